@@ -1,0 +1,311 @@
+//! The headless wgpu context: adapter choice, optional features, and the facts every CSV row
+//! records about the device.
+
+use std::sync::{Arc, Mutex};
+
+use crate::{CoreError, Result};
+
+/// Optional features the methods can use, with the names the CSV records; requested only
+/// where the adapter has them.
+pub const FEATURE_NAMES: &[(wgpu::Features, &str)] = &[
+    (wgpu::Features::TIMESTAMP_QUERY, "TIMESTAMP_QUERY"),
+    (
+        wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+        "TIMESTAMP_QUERY_INSIDE_ENCODERS",
+    ),
+    (
+        wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES,
+        "TIMESTAMP_QUERY_INSIDE_PASSES",
+    ),
+    (wgpu::Features::FLOAT32_BLENDABLE, "FLOAT32_BLENDABLE"),
+    (wgpu::Features::SHADER_INT64, "SHADER_INT64"),
+    (
+        wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
+        "SHADER_INT64_ATOMIC_MIN_MAX",
+    ),
+    (
+        wgpu::Features::PIPELINE_STATISTICS_QUERY,
+        "PIPELINE_STATISTICS_QUERY",
+    ),
+    (
+        wgpu::Features::INDIRECT_FIRST_INSTANCE,
+        "INDIRECT_FIRST_INSTANCE",
+    ),
+    (
+        wgpu::Features::MULTI_DRAW_INDIRECT_COUNT,
+        "MULTI_DRAW_INDIRECT_COUNT",
+    ),
+    (wgpu::Features::SHADER_F16, "SHADER_F16"),
+    (
+        wgpu::Features::RG11B10UFLOAT_RENDERABLE,
+        "RG11B10UFLOAT_RENDERABLE",
+    ),
+    (
+        wgpu::Features::VERTEX_WRITABLE_STORAGE,
+        "VERTEX_WRITABLE_STORAGE",
+    ),
+    (wgpu::Features::PRIMITIVE_INDEX, "PRIMITIVE_INDEX"),
+];
+
+/// The union of [`FEATURE_NAMES`].
+pub fn wanted_features() -> wgpu::Features {
+    FEATURE_NAMES
+        .iter()
+        .fold(wgpu::Features::empty(), |a, (f, _)| a | *f)
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BackendChoice {
+    Vulkan,
+    Gl,
+    Any,
+}
+
+impl std::str::FromStr for BackendChoice {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "vulkan" | "vk" => Ok(BackendChoice::Vulkan),
+            "gl" | "gles" | "opengl" => Ok(BackendChoice::Gl),
+            "any" => Ok(BackendChoice::Any),
+            other => Err(format!("unknown backend '{other}' (vulkan, gl, any)")),
+        }
+    }
+}
+
+impl BackendChoice {
+    pub fn backends(self) -> wgpu::Backends {
+        match self {
+            BackendChoice::Vulkan => wgpu::Backends::VULKAN,
+            BackendChoice::Gl => wgpu::Backends::GL,
+            BackendChoice::Any => wgpu::Backends::VULKAN | wgpu::Backends::GL,
+        }
+    }
+}
+
+/// How to pick the adapter.
+#[derive(Clone, Debug)]
+pub struct GpuOptions {
+    pub backend: BackendChoice,
+    /// Case-insensitive substring of the adapter name.
+    pub adapter: Option<String>,
+    /// Index into `mfx list adapters` (after the backend filter).
+    pub adapter_index: Option<usize>,
+}
+
+impl Default for GpuOptions {
+    fn default() -> Self {
+        GpuOptions {
+            backend: BackendChoice::Vulkan,
+            adapter: None,
+            adapter_index: None,
+        }
+    }
+}
+
+/// What the CSV records about the device.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct AdapterFacts {
+    pub name: String,
+    pub backend: String,
+    pub device_type: String,
+    pub driver: String,
+    pub driver_info: String,
+    /// Optional features granted (names, `|`-separated).
+    pub features: String,
+    pub is_software: bool,
+}
+
+impl AdapterFacts {
+    pub fn of(info: &wgpu::AdapterInfo, features: wgpu::Features) -> Self {
+        let names: Vec<&str> = FEATURE_NAMES
+            .iter()
+            .filter(|(f, _)| features.contains(*f))
+            .map(|(_, n)| *n)
+            .collect();
+        AdapterFacts {
+            name: info.name.clone(),
+            backend: format!("{:?}", info.backend).to_lowercase(),
+            device_type: format!("{:?}", info.device_type).to_lowercase(),
+            driver: info.driver.clone(),
+            driver_info: info.driver_info.clone(),
+            features: names.join("|"),
+            is_software: info.device_type == wgpu::DeviceType::Cpu,
+        }
+    }
+}
+
+/// A device and queue plus what was granted. Cheap to share by reference.
+pub struct Gpu {
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub features: wgpu::Features,
+    pub limits: wgpu::Limits,
+    pub facts: AdapterFacts,
+    pub downlevel: wgpu::DownlevelCapabilities,
+    /// Set by the device-lost callback; a lost device fails every later point with this reason.
+    pub lost: Arc<Mutex<Option<String>>>,
+}
+
+/// Lists adapters for a backend choice, in enumeration order (the `--adapter-index` order).
+pub fn list_adapters(backend: BackendChoice) -> Vec<wgpu::Adapter> {
+    let instance = make_instance(backend);
+    pollster::block_on(instance.enumerate_adapters(backend.backends()))
+}
+
+fn make_instance(backend: BackendChoice) -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = backend.backends();
+    wgpu::Instance::new(desc)
+}
+
+fn type_rank(t: wgpu::DeviceType) -> u8 {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    }
+}
+
+impl Gpu {
+    /// Opens the chosen adapter: a hardware GPU if one exists, else a software one (lavapipe).
+    pub fn new(opts: &GpuOptions) -> Result<Gpu> {
+        let adapters = list_adapters(opts.backend);
+        if adapters.is_empty() {
+            return Err(CoreError::NoAdapter(format!(
+                "no {:?} adapter found (on a machine without a GPU install Mesa's lavapipe: scripts/setup.sh)",
+                opts.backend
+            )));
+        }
+        let adapter = if let Some(i) = opts.adapter_index {
+            let n = adapters.len();
+            adapters.into_iter().nth(i).ok_or_else(|| {
+                CoreError::NoAdapter(format!(
+                    "--adapter-index {i} out of range: {n} adapter(s) (see `mfx list adapters`)"
+                ))
+            })?
+        } else {
+            let mut cands: Vec<wgpu::Adapter> = adapters
+                .into_iter()
+                .filter(|a| match &opts.adapter {
+                    Some(s) => a.get_info().name.to_lowercase().contains(&s.to_lowercase()),
+                    None => true,
+                })
+                .collect();
+            if cands.is_empty() {
+                return Err(CoreError::NoAdapter(format!(
+                    "no adapter name contains '{}' (see `mfx list adapters`)",
+                    opts.adapter.clone().unwrap_or_default()
+                )));
+            }
+            cands.sort_by_key(|a| type_rank(a.get_info().device_type));
+            cands.remove(0)
+        };
+        Self::open(adapter)
+    }
+
+    pub fn open(adapter: wgpu::Adapter) -> Result<Gpu> {
+        let info = adapter.get_info();
+        let features = adapter.features() & wanted_features();
+        let limits = adapter.limits();
+        let desc = wgpu::DeviceDescriptor {
+            label: Some("mfx"),
+            required_features: features,
+            required_limits: limits.clone(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&desc)).map_err(|e| {
+            CoreError::NoAdapter(format!("request_device on '{}' failed: {e}", info.name))
+        })?;
+        let lost = Arc::new(Mutex::new(None));
+        let lost2 = lost.clone();
+        device.set_device_lost_callback(move |reason, msg| {
+            *lost2.lock().unwrap() = Some(format!("device lost ({reason:?}): {msg}"));
+        });
+        // Uncaptured errors are logged; the runner wraps each point in error scopes to attribute them.
+        device.on_uncaptured_error(Arc::new(|e: wgpu::Error| {
+            log::error!("uncaptured wgpu error: {e}")
+        }));
+        let downlevel = adapter.get_downlevel_capabilities();
+        Ok(Gpu {
+            facts: AdapterFacts::of(&info, features),
+            adapter,
+            device,
+            queue,
+            features,
+            limits,
+            downlevel,
+            lost,
+        })
+    }
+
+    pub fn has(&self, f: wgpu::Features) -> bool {
+        self.features.contains(f)
+    }
+
+    /// Blocks until all submitted work is done.
+    pub fn wait(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| CoreError::Gpu(format!("poll failed: {e}")))
+    }
+
+    pub fn check_lost(&self) -> Result<()> {
+        match self.lost.lock().unwrap().clone() {
+            Some(r) => Err(CoreError::DeviceLost(r)),
+            None => Ok(()),
+        }
+    }
+
+    /// Whether a texture format can be a render target here (GL downlevel lacks some, e.g. R32Float).
+    pub fn renderable(&self, format: wgpu::TextureFormat) -> bool {
+        self.adapter
+            .get_texture_format_features(format)
+            .allowed_usages
+            .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
+    }
+
+    /// Reads back a whole buffer (must have MAP_READ or be copied first; this copies).
+    pub fn read_buffer(&self, src: &wgpu::Buffer, size: u64) -> Result<Vec<u8>> {
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(src, 0, &staging, 0, size);
+        self.queue.submit([enc.finish()]);
+        self.map_read(&staging)
+    }
+
+    /// Maps a MAP_READ buffer and copies its bytes out.
+    pub fn map_read(&self, buf: &wgpu::Buffer) -> Result<Vec<u8>> {
+        self.map_read_range(buf, buf.size())
+    }
+
+    /// Maps the first `size` bytes of a MAP_READ buffer and copies them out.
+    pub fn map_read_range(&self, buf: &wgpu::Buffer, size: u64) -> Result<Vec<u8>> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        buf.slice(..size).map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait()?;
+        rx.recv()
+            .map_err(|_| CoreError::Gpu("map callback dropped".into()))?
+            .map_err(|e| CoreError::Gpu(format!("buffer map failed: {e}")))?;
+        let bytes = buf
+            .slice(..size)
+            .get_mapped_range()
+            .map_err(|e| CoreError::Gpu(format!("{e}")))?
+            .to_vec();
+        buf.unmap();
+        Ok(bytes)
+    }
+}

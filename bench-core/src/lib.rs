@@ -1,0 +1,41 @@
+//! bench-core: the GPU context, timing, the multi-fragment methods, the exact CPU reference,
+//! error metrics, CSV records and the sweep runner. Reading order for a newcomer:
+//! `methods/mod.rs` (what is measured), `reference/mod.rs` (what it is judged against),
+//! `record.rs` (what is written), `runner.rs` (how a suite becomes rows).
+
+pub mod effects;
+pub mod gpu;
+pub mod gpu_scene;
+pub mod image_io;
+pub mod methods;
+pub mod metrics;
+pub mod record;
+pub mod reference;
+pub mod runner;
+pub mod studies;
+pub mod timing;
+
+pub use gpu::{BackendChoice, Gpu, GpuOptions};
+
+/// Errors that cross the crate boundary; the CLI prints each as one line with context.
+#[derive(Debug, thiserror::Error)]
+pub enum CoreError {
+    #[error("no usable adapter: {0}")]
+    NoAdapter(String),
+    #[error("GPU error: {0}")]
+    Gpu(String),
+    #[error("GPU out of memory: {0}")]
+    OutOfMemory(String),
+    #[error("{0}")]
+    DeviceLost(String),
+    #[error("bad sweep value: {0}")]
+    Param(String),
+    #[error(transparent)]
+    Scene(#[from] scenarios::SceneError),
+    #[error("CSV schema: {0}")]
+    Schema(String),
+    #[error("I/O: {0}")]
+    Io(String),
+}
+
+pub type Result<T, E = CoreError> = std::result::Result<T, E>;

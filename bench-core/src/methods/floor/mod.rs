@@ -1,0 +1,215 @@
+//! The floor rows: one depth-only pass (`floor_depth`) and one opaque single-colour pass
+//! (`floor_opaque`) over exactly the scene's geometry and resolution. Every method's `x_floor`
+//! is its time over `floor_depth` of the same scene in the same run.
+
+use scenarios::Params;
+
+use super::{camera_entry, shader, Capture, FrameStats, Method, Prepared};
+use crate::gpu::Gpu;
+use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::timing::GpuTimer;
+use crate::Result;
+
+const WGSL: &str = include_str!("floor.wgsl");
+
+pub struct FloorDepth;
+pub struct FloorOpaque;
+
+impl Method for FloorDepth {
+    fn name(&self) -> &'static str {
+        "floor_depth"
+    }
+    fn describe(&self) -> &'static str {
+        "yardstick: one depth-only pass (positions only, no fragment shader); no image"
+    }
+    fn exact(&self) -> bool {
+        false
+    }
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Params) -> Result<Box<dyn Prepared>> {
+        Ok(Box::new(PreparedFloor::new(gpu, scene, false)))
+    }
+}
+
+impl Method for FloorOpaque {
+    fn name(&self) -> &'static str {
+        "floor_opaque"
+    }
+    fn describe(&self) -> &'static str {
+        "yardstick: one opaque single-colour pass (positions only, RGBA8 + depth); no image"
+    }
+    fn exact(&self) -> bool {
+        false
+    }
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Params) -> Result<Box<dyn Prepared>> {
+        Ok(Box::new(PreparedFloor::new(gpu, scene, true)))
+    }
+}
+
+struct PreparedFloor {
+    pipeline: wgpu::RenderPipeline,
+    bind: wgpu::BindGroup,
+    depth: wgpu::TextureView,
+    color: Option<wgpu::TextureView>,
+    alloc: AllocCounter,
+    reversed: bool,
+}
+
+impl PreparedFloor {
+    fn new(gpu: &Gpu, scene: &GpuScene, with_color: bool) -> Self {
+        let d = &gpu.device;
+        let module = shader(gpu, "floor", WGSL);
+        let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("floor"),
+            entries: &[camera_entry(0)],
+        });
+        let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("floor"),
+            bind_group_layouts: &[Some(&bgl)],
+            immediate_size: 0,
+        });
+        let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("floor"),
+            layout: &bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: scene.camera.as_entire_binding(),
+            }],
+        });
+        let layouts = GpuScene::layouts(Attrs::POSITION_ONLY);
+        let targets = [Some(wgpu::ColorTargetState {
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("floor"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_position"),
+                compilation_options: Default::default(),
+                buffers: &layouts.iter().map(|l| Some(l.clone())).collect::<Vec<_>>(),
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(depth_state(scene.reversed_z, true)),
+            multisample: Default::default(),
+            fragment: with_color.then(|| wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_constant"),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let mut alloc = AllocCounter::default();
+        let depth = alloc
+            .texture(
+                gpu,
+                "floor depth",
+                scene.width,
+                scene.height,
+                wgpu::TextureFormat::Depth32Float,
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+            )
+            .create_view(&Default::default());
+        let color = with_color.then(|| {
+            alloc
+                .texture(
+                    gpu,
+                    "floor colour",
+                    scene.width,
+                    scene.height,
+                    wgpu::TextureFormat::Rgba8Unorm,
+                    wgpu::TextureUsages::RENDER_ATTACHMENT,
+                )
+                .create_view(&Default::default())
+        });
+        PreparedFloor {
+            pipeline,
+            bind,
+            depth,
+            color,
+            alloc,
+            reversed: scene.reversed_z,
+        }
+    }
+}
+
+/// Depth test "nearer passes", with or without writes, for the scene's depth convention.
+pub fn depth_state(reversed: bool, write: bool) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: wgpu::TextureFormat::Depth32Float,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(if reversed {
+            wgpu::CompareFunction::Greater
+        } else {
+            wgpu::CompareFunction::Less
+        }),
+        stencil: Default::default(),
+        bias: Default::default(),
+    }
+}
+
+/// Clear value of the depth buffer for the scene's depth convention.
+pub fn clear_depth(reversed: bool) -> f32 {
+    if reversed {
+        0.0
+    } else {
+        1.0
+    }
+}
+
+impl Prepared for PreparedFloor {
+    fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        {
+            let color_att: Vec<Option<wgpu::RenderPassColorAttachment>> = self
+                .color
+                .iter()
+                .map(|v| {
+                    Some(wgpu::RenderPassColorAttachment {
+                        view: v,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })
+                })
+                .collect();
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("floor"),
+                color_attachments: &color_att,
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(clear_depth(self.reversed)),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: timer.render_pass("floor"),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.bind, &[]);
+            scene.draw(&mut pass, Attrs::POSITION_ONLY);
+        }
+        gpu.queue.submit([enc.finish()]);
+        Ok(FrameStats {
+            geometry_passes: 1,
+            layers: 1,
+        })
+    }
+
+    fn readback(&mut self, _: &Gpu, _: &GpuScene) -> Result<Capture> {
+        Ok(Capture::empty())
+    }
+
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}

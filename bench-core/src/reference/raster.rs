@@ -1,0 +1,314 @@
+//! The f64 rasterizer behind [`super::FragmentLists`].
+
+use glam::{DMat4, DVec4};
+use rayon::prelude::*;
+use scenarios::Scene;
+
+use super::FragmentLists;
+
+/// Sub-pixel precision of vertex positions: Vulkan's `subPixelPrecisionBits` is 8 on the
+/// drivers we target (NVIDIA, lavapipe), and snapping alike makes coverage decisions identical.
+pub const SUBPIXEL_BITS: u32 = 8;
+
+/// Rows per parallel strip.
+const STRIP: u32 = 8;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefFragment {
+    /// Window depth z/w in [0, 1] (reversed-Z: 1 at the near plane).
+    pub depth: f64,
+    /// Linear view-space distance along the view axis (positive in front of the eye).
+    pub view_z: f64,
+    /// Straight RGBA.
+    pub color: [f64; 4],
+    /// Interpolated (not renormalised) world-space normal.
+    pub normal: [f64; 3],
+    pub object_id: u32,
+    pub front_facing: bool,
+    /// Triangle index in the scene's index buffer (submission order).
+    pub prim: u32,
+}
+
+/// A vertex after projection, carrying what is interpolated.
+#[derive(Clone, Copy)]
+struct ClipVert {
+    clip: DVec4,
+    /// color rgba, normal xyz, view_z: interpolated linearly in clip space when clipping.
+    attrs: [f64; 8],
+}
+
+/// Screen-space vertex ready for edge functions.
+#[derive(Clone, Copy)]
+struct ScreenVert {
+    x: f64,
+    y: f64,
+    z: f64,
+    inv_w: f64,
+    attrs: [f64; 8],
+}
+
+struct Tri {
+    v: [ScreenVert; 3],
+    area: f64,
+    front: bool,
+    prim: u32,
+    object_id: u32,
+    y0: u32,
+    y1: u32,
+    x0: u32,
+    x1: u32,
+}
+
+fn lerp(a: &ClipVert, b: &ClipVert, t: f64) -> ClipVert {
+    let mut attrs = [0.0; 8];
+    for i in 0..8 {
+        attrs[i] = a.attrs[i] + (b.attrs[i] - a.attrs[i]) * t;
+    }
+    ClipVert {
+        clip: a.clip + (b.clip - a.clip) * t,
+        attrs,
+    }
+}
+
+/// Sutherland–Hodgman against one plane `d(v) >= 0`.
+fn clip_plane(poly: &[ClipVert], d: impl Fn(&DVec4) -> f64) -> Vec<ClipVert> {
+    let mut out = Vec::with_capacity(poly.len() + 2);
+    for i in 0..poly.len() {
+        let a = &poly[i];
+        let b = &poly[(i + 1) % poly.len()];
+        let (da, db) = (d(&a.clip), d(&b.clip));
+        if da >= 0.0 {
+            out.push(*a);
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            out.push(lerp(a, b, da / (da - db)));
+        }
+    }
+    out
+}
+
+fn snap(v: f64) -> f64 {
+    let s = (1u32 << SUBPIXEL_BITS) as f64;
+    (v * s).round() / s
+}
+
+/// Twice the signed area in screen space (y down), and the edge function of edge a→b at p.
+fn edge(a: (f64, f64), b: (f64, f64), p: (f64, f64)) -> f64 {
+    (b.0 - a.0) * (p.1 - a.1) - (b.1 - a.1) * (p.0 - a.0)
+}
+
+/// Top-left rule for triangles wound so that `edge(v0, v1, v2) > 0` in y-down screen space:
+/// a top edge is horizontal going right, a left edge goes up.
+fn top_left(a: (f64, f64), b: (f64, f64)) -> bool {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    (dy == 0.0 && dx > 0.0) || dy < 0.0
+}
+
+/// Projects, clips and snaps every triangle, then rasterizes row strips in parallel.
+pub fn rasterize(scene: &Scene, width: u32, height: u32) -> FragmentLists {
+    let aspect = width as f64 / height as f64;
+    let m: DMat4 = scene.camera.clip_from_world_gpu(aspect).as_dmat4();
+    let view: DMat4 = scene.camera.view().as_mat4().as_dmat4();
+    let mesh = &scene.mesh;
+    let (w, h) = (width as f64, height as f64);
+
+    let tris: Vec<Tri> = mesh
+        .indices
+        .par_chunks_exact(3)
+        .enumerate()
+        .flat_map_iter(|(prim, idx)| {
+            let verts: Vec<ClipVert> = idx
+                .iter()
+                .map(|&i| {
+                    let i = i as usize;
+                    let p = glam::Vec3::from(mesh.positions[i]).as_dvec3().extend(1.0);
+                    let c = mesh.colors[i];
+                    let n = mesh.normals[i];
+                    let view_z = -(view * p).z;
+                    ClipVert {
+                        clip: m * p,
+                        attrs: [
+                            c[0] as f64,
+                            c[1] as f64,
+                            c[2] as f64,
+                            c[3] as f64,
+                            n[0] as f64,
+                            n[1] as f64,
+                            n[2] as f64,
+                            view_z,
+                        ],
+                    }
+                })
+                .collect();
+            let object_id = mesh.object_ids[idx[0] as usize];
+            // Vulkan clips to 0 ≤ z ≤ w (x and y are handled by the guard band and scissor).
+            let poly = clip_plane(&verts, |c| c.z);
+            let poly = if poly.len() >= 3 {
+                clip_plane(&poly, |c| c.w - c.z)
+            } else {
+                poly
+            };
+            let mut out = Vec::new();
+            if poly.len() < 3 {
+                return out.into_iter();
+            }
+            let sv: Vec<ScreenVert> = poly
+                .iter()
+                .map(|v| {
+                    let inv_w = 1.0 / v.clip.w;
+                    ScreenVert {
+                        x: snap((v.clip.x * inv_w * 0.5 + 0.5) * w),
+                        y: snap((0.5 - v.clip.y * inv_w * 0.5) * h),
+                        z: v.clip.z * inv_w,
+                        inv_w,
+                        attrs: v.attrs,
+                    }
+                })
+                .collect();
+            for k in 1..sv.len() - 1 {
+                let mut t = [sv[0], sv[k], sv[k + 1]];
+                let area = edge((t[0].x, t[0].y), (t[1].x, t[1].y), (t[2].x, t[2].y));
+                if area == 0.0 {
+                    continue; // degenerate after snapping: the GPU draws nothing either
+                }
+                // Counter-clockwise in NDC (y up) is front-facing (wgpu's default); y-down flips the sign.
+                let front = area < 0.0;
+                if area < 0.0 {
+                    t.swap(1, 2);
+                }
+                let xs = [t[0].x, t[1].x, t[2].x];
+                let ys = [t[0].y, t[1].y, t[2].y];
+                let (minx, maxx) = (
+                    xs.iter().cloned().fold(f64::INFINITY, f64::min),
+                    xs.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+                );
+                let (miny, maxy) = (
+                    ys.iter().cloned().fold(f64::INFINITY, f64::min),
+                    ys.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+                );
+                // Pixel centres (i + 0.5) inside [min, max].
+                let x0 = (minx - 0.5).ceil().max(0.0);
+                let x1 = (maxx - 0.5).floor().min(w - 1.0);
+                let y0 = (miny - 0.5).ceil().max(0.0);
+                let y1 = (maxy - 0.5).floor().min(h - 1.0);
+                if x0 > x1 || y0 > y1 {
+                    continue;
+                }
+                out.push(Tri {
+                    v: t,
+                    area: area.abs(),
+                    front,
+                    prim: prim as u32,
+                    object_id,
+                    x0: x0 as u32,
+                    x1: x1 as u32,
+                    y0: y0 as u32,
+                    y1: y1 as u32,
+                });
+            }
+            out.into_iter()
+        })
+        .collect();
+
+    // Bin triangles into row strips.
+    let nstrips = height.div_ceil(STRIP) as usize;
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); nstrips];
+    for (i, t) in tris.iter().enumerate() {
+        for s in (t.y0 / STRIP)..=(t.y1 / STRIP) {
+            bins[s as usize].push(i as u32);
+        }
+    }
+    let reversed = scene.camera.reversed_z;
+
+    let strips: Vec<Vec<Vec<RefFragment>>> = bins
+        .par_iter()
+        .enumerate()
+        .map(|(s, bin)| {
+            let row0 = s as u32 * STRIP;
+            let rows = STRIP.min(height - row0);
+            let mut px: Vec<Vec<RefFragment>> = vec![Vec::new(); (rows * width) as usize];
+            for &ti in bin {
+                let t = &tris[ti as usize];
+                let p = [
+                    (t.v[0].x, t.v[0].y),
+                    (t.v[1].x, t.v[1].y),
+                    (t.v[2].x, t.v[2].y),
+                ];
+                let tl = [
+                    top_left(p[1], p[2]),
+                    top_left(p[2], p[0]),
+                    top_left(p[0], p[1]),
+                ];
+                for y in t.y0.max(row0)..=t.y1.min(row0 + rows - 1) {
+                    let cy = y as f64 + 0.5;
+                    for x in t.x0..=t.x1 {
+                        let c = (x as f64 + 0.5, cy);
+                        let e = [
+                            edge(p[1], p[2], c),
+                            edge(p[2], p[0], c),
+                            edge(p[0], p[1], c),
+                        ];
+                        if (0..3).any(|i| e[i] < 0.0 || (e[i] == 0.0 && !tl[i])) {
+                            continue;
+                        }
+                        let b = [e[0] / t.area, e[1] / t.area, e[2] / t.area];
+                        let depth =
+                            (b[0] * t.v[0].z + b[1] * t.v[1].z + b[2] * t.v[2].z).clamp(0.0, 1.0);
+                        let pw = [
+                            b[0] * t.v[0].inv_w,
+                            b[1] * t.v[1].inv_w,
+                            b[2] * t.v[2].inv_w,
+                        ];
+                        let sum = pw[0] + pw[1] + pw[2];
+                        let mut a = [0.0; 8];
+                        for (k, ak) in a.iter_mut().enumerate() {
+                            *ak = (pw[0] * t.v[0].attrs[k]
+                                + pw[1] * t.v[1].attrs[k]
+                                + pw[2] * t.v[2].attrs[k])
+                                / sum;
+                        }
+                        px[((y - row0) * width + x) as usize].push(RefFragment {
+                            depth,
+                            view_z: a[7],
+                            color: [a[0], a[1], a[2], a[3]],
+                            normal: [a[4], a[5], a[6]],
+                            object_id: t.object_id,
+                            front_facing: t.front,
+                            prim: t.prim,
+                        });
+                    }
+                }
+            }
+            for list in &mut px {
+                // Nearest first; ties keep submission order (a stable, documented choice).
+                list.sort_by(|a, b| {
+                    let o = if reversed {
+                        b.depth.total_cmp(&a.depth)
+                    } else {
+                        a.depth.total_cmp(&b.depth)
+                    };
+                    o.then(a.prim.cmp(&b.prim))
+                });
+            }
+            px
+        })
+        .collect();
+
+    let mut offsets = Vec::with_capacity((width * height + 1) as usize);
+    let total: usize = strips.iter().flatten().map(|l| l.len()).sum();
+    let mut frags = Vec::with_capacity(total);
+    offsets.push(0u32);
+    for strip in strips {
+        for list in strip {
+            frags.extend(list);
+            offsets.push(frags.len() as u32);
+        }
+    }
+    FragmentLists {
+        width,
+        height,
+        reversed_z: reversed,
+        offsets,
+        frags,
+    }
+}

@@ -1,0 +1,166 @@
+//! The `methods` study: every multi-fragment method on every scene, timed, and judged against
+//! the exact CPU reference; `speedup_vs_depth_peel` comes from depth_peel in the same group.
+
+use scenarios::suite::axis_product;
+use scenarios::StudySpec;
+
+use super::{Emit, GroupCtx, PointSpec, Study};
+use crate::effects;
+use crate::methods::{self, Expected};
+use crate::metrics::{image_error, layer_count_accuracy, BAD_PIXEL_TOL};
+use crate::record::Row;
+use crate::runner::{failed_row, measure, set_params, set_timing, skipped_row};
+use crate::{CoreError, Result};
+
+pub struct MethodsStudy;
+
+impl Study for MethodsStudy {
+    fn kind(&self) -> &'static str {
+        "methods"
+    }
+    fn describe(&self) -> &'static str {
+        "multi-fragment capture methods: time, memory, and error vs the exact CPU reference"
+    }
+    fn points(&self, spec: &StudySpec) -> Result<Vec<PointSpec>> {
+        let mut out = Vec::new();
+        for name in &spec.methods {
+            let m = methods::by_name(name).ok_or_else(|| {
+                CoreError::Param(format!(
+                    "unknown method '{name}' (known: {})",
+                    methods::all()
+                        .iter()
+                        .map(|m| m.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })?;
+            for params in axis_product(&spec.axes, m.axes()) {
+                out.push(PointSpec {
+                    method: name.clone(),
+                    params,
+                });
+            }
+        }
+        Ok(out)
+    }
+
+    fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
+        // depth_peel first so every other row can carry its speedup over it.
+        let mut order: Vec<usize> = (0..ctx.group.points.len()).collect();
+        order.sort_by_key(|&i| ctx.group.points[i].method != "depth_peel");
+        let mut peel_ms: Option<f64> = None;
+        for i in order {
+            let pt = &ctx.group.points[i];
+            let method = methods::by_name(&pt.method).expect("checked in points()");
+            let mut row = Row::new();
+            row.set("method", &pt.method)
+                .set("exact", method.exact())
+                .set("effect", "transparency");
+            set_params(&mut row, &pt.params)?;
+            if let Err(why) = method.supports(ctx.gpu, &pt.params) {
+                emit(i, skipped_row(row, &why))?;
+                continue;
+            }
+            let mut m = match measure(
+                ctx.gpu,
+                ctx.gscene,
+                method.as_ref(),
+                &pt.params,
+                ctx.warmup,
+                ctx.reps,
+            ) {
+                Ok(m) => m,
+                Err(e) => {
+                    emit(i, failed_row(row, &e.to_string()))?;
+                    continue;
+                }
+            };
+            set_timing(&mut row, &m, ctx);
+            let cap = match m.prepared.readback(ctx.gpu, ctx.gscene) {
+                Ok(c) => c,
+                Err(e) => {
+                    emit(i, failed_row(row, &format!("readback: {e}")))?;
+                    continue;
+                }
+            };
+            let lists = ctx.reference();
+            set_reference_columns(&mut row, lists);
+            let dc = lists.depth_complexity();
+            let k = match cap.expected {
+                Expected::All => u32::MAX,
+                Expected::FirstK(k) => k,
+            };
+            let overflow = dc.iter().filter(|&&d| d > k).count();
+            row.set_f("overflow_rate", overflow as f64 / dc.len().max(1) as f64);
+            let mut flag = cap.flag.clone();
+            if overflow > 0 && flag.is_none() {
+                flag = Some("overflow".into());
+            }
+            if let Some(img) = &cap.image {
+                let reference = effects::reference_image("transparency", lists, cap.expected)
+                    .expect("known effect");
+                let e = image_error(&reference, img, BAD_PIXEL_TOL);
+                row.set_f("rmse", e.rmse)
+                    .set_f("psnr_db", e.psnr_db)
+                    .set_f("max_abs_err", e.max_abs)
+                    .set_f("bad_pixel_frac", e.bad_pixel_frac)
+                    .set_f("bad_pixel_tol", BAD_PIXEL_TOL)
+                    .set("non_finite", e.non_finite);
+                if e.non_finite > 0 {
+                    flag.get_or_insert_with(|| "precision".into());
+                }
+            }
+            if let Some(counts) = &cap.counts {
+                let expected: Vec<u32> = dc.iter().map(|&d| d.min(k)).collect();
+                row.set_f(
+                    "layer_count_accuracy",
+                    layer_count_accuracy(&expected, counts),
+                );
+                row.set(
+                    "layers_captured_max",
+                    counts.iter().max().copied().unwrap_or(0),
+                );
+            }
+            if let Some(c) = cap.collision_fragments {
+                row.set_f(
+                    "collision_rate",
+                    c as f64 / lists.total_fragments().max(1) as f64,
+                );
+            }
+            if let Some(h) = cap.hazard_pixels {
+                row.set_f("hazard_rate", h as f64 / dc.len().max(1) as f64);
+            }
+            if let Some(f) = flag {
+                row.set("flag", f);
+            }
+            if !cap.notes.is_empty() {
+                row.set("notes", &cap.notes);
+            }
+            if let Some(g) = m.gpu_ms.map(|s| s.median) {
+                if pt.method == "depth_peel" && peel_ms.is_none() {
+                    peel_ms = Some(g);
+                }
+                if let Some(p) = peel_ms {
+                    if g > 0.0 {
+                        row.set_f("speedup_vs_depth_peel", p / g);
+                    }
+                }
+            }
+            emit(i, row)?;
+        }
+        Ok(())
+    }
+}
+
+/// Scene columns that need the reference (depth complexity, true fragments).
+pub fn set_reference_columns(row: &mut Row, lists: &crate::reference::FragmentLists) {
+    let dc = lists.depth_complexity();
+    let covered = dc.iter().filter(|&&d| d > 0).count();
+    row.set("depth_complexity_max", lists.max_depth_complexity())
+        .set_f(
+            "depth_complexity_mean",
+            lists.total_fragments() as f64 / covered.max(1) as f64,
+        )
+        .set("true_fragments", lists.total_fragments())
+        .set("bytes_true_fragments", lists.total_fragments() * 8);
+}

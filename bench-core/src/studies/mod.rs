@@ -1,0 +1,129 @@
+//! Studies: what a suite's `[[study]]` tables run. Each study kind turns its table into points
+//! per scene × resolution group and runs a group on the GPU, emitting one row per point. The
+//! runner adds the floor rows, the run metadata and `x_floor` to every group, so every study
+//! is read against the same yardstick.
+//!
+//! | kind      | what it measures                                                     |
+//! |-----------|----------------------------------------------------------------------|
+//! | `methods` | multi-fragment capture methods vs the exact CPU reference            |
+
+pub mod methods;
+
+use std::cell::OnceCell;
+
+use scenarios::{Params, Scene, SceneSpec, StudySpec, Suite};
+
+use crate::gpu::Gpu;
+use crate::gpu_scene::GpuScene;
+use crate::record::{Column, Row};
+use crate::reference::{rasterize, FragmentLists};
+use crate::Result;
+
+/// Columns owned by individual studies (appended after the shared axes, in this order).
+pub const STUDY_COLUMNS: &[&[Column]] = &[];
+
+/// One point of a group: a method (or path/variant) name and its axis values.
+#[derive(Clone, Debug)]
+pub struct PointSpec {
+    pub method: String,
+    pub params: Params,
+}
+
+/// A scene at a resolution with the points to run on it: the unit of sharding.
+#[derive(Clone, Debug)]
+pub struct Group {
+    pub study_index: usize,
+    pub kind: String,
+    pub scene: SceneSpec,
+    pub width: u32,
+    pub height: u32,
+    pub points: Vec<PointSpec>,
+}
+
+impl Group {
+    /// Stable identity of a point: study|scene|resolution|method|axes.
+    pub fn point_key(&self, method: &str, params: &Params) -> String {
+        format!(
+            "{}|{}|{}x{}|{}|{}",
+            self.kind,
+            self.scene.label(),
+            self.width,
+            self.height,
+            method,
+            params.label()
+        )
+    }
+}
+
+/// Everything a study needs to run one group.
+pub struct GroupCtx<'a> {
+    pub gpu: &'a Gpu,
+    pub suite: &'a Suite,
+    pub study: &'a StudySpec,
+    pub group: &'a Group,
+    pub scene: &'a Scene,
+    pub gscene: &'a GpuScene,
+    pub reps: u32,
+    pub warmup: u32,
+    /// floor_depth median GPU ms of this group, when measured.
+    pub floor_ms: Option<f64>,
+    reference: OnceCell<FragmentLists>,
+}
+
+impl<'a> GroupCtx<'a> {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        gpu: &'a Gpu,
+        suite: &'a Suite,
+        study: &'a StudySpec,
+        group: &'a Group,
+        scene: &'a Scene,
+        gscene: &'a GpuScene,
+        reps: u32,
+        warmup: u32,
+    ) -> Self {
+        GroupCtx {
+            gpu,
+            suite,
+            study,
+            group,
+            scene,
+            gscene,
+            reps,
+            warmup,
+            floor_ms: None,
+            reference: OnceCell::new(),
+        }
+    }
+
+    /// The exact fragment lists of this scene and resolution, computed once per group.
+    pub fn reference(&self) -> &FragmentLists {
+        self.reference
+            .get_or_init(|| rasterize(self.scene, self.group.width, self.group.height))
+    }
+
+    pub fn has_reference(&self) -> bool {
+        self.reference.get().is_some()
+    }
+}
+
+/// Emits the row of point `index` of the group.
+pub type Emit<'e> = dyn FnMut(usize, Row) -> Result<()> + 'e;
+
+pub trait Study: Sync {
+    fn kind(&self) -> &'static str;
+    fn describe(&self) -> &'static str;
+    /// The points to run on every scene × resolution of `spec`; unknown names are errors here,
+    /// before any GPU work.
+    fn points(&self, spec: &StudySpec) -> Result<Vec<PointSpec>>;
+    /// Runs one group, emitting each point's row (ok, skipped or failed) with its index.
+    fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()>;
+}
+
+pub fn all() -> Vec<Box<dyn Study>> {
+    vec![Box::new(methods::MethodsStudy)]
+}
+
+pub fn by_kind(kind: &str) -> Option<Box<dyn Study>> {
+    all().into_iter().find(|s| s.kind() == kind)
+}

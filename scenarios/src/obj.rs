@@ -1,0 +1,167 @@
+//! OBJ loading through tobj: validated, normalised into the unit sphere, optionally instanced on
+//! a grid to reach millions of triangles. Bad files are errors naming the file and the problem.
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::scenes::{frame_sphere, Mesh, ObjectInfo, Scene, SceneSpec};
+use crate::{Result, SceneError};
+
+/// Loads one OBJ file into a single mesh (all models merged), computing normals where missing.
+pub fn load(path: &Path) -> Result<Mesh> {
+    let err = |why: String| SceneError::Obj {
+        path: path.display().to_string(),
+        why,
+    };
+    if !path.exists() {
+        return Err(err("file not found".into()));
+    }
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ..Default::default()
+    };
+    let (models, _materials) =
+        tobj::load_obj(path, &opts).map_err(|e| err(format!("malformed OBJ: {e}")))?;
+    let mut mesh = Mesh::default();
+    for model in &models {
+        let m = &model.mesh;
+        if m.positions.len() % 3 != 0 {
+            return Err(err(format!(
+                "model '{}': position array is not xyz triples",
+                model.name
+            )));
+        }
+        let base = mesh.positions.len() as u32;
+        let nverts = m.positions.len() / 3;
+        for v in 0..nverts {
+            let p = [
+                m.positions[3 * v],
+                m.positions[3 * v + 1],
+                m.positions[3 * v + 2],
+            ];
+            if p.iter().any(|c| !c.is_finite()) {
+                return Err(err(format!(
+                    "model '{}': vertex {v} has a non-finite coordinate {p:?}",
+                    model.name
+                )));
+            }
+            mesh.positions.push(p);
+            mesh.colors.push([0.8, 0.8, 0.8, 1.0]);
+            mesh.object_ids.push(0);
+        }
+        for &i in &m.indices {
+            if i as usize >= nverts {
+                return Err(err(format!(
+                    "model '{}': face index {i} out of range ({nverts} vertices)",
+                    model.name
+                )));
+            }
+            mesh.indices.push(base + i);
+        }
+        if m.normals.len() == m.positions.len() {
+            mesh.normals
+                .extend(m.normals.chunks_exact(3).map(|n| [n[0], n[1], n[2]]));
+        } else {
+            mesh.normals
+                .extend(face_normals(&mesh.positions[base as usize..], &m.indices));
+        }
+    }
+    if mesh.indices.is_empty() {
+        return Err(err("no triangles (no faces found)".into()));
+    }
+    Ok(mesh)
+}
+
+/// Area-weighted vertex normals.
+pub fn face_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
+    let mut acc = vec![Vec3::ZERO; positions.len()];
+    for t in indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| Vec3::from(positions[i as usize]));
+        let n = (b - a).cross(c - a);
+        for &i in t {
+            acc[i as usize] += n;
+        }
+    }
+    acc.into_iter()
+        .map(|n| n.normalize_or(Vec3::Y).into())
+        .collect()
+}
+
+/// Centres the mesh at the origin and scales it into the unit sphere.
+pub fn normalise(mesh: &mut Mesh) {
+    let (lo, hi) = mesh.bounds();
+    let centre = (lo + hi) * 0.5;
+    let radius = mesh
+        .positions
+        .iter()
+        .map(|p| (Vec3::from(*p) - centre).length())
+        .fold(0.0f32, f32::max);
+    let s = if radius > 0.0 { 1.0 / radius } else { 1.0 };
+    for p in &mut mesh.positions {
+        *p = ((Vec3::from(*p) - centre) * s).into();
+    }
+}
+
+/// Replicates `mesh` on a √n×√n grid in the x–y plane (object id = instance), renormalised.
+pub fn instance_grid(mesh: &Mesh, n: u32) -> Mesh {
+    if n <= 1 {
+        return mesh.clone();
+    }
+    let cols = (n as f32).sqrt().ceil() as u32;
+    let mut out = Mesh::default();
+    for k in 0..n {
+        let offset = Vec3::new(
+            (k % cols) as f32 * 1.6,
+            (k / cols) as f32 * 1.6,
+            (k % 3) as f32 * 0.3,
+        );
+        let mut inst = mesh.clone();
+        for p in &mut inst.positions {
+            *p = (Vec3::from(*p) + offset).into();
+        }
+        inst.object_ids.iter_mut().for_each(|id| *id = k);
+        out.append(&inst);
+    }
+    normalise(&mut out);
+    out
+}
+
+/// The `obj` generator: `path` (required), `instances` (grid), `alpha` (uniform opacity).
+pub fn build(spec: &SceneSpec) -> Result<Scene> {
+    let label = spec.label();
+    let mut r = spec.params.reader(&label);
+    let path = r
+        .opt_string("path")?
+        .ok_or_else(|| SceneError::OutOfRange {
+            scene: label.clone(),
+            param: "path".into(),
+            value: String::new(),
+            why: "the obj generator needs path = \"file.obj\"".into(),
+        })?;
+    let instances = r.int("instances", 1, 1, 4096)? as u32;
+    let alpha = r.float("alpha", 0.4, 0.0, 1.0)? as f32;
+    r.finish()?;
+    let mut mesh = load(Path::new(&path))?;
+    normalise(&mut mesh);
+    let mut mesh = instance_grid(&mesh, instances);
+    // Colour from the normal so layers are distinguishable in images.
+    for (c, n) in mesh.colors.iter_mut().zip(&mesh.normals) {
+        *c = [
+            0.2 + 0.6 * (0.5 + 0.5 * n[0]),
+            0.2 + 0.6 * (0.5 + 0.5 * n[1]),
+            0.2 + 0.6 * (0.5 + 0.5 * n[2]),
+            alpha,
+        ];
+    }
+    let objects = (0..instances)
+        .map(|k| ObjectInfo {
+            name: format!("instance{k}"),
+            closed: false,
+        })
+        .collect();
+    let mut scene = Scene::new(spec.clone(), mesh, frame_sphere(1.0, 45.0));
+    scene.objects = objects;
+    Ok(scene)
+}

@@ -1,0 +1,477 @@
+//! `mfx`: sweep multi-fragment methods on a GPU, log tidy CSV, and report.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use bench_core::methods;
+use bench_core::record::{CsvSink, Row, Sink};
+use bench_core::runner::{self, RunOptions};
+use bench_core::{BackendChoice, Gpu, GpuOptions};
+use clap::{Args, Parser, Subcommand};
+use scenarios::{ParamValue, Params, SceneSpec, Suite};
+
+#[derive(Parser)]
+#[command(
+    name = "mfx",
+    version,
+    about = "GPU multi-fragment rendering benchmark and research harness"
+)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Args, Clone)]
+struct GpuArgs {
+    /// wgpu backend: vulkan, gl or any.
+    #[arg(long, default_value = "vulkan")]
+    backend: BackendChoice,
+    /// Use the adapter whose name contains this (case-insensitive).
+    #[arg(long)]
+    adapter: Option<String>,
+    /// Use adapter number K of `mfx list adapters` (for one shard per GPU).
+    #[arg(long)]
+    adapter_index: Option<usize>,
+}
+
+impl GpuArgs {
+    fn options(&self) -> GpuOptions {
+        GpuOptions {
+            backend: self.backend,
+            adapter: self.adapter.clone(),
+            adapter_index: self.adapter_index,
+        }
+    }
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// List scenes, methods, studies, suites, adapters or CSV columns.
+    List {
+        /// scenes | methods | studies | suites | adapters | columns (all when omitted)
+        what: Option<String>,
+        #[command(flatten)]
+        gpu: GpuArgs,
+    },
+    /// Run a suite (a name in scenarios/suites or a TOML path) and write runs.csv + plots.
+    Sweep {
+        suite: String,
+        /// Output folder (default results/<run_id>/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Run shard I of N (e.g. 0/4): every scene group lands in exactly one shard.
+        #[arg(long, value_parser = parse_shard)]
+        shard: Option<(usize, usize)>,
+        /// Skip the report after the sweep.
+        #[arg(long)]
+        no_report: bool,
+        #[command(flatten)]
+        gpu: GpuArgs,
+    },
+    /// Turn a run folder's runs.csv into PNG/SVG plots and an HTML page.
+    Report {
+        dir: PathBuf,
+        /// Adapter name (substring) used as the baseline of cross-adapter speedups.
+        #[arg(long)]
+        baseline: Option<String>,
+    },
+    /// Render one scene with one method to a PNG (and the CPU reference beside it).
+    Render {
+        #[arg(long)]
+        scene: Option<String>,
+        /// Scene parameter, repeatable: --param depth_complexity=8
+        #[arg(long = "param")]
+        params: Vec<String>,
+        /// Render an OBJ file (the `obj` scene generator).
+        #[arg(long)]
+        obj: Option<PathBuf>,
+        #[arg(long, default_value = "depth_peel")]
+        method: String,
+        /// Method axis, repeatable: --axis max_layers=16
+        #[arg(long = "axis")]
+        axes: Vec<String>,
+        #[arg(long, default_value_t = 256)]
+        width: u32,
+        #[arg(long, default_value_t = 256)]
+        height: u32,
+        #[arg(long)]
+        png: PathBuf,
+        /// Also write the CPU reference composite here.
+        #[arg(long)]
+        reference_png: Option<PathBuf>,
+        #[command(flatten)]
+        gpu: GpuArgs,
+    },
+}
+
+fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String> {
+    let (i, n) = s.split_once('/').ok_or("shard must be I/N, e.g. 0/4")?;
+    let i: usize = i
+        .parse()
+        .map_err(|_| format!("shard index '{i}' is not a number"))?;
+    let n: usize = n
+        .parse()
+        .map_err(|_| format!("shard count '{n}' is not a number"))?;
+    if n == 0 || i >= n {
+        return Err(format!("shard {i}/{n}: need 0 <= I < N"));
+    }
+    Ok((i, n))
+}
+
+/// `k=v` into a typed value: integers, floats, booleans, else strings.
+fn parse_kv(s: &str) -> Result<(String, ParamValue)> {
+    let (k, v) = s
+        .split_once('=')
+        .with_context(|| format!("'{s}' is not key=value"))?;
+    let val = if let Ok(i) = v.parse::<i64>() {
+        ParamValue::Int(i)
+    } else if let Ok(x) = v.parse::<f64>() {
+        ParamValue::Float(x)
+    } else if let Ok(b) = v.parse::<bool>() {
+        ParamValue::Bool(b)
+    } else {
+        ParamValue::Str(v.to_string())
+    };
+    Ok((k.to_string(), val))
+}
+
+fn main() {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    let cli = Cli::parse();
+    if let Err(e) = run(cli) {
+        eprintln!("mfx: error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.cmd {
+        Cmd::List { what, gpu } => list(what.as_deref(), &gpu),
+        Cmd::Sweep {
+            suite,
+            out,
+            shard,
+            no_report,
+            gpu,
+        } => sweep(&suite, out, shard, no_report, &gpu),
+        Cmd::Report { dir, baseline } => {
+            let page = report::build(&dir, baseline.as_deref())
+                .with_context(|| format!("report of {}", dir.display()))?;
+            println!("report: {}", page.display());
+            Ok(())
+        }
+        Cmd::Render {
+            scene,
+            params,
+            obj,
+            method,
+            axes,
+            width,
+            height,
+            png,
+            reference_png,
+            gpu,
+        } => {
+            let mut p = Params::new();
+            for kv in &params {
+                let (k, v) = parse_kv(kv)?;
+                p.set(&k, v);
+            }
+            let generator = match (&scene, &obj) {
+                (_, Some(path)) => {
+                    p.set("path", ParamValue::Str(path.display().to_string()));
+                    "obj".to_string()
+                }
+                (Some(s), None) => s.clone(),
+                (None, None) => bail!("give --scene NAME or --obj FILE"),
+            };
+            let mut a = Params::new();
+            for kv in &axes {
+                let (k, v) = parse_kv(kv)?;
+                a.set(&k, v);
+            }
+            render(
+                &SceneSpec::new(&generator, p),
+                &method,
+                &a,
+                width,
+                height,
+                &png,
+                reference_png.as_deref(),
+                &gpu,
+            )
+        }
+    }
+}
+
+fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
+    let all = what.is_none();
+    let is = |w: &str| all || what == Some(w);
+    if let Some(w) = what {
+        if ![
+            "scenes", "methods", "studies", "suites", "adapters", "columns",
+        ]
+        .contains(&w)
+        {
+            bail!("unknown list '{w}' (scenes, methods, studies, suites, adapters, columns)");
+        }
+    }
+    if is("scenes") {
+        println!("scenes:");
+        for g in scenarios::scenes::GENERATORS {
+            println!("  {g:<8} {}", scenarios::scenes::describe(g));
+        }
+    }
+    if is("methods") {
+        println!("methods:");
+        for m in methods::all() {
+            println!(
+                "  {:<14} {} [axes: {}]",
+                m.name(),
+                m.describe(),
+                m.axes().join(", ")
+            );
+        }
+    }
+    if is("studies") {
+        println!("studies:");
+        for s in bench_core::studies::all() {
+            println!("  {:<10} {}", s.kind(), s.describe());
+        }
+    }
+    if is("suites") {
+        println!(
+            "suites (scenarios/suites/*.toml, built in: {}):",
+            scenarios::suite::BUILTIN
+                .iter()
+                .map(|(n, _)| *n)
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        if let Ok(rd) = std::fs::read_dir("scenarios/suites") {
+            let mut names: Vec<String> = rd
+                .filter_map(|e| e.ok())
+                .map(|e| e.path().display().to_string())
+                .collect();
+            names.sort();
+            for n in names {
+                println!("  {n}");
+            }
+        }
+    }
+    if is("columns") {
+        println!(
+            "CSV columns (schema {}):",
+            bench_core::record::SCHEMA_VERSION
+        );
+        for c in bench_core::record::columns() {
+            println!("  {:<24} {}", c.name, c.doc);
+        }
+    }
+    if is("adapters") {
+        println!("adapters ({:?}; index for --adapter-index):", gpu.backend);
+        for (i, a) in bench_core::gpu::list_adapters(gpu.backend)
+            .iter()
+            .enumerate()
+        {
+            let info = a.get_info();
+            let facts = bench_core::gpu::AdapterFacts::of(
+                &info,
+                a.features() & bench_core::gpu::wanted_features(),
+            );
+            println!(
+                "  [{i}] {} ({}, {}, driver {} {})",
+                facts.name, facts.backend, facts.device_type, facts.driver, facts.driver_info
+            );
+            println!("      features: {}", facts.features);
+            let l = a.limits();
+            println!(
+                "      max colour attachments: {}, bytes per sample: {}",
+                l.max_color_attachments, l.max_color_attachment_bytes_per_sample
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Progress bar + CSV as one sink.
+struct Progress<'a> {
+    csv: CsvSink,
+    bar: &'a indicatif::ProgressBar,
+    failed: usize,
+    skipped: usize,
+}
+
+impl Sink for Progress<'_> {
+    fn point_done(&mut self, row: &Row) -> bench_core::Result<()> {
+        self.csv.point_done(row)?;
+        match row.get("status") {
+            Some("failed") => {
+                self.failed += 1;
+                self.bar.println(format!(
+                    "failed: {} — {}",
+                    row.get("point_key").unwrap_or(""),
+                    row.get("reason").unwrap_or("")
+                ));
+            }
+            Some("skipped") => self.skipped += 1,
+            _ => {}
+        }
+        self.bar.set_message(format!(
+            "{} {}",
+            row.get("scene_label").unwrap_or(""),
+            row.get("method").unwrap_or("")
+        ));
+        self.bar.inc(1);
+        Ok(())
+    }
+}
+
+fn sweep(
+    suite_name: &str,
+    out: Option<PathBuf>,
+    shard: Option<(usize, usize)>,
+    no_report: bool,
+    gpu_args: &GpuArgs,
+) -> Result<()> {
+    let suite = Suite::load(suite_name)?;
+    let gpu = Gpu::new(&gpu_args.options())?;
+    let shard = shard.unwrap_or((0, 1));
+    let groups = runner::expand(&suite, gpu.facts.is_software)?;
+    let groups = runner::shard_groups(groups, shard);
+    let stamp = chrono_stamp();
+    let run_id = if shard.1 > 1 {
+        format!("{stamp}-{}-shard{}of{}", suite.name, shard.0, shard.1)
+    } else {
+        format!("{stamp}-{}", suite.name)
+    };
+    let out = out.unwrap_or_else(|| PathBuf::from("results").join(&run_id));
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let csv_path = out.join("runs.csv");
+    eprintln!(
+        "mfx: suite '{}' on {} ({}, {}){}: {} groups, {} rows -> {}",
+        suite.name,
+        gpu.facts.name,
+        gpu.facts.backend,
+        gpu.facts.device_type,
+        if gpu.facts.is_software {
+            " [software profile]"
+        } else {
+            ""
+        },
+        groups.len(),
+        runner::rows_in(&groups),
+        csv_path.display()
+    );
+    let bar = indicatif::ProgressBar::new(runner::rows_in(&groups) as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} [{elapsed}] {msg}").unwrap(),
+    );
+    if std::env::var_os("CI").is_some() {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    let mut sink = Progress {
+        csv: CsvSink::create(&csv_path)?,
+        bar: &bar,
+        failed: 0,
+        skipped: 0,
+    };
+    let opts = RunOptions {
+        run_id,
+        git_rev: runner::git_rev(),
+        shard,
+    };
+    let n = runner::run(&gpu, &suite, &groups, &opts, &mut sink)?;
+    bar.finish_and_clear();
+    eprintln!(
+        "mfx: wrote {n} rows ({} failed, {} skipped) to {}",
+        sink.failed,
+        sink.skipped,
+        csv_path.display()
+    );
+    if !no_report {
+        let page =
+            report::build(&out, None).with_context(|| format!("report of {}", out.display()))?;
+        eprintln!("mfx: report {}", page.display());
+    }
+    Ok(())
+}
+
+fn chrono_stamp() -> String {
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap_or_default()
+        .as_secs();
+    // UTC yyyymmdd-hhmmss without another dependency in the binary.
+    let (d, s) = (now / 86400, now % 86400);
+    let (y, m, day) = civil_from_days(d as i64);
+    format!(
+        "{y:04}{m:02}{day:02}-{:02}{:02}{:02}",
+        s / 3600,
+        (s / 60) % 60,
+        s % 60
+    )
+}
+
+/// Days since 1970-01-01 to (year, month, day) (H. Hinnant's algorithm).
+fn civil_from_days(z: i64) -> (i64, u32, u32) {
+    let z = z + 719468;
+    let era = z.div_euclid(146097);
+    let doe = z.rem_euclid(146097);
+    let yoe = (doe - doe / 1460 + doe / 36524 - doe / 146096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    (yoe + era * 400 + (m <= 2) as i64, m, d)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn render(
+    spec: &SceneSpec,
+    method: &str,
+    axes: &Params,
+    w: u32,
+    h: u32,
+    png: &Path,
+    reference_png: Option<&Path>,
+    gpu_args: &GpuArgs,
+) -> Result<()> {
+    let scene = spec.build()?;
+    let m = methods::by_name(method)
+        .with_context(|| format!("unknown method '{method}' (see `mfx list methods`)"))?;
+    let gpu = Gpu::new(&gpu_args.options())?;
+    m.supports(&gpu, axes)
+        .map_err(|why| anyhow::anyhow!("{method} cannot run here: {why}"))?;
+    let gscene = bench_core::gpu_scene::GpuScene::upload(&gpu, &scene, w, h);
+    let mut measured = runner::measure(&gpu, &gscene, m.as_ref(), axes, 0, 1)?;
+    let cap = measured.prepared.readback(&gpu, &gscene)?;
+    let img = cap
+        .image
+        .with_context(|| format!("{method} produces no image"))?;
+    bench_core::image_io::write_png(png, w, h, &img, [1.0, 1.0, 1.0])?;
+    println!(
+        "{}: {} on {} at {w}x{h} -> {}",
+        gpu.facts.name,
+        method,
+        spec.label(),
+        png.display()
+    );
+    if let Some(r) = reference_png {
+        let lists = bench_core::reference::rasterize(&scene, w, h);
+        let reference = bench_core::effects::reference_image("transparency", &lists, cap.expected)
+            .expect("known effect");
+        let ref32: Vec<[f32; 4]> = reference.iter().map(|p| p.map(|c| c as f32)).collect();
+        bench_core::image_io::write_png(r, w, h, &ref32, [1.0, 1.0, 1.0])?;
+        let e =
+            bench_core::metrics::image_error(&reference, &img, bench_core::metrics::BAD_PIXEL_TOL);
+        println!(
+            "reference -> {}; rmse {:.3e}, max abs {:.3e}, bad pixels {:.4}%",
+            r.display(),
+            e.rmse,
+            e.max_abs,
+            100.0 * e.bad_pixel_frac
+        );
+    }
+    Ok(())
+}
