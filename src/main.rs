@@ -259,6 +259,10 @@ fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
             }
         }
     }
+    if what == Some("columns") && std::env::var_os("MFX_COLUMNS_MARKDOWN").is_some() {
+        print!("{}", bench_core::record::columns_markdown());
+        return Ok(());
+    }
     if is("columns") {
         println!(
             "CSV columns (schema {}):",

@@ -7,7 +7,12 @@
 //! |-----------|----------------------------------------------------------------------|
 //! | `methods` | multi-fragment capture methods vs the exact CPU reference            |
 
+pub mod deferred;
+pub mod geometry;
 pub mod methods;
+pub mod prepass;
+pub mod shadows;
+pub mod stability;
 
 use std::cell::OnceCell;
 
@@ -20,7 +25,13 @@ use crate::reference::{rasterize, FragmentLists};
 use crate::Result;
 
 /// Columns owned by individual studies (appended after the shared axes, in this order).
-pub const STUDY_COLUMNS: &[&[Column]] = &[];
+pub const STUDY_COLUMNS: &[&[Column]] = &[
+    geometry::COLUMNS,
+    stability::COLUMNS,
+    deferred::COLUMNS,
+    prepass::COLUMNS,
+    shadows::COLUMNS,
+];
 
 /// One point of a group: a method (or path/variant) name and its axis values.
 #[derive(Clone, Debug)]
