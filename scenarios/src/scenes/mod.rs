@@ -7,9 +7,11 @@
 //! | `grass`  | the thesis's benchmark: N blades of 5 triangles             | —                       |
 //! | `shells` | nested closed spheres or boxes around the view axis         | max depth complexity 2n |
 //! | `quads`  | d overlapping screen-parallel quads at distinct depths      | max depth complexity d  |
+//! | `mesh`   | a procedural large mesh (bumpy sphere or wavy grid), shared vertices | —     |
 //! | `obj`    | an OBJ file (tobj), normalised into view, grid-instanced    | —                       |
 
 pub mod grass;
+pub mod mesh;
 pub mod quads;
 pub mod shells;
 
@@ -213,6 +215,7 @@ impl SceneSpec {
             "grass" => grass::build(self)?,
             "shells" => shells::build(self)?,
             "quads" => quads::build(self)?,
+            "mesh" => mesh::build(self)?,
             "obj" => obj::build(self)?,
             other => {
                 return Err(SceneError::UnknownGenerator(
@@ -235,7 +238,7 @@ impl SceneSpec {
 }
 
 /// Generator names, for `mfx list scenes`.
-pub const GENERATORS: &[&str] = &["grass", "shells", "quads", "obj"];
+pub const GENERATORS: &[&str] = &["grass", "shells", "quads", "mesh", "obj"];
 
 /// One-line description per generator, for `mfx list scenes`.
 pub fn describe(generator: &str) -> &'static str {
@@ -243,6 +246,7 @@ pub fn describe(generator: &str) -> &'static str {
         "grass" => "blades=N (5 triangles each), alpha, seed: the thesis's grass benchmark",
         "shells" => "count, shape=sphere|box, segments, alpha, seed: nested closed shells, max depth complexity 2·count",
         "quads" => "depth_complexity=d, alpha, tilt, seed: d quads over the centre at distinct depths",
+        "mesh" => "triangles=N, shape=sphere|grid, alpha: a procedural large mesh with shared vertices (geometry study)",
         "obj" => "path, instances, alpha: an OBJ file via tobj, normalised, instanced on a grid",
         _ => "",
     }

@@ -1,0 +1,948 @@
+//! The `geometry` study: how fast the GPU takes in geometry (Bavoil 2007, ch. 3, on today's
+//! GPUs through wgpu). Every point draws the scene's triangles with a constant-colour fragment
+//! shader and the depth test on, through a vertex shader that touches every attribute, and
+//! sweeps how the geometry is fed:
+//!
+//! | axis               | values                                                                 |
+//! |--------------------|------------------------------------------------------------------------|
+//! | `batch_size`       | triangles per draw call (0 = whole mesh), at a fixed total             |
+//! | `draw_triangles`   | triangles drawn (a prefix of the ordered mesh; 0 = all): the throughput curve |
+//! | `vertex_format`    | position: float32x3, float16x4, snorm16x4 (quantised to the batch's box) |
+//! | `normal_format`    | float32x3/x4, float16x4, snorm16x4, snorm8x4, unorm8x4, unorm10_10_10_2, none |
+//! | `color_format`     | float32x4/x3, float16x4, unorm16x4, snorm16x4, unorm8x4, snorm8x4, unorm10_10_10_2, none |
+//! | `texcoord_format`  | float32x2/x3, float16x2, snorm16x2, unorm16x2, none                    |
+//! | `layout`           | interleaved (one buffer) or separate (one buffer per attribute)        |
+//! | `extra_attributes` | 0…8 extra float32x4 attributes (the thesis's Fig. 3.3)                  |
+//! | `index_format`     | uint16 (batches of ≤ 65,536 vertices, built) or uint32                 |
+//! | `mesh_order`       | original, shuffled, vcache, vcache_vfetch (meshopt)                     |
+//! | `indexed`          | true, false (every corner its own vertex)                              |
+//! | `primitive`        | list, strip (meshopt stripify + primitive restart; indexed only)       |
+//!
+//! Each row records triangles/s and vertices/s, meshopt's ACMR/ATVR of the exact index stream
+//! drawn, the measured vertex-shader invocations (pipeline statistics, where the adapter has
+//! them) and so the post-transform cache hit rate, and the time at a small viewport over the
+//! time at the suite's, which is ≈ 1 when the raster stage is not the bottleneck (the thesis's
+//! check). Study options in the `[[study]]` table: `raster_check = true|false` (default true),
+//! `small_viewport_divisor = N` (default 8).
+
+pub mod prep;
+#[cfg(test)]
+mod tests;
+
+use std::collections::{BTreeMap, HashMap};
+
+use scenarios::suite::axis_product;
+use scenarios::{Mesh, Params, StudySpec};
+use wgpu::util::DeviceExt;
+
+use self::prep::{
+    AttrFormat, AttrKind, BatchSpec, Batched, FeedFormats, IndexFormat, Layout, MeshOrder,
+    Ordered, Primitive, Streams,
+};
+use super::{Emit, GroupCtx, PointSpec, Study};
+use crate::gpu::Gpu;
+use crate::gpu_scene::{AllocCounter, GpuScene};
+use crate::methods::floor::{clear_depth, depth_state};
+use crate::methods::{bool_param, camera_entry, int_param, shader, str_param};
+use crate::record::{Column, Row};
+use crate::runner::{failed_row, one_line, set_params, skipped_row};
+use crate::timing::{GpuTimer, Stats};
+use crate::{CoreError, Result};
+
+const WGSL: &str = include_str!("geometry.wgsl");
+
+const fn c(name: &'static str, doc: &'static str) -> Column {
+    Column { name, doc }
+}
+
+/// CSV columns this study owns (documented in results/README.md).
+pub const COLUMNS: &[Column] = &[
+    c("batch_size", "geometry: triangles per draw call asked for (0 = the whole mesh; 16-bit indices may split further, see batches)"),
+    c("draw_triangles", "geometry: triangles drawn per frame, a prefix of the ordered mesh (0 = all of it)"),
+    c("vertex_format", "geometry: position format: float32x3, float16x4 or snorm16x4 (both quantised to the batch's bounding box, decoded in the vertex shader)"),
+    c("normal_format", "geometry: normal format (wgpu name) or none; unorm formats store n·½+½"),
+    c("color_format", "geometry: colour format (wgpu name) or none"),
+    c("texcoord_format", "geometry: texture-coordinate format (wgpu name) or none"),
+    c("layout", "geometry: interleaved (one vertex buffer) or separate (one buffer per attribute)"),
+    c("extra_attributes", "geometry: extra float32x4 attributes per vertex (0..8; the thesis's Fig. 3.3)"),
+    c("index_format", "geometry: uint16 or uint32 indices"),
+    c("mesh_order", "geometry: triangle order: original, shuffled, vcache (meshopt), vcache_vfetch (meshopt cache + fetch)"),
+    c("indexed", "geometry: true for indexed draws, false for one vertex per triangle corner"),
+    c("primitive", "geometry: list, or strip (meshopt stripify, primitive restart)"),
+    c("batches", "geometry: draw calls per frame"),
+    c("batch_vertices", "geometry: vertices in the vertex buffers after batching (shared vertices are duplicated across batches)"),
+    c("index_count", "geometry: indices submitted per frame (restart indices included; 0 for non-indexed)"),
+    c("vertex_stride_bytes", "geometry: bytes per vertex, summed over the vertex buffers"),
+    c("vertex_bytes", "geometry: bytes of vertex buffers"),
+    c("index_bytes", "geometry: bytes of the index buffer"),
+    c("acmr", "geometry: meshopt ACMR (vertices transformed per triangle, FIFO cache of 16) of the drawn index stream; best ≈ 0.5, worst 3"),
+    c("atvr", "geometry: meshopt ATVR (vertices transformed per vertex, FIFO 16); best 1"),
+    c("vs_acmr", "geometry: measured vertex-shader invocations per triangle (pipeline statistics)"),
+    c("post_transform_hit_rate", "geometry: measured 1 − vs_invocations / (3 × triangles): the share of triangle corners served without a vertex-shader run"),
+    c("small_viewport", "geometry: WxH of the raster-bound check's small viewport"),
+    c("gpu_ms_small_viewport", "geometry: median GPU ms of the same point at the small viewport"),
+    c("raster_bound_ratio", "geometry: gpu_ms_median / gpu_ms_small_viewport; ≈ 1 when the raster stage is not the bottleneck"),
+    c("prep_ms", "geometry: CPU ms to order, batch, stripify and encode this point's buffers (untimed on the GPU)"),
+];
+
+const AXES: &[&str] = &[
+    "batch_size",
+    "draw_triangles",
+    "vertex_format",
+    "normal_format",
+    "color_format",
+    "texcoord_format",
+    "layout",
+    "extra_attributes",
+    "index_format",
+    "mesh_order",
+    "indexed",
+    "primitive",
+];
+
+const OPTIONS: &[&str] = &["raster_check", "small_viewport_divisor"];
+
+/// One point, parsed.
+#[derive(Clone, Debug)]
+pub struct FeedSpec {
+    pub formats: FeedFormats,
+    pub batch: BatchSpec,
+    pub order: MeshOrder,
+}
+
+fn opt_format(params: &Params, axis: &str, kind: AttrKind, default: &str) -> Result<Option<AttrFormat>, String> {
+    let mut allowed: Vec<&str> = kind.allowed().to_vec();
+    if kind != AttrKind::Position {
+        allowed.push("none");
+    }
+    let name = str_param(params, axis, default, &allowed)?;
+    Ok(prep::format_by_name(&name))
+}
+
+impl FeedSpec {
+    /// Reads and checks a point's axes; a bad value is an error naming the axis.
+    pub fn from_params(p: &Params) -> Result<FeedSpec, String> {
+        let position = opt_format(p, "vertex_format", AttrKind::Position, "float32x3")?
+            .expect("positions always have a format");
+        let normal = opt_format(p, "normal_format", AttrKind::Normal, "float32x3")?;
+        let color = opt_format(p, "color_format", AttrKind::Color, "none")?;
+        let texcoord = opt_format(p, "texcoord_format", AttrKind::Texcoord, "none")?;
+        let layout = match str_param(p, "layout", "separate", &["interleaved", "separate"])?.as_str() {
+            "interleaved" => Layout::Interleaved,
+            _ => Layout::Separate,
+        };
+        let extra_attributes = int_param(p, "extra_attributes", 0, 0, 8)? as u32;
+        let batch_size = int_param(p, "batch_size", 0, 0, i32::MAX as i64)? as usize;
+        let draw_triangles = int_param(p, "draw_triangles", 0, 0, i32::MAX as i64)? as usize;
+        let index_format = match str_param(p, "index_format", "uint32", &["uint16", "uint32"])?.as_str() {
+            "uint16" => IndexFormat::Uint16,
+            _ => IndexFormat::Uint32,
+        };
+        let order = MeshOrder::parse(&str_param(p, "mesh_order", "original", prep::MESH_ORDERS)?)
+            .expect("checked");
+        let indexed = bool_param(p, "indexed", true)?;
+        let primitive = match str_param(p, "primitive", "list", &["list", "strip"])?.as_str() {
+            "strip" => Primitive::Strip,
+            _ => Primitive::List,
+        };
+        Ok(FeedSpec {
+            formats: FeedFormats {
+                position,
+                normal,
+                color,
+                texcoord,
+                extra_attributes,
+                layout,
+            },
+            batch: BatchSpec {
+                batch_size,
+                draw_triangles,
+                index_format,
+                primitive,
+                indexed,
+            },
+            order,
+        })
+    }
+
+    /// Why this point cannot run on this adapter (a `skipped` row), if it cannot.
+    pub fn unsupported(&self, gpu: &Gpu, mesh: &Mesh) -> Option<String> {
+        if !self.batch.indexed && self.batch.primitive == Primitive::Strip {
+            return Some("strips are stitched with primitive restart, which needs indexed draws".into());
+        }
+        let slots = self.formats.slots().len() as u32;
+        if slots > gpu.limits.max_vertex_attributes {
+            return Some(format!(
+                "{slots} vertex attributes exceed this adapter's max_vertex_attributes = {}",
+                gpu.limits.max_vertex_attributes
+            ));
+        }
+        let bufs = self.formats.buffer_count() as u32;
+        if bufs > gpu.limits.max_vertex_buffers {
+            return Some(format!(
+                "{bufs} separate vertex buffers exceed this adapter's max_vertex_buffers = {}",
+                gpu.limits.max_vertex_buffers
+            ));
+        }
+        if self.batch.draw_triangles > mesh.triangle_count() {
+            return Some(format!(
+                "draw_triangles = {} but the scene has only {} triangles",
+                self.batch.draw_triangles,
+                mesh.triangle_count()
+            ));
+        }
+        None
+    }
+}
+
+/// Deliberately wrong decodes, for the test that proves a wrong decode cannot pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WrongDecode {
+    /// Quantised positions read as if stored in [0, 1] (unorm convention) instead of [−1, 1].
+    PositionUnormConvention,
+    /// A normal stored in a unorm format used without its s·2 − 1 remap.
+    NormalWithoutRemap,
+}
+
+fn wgsl_type(f: AttrFormat) -> &'static str {
+    match f.comps {
+        2 => "vec2<f32>",
+        3 => "vec3<f32>",
+        _ => "vec4<f32>",
+    }
+}
+
+fn pad4(expr: &str, comps: u32) -> String {
+    match comps {
+        2 => format!("vec4<f32>({expr}, 0.0, 0.0)"),
+        3 => format!("vec4<f32>({expr}, 0.0)"),
+        _ => expr.to_string(),
+    }
+}
+
+/// The WGSL of a feed: a generated prelude (the vertex input struct and the decodes, from the
+/// same rules as the CPU twin in `prep.rs`) then `geometry.wgsl`.
+pub fn shader_source(formats: &FeedFormats, wrong: Option<WrongDecode>) -> String {
+    let slots = formats.slots();
+    let mut s = String::from("struct FeedIn {\n");
+    for sl in &slots {
+        s += &format!(
+            "    @location({}) {}: {},\n",
+            sl.location,
+            sl.kind.name(),
+            wgsl_type(sl.format)
+        );
+    }
+    s += "};\n\n";
+    s += "fn decode_position(v: FeedIn, batch: u32) -> vec3<f32> {\n";
+    if prep::position_quantised(formats.position) {
+        s += "    let b = boxes[batch];\n";
+        if wrong == Some(WrongDecode::PositionUnormConvention) {
+            s += "    return b.centre.xyz - b.half.xyz + 2.0 * b.half.xyz * v.position.xyz;\n";
+        } else {
+            s += "    return b.centre.xyz + b.half.xyz * v.position.xyz;\n";
+        }
+    } else {
+        s += "    return v.position;\n";
+    }
+    s += "}\n\nfn attribute_check(v: FeedIn) -> vec3<f32> {\n    var acc = vec3<f32>(0.0);\n";
+    for (k, sl) in slots.iter().skip(1).enumerate() {
+        let field = format!("v.{}", sl.kind.name());
+        let decoded = if prep::remapped(sl.kind, sl.format)
+            && !(wrong == Some(WrongDecode::NormalWithoutRemap) && sl.kind == AttrKind::Normal)
+        {
+            format!("({field} * 2.0 - 1.0)")
+        } else {
+            field
+        };
+        let (w, m) = prep::check_coeffs(k);
+        s += &format!(
+            "    {{\n        let d = {};\n        acc += {w:?} * (d.xyz + d.w * vec3<f32>({:?}, {:?}, {:?}));\n    }}\n",
+            pad4(&decoded, sl.format.comps),
+            m[0],
+            m[1],
+            m[2]
+        );
+    }
+    s += "    return acc;\n}\n\n";
+    s + WGSL
+}
+
+/// What the fragment stage writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// The benchmark: constant colour into RGBA8, depth test on.
+    Bench,
+    /// Tests: decoded attributes and depth into RGBA32F.
+    Check,
+}
+
+struct Target {
+    width: u32,
+    height: u32,
+    color: wgpu::Texture,
+    color_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+}
+
+/// A feed ready to draw: every buffer, pipeline, target and query exists before the first frame.
+pub struct FeedGpu {
+    pipeline: wgpu::RenderPipeline,
+    bind: wgpu::BindGroup,
+    vertex_buffers: Vec<wgpu::Buffer>,
+    index_buffer: Option<(wgpu::Buffer, wgpu::IndexFormat)>,
+    draws: Vec<prep::Batch>,
+    targets: Vec<Target>,
+    stats: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
+    reversed: bool,
+    pub alloc: AllocCounter,
+}
+
+impl FeedGpu {
+    /// Creates everything for one point. `sizes` are the render targets (the suite's viewport,
+    /// then the small one of the raster check).
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        gpu: &Gpu,
+        scene: &GpuScene,
+        spec: &FeedSpec,
+        batched: &Batched,
+        streams: &Streams,
+        mode: Mode,
+        sizes: &[(u32, u32)],
+        wrong: Option<WrongDecode>,
+    ) -> FeedGpu {
+        let d = &gpu.device;
+        let mut alloc = AllocCounter::default();
+        let src = shader_source(&spec.formats, wrong);
+        let module = shader(gpu, "geometry feed", &src);
+        let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("geometry feed"),
+            entries: &[
+                camera_entry(0),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::VERTEX,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::VERTEX,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("geometry feed"),
+            bind_group_layouts: &[Some(&bgl)],
+            immediate_size: 0,
+        });
+        let boxes: Vec<[f32; 8]> = batched
+            .batches
+            .iter()
+            .map(|b| {
+                [
+                    b.centre[0], b.centre[1], b.centre[2], 0.0, b.half[0], b.half[1], b.half[2],
+                    0.0,
+                ]
+            })
+            .collect();
+        alloc.bytes += (boxes.len() * 32) as u64 + 16;
+        let box_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("batch boxes"),
+            contents: bytemuck::cast_slice(&boxes),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let feed_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("feed touch"),
+            contents: bytemuck::cast_slice(&[0.0f32; 4]),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("geometry feed"),
+            layout: &bgl,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: scene.camera.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: box_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: feed_buf.as_entire_binding(),
+                },
+            ],
+        });
+        let vertex_buffers: Vec<wgpu::Buffer> = streams
+            .buffers
+            .iter()
+            .map(|b| {
+                alloc.bytes += b.len() as u64;
+                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("feed vertices"),
+                    // A zero-sized buffer cannot be bound; an empty mesh never reaches here.
+                    contents: b,
+                    usage: wgpu::BufferUsages::VERTEX,
+                })
+            })
+            .collect();
+        let index_buffer = spec.batch.indexed.then(|| {
+            let fmt = spec.batch.index_format;
+            let bytes: Vec<u8> = match fmt {
+                IndexFormat::Uint32 => bytemuck::cast_slice(&batched.indices).to_vec(),
+                IndexFormat::Uint16 => {
+                    let v: Vec<u16> = batched.indices.iter().map(|&i| i as u16).collect();
+                    let mut b: Vec<u8> = bytemuck::cast_slice(&v).to_vec();
+                    // Buffer sizes must be a multiple of 4 (COPY_BUFFER_ALIGNMENT).
+                    b.resize(b.len().next_multiple_of(4), 0);
+                    b
+                }
+            };
+            alloc.bytes += bytes.len() as u64;
+            let buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("feed indices"),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::INDEX,
+            });
+            (buf, fmt.wgpu())
+        });
+        let vlayouts: Vec<Option<wgpu::VertexBufferLayout>> = streams
+            .strides
+            .iter()
+            .zip(&streams.attributes)
+            .map(|(&stride, attrs)| {
+                Some(wgpu::VertexBufferLayout {
+                    array_stride: stride,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: attrs,
+                })
+            })
+            .collect();
+        let color_format = match mode {
+            Mode::Bench => wgpu::TextureFormat::Rgba8Unorm,
+            Mode::Check => wgpu::TextureFormat::Rgba32Float,
+        };
+        let targets_state = [Some(wgpu::ColorTargetState {
+            format: color_format,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        let (topology, strip_index_format) = match spec.batch.primitive {
+            Primitive::List => (wgpu::PrimitiveTopology::TriangleList, None),
+            Primitive::Strip => (
+                wgpu::PrimitiveTopology::TriangleStrip,
+                Some(spec.batch.index_format.wgpu()),
+            ),
+        };
+        let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("geometry feed"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_feed"),
+                compilation_options: Default::default(),
+                buffers: &vlayouts,
+            },
+            primitive: wgpu::PrimitiveState {
+                topology,
+                strip_index_format,
+                // Both faces drawn: strips alternate winding, and culling would hide work.
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(depth_state(scene.reversed_z, true)),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some(match mode {
+                    Mode::Bench => "fs_constant",
+                    Mode::Check => "fs_check",
+                }),
+                compilation_options: Default::default(),
+                targets: &targets_state,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let targets = sizes
+            .iter()
+            .map(|&(w, h)| {
+                let color = alloc.texture(
+                    gpu,
+                    "feed colour",
+                    w,
+                    h,
+                    color_format,
+                    wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                );
+                let depth = alloc.texture(
+                    gpu,
+                    "feed depth",
+                    w,
+                    h,
+                    wgpu::TextureFormat::Depth32Float,
+                    wgpu::TextureUsages::RENDER_ATTACHMENT,
+                );
+                Target {
+                    width: w,
+                    height: h,
+                    color_view: color.create_view(&Default::default()),
+                    color,
+                    depth_view: depth.create_view(&Default::default()),
+                }
+            })
+            .collect();
+        let stats = gpu
+            .has(wgpu::Features::PIPELINE_STATISTICS_QUERY)
+            .then(|| {
+                let set = d.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("feed statistics"),
+                    ty: wgpu::QueryType::PipelineStatistics(
+                        wgpu::PipelineStatisticsTypes::VERTEX_SHADER_INVOCATIONS
+                            | wgpu::PipelineStatisticsTypes::FRAGMENT_SHADER_INVOCATIONS,
+                    ),
+                    count: 1,
+                });
+                let resolve = d.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("statistics resolve"),
+                    size: 256,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                let read = d.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("statistics read"),
+                    size: 256,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                (set, resolve, read)
+            });
+        FeedGpu {
+            pipeline,
+            bind,
+            vertex_buffers,
+            index_buffer,
+            draws: batched.batches.clone(),
+            targets,
+            stats,
+            reversed: scene.reversed_z,
+            alloc,
+        }
+    }
+
+    /// Encodes and submits one frame into target `t`; with `stats`, wraps it in the pipeline
+    /// statistics query (never in a timed frame).
+    pub fn frame(&self, gpu: &Gpu, t: usize, timer: Option<&mut GpuTimer>, stats: bool) {
+        let target = &self.targets[t];
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("geometry feed"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &target.color_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        // Check mode: alpha −1 marks "no fragment" (depth is in [0, 1]).
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: 0.0,
+                            g: 0.0,
+                            b: 0.0,
+                            a: -1.0,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &target.depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(clear_depth(self.reversed)),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: timer.and_then(|t| t.render_pass("feed")),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            let query = if stats { self.stats.as_ref() } else { None };
+            if let Some((set, _, _)) = query {
+                pass.begin_pipeline_statistics_query(set, 0);
+            }
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.bind, &[]);
+            for (i, b) in self.vertex_buffers.iter().enumerate() {
+                pass.set_vertex_buffer(i as u32, b.slice(..));
+            }
+            if let Some((ib, fmt)) = &self.index_buffer {
+                pass.set_index_buffer(ib.slice(..), *fmt);
+            }
+            for (i, b) in self.draws.iter().enumerate() {
+                // instance_index = batch: the vertex shader's key into the per-batch boxes.
+                let inst = i as u32..i as u32 + 1;
+                if self.index_buffer.is_some() {
+                    pass.draw_indexed(
+                        b.first_index..b.first_index + b.index_count,
+                        b.first_vertex as i32,
+                        inst,
+                    );
+                } else {
+                    pass.draw(b.first_vertex..b.first_vertex + b.vertex_count, inst);
+                }
+            }
+            if query.is_some() {
+                pass.end_pipeline_statistics_query();
+            }
+        }
+        if let (true, Some((set, resolve, read))) = (stats, &self.stats) {
+            enc.resolve_query_set(set, 0..1, resolve, 0);
+            enc.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
+        }
+        gpu.queue.submit([enc.finish()]);
+    }
+
+    /// Vertex- and fragment-shader invocations of one untimed frame, where the adapter counts them.
+    pub fn invocations(&self, gpu: &Gpu) -> Result<Option<(u64, u64)>> {
+        if self.stats.is_none() {
+            return Ok(None);
+        }
+        self.frame(gpu, 0, None, true);
+        gpu.wait()?;
+        let (_, _, read) = self.stats.as_ref().expect("checked");
+        let bytes = gpu.map_read_range(read, 16)?;
+        let v: &[u64] = bytemuck::cast_slice(&bytes);
+        Ok(Some((v[0], v[1])))
+    }
+
+    /// Reads target `t`'s colour (check mode: RGBA32F; bench mode is RGBA8 and not read).
+    pub fn read_check(&self, gpu: &Gpu, t: usize) -> Result<Vec<[f32; 4]>> {
+        let target = &self.targets[t];
+        let row = (target.width as u64 * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as u64);
+        let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("check read"),
+            size: row * target.height as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.copy_texture_to_buffer(
+            target.color.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buf,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row as u32),
+                    rows_per_image: None,
+                },
+            },
+            wgpu::Extent3d {
+                width: target.width,
+                height: target.height,
+                depth_or_array_layers: 1,
+            },
+        );
+        gpu.queue.submit([enc.finish()]);
+        let bytes = gpu.map_read(&buf)?;
+        let mut out = Vec::with_capacity((target.width * target.height) as usize);
+        for y in 0..target.height as usize {
+            let r = &bytes[y * row as usize..y * row as usize + target.width as usize * 16];
+            out.extend(bytemuck::cast_slice::<u8, [f32; 4]>(r).iter().copied());
+        }
+        Ok(out)
+    }
+}
+
+fn scope_error(e: Option<wgpu::Error>, what: &str) -> Result<()> {
+    match e {
+        None => Ok(()),
+        Some(wgpu::Error::OutOfMemory { .. }) => Err(CoreError::OutOfMemory(format!(
+            "{what}: the GPU ran out of memory"
+        ))),
+        Some(e) => Err(CoreError::Gpu(format!("{what}: {e}"))),
+    }
+}
+
+/// Runs `f` inside validation and out-of-memory error scopes, so a GPU error is this point's.
+pub fn scoped<T>(gpu: &Gpu, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+    gpu.check_lost()?;
+    let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let r = f();
+    scope_error(pollster::block_on(oom.pop()), what)?;
+    scope_error(pollster::block_on(validation.pop()), what)?;
+    gpu.check_lost()?;
+    r
+}
+
+/// GPU and wall-clock ms of `reps` frames into target `t` after `warmup` (as `runner::measure`).
+fn time_frames(gpu: &Gpu, feed: &FeedGpu, t: usize, warmup: u32, reps: u32) -> Result<(Option<Stats>, Stats)> {
+    let mut timer = GpuTimer::new(gpu);
+    let mut g = Vec::new();
+    let mut c = Vec::new();
+    for rep in 0..warmup + reps {
+        timer.begin_frame();
+        let t0 = std::time::Instant::now();
+        feed.frame(gpu, t, Some(&mut timer), false);
+        gpu.wait()?;
+        let cpu = t0.elapsed().as_secs_f64() * 1e3;
+        let passes = timer.read(gpu)?;
+        if rep >= warmup {
+            c.push(cpu);
+            if timer.enabled() {
+                g.push(passes.iter().map(|(_, ms)| ms).sum());
+            }
+        }
+    }
+    Ok((Stats::of(&g), Stats::of(&c).unwrap_or_default()))
+}
+
+pub struct GeometryStudy;
+
+fn study_options(spec: &StudySpec) -> Result<(bool, u32)> {
+    if let Some(k) = spec.extra.keys().find(|k| !OPTIONS.contains(&k.as_str())) {
+        return Err(CoreError::Param(format!(
+            "geometry study: unknown key '{k}' (options: {}; axes go in `axes`)",
+            OPTIONS.join(", ")
+        )));
+    }
+    let raster_check = match spec.extra.get("raster_check") {
+        None => true,
+        Some(toml::Value::Boolean(b)) => *b,
+        Some(v) => return Err(CoreError::Param(format!("geometry study: raster_check must be true or false, got {v}"))),
+    };
+    let div = match spec.extra.get("small_viewport_divisor") {
+        None => 8,
+        Some(toml::Value::Integer(i)) if (2..=1024).contains(i) => *i as u32,
+        Some(v) => return Err(CoreError::Param(format!("geometry study: small_viewport_divisor must be an integer in 2..=1024, got {v}"))),
+    };
+    Ok((raster_check, div))
+}
+
+/// The CPU-side product of one point.
+pub struct PreparedFeed {
+    pub batched: Batched,
+    pub streams: Streams,
+}
+
+/// Orders (cached by the caller), batches and encodes one point.
+pub fn prepare_feed(mesh: &Mesh, ordered: &Ordered, spec: &FeedSpec) -> PreparedFeed {
+    let batched = prep::batch(mesh, ordered, &spec.batch);
+    let streams = prep::encode_streams(mesh, &batched, &spec.formats);
+    PreparedFeed { batched, streams }
+}
+
+impl Study for GeometryStudy {
+    fn kind(&self) -> &'static str {
+        "geometry"
+    }
+    fn describe(&self) -> &'static str {
+        "geometry feeding (Bavoil ch. 3): batch size, vertex formats, layout, index precision, mesh order, strips; triangles/s and post-transform cache hits"
+    }
+    fn points(&self, spec: &StudySpec) -> Result<Vec<PointSpec>> {
+        if !spec.methods.is_empty() {
+            return Err(CoreError::Param(
+                "the geometry study takes no `methods` (it sweeps `axes`)".into(),
+            ));
+        }
+        if let Some(k) = spec.axes.keys().find(|k| !AXES.contains(&k.as_str())) {
+            return Err(CoreError::Param(format!(
+                "geometry study: unknown axis '{k}' (known: {})",
+                AXES.join(", ")
+            )));
+        }
+        study_options(spec)?;
+        let points: Vec<PointSpec> = axis_product(&spec.axes, AXES)
+            .into_iter()
+            .map(|params| PointSpec {
+                method: "geometry".into(),
+                params,
+            })
+            .collect();
+        for p in &points {
+            FeedSpec::from_params(&p.params)
+                .map_err(|e| CoreError::Param(format!("geometry study: {e}")))?;
+        }
+        Ok(points)
+    }
+
+    fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
+        let (raster_check, div) = study_options(ctx.study)?;
+        let gpu = ctx.gpu;
+        let mesh = &ctx.scene.mesh;
+        let (w, h) = (ctx.group.width, ctx.group.height);
+        let small = ((w / div).max(1), (h / div).max(1));
+        let mut orders: HashMap<MeshOrder, Ordered> = HashMap::new();
+        for (i, pt) in ctx.group.points.iter().enumerate() {
+            let mut row = Row::new();
+            row.set("method", "geometry");
+            set_params(&mut row, &pt.params)?;
+            let spec = FeedSpec::from_params(&pt.params).map_err(CoreError::Param)?;
+            if let Some(why) = spec.unsupported(gpu, mesh) {
+                emit(i, skipped_row(row, &why))?;
+                continue;
+            }
+            let t0 = std::time::Instant::now();
+            let ordered = orders
+                .entry(spec.order)
+                .or_insert_with(|| prep::order_mesh(mesh, spec.order));
+            let feed = prepare_feed(mesh, ordered, &spec);
+            let prep_ms = t0.elapsed().as_secs_f64() * 1e3;
+            match measure_feed(ctx, &spec, &feed, raster_check.then_some(small)) {
+                Ok(m) => {
+                    fill_row(&mut row, &spec, &feed, &m, prep_ms, small, ctx.floor_ms);
+                    emit(i, row)?;
+                }
+                Err(e) => emit(i, failed_row(row, &e.to_string()))?,
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What one point measured on the GPU.
+pub struct FeedMeasured {
+    pub gpu_ms: Option<Stats>,
+    pub cpu_ms: Stats,
+    pub gpu_ms_small: Option<Stats>,
+    pub invocations: Option<(u64, u64)>,
+    pub bytes_allocated: u64,
+}
+
+fn measure_feed(
+    ctx: &GroupCtx<'_>,
+    spec: &FeedSpec,
+    feed: &PreparedFeed,
+    small: Option<(u32, u32)>,
+) -> Result<FeedMeasured> {
+    let gpu = ctx.gpu;
+    let mut sizes = vec![(ctx.group.width, ctx.group.height)];
+    sizes.extend(small);
+    let fg = scoped(gpu, "prepare", || {
+        Ok(FeedGpu::new(
+            gpu,
+            ctx.gscene,
+            spec,
+            &feed.batched,
+            &feed.streams,
+            Mode::Bench,
+            &sizes,
+            None,
+        ))
+    })?;
+    scoped(gpu, "frame", || {
+        let (gpu_ms, cpu_ms) = time_frames(gpu, &fg, 0, ctx.warmup, ctx.reps)?;
+        let gpu_ms_small = match small {
+            Some(_) => time_frames(gpu, &fg, 1, ctx.warmup, ctx.reps)?.0,
+            None => None,
+        };
+        let invocations = fg.invocations(gpu)?;
+        Ok(FeedMeasured {
+            gpu_ms,
+            cpu_ms,
+            gpu_ms_small,
+            invocations,
+            bytes_allocated: fg.alloc.bytes,
+        })
+    })
+}
+
+fn fill_row(
+    row: &mut Row,
+    spec: &FeedSpec,
+    feed: &PreparedFeed,
+    m: &FeedMeasured,
+    prep_ms: f64,
+    small: (u32, u32),
+    floor_ms: Option<f64>,
+) {
+    let b = &feed.batched;
+    let tris = b.triangles as f64;
+    let index_count: u64 = if spec.batch.indexed { b.indices.len() as u64 } else { 0 };
+    // Vertices per draw in the thesis's sense: indices for indexed draws, corners otherwise.
+    let submitted = if spec.batch.indexed { index_count as f64 } else { 3.0 * tris };
+    let index_bytes = match (spec.batch.indexed, spec.batch.index_format) {
+        (false, _) => 0,
+        (true, IndexFormat::Uint16) => 2 * index_count,
+        (true, IndexFormat::Uint32) => 4 * index_count,
+    };
+    row.set("effect", "none")
+        .set("exact", false)
+        .set("batches", b.batches.len())
+        .set("batch_vertices", b.verts.len())
+        .set("index_count", index_count)
+        .set("vertex_stride_bytes", feed.streams.strides.iter().sum::<u64>())
+        .set("vertex_bytes", feed.streams.bytes())
+        .set("index_bytes", index_bytes)
+        .set_f("prep_ms", prep_ms)
+        .set("geometry_passes", 1)
+        .set("bytes_allocated", m.bytes_allocated)
+        .set_f("cpu_ms_median", m.cpu_ms.median)
+        .set_f("cpu_ms_min", m.cpu_ms.min)
+        .set_f("cpu_ms_max", m.cpu_ms.max);
+    if let Some(s) = &b.cache {
+        row.set_f("acmr", s.acmr as f64).set_f("atvr", s.atvr as f64);
+    }
+    if let Some(g) = m.gpu_ms {
+        row.set_f("gpu_ms_median", g.median)
+            .set_f("gpu_ms_min", g.min)
+            .set_f("gpu_ms_max", g.max)
+            .set_f("gpu_ms_rel_noise", g.rel_noise)
+            .set(
+                "pass_ms",
+                serde_json::to_string(&BTreeMap::from([("feed", g.median)])).unwrap_or_default(),
+            );
+        if g.median > 0.0 {
+            let secs = g.median * 1e-3;
+            row.set_f("triangles_per_s", tris / secs)
+                .set_f("vertices_per_s", submitted / secs);
+        }
+        if let Some(s) = m.gpu_ms_small {
+            row.set("small_viewport", format!("{}x{}", small.0, small.1))
+                .set_f("gpu_ms_small_viewport", s.median);
+            if s.median > 0.0 {
+                row.set_f("raster_bound_ratio", g.median / s.median);
+            }
+        }
+        let _ = floor_ms; // x_floor is added by the runner
+    }
+    if let Some((vs, fs)) = m.invocations {
+        row.set("vs_invocations", vs).set("ps_invocations", fs);
+        if tris > 0.0 {
+            row.set_f("vs_acmr", vs as f64 / tris)
+                .set_f("post_transform_hit_rate", 1.0 - vs as f64 / (3.0 * tris));
+        }
+    }
+    let mut notes = Vec::new();
+    if m.gpu_ms.is_none() {
+        notes.push("no TIMESTAMP_QUERY: only wall-clock times".to_string());
+    }
+    if m.invocations.is_none() {
+        notes.push("no PIPELINE_STATISTICS_QUERY: post-transform hits not measured".to_string());
+    }
+    if spec.batch.batch_size > 0 && b.batches.len() > 1 {
+        let asked = (b.triangles).div_ceil(spec.batch.batch_size);
+        if asked != b.batches.len() {
+            notes.push(format!(
+                "{} batches instead of {asked}: 16-bit indices cap a batch at {} vertices",
+                b.batches.len(),
+                spec.batch.index_format.max_batch_vertices(spec.batch.primitive)
+            ));
+        }
+    }
+    if !notes.is_empty() {
+        row.set("notes", one_line(&notes.join("; ")));
+    }
+}
