@@ -572,15 +572,6 @@ impl Streams {
     }
 }
 
-/// A small deterministic hash → [0, 1) for the extra attributes' values.
-fn unit_hash(a: u32, b: u32) -> f32 {
-    let mut x = (a as u64) << 32 | b as u64;
-    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^= x >> 31;
-    (x >> 40) as f32 / (1u64 << 24) as f32
-}
-
 /// The attribute's natural value at source vertex `v` (position in world units).
 pub fn natural(kind: AttrKind, mesh: &Mesh, v: u32) -> [f32; 4] {
     let i = v as usize;
@@ -604,12 +595,16 @@ pub fn natural(kind: AttrKind, mesh: &Mesh, v: u32) -> [f32; 4] {
                 0.0,
             ]
         }
-        AttrKind::Extra(k) => [
-            unit_hash(v, 4 * k),
-            unit_hash(v, 4 * k + 1),
-            unit_hash(v, 4 * k + 2),
-            unit_hash(v, 4 * k + 3),
-        ],
+        AttrKind::Extra(k) => {
+            // Smooth in space like real texture coordinates (a per-vertex hash would be noise
+            // that no interpolation reproduces to better than its gradient), distinct per k.
+            let p = mesh.positions[i];
+            std::array::from_fn(|c| {
+                let a = 1.0 + ((4 * k + c as u32) % 5) as f32 * 0.7;
+                let ph = (4 * k + c as u32) as f32 * 0.9;
+                0.5 + 0.5 * (a * p[0] - 0.8 * a * p[1] + 0.5 * p[2] + ph).sin()
+            })
+        }
     }
 }
 
