@@ -27,6 +27,7 @@ use crate::{ParamValue, Params, Result, SceneError, SceneSpec};
 pub const BUILTIN: &[(&str, &str)] = &[
     ("smoke", include_str!("../suites/smoke.toml")),
     ("default", include_str!("../suites/default.toml")),
+    ("geometry", include_str!("../suites/geometry.toml")),
 ];
 
 #[derive(Clone, Debug)]

@@ -38,7 +38,11 @@ pub fn build(spec: &SceneSpec) -> Result<Scene> {
             let (p, n) = if sphere {
                 let theta = v * std::f32::consts::PI;
                 let phi = u * std::f32::consts::TAU;
-                let dir = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
+                let dir = Vec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.cos(),
+                    theta.sin() * phi.sin(),
+                );
                 // Low-frequency bumps so normals vary; radius stays in [0.9, 1.0].
                 let bump = 0.95 + 0.05 * (5.0 * phi).sin() * (4.0 * theta).sin();
                 (dir * bump, dir)
@@ -48,10 +52,7 @@ pub fn build(spec: &SceneSpec) -> Result<Scene> {
                 let h = 0.1 * (6.0 * x).sin() * (5.0 * z).cos();
                 let dhdx = 0.6 * (6.0 * x).cos() * (5.0 * z).cos();
                 let dhdz = -0.5 * (6.0 * x).sin() * (5.0 * z).sin();
-                (
-                    Vec3::new(x, h, z),
-                    Vec3::new(-dhdx, 1.0, -dhdz).normalize(),
-                )
+                (Vec3::new(x, h, z), Vec3::new(-dhdx, 1.0, -dhdz).normalize())
             };
             mesh.positions.push(p.into());
             mesh.normals.push(n.into());

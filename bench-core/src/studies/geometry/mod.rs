@@ -36,8 +36,8 @@ use scenarios::{Mesh, Params, StudySpec};
 use wgpu::util::DeviceExt;
 
 use self::prep::{
-    AttrFormat, AttrKind, BatchSpec, Batched, FeedFormats, IndexFormat, Layout, MeshOrder,
-    Ordered, Primitive, Streams,
+    AttrFormat, AttrKind, BatchSpec, Batched, FeedFormats, IndexFormat, Layout, MeshOrder, Ordered,
+    Primitive, Streams,
 };
 use super::{Emit, GroupCtx, PointSpec, Study};
 use crate::gpu::Gpu;
@@ -110,7 +110,12 @@ pub struct FeedSpec {
     pub order: MeshOrder,
 }
 
-fn opt_format(params: &Params, axis: &str, kind: AttrKind, default: &str) -> Result<Option<AttrFormat>, String> {
+fn opt_format(
+    params: &Params,
+    axis: &str,
+    kind: AttrKind,
+    default: &str,
+) -> Result<Option<AttrFormat>, String> {
     let mut allowed: Vec<&str> = kind.allowed().to_vec();
     if kind != AttrKind::Position {
         allowed.push("none");
@@ -127,17 +132,19 @@ impl FeedSpec {
         let normal = opt_format(p, "normal_format", AttrKind::Normal, "float32x3")?;
         let color = opt_format(p, "color_format", AttrKind::Color, "none")?;
         let texcoord = opt_format(p, "texcoord_format", AttrKind::Texcoord, "none")?;
-        let layout = match str_param(p, "layout", "separate", &["interleaved", "separate"])?.as_str() {
-            "interleaved" => Layout::Interleaved,
-            _ => Layout::Separate,
-        };
+        let layout =
+            match str_param(p, "layout", "separate", &["interleaved", "separate"])?.as_str() {
+                "interleaved" => Layout::Interleaved,
+                _ => Layout::Separate,
+            };
         let extra_attributes = int_param(p, "extra_attributes", 0, 0, 8)? as u32;
         let batch_size = int_param(p, "batch_size", 0, 0, i32::MAX as i64)? as usize;
         let draw_triangles = int_param(p, "draw_triangles", 0, 0, i32::MAX as i64)? as usize;
-        let index_format = match str_param(p, "index_format", "uint32", &["uint16", "uint32"])?.as_str() {
-            "uint16" => IndexFormat::Uint16,
-            _ => IndexFormat::Uint32,
-        };
+        let index_format =
+            match str_param(p, "index_format", "uint32", &["uint16", "uint32"])?.as_str() {
+                "uint16" => IndexFormat::Uint16,
+                _ => IndexFormat::Uint32,
+            };
         let order = MeshOrder::parse(&str_param(p, "mesh_order", "original", prep::MESH_ORDERS)?)
             .expect("checked");
         let indexed = bool_param(p, "indexed", true)?;
@@ -165,10 +172,60 @@ impl FeedSpec {
         })
     }
 
+    /// Writes the effective value of every axis (defaults included), so each row says exactly
+    /// what was fed without the reader knowing the defaults.
+    pub fn set_columns(&self, row: &mut Row) {
+        let f = &self.formats;
+        let name = |o: Option<AttrFormat>| o.map_or("none", |f| f.name);
+        row.set("batch_size", self.batch.batch_size)
+            .set("draw_triangles", self.batch.draw_triangles)
+            .set("vertex_format", f.position.name)
+            .set("normal_format", name(f.normal))
+            .set("color_format", name(f.color))
+            .set("texcoord_format", name(f.texcoord))
+            .set(
+                "layout",
+                match f.layout {
+                    Layout::Interleaved => "interleaved",
+                    Layout::Separate => "separate",
+                },
+            )
+            .set("extra_attributes", f.extra_attributes)
+            .set(
+                "index_format",
+                match self.batch.index_format {
+                    IndexFormat::Uint16 => "uint16",
+                    IndexFormat::Uint32 => "uint32",
+                },
+            )
+            .set(
+                "mesh_order",
+                prep::MESH_ORDERS[[
+                    MeshOrder::Original,
+                    MeshOrder::Shuffled,
+                    MeshOrder::Vcache,
+                    MeshOrder::VcacheVfetch,
+                ]
+                .iter()
+                .position(|o| *o == self.order)
+                .expect("every order is listed")],
+            )
+            .set("indexed", self.batch.indexed)
+            .set(
+                "primitive",
+                match self.batch.primitive {
+                    Primitive::List => "list",
+                    Primitive::Strip => "strip",
+                },
+            );
+    }
+
     /// Why this point cannot run on this adapter (a `skipped` row), if it cannot.
     pub fn unsupported(&self, gpu: &Gpu, mesh: &Mesh) -> Option<String> {
         if !self.batch.indexed && self.batch.primitive == Primitive::Strip {
-            return Some("strips are stitched with primitive restart, which needs indexed draws".into());
+            return Some(
+                "strips are stitched with primitive restart, which needs indexed draws".into(),
+            );
         }
         let slots = self.formats.slots().len() as u32;
         if slots > gpu.limits.max_vertex_attributes {
@@ -352,7 +409,13 @@ impl FeedGpu {
             .iter()
             .map(|b| {
                 [
-                    b.centre[0], b.centre[1], b.centre[2], 0.0, b.half[0], b.half[1], b.half[2],
+                    b.centre[0],
+                    b.centre[1],
+                    b.centre[2],
+                    0.0,
+                    b.half[0],
+                    b.half[1],
+                    b.half[2],
                     0.0,
                 ]
             })
@@ -505,31 +568,29 @@ impl FeedGpu {
                 }
             })
             .collect();
-        let stats = gpu
-            .has(wgpu::Features::PIPELINE_STATISTICS_QUERY)
-            .then(|| {
-                let set = d.create_query_set(&wgpu::QuerySetDescriptor {
-                    label: Some("feed statistics"),
-                    ty: wgpu::QueryType::PipelineStatistics(
-                        wgpu::PipelineStatisticsTypes::VERTEX_SHADER_INVOCATIONS
-                            | wgpu::PipelineStatisticsTypes::FRAGMENT_SHADER_INVOCATIONS,
-                    ),
-                    count: 1,
-                });
-                let resolve = d.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("statistics resolve"),
-                    size: 256,
-                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                });
-                let read = d.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("statistics read"),
-                    size: 256,
-                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
-                (set, resolve, read)
+        let stats = gpu.has(wgpu::Features::PIPELINE_STATISTICS_QUERY).then(|| {
+            let set = d.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("feed statistics"),
+                ty: wgpu::QueryType::PipelineStatistics(
+                    wgpu::PipelineStatisticsTypes::VERTEX_SHADER_INVOCATIONS
+                        | wgpu::PipelineStatisticsTypes::FRAGMENT_SHADER_INVOCATIONS,
+                ),
+                count: 1,
             });
+            let resolve = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("statistics resolve"),
+                size: 256,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let read = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("statistics read"),
+                size: 256,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            (set, resolve, read)
+        });
         FeedGpu {
             pipeline,
             bind,
@@ -630,7 +691,8 @@ impl FeedGpu {
     /// Reads target `t`'s colour (check mode: RGBA32F; bench mode is RGBA8 and not read).
     pub fn read_check(&self, gpu: &Gpu, t: usize) -> Result<Vec<[f32; 4]>> {
         let target = &self.targets[t];
-        let row = (target.width as u64 * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as u64);
+        let row =
+            (target.width as u64 * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as u64);
         let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("check read"),
             size: row * target.height as u64,
@@ -688,7 +750,13 @@ pub fn scoped<T>(gpu: &Gpu, what: &str, f: impl FnOnce() -> Result<T>) -> Result
 }
 
 /// GPU and wall-clock ms of `reps` frames into target `t` after `warmup` (as `runner::measure`).
-fn time_frames(gpu: &Gpu, feed: &FeedGpu, t: usize, warmup: u32, reps: u32) -> Result<(Option<Stats>, Stats)> {
+fn time_frames(
+    gpu: &Gpu,
+    feed: &FeedGpu,
+    t: usize,
+    warmup: u32,
+    reps: u32,
+) -> Result<(Option<Stats>, Stats)> {
     let mut timer = GpuTimer::new(gpu);
     let mut g = Vec::new();
     let mut c = Vec::new();
@@ -721,13 +789,20 @@ fn study_options(spec: &StudySpec) -> Result<(bool, u32)> {
     let raster_check = match spec.extra.get("raster_check") {
         None => true,
         Some(toml::Value::Boolean(b)) => *b,
-        Some(v) => return Err(CoreError::Param(format!("geometry study: raster_check must be true or false, got {v}"))),
+        Some(v) => {
+            return Err(CoreError::Param(format!(
+                "geometry study: raster_check must be true or false, got {v}"
+            )))
+        }
     };
-    let div = match spec.extra.get("small_viewport_divisor") {
-        None => 8,
-        Some(toml::Value::Integer(i)) if (2..=1024).contains(i) => *i as u32,
-        Some(v) => return Err(CoreError::Param(format!("geometry study: small_viewport_divisor must be an integer in 2..=1024, got {v}"))),
-    };
+    let div =
+        match spec.extra.get("small_viewport_divisor") {
+            None => 8,
+            Some(toml::Value::Integer(i)) if (2..=1024).contains(i) => *i as u32,
+            Some(v) => return Err(CoreError::Param(format!(
+                "geometry study: small_viewport_divisor must be an integer in 2..=1024, got {v}"
+            ))),
+        };
     Ok((raster_check, div))
 }
 
@@ -790,6 +865,7 @@ impl Study for GeometryStudy {
             row.set("method", "geometry");
             set_params(&mut row, &pt.params)?;
             let spec = FeedSpec::from_params(&pt.params).map_err(CoreError::Param)?;
+            spec.set_columns(&mut row);
             if let Some(why) = spec.unsupported(gpu, mesh) {
                 emit(i, skipped_row(row, &why))?;
                 continue;
@@ -870,9 +946,17 @@ fn fill_row(
 ) {
     let b = &feed.batched;
     let tris = b.triangles as f64;
-    let index_count: u64 = if spec.batch.indexed { b.indices.len() as u64 } else { 0 };
+    let index_count: u64 = if spec.batch.indexed {
+        b.indices.len() as u64
+    } else {
+        0
+    };
     // Vertices per draw in the thesis's sense: indices for indexed draws, corners otherwise.
-    let submitted = if spec.batch.indexed { index_count as f64 } else { 3.0 * tris };
+    let submitted = if spec.batch.indexed {
+        index_count as f64
+    } else {
+        3.0 * tris
+    };
     let index_bytes = match (spec.batch.indexed, spec.batch.index_format) {
         (false, _) => 0,
         (true, IndexFormat::Uint16) => 2 * index_count,
@@ -883,7 +967,10 @@ fn fill_row(
         .set("batches", b.batches.len())
         .set("batch_vertices", b.verts.len())
         .set("index_count", index_count)
-        .set("vertex_stride_bytes", feed.streams.strides.iter().sum::<u64>())
+        .set(
+            "vertex_stride_bytes",
+            feed.streams.strides.iter().sum::<u64>(),
+        )
         .set("vertex_bytes", feed.streams.bytes())
         .set("index_bytes", index_bytes)
         .set_f("prep_ms", prep_ms)
@@ -893,7 +980,8 @@ fn fill_row(
         .set_f("cpu_ms_min", m.cpu_ms.min)
         .set_f("cpu_ms_max", m.cpu_ms.max);
     if let Some(s) = &b.cache {
-        row.set_f("acmr", s.acmr as f64).set_f("atvr", s.atvr as f64);
+        row.set_f("acmr", s.acmr as f64)
+            .set_f("atvr", s.atvr as f64);
     }
     if let Some(g) = m.gpu_ms {
         row.set_f("gpu_ms_median", g.median)
@@ -938,7 +1026,9 @@ fn fill_row(
             notes.push(format!(
                 "{} batches instead of {asked}: 16-bit indices cap a batch at {} vertices",
                 b.batches.len(),
-                spec.batch.index_format.max_batch_vertices(spec.batch.primitive)
+                spec.batch
+                    .index_format
+                    .max_batch_vertices(spec.batch.primitive)
             ));
         }
     }

@@ -10,6 +10,7 @@ use meshopt::VertexCacheStatistics;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_pcg::Pcg32;
+use rayon::prelude::*;
 use scenarios::Mesh;
 
 /// How one component is stored.
@@ -407,21 +408,20 @@ pub fn batch(mesh: &Mesh, ordered: &Ordered, spec: &BatchSpec) -> Batched {
         cur_unique.clear();
         while end < tris && end - start < per_batch {
             let t = tri_idx(end);
-            let new: Vec<u32> = {
-                let mut n: Vec<u32> = t
-                    .iter()
-                    .copied()
-                    .filter(|&v| local_of[v as usize] == u32::MAX)
-                    .collect();
-                n.sort_unstable();
-                n.dedup();
-                n
-            };
-            if cur_unique.len() + new.len() > max_verts {
+            // The triangle's vertices not yet in the batch (a corner may repeat).
+            let mut new = [0u32; 3];
+            let mut n_new = 0;
+            for &v in t {
+                if local_of[v as usize] == u32::MAX && !new[..n_new].contains(&v) {
+                    new[n_new] = v;
+                    n_new += 1;
+                }
+            }
+            if cur_unique.len() + n_new > max_verts {
                 break;
             }
-            for v in new {
-                local_of[v as usize] = 0; // mark
+            for &v in &new[..n_new] {
+                local_of[v as usize] = 0; // mark: in the batch, local id assigned at close
                 cur_unique.push(v);
             }
             end += 1;
@@ -449,12 +449,9 @@ pub fn batch(mesh: &Mesh, ordered: &Ordered, spec: &BatchSpec) -> Batched {
             match spec.primitive {
                 Primitive::List => out.indices.extend_from_slice(&local),
                 Primitive::Strip => {
-                    let strip = meshopt::stripify(
-                        &local,
-                        cur_unique.len(),
-                        spec.index_format.restart(),
-                    )
-                    .expect("stripify output fits its bound (4 indices per triangle)");
+                    let strip =
+                        meshopt::stripify(&local, cur_unique.len(), spec.index_format.restart())
+                            .expect("stripify output fits its bound (4 indices per triangle)");
                     out.indices.extend_from_slice(&strip);
                 }
             }
@@ -611,8 +608,8 @@ pub fn natural(kind: AttrKind, mesh: &Mesh, v: u32) -> [f32; 4] {
 /// Natural value → stored units (box-normalised positions, remapped signed values).
 fn to_stored(kind: AttrKind, fmt: AttrFormat, b: &Batch, mut v: [f32; 4]) -> [f32; 4] {
     if kind == AttrKind::Position && position_quantised(fmt) {
-        for c in 0..3 {
-            v[c] = (v[c] - b.centre[c]) / b.half[c];
+        for (c, x) in v.iter_mut().enumerate().take(3) {
+            *x = (*x - b.centre[c]) / b.half[c];
         }
         v[3] = 0.0;
     } else if remapped(kind, fmt) {
@@ -646,10 +643,12 @@ pub fn from_stored(kind: AttrKind, fmt: AttrFormat, b: &Batch, d: [f32; 4]) -> [
 /// Encodes every vertex of `batched` in `formats`.
 pub fn encode_streams(mesh: &Mesh, batched: &Batched, formats: &FeedFormats) -> Streams {
     let slots = formats.slots();
-    let sizes: Vec<usize> = slots.iter().map(|s| s.format.format.size() as usize).collect();
+    let sizes: Vec<usize> = slots
+        .iter()
+        .map(|s| s.format.format.size() as usize)
+        .collect();
     let mut placement = Vec::new();
-    let (strides, attributes): (Vec<u64>, Vec<Vec<wgpu::VertexAttribute>>) = match formats.layout
-    {
+    let (strides, attributes): (Vec<u64>, Vec<Vec<wgpu::VertexAttribute>>) = match formats.layout {
         Layout::Interleaved => {
             let mut off = 0usize;
             let mut attrs = Vec::new();
@@ -682,21 +681,29 @@ pub fn encode_streams(mesh: &Mesh, batched: &Batched, formats: &FeedFormats) -> 
             .unzip(),
     };
     let nv = batched.verts.len();
-    let mut buffers: Vec<Vec<u8>> = strides.iter().map(|&s| vec![0u8; s as usize * nv]).collect();
-    for b in &batched.batches {
-        let range = b.first_vertex as usize..(b.first_vertex + b.vertex_count) as usize;
-        for (si, s) in slots.iter().enumerate() {
-            let (buf, off) = placement[si];
-            let stride = strides[buf] as usize;
-            let sz = sizes[si];
-            let data = &mut buffers[buf];
-            for vi in range.clone() {
+    let mut buffers: Vec<Vec<u8>> = strides
+        .iter()
+        .map(|&s| vec![0u8; s as usize * nv])
+        .collect();
+    let firsts: Vec<u32> = batched.batches.iter().map(|b| b.first_vertex).collect();
+    for (buf, data) in buffers.iter_mut().enumerate() {
+        let stride = strides[buf] as usize;
+        let in_buf: Vec<usize> = (0..slots.len())
+            .filter(|&si| placement[si].0 == buf)
+            .collect();
+        // Parallel over vertices: the encode of tens of millions of vertices is the user's wait.
+        data.par_chunks_mut(stride)
+            .enumerate()
+            .for_each(|(vi, vertex)| {
+                let b = &batched.batches[firsts.partition_point(|&f| f as usize <= vi) - 1];
                 let v = batched.verts[vi];
-                let stored = to_stored(s.kind, s.format, b, natural(s.kind, mesh, v));
-                let at = vi * stride + off;
-                encode(s.format, stored, &mut data[at..at + sz]);
-            }
-        }
+                for &si in &in_buf {
+                    let s = &slots[si];
+                    let off = placement[si].1;
+                    let stored = to_stored(s.kind, s.format, b, natural(s.kind, mesh, v));
+                    encode(s.format, stored, &mut vertex[off..off + sizes[si]]);
+                }
+            });
     }
     Streams {
         buffers,

@@ -53,9 +53,16 @@ fn i(v: i64) -> ParamValue {
 fn uint16_batching_keeps_every_triangle_exactly_once_mesh_150k() {
     let scene = mesh_scene(150_000, "sphere");
     let mesh = &scene.mesh;
-    assert!(mesh.vertex_count() > 65_536, "the test needs more vertices than 16 bits index");
+    assert!(
+        mesh.vertex_count() > 65_536,
+        "the test needs more vertices than 16 bits index"
+    );
     let want = original_triangles(mesh);
-    for order in [MeshOrder::Original, MeshOrder::Shuffled, MeshOrder::VcacheVfetch] {
+    for order in [
+        MeshOrder::Original,
+        MeshOrder::Shuffled,
+        MeshOrder::VcacheVfetch,
+    ] {
         let ordered = order_mesh(mesh, order);
         for batch_size in [0usize, 1000, 7] {
             let spec = BatchSpec {
@@ -67,19 +74,34 @@ fn uint16_batching_keeps_every_triangle_exactly_once_mesh_150k() {
             };
             let b = batch(mesh, &ordered, &spec);
             for bt in &b.batches {
-                assert!(bt.vertex_count <= 65_536, "{order:?}/{batch_size}: batch of {} vertices", bt.vertex_count);
+                assert!(
+                    bt.vertex_count <= 65_536,
+                    "{order:?}/{batch_size}: batch of {} vertices",
+                    bt.vertex_count
+                );
                 if batch_size > 0 {
                     assert!(bt.triangles as usize <= batch_size);
                 }
-                let idx = &b.indices[bt.first_index as usize..(bt.first_index + bt.index_count) as usize];
+                let idx =
+                    &b.indices[bt.first_index as usize..(bt.first_index + bt.index_count) as usize];
                 assert!(idx.iter().all(|&l| l < bt.vertex_count));
             }
             if batch_size == 0 {
-                assert!(b.batches.len() >= 2, "75k vertices cannot fit one 16-bit batch");
+                assert!(
+                    b.batches.len() >= 2,
+                    "75k vertices cannot fit one 16-bit batch"
+                );
             }
             let got = sorted_canonical(source_triangles(&b, 0xFFFF, Primitive::List));
-            assert_eq!(got.len(), want.len(), "{order:?}/{batch_size}: triangle count");
-            assert!(got == want, "{order:?}/{batch_size}: triangle multiset differs");
+            assert_eq!(
+                got.len(),
+                want.len(),
+                "{order:?}/{batch_size}: triangle count"
+            );
+            assert!(
+                got == want,
+                "{order:?}/{batch_size}: triangle multiset differs"
+            );
         }
     }
     // Non-indexed batches: each corner its own vertex, same triangles.
@@ -96,7 +118,10 @@ fn uint16_batching_keeps_every_triangle_exactly_once_mesh_150k() {
         },
     );
     let got = sorted_canonical(b.verts.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
-    assert!(got == want, "non-indexed batching lost or changed triangles");
+    assert!(
+        got == want,
+        "non-indexed batching lost or changed triangles"
+    );
 }
 
 /// mesh(6k triangles): meshopt strips with primitive restart, per batch, unroll to exactly the
@@ -119,10 +144,16 @@ fn strips_with_restart_reproduce_the_list_triangles_mesh_6k() {
                 };
                 let b = batch(mesh, &ordered, &spec);
                 let got = sorted_canonical(source_triangles(&b, fmt.restart(), Primitive::Strip));
-                assert!(got == want, "{order:?}/{fmt:?}/{batch_size}: strips differ from the list");
+                assert!(
+                    got == want,
+                    "{order:?}/{fmt:?}/{batch_size}: strips differ from the list"
+                );
                 if order == MeshOrder::Vcache && batch_size == 0 {
                     // A cache-optimised grid strips well: fewer indices than the list's 3 per triangle.
-                    assert!(b.indices.len() < 3 * want.len(), "strips are no shorter than the list");
+                    assert!(
+                        b.indices.len() < 3 * want.len(),
+                        "strips are no shorter than the list"
+                    );
                 }
             }
         }
@@ -137,16 +168,30 @@ fn every_format_decodes_within_half_a_quantisation_step() {
     let scene = mesh_scene(3_000, "sphere");
     let mesh = &scene.mesh;
     let ordered = order_mesh(mesh, MeshOrder::Original);
-    let kinds = [AttrKind::Position, AttrKind::Normal, AttrKind::Color, AttrKind::Texcoord, AttrKind::Extra(2)];
+    let kinds = [
+        AttrKind::Position,
+        AttrKind::Normal,
+        AttrKind::Color,
+        AttrKind::Texcoord,
+        AttrKind::Extra(2),
+    ];
     for kind in kinds {
         for name in kind.allowed() {
             let fmt = format_by_name(name).expect("allowed formats are known");
             let formats = FeedFormats {
-                position: if kind == AttrKind::Position { fmt } else { format_by_name("float32x3").unwrap() },
+                position: if kind == AttrKind::Position {
+                    fmt
+                } else {
+                    format_by_name("float32x3").unwrap()
+                },
                 normal: (kind == AttrKind::Normal).then_some(fmt),
                 color: (kind == AttrKind::Color).then_some(fmt),
                 texcoord: (kind == AttrKind::Texcoord).then_some(fmt),
-                extra_attributes: if matches!(kind, AttrKind::Extra(_)) { 3 } else { 0 },
+                extra_attributes: if matches!(kind, AttrKind::Extra(_)) {
+                    3
+                } else {
+                    0
+                },
                 layout: Layout::Interleaved,
             };
             let spec = BatchSpec {
@@ -159,7 +204,10 @@ fn every_format_decodes_within_half_a_quantisation_step() {
             let b = batch(mesh, &ordered, &spec);
             let streams = encode_streams(mesh, &b, &formats);
             let slots = formats.slots();
-            let si = slots.iter().position(|s| s.kind == kind).expect("slot present");
+            let si = slots
+                .iter()
+                .position(|s| s.kind == kind)
+                .expect("slot present");
             let mut worst = 0.0f64;
             for bt in &b.batches {
                 for vi in bt.first_vertex as usize..(bt.first_vertex + bt.vertex_count) as usize {
@@ -199,7 +247,10 @@ fn every_format_decodes_within_half_a_quantisation_step() {
                 }
             }
             if fmt.enc != Enc::F32 {
-                assert!(worst > 0.0, "{name}: a quantised format showed no error at all (not encoded?)");
+                assert!(
+                    worst > 0.0,
+                    "{name}: a quantised format showed no error at all (not encoded?)"
+                );
             }
         }
     }
@@ -234,18 +285,35 @@ impl Comparison {
     /// across a sub-pixel snap boundary: allow 0.5% of pixels either way, nothing more.
     fn passes(&self) -> bool {
         let allowed = (self.pixels as f64 * 0.005).ceil() as usize;
-        self.coverage_mismatch <= allowed && self.value_bad <= allowed && self.covered > self.pixels / 10
+        self.coverage_mismatch <= allowed
+            && self.value_bad <= allowed
+            && self.covered > self.pixels / 10
     }
 }
 
 const W: u32 = 64;
 const H: u32 = 64;
 
-fn render_and_compare(gpu: &Gpu, scene: &Scene, ordered: &Ordered, spec: &FeedSpec, wrong: Option<WrongDecode>) -> Comparison {
+fn render_and_compare(
+    gpu: &Gpu,
+    scene: &Scene,
+    ordered: &Ordered,
+    spec: &FeedSpec,
+    wrong: Option<WrongDecode>,
+) -> Comparison {
     let feed = prepare_feed(&scene.mesh, ordered, spec);
     let gscene = GpuScene::upload(gpu, scene, W, H);
     let image = scoped(gpu, "check render", || {
-        let fg = FeedGpu::new(gpu, &gscene, spec, &feed.batched, &feed.streams, Mode::Check, &[(W, H)], wrong);
+        let fg = FeedGpu::new(
+            gpu,
+            &gscene,
+            spec,
+            &feed.batched,
+            &feed.streams,
+            Mode::Check,
+            &[(W, H)],
+            wrong,
+        );
         fg.frame(gpu, 0, None, false);
         fg.read_check(gpu, 0)
     })
@@ -268,14 +336,19 @@ fn render_and_compare(gpu: &Gpu, scene: &Scene, ordered: &Ordered, spec: &FeedSp
             twin.object_ids.push(0);
         }
         if spec.batch.indexed {
-            let idx = &b.indices[bt.first_index as usize..(bt.first_index + bt.index_count) as usize];
+            let idx =
+                &b.indices[bt.first_index as usize..(bt.first_index + bt.index_count) as usize];
             let list = match spec.batch.primitive {
                 Primitive::List => idx.to_vec(),
-                Primitive::Strip => meshopt::unstripify(idx, spec.batch.index_format.restart()).unwrap(),
+                Primitive::Strip => {
+                    meshopt::unstripify(idx, spec.batch.index_format.restart()).unwrap()
+                }
             };
-            twin.indices.extend(list.iter().map(|&l| l + bt.first_vertex));
+            twin.indices
+                .extend(list.iter().map(|&l| l + bt.first_vertex));
         } else {
-            twin.indices.extend(bt.first_vertex..bt.first_vertex + bt.vertex_count);
+            twin.indices
+                .extend(bt.first_vertex..bt.first_vertex + bt.vertex_count);
         }
     }
     let twin_scene = Scene::new(scene.spec.clone(), twin, scene.camera.clone());
@@ -294,7 +367,9 @@ fn render_and_compare(gpu: &Gpu, scene: &Scene, ordered: &Ordered, spec: &FeedSp
         match (gpu_covered, reference) {
             (true, Some(f)) => {
                 c.covered += 1;
-                let ve = (0..3).map(|k| (px[k] as f64 - f.color[k]).abs()).fold(0.0, f64::max);
+                let ve = (0..3)
+                    .map(|k| (px[k] as f64 - f.color[k]).abs())
+                    .fold(0.0, f64::max);
                 let de = (px[3] as f64 - f.depth).abs();
                 if ve > VALUE_TOL || de > DEPTH_TOL {
                     c.value_bad += 1;
@@ -326,7 +401,11 @@ fn combinations() -> Vec<Vec<(&'static str, ParamValue)>> {
         for layout in ["interleaved", "separate"] {
             for batch_size in [0, 97] {
                 let mut p = base();
-                p.extend([("vertex_format", s(pos)), ("layout", s(layout)), ("batch_size", i(batch_size))]);
+                p.extend([
+                    ("vertex_format", s(pos)),
+                    ("layout", s(layout)),
+                    ("batch_size", i(batch_size)),
+                ]);
                 v.push(p);
             }
         }
@@ -337,8 +416,13 @@ fn combinations() -> Vec<Vec<(&'static str, ParamValue)>> {
         ("texcoord_format", AttrKind::Texcoord),
     ] {
         for f in kind.allowed().iter().chain(&["none"]) {
-            let mut p: Vec<(&str, ParamValue)> = base().into_iter().filter(|(k, _)| *k != axis).collect();
-            p.extend([(axis, s(f)), ("layout", s("interleaved")), ("vertex_format", s("snorm16x4"))]);
+            let mut p: Vec<(&str, ParamValue)> =
+                base().into_iter().filter(|(k, _)| *k != axis).collect();
+            p.extend([
+                (axis, s(f)),
+                ("layout", s("interleaved")),
+                ("vertex_format", s("snorm16x4")),
+            ]);
             v.push(p);
         }
     }
@@ -362,9 +446,16 @@ fn combinations() -> Vec<Vec<(&'static str, ParamValue)>> {
         }
     }
     for batch_size in [0, 150] {
-        v.push(vec![("indexed", ParamValue::Bool(false)), ("batch_size", i(batch_size)), ("vertex_format", s("float16x4"))]);
+        v.push(vec![
+            ("indexed", ParamValue::Bool(false)),
+            ("batch_size", i(batch_size)),
+            ("vertex_format", s("float16x4")),
+        ]);
     }
-    v.push(vec![("draw_triangles", i(500)), ("vertex_format", s("snorm16x4"))]);
+    v.push(vec![
+        ("draw_triangles", i(500)),
+        ("vertex_format", s("snorm16x4")),
+    ]);
     v
 }
 
@@ -383,13 +474,20 @@ fn every_format_and_layout_matches_the_cpu_reference_mesh_1200_at_64px() {
         if let Some(why) = spec.unsupported(&gpu, &scene.mesh) {
             panic!("{combo:?} unsupported on the test adapter: {why}");
         }
-        let ordered = orders.entry(spec.order).or_insert_with(|| order_mesh(&scene.mesh, spec.order));
+        let ordered = orders
+            .entry(spec.order)
+            .or_insert_with(|| order_mesh(&scene.mesh, spec.order));
         let c = render_and_compare(&gpu, &scene, ordered, &spec, None);
         if !c.passes() {
             failures.push(format!("{combo:?}: {c:?}"));
         }
     }
-    assert!(failures.is_empty(), "{} combinations differ from the CPU reference:\n{}", failures.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} combinations differ from the CPU reference:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
 }
 
 /// The same comparison fails for deliberately wrong decodes: positions read with the unorm
@@ -403,14 +501,35 @@ fn a_wrong_decode_fails_the_comparison_mesh_1200_at_64px() {
     let pos = spec_with(&[("vertex_format", s("snorm16x4")), ("batch_size", i(97))]);
     let right = render_and_compare(&gpu, &scene, &ordered, &pos, None);
     assert!(right.passes(), "the right decode must pass: {right:?}");
-    let wrong = render_and_compare(&gpu, &scene, &ordered, &pos, Some(WrongDecode::PositionUnormConvention));
-    assert!(!wrong.passes(), "a unorm-convention position decode passed: {wrong:?}");
+    let wrong = render_and_compare(
+        &gpu,
+        &scene,
+        &ordered,
+        &pos,
+        Some(WrongDecode::PositionUnormConvention),
+    );
+    assert!(
+        !wrong.passes(),
+        "a unorm-convention position decode passed: {wrong:?}"
+    );
     eprintln!("wrong position decode: {wrong:?}");
     let nrm = spec_with(&[("normal_format", s("unorm8x4"))]);
     let right = render_and_compare(&gpu, &scene, &ordered, &nrm, None);
-    assert!(right.passes(), "the right normal decode must pass: {right:?}");
-    let wrong = render_and_compare(&gpu, &scene, &ordered, &nrm, Some(WrongDecode::NormalWithoutRemap));
-    assert!(!wrong.passes(), "a normal decode without its remap passed: {wrong:?}");
+    assert!(
+        right.passes(),
+        "the right normal decode must pass: {right:?}"
+    );
+    let wrong = render_and_compare(
+        &gpu,
+        &scene,
+        &ordered,
+        &nrm,
+        Some(WrongDecode::NormalWithoutRemap),
+    );
+    assert!(
+        !wrong.passes(),
+        "a normal decode without its remap passed: {wrong:?}"
+    );
     eprintln!("wrong normal decode: {wrong:?}");
 }
 
@@ -453,7 +572,11 @@ triangles = 800
     };
     let n = crate::runner::run(&gpu, &suite, &groups, &opts, &mut sink).unwrap();
     assert_eq!(n, crate::runner::rows_in(&groups));
-    let rows: Vec<&Row> = sink.0.iter().filter(|r| r.get("study") == Some("geometry") && r.get("method") == Some("geometry")).collect();
+    let rows: Vec<&Row> = sink
+        .0
+        .iter()
+        .filter(|r| r.get("study") == Some("geometry") && r.get("method") == Some("geometry"))
+        .collect();
     assert_eq!(rows.len(), 8);
     for r in &rows {
         let indexed = r.get("indexed") == Some("true");
@@ -469,9 +592,16 @@ triangles = 800
         if gpu.has(wgpu::Features::PIPELINE_STATISTICS_QUERY) {
             let vs: f64 = r.get("vs_invocations").unwrap().parse().unwrap();
             if indexed {
-                assert!(vs <= 3.0 * tris && vs > 0.0, "{vs} invocations for {tris} triangles");
+                assert!(
+                    vs <= 3.0 * tris && vs > 0.0,
+                    "{vs} invocations for {tris} triangles"
+                );
             } else {
-                assert_eq!(vs, 3.0 * tris, "non-indexed draws run the vertex shader per corner");
+                assert_eq!(
+                    vs,
+                    3.0 * tris,
+                    "non-indexed draws run the vertex shader per corner"
+                );
             }
         }
         if gpu.has(wgpu::Features::TIMESTAMP_QUERY) {
@@ -489,10 +619,19 @@ fn bad_axes_are_errors_naming_the_axis() {
             "name = \"x\"\n[[study]]\nkind = \"geometry\"\naxes = {{ {axes} }}\n[[study.scenes]]\ngenerator = \"mesh\"\n"
         );
         let suite = Suite::parse(&text, "t").unwrap();
-        study.points(&suite.studies[0]).map(|p| p.len()).map_err(|e| e.to_string())
+        study
+            .points(&suite.studies[0])
+            .map(|p| p.len())
+            .map_err(|e| e.to_string())
     };
     assert_eq!(parse("index_format = [\"uint16\", \"uint32\"]"), Ok(2));
-    assert!(parse("vertex_format = [\"snorm8x4\"]").unwrap_err().contains("vertex_format"));
-    assert!(parse("batch_sise = [4]").unwrap_err().contains("batch_sise"));
-    assert!(parse("extra_attributes = [9]").unwrap_err().contains("extra_attributes"));
+    assert!(parse("vertex_format = [\"snorm8x4\"]")
+        .unwrap_err()
+        .contains("vertex_format"));
+    assert!(parse("batch_sise = [4]")
+        .unwrap_err()
+        .contains("batch_sise"));
+    assert!(parse("extra_attributes = [9]")
+        .unwrap_err()
+        .contains("extra_attributes"));
 }
