@@ -48,8 +48,10 @@ fn two_overlapping_quads_composite_under_in_depth_order() {
             want[c]
         );
     }
-    // A corner pixel is covered by the big far quad only.
-    assert_eq!(fl.at(9, 9).len(), 1);
+    // Far quad: ±1 at distance 11 with a 30° fov spans ±5.4 px around the centre; the near one
+    // ±3.3 px: pixel (12,12) sees the far quad only.
+    assert_eq!(fl.at(12, 12).len(), 1);
+    assert_eq!(fl.at(12, 12)[0].object_id, 1);
     assert_eq!(fl.at(0, 0).len(), 0);
 }
 
