@@ -24,6 +24,11 @@ use crate::Result;
 /// WGSL shared by every raster method: the camera uniform and the standard vertex stage.
 pub const COMMON_WGSL: &str = include_str!("common.wgsl");
 
+/// The effects fold (`fold_init_at` / `fold_step` / `fold_finish_image`, override `EFFECT`):
+/// prepend it to a method's WGSL and set `effects::EffectConfig::constants` on the pipelines
+/// that call the fold.
+pub const EFFECTS_WGSL: &str = include_str!("effects.wgsl");
+
 /// Which reference a capture is judged against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Expected {

@@ -26,6 +26,7 @@ use crate::Result;
 
 /// Columns owned by individual studies (appended after the shared axes, in this order).
 pub const STUDY_COLUMNS: &[&[Column]] = &[
+    crate::effects::COLUMNS,
     geometry::COLUMNS,
     stability::COLUMNS,
     deferred::COLUMNS,
