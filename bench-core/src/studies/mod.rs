@@ -6,6 +6,7 @@
 //! | kind      | what it measures                                                     |
 //! |-----------|----------------------------------------------------------------------|
 //! | `methods` | multi-fragment capture methods vs the exact CPU reference            |
+//! | `stability` | stiff/extreme inputs: methods study + case, stiffness, lost fragments |
 
 pub mod deferred;
 pub mod geometry;
@@ -133,7 +134,10 @@ pub trait Study: Sync {
 }
 
 pub fn all() -> Vec<Box<dyn Study>> {
-    vec![Box::new(methods::MethodsStudy)]
+    vec![
+        Box::new(methods::MethodsStudy),
+        Box::new(stability::StabilityStudy),
+    ]
 }
 
 pub fn by_kind(kind: &str) -> Option<Box<dyn Study>> {
