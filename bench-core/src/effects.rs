@@ -8,7 +8,7 @@
 //! | `effect`       | payload read            | compared image (per pixel)                                          |
 //! |----------------|-------------------------|---------------------------------------------------------------------|
 //! | `transparency` | colour (+ window depth) | under-composite (C, A), A = 1 − transmittance                       |
-//! | `translucency` | view_z + facing         | (T, T, T, 1 − T), T = exp(−σ·l), l = Σ(exit − entry) ≥ 0 in linear view depth |
+//! | `translucency` | view_z + facing         | (T, T, T, 1 − T), T = exp(−σ·l), l = Σ(exit − entry) ≥ 0 in linear view depth; 1 − T to full relative precision for small σ·l |
 //! | `fresnel`      | view_z + facing + normal| as translucency with T × Π_i (1 − (1 − cos θ_i)^5)                   |
 //! | `csg_and/or/sub` | window depth + object id | (depth, 1 if A, 1 if B, 1) of the first fragment where A∩B / A∪B / A−B becomes true; 0 if never |
 //! | `dof`          | colour + view_z         | three images (foreground, midground, background) one after another: the nearest fragment of view depth in [0, n), [n, f), [f, ∞) as (rgb·a, a); 0 if none |
@@ -284,8 +284,8 @@ impl EffectConfig {
         vec![
             ("EFFECT", self.effect.code() as f64),
             ("THICKNESS_STABLE", if self.stable_thickness { 1.0 } else { 0.0 }),
-            // f32 overrides: σ beyond f32 range is refused by from_params' finiteness check
-            // only in f64, so clamp to the largest f32 (σ·l then saturates to T = 0 as it must).
+            // f32 overrides: a σ beyond the f32 range is clamped to the largest f32 (σ·l then
+            // saturates and T = 0, as the reference gives).
             ("SIGMA", self.sigma.min(f32::MAX as f64)),
             ("CSG_OP", op as f64),
             ("CSG_A", self.csg_a as f64),
@@ -313,10 +313,12 @@ impl EffectConfig {
                         let l: f64 = frags(p).map(signed_view_z).sum();
                         let x = (self.sigma * l).max(0.0);
                         let mut t = (-x).exp();
+                        let mut a = -(-x).exp_m1();
                         if let Some(dirs) = &dirs {
                             t *= frags(p).map(|f| schlick_t(f.normal, dirs[p])).product::<f64>();
+                            a = 1.0 - t;
                         }
-                        [t, t, t, 1.0 - t]
+                        [t, t, t, a]
                     })
                     .collect()
             }

@@ -142,16 +142,27 @@ pub fn run_methods_group(
                 flag = Some("overflow".into());
             }
             if let Some(counts) = &cap.counts {
-                // Fragments the method should have captured (within its k) but did not; where
-                // the reference has exact depth ties this is the coplanar loss of strict peeling.
-                let lost: u64 = dc
-                    .iter()
-                    .zip(counts)
-                    .map(|(&d, &c)| d.min(k).saturating_sub(c) as u64)
-                    .sum();
-                row.set("lost_fragments", lost);
-                if lost > 0 && has_depth_ties(lists) {
+                // Fragments the method should have captured (within its k) but did not. At a
+                // pixel whose f64 reference has exact depth ties this is the coplanar loss of
+                // strict peeling; elsewhere distinct layers merged in the method's own depth
+                // precision (e.g. a large far/near ratio).
+                let (mut coplanar, mut precision) = (0u64, 0u64);
+                for (p, (&d, &c)) in dc.iter().zip(counts).enumerate() {
+                    let lost = d.min(k).saturating_sub(c) as u64;
+                    if lost > 0 {
+                        let f = lists.pixel(p);
+                        if f.windows(2).any(|w| w[0].depth == w[1].depth) {
+                            coplanar += lost;
+                        } else {
+                            precision += lost;
+                        }
+                    }
+                }
+                row.set("lost_fragments", coplanar + precision);
+                if coplanar > 0 {
                     flag.get_or_insert_with(|| "lost_coplanar".into());
+                } else if precision > 0 {
+                    flag.get_or_insert_with(|| "precision".into());
                 }
             }
             if let Some(img) = &cap.image {
