@@ -40,7 +40,8 @@ pub const EFFECTS: &[&str] = &[
 pub const COLUMNS: &[Column] = &[
     Column {
         name: "sigma",
-        doc: "translucency/fresnel: extinction coefficient σ per world unit (Beer–Lambert exp(−σ·l))",
+        doc:
+            "translucency/fresnel: extinction coefficient σ per world unit (Beer–Lambert exp(−σ·l))",
     },
     Column {
         name: "csg_a",
@@ -141,13 +142,43 @@ pub struct Payload {
 }
 
 impl Payload {
-    pub const RGBA: Payload = Payload { color: true, view_z: false, normal: false, object_id: false };
-    pub const DEPTH: Payload = Payload { color: false, view_z: true, normal: false, object_id: false };
-    pub const DEPTH_NORMAL: Payload = Payload { color: false, view_z: true, normal: true, object_id: false };
-    pub const DEPTH_ID: Payload = Payload { color: false, view_z: false, normal: false, object_id: true };
-    pub const RGBA_VIEWZ: Payload = Payload { color: true, view_z: true, normal: false, object_id: false };
+    pub const RGBA: Payload = Payload {
+        color: true,
+        view_z: false,
+        normal: false,
+        object_id: false,
+    };
+    pub const DEPTH: Payload = Payload {
+        color: false,
+        view_z: true,
+        normal: false,
+        object_id: false,
+    };
+    pub const DEPTH_NORMAL: Payload = Payload {
+        color: false,
+        view_z: true,
+        normal: true,
+        object_id: false,
+    };
+    pub const DEPTH_ID: Payload = Payload {
+        color: false,
+        view_z: false,
+        normal: false,
+        object_id: true,
+    };
+    pub const RGBA_VIEWZ: Payload = Payload {
+        color: true,
+        view_z: true,
+        normal: false,
+        object_id: false,
+    };
     /// The "uber" configuration: everything stored.
-    pub const ALL: Payload = Payload { color: true, view_z: true, normal: true, object_id: true };
+    pub const ALL: Payload = Payload {
+        color: true,
+        view_z: true,
+        normal: true,
+        object_id: true,
+    };
 
     /// The `payload` column value.
     pub fn name(self) -> &'static str {
@@ -198,7 +229,9 @@ impl Default for EffectConfig {
 }
 
 /// Axes every effect-capable method reads (add them to its `axes()`).
-pub const AXES: &[&str] = &["effect", "sigma", "csg_a", "csg_b", "dof_near", "dof_far", "variant"];
+pub const AXES: &[&str] = &[
+    "effect", "sigma", "csg_a", "csg_b", "dof_near", "dof_far", "variant",
+];
 
 fn float(params: &Params, k: &str, default: f64) -> Result<f64, String> {
     match params.get(k) {
@@ -254,8 +287,12 @@ impl EffectConfig {
                 Some(other) => Err(format!("axis '{k}' must be an object id ≥ 0, got {other}")),
             }
         };
-        let (dof_near, dof_far) = (float(params, "dof_near", d.dof_near)?, float(params, "dof_far", d.dof_far)?);
-        if !(dof_near.is_finite() && dof_far.is_finite() && 0.0 <= dof_near && dof_near <= dof_far) {
+        let (dof_near, dof_far) = (
+            float(params, "dof_near", d.dof_near)?,
+            float(params, "dof_far", d.dof_far)?,
+        );
+        if !(dof_near.is_finite() && dof_far.is_finite() && 0.0 <= dof_near && dof_near <= dof_far)
+        {
             return Err(format!(
                 "dof bounds must satisfy 0 ≤ dof_near ≤ dof_far (finite), got {dof_near}, {dof_far}"
             ));
@@ -283,7 +320,10 @@ impl EffectConfig {
         };
         vec![
             ("EFFECT", self.effect.code() as f64),
-            ("THICKNESS_STABLE", if self.stable_thickness { 1.0 } else { 0.0 }),
+            (
+                "THICKNESS_STABLE",
+                if self.stable_thickness { 1.0 } else { 0.0 },
+            ),
             // f32 overrides: a σ beyond the f32 range is clamped to the largest f32 (σ·l then
             // saturates and T = 0, as the reference gives).
             ("SIGMA", self.sigma.min(f32::MAX as f64)),
@@ -297,7 +337,12 @@ impl EffectConfig {
 
     /// The f64 reference image(s) of this effect, judged against `expected` (all fragments or
     /// the k nearest); `image_count` images of `lists.pixels()` pixels, one after another.
-    pub fn reference(&self, scene: &Scene, lists: &FragmentLists, expected: Expected) -> Vec<[f64; 4]> {
+    pub fn reference(
+        &self,
+        scene: &Scene,
+        lists: &FragmentLists,
+        expected: Expected,
+    ) -> Vec<[f64; 4]> {
         let k = match expected {
             Expected::All => usize::MAX,
             Expected::FirstK(k) => k as usize,
@@ -305,9 +350,12 @@ impl EffectConfig {
         let n = lists.pixels();
         let frags = |p: usize| lists.pixel(p).iter().take(k);
         match self.effect {
-            Effect::Transparency => (0..n).map(|p| crate::reference::composite(frags(p))).collect(),
+            Effect::Transparency => (0..n)
+                .map(|p| crate::reference::composite(frags(p)))
+                .collect(),
             Effect::Translucency | Effect::Fresnel => {
-                let dirs = (self.effect == Effect::Fresnel).then(|| view_dirs(scene, lists.width, lists.height));
+                let dirs = (self.effect == Effect::Fresnel)
+                    .then(|| view_dirs(scene, lists.width, lists.height));
                 (0..n)
                     .map(|p| {
                         let l: f64 = frags(p).map(signed_view_z).sum();
@@ -315,7 +363,9 @@ impl EffectConfig {
                         let mut t = (-x).exp();
                         let mut a = -(-x).exp_m1();
                         if let Some(dirs) = &dirs {
-                            t *= frags(p).map(|f| schlick_t(f.normal, dirs[p])).product::<f64>();
+                            t *= frags(p)
+                                .map(|f| schlick_t(f.normal, dirs[p]))
+                                .product::<f64>();
                             a = 1.0 - t;
                         }
                         [t, t, t, a]
@@ -459,19 +509,38 @@ mod tests {
     #[test]
     fn thickness_is_exit_minus_entry_for_nested_objects() {
         // Two nested objects: [1, 4] and [2, 3] → 3 + 1 = 4.
-        let f = [frag(1.0, true, 0), frag(2.0, true, 1), frag(3.0, false, 1), frag(4.0, false, 0)];
+        let f = [
+            frag(1.0, true, 0),
+            frag(2.0, true, 1),
+            frag(3.0, false, 1),
+            frag(4.0, false, 0),
+        ];
         assert_eq!(f.iter().map(signed_view_z).sum::<f64>(), 4.0);
     }
 
     #[test]
     fn csg_operations_pick_the_first_surface_of_the_result() {
         // A = [1, 3], B = [2, 4] along the ray.
-        let f = [frag(1.0, true, 0), frag(2.0, true, 1), frag(3.0, false, 0), frag(4.0, false, 1)];
-        assert_eq!(csg(f.iter(), 0, 0, 1)[0], 0.02, "A∩B starts where B is entered");
+        let f = [
+            frag(1.0, true, 0),
+            frag(2.0, true, 1),
+            frag(3.0, false, 0),
+            frag(4.0, false, 1),
+        ];
+        assert_eq!(
+            csg(f.iter(), 0, 0, 1)[0],
+            0.02,
+            "A∩B starts where B is entered"
+        );
         assert_eq!(csg(f.iter(), 1, 0, 1)[0], 0.01, "A∪B starts at A's front");
         assert_eq!(csg(f.iter(), 2, 0, 1)[0], 0.01, "A−B starts at A's front");
         // B first: A − B starts where B is left.
-        let g = [frag(1.0, true, 1), frag(2.0, true, 0), frag(3.0, false, 1), frag(4.0, false, 0)];
+        let g = [
+            frag(1.0, true, 1),
+            frag(2.0, true, 0),
+            frag(3.0, false, 1),
+            frag(4.0, false, 0),
+        ];
         assert_eq!(csg(g.iter(), 2, 0, 1), [0.03, 0.0, 1.0, 1.0]);
     }
 
@@ -481,7 +550,9 @@ mod tests {
         assert!(EffectConfig::from_params(&p).unwrap_err().contains("glow"));
         let p = Params::new().with("sigma", ParamValue::Float(-1.0));
         assert!(EffectConfig::from_params(&p).unwrap_err().contains("sigma"));
-        let p = Params::new().with("dof_near", ParamValue::Float(5.0)).with("dof_far", ParamValue::Float(1.0));
+        let p = Params::new()
+            .with("dof_near", ParamValue::Float(5.0))
+            .with("dof_far", ParamValue::Float(1.0));
         assert!(EffectConfig::from_params(&p).unwrap_err().contains("dof"));
     }
 }

@@ -75,7 +75,7 @@ pub const AXES: &[Column] = &[
     ),
     c(
         "payload",
-        "what is stored per fragment: depth | rgba_depth | depth_normal | depth_id",
+        "what is stored per fragment: depth (signed linear depth) | rgba_depth | depth_normal | depth_id | rgba_viewz | all (uber)",
     ),
     c(
         "occlusion_stop",

@@ -30,7 +30,13 @@ fn err(spec: &SceneSpec, params: &Params) -> (f64, f64) {
     let img = cap.image.unwrap();
     assert_eq!(img.len(), reference.len(), "{}: image size", spec.label());
     let e = image_error(&reference, &img, BAD_PIXEL_TOL);
-    assert_eq!(e.non_finite, 0, "{} {}: NaN/Inf", spec.label(), params.label());
+    assert_eq!(
+        e.non_finite,
+        0,
+        "{} {}: NaN/Inf",
+        spec.label(),
+        params.label()
+    );
     (e.max_abs, e.rmse)
 }
 
@@ -38,8 +44,18 @@ fn check_tol(spec: SceneSpec, params: Params, max_tol: f64, rmse_tol: f64) {
     for spec_mode in ["specialised", "uber"] {
         let p = params.clone().with("specialisation", s(spec_mode));
         let (m, r) = err(&spec, &p);
-        assert!(m <= max_tol, "{} {}: max abs error {m} > {max_tol}", spec.label(), p.label());
-        assert!(r <= rmse_tol, "{} {}: RMSE {r} > {rmse_tol}", spec.label(), p.label());
+        assert!(
+            m <= max_tol,
+            "{} {}: max abs error {m} > {max_tol}",
+            spec.label(),
+            p.label()
+        );
+        assert!(
+            r <= rmse_tol,
+            "{} {}: RMSE {r} > {rmse_tol}",
+            spec.label(),
+            p.label()
+        );
     }
 }
 
@@ -53,7 +69,12 @@ fn check_interp(spec: SceneSpec, params: Params) {
 }
 
 fn shells() -> SceneSpec {
-    SceneSpec::new("shells", Params::new().with("count", ParamValue::Int(3)).with("segments", ParamValue::Int(16)))
+    SceneSpec::new(
+        "shells",
+        Params::new()
+            .with("count", ParamValue::Int(3))
+            .with("segments", ParamValue::Int(16)),
+    )
 }
 
 #[test]
@@ -64,31 +85,59 @@ fn transparency_48px_matches_reference() {
 #[test]
 fn translucency_stable_and_naive_48px_match_reference_near_the_eye() {
     for v in ["stable", "naive"] {
-        check_interp(shells(), Params::new().with("effect", s("translucency")).with("sigma", ParamValue::Float(0.8)).with("variant", s(v)));
+        check_interp(
+            shells(),
+            Params::new()
+                .with("effect", s("translucency"))
+                .with("sigma", ParamValue::Float(0.8))
+                .with("variant", s(v)),
+        );
     }
 }
 
 #[test]
 fn fresnel_48px_matches_reference() {
-    check_interp(shells(), Params::new().with("effect", s("fresnel")).with("sigma", ParamValue::Float(0.5)));
+    check_interp(
+        shells(),
+        Params::new()
+            .with("effect", s("fresnel"))
+            .with("sigma", ParamValue::Float(0.5)),
+    );
 }
 
 #[test]
 fn csg_and_or_sub_48px_match_reference() {
     for shape in ["sphere", "box"] {
-        let spec = SceneSpec::new("csg_pair", Params::new().with("shape", s(shape)).with("segments", ParamValue::Int(16)));
+        let spec = SceneSpec::new(
+            "csg_pair",
+            Params::new()
+                .with("shape", s(shape))
+                .with("segments", ParamValue::Int(16)),
+        );
         for op in ["csg_and", "csg_or", "csg_sub"] {
-            check(spec.clone(), Params::new().with("effect", s(op)).with("csg_a", ParamValue::Int(0)).with("csg_b", ParamValue::Int(1)));
+            check(
+                spec.clone(),
+                Params::new()
+                    .with("effect", s(op))
+                    .with("csg_a", ParamValue::Int(0))
+                    .with("csg_b", ParamValue::Int(1)),
+            );
         }
     }
 }
 
 #[test]
 fn dof_three_partitions_48px_match_reference() {
-    let spec = SceneSpec::new("quads", Params::new().with("depth_complexity", ParamValue::Int(6)));
+    let spec = SceneSpec::new(
+        "quads",
+        Params::new().with("depth_complexity", ParamValue::Int(6)),
+    );
     check(
         spec,
-        Params::new().with("effect", s("dof")).with("dof_near", ParamValue::Float(3.6)).with("dof_far", ParamValue::Float(4.4)),
+        Params::new()
+            .with("effect", s("dof"))
+            .with("dof_near", ParamValue::Float(3.6))
+            .with("dof_far", ParamValue::Float(4.4)),
     );
 }
 
@@ -97,8 +146,23 @@ fn effects_differ_from_each_other() {
     // Guards against a fold that ignores EFFECT: translucency and transparency images differ.
     let gpu = testing::gpu();
     let scene = shells().build().unwrap();
-    let a = testing::render(&gpu, &scene, "depth_peel", &Params::new().with("effect", s("transparency")), W, W).0;
-    let b = testing::render(&gpu, &scene, "depth_peel", &Params::new().with("effect", s("translucency")), W, W).0;
+    let a = testing::render(
+        &gpu,
+        &scene,
+        "depth_peel",
+        &Params::new().with("effect", s("transparency")),
+        W,
+        W,
+    )
+    .0;
+    let b = testing::render(
+        &gpu,
+        &scene,
+        "depth_peel",
+        &Params::new().with("effect", s("translucency")),
+        W,
+        W,
+    )
+    .0;
     assert_ne!(a.image, b.image);
 }
-

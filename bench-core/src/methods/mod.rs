@@ -4,15 +4,18 @@
 //! |----------------|--------------------------------|----------------------------|-----------------|---------------------------|
 //! | `floor_depth`  | the yardstick (issue "Compare GPUs") | — (no image)          | 1               | 4 B depth                 |
 //! | `floor_opaque` | the yardstick, one colour       | — (no image)              | 1               | 4 B depth + 4 B RGBA8     |
-//! | `depth_peel`   | Everitt 2001, classic front-to-back peeling | exact up to `max_layers`; coplanar ties lost | layers + 1 | 2×4 B depth + 16 B layer + 20 B accumulation |
+//! | `depth_peel`   | Everitt 2001, classic front-to-back peeling; every effect via the fold | exact up to `max_layers`; coplanar ties lost (`variant=tiebreak` keeps them) | layers + 1 | 2×4 B depth + 4–36 B layer payload + 64 B fold state + 16 B per output image + 4 B count |
 //!
 //! Every method implements [`Method`] (what it is, which axes and features it needs, and
 //! `prepare`, which creates every GPU object) and [`Prepared`] (`frame`, the timed per-frame
 //! work, and `readback`). Nothing assumes a render pass: a compute-only method only has to fill
-//! the same [`Capture`]. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL.
+//! the same [`Capture`]. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL;
+//! `effects.wgsl` ([`EFFECTS_WGSL`]) is the effects fold, and `packing` the float colour packing
+//! shared with the bucket methods.
 
 pub mod depth_peel;
 pub mod floor;
+pub mod packing;
 
 use scenarios::Params;
 

@@ -91,8 +91,7 @@ pub fn run_methods_group(
             if let Some(p) = payload_of(method.as_ref(), &pt.params, &effect) {
                 row.set("payload", p);
             }
-            if effect.effect != effects::Effect::Transparency
-                && !method.axes().contains(&"effect")
+            if effect.effect != effects::Effect::Transparency && !method.axes().contains(&"effect")
             {
                 let why = format!(
                     "{} resolves no effects fold (it stores colour only): it cannot supply {}",

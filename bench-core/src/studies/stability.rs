@@ -84,7 +84,13 @@ pub fn stiffness_value(ctx: &GroupCtx<'_>, pt: &PointSpec, name: &str) -> Option
             let sigma = EffectConfig::from_params(&pt.params).ok()?.sigma;
             let lists = ctx.reference();
             let lmax = (0..lists.pixels())
-                .map(|p| lists.pixel(p).iter().map(crate::effects::signed_view_z).sum::<f64>())
+                .map(|p| {
+                    lists
+                        .pixel(p)
+                        .iter()
+                        .map(crate::effects::signed_view_z)
+                        .sum::<f64>()
+                })
                 .fold(0.0, f64::max);
             Some(sigma * lmax)
         }
@@ -95,7 +101,12 @@ pub fn stiffness_value(ctx: &GroupCtx<'_>, pt: &PointSpec, name: &str) -> Option
         "depth_gap_min" => {
             let lists = ctx.reference();
             (0..lists.pixels())
-                .flat_map(|p| lists.pixel(p).windows(2).map(|w| (w[1].depth - w[0].depth).abs()))
+                .flat_map(|p| {
+                    lists
+                        .pixel(p)
+                        .windows(2)
+                        .map(|w| (w[1].depth - w[0].depth).abs())
+                })
                 .filter(|g| *g > 0.0)
                 .min_by(f64::total_cmp)
         }
@@ -136,7 +147,8 @@ impl Study for StabilityStudy {
         let case = extra_str(ctx.study, "case")?.to_string();
         let stiffness = extra_str(ctx.study, "stiffness")?.to_string();
         let add = |row: &mut Row, pt: &PointSpec| {
-            row.set("stability_case", &case).set("stiffness", &stiffness);
+            row.set("stability_case", &case)
+                .set("stiffness", &stiffness);
             if let Some(v) = stiffness_value(ctx, pt, &stiffness) {
                 row.set_f("stiffness_value", v);
             }

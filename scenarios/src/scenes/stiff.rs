@@ -157,7 +157,13 @@ pub fn coplanar(spec: &SceneSpec) -> Result<Scene> {
             });
         }
     }
-    let mut camera = Camera::look_at(DVec3::new(0.0, 0.0, distance), DVec3::ZERO, fovy, 0.1, 100.0);
+    let mut camera = Camera::look_at(
+        DVec3::new(0.0, 0.0, distance),
+        DVec3::ZERO,
+        fovy,
+        0.1,
+        100.0,
+    );
     camera.reversed_z = reversed_z;
     let mut scene = Scene::new(spec.clone(), mesh, camera);
     scene.objects = objects;
@@ -191,7 +197,12 @@ pub fn extreme(spec: &SceneSpec) -> Result<Scene> {
     for (i, z) in [0.5f32, -0.5].into_iter().enumerate() {
         let e = 1.0 - 0.3 * i as f32;
         mesh.push_quad(
-            [Vec3::new(-e, -e, z), Vec3::new(e, -e, z), Vec3::new(e, e, z), Vec3::new(-e, e, z)],
+            [
+                Vec3::new(-e, -e, z),
+                Vec3::new(e, -e, z),
+                Vec3::new(e, e, z),
+                Vec3::new(-e, e, z),
+            ],
             palette(id, alpha),
             id,
         );
@@ -200,7 +211,11 @@ pub fn extreme(spec: &SceneSpec) -> Result<Scene> {
     // A huge triangle covering the whole view, every vertex at ±coord in x or y.
     push_tri(
         &mut mesh,
-        [Vec3::new(-coord, -coord, -1.0), Vec3::new(coord, -coord, -1.0), Vec3::new(0.0, coord, -1.0)],
+        [
+            Vec3::new(-coord, -coord, -1.0),
+            Vec3::new(coord, -coord, -1.0),
+            Vec3::new(0.0, coord, -1.0),
+        ],
         id,
     );
     id += 1;
@@ -210,15 +225,27 @@ pub fn extreme(spec: &SceneSpec) -> Result<Scene> {
         let sign = if k < 3 { 1.0 } else { -1.0 };
         let mut far = Vec3::ZERO;
         far[axis] = sign * coord;
-        let a = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 0.2 * k as f32 - 0.6);
+        let a = Vec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            0.2 * k as f32 - 0.6,
+        );
         let b = a + Vec3::new(0.3, 0.05, 0.0);
         push_tri(&mut mesh, [a, b, far], id);
         id += 1;
     }
     // Zero-area triangles: a repeated vertex, three collinear vertices, all three equal.
     for k in 0..degenerate {
-        let p = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
-        let d = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 0.0);
+        let p = Vec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        let d = Vec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            0.0,
+        );
         let v = match k % 3 {
             0 => [p, p, p + d],
             1 => [p, p + d, p + 2.0 * d],

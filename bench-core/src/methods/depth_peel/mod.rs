@@ -17,8 +17,8 @@ use scenarios::Params;
 
 use super::floor::{clear_depth, depth_state};
 use super::{
-    bool_param, camera_entry, int_param, read_vec, shader, storage_entry, str_param,
-    texture_entry, Capture, Expected, FrameStats, Method, Prepared, EFFECTS_WGSL,
+    bool_param, camera_entry, int_param, read_vec, shader, storage_entry, str_param, texture_entry,
+    Capture, Expected, FrameStats, Method, Prepared, EFFECTS_WGSL,
 };
 use crate::effects::{self, EffectConfig, Payload};
 use crate::gpu::Gpu;
@@ -51,8 +51,12 @@ impl Config {
         Ok(Config {
             max_layers: int_param(params, "max_layers", 64, 1, 4096)? as u32,
             occlusion_stop: bool_param(params, "occlusion_stop", true)?,
-            uber: str_param(params, "specialisation", "specialised", &["specialised", "uber"])?
-                == "uber",
+            uber: str_param(
+                params,
+                "specialisation",
+                "specialised",
+                &["specialised", "uber"],
+            )? == "uber",
             tiebreak: effects::variant_has(params, "tiebreak")?,
             effect: EffectConfig::from_params(params)?,
         })
