@@ -166,3 +166,75 @@ fn effects_differ_from_each_other() {
     .0;
     assert_ne!(a.image, b.image);
 }
+
+// ---- the effect axis in the methods study ----
+
+struct Collect(Vec<bench_core::record::Row>);
+impl bench_core::record::Sink for Collect {
+    fn point_done(&mut self, row: &bench_core::record::Row) -> bench_core::Result<()> {
+        self.0.push(row.clone());
+        Ok(())
+    }
+}
+
+fn sweep(text: &str) -> bench_core::Result<Vec<bench_core::record::Row>> {
+    let gpu = testing::gpu();
+    let suite = scenarios::Suite::parse(text, "test").unwrap();
+    let groups = bench_core::runner::expand(&suite, true)?;
+    let mut sink = Collect(Vec::new());
+    let opts = bench_core::runner::RunOptions { run_id: "t".into(), git_rev: "t".into(), shard: (0, 1) };
+    bench_core::runner::run(&gpu, &suite, &groups, &opts, &mut sink)?;
+    Ok(sink.0)
+}
+
+#[test]
+fn effect_axis_rows_are_judged_per_effect_and_a_method_without_a_fold_is_skipped_16px() {
+    let rows = sweep(
+        r#"
+        reps = 1
+        warmup = 0
+        resolutions = [[16, 16]]
+        [[study]]
+        kind = "methods"
+        methods = ["depth_peel", "floor_opaque"]
+        axes = { effect = ["transparency", "csg_and"], specialisation = ["specialised", "uber"] }
+        [[study.scenes]]
+        generator = "csg_pair"
+        segments = 8
+    "#,
+    )
+    .unwrap();
+    let get = |m: &str, e: &str, sp: Option<&str>| {
+        rows.iter()
+            .find(|r| {
+                r.get("method") == Some(m)
+                    && r.get("effect") == Some(e)
+                    && sp.is_none_or(|sp| r.get("specialisation") == Some(sp))
+            })
+            .unwrap_or_else(|| panic!("no row {m} {e} {sp:?}"))
+    };
+    let csg = get("depth_peel", "csg_and", Some("specialised"));
+    assert_eq!(csg.get("status"), Some("ok"));
+    assert_eq!(csg.get("payload"), Some("depth_id"));
+    assert_eq!(csg.get("max_abs_err").map(|v| v.parse::<f64>().unwrap() <= 1e-4), Some(true));
+    assert_eq!(get("depth_peel", "csg_and", Some("uber")).get("payload"), Some("all"));
+    let floor = get("floor_opaque", "csg_and", None);
+    assert_eq!(floor.get("status"), Some("skipped"));
+    assert!(floor.get("reason").unwrap().contains("csg_and"), "{:?}", floor.get("reason"));
+}
+
+#[test]
+fn an_unknown_effect_in_a_suite_is_an_error_naming_it() {
+    let err = sweep(
+        r#"
+        [[study]]
+        kind = "methods"
+        methods = ["depth_peel"]
+        axes = { effect = ["glow"] }
+        [[study.scenes]]
+        generator = "quads"
+    "#,
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("glow"), "{err}");
+}

@@ -1,6 +1,7 @@
 //! Figures per study kind. Each module reads only the rows of its study.
 
 pub mod methods;
+pub mod stability;
 
 use std::path::Path;
 
@@ -17,6 +18,12 @@ pub fn all_figures(runs: &Runs, dir: &Path) -> Result<Vec<(String, Vec<Figure>)>
             "Multi-fragment methods".to_string(),
             methods::figures(runs, dir)?,
         ));
+    }
+    if !runs.study("stability").is_empty() || !runs.study("methods").is_empty() {
+        let figs = stability::figures(runs, dir)?;
+        if !figs.is_empty() {
+            out.push(("Effects and stability".to_string(), figs));
+        }
     }
     Ok(out)
 }
