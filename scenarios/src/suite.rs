@@ -27,6 +27,7 @@ use crate::{ParamValue, Params, Result, SceneError, SceneSpec};
 pub const BUILTIN: &[(&str, &str)] = &[
     ("smoke", include_str!("../suites/smoke.toml")),
     ("default", include_str!("../suites/default.toml")),
+    ("methods", include_str!("../suites/methods.toml")),
 ];
 
 #[derive(Clone, Debug)]
