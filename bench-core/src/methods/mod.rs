@@ -5,12 +5,19 @@
 //! | `floor_depth`  | the yardstick (issue "Compare GPUs") | — (no image)          | 1               | 4 B depth                 |
 //! | `floor_opaque` | the yardstick, one colour       | — (no image)              | 1               | 4 B depth + 4 B RGBA8     |
 //! | `depth_peel`   | Everitt 2001, classic front-to-back peeling | exact up to `max_layers`; coplanar ties lost | layers + 1 | 2×4 B depth + 16 B layer + 20 B accumulation |
+//! | `bdp`          | Liu et al., GPU Pro ch. 1, uniform bucket depth peeling | approximate: exact iff ≤1 fragment per bucket (2 if paired); collisions counted | 2 | 8 B range + 4 B × channels (≤32) + 68 B resolve |
+//! | `bdp2`         | Liu et al., GPU Pro ch. 1, two-pass BDP | approximate: 2 fragments per bucket; collisions counted | 3 | 8 B range + 2 × 4 B × K + 68 B resolve |
+//! | `adp`          | Liu et al., GPU Pro ch. 1, adaptive (histogram-equalised) BDP | approximate: fragments sharing a histogram bin collide | 2 + ⌈occupied bins / K⌉ | hist_bins/8 B + 8 B × K + 8 B range + 68 B resolve |
 //!
 //! Every method implements [`Method`] (what it is, which axes and features it needs, and
 //! `prepare`, which creates every GPU object) and [`Prepared`] (`frame`, the timed per-frame
 //! work, and `readback`). Nothing assumes a render pass: a compute-only method only has to fill
 //! the same [`Capture`]. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL.
 
+pub mod adp;
+pub mod bdp;
+pub mod bdp2;
+pub mod bucket;
 pub mod depth_peel;
 pub mod floor;
 
@@ -121,6 +128,9 @@ pub fn all() -> Vec<Box<dyn Method>> {
         Box::new(floor::FloorDepth),
         Box::new(floor::FloorOpaque),
         Box::new(depth_peel::DepthPeel),
+        Box::new(bdp::Bdp),
+        Box::new(bdp2::Bdp2),
+        Box::new(adp::Adp),
     ]
 }
 
