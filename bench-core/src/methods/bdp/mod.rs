@@ -55,3 +55,64 @@ impl Method for Bdp {
         Ok(Box::new(PreparedBucket::new(gpu, scene, cfg, WGSL)?))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::methods::bucket::testing::{quads, quantised_reference, run};
+    use crate::methods::bucket::{pack_color, unpack_color};
+
+    #[test]
+    fn bdp_quads4_48px_32_single_buckets_no_shared_bucket_is_exact_up_to_the_packing() {
+        let cfg = Config {
+            kind: Kind::Uniform { paired: false },
+            buckets: 32,
+        };
+        let r = run(cfg, WGSL, &quads(4, 1), 48);
+        assert_eq!(
+            r.assert_counts_match_twin(&cfg),
+            0,
+            "precondition: the twin routes no two layers into one bucket"
+        );
+        assert_eq!(r.capture.flag, None);
+        // Against the reference with pack_color's quantisation applied: only f32 compositing differs.
+        let (e, p) = r.max_err(&quantised_reference(&r.lists, |c| {
+            unpack_color(pack_color(c))
+        }));
+        assert!(e < 1e-5, "pixel {p}: {e} from the packed twin");
+        // Against the exact reference: a colour half-step (1/254) bounds the colour error, and each
+        // of the ≤ 4 layers' alpha half-steps (1/2030) moves the composite by at most 2×.
+        let (e, p) = r.max_err(&r.lists.composite());
+        assert!(
+            e <= 0.5 / 127.0 + 4.0 * 2.0 * 0.5 / 1015.0,
+            "pixel {p}: {e} from the reference"
+        );
+    }
+
+    #[test]
+    fn bdp_quads16_48px_8_buckets_collision_count_equals_the_twin_single_and_paired() {
+        let scene = quads(16, 1);
+        let mut lost = Vec::new();
+        for paired in [false, true] {
+            let cfg = Config {
+                kind: Kind::Uniform { paired },
+                buckets: 8,
+            };
+            let r = run(cfg, WGSL, &scene, 48);
+            let twin = r.assert_counts_match_twin(&cfg);
+            assert!(
+                twin > 0,
+                "16 layers in 8 buckets must collide (paired: {paired})"
+            );
+            assert_eq!(r.capture.flag.as_deref(), Some("collision"));
+            lost.push(twin);
+        }
+        assert!(lost[1] < lost[0], "paired keeps two per bucket: {lost:?}");
+    }
+}
+
+/// bdp's WGSL, for other methods' tests that compare against it.
+#[cfg(test)]
+pub(crate) fn tests_wgsl() -> &'static str {
+    WGSL
+}

@@ -49,3 +49,31 @@ impl Method for Bdp2 {
         Ok(Box::new(PreparedBucket::new(gpu, scene, cfg, WGSL)?))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::methods::bucket::testing::{quads, run};
+    use crate::methods::bucket::twin_collisions;
+
+    #[test]
+    fn bdp2_quads16_48px_8_buckets_collision_count_equals_the_twin_and_beats_one_pass() {
+        let cfg = Config {
+            kind: Kind::TwoPass,
+            buckets: 8,
+        };
+        let r = run(cfg, WGSL, &quads(16, 1), 48);
+        assert_eq!(r.geometry_passes, 3);
+        let twin = r.assert_counts_match_twin(&cfg);
+        assert!(
+            twin > 0,
+            "16 layers in 8 buckets of 2 must still collide somewhere"
+        );
+        let one_pass = Config {
+            kind: Kind::Uniform { paired: false },
+            buckets: 8,
+        };
+        let single = twin_collisions(&one_pass, &r.lists);
+        assert!(twin < single, "bdp2 lost {twin}, one pass {single}");
+    }
+}
