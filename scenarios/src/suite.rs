@@ -27,6 +27,7 @@ use crate::{ParamValue, Params, Result, SceneError, SceneSpec};
 pub const BUILTIN: &[(&str, &str)] = &[
     ("smoke", include_str!("../suites/smoke.toml")),
     ("default", include_str!("../suites/default.toml")),
+    ("buckets", include_str!("../suites/buckets.toml")),
 ];
 
 #[derive(Clone, Debug)]
