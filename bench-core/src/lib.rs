@@ -13,6 +13,7 @@ pub mod record;
 pub mod reference;
 pub mod runner;
 pub mod studies;
+pub mod testing;
 pub mod timing;
 
 pub use gpu::{BackendChoice, Gpu, GpuOptions};
