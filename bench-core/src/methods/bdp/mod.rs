@@ -59,8 +59,8 @@ impl Method for Bdp {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::bucket::testing::{quads, quantised_reference, run};
-    use crate::methods::bucket::{pack_color, unpack_color};
+    use crate::methods::bucket::testing::{quads, quads_z, quantised_reference, run};
+    use crate::methods::bucket::{keyed_color, pack_color, pack_keyed, unpack_color};
 
     #[test]
     fn bdp_quads4_48px_32_single_buckets_no_shared_bucket_is_exact_up_to_the_packing() {
@@ -87,6 +87,49 @@ mod tests {
             e <= 0.5 / 127.0 + 4.0 * 2.0 * 0.5 / 1015.0,
             "pixel {p}: {e} from the reference"
         );
+    }
+
+    #[test]
+    fn bdp_paired_and_bdp2_quads4_48px_resolve_nearest_first_under_both_depth_conventions() {
+        // 4 layers in 8 buckets, two slots per bucket: no collision, so the image is the
+        // reference with the keyed packing's RGBA6 colours, if and only if the resolve walks
+        // the pairs (near/far, or pass 2 before pass 1) in the right order.
+        let bdp2_wgsl = include_str!("../bdp2/bdp2.wgsl");
+        for reversed in [false, true] {
+            let scene = quads_z(4, 5, reversed);
+            for (kind, wgsl) in [
+                (Kind::Uniform { paired: true }, WGSL),
+                (Kind::TwoPass, bdp2_wgsl),
+            ] {
+                let cfg = Config { kind, buckets: 8 };
+                let r = run(cfg, wgsl, &scene, 48);
+                assert_eq!(
+                    r.assert_counts_match_twin(&cfg),
+                    0,
+                    "{kind:?} reversed {reversed}"
+                );
+                let want = quantised_reference(&r.lists, |c| keyed_color(pack_keyed(0, c)));
+                let (e, p) = r.max_err(&want);
+                assert!(
+                    e < 1e-5,
+                    "{kind:?} reversed {reversed}: pixel {p} off by {e}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn bdp_reversed_z_quads4_48px_32_buckets_matches_the_packed_reference() {
+        let cfg = Config {
+            kind: Kind::Uniform { paired: false },
+            buckets: 32,
+        };
+        let r = run(cfg, WGSL, &quads_z(4, 1, true), 48);
+        assert_eq!(r.assert_counts_match_twin(&cfg), 0);
+        let (e, p) = r.max_err(&quantised_reference(&r.lists, |c| {
+            unpack_color(pack_color(c))
+        }));
+        assert!(e < 1e-5, "pixel {p}: {e} from the packed twin");
     }
 
     #[test]

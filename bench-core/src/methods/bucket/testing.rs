@@ -26,9 +26,15 @@ pub fn gpu() -> &'static Gpu {
 
 /// `quads` with `d` screen-parallel layers (untilted: each layer has one window depth).
 pub fn quads(d: i64, seed: i64) -> Scene {
+    quads_z(d, seed, false)
+}
+
+/// `quads` with the depth convention chosen (reversed-Z: 1 at the near plane).
+pub fn quads_z(d: i64, seed: i64, reversed_z: bool) -> Scene {
     let p = Params::new()
         .with("depth_complexity", ParamValue::Int(d))
-        .with("seed", ParamValue::Int(seed));
+        .with("seed", ParamValue::Int(seed))
+        .with("reversed_z", ParamValue::Bool(reversed_z));
     SceneSpec::new("quads", p).build().expect("quads scene")
 }
 
