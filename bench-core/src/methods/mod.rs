@@ -10,6 +10,9 @@
 //! | `kbuffer_atomic` | hazard-free k-buffer: 32-bit atomicMax bubbling of depth keys, then a payload pass | exact k nearest (ties get their own slots) | 2 (+ resolve) | k × (4 B key + 4 B claim + 32 B entry) |
 //! | `linked_list`  | Yang et al. 2010, per-pixel linked lists (atomic heads, one node pool), sorted in the resolve | exact within the pool (`layers` nodes per pixel on average); overflow counted | 1 (+ resolve) | 8 B + layers × 32 B node |
 //! | `wboit`        | McGuire & Bavoil 2013, weighted blended OIT | approximate (exact for one layer or one colour/alpha) | 1 (+ resolve) | 8 B RGBA16F + 2 B R16F + 16 B result |
+//! | `bdp`          | Liu et al., GPU Pro ch. 1, uniform bucket depth peeling | approximate: exact iff ≤1 fragment per bucket (2 if paired); collisions counted | 2 | 8 B range + 4 B × channels (≤32) + 68 B resolve |
+//! | `bdp2`         | Liu et al., GPU Pro ch. 1, two-pass BDP | approximate: 2 fragments per bucket; collisions counted | 3 | 8 B range + 2 × 4 B × K + 68 B resolve |
+//! | `adp`          | Liu et al., GPU Pro ch. 1, adaptive (histogram-equalised) BDP | approximate: fragments sharing a histogram bin collide | 2 + ⌈occupied bins / K⌉ | hist_bins/8 B + 8 B × K + 8 B range + 68 B resolve |
 //!
 //! Every method implements [`Method`] (what it is, which axes and features it needs, and
 //! `prepare`, which creates every GPU object) and [`Prepared`] (`frame`, the timed per-frame
@@ -18,6 +21,10 @@
 //! `effects.wgsl` ([`EFFECTS_WGSL`]) is the effects fold, and `packing` the float colour packing
 //! shared with the bucket methods.
 
+pub mod adp;
+pub mod bdp;
+pub mod bdp2;
+pub mod bucket;
 pub mod depth_peel;
 pub mod dual_peel;
 pub mod floor;
@@ -150,6 +157,9 @@ pub fn all() -> Vec<Box<dyn Method>> {
         Box::new(kbuffer_atomic::KBufferAtomic),
         Box::new(linked_list::LinkedList),
         Box::new(wboit::Wboit),
+        Box::new(bdp::Bdp),
+        Box::new(bdp2::Bdp2),
+        Box::new(adp::Adp),
     ]
 }
 
