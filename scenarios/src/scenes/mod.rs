@@ -8,10 +8,12 @@
 //! | `shells` | nested closed spheres or boxes around the view axis         | max depth complexity 2n |
 //! | `quads`  | d overlapping screen-parallel quads at distinct depths      | max depth complexity d  |
 //! | `obj`    | an OBJ file (tobj), normalised into view, grid-instanced    | —                       |
+//! | `soft_shadow` | occluders over a ground plane under a square area light | ray-traced visibility |
 
 pub mod grass;
 pub mod quads;
 pub mod shells;
+pub mod soft_shadow;
 
 use glam::{DVec3, Vec3};
 
@@ -156,6 +158,16 @@ pub struct Light {
     pub length: f32,
 }
 
+/// A square area light (the `shadows` study): the light's camera sits at the square's centre and
+/// looks along its normal; the square's sides follow the camera's x and y axes. `camera.fovy`
+/// and `camera.near`/`far` frame the shadow map (aspect 1).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AreaLight {
+    pub camera: Camera,
+    /// Side length of the square, world units.
+    pub size: f64,
+}
+
 /// A scene ready to render.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -167,6 +179,8 @@ pub struct Scene {
     pub analytic_max_depth_complexity: Option<u32>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    /// The square area light of soft-shadow scenes (None elsewhere).
+    pub area_light: Option<AreaLight>,
 }
 
 impl Scene {
@@ -179,6 +193,7 @@ impl Scene {
             analytic_max_depth_complexity: None,
             materials: Vec::new(),
             lights: Vec::new(),
+            area_light: None,
         }
     }
     pub fn name(&self) -> &str {
@@ -214,6 +229,7 @@ impl SceneSpec {
             "shells" => shells::build(self)?,
             "quads" => quads::build(self)?,
             "obj" => obj::build(self)?,
+            "soft_shadow" => soft_shadow::build(self)?,
             other => {
                 return Err(SceneError::UnknownGenerator(
                     other.to_string(),
@@ -235,7 +251,7 @@ impl SceneSpec {
 }
 
 /// Generator names, for `mfx list scenes`.
-pub const GENERATORS: &[&str] = &["grass", "shells", "quads", "obj"];
+pub const GENERATORS: &[&str] = &["grass", "shells", "quads", "obj", "soft_shadow"];
 
 /// One-line description per generator, for `mfx list scenes`.
 pub fn describe(generator: &str) -> &'static str {
@@ -244,6 +260,7 @@ pub fn describe(generator: &str) -> &'static str {
         "shells" => "count, shape=sphere|box, segments, alpha, seed: nested closed shells, max depth complexity 2·count",
         "quads" => "depth_complexity=d, alpha, tilt, seed: d quads over the centre at distinct depths",
         "obj" => "path, instances, alpha: an OBJ file via tobj, normalised, instanced on a grid",
+        "soft_shadow" => "case=spheres|leaves|slabs|tangent|quad|obj, light_size, light_height, …: occluders over a ground plane under a square area light",
         _ => "",
     }
 }
