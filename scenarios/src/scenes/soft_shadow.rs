@@ -167,11 +167,7 @@ pub fn build(spec: &SceneSpec) -> Result<Scene> {
             let top = base + d * 1.6;
             let w = Vec3::new(0.0, 0.0, 1.0);
             let mut m = Mesh::default();
-            m.push_quad(
-                [base - w, base + w, top + w, top - w],
-                palette(1, 1.0),
-                1,
-            );
+            m.push_quad([base - w, base + w, top + w, top - w], palette(1, 1.0), 1);
             add(m, "tangent quad", false);
             add(
                 uv_sphere(Vec3::new(-0.6, 0.7, 0.2), 0.4, segments, palette(2, 1.0), 2),

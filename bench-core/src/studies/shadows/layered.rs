@@ -17,8 +17,8 @@ use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, CameraUniform, GpuScene};
 use crate::methods::floor::{clear_depth, depth_state};
 use crate::methods::{
-    bool_param, camera_entry, int_param, read_vec, shader, storage_entry, str_param,
-    texture_entry, Capture, Expected, FrameStats, Method, Prepared,
+    bool_param, camera_entry, int_param, read_vec, shader, storage_entry, str_param, texture_entry,
+    Capture, Expected, FrameStats, Method, Prepared,
 };
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
@@ -70,7 +70,9 @@ fn float_param(
         Some(other) => return Err(format!("axis '{name}' must be a number, got {other}")),
     };
     if !v.is_finite() || v < min || v > max {
-        return Err(format!("axis '{name}' = {v} is out of range [{min}, {max}]"));
+        return Err(format!(
+            "axis '{name}' = {v} is out of range [{min}, {max}]"
+        ));
     }
     Ok(v)
 }
@@ -114,12 +116,12 @@ impl Config {
 /// Matches `struct Light` in shadows.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct LightUniform {
-    view_from_world: [[f32; 4]; 4],
-    map: [f32; 4],
-    cfg: [u32; 4],
-    bias: [f32; 4],
-    level_offset: [[u32; 4]; 4],
+pub struct LightUniform {
+    pub view_from_world: [[f32; 4]; 4],
+    pub map: [f32; 4],
+    pub cfg: [u32; 4],
+    pub bias: [f32; 4],
+    pub level_offset: [[u32; 4]; 4],
 }
 
 #[repr(C)]
@@ -175,7 +177,9 @@ impl Method for LayeredSsm {
             .allowed_usages
             .contains(wgpu::TextureUsages::STORAGE_BINDING)
         {
-            return Err(format!("{PACKED_FORMAT:?} storage textures are not supported"));
+            return Err(format!(
+                "{PACKED_FORMAT:?} storage textures are not supported"
+            ));
         }
         Ok(())
     }
@@ -186,12 +190,7 @@ impl Method for LayeredSsm {
 
 impl LayeredSsm {
     /// `prepare`, keeping the concrete type (the study reads the G-buffer points from it).
-    pub fn prepare_ssm(
-        &self,
-        gpu: &Gpu,
-        scene: &GpuScene,
-        params: &Params,
-    ) -> Result<PreparedSsm> {
+    pub fn prepare_ssm(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<PreparedSsm> {
         let cfg = Config::from_params(params).map_err(CoreError::Param)?;
         Ok(PreparedSsm::new(gpu, scene, &self.light, cfg))
     }
@@ -219,6 +218,9 @@ pub struct PreparedSsm {
     eye_depth: wgpu::TextureView,
     visibility: wgpu::Buffer,
     points: wgpu::Buffer,
+    packed_tex: [wgpu::Texture; 2],
+    pyramid: wgpu::Buffer,
+    light_uniform: LightUniform,
     reversed: bool,
     alloc: AllocCounter,
 }
@@ -423,15 +425,25 @@ impl PreparedSsm {
             })
             .create_view(&Default::default());
         let sm_depth = alloc
-            .texture(gpu, "ssm depth", r, r, wgpu::TextureFormat::Depth32Float, rt)
+            .texture(
+                gpu,
+                "ssm depth",
+                r,
+                r,
+                wgpu::TextureFormat::Depth32Float,
+                rt,
+            )
             .create_view(&Default::default());
-        let st = wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING;
-        let packed_depth = alloc
-            .texture(gpu, "ssm packed depths", r, r, PACKED_FORMAT, st)
-            .create_view(&Default::default());
-        let packed_slope = alloc
-            .texture(gpu, "ssm packed slopes", r, r, PACKED_FORMAT, st)
-            .create_view(&Default::default());
+        // COPY_SRC: the CPU twin's test reads the packed maps back.
+        let st = wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC;
+        let packed_tex = [
+            alloc.texture(gpu, "ssm packed depths", r, r, PACKED_FORMAT, st),
+            alloc.texture(gpu, "ssm packed slopes", r, r, PACKED_FORMAT, st),
+        ];
+        let packed_depth = packed_tex[0].create_view(&Default::default());
+        let packed_slope = packed_tex[1].create_view(&Default::default());
         let top = cfg.top_level();
         let mut offsets = [[0u32; 4]; 4];
         let mut total = 0u32;
@@ -446,7 +458,14 @@ impl PreparedSsm {
             .texture(gpu, "ssm gbuffer", w, h, GBUFFER_FORMAT, rt)
             .create_view(&Default::default());
         let eye_depth = alloc
-            .texture(gpu, "ssm eye depth", w, h, wgpu::TextureFormat::Depth32Float, rt)
+            .texture(
+                gpu,
+                "ssm eye depth",
+                w,
+                h,
+                wgpu::TextureFormat::Depth32Float,
+                rt,
+            )
             .create_view(&Default::default());
         let px = (w * h) as u64;
         let visibility = alloc.buffer(gpu, "ssm visibility", px * 4, sb);
@@ -555,7 +574,11 @@ impl PreparedSsm {
                     usage: wgpu::BufferUsages::UNIFORM,
                 });
                 (
-                    bg("ssm reduce", &reduce_bgl, &[entry(6, u.as_entire_binding())]),
+                    bg(
+                        "ssm reduce",
+                        &reduce_bgl,
+                        &[entry(6, u.as_entire_binding())],
+                    ),
                     size,
                 )
             })
@@ -593,6 +616,9 @@ impl PreparedSsm {
             eye_depth,
             visibility,
             points,
+            packed_tex,
+            pyramid,
+            light_uniform: lu,
             reversed: scene.reversed_z,
             alloc,
         }
@@ -624,6 +650,55 @@ impl PreparedSsm {
 
     pub fn config(&self) -> &Config {
         &self.cfg
+    }
+
+    /// The shading inputs as the GPU holds them after a frame, for the CPU twin.
+    pub fn read_maps(&self, gpu: &Gpu) -> Result<super::twin::Maps> {
+        let r = self.cfg.shadow_map_res;
+        let row = (r * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let mut out = Vec::new();
+        for tex in &self.packed_tex {
+            let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("ssm map readback"),
+                size: (row * r) as u64,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let mut enc = gpu.device.create_command_encoder(&Default::default());
+            enc.copy_texture_to_buffer(
+                tex.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &buf,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(row),
+                        rows_per_image: None,
+                    },
+                },
+                wgpu::Extent3d {
+                    width: r,
+                    height: r,
+                    depth_or_array_layers: 1,
+                },
+            );
+            gpu.queue.submit([enc.finish()]);
+            let bytes = gpu.map_read(&buf)?;
+            let mut texels = Vec::with_capacity((r * r) as usize);
+            for y in 0..r as usize {
+                let line = &bytes[y * row as usize..y * row as usize + r as usize * 16];
+                texels.extend_from_slice(bytemuck::cast_slice::<u8, [f32; 4]>(line));
+            }
+            out.push(texels);
+        }
+        let pyramid = read_vec::<f32>(gpu, &self.pyramid, (self.pyramid.size() / 4) as usize)?;
+        let slope = out.pop().unwrap_or_default();
+        let depth = out.pop().unwrap_or_default();
+        Ok(super::twin::Maps {
+            light: self.light_uniform,
+            depth,
+            slope,
+            pyramid,
+        })
     }
 }
 

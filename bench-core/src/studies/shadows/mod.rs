@@ -13,6 +13,7 @@
 
 pub mod layered;
 pub mod raytrace;
+pub mod twin;
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -65,7 +66,11 @@ struct Settings {
 }
 
 fn settings(spec: &StudySpec) -> Result<Settings> {
-    if let Some(k) = spec.extra.keys().find(|k| !STUDY_KEYS.contains(&k.as_str())) {
+    if let Some(k) = spec
+        .extra
+        .keys()
+        .find(|k| !STUDY_KEYS.contains(&k.as_str()))
+    {
         return Err(CoreError::Param(format!(
             "unknown key '{k}' in the shadows study (known: {})",
             STUDY_KEYS.join(", ")
@@ -73,9 +78,9 @@ fn settings(spec: &StudySpec) -> Result<Settings> {
     }
     let rays = match spec.extra.get("shadow_rays") {
         None => 64,
-        Some(v) => v.as_integer().ok_or_else(|| {
-            CoreError::Param(format!("shadow_rays must be an integer, got {v}"))
-        })?,
+        Some(v) => v
+            .as_integer()
+            .ok_or_else(|| CoreError::Param(format!("shadow_rays must be an integer, got {v}")))?,
     };
     let m = (rays.max(0) as f64).sqrt().round() as i64;
     if !(1..=4096).contains(&m) || m * m != rays {
@@ -85,9 +90,9 @@ fn settings(spec: &StudySpec) -> Result<Settings> {
     }
     let images = match spec.extra.get("images") {
         None => true,
-        Some(v) => v.as_bool().ok_or_else(|| {
-            CoreError::Param(format!("images must be true or false, got {v}"))
-        })?,
+        Some(v) => v
+            .as_bool()
+            .ok_or_else(|| CoreError::Param(format!("images must be true or false, got {v}")))?,
     };
     Ok(Settings {
         rays_per_axis: m as u32,
@@ -108,7 +113,11 @@ impl Study for ShadowsStudy {
                 "the shadows study runs '{METHOD}' only, not '{m}' (leave `methods` out)"
             )));
         }
-        if let Some(a) = spec.axes.keys().find(|a| !layered::AXES.contains(&a.as_str())) {
+        if let Some(a) = spec
+            .axes
+            .keys()
+            .find(|a| !layered::AXES.contains(&a.as_str()))
+        {
             return Err(CoreError::Param(format!(
                 "unknown shadows axis '{a}' (known: {})",
                 layered::AXES.join(", ")
@@ -148,7 +157,10 @@ impl Study for ShadowsStudy {
             Ok(r) => r,
             Err(e) => {
                 for (i, p) in ctx.group.points.iter().enumerate() {
-                    emit(i, failed_row(base_row(&p.params)?, &format!("reference: {e}")))?;
+                    emit(
+                        i,
+                        failed_row(base_row(&p.params)?, &format!("reference: {e}")),
+                    )?;
                 }
                 return Ok(());
             }
@@ -156,11 +168,14 @@ impl Study for ShadowsStudy {
         let (w, h) = (ctx.group.width, ctx.group.height);
         let img_dir = if set.images {
             std::env::var_os("MFX_OUT_DIR").map(|d| {
-                PathBuf::from(d).join("images").join("shadows").join(format!(
-                    "{}-{}-{w}x{h}",
-                    ctx.group.study_index,
-                    sanitize(&ctx.scene.label())
-                ))
+                PathBuf::from(d)
+                    .join("images")
+                    .join("shadows")
+                    .join(format!(
+                        "{}-{}-{w}x{h}",
+                        ctx.group.study_index,
+                        sanitize(&ctx.scene.label())
+                    ))
             })
         } else {
             None
@@ -179,12 +194,7 @@ impl Study for ShadowsStudy {
                 continue;
             }
             let mut m = match measure(
-                ctx.gpu,
-                ctx.gscene,
-                &method,
-                &pt.params,
-                ctx.warmup,
-                ctx.reps,
+                ctx.gpu, ctx.gscene, &method, &pt.params, ctx.warmup, ctx.reps,
             ) {
                 Ok(m) => m,
                 Err(e) => {
@@ -265,7 +275,13 @@ fn group_reference(ctx: &GroupCtx<'_>, method: &LayeredSsm, m: u32) -> Result<Ar
         return Ok(r.clone());
     }
     let points = gbuffer_points(ctx.gpu, ctx.gscene, method)?;
-    let r = Arc::new(reference(ctx.scene, &method.light, &points, ctx.group.width, m));
+    let r = Arc::new(reference(
+        ctx.scene,
+        &method.light,
+        &points,
+        ctx.group.width,
+        m,
+    ));
     let mut cache = CACHE.lock().unwrap();
     cache.push((key, r.clone()));
     if cache.len() > CACHE_ENTRIES {
@@ -375,7 +391,13 @@ pub fn compare(reference: &[Option<f64>], got: &[f32]) -> VisError {
 
 fn sanitize(s: &str) -> String {
     s.chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '=' || c == '-' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '=' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect()
 }
 

@@ -240,9 +240,9 @@ pub fn visibility_image(
         .par_chunks(width.max(1))
         .enumerate()
         .flat_map_iter(|(y, row)| {
-            row.iter().enumerate().map(move |(x, p)| {
-                p.map(|p| visibility(bvh, light, p, m, (y * width + x) as u64))
-            })
+            row.iter()
+                .enumerate()
+                .map(move |(x, p)| p.map(|p| visibility(bvh, light, p, m, (y * width + x) as u64)))
         })
         .collect()
 }
@@ -334,9 +334,9 @@ mod tests {
         for i in 0..400 {
             let p = DVec3::new(r(), 0.0, r());
             let q = l.point(jitter(i) - 0.5, jitter(i + 999) - 0.5);
-            let brute = tris.iter().any(|t| {
-                intersect(p, q - p, t).is_some_and(|h| h > T_MIN && h < 1.0)
-            });
+            let brute = tris
+                .iter()
+                .any(|t| intersect(p, q - p, t).is_some_and(|h| h > T_MIN && h < 1.0));
             assert_eq!(bvh.occluded(p, q - p, T_MIN, 1.0), brute, "ray {i}");
         }
     }
