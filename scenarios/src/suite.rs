@@ -27,6 +27,8 @@ use crate::{ParamValue, Params, Result, SceneError, SceneSpec};
 pub const BUILTIN: &[(&str, &str)] = &[
     ("smoke", include_str!("../suites/smoke.toml")),
     ("default", include_str!("../suites/default.toml")),
+    ("shadows", include_str!("../suites/shadows.toml")),
+    ("shadows-ci", include_str!("../suites/shadows-ci.toml")),
 ];
 
 #[derive(Clone, Debug)]

@@ -9,6 +9,8 @@
 //! max_nspp samples × k layers), needs no raster state or derivatives (slopes were taken at peel
 //! time), and writes its f32 visibility straight into a storage buffer that is read back exactly.
 
+use std::sync::{Arc, Mutex};
+
 use bytemuck::{Pod, Zeroable};
 use scenarios::{AreaLight, Params};
 use wgpu::util::DeviceExt;
@@ -136,6 +138,8 @@ struct ReduceUniform {
 /// Layered soft shadow maps for one scene's area light.
 pub struct LayeredSsm {
     pub light: AreaLight,
+    /// Compiled on the first `prepare` and shared by every later one (same device, same scene).
+    pipelines: Mutex<Option<Arc<Pipelines>>>,
 }
 
 impl Method for LayeredSsm {
@@ -189,15 +193,41 @@ impl Method for LayeredSsm {
 }
 
 impl LayeredSsm {
+    pub fn new(light: AreaLight) -> Self {
+        LayeredSsm {
+            light,
+            pipelines: Mutex::new(None),
+        }
+    }
+
     /// `prepare`, keeping the concrete type (the study reads the G-buffer points from it).
     pub fn prepare_ssm(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<PreparedSsm> {
         let cfg = Config::from_params(params).map_err(CoreError::Param)?;
-        Ok(PreparedSsm::new(gpu, scene, &self.light, cfg))
+        let pipes = {
+            let mut cached = self.pipelines.lock().unwrap();
+            match &*cached {
+                Some(p) if p.reversed_z == scene.reversed_z => p.clone(),
+                _ => {
+                    let p = Arc::new(Pipelines::new(gpu, scene.reversed_z));
+                    *cached = Some(p.clone());
+                    p
+                }
+            }
+        };
+        Ok(PreparedSsm::new(gpu, scene, &self.light, cfg, pipes))
     }
 }
 
-pub struct PreparedSsm {
-    cfg: Config,
+/// Shader, layouts and pipelines: the same for every configuration (the configuration lives in
+/// uniforms), so one set is compiled per scene group and shared by all its points.
+pub struct Pipelines {
+    reversed_z: bool,
+    cam_bgl: wgpu::BindGroupLayout,
+    prev_bgl: wgpu::BindGroupLayout,
+    light_bgl: wgpu::BindGroupLayout,
+    pack_bgl: wgpu::BindGroupLayout,
+    reduce_bgl: wgpu::BindGroupLayout,
+    shade_bgl: wgpu::BindGroupLayout,
     peel_first: wgpu::RenderPipeline,
     peel: wgpu::RenderPipeline,
     gbuffer: wgpu::RenderPipeline,
@@ -205,6 +235,11 @@ pub struct PreparedSsm {
     reduce: wgpu::ComputePipeline,
     shade: wgpu::ComputePipeline,
     export: wgpu::ComputePipeline,
+}
+
+pub struct PreparedSsm {
+    cfg: Config,
+    pipes: Arc<Pipelines>,
     light_cam_bg: wgpu::BindGroup,
     eye_cam_bg: wgpu::BindGroup,
     prev_bg: Vec<wgpu::BindGroup>,
@@ -255,11 +290,9 @@ fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEn
     wgpu::BindGroupEntry { binding, resource }
 }
 
-impl PreparedSsm {
-    fn new(gpu: &Gpu, scene: &GpuScene, light: &AreaLight, cfg: Config) -> Self {
+impl Pipelines {
+    fn new(gpu: &Gpu, reversed_z: bool) -> Self {
         let d = &gpu.device;
-        let r = cfg.shadow_map_res;
-        let (w, h) = (scene.width, scene.height);
         let module = shader(gpu, "layered_ssm", WGSL);
         let comp = wgpu::ShaderStages::COMPUTE;
         let nf = wgpu::TextureSampleType::Float { filterable: false };
@@ -367,7 +400,7 @@ impl PreparedSsm {
                 buffers: &pos_layouts,
             },
             primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(depth_state(scene.reversed_z, true)),
+            depth_stencil: Some(depth_state(reversed_z, true)),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
@@ -397,6 +430,45 @@ impl PreparedSsm {
         let shade = compute("ssm shade", &shade_layout, "shade");
         let export = compute("ssm export", &shade_layout, "export_points");
 
+        Pipelines {
+            reversed_z,
+            cam_bgl,
+            prev_bgl,
+            light_bgl,
+            pack_bgl,
+            reduce_bgl,
+            shade_bgl,
+            peel_first,
+            peel,
+            gbuffer,
+            pack,
+            reduce,
+            shade,
+            export,
+        }
+    }
+}
+
+impl PreparedSsm {
+    fn new(
+        gpu: &Gpu,
+        scene: &GpuScene,
+        light: &AreaLight,
+        cfg: Config,
+        pipes: Arc<Pipelines>,
+    ) -> Self {
+        let d = &gpu.device;
+        let r = cfg.shadow_map_res;
+        let (w, h) = (scene.width, scene.height);
+        let p = &*pipes;
+        let (cam_bgl, prev_bgl, light_bgl, pack_bgl, reduce_bgl, shade_bgl) = (
+            &p.cam_bgl,
+            &p.prev_bgl,
+            &p.light_bgl,
+            &p.pack_bgl,
+            &p.reduce_bgl,
+            &p.shade_bgl,
+        );
         // ---- resources ----
         let mut alloc = AllocCounter::default();
         let rt = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
@@ -520,12 +592,12 @@ impl PreparedSsm {
         };
         let light_cam_bg = bg(
             "ssm light camera",
-            &cam_bgl,
+            cam_bgl,
             &[entry(0, light_cam_buf.as_entire_binding())],
         );
         let eye_cam_bg = bg(
             "ssm eye camera",
-            &cam_bgl,
+            cam_bgl,
             &[entry(0, scene.camera.as_entire_binding())],
         );
         let prev_bg = (0..cfg.layers as usize)
@@ -533,14 +605,14 @@ impl PreparedSsm {
                 let v = if j == 0 { &dummy } else { &layer_views[j - 1] };
                 bg(
                     "ssm prev layer",
-                    &prev_bgl,
+                    prev_bgl,
                     &[entry(0, wgpu::BindingResource::TextureView(v))],
                 )
             })
             .collect();
         let light_bg = bg(
             "ssm light",
-            &light_bgl,
+            light_bgl,
             &[
                 entry(1, light_buf.as_entire_binding()),
                 entry(2, pyramid.as_entire_binding()),
@@ -549,7 +621,7 @@ impl PreparedSsm {
         let layer_or_dummy = |j: usize| layer_views.get(j).unwrap_or(&dummy);
         let pack_bg = bg(
             "ssm pack",
-            &pack_bgl,
+            pack_bgl,
             &[
                 entry(0, wgpu::BindingResource::TextureView(layer_or_dummy(0))),
                 entry(1, wgpu::BindingResource::TextureView(layer_or_dummy(1))),
@@ -574,18 +646,14 @@ impl PreparedSsm {
                     usage: wgpu::BufferUsages::UNIFORM,
                 });
                 (
-                    bg(
-                        "ssm reduce",
-                        &reduce_bgl,
-                        &[entry(6, u.as_entire_binding())],
-                    ),
+                    bg("ssm reduce", reduce_bgl, &[entry(6, u.as_entire_binding())]),
                     size,
                 )
             })
             .collect();
         let shade_bg = bg(
             "ssm shade",
-            &shade_bgl,
+            shade_bgl,
             &[
                 entry(7, wgpu::BindingResource::TextureView(&gbuffer_view)),
                 entry(8, wgpu::BindingResource::TextureView(&packed_depth)),
@@ -596,13 +664,7 @@ impl PreparedSsm {
         );
         PreparedSsm {
             cfg,
-            peel_first,
-            peel,
-            gbuffer,
-            pack,
-            reduce,
-            shade,
-            export,
+            pipes,
             light_cam_bg,
             eye_cam_bg,
             prev_bg,
@@ -629,7 +691,7 @@ impl PreparedSsm {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.export);
+            pass.set_pipeline(&self.pipes.export);
             pass.set_bind_group(0, &self.eye_cam_bg, &[]);
             pass.set_bind_group(1, &self.light_bg, &[]);
             pass.set_bind_group(2, &self.shade_bg, &[]);
@@ -735,7 +797,11 @@ impl Prepared for PreparedSsm {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(if j == 0 { &self.peel_first } else { &self.peel });
+            pass.set_pipeline(if j == 0 {
+                &self.pipes.peel_first
+            } else {
+                &self.pipes.peel
+            });
             pass.set_bind_group(0, &self.light_cam_bg, &[]);
             pass.set_bind_group(1, &self.prev_bg[j], &[]);
             scene.draw(&mut pass, Attrs::ALL);
@@ -745,7 +811,7 @@ impl Prepared for PreparedSsm {
                 label: Some("sm_pack"),
                 timestamp_writes: timer.compute_pass("sm_pack"),
             });
-            pass.set_pipeline(&self.pack);
+            pass.set_pipeline(&self.pipes.pack);
             pass.set_bind_group(0, &self.eye_cam_bg, &[]);
             pass.set_bind_group(1, &self.light_bg, &[]);
             pass.set_bind_group(2, &self.pack_bg, &[]);
@@ -756,7 +822,7 @@ impl Prepared for PreparedSsm {
                 label: Some("hsm_build"),
                 timestamp_writes: timer.compute_pass("hsm_build"),
             });
-            pass.set_pipeline(&self.reduce);
+            pass.set_pipeline(&self.pipes.reduce);
             pass.set_bind_group(0, &self.eye_cam_bg, &[]);
             pass.set_bind_group(1, &self.light_bg, &[]);
             for (bgr, size) in &self.reduce_bg {
@@ -788,7 +854,7 @@ impl Prepared for PreparedSsm {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.gbuffer);
+            pass.set_pipeline(&self.pipes.gbuffer);
             pass.set_bind_group(0, &self.eye_cam_bg, &[]);
             scene.draw(&mut pass, Attrs::POSITION_ONLY);
         }
@@ -797,7 +863,7 @@ impl Prepared for PreparedSsm {
                 label: Some("shade"),
                 timestamp_writes: timer.compute_pass("shade"),
             });
-            pass.set_pipeline(&self.shade);
+            pass.set_pipeline(&self.pipes.shade);
             pass.set_bind_group(0, &self.eye_cam_bg, &[]);
             pass.set_bind_group(1, &self.light_bg, &[]);
             pass.set_bind_group(2, &self.shade_bg, &[]);

@@ -152,7 +152,7 @@ impl Study for ShadowsStudy {
             }
             return Ok(());
         };
-        let method = LayeredSsm { light };
+        let method = LayeredSsm::new(light);
         let reference = match group_reference(ctx, &method, set.rays_per_axis) {
             Ok(r) => r,
             Err(e) => {

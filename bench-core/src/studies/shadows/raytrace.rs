@@ -37,7 +37,7 @@ const LEAF: usize = 4;
 impl Bvh {
     pub fn from_scene(scene: &Scene) -> Bvh {
         let m = &scene.mesh;
-        let p = |i: u32| DVec3::from(glam::Vec3::from(m.positions[i as usize]).as_dvec3());
+        let p = |i: u32| glam::Vec3::from(m.positions[i as usize]).as_dvec3();
         Bvh::build(
             m.indices
                 .chunks_exact(3)
@@ -145,7 +145,7 @@ fn slab_hit(lo: DVec3, hi: DVec3, o: DVec3, inv: DVec3, tmin: f64, tmax: f64) ->
     let near = t0.min(t1).max_element().max(tmin);
     let far = t0.max(t1).min_element().min(tmax);
     // NaN (0·inf on a face) compares false: treat as a hit so no triangle is ever skipped.
-    !(near > far)
+    near.partial_cmp(&far) != Some(std::cmp::Ordering::Greater)
 }
 
 /// Möller–Trumbore: ray parameter of the hit, or None (both faces count: shadows have no culling).

@@ -38,9 +38,7 @@ fn errors_where(
     let gpu = testing::gpu();
     let scene = scene(case);
     let gs = GpuScene::upload(&gpu, &scene, W, W);
-    let method = LayeredSsm {
-        light: scene.area_light.clone().unwrap(),
-    };
+    let method = LayeredSsm::new(scene.area_light.clone().unwrap());
     let points = gbuffer_points(&gpu, &gs, &method).unwrap();
     let mut r = reference(&scene, &method.light, &points, W, M);
     for (v, p) in r.vis.iter_mut().zip(&points) {
@@ -117,9 +115,7 @@ fn cpu_twin_matches_gpu_shading_on_every_case() {
     for case in ["quad", "spheres", "leaves", "slabs", "tangent"] {
         let scene = scene(case);
         let gs = GpuScene::upload(&gpu, &scene, W, W);
-        let method = LayeredSsm {
-            light: scene.area_light.clone().unwrap(),
-        };
+        let method = LayeredSsm::new(scene.area_light.clone().unwrap());
         for p in &configs {
             let mut prep = method.prepare_ssm(&gpu, &gs, p).unwrap();
             let mut timer = crate::timing::GpuTimer::new(&gpu);
@@ -202,9 +198,7 @@ fn debug_images() {
     let scene = scene(&case);
     let w = 128;
     let gs = GpuScene::upload(&gpu, &scene, w, w);
-    let method = LayeredSsm {
-        light: scene.area_light.clone().unwrap(),
-    };
+    let method = LayeredSsm::new(scene.area_light.clone().unwrap());
     let points = gbuffer_points(&gpu, &gs, &method).unwrap();
     let r = reference(&scene, &method.light, &points, w, M);
     super::write_visibility_png(std::path::Path::new("/tmp/ssm/ref.png"), w, w, &r.vis).unwrap();
