@@ -1,6 +1,7 @@
 //! Figures per study kind. Each module reads only the rows of its study.
 
 pub mod methods;
+pub mod shadows;
 
 use std::path::Path;
 
@@ -16,6 +17,12 @@ pub fn all_figures(runs: &Runs, dir: &Path) -> Result<Vec<(String, Vec<Figure>)>
         out.push((
             "Multi-fragment methods".to_string(),
             methods::figures(runs, dir)?,
+        ));
+    }
+    if !runs.study("shadows").is_empty() {
+        out.push((
+            "Soft shadows (layered shadow maps vs ray tracing)".to_string(),
+            shadows::figures(runs, dir)?,
         ));
     }
     Ok(out)
