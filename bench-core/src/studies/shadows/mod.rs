@@ -185,7 +185,15 @@ impl Study for ShadowsStudy {
                 .map_err(|e| CoreError::Io(format!("{}: {e}", dir.display())))?;
             write_visibility_png(&dir.join("reference.png"), w, h, &reference.vis)?;
         }
-        let mut imaged_layers = Vec::new();
+        // Images of the last point of each layer count: with the suite's ascending axis values
+        // that is its finest configuration (largest shadow map and max_nspp).
+        let layers_of = |p: &PointSpec| Config::from_params(&p.params).map(|c| c.layers).ok();
+        let imaged: Vec<usize> = (0..ctx.group.points.len())
+            .filter(|&i| {
+                let k = layers_of(&ctx.group.points[i]);
+                k.is_some() && ctx.group.points[i + 1..].iter().all(|q| layers_of(q) != k)
+            })
+            .collect();
         for (i, pt) in ctx.group.points.iter().enumerate() {
             let mut row = base_row(&pt.params)?;
             row.set_f("reference_ms", reference.ms);
@@ -228,11 +236,8 @@ impl Study for ShadowsStudy {
                 );
             }
             if let Some(dir) = &img_dir {
-                let k = Config::from_params(&pt.params)
-                    .map(|c| c.layers)
-                    .unwrap_or(0);
-                if !imaged_layers.contains(&k) {
-                    imaged_layers.push(k);
+                if imaged.contains(&i) {
+                    let k = layers_of(pt).unwrap_or(0);
                     let stem = format!("p{i}-layers{k}");
                     let vis: Vec<Option<f64>> = got
                         .iter()
@@ -389,16 +394,14 @@ pub fn compare(reference: &[Option<f64>], got: &[f32]) -> VisError {
     e
 }
 
+/// A scene label as a folder name: `soft_shadow(case=leaves)` → `soft_shadow_case=leaves`.
 fn sanitize(s: &str) -> String {
+    let keep = |c: char| c.is_ascii_alphanumeric() || matches!(c, '=' | '-' | '.');
     s.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '=' || c == '-' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
+        .map(|c| if keep(c) { c } else { '_' })
+        .collect::<String>()
+        .trim_matches('_')
+        .to_string()
 }
 
 /// Grey visibility (black = in shadow); pixels not evaluated in dark blue.
