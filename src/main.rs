@@ -65,8 +65,22 @@ enum Cmd {
         /// Skip the report after the sweep.
         #[arg(long)]
         no_report: bool,
+        /// Save each point's image as OUT/images/<hash>.npy (for cross-backend comparison).
+        #[arg(long)]
+        save_images: bool,
         #[command(flatten)]
         gpu: GpuArgs,
+    },
+    /// Merge run folders (shards, machines) into one runs.csv; duplicates are reported.
+    Merge {
+        /// Run folders, folders of run folders (one level down), or runs.csv files.
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        #[arg(long)]
+        out: PathBuf,
+        /// Exit with an error when a point appears twice (instead of keeping the first).
+        #[arg(long)]
+        strict: bool,
     },
     /// Turn a run folder's runs.csv into PNG/SVG plots and an HTML page.
     Report {
@@ -152,8 +166,25 @@ fn run(cli: Cli) -> Result<()> {
             out,
             shard,
             no_report,
+            save_images,
             gpu,
-        } => sweep(&suite, out, shard, no_report, &gpu),
+        } => sweep(&suite, out, shard, no_report, save_images, &gpu),
+        Cmd::Merge {
+            inputs,
+            out,
+            strict,
+        } => {
+            let m = bench_core::merge::merge(&inputs, &out)?;
+            println!("{}", m.summary());
+            if strict && !m.duplicates.is_empty() {
+                bail!(
+                    "{} duplicate points (--strict); see {}",
+                    m.duplicates.len(),
+                    out.join("duplicates.csv").display()
+                );
+            }
+            Ok(())
+        }
         Cmd::Report { dir, baseline } => {
             let page = report::build(&dir, baseline.as_deref())
                 .with_context(|| format!("report of {}", dir.display()))?;
@@ -336,6 +367,7 @@ fn sweep(
     out: Option<PathBuf>,
     shard: Option<(usize, usize)>,
     no_report: bool,
+    save_images: bool,
     gpu_args: &GpuArgs,
 ) -> Result<()> {
     let suite = Suite::load(suite_name)?;
@@ -384,6 +416,7 @@ fn sweep(
         run_id,
         git_rev: runner::git_rev(),
         shard,
+        save_images: save_images.then(|| out.clone()),
     };
     let n = runner::run(&gpu, &suite, &groups, &opts, &mut sink)?;
     bar.finish_and_clear();

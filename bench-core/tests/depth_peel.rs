@@ -20,37 +20,82 @@ fn check(spec: SceneSpec, max_layers: i64) {
     let e = image_error(&reference, cap.image.as_ref().unwrap(), BAD_PIXEL_TOL);
     let label = spec.label();
     assert!(e.rmse <= 1e-3, "{label}: RMSE {} > 1e-3", e.rmse);
-    assert!(e.max_abs <= 1e-4, "{label}: max abs error {} (f32 rounding is ~1e-6)", e.max_abs);
+    assert!(
+        e.max_abs <= 1e-4,
+        "{label}: max abs error {} (f32 rounding is ~1e-6)",
+        e.max_abs
+    );
     assert_eq!(e.non_finite, 0, "{label}: NaN/Inf in output");
     let dc = lists.max_depth_complexity();
-    assert_eq!(frame.layers, dc, "{label}: layers peeled vs true max depth complexity");
-    assert_eq!(frame.geometry_passes, dc + 1, "{label}: the occlusion query ends peeling one pass after the last layer");
+    assert_eq!(
+        frame.layers, dc,
+        "{label}: layers peeled vs true max depth complexity"
+    );
+    assert_eq!(
+        frame.geometry_passes,
+        dc + 1,
+        "{label}: the occlusion query ends peeling one pass after the last layer"
+    );
     let counts = cap.counts.unwrap();
-    assert_eq!(counts, lists.depth_complexity(), "{label}: per-pixel layer counts");
+    assert_eq!(
+        counts,
+        lists.depth_complexity(),
+        "{label}: per-pixel layer counts"
+    );
 }
 
 #[test]
 fn depth_peel_quads_64px_matches_reference() {
     for d in [1, 3, 9] {
-        check(SceneSpec::new("quads", Params::new().with("depth_complexity", ParamValue::Int(d))), 64);
+        check(
+            SceneSpec::new(
+                "quads",
+                Params::new().with("depth_complexity", ParamValue::Int(d)),
+            ),
+            64,
+        );
     }
 }
 
 #[test]
 fn depth_peel_shells_64px_matches_reference() {
-    check(SceneSpec::new("shells", Params::new().with("count", ParamValue::Int(3)).with("segments", ParamValue::Int(16))), 64);
-    check(SceneSpec::new("shells", Params::new().with("count", ParamValue::Int(2)).with("shape", ParamValue::Str("box".into()))), 64);
+    check(
+        SceneSpec::new(
+            "shells",
+            Params::new()
+                .with("count", ParamValue::Int(3))
+                .with("segments", ParamValue::Int(16)),
+        ),
+        64,
+    );
+    check(
+        SceneSpec::new(
+            "shells",
+            Params::new()
+                .with("count", ParamValue::Int(2))
+                .with("shape", ParamValue::Str("box".into())),
+        ),
+        64,
+    );
 }
 
 #[test]
 fn depth_peel_grass_64px_matches_reference() {
-    check(SceneSpec::new("grass", Params::new().with("blades", ParamValue::Int(300))), 64);
+    check(
+        SceneSpec::new("grass", Params::new().with("blades", ParamValue::Int(300))),
+        64,
+    );
 }
 
 #[test]
 fn depth_peel_reversed_z_matches_reference() {
     check(
-        SceneSpec::new("quads", Params::new().with("depth_complexity", ParamValue::Int(5)).with("reversed_z", ParamValue::Bool(true))),
+        SceneSpec::new(
+            "quads",
+            Params::new()
+                .with("depth_complexity", ParamValue::Int(5))
+                .with("reversed_z", ParamValue::Bool(true)),
+        ),
         64,
     );
 }
@@ -58,8 +103,15 @@ fn depth_peel_reversed_z_matches_reference() {
 #[test]
 fn depth_peel_max_layers_bound_composites_the_nearest_layers_only() {
     let gpu = testing::gpu();
-    let scene = SceneSpec::new("quads", Params::new().with("depth_complexity", ParamValue::Int(8))).build().unwrap();
-    let params = Params::new().with("max_layers", ParamValue::Int(3)).with("occlusion_stop", ParamValue::Bool(false));
+    let scene = SceneSpec::new(
+        "quads",
+        Params::new().with("depth_complexity", ParamValue::Int(8)),
+    )
+    .build()
+    .unwrap();
+    let params = Params::new()
+        .with("max_layers", ParamValue::Int(3))
+        .with("occlusion_stop", ParamValue::Bool(false));
     let (cap, frame) = testing::render(&gpu, &scene, "depth_peel", &params, 48, 48);
     assert_eq!(frame.geometry_passes, 3);
     let lists = rasterize(&scene, 48, 48);

@@ -19,7 +19,12 @@ fn run(text: &str) -> Vec<Row> {
     let groups = runner::expand(&suite, gpu.facts.is_software).unwrap();
     let n = runner::rows_in(&groups);
     let mut sink = Collect(Vec::new());
-    let opts = RunOptions { run_id: "t".into(), git_rev: "t".into(), shard: (0, 1) };
+    let opts = RunOptions {
+        run_id: "t".into(),
+        git_rev: "t".into(),
+        shard: (0, 1),
+        save_images: None,
+    };
     let written = runner::run(&gpu, &suite, &groups, &opts, &mut sink).unwrap();
     assert_eq!(written, n);
     assert_eq!(sink.0.len(), n, "one row per point, floors included");
@@ -40,14 +45,30 @@ fn out_of_range_axis_is_a_skipped_row_with_reason() {
         generator = "quads"
         depth_complexity = 2
     "#);
-    let peel: Vec<&Row> = rows.iter().filter(|r| r.get("method") == Some("depth_peel")).collect();
+    let peel: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.get("method") == Some("depth_peel"))
+        .collect();
     assert_eq!(peel.len(), 2);
-    let bad = peel.iter().find(|r| r.get("max_layers") == Some("0")).unwrap();
+    let bad = peel
+        .iter()
+        .find(|r| r.get("max_layers") == Some("0"))
+        .unwrap();
     assert_eq!(bad.get("status"), Some("skipped"));
-    assert!(bad.get("reason").unwrap().contains("max_layers"), "reason names the axis: {:?}", bad.get("reason"));
-    let good = peel.iter().find(|r| r.get("max_layers") == Some("4")).unwrap();
+    assert!(
+        bad.get("reason").unwrap().contains("max_layers"),
+        "reason names the axis: {:?}",
+        bad.get("reason")
+    );
+    let good = peel
+        .iter()
+        .find(|r| r.get("max_layers") == Some("4"))
+        .unwrap();
     assert_eq!(good.get("status"), Some("ok"));
-    assert!(good.get("x_floor").is_some(), "x_floor is filled from the floor rows");
+    assert!(
+        good.get("x_floor").is_some(),
+        "x_floor is filled from the floor rows"
+    );
 }
 
 #[test]
@@ -66,7 +87,11 @@ fn a_scene_that_cannot_be_built_fails_every_row_of_its_group_with_the_reason() {
     assert_eq!(rows.len(), 3);
     for r in &rows {
         assert_eq!(r.get("status"), Some("failed"));
-        assert!(r.get("reason").unwrap().contains("/nonexistent/mesh.obj"), "{:?}", r.get("reason"));
+        assert!(
+            r.get("reason").unwrap().contains("/nonexistent/mesh.obj"),
+            "{:?}",
+            r.get("reason")
+        );
     }
 }
 
@@ -76,5 +101,8 @@ fn unknown_method_and_study_are_errors_before_any_gpu_work() {
     let e = runner::expand(&s, false).unwrap_err().to_string();
     assert!(e.contains("unknown method 'nope'"), "{e}");
     let s = Suite::parse("[[study]]\nkind = \"nope\"\n", "t").unwrap();
-    assert!(runner::expand(&s, false).unwrap_err().to_string().contains("unknown kind 'nope'"));
+    assert!(runner::expand(&s, false)
+        .unwrap_err()
+        .to_string()
+        .contains("unknown kind 'nope'"));
 }
