@@ -39,7 +39,12 @@ pub struct Pt {
 
 impl Pt {
     pub fn new(x: f64, y: f64) -> Pt {
-        Pt { x, y, lo: None, hi: None }
+        Pt {
+            x,
+            y,
+            lo: None,
+            hi: None,
+        }
     }
     pub fn spread(x: f64, y: f64, lo: Option<f64>, hi: Option<f64>) -> Pt {
         Pt { x, y, lo, hi }
@@ -119,7 +124,11 @@ impl XY {
         let svg = dir.join(format!("{stem}.svg"));
         self.render(BitMapBackend::new(&png, (960, 600)).into_drawing_area())?;
         self.render(SVGBackend::new(&svg, (960, 600)).into_drawing_area())?;
-        Ok(Figure { title: self.title.clone(), stem: stem.into(), caption: caption.into() })
+        Ok(Figure {
+            title: self.title.clone(),
+            stem: stem.into(),
+            caption: caption.into(),
+        })
     }
 
     fn render<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>
@@ -151,8 +160,16 @@ impl XY {
         let (lx, ly) = (self.log_x, self.log_y);
         chart
             .configure_mesh()
-            .x_desc(if lx { format!("{} (log)", self.x_label) } else { self.x_label.clone() })
-            .y_desc(if ly { format!("{} (log)", self.y_label) } else { self.y_label.clone() })
+            .x_desc(if lx {
+                format!("{} (log)", self.x_label)
+            } else {
+                self.x_label.clone()
+            })
+            .y_desc(if ly {
+                format!("{} (log)", self.y_label)
+            } else {
+                self.y_label.clone()
+            })
             .x_label_formatter(&|v| tick(*v, lx))
             .y_label_formatter(&|v| tick(*v, ly))
             .label_style(("sans-serif", 14))
@@ -164,11 +181,21 @@ impl XY {
                 .points
                 .iter()
                 .filter_map(|p| {
-                    Some((tr(p.x, lx)?, tr(p.y, ly)?, p.lo.and_then(|l| tr(l, ly)), p.hi.and_then(|h| tr(h, ly))))
+                    Some((
+                        tr(p.x, lx)?,
+                        tr(p.y, ly)?,
+                        p.lo.and_then(|l| tr(l, ly)),
+                        p.hi.and_then(|h| tr(h, ly)),
+                    ))
                 })
                 .collect();
             if self.lines && p.len() > 1 {
-                chart.draw_series(LineSeries::new(p.iter().map(|q| (q.0, q.1)), color.stroke_width(2))).map_err(err)?;
+                chart
+                    .draw_series(LineSeries::new(
+                        p.iter().map(|q| (q.0, q.1)),
+                        color.stroke_width(2),
+                    ))
+                    .map_err(err)?;
             }
             chart
                 .draw_series(p.iter().map(|q| Circle::new((q.0, q.1), 4, color.filled())))
@@ -177,7 +204,12 @@ impl XY {
                 .legend(move |(x, y)| Circle::new((x + 8, y), 5, color.filled()));
             for q in &p {
                 if let (Some(l), Some(h)) = (q.2, q.3) {
-                    chart.draw_series(std::iter::once(PathElement::new(vec![(q.0, l), (q.0, h)], color.stroke_width(1)))).map_err(err)?;
+                    chart
+                        .draw_series(std::iter::once(PathElement::new(
+                            vec![(q.0, l), (q.0, h)],
+                            color.stroke_width(1),
+                        )))
+                        .map_err(err)?;
                 }
             }
         }
@@ -212,10 +244,15 @@ impl Bars {
         ensure_font();
         let png = dir.join(format!("{stem}.png"));
         let svg = dir.join(format!("{stem}.svg"));
-        let w = (300 + 40 * self.categories.len() * self.series.len().max(1)).clamp(960, 2400) as u32;
+        let w =
+            (300 + 40 * self.categories.len() * self.series.len().max(1)).clamp(960, 2400) as u32;
         self.render(BitMapBackend::new(&png, (w, 640)).into_drawing_area())?;
         self.render(SVGBackend::new(&svg, (w, 640)).into_drawing_area())?;
-        Ok(Figure { title: self.title.clone(), stem: stem.into(), caption: caption.into() })
+        Ok(Figure {
+            title: self.title.clone(),
+            stem: stem.into(),
+            caption: caption.into(),
+        })
     }
 
     fn render<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>
@@ -264,8 +301,16 @@ impl Bars {
                     String::new()
                 }
             })
-            .x_label_style(("sans-serif", 12).into_font().transform(FontTransform::Rotate90))
-            .y_desc(if ly { format!("{} (log)", self.y_label) } else { self.y_label.clone() })
+            .x_label_style(
+                ("sans-serif", 12)
+                    .into_font()
+                    .transform(FontTransform::Rotate90),
+            )
+            .y_desc(if ly {
+                format!("{} (log)", self.y_label)
+            } else {
+                self.y_label.clone()
+            })
             .y_label_formatter(&|v| tick(*v, ly))
             .label_style(("sans-serif", 14))
             .draw()
@@ -281,21 +326,42 @@ impl Bars {
                     let p = (*p)?;
                     let y = tr(p.y, ly)?;
                     let x = ci as f64 + 0.1 + si as f64 * bw;
-                    Some(Rectangle::new([(x, base), (x + bw * 0.92, y)], color.filled()))
+                    Some(Rectangle::new(
+                        [(x, base), (x + bw * 0.92, y)],
+                        color.filled(),
+                    ))
                 })
                 .collect();
-            chart.draw_series(rects).map_err(err)?.label(name).legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], color.filled()));
+            chart
+                .draw_series(rects)
+                .map_err(err)?
+                .label(name)
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 5), (x + 12, y + 5)], color.filled())
+                });
             for (ci, p) in vals.iter().enumerate() {
                 if let Some(p) = p {
-                    if let (Some(l), Some(h)) = (p.lo.and_then(|v| tr(v, ly)), p.hi.and_then(|v| tr(v, ly))) {
+                    if let (Some(l), Some(h)) =
+                        (p.lo.and_then(|v| tr(v, ly)), p.hi.and_then(|v| tr(v, ly)))
+                    {
                         let x = ci as f64 + 0.1 + si as f64 * bw + bw * 0.46;
-                        chart.draw_series(std::iter::once(PathElement::new(vec![(x, l), (x, h)], BLACK.stroke_width(1)))).map_err(err)?;
+                        chart
+                            .draw_series(std::iter::once(PathElement::new(
+                                vec![(x, l), (x, h)],
+                                BLACK.stroke_width(1),
+                            )))
+                            .map_err(err)?;
                     }
                 }
             }
         }
         if let Some(r) = self.reference.and_then(|v| tr(v, ly)) {
-            chart.draw_series(std::iter::once(PathElement::new(vec![(0.0, r), (n as f64, r)], BLACK.stroke_width(1)))).map_err(err)?;
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![(0.0, r), (n as f64, r)],
+                    BLACK.stroke_width(1),
+                )))
+                .map_err(err)?;
         }
         chart
             .configure_series_labels()

@@ -28,7 +28,11 @@ impl Rec {
     /// Method plus its non-empty axis values: one series per configuration.
     pub fn config_label(&self, axes: &[&str]) -> String {
         let mut s = self.get("method").to_string();
-        let parts: Vec<String> = axes.iter().filter(|a| !self.get(a).is_empty()).map(|a| format!("{a}={}", self.get(a))).collect();
+        let parts: Vec<String> = axes
+            .iter()
+            .filter(|a| !self.get(a).is_empty())
+            .map(|a| format!("{a}={}", self.get(a)))
+            .collect();
         if !parts.is_empty() {
             s.push_str(&format!(" ({})", parts.join(", ")));
         }
@@ -46,22 +50,42 @@ pub struct Runs {
 
 impl Runs {
     pub fn load(path: &Path) -> Result<Runs> {
-        let mut rdr = csv::Reader::from_path(path).with_context(|| format!("reading {}", path.display()))?;
-        let header: Vec<String> = rdr.headers().with_context(|| format!("{}: no header", path.display()))?.iter().map(String::from).collect();
+        let mut rdr =
+            csv::Reader::from_path(path).with_context(|| format!("reading {}", path.display()))?;
+        let header: Vec<String> = rdr
+            .headers()
+            .with_context(|| format!("{}: no header", path.display()))?
+            .iter()
+            .map(String::from)
+            .collect();
         if !header.iter().any(|h| h == "schema") {
-            bail!("{}: not an mfx runs.csv (no 'schema' column)", path.display());
+            bail!(
+                "{}: not an mfx runs.csv (no 'schema' column)",
+                path.display()
+            );
         }
         let mut rows = Vec::new();
         for (i, rec) in rdr.records().enumerate() {
             let rec = rec.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
-            rows.push(Rec(header.iter().cloned().zip(rec.iter().map(String::from)).collect()));
+            rows.push(Rec(header
+                .iter()
+                .cloned()
+                .zip(rec.iter().map(String::from))
+                .collect()));
         }
-        Ok(Runs { header, rows, sources: vec![path.to_path_buf()] })
+        Ok(Runs {
+            header,
+            rows,
+            sources: vec![path.to_path_buf()],
+        })
     }
 
     /// Rows of one study kind.
     pub fn study(&self, kind: &str) -> Vec<&Rec> {
-        self.rows.iter().filter(|r| r.get("study") == kind).collect()
+        self.rows
+            .iter()
+            .filter(|r| r.get("study") == kind)
+            .collect()
     }
 
     /// Distinct non-empty values of a column, in first-seen order.

@@ -6,7 +6,10 @@ use crate::charts::Figure;
 use crate::data::{Rec, Runs};
 
 fn esc(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 pub fn page(runs: &Runs, sections: &[(String, Vec<Figure>)], extra_html: &str) -> String {
@@ -23,13 +26,22 @@ pub fn page(runs: &Runs, sections: &[(String, Vec<Figure>)], extra_html: &str) -
     h.push_str("<h2>Runs</h2><table id=\"runs\"><tr><th>run_id</th><th>suite</th><th>git_rev</th><th>adapter</th><th>backend</th><th>device type</th><th>driver</th><th>rows ok / skipped / failed</th></tr>");
     let mut keys: Vec<(String, String)> = Vec::new();
     for r in &runs.rows {
-        let k = (r.get("run_id").to_string(), r.get("adapter").to_string() + r.get("backend"));
+        let k = (
+            r.get("run_id").to_string(),
+            r.get("adapter").to_string() + r.get("backend"),
+        );
         if !keys.contains(&k) {
             keys.push(k);
         }
     }
     for (run, ad) in &keys {
-        let rs: Vec<&Rec> = runs.rows.iter().filter(|r| r.get("run_id") == run && format!("{}{}", r.get("adapter"), r.get("backend")) == *ad).collect();
+        let rs: Vec<&Rec> = runs
+            .rows
+            .iter()
+            .filter(|r| {
+                r.get("run_id") == run && format!("{}{}", r.get("adapter"), r.get("backend")) == *ad
+            })
+            .collect();
         let f = rs[0];
         let count = |s: &str| rs.iter().filter(|r| r.get("status") == s).count();
         let _ = write!(
@@ -86,7 +98,13 @@ pub fn page(runs: &Runs, sections: &[(String, Vec<Figure>)], extra_html: &str) -
     let bad: Vec<&Rec> = runs.rows.iter().filter(|r| !r.ok()).collect();
     let _ = write!(h, "<h2>Skipped and failed rows ({})</h2><table id=\"notok\"><tr><th>status</th><th>point</th><th>reason</th></tr>", bad.len());
     for r in bad {
-        let _ = write!(h, "<tr class=\"{0}\"><td>{0}</td><td>{1}</td><td>{2}</td></tr>", esc(r.get("status")), esc(r.get("point_key")), esc(r.get("reason")));
+        let _ = write!(
+            h,
+            "<tr class=\"{0}\"><td>{0}</td><td>{1}</td><td>{2}</td></tr>",
+            esc(r.get("status")),
+            esc(r.get("point_key")),
+            esc(r.get("reason"))
+        );
     }
     h.push_str("</table></body></html>\n");
     h

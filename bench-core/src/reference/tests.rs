@@ -171,3 +171,25 @@ fn geometry_behind_the_eye_and_beyond_far_is_clipped() {
     let fl = rasterize(&s, 16, 16);
     assert_eq!(fl.total_fragments(), 0);
 }
+
+#[test]
+fn depth_ties_are_detected_only_where_fragments_are_within_f32_ulps() {
+    let mut m = Mesh::default();
+    quad(&mut m, 1.0, 0.0, [1.0, 0.0, 0.0, 0.5], 0);
+    quad(&mut m, 1.0, 0.0, [0.0, 1.0, 0.0, 0.5], 1); // coplanar: a tie everywhere it covers
+    quad(&mut m, 0.3, 2.0, [0.0, 0.0, 1.0, 0.5], 2); // well separated
+    let s = scene_with(m);
+    let fl = rasterize(&s, 32, 32);
+    let ties = fl.depth_tie_pixels(2);
+    let p = 16 * 32 + 16;
+    assert!(ties[p], "coplanar pair at the centre is a tie");
+    assert!(!ties[0], "empty pixel has no tie");
+    let mut m2 = Mesh::default();
+    quad(&mut m2, 1.0, 0.0, [1.0, 0.0, 0.0, 0.5], 0);
+    quad(&mut m2, 1.0, 1.0, [0.0, 1.0, 0.0, 0.5], 1);
+    let fl2 = rasterize(&scene_with(m2), 32, 32);
+    assert!(
+        !fl2.depth_tie_pixels(2)[p],
+        "layers 1 unit apart are no tie"
+    );
+}

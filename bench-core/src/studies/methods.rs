@@ -135,7 +135,11 @@ impl Study for MethodsStudy {
                 row.set("flag", f);
             }
             if !cap.notes.is_empty() {
-                row.set("notes", &cap.notes);
+                let prev = row
+                    .get("notes")
+                    .map(|n| format!("{n}; "))
+                    .unwrap_or_default();
+                row.set("notes", format!("{prev}{}", cap.notes));
             }
             if let Some(g) = m.gpu_ms.map(|s| s.median) {
                 if pt.method == "depth_peel" && peel_ms.is_none() {

@@ -9,25 +9,64 @@ use crate::charts::{Bars, Figure, Pt, Series, XY};
 use crate::data::{Rec, Runs};
 
 /// Axes that distinguish configurations of one method.
-pub const CONFIG_AXES: &[&str] = &["layers", "max_layers", "variant", "payload", "specialisation", "effect", "bucket_count", "bucket_pairing", "hist_bins"];
+pub const CONFIG_AXES: &[&str] = &[
+    "layers",
+    "max_layers",
+    "variant",
+    "payload",
+    "specialisation",
+    "effect",
+    "bucket_count",
+    "bucket_pairing",
+    "hist_bins",
+];
 
 /// Errors of exact results are 0; drawn at this floor on log axes.
 pub const EXACT_FLOOR: f64 = 1e-7;
 
 fn safe(s: &str) -> String {
-    s.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect::<String>().chars().take(60).collect()
+    s.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect::<String>()
+        .chars()
+        .take(60)
+        .collect()
 }
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
-    let rows: Vec<&Rec> = runs.study("methods").into_iter().filter(|r| r.ok()).collect();
+    let rows: Vec<&Rec> = runs
+        .study("methods")
+        .into_iter()
+        .filter(|r| r.ok())
+        .collect();
     let mut figs = Vec::new();
-    let methods: Vec<&Rec> = rows.iter().copied().filter(|r| !r.get("method").starts_with("floor_")).collect();
-    for res in Runs::distinct(methods.iter().copied(), "width").iter().zip(Runs::distinct(methods.iter().copied(), "height")).map(|(w, h)| format!("{w}x{h}")) {
-        let at_res: Vec<&Rec> = methods.iter().copied().filter(|r| format!("{}x{}", r.get("width"), r.get("height")) == res).collect();
+    let methods: Vec<&Rec> = rows
+        .iter()
+        .copied()
+        .filter(|r| !r.get("method").starts_with("floor_"))
+        .collect();
+    for res in Runs::distinct(methods.iter().copied(), "width")
+        .iter()
+        .zip(Runs::distinct(methods.iter().copied(), "height"))
+        .map(|(w, h)| format!("{w}x{h}"))
+    {
+        let at_res: Vec<&Rec> = methods
+            .iter()
+            .copied()
+            .filter(|r| format!("{}x{}", r.get("width"), r.get("height")) == res)
+            .collect();
         // Time vs layers: x = true max depth complexity of the scene, per generator.
         for generator in Runs::distinct(at_res.iter().copied(), "scene") {
-            let g: Vec<&Rec> = at_res.iter().copied().filter(|r| r.get("scene") == generator).collect();
-            let series = series_by_config(&g, |r| Some((r.f("depth_complexity_max")?, r.f("gpu_ms_median")?)), true);
+            let g: Vec<&Rec> = at_res
+                .iter()
+                .copied()
+                .filter(|r| r.get("scene") == generator)
+                .collect();
+            let series = series_by_config(
+                &g,
+                |r| Some((r.f("depth_complexity_max")?, r.f("gpu_ms_median")?)),
+                true,
+            );
             if series.iter().map(|s| s.points.len()).sum::<usize>() >= 2 {
                 let xy = XY {
                     title: format!("GPU time vs depth complexity — {generator}, {res}"),
@@ -43,8 +82,16 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         }
         // Error vs time, per scene: the Pareto view.
         for label in Runs::distinct(at_res.iter().copied(), "scene_label") {
-            let g: Vec<&Rec> = at_res.iter().copied().filter(|r| r.get("scene_label") == label).collect();
-            let series = series_by_config(&g, |r| Some((r.f("gpu_ms_median")?, r.f("rmse")?.max(EXACT_FLOOR))), false);
+            let g: Vec<&Rec> = at_res
+                .iter()
+                .copied()
+                .filter(|r| r.get("scene_label") == label)
+                .collect();
+            let series = series_by_config(
+                &g,
+                |r| Some((r.f("gpu_ms_median")?, r.f("rmse")?.max(EXACT_FLOOR))),
+                false,
+            );
             if series.is_empty() {
                 continue;
             }
@@ -63,15 +110,35 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         let labels = Runs::distinct(at_res.iter().copied(), "scene_label");
         let configs = Runs::distinct_configs(&at_res);
         for (col, title, ylab, stem, reference) in [
-            ("speedup_vs_depth_peel", "Speedup over classic depth peeling", "speedup (×)", "methods_speedup", Some(1.0)),
-            ("x_floor", "Multiple of the depth-only floor", "GPU time / floor_depth time (×)", "methods_x_floor", Some(1.0)),
+            (
+                "speedup_vs_depth_peel",
+                "Speedup over classic depth peeling",
+                "speedup (×)",
+                "methods_speedup",
+                Some(1.0),
+            ),
+            (
+                "x_floor",
+                "Multiple of the depth-only floor",
+                "GPU time / floor_depth time (×)",
+                "methods_x_floor",
+                Some(1.0),
+            ),
         ] {
             let series: Vec<(String, Vec<Option<Pt>>)> = configs
                 .iter()
                 .map(|c| {
                     let vals = labels
                         .iter()
-                        .map(|l| at_res.iter().find(|r| r.get("scene_label") == l && &r.config_label(CONFIG_AXES) == c).and_then(|r| r.f(col)).map(|v| Pt::new(0.0, v)))
+                        .map(|l| {
+                            at_res
+                                .iter()
+                                .find(|r| {
+                                    r.get("scene_label") == l && &r.config_label(CONFIG_AXES) == c
+                                })
+                                .and_then(|r| r.f(col))
+                                .map(|v| Pt::new(0.0, v))
+                        })
                         .collect();
                     (c.clone(), vals)
                 })
@@ -80,23 +147,45 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             if series.is_empty() {
                 continue;
             }
-            let bars = Bars { title: format!("{title} — {res}"), y_label: ylab.into(), log_y: true, categories: labels.clone(), series, reference };
-            figs.push(bars.draw(dir, &format!("{stem}_{res}"), "Same scene, resolution and run; the line marks 1×.")?);
+            let bars = Bars {
+                title: format!("{title} — {res}"),
+                y_label: ylab.into(),
+                log_y: true,
+                categories: labels.clone(),
+                series,
+                reference,
+            };
+            figs.push(bars.draw(
+                dir,
+                &format!("{stem}_{res}"),
+                "Same scene, resolution and run; the line marks 1×.",
+            )?);
         }
     }
     Ok(figs)
 }
 
 /// One series per method configuration, points sorted by x.
-pub fn series_by_config(rows: &[&Rec], xy: impl Fn(&Rec) -> Option<(f64, f64)>, spread: bool) -> Vec<Series> {
+pub fn series_by_config(
+    rows: &[&Rec],
+    xy: impl Fn(&Rec) -> Option<(f64, f64)>,
+    spread: bool,
+) -> Vec<Series> {
     let mut out: Vec<Series> = Vec::new();
     for r in rows {
         let Some((x, y)) = xy(r) else { continue };
         let name = r.config_label(CONFIG_AXES);
-        let p = if spread { Pt::spread(x, y, r.f("gpu_ms_min"), r.f("gpu_ms_max")) } else { Pt::new(x, y) };
+        let p = if spread {
+            Pt::spread(x, y, r.f("gpu_ms_min"), r.f("gpu_ms_max"))
+        } else {
+            Pt::new(x, y)
+        };
         match out.iter_mut().find(|s| s.name == name) {
             Some(s) => s.points.push(p),
-            None => out.push(Series { name, points: vec![p] }),
+            None => out.push(Series {
+                name,
+                points: vec![p],
+            }),
         }
     }
     for s in &mut out {

@@ -13,7 +13,10 @@ use crate::data::Runs;
 pub fn all_figures(runs: &Runs, dir: &Path) -> Result<Vec<(String, Vec<Figure>)>> {
     let mut out = Vec::new();
     if !runs.study("methods").is_empty() {
-        out.push(("Multi-fragment methods".to_string(), methods::figures(runs, dir)?));
+        out.push((
+            "Multi-fragment methods".to_string(),
+            methods::figures(runs, dir)?,
+        ));
     }
     Ok(out)
 }
