@@ -338,8 +338,17 @@ fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
                 a.features() & bench_core::gpu::wanted_features(),
             );
             println!(
-                "  [{i}] {} ({}, {}, driver {} {})",
-                facts.name, facts.backend, facts.device_type, facts.driver, facts.driver_info
+                "  [{i}] {} ({}, {}, driver {} {}, pci {})",
+                facts.name,
+                facts.backend,
+                facts.device_type,
+                facts.driver,
+                facts.driver_info,
+                if info.device_pci_bus_id.is_empty() {
+                    "-"
+                } else {
+                    &info.device_pci_bus_id
+                }
             );
             println!("      features: {}", facts.features);
             let l = a.limits();
