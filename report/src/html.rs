@@ -113,7 +113,7 @@ pub fn page(runs: &Runs, sections: &[(String, Vec<Figure>)], extra_html: &str) -
 fn short(v: Option<f64>) -> String {
     match v {
         None => String::new(),
-        Some(x) if x == 0.0 => "0".into(),
+        Some(0.0) => "0".into(),
         Some(x) if x.is_infinite() => "inf".into(),
         Some(x) if x.abs() >= 100.0 => format!("{x:.0}"),
         Some(x) if x.abs() >= 0.01 => format!("{x:.3}"),

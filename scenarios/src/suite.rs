@@ -132,8 +132,7 @@ impl Suite {
                     .map_err(&err)?,
                 max_triangles: t
                     .get("max_triangles")
-                    .map(|v| v.as_integer().map(|i| i as u64))
-                    .flatten(),
+                    .and_then(|v| v.as_integer().map(|i| i as u64)),
                 reps: t.get("reps").and_then(|v| v.as_integer()).map(|i| i as u32),
             });
         }

@@ -86,8 +86,8 @@ pub fn composite<'a>(frags: impl Iterator<Item = &'a RefFragment>) -> [f64; 4] {
     for f in frags {
         let a = f.color[3];
         let t = 1.0 - acc[3];
-        for c in 0..3 {
-            acc[c] += t * a * f.color[c];
+        for (c, fc) in acc.iter_mut().zip(&f.color).take(3) {
+            *c += t * a * fc;
         }
         acc[3] += t * a;
     }

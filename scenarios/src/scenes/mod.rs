@@ -79,7 +79,7 @@ impl Mesh {
         if self.indices.is_empty() {
             return Err(format!("{what}: no triangles"));
         }
-        if self.indices.len() % 3 != 0 {
+        if !self.indices.len().is_multiple_of(3) {
             return Err(format!(
                 "{what}: index count {} is not a multiple of 3",
                 self.indices.len()
