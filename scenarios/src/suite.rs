@@ -27,6 +27,11 @@ use crate::{ParamValue, Params, Result, SceneError, SceneSpec};
 pub const BUILTIN: &[(&str, &str)] = &[
     ("smoke", include_str!("../suites/smoke.toml")),
     ("default", include_str!("../suites/default.toml")),
+    ("stability", include_str!("../suites/stability.toml")),
+    ("stability_ci", include_str!("../suites/stability_ci.toml")),
+    ("effects", include_str!("../suites/effects.toml")),
+    ("methods", include_str!("../suites/methods.toml")),
+    ("buckets", include_str!("../suites/buckets.toml")),
 ];
 
 #[derive(Clone, Debug)]

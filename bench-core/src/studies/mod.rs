@@ -6,6 +6,7 @@
 //! | kind      | what it measures                                                     |
 //! |-----------|----------------------------------------------------------------------|
 //! | `methods` | multi-fragment capture methods vs the exact CPU reference            |
+//! | `stability` | stiff/extreme inputs: methods study + case, stiffness, lost fragments |
 
 pub mod deferred;
 pub mod geometry;
@@ -26,6 +27,7 @@ use crate::Result;
 
 /// Columns owned by individual studies (appended after the shared axes, in this order).
 pub const STUDY_COLUMNS: &[&[Column]] = &[
+    crate::effects::COLUMNS,
     geometry::COLUMNS,
     stability::COLUMNS,
     deferred::COLUMNS,
@@ -166,7 +168,10 @@ pub trait Study: Sync {
 }
 
 pub fn all() -> Vec<Box<dyn Study>> {
-    vec![Box::new(methods::MethodsStudy)]
+    vec![
+        Box::new(methods::MethodsStudy),
+        Box::new(stability::StabilityStudy),
+    ]
 }
 
 pub fn by_kind(kind: &str) -> Option<Box<dyn Study>> {

@@ -1,6 +1,8 @@
 //! Figures per study kind. Each module reads only the rows of its study.
 
+pub mod buckets;
 pub mod methods;
+pub mod stability;
 
 use std::path::Path;
 
@@ -15,8 +17,17 @@ pub fn all_figures(runs: &Runs, dir: &Path) -> Result<Vec<(String, Vec<Figure>)>
     if !runs.study("methods").is_empty() {
         out.push((
             "Multi-fragment methods".to_string(),
-            methods::figures(runs, dir)?,
+            methods::figures(runs, dir)?
+                .into_iter()
+                .chain(buckets::figures(runs, dir)?)
+                .collect(),
         ));
+    }
+    if !runs.study("stability").is_empty() || !runs.study("methods").is_empty() {
+        let figs = stability::figures(runs, dir)?;
+        if !figs.is_empty() {
+            out.push(("Effects and stability".to_string(), figs));
+        }
     }
     Ok(out)
 }

@@ -8,10 +8,15 @@
 //! | `shells` | nested closed spheres or boxes around the view axis         | max depth complexity 2n |
 //! | `quads`  | d overlapping screen-parallel quads at distinct depths      | max depth complexity d  |
 //! | `obj`    | an OBJ file (tobj), normalised into view, grid-instanced    | —                       |
+//! | `slabs`  | tiles² stacks of nested thin closed boxes far away (stiff)  | max depth complexity 2n |
+//! | `csg_pair` | two overlapping closed solids, ids 0 and 1 (CSG operands) | ≤ 4 per pixel           |
+//! | `coplanar` | layers of exactly duplicated quads (z-fighting)          | layers · copies         |
+//! | `extreme` | degenerate triangles, ±1e7 vertices, a view-covering triangle | —                    |
 
 pub mod grass;
 pub mod quads;
 pub mod shells;
+pub mod stiff;
 
 use glam::{DVec3, Vec3};
 
@@ -214,6 +219,10 @@ impl SceneSpec {
             "shells" => shells::build(self)?,
             "quads" => quads::build(self)?,
             "obj" => obj::build(self)?,
+            "slabs" => stiff::slabs(self)?,
+            "csg_pair" => stiff::csg_pair(self)?,
+            "coplanar" => stiff::coplanar(self)?,
+            "extreme" => stiff::extreme(self)?,
             other => {
                 return Err(SceneError::UnknownGenerator(
                     other.to_string(),
@@ -235,7 +244,9 @@ impl SceneSpec {
 }
 
 /// Generator names, for `mfx list scenes`.
-pub const GENERATORS: &[&str] = &["grass", "shells", "quads", "obj"];
+pub const GENERATORS: &[&str] = &[
+    "grass", "shells", "quads", "obj", "slabs", "csg_pair", "coplanar", "extreme",
+];
 
 /// One-line description per generator, for `mfx list scenes`.
 pub fn describe(generator: &str) -> &'static str {
@@ -244,6 +255,10 @@ pub fn describe(generator: &str) -> &'static str {
         "shells" => "count, shape=sphere|box, segments, alpha, seed: nested closed shells, max depth complexity 2·count",
         "quads" => "depth_complexity=d, alpha, tilt, seed: d quads over the centre at distinct depths",
         "obj" => "path, instances, alpha: an OBJ file via tobj, normalised, instanced on a grid",
+        "slabs" => "count, tiles, distance, wall, alpha, reversed_z, seed: tiles² stacks of count nested thin closed boxes far away (thickness cancellation)",
+        "csg_pair" => "offset, segments, shape=sphere|box, alpha: two overlapping closed solids, ids 0 (A) and 1 (B)",
+        "coplanar" => "layers, copies, alpha, reversed_z: layers of exactly duplicated quads (z-fighting), max depth complexity layers·copies",
+        "extreme" => "coord, degenerate, alpha, seed: zero-area triangles, a view-covering triangle and vertices at ±coord",
         _ => "",
     }
 }
