@@ -7,6 +7,7 @@ pub mod effects;
 pub mod gpu;
 pub mod gpu_scene;
 pub mod image_io;
+pub mod merge;
 pub mod methods;
 pub mod metrics;
 pub mod record;

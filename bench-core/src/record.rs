@@ -137,6 +137,7 @@ pub const METRICS: &[Column] = &[
     c("vertices_per_s", "vertices (index count for indexed draws) per second of GPU time"),
     c("vs_invocations", "vertex shader invocations per frame (pipeline statistics query)"),
     c("ps_invocations", "fragment shader invocations per frame (pipeline statistics query)"),
+    c("image_file", "the point's image saved by `mfx sweep --save-images`: images/<hash>.npy, float32 H×W×4 premultiplied RGBA (empty otherwise)"),
     c("notes", "free text: anything a reader must know about this row"),
 ];
 

@@ -3,6 +3,7 @@
 //! `dir/report/index.html` with PNG and SVG figures beside it.
 
 pub mod charts;
+pub mod compare;
 pub mod data;
 pub mod html;
 pub mod studies;
@@ -19,9 +20,14 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
     let runs = Runs::load(&csv)?;
     let out = dir.join("report");
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    let sections = studies::all_figures(&runs, &out)?;
-    let _ = baseline;
-    let page = html::page(&runs, &sections, "");
+    let mut sections = studies::all_figures(&runs, &out)?;
+    // More than one adapter or backend (a merged CSV): compare them.
+    let mut extra = String::new();
+    if let Some(c) = compare::compare(&runs, dir, &out, baseline)? {
+        sections.push(("Adapters and backends".to_string(), c.figures));
+        extra = c.html;
+    }
+    let page = html::page(&runs, &sections, &extra);
     let path = out.join("index.html");
     std::fs::write(&path, page).with_context(|| format!("writing {}", path.display()))?;
     Ok(path)

@@ -192,6 +192,7 @@ pub fn run_methods_group(
                 if e.non_finite > 0 {
                     flag.get_or_insert_with(|| "precision".into());
                 }
+                ctx.save_image(&mut row, &pt.method, &pt.params, img)?;
             }
             if let Some(counts) = &cap.counts {
                 let expected: Vec<u32> = dc.iter().map(|&d| d.min(k)).collect();

@@ -81,6 +81,8 @@ pub struct GroupCtx<'a> {
     pub warmup: u32,
     /// floor_depth median GPU ms of this group, when measured.
     pub floor_ms: Option<f64>,
+    /// Where `save_image` writes point images (`mfx sweep --save-images`); none = not saved.
+    pub images_dir: Option<std::path::PathBuf>,
     reference: OnceCell<FragmentLists>,
 }
 
@@ -106,6 +108,7 @@ impl<'a> GroupCtx<'a> {
             reps,
             warmup,
             floor_ms: None,
+            images_dir: None,
             reference: OnceCell::new(),
         }
     }
@@ -118,6 +121,37 @@ impl<'a> GroupCtx<'a> {
 
     pub fn has_reference(&self) -> bool {
         self.reference.get().is_some()
+    }
+
+    /// Saves a point's image when `--save-images` is on and records it in `image_file`, so the
+    /// report can compare the same point across adapters and backends. The name hashes the
+    /// point key, adapter and backend: runs from many machines merge into one `images/`.
+    pub fn save_image(
+        &self,
+        row: &mut Row,
+        method: &str,
+        params: &Params,
+        img: &[[f32; 4]],
+    ) -> Result<()> {
+        let Some(dir) = &self.images_dir else {
+            return Ok(());
+        };
+        let f = &self.gpu.facts;
+        let key = self.group.point_key(method, params);
+        let name = format!(
+            "images/{}.npy",
+            crate::image_io::point_hash(&key, &f.name, &f.backend)
+        );
+        std::fs::create_dir_all(dir.join("images"))
+            .map_err(|e| crate::CoreError::Io(format!("{}: {e}", dir.display())))?;
+        crate::image_io::write_npy_rgba(
+            &dir.join(&name),
+            self.group.width,
+            self.group.height,
+            img,
+        )?;
+        row.set("image_file", name);
+        Ok(())
     }
 }
 
