@@ -89,6 +89,22 @@ pub const AXES: &[Column] = &[
         "variant",
         "method-specific variant (e.g. heuristics on/off, naive vs stable thickness)",
     ),
+    c(
+        "bucket_count",
+        "bucket methods: buckets per pixel per pass (8/16/32; 8 attachments × 4 channels, paired uses 2 channels per bucket)",
+    ),
+    c(
+        "bucket_mode",
+        "bucket methods: uniform (depth range split evenly: bdp, bdp2) | adaptive (histogram-equalised: adp)",
+    ),
+    c(
+        "bucket_pairing",
+        "bucket methods: single (one fragment per bucket) | paired (nearest and farthest of each bucket)",
+    ),
+    c(
+        "hist_bins",
+        "adaptive bucket peeling: bins of the per-pixel depth-occupancy histogram (256/1024/2048)",
+    ),
 ];
 
 /// Measurements.

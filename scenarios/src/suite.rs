@@ -30,6 +30,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("stability", include_str!("../suites/stability.toml")),
     ("stability_ci", include_str!("../suites/stability_ci.toml")),
     ("effects", include_str!("../suites/effects.toml")),
+    ("methods", include_str!("../suites/methods.toml")),
+    ("buckets", include_str!("../suites/buckets.toml")),
 ];
 
 #[derive(Clone, Debug)]

@@ -120,7 +120,7 @@ pub fn run_methods_group(
                 }
             };
             set_timing(&mut row, &m, ctx);
-            let cap = match m.prepared.readback(ctx.gpu, ctx.gscene) {
+            let mut cap = match m.prepared.readback(ctx.gpu, ctx.gscene) {
                 Ok(c) => c,
                 Err(e) => {
                     emit(i, failed_row(row, &format!("readback: {e}")))?;
@@ -128,13 +128,19 @@ pub fn run_methods_group(
                 }
             };
             let lists = ctx.reference();
+            m.prepared.judge(&mut cap, lists);
             set_reference_columns(&mut row, lists);
             let dc = lists.depth_complexity();
             let k = match cap.expected {
                 Expected::All => u32::MAX,
                 Expected::FirstK(k) => k,
             };
-            let overflow = dc.iter().filter(|&&d| d > k).count();
+            // Beyond a FirstK capacity, or as the method counted it (pools, unpeeled layers).
+            let overflow = dc
+                .iter()
+                .filter(|&&d| d > k)
+                .count()
+                .max(cap.overflow_pixels.unwrap_or(0) as usize);
             row.set_f("overflow_rate", overflow as f64 / dc.len().max(1) as f64);
             let mut flag = cap.flag.clone();
             if overflow > 0 && flag.is_none() {

@@ -1,5 +1,6 @@
-//! Figures of the `methods` study: time vs layers, error vs time (Pareto), speedup over classic
-//! depth peeling, and multiples of the depth-only floor.
+//! Figures of the `methods` study: time vs layers, error vs time (Pareto), hazard / overflow /
+//! collision rates vs depth complexity, speedup over classic depth peeling, and multiples of the
+//! depth-only floor.
 
 use std::path::Path;
 
@@ -105,6 +106,47 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                 series,
             };
             figs.push(xy.draw(dir, &format!("methods_error_vs_time_{}_{res}", safe(&label)), &format!("One point per method configuration. Exact results (RMSE 0) are drawn at {EXACT_FLOOR:.0e}.") )?);
+        }
+        // Failure rates vs depth complexity: k-buffer hazards, capacity overflow, bucket
+        // collisions; one figure per rate that some configuration reports.
+        for (col, what) in [
+            (
+                "hazard_rate",
+                "pixels whose captured set is not the true k nearest (RMW hazards)",
+            ),
+            (
+                "overflow_rate",
+                "pixels whose fragments exceeded the method's capacity",
+            ),
+            ("collision_rate", "true fragments merged or lost by buckets"),
+        ] {
+            let g: Vec<&Rec> = at_res
+                .iter()
+                .copied()
+                .filter(|r| r.f(col).is_some())
+                .collect();
+            let series = series_by_config(
+                &g,
+                |r| Some((r.f("depth_complexity_max")?, r.f(col)?)),
+                false,
+            );
+            if series.iter().map(|s| s.points.len()).sum::<usize>() < 2 {
+                continue;
+            }
+            let xy = XY {
+                title: format!("{col} vs depth complexity — {res}"),
+                x_label: "true max fragments per pixel".into(),
+                y_label: format!("{col} (fraction)"),
+                log_x: true,
+                log_y: false,
+                lines: false,
+                series,
+            };
+            figs.push(xy.draw(
+                dir,
+                &format!("methods_{col}_{res}"),
+                &format!("Fraction of {what}, one point per scene and configuration."),
+            )?);
         }
         // Speedup over depth peeling and multiple of the floor, per scene.
         let labels = Runs::distinct(at_res.iter().copied(), "scene_label");

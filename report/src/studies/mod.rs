@@ -1,5 +1,6 @@
 //! Figures per study kind. Each module reads only the rows of its study.
 
+pub mod buckets;
 pub mod methods;
 pub mod stability;
 
@@ -16,7 +17,10 @@ pub fn all_figures(runs: &Runs, dir: &Path) -> Result<Vec<(String, Vec<Figure>)>
     if !runs.study("methods").is_empty() {
         out.push((
             "Multi-fragment methods".to_string(),
-            methods::figures(runs, dir)?,
+            methods::figures(runs, dir)?
+                .into_iter()
+                .chain(buckets::figures(runs, dir)?)
+                .collect(),
         ));
     }
     if !runs.study("stability").is_empty() || !runs.study("methods").is_empty() {
