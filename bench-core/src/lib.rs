@@ -7,12 +7,14 @@ pub mod effects;
 pub mod gpu;
 pub mod gpu_scene;
 pub mod image_io;
+pub mod merge;
 pub mod methods;
 pub mod metrics;
 pub mod record;
 pub mod reference;
 pub mod runner;
 pub mod studies;
+pub mod testing;
 pub mod timing;
 
 pub use gpu::{BackendChoice, Gpu, GpuOptions};

@@ -28,6 +28,13 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("smoke", include_str!("../suites/smoke.toml")),
     ("default", include_str!("../suites/default.toml")),
     ("geometry", include_str!("../suites/geometry.toml")),
+    ("stability", include_str!("../suites/stability.toml")),
+    ("stability_ci", include_str!("../suites/stability_ci.toml")),
+    ("effects", include_str!("../suites/effects.toml")),
+    ("methods", include_str!("../suites/methods.toml")),
+    ("buckets", include_str!("../suites/buckets.toml")),
+    ("shadows", include_str!("../suites/shadows.toml")),
+    ("shadows-ci", include_str!("../suites/shadows-ci.toml")),
 ];
 
 #[derive(Clone, Debug)]
@@ -133,8 +140,7 @@ impl Suite {
                     .map_err(&err)?,
                 max_triangles: t
                     .get("max_triangles")
-                    .map(|v| v.as_integer().map(|i| i as u64))
-                    .flatten(),
+                    .and_then(|v| v.as_integer().map(|i| i as u64)),
                 reps: t.get("reps").and_then(|v| v.as_integer()).map(|i| i as u32),
             });
         }

@@ -569,6 +569,7 @@ triangles = 800
         run_id: "t".into(),
         git_rev: "t".into(),
         shard: (0, 1),
+        save_images: None,
     };
     let n = crate::runner::run(&gpu, &suite, &groups, &opts, &mut sink).unwrap();
     assert_eq!(n, crate::runner::rows_in(&groups));
