@@ -28,6 +28,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("smoke", include_str!("../suites/smoke.toml")),
     ("default", include_str!("../suites/default.toml")),
     ("geometry", include_str!("../suites/geometry.toml")),
+    ("geometry-ci", include_str!("../suites/geometry-ci.toml")),
     ("stability", include_str!("../suites/stability.toml")),
     ("stability_ci", include_str!("../suites/stability_ci.toml")),
     ("effects", include_str!("../suites/effects.toml")),

@@ -636,3 +636,104 @@ fn bad_axes_are_errors_naming_the_axis() {
         .unwrap_err()
         .contains("extra_attributes"));
 }
+
+/// The CI suite `geometry-ci` (every axis of the full suite, at lavapipe size) through the real
+/// runner: one row per point, every row ok (none of its points is impossible on lavapipe), with
+/// the measured quantities its figures need, and the invariants a row can be checked against:
+/// batches = ⌈drawn / batch_size⌉ for 32-bit lists, the vertex-shader count of non-indexed draws
+/// exactly 3 per drawn triangle, 16-bit rows never above 65,536 vertices a batch.
+#[test]
+fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
+    let suite = Suite::load("geometry-ci").unwrap();
+    let gpu = gpu();
+    let groups = crate::runner::expand(&suite, gpu.facts.is_software).unwrap();
+    let mut sink = VecSink(Vec::new());
+    let opts = crate::runner::RunOptions {
+        run_id: "t".into(),
+        git_rev: "t".into(),
+        shard: (0, 1),
+        save_images: None,
+    };
+    let t0 = std::time::Instant::now();
+    let n = crate::runner::run(&gpu, &suite, &groups, &opts, &mut sink).unwrap();
+    eprintln!("geometry-ci: {n} rows in {:.1} s", t0.elapsed().as_secs_f64());
+    assert_eq!(n, crate::runner::rows_in(&groups));
+    let rows: Vec<&Row> = sink
+        .0
+        .iter()
+        .filter(|r| r.get("method") == Some("geometry"))
+        .collect();
+    assert!(rows.len() >= 90, "only {} geometry rows", rows.len());
+    let num = |r: &Row, c: &str| -> f64 {
+        r.get(c)
+            .unwrap_or_else(|| panic!("{c} missing: {:?}", r.cells))
+            .parse()
+            .unwrap()
+    };
+    for r in &rows {
+        assert_eq!(r.get("status"), Some("ok"), "{:?}", r.cells);
+        let drawn = match num(r, "draw_triangles") {
+            0.0 => num(r, "triangles"),
+            d => d,
+        };
+        let batches = num(r, "batches");
+        let batch_size = num(r, "batch_size");
+        let list32 = r.get("index_format") == Some("uint32") && r.get("primitive") == Some("list");
+        if list32 {
+            let want = if batch_size == 0.0 {
+                1.0
+            } else {
+                (drawn / batch_size).ceil()
+            };
+            assert_eq!(batches, want, "{:?}", r.cells);
+        }
+        if r.get("index_format") == Some("uint16") {
+            assert!(num(r, "batch_vertices") / batches <= 65_536.0);
+        }
+        assert!(num(r, "vertex_stride_bytes") >= 6.0);
+        if gpu.has(wgpu::Features::PIPELINE_STATISTICS_QUERY) {
+            let vs = num(r, "vs_invocations");
+            if r.get("indexed") == Some("false") {
+                assert_eq!(vs, 3.0 * drawn, "{:?}", r.cells);
+            } else {
+                assert!(vs > 0.0 && vs <= 3.0 * drawn, "{:?}", r.cells);
+            }
+        }
+        if gpu.has(wgpu::Features::TIMESTAMP_QUERY) {
+            assert!(num(r, "triangles_per_s") > 0.0);
+        }
+    }
+    // Every axis value of the full suite's sub-studies appears in some row.
+    for (axis, value) in [
+        ("mesh_order", "vcache_vfetch"),
+        ("primitive", "strip"),
+        ("index_format", "uint16"),
+        ("indexed", "false"),
+        ("layout", "interleaved"),
+        ("vertex_format", "snorm16x4"),
+        ("normal_format", "unorm10_10_10_2"),
+        ("color_format", "snorm8x4"),
+        ("texcoord_format", "unorm16x2"),
+    ] {
+        assert!(
+            rows.iter().any(|r| r.get(axis) == Some(value)),
+            "no row with {axis} = {value}"
+        );
+    }
+}
+
+/// The H100-size suites parse and expand (every axis value valid) without a GPU, and their
+/// point counts stay those the run-time estimate in the suite descriptions was made for.
+#[test]
+fn full_size_geometry_suites_expand() {
+    for (name, want) in [("geometry", 191), ("geometry-ci", 100)] {
+        let suite = Suite::load(name).unwrap();
+        let groups = crate::runner::expand(&suite, false).unwrap();
+        let points: usize = groups.iter().map(|g| g.points.len()).sum();
+        assert_eq!(points, want, "{name}: points");
+    }
+    let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scenarios/suites/geometry-models.toml");
+    let suite = Suite::load(models.to_str().unwrap()).unwrap();
+    assert!(!crate::runner::expand(&suite, false).unwrap().is_empty());
+}
