@@ -1,6 +1,7 @@
 //! Figures per study kind. Each module reads only the rows of its study.
 
 pub mod buckets;
+pub mod geometry;
 pub mod methods;
 pub mod shadows;
 pub mod stability;
@@ -29,6 +30,12 @@ pub fn all_figures(runs: &Runs, dir: &Path) -> Result<Vec<(String, Vec<Figure>)>
         if !figs.is_empty() {
             out.push(("Effects and stability".to_string(), figs));
         }
+    }
+    if !runs.study("geometry").is_empty() {
+        out.push((
+            "Geometry feeding (Bavoil ch. 3)".to_string(),
+            geometry::figures(runs, dir)?,
+        ));
     }
     if !runs.study("shadows").is_empty() {
         out.push((

@@ -75,7 +75,7 @@ pub const COLUMNS: &[Column] = &[
     c("vertex_stride_bytes", "geometry: bytes per vertex, summed over the vertex buffers"),
     c("vertex_bytes", "geometry: bytes of vertex buffers"),
     c("index_bytes", "geometry: bytes of the index buffer"),
-    c("acmr", "geometry: meshopt ACMR (vertices transformed per triangle, FIFO cache of 16) of the drawn index stream; best ≈ 0.5, worst 3"),
+    c("acmr", "geometry: meshopt ACMR (vertices transformed per triangle, FIFO cache of 16) of the batched triangle list (for strips: the list they were made from); best ≈ 0.5, worst 3"),
     c("atvr", "geometry: meshopt ATVR (vertices transformed per vertex, FIFO 16); best 1"),
     c("vs_acmr", "geometry: measured vertex-shader invocations per triangle (pipeline statistics)"),
     c("post_transform_hit_rate", "geometry: measured 1 − vs_invocations / (3 × triangles): the share of triangle corners served without a vertex-shader run"),

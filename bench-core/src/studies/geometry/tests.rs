@@ -726,7 +726,7 @@ fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
 /// point counts stay those the run-time estimate in the suite descriptions was made for.
 #[test]
 fn full_size_geometry_suites_expand() {
-    for (name, want) in [("geometry", 191), ("geometry-ci", 100)] {
+    for (name, want) in [("geometry", 175), ("geometry-ci", 100)] {
         let suite = Suite::load(name).unwrap();
         let groups = crate::runner::expand(&suite, false).unwrap();
         let points: usize = groups.iter().map(|g| g.points.len()).sum();
@@ -736,4 +736,38 @@ fn full_size_geometry_suites_expand() {
         .join("../scenarios/suites/geometry-models.toml");
     let suite = Suite::load(models.to_str().unwrap()).unwrap();
     assert!(!crate::runner::expand(&suite, false).unwrap().is_empty());
+}
+
+/// geometry-models without its meshes (the test's working directory has no models/): every row
+/// of every group is a failed row naming the missing file, none lost, nothing panics.
+#[test]
+fn geometry_models_without_the_meshes_fails_rows_naming_the_file() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scenarios/suites/geometry-models.toml");
+    let suite = Suite::load(path.to_str().unwrap()).unwrap();
+    let cwd = std::env::current_dir().unwrap();
+    assert!(
+        !cwd.join("models/stanford-bunny.obj").exists(),
+        "the test needs a working directory without models/"
+    );
+    let gpu = gpu();
+    let groups = crate::runner::expand(&suite, gpu.facts.is_software).unwrap();
+    let mut sink = VecSink(Vec::new());
+    let opts = crate::runner::RunOptions {
+        run_id: "t".into(),
+        git_rev: "t".into(),
+        shard: (0, 1),
+        save_images: None,
+    };
+    let n = crate::runner::run(&gpu, &suite, &groups, &opts, &mut sink).unwrap();
+    assert_eq!(n, crate::runner::rows_in(&groups));
+    assert_eq!(sink.0.len(), n);
+    for r in &sink.0 {
+        assert_eq!(r.get("status"), Some("failed"), "{:?}", r.cells);
+        let why = r.get("reason").unwrap();
+        assert!(
+            why.contains("file not found") && why.contains("models/"),
+            "{why}"
+        );
+    }
 }

@@ -1,0 +1,482 @@
+//! Figures of the `geometry` study (Bavoil 2007, ch. 3, on today's GPUs): throughput vs vertices
+//! per draw (Fig. 3.1), time vs number of batches (Fig. 3.2), interleaved vs separate buffers by
+//! attribute count (Fig. 3.3), bar charts for index precision × mesh order × strips (Tables
+//! 3.2–3.3) with measured vs predicted vertex-shader runs per triangle, vertex formats (Table
+//! 3.4), and the raster-stage check. Each `[[study]]` of a suite is told apart by the axes it
+//! sweeps (the point key's last field); every figure has min–max whiskers where times are drawn.
+
+use std::path::Path;
+
+use anyhow::Result;
+
+use crate::charts::{Bars, Figure, Pt, Series, XY};
+use crate::data::{Rec, Runs};
+
+/// The axes a row's `[[study]]` swept (from its point key).
+fn swept(r: &Rec) -> Vec<&str> {
+    let key = r.get("point_key");
+    let last = key.rsplit('|').next().unwrap_or("");
+    last.split(',')
+        .filter_map(|kv| kv.split_once('=').map(|(k, _)| k))
+        .collect()
+}
+
+fn sweeps(r: &Rec, axis: &str) -> bool {
+    swept(r).contains(&axis)
+}
+
+fn safe(s: &str) -> String {
+    s.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .take(60)
+        .collect()
+}
+
+/// Triangles drawn per frame: `draw_triangles` (a prefix) or the whole scene.
+fn drawn(r: &Rec) -> Option<f64> {
+    match r.f("draw_triangles") {
+        Some(d) if d > 0.0 => Some(d),
+        _ => r.f("triangles"),
+    }
+}
+
+/// Vertices per draw call in the thesis's sense: indices (indexed) or corners (non-indexed).
+fn vertices_per_draw(r: &Rec) -> Option<f64> {
+    let batches = r.f("batches")?.max(1.0);
+    let v = if r.get("indexed") == "false" {
+        3.0 * drawn(r)?
+    } else {
+        r.f("index_count")?
+    };
+    Some(v / batches)
+}
+
+/// A rate `amount / gpu time` with whiskers from the min and max GPU times.
+fn rate(r: &Rec, x: f64, amount: f64, scale: f64) -> Option<Pt> {
+    let ms = r.f("gpu_ms_median")?;
+    if ms <= 0.0 {
+        return None;
+    }
+    let per = |m: Option<f64>| m.filter(|m| *m > 0.0).map(|m| amount / (m * 1e-3) / scale);
+    Some(Pt::spread(
+        x,
+        amount / (ms * 1e-3) / scale,
+        per(r.f("gpu_ms_max")),
+        per(r.f("gpu_ms_min")),
+    ))
+}
+
+fn gpu_ms(r: &Rec, x: f64) -> Option<Pt> {
+    Some(Pt::spread(
+        x,
+        r.f("gpu_ms_median")?,
+        r.f("gpu_ms_min"),
+        r.f("gpu_ms_max"),
+    ))
+}
+
+fn push(series: &mut Vec<Series>, name: String, p: Pt) {
+    match series.iter_mut().find(|s| s.name == name) {
+        Some(s) => s.points.push(p),
+        None => series.push(Series {
+            name,
+            points: vec![p],
+        }),
+    }
+}
+
+fn sorted(mut series: Vec<Series>) -> Vec<Series> {
+    for s in &mut series {
+        s.points.sort_by(|a, b| a.x.total_cmp(&b.x));
+    }
+    series
+}
+
+pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
+    let rows: Vec<&Rec> = runs
+        .study("geometry")
+        .into_iter()
+        .filter(|r| r.ok() && r.get("method") == "geometry")
+        .collect();
+    let mut figs = Vec::new();
+    let mut resolutions: Vec<String> = Vec::new();
+    for r in &rows {
+        let res = format!("{}x{}", r.get("width"), r.get("height"));
+        if !resolutions.contains(&res) {
+            resolutions.push(res);
+        }
+    }
+    for res in resolutions {
+        let at: Vec<&Rec> = rows
+            .iter()
+            .copied()
+            .filter(|r| format!("{}x{}", r.get("width"), r.get("height")) == res)
+            .collect();
+        throughput(&at, &res, dir, &mut figs)?;
+        batching(&at, &res, dir, &mut figs)?;
+        layout(&at, &res, dir, &mut figs)?;
+        index_precision(&at, &res, dir, &mut figs)?;
+        formats(&at, &res, dir, &mut figs)?;
+        raster_check(&at, &res, dir, &mut figs)?;
+    }
+    Ok(figs)
+}
+
+/// Fig. 3.1: triangles/s vs vertices per draw call (log x), indexed and non-indexed, per scene.
+fn throughput(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<()> {
+    let mut series = Vec::new();
+    for r in at.iter().filter(|r| sweeps(r, "draw_triangles")) {
+        let (Some(x), Some(t)) = (vertices_per_draw(r), drawn(r)) else {
+            continue;
+        };
+        let name = format!(
+            "{} — {}",
+            r.get("scene_label"),
+            if r.get("indexed") == "false" {
+                "non-indexed"
+            } else {
+                "indexed"
+            }
+        );
+        if let Some(p) = rate(r, x, t, 1e6) {
+            push(&mut series, name, p);
+        }
+    }
+    if series.iter().map(|s| s.points.len()).sum::<usize>() < 2 {
+        return Ok(());
+    }
+    let xy = XY {
+        title: format!("Geometry throughput vs vertices per draw call — {res}"),
+        x_label: "vertices per draw call (indices, or corners when non-indexed)".into(),
+        y_label: "million triangles per second (GPU time)".into(),
+        log_x: true,
+        log_y: false,
+        lines: true,
+        series: sorted(series),
+    };
+    figs.push(xy.draw(
+        dir,
+        &format!("geometry_throughput_vs_vertices_{res}"),
+        "Thesis Fig. 3.1: one draw of a growing prefix of the mesh; the thesis saw a cliff above ~1M vertices per indexed draw on GeForce 7 and none without indices. Whiskers: min–max GPU time.",
+    )?);
+    Ok(())
+}
+
+/// Fig. 3.2: time per frame vs number of draw calls at a fixed total, GPU and wall clock.
+fn batching(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<()> {
+    let mut series = Vec::new();
+    for r in at
+        .iter()
+        .filter(|r| sweeps(r, "batch_size") && !sweeps(r, "index_format"))
+    {
+        let Some(b) = r.f("batches") else { continue };
+        let label = r.get("scene_label");
+        if let Some(p) = gpu_ms(r, b) {
+            push(&mut series, format!("{label} — GPU"), p);
+        }
+        if let Some(c) = r.f("cpu_ms_median") {
+            push(
+                &mut series,
+                format!("{label} — wall clock"),
+                Pt::spread(b, c, r.f("cpu_ms_min"), r.f("cpu_ms_max")),
+            );
+        }
+    }
+    if series.iter().map(|s| s.points.len()).sum::<usize>() < 2 {
+        return Ok(());
+    }
+    let xy = XY {
+        title: format!("Time per frame vs number of batches — {res}"),
+        x_label: "draw calls per frame (same triangles in total)".into(),
+        y_label: "time per frame [ms]".into(),
+        log_x: true,
+        log_y: true,
+        lines: true,
+        series: sorted(series),
+    };
+    figs.push(xy.draw(
+        dir,
+        &format!("geometry_time_vs_batches_{res}"),
+        "Thesis Fig. 3.2: the mesh cut into 1 … N draw calls. GPU = timestamped render pass; wall clock = encode + submit + wait, where per-draw CPU cost shows. Whiskers: min–max.",
+    )?);
+    Ok(())
+}
+
+/// Fig. 3.3: interleaved vs separate vertex buffers as extra float32x4 attributes grow.
+fn layout(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<()> {
+    let mut series = Vec::new();
+    for r in at.iter().filter(|r| sweeps(r, "extra_attributes")) {
+        let Some(x) = r.f("extra_attributes") else {
+            continue;
+        };
+        if let Some(p) = gpu_ms(r, x) {
+            push(
+                &mut series,
+                format!("{} — {}", r.get("scene_label"), r.get("layout")),
+                p,
+            );
+        }
+    }
+    if series.iter().map(|s| s.points.len()).sum::<usize>() < 2 {
+        return Ok(());
+    }
+    let xy = XY {
+        title: format!("Interleaved vs separate vertex buffers — {res}"),
+        x_label: "extra float32x4 attributes per vertex".into(),
+        y_label: "GPU time per frame [ms]".into(),
+        log_x: false,
+        log_y: false,
+        lines: true,
+        series: sorted(series),
+    };
+    figs.push(xy.draw(
+        dir,
+        &format!("geometry_layout_vs_attributes_{res}"),
+        "Thesis Fig. 3.3: one draw of the whole mesh, every attribute read by the vertex shader. Whiskers: min–max GPU time.",
+    )?);
+    Ok(())
+}
+
+/// Tables 3.2–3.3: index precision × mesh order × primitive, triangles/s per scene, and the
+/// measured vertex-shader runs per triangle beside meshopt's prediction (ACMR).
+fn index_precision(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<()> {
+    let rows: Vec<&Rec> = at
+        .iter()
+        .copied()
+        .filter(|r| sweeps(r, "index_format"))
+        .collect();
+    for label in Runs::distinct(rows.iter().copied(), "scene_label") {
+        let g: Vec<&Rec> = rows
+            .iter()
+            .copied()
+            .filter(|r| r.get("scene_label") == label)
+            .collect();
+        let cat = |r: &Rec| format!("{} {}", r.get("mesh_order"), r.get("primitive"));
+        let categories = Runs::distinct_by(&g, cat);
+        let find = |c: &str, f: &dyn Fn(&Rec) -> bool| {
+            g.iter().copied().find(|r| cat(r) == c && f(r))
+        };
+        let series: Vec<(String, Vec<Option<Pt>>)> = ["uint16", "uint32"]
+            .iter()
+            .map(|fmt| {
+                let vals = categories
+                    .iter()
+                    .map(|c| {
+                        find(c, &|r: &Rec| r.get("index_format") == *fmt)
+                            .and_then(|r| rate(r, 0.0, drawn(r)?, 1e6))
+                    })
+                    .collect();
+                (fmt.to_string(), vals)
+            })
+            .filter(|(_, v): &(String, Vec<Option<Pt>>)| v.iter().any(|p| p.is_some()))
+            .collect();
+        if !series.is_empty() {
+            figs.push(
+                Bars {
+                    title: format!("Index precision × mesh order — {label}, {res}"),
+                    y_label: "million triangles per second".into(),
+                    log_y: false,
+                    categories: categories.clone(),
+                    series,
+                    reference: None,
+                }
+                .draw(
+                    dir,
+                    &format!("geometry_index_precision_{}_{res}", safe(&label)),
+                    "Thesis Tables 3.2–3.3: 16- vs 32-bit indices for each triangle order (original, shuffled, meshopt vertex cache, cache + fetch) as lists and as strips with primitive restart. Whiskers: from the min–max GPU time.",
+                )?,
+            );
+        }
+        // Measured vs predicted post-transform cache behaviour (32-bit: no batch cuts).
+        let mut series: Vec<(String, Vec<Option<Pt>>)> = Vec::new();
+        for (name, col) in [
+            ("meshopt ACMR (FIFO 16)", "acmr"),
+            ("measured VS runs / triangle", "vs_acmr"),
+        ] {
+            let vals = categories
+                .iter()
+                .map(|c| {
+                    find(c, &|r: &Rec| r.get("index_format") == "uint32")
+                        .and_then(|r| r.f(col))
+                        .map(|v| Pt::new(0.0, v))
+                })
+                .collect::<Vec<_>>();
+            if vals.iter().any(|v| v.is_some()) {
+                series.push((name.to_string(), vals));
+            }
+        }
+        if !series.is_empty() {
+            figs.push(
+                Bars {
+                    title: format!("Vertex-shader runs per triangle — {label}, {res}"),
+                    y_label: "vertex-shader invocations per triangle".into(),
+                    log_y: false,
+                    categories,
+                    series,
+                    reference: Some(0.5),
+                }
+                .draw(
+                    dir,
+                    &format!("geometry_acmr_{}_{res}", safe(&label)),
+                    "Measured (pipeline statistics) against meshopt's FIFO-16 simulation of the same index stream, 32-bit indices; 3 = no reuse, the line at 0.5 is the ideal of a closed mesh.",
+                )?,
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Table 3.4: one bar per attribute format, GPU time, per scene.
+fn formats(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<()> {
+    const AXES: [(&str, &str); 4] = [
+        ("vertex_format", "position"),
+        ("normal_format", "normal"),
+        ("color_format", "colour"),
+        ("texcoord_format", "texcoord"),
+    ];
+    let rows: Vec<&Rec> = at
+        .iter()
+        .copied()
+        .filter(|r| {
+            !sweeps(r, "index_format")
+                && !sweeps(r, "extra_attributes")
+                && AXES.iter().any(|(a, _)| sweeps(r, a))
+        })
+        .collect();
+    for label in Runs::distinct(rows.iter().copied(), "scene_label") {
+        let g: Vec<&Rec> = rows
+            .iter()
+            .copied()
+            .filter(|r| r.get("scene_label") == label)
+            .collect();
+        // A category names the formats the point's study swept, e.g. "normal snorm8x4".
+        let cat = |r: &Rec| {
+            let s = swept(r);
+            AXES.iter()
+                .filter(|(a, _)| s.contains(a) && (r.get(a) != "none" || s.len() == 1))
+                .map(|(a, n)| format!("{n} {}", r.get(a)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let categories = Runs::distinct_by(&g, |r| {
+            let c = cat(r);
+            if c.is_empty() {
+                "no attributes".into()
+            } else {
+                c
+            }
+        });
+        let vals = categories
+            .iter()
+            .map(|c| {
+                g.iter()
+                    .copied()
+                    .find(|r| {
+                        let k = cat(r);
+                        k == *c || (k.is_empty() && c == "no attributes")
+                    })
+                    .and_then(|r| gpu_ms(r, 0.0))
+            })
+            .collect();
+        figs.push(
+            Bars {
+                title: format!("Vertex formats — {label}, {res}"),
+                y_label: "GPU time per frame [ms]".into(),
+                log_y: false,
+                categories,
+                series: vec![("GPU ms".into(), vals)],
+                reference: None,
+            }
+            .draw(
+                dir,
+                &format!("geometry_formats_{}_{res}", safe(&label)),
+                "Thesis Table 3.4: one draw of the whole mesh per attribute format (other attributes at their defaults: position float32x3, normal as swept or none). Whiskers: min–max GPU time.",
+            )?,
+        );
+    }
+    Ok(())
+}
+
+/// The thesis's check: time at the suite's viewport over time at a small one (≈ 1 when the
+/// raster stage is not the bottleneck), against the GPU time of the point.
+fn raster_check(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<()> {
+    let mut series = Vec::new();
+    for r in at {
+        if let (Some(ms), Some(ratio)) = (r.f("gpu_ms_median"), r.f("raster_bound_ratio")) {
+            push(&mut series, r.get("scene_label").to_string(), Pt::new(ms, ratio));
+        }
+    }
+    if series.is_empty() {
+        return Ok(());
+    }
+    let xy = XY {
+        title: format!("Raster-stage check — {res}"),
+        x_label: "GPU time per frame at the suite's viewport [ms]".into(),
+        y_label: "time at the viewport / time at the small viewport".into(),
+        log_x: true,
+        log_y: false,
+        lines: false,
+        series: sorted(series),
+    };
+    figs.push(xy.draw(
+        dir,
+        &format!("geometry_raster_check_{res}"),
+        "One point per measured row; ≈ 1 means shrinking the viewport does not change the time, so the raster stage is not the bottleneck (the thesis's method).",
+    )?);
+    Ok(())
+}
+
+impl Runs {
+    /// Distinct values of `key` over rows, first-seen order.
+    pub fn distinct_by(rows: &[&Rec], key: impl Fn(&Rec) -> String) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for r in rows {
+            let k = key(r);
+            if !out.contains(&k) {
+                out.push(k);
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rec(pairs: &[(&str, &str)]) -> Rec {
+        Rec(pairs
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect())
+    }
+
+    #[test]
+    fn swept_axes_come_from_the_point_key() {
+        let r = rec(&[(
+            "point_key",
+            "geometry|quads(depth_complexity=8,seed=1)|64x64|geometry|index_format=uint16,mesh_order=vcache",
+        )]);
+        assert_eq!(swept(&r), vec!["index_format", "mesh_order"]);
+        assert!(sweeps(&r, "mesh_order") && !sweeps(&r, "seed"));
+    }
+
+    #[test]
+    fn vertices_per_draw_counts_indices_or_corners() {
+        let idx = rec(&[
+            ("indexed", "true"),
+            ("index_count", "3000"),
+            ("batches", "3"),
+            ("triangles", "1000"),
+            ("draw_triangles", "0"),
+        ]);
+        assert_eq!(vertices_per_draw(&idx), Some(1000.0));
+        let non = rec(&[
+            ("indexed", "false"),
+            ("batches", "1"),
+            ("triangles", "1000"),
+            ("draw_triangles", "100"),
+        ]);
+        assert_eq!(vertices_per_draw(&non), Some(300.0));
+    }
+}
