@@ -253,9 +253,8 @@ fn index_precision(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -
             .collect();
         let cat = |r: &Rec| format!("{} {}", r.get("mesh_order"), r.get("primitive"));
         let categories = Runs::distinct_by(&g, cat);
-        let find = |c: &str, f: &dyn Fn(&Rec) -> bool| {
-            g.iter().copied().find(|r| cat(r) == c && f(r))
-        };
+        let find =
+            |c: &str, f: &dyn Fn(&Rec) -> bool| g.iter().copied().find(|r| cat(r) == c && f(r));
         let series: Vec<(String, Vec<Option<Pt>>)> = ["uint16", "uint32"]
             .iter()
             .map(|fmt| {
@@ -343,56 +342,84 @@ fn formats(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result
                 && AXES.iter().any(|(a, _)| sweeps(r, a))
         })
         .collect();
+    // One chart per scene and per [[study]] (the set of format axes it swept).
+    let which = |r: &Rec| {
+        let s = swept(r);
+        AXES.iter()
+            .filter(|(a, _)| s.contains(a))
+            .map(|(_, n)| *n)
+            .collect::<Vec<_>>()
+            .join(" × ")
+    };
     for label in Runs::distinct(rows.iter().copied(), "scene_label") {
-        let g: Vec<&Rec> = rows
+        let of_scene: Vec<&Rec> = rows
             .iter()
             .copied()
             .filter(|r| r.get("scene_label") == label)
             .collect();
-        // A category names the formats the point's study swept, e.g. "normal snorm8x4".
-        let cat = |r: &Rec| {
-            let s = swept(r);
-            AXES.iter()
-                .filter(|(a, _)| s.contains(a) && (r.get(a) != "none" || s.len() == 1))
-                .map(|(a, n)| format!("{n} {}", r.get(a)))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let categories = Runs::distinct_by(&g, |r| {
-            let c = cat(r);
-            if c.is_empty() {
-                "no attributes".into()
-            } else {
-                c
-            }
-        });
-        let vals = categories
-            .iter()
-            .map(|c| {
-                g.iter()
-                    .copied()
-                    .find(|r| {
-                        let k = cat(r);
-                        k == *c || (k.is_empty() && c == "no attributes")
-                    })
-                    .and_then(|r| gpu_ms(r, 0.0))
-            })
-            .collect();
-        figs.push(
-            Bars {
-                title: format!("Vertex formats — {label}, {res}"),
-                y_label: "GPU time per frame [ms]".into(),
-                log_y: false,
-                categories,
-                series: vec![("GPU ms".into(), vals)],
-                reference: None,
-            }
-            .draw(
-                dir,
-                &format!("geometry_formats_{}_{res}", safe(&label)),
-                "Thesis Table 3.4: one draw of the whole mesh per attribute format (other attributes at their defaults: position float32x3, normal as swept or none). Whiskers: min–max GPU time.",
-            )?,
-        );
+        for study in Runs::distinct_by(&of_scene, which) {
+            let g: Vec<&Rec> = of_scene
+                .iter()
+                .copied()
+                .filter(|r| which(r) == study)
+                .collect();
+            // A category names the formats that vary in this study, e.g. "normal snorm8x4";
+            // swept axes with one value (e.g. normal none) go in the title.
+            let varying: Vec<(&str, &str)> = AXES
+                .iter()
+                .copied()
+                .filter(|(a, _)| Runs::distinct(g.iter().copied(), a).len() > 1)
+                .collect();
+            let fixed: Vec<String> = AXES
+                .iter()
+                .filter(|(a, _)| sweeps(g[0], a) && !varying.iter().any(|(v, _)| v == a))
+                .map(|(a, n)| format!("{n} {}", g[0].get(a)))
+                .collect();
+            let cat = |r: &Rec| {
+                varying
+                    .iter()
+                    .map(|(a, n)| format!("{n} {}", r.get(a)))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            let categories = Runs::distinct_by(&g, cat);
+            let vals = categories
+                .iter()
+                .map(|c| {
+                    g.iter()
+                        .copied()
+                        .find(|r| cat(r) == *c)
+                        .and_then(|r| gpu_ms(r, 0.0))
+                })
+                .collect();
+            figs.push(
+                Bars {
+                    title: format!(
+                        "Vertex formats ({}{}) — {label}, {res}",
+                        varying.iter().map(|(_, n)| *n).collect::<Vec<_>>().join(" × "),
+                        if fixed.is_empty() {
+                            String::new()
+                        } else {
+                            format!("; {}", fixed.join(", "))
+                        }
+                    ),
+                    y_label: "GPU time per frame [ms]".into(),
+                    log_y: false,
+                    categories,
+                    series: vec![("GPU ms".into(), vals)],
+                    reference: None,
+                }
+                .draw(
+                    dir,
+                    &format!(
+                        "geometry_formats_{}_{}_{res}",
+                        safe(&study),
+                        safe(&label)
+                    ),
+                    "Thesis Table 3.4: one draw of the whole mesh per attribute format; attributes not swept keep their defaults (position float32x3, normal float32x3, no colour, no texcoord). Whiskers: min–max GPU time.",
+                )?,
+            );
+        }
     }
     Ok(())
 }
@@ -403,7 +430,11 @@ fn raster_check(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> R
     let mut series = Vec::new();
     for r in at {
         if let (Some(ms), Some(ratio)) = (r.f("gpu_ms_median"), r.f("raster_bound_ratio")) {
-            push(&mut series, r.get("scene_label").to_string(), Pt::new(ms, ratio));
+            push(
+                &mut series,
+                r.get("scene_label").to_string(),
+                Pt::new(ms, ratio),
+            );
         }
     }
     if series.is_empty() {

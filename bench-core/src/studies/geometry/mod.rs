@@ -795,14 +795,15 @@ fn study_options(spec: &StudySpec) -> Result<(bool, u32)> {
             )))
         }
     };
-    let div =
-        match spec.extra.get("small_viewport_divisor") {
-            None => 8,
-            Some(toml::Value::Integer(i)) if (2..=1024).contains(i) => *i as u32,
-            Some(v) => return Err(CoreError::Param(format!(
+    let div = match spec.extra.get("small_viewport_divisor") {
+        None => 8,
+        Some(toml::Value::Integer(i)) if (2..=1024).contains(i) => *i as u32,
+        Some(v) => {
+            return Err(CoreError::Param(format!(
                 "geometry study: small_viewport_divisor must be an integer in 2..=1024, got {v}"
-            ))),
-        };
+            )))
+        }
+    };
     Ok((raster_check, div))
 }
 

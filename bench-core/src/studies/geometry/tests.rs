@@ -656,7 +656,10 @@ fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
     };
     let t0 = std::time::Instant::now();
     let n = crate::runner::run(&gpu, &suite, &groups, &opts, &mut sink).unwrap();
-    eprintln!("geometry-ci: {n} rows in {:.1} s", t0.elapsed().as_secs_f64());
+    eprintln!(
+        "geometry-ci: {n} rows in {:.1} s",
+        t0.elapsed().as_secs_f64()
+    );
     assert_eq!(n, crate::runner::rows_in(&groups));
     let rows: Vec<&Row> = sink
         .0
