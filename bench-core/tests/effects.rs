@@ -182,7 +182,11 @@ fn sweep(text: &str) -> bench_core::Result<Vec<bench_core::record::Row>> {
     let suite = scenarios::Suite::parse(text, "test").unwrap();
     let groups = bench_core::runner::expand(&suite, true)?;
     let mut sink = Collect(Vec::new());
-    let opts = bench_core::runner::RunOptions { run_id: "t".into(), git_rev: "t".into(), shard: (0, 1) };
+    let opts = bench_core::runner::RunOptions {
+        run_id: "t".into(),
+        git_rev: "t".into(),
+        shard: (0, 1),
+    };
     bench_core::runner::run(&gpu, &suite, &groups, &opts, &mut sink)?;
     Ok(sink.0)
 }
@@ -216,11 +220,22 @@ fn effect_axis_rows_are_judged_per_effect_and_a_method_without_a_fold_is_skipped
     let csg = get("depth_peel", "csg_and", Some("specialised"));
     assert_eq!(csg.get("status"), Some("ok"));
     assert_eq!(csg.get("payload"), Some("depth_id"));
-    assert_eq!(csg.get("max_abs_err").map(|v| v.parse::<f64>().unwrap() <= 1e-4), Some(true));
-    assert_eq!(get("depth_peel", "csg_and", Some("uber")).get("payload"), Some("all"));
+    assert_eq!(
+        csg.get("max_abs_err")
+            .map(|v| v.parse::<f64>().unwrap() <= 1e-4),
+        Some(true)
+    );
+    assert_eq!(
+        get("depth_peel", "csg_and", Some("uber")).get("payload"),
+        Some("all")
+    );
     let floor = get("floor_opaque", "csg_and", None);
     assert_eq!(floor.get("status"), Some("skipped"));
-    assert!(floor.get("reason").unwrap().contains("csg_and"), "{:?}", floor.get("reason"));
+    assert!(
+        floor.get("reason").unwrap().contains("csg_and"),
+        "{:?}",
+        floor.get("reason")
+    );
 }
 
 #[test]

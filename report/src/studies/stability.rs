@@ -30,15 +30,25 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             .copied()
             .filter(|r| r.get("stability_case") == case)
             .collect();
-        let stiffness = g.first().map(|r| r.get("stiffness").to_string()).unwrap_or_default();
+        let stiffness = g
+            .first()
+            .map(|r| r.get("stiffness").to_string())
+            .unwrap_or_default();
         // A series per method configuration and depth convention (reversed-Z is a scene
         // parameter, so it is folded into the name from the scene label).
         let mut series = series_by_config(
             &g,
-            |r| Some((r.f("stiffness_value")?.max(f64::MIN_POSITIVE), r.f("rmse")?.max(EXACT_FLOOR))),
+            |r| {
+                Some((
+                    r.f("stiffness_value")?.max(f64::MIN_POSITIVE),
+                    r.f("rmse")?.max(EXACT_FLOOR),
+                ))
+            },
             false,
         );
-        if g.iter().any(|r| r.get("scene_label").contains("reversed_z=true")) {
+        if g.iter()
+            .any(|r| r.get("scene_label").contains("reversed_z=true"))
+        {
             series.clear();
             for rev in [false, true] {
                 let sub: Vec<&Rec> = g
@@ -51,7 +61,11 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     |r| Some((r.f("stiffness_value")?, r.f("rmse")?.max(EXACT_FLOOR))),
                     false,
                 ) {
-                    s.name = format!("{} [{}]", s.name, if rev { "reversed-Z" } else { "standard Z" });
+                    s.name = format!(
+                        "{} [{}]",
+                        s.name,
+                        if rev { "reversed-Z" } else { "standard Z" }
+                    );
                     series.push(s);
                 }
             }
@@ -59,7 +73,9 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         if series.iter().map(|s| s.points.len()).sum::<usize>() == 0 {
             continue;
         }
-        let positive_x = g.iter().all(|r| r.f("stiffness_value").is_some_and(|v| v > 0.0));
+        let positive_x = g
+            .iter()
+            .all(|r| r.f("stiffness_value").is_some_and(|v| v > 0.0));
         let xy = XY {
             title: format!("Error vs stiffness — {case}"),
             x_label: stiffness.clone(),
@@ -76,7 +92,11 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             .collect();
         let caption = format!(
             "Exact results (RMSE 0) are drawn at {EXACT_FLOOR:.0e}. Flags: {}.",
-            if flagged.is_empty() { "none".to_string() } else { flagged.join(", ") }
+            if flagged.is_empty() {
+                "none".to_string()
+            } else {
+                flagged.join(", ")
+            }
         );
         figs.push(xy.draw(dir, &format!("stability_{}", safe(&case)), &caption)?);
     }
@@ -117,7 +137,9 @@ fn specialisation(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                 .map(|c| {
                     let find = |s: &str| {
                         rows.iter()
-                            .find(|r| &key(r) == c && r.get("effect") == e && r.get("specialisation") == s)
+                            .find(|r| {
+                                &key(r) == c && r.get("effect") == e && r.get("specialisation") == s
+                            })
                             .and_then(|r| r.f("gpu_ms_median"))
                     };
                     match (find("uber"), find("specialised")) {
