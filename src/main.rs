@@ -416,6 +416,8 @@ fn sweep(
     let out = out.unwrap_or_else(|| PathBuf::from("results").join(&run_id));
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     let csv_path = out.join("runs.csv");
+    // Studies that write images (shadows) put them beside the CSV.
+    std::env::set_var("MFX_OUT_DIR", &out);
     eprintln!(
         "mfx: suite '{}' on {} ({}, {}){}: {} groups, {} rows -> {}",
         suite.name,

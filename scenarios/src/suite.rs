@@ -32,6 +32,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("effects", include_str!("../suites/effects.toml")),
     ("methods", include_str!("../suites/methods.toml")),
     ("buckets", include_str!("../suites/buckets.toml")),
+    ("shadows", include_str!("../suites/shadows.toml")),
+    ("shadows-ci", include_str!("../suites/shadows-ci.toml")),
 ];
 
 #[derive(Clone, Debug)]

@@ -50,6 +50,10 @@ pub const COMMON_WGSL: &str = include_str!("common.wgsl");
 /// that call the fold.
 pub const EFFECTS_WGSL: &str = include_str!("effects.wgsl");
 
+/// Bytes of one `FoldState` in `effects.wgsl` (three vec4 + two u32, padded to 16): methods that
+/// keep fold states in a per-pixel buffer between passes size it with this.
+pub const FOLD_STATE_BYTES: u64 = 64;
+
 /// Which reference a capture is judged against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Expected {

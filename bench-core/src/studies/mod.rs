@@ -7,6 +7,7 @@
 //! |-----------|----------------------------------------------------------------------|
 //! | `methods` | multi-fragment capture methods vs the exact CPU reference            |
 //! | `stability` | stiff/extreme inputs: methods study + case, stiffness, lost fragments |
+//! | `shadows` | layered soft shadow maps from an area light vs a ray-traced reference |
 
 pub mod deferred;
 pub mod geometry;
@@ -171,6 +172,7 @@ pub fn all() -> Vec<Box<dyn Study>> {
     vec![
         Box::new(methods::MethodsStudy),
         Box::new(stability::StabilityStudy),
+        Box::new(shadows::ShadowsStudy),
     ]
 }
 

@@ -2,6 +2,7 @@
 
 pub mod buckets;
 pub mod methods;
+pub mod shadows;
 pub mod stability;
 
 use std::path::Path;
@@ -28,6 +29,12 @@ pub fn all_figures(runs: &Runs, dir: &Path) -> Result<Vec<(String, Vec<Figure>)>
         if !figs.is_empty() {
             out.push(("Effects and stability".to_string(), figs));
         }
+    }
+    if !runs.study("shadows").is_empty() {
+        out.push((
+            "Soft shadows (layered shadow maps vs ray tracing)".to_string(),
+            shadows::figures(runs, dir)?,
+        ));
     }
     Ok(out)
 }

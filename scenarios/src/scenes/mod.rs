@@ -12,10 +12,12 @@
 //! | `csg_pair` | two overlapping closed solids, ids 0 and 1 (CSG operands) | ≤ 4 per pixel           |
 //! | `coplanar` | layers of exactly duplicated quads (z-fighting)          | layers · copies         |
 //! | `extreme` | degenerate triangles, ±1e7 vertices, a view-covering triangle | —                    |
+//! | `soft_shadow` | occluders over a ground plane under a square area light | ray-traced visibility |
 
 pub mod grass;
 pub mod quads;
 pub mod shells;
+pub mod soft_shadow;
 pub mod stiff;
 
 use glam::{DVec3, Vec3};
@@ -161,6 +163,16 @@ pub struct Light {
     pub length: f32,
 }
 
+/// A square area light (the `shadows` study): the light's camera sits at the square's centre and
+/// looks along its normal; the square's sides follow the camera's x and y axes. `camera.fovy`
+/// and `camera.near`/`far` frame the shadow map (aspect 1).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AreaLight {
+    pub camera: Camera,
+    /// Side length of the square, world units.
+    pub size: f64,
+}
+
 /// A scene ready to render.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -172,6 +184,8 @@ pub struct Scene {
     pub analytic_max_depth_complexity: Option<u32>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    /// The square area light of soft-shadow scenes (None elsewhere).
+    pub area_light: Option<AreaLight>,
 }
 
 impl Scene {
@@ -184,6 +198,7 @@ impl Scene {
             analytic_max_depth_complexity: None,
             materials: Vec::new(),
             lights: Vec::new(),
+            area_light: None,
         }
     }
     pub fn name(&self) -> &str {
@@ -223,6 +238,7 @@ impl SceneSpec {
             "csg_pair" => stiff::csg_pair(self)?,
             "coplanar" => stiff::coplanar(self)?,
             "extreme" => stiff::extreme(self)?,
+            "soft_shadow" => soft_shadow::build(self)?,
             other => {
                 return Err(SceneError::UnknownGenerator(
                     other.to_string(),
@@ -245,7 +261,15 @@ impl SceneSpec {
 
 /// Generator names, for `mfx list scenes`.
 pub const GENERATORS: &[&str] = &[
-    "grass", "shells", "quads", "obj", "slabs", "csg_pair", "coplanar", "extreme",
+    "grass",
+    "shells",
+    "quads",
+    "obj",
+    "slabs",
+    "csg_pair",
+    "coplanar",
+    "extreme",
+    "soft_shadow",
 ];
 
 /// One-line description per generator, for `mfx list scenes`.
@@ -259,6 +283,7 @@ pub fn describe(generator: &str) -> &'static str {
         "csg_pair" => "offset, segments, shape=sphere|box, alpha: two overlapping closed solids, ids 0 (A) and 1 (B)",
         "coplanar" => "layers, copies, alpha, reversed_z: layers of exactly duplicated quads (z-fighting), max depth complexity layers·copies",
         "extreme" => "coord, degenerate, alpha, seed: zero-area triangles, a view-covering triangle and vertices at ±coord",
+        "soft_shadow" => "case=spheres|leaves|slabs|tangent|quad|obj, light_size, light_height, …: occluders over a ground plane under a square area light",
         _ => "",
     }
 }

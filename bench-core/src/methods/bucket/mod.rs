@@ -14,7 +14,10 @@
 
 use scenarios::Params;
 
-use super::{camera_entry, read_vec, storage_entry, texture_entry, Capture, Expected, FrameStats};
+use super::{
+    camera_entry, read_vec, storage_entry, texture_entry, Capture, Expected, FrameStats,
+    FOLD_STATE_BYTES,
+};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::reference::FragmentLists;
@@ -29,7 +32,6 @@ const RANGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 pub const MAX_CHANNELS: u32 = 32;
 const MIN_NORMAL_BITS: u32 = 0x0080_0000;
 /// std430 size of `FoldState` (vec4, vec4, u32, u32, padded to 16).
-const FOLD_STATE_BYTES: u64 = 48;
 const PASS_STRIDE: u64 = 256;
 
 /// Which bucket method.

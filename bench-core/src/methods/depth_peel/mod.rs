@@ -18,7 +18,7 @@ use scenarios::Params;
 use super::floor::{clear_depth, depth_state};
 use super::{
     bool_param, camera_entry, int_param, read_vec, shader, storage_entry, str_param, texture_entry,
-    Capture, Expected, FrameStats, Method, Prepared, EFFECTS_WGSL,
+    Capture, Expected, FrameStats, Method, Prepared, EFFECTS_WGSL, FOLD_STATE_BYTES,
 };
 use crate::effects::{self, EffectConfig, Payload};
 use crate::gpu::Gpu;
@@ -31,7 +31,6 @@ const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const Z_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// `struct FoldState` in effects.wgsl: three vec4 + two u32, rounded up to its 16-byte alignment.
-const FOLD_STATE_BYTES: u64 = 64;
 
 pub struct DepthPeel;
 
