@@ -186,6 +186,7 @@ fn sweep(text: &str) -> bench_core::Result<Vec<bench_core::record::Row>> {
         run_id: "t".into(),
         git_rev: "t".into(),
         shard: (0, 1),
+        save_images: None,
     };
     bench_core::runner::run(&gpu, &suite, &groups, &opts, &mut sink)?;
     Ok(sink.0)

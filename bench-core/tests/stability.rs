@@ -355,6 +355,7 @@ fn stability_suite_software_profile_flags_every_known_failure() {
         run_id: "t".into(),
         git_rev: "t".into(),
         shard: (0, 1),
+        save_images: None,
     };
     let written = runner::run(&gpu, &suite, &groups, &opts, &mut sink).unwrap();
     assert_eq!(written, runner::rows_in(&groups));

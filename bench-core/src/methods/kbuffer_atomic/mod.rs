@@ -27,7 +27,7 @@ impl Method for KBufferAtomic {
         "kbuffer_atomic"
     }
     fn describe(&self) -> &'static str {
-        "hazard-free k-buffer: 32-bit atomicMax bubbling of depth keys + payload claim pass; exact k nearest; 2 geometry passes + resolve; k × 40 B per pixel"
+        "hazard-free k-buffer: 32-bit atomicMax bubbling of depth keys + payload claim pass; exact k nearest; 2 geometry passes + resolve; k × 40 B + 16 B per pixel"
     }
     fn exact(&self) -> bool {
         true

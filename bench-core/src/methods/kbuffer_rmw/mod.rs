@@ -42,7 +42,7 @@ impl Method for KBufferRmw {
         "kbuffer_rmw"
     }
     fn describe(&self) -> &'static str {
-        "Bavoil 2007 ch. 4: k-buffer by non-atomic RMW insertion sort in storage; k nearest with hazards (measured); 1 geometry pass + resolve; k × 36 B per pixel"
+        "Bavoil 2007 ch. 4: k-buffer by non-atomic RMW insertion sort in storage; k nearest with hazards (measured); 1 geometry pass + resolve; k × 36 B + 16 B per pixel"
     }
     fn exact(&self) -> bool {
         false
@@ -112,7 +112,10 @@ impl KSlots {
         Ok(cap)
     }
 
-    /// `hazard_pixels`: pixels whose captured depths are not the true k nearest.
+    /// `hazard_pixels`: pixels whose captured depths are not the true k nearest. It cannot tell
+    /// an RMW race from a raster-coverage disagreement with the reference (a fragment the GPU
+    /// did not rasterize: seen on 1 pixel of 128² grass on lavapipe, where depth_peel and
+    /// linked_list miss it too), so read it beside depth_peel's `layer_count_accuracy`.
     pub fn judge(&self, cap: &mut Capture, lists: &FragmentLists) {
         if self.captured.len() != lists.pixels() * self.k as usize {
             return;

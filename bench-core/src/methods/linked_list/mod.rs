@@ -31,7 +31,7 @@ impl Method for LinkedList {
         "linked_list"
     }
     fn describe(&self) -> &'static str {
-        "Yang et al. 2010: per-pixel linked lists in one node pool (layers × pixels nodes), sorted in a compute resolve; exact within the pool, overflow counted; 1 geometry pass + resolve; 8 B + layers × 32 B per pixel"
+        "Yang et al. 2010: per-pixel linked lists in one node pool (layers × pixels nodes), sorted in a compute resolve; exact within the pool, overflow counted; 1 geometry pass + resolve; 28 B + layers × 32 B per pixel"
     }
     fn exact(&self) -> bool {
         true
