@@ -93,6 +93,11 @@ fn num(v: f64) -> String {
     }
 }
 
+/// A CSV number cell, shortened like `num`; text that is not a number is kept (escaped).
+fn cell(s: &str) -> String {
+    s.parse::<f64>().map(num).unwrap_or_else(|_| esc(s))
+}
+
 fn geomean(v: &[f64]) -> Option<f64> {
     let v: Vec<f64> = v
         .iter()
@@ -430,8 +435,8 @@ pub fn compare(
                 esc(b),
                 num(*max),
                 num(*rms),
-                esc(ea),
-                esc(eb)
+                cell(ea),
+                cell(eb)
             );
         }
         html.push_str("</table>");
