@@ -575,6 +575,29 @@ mod tests {
     }
 
     #[test]
+    fn a_merged_report_names_platforms_and_every_image_exists() {
+        let d = setup("page");
+        let page = crate::build(&d, None).unwrap();
+        let html = std::fs::read_to_string(&page).unwrap();
+        for t in ["runs", "speedup", "agreement", "rows", "notok"] {
+            assert!(html.contains(&format!("id=\"{t}\"")), "no table {t}");
+        }
+        // The rows table says which platform each row ran on.
+        assert!(html.contains("<td>GPU (vulkan)</td>"), "{html}");
+        assert!(html.contains("<td>llvmpipe (gl)</td>"), "{html}");
+        // Every image the page shows is on disk (the browser check's precondition).
+        let srcs: Vec<&str> = html
+            .split("<img src=\"")
+            .skip(1)
+            .map(|s| &s[..s.find('"').unwrap()])
+            .collect();
+        assert!(srcs.len() >= 2, "{srcs:?}");
+        for s in srcs {
+            assert!(page.parent().unwrap().join(s).is_file(), "{s} missing");
+        }
+    }
+
+    #[test]
     fn nan_is_the_largest_difference() {
         assert_eq!(
             image_diff(&[0.0, f32::NAN], &[0.0, 0.0]).unwrap().0,
