@@ -424,7 +424,7 @@ fn sweep(
         gpu.facts.name,
         gpu.facts.backend,
         gpu.facts.device_type,
-        if gpu.facts.is_software {
+        if gpu.facts.is_software && suite.software.is_some() {
             " [software profile]"
         } else {
             ""
