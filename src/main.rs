@@ -450,9 +450,9 @@ fn sweep(
         run_id,
         git_rev: runner::git_rev(),
         shard,
+        save_images: save_images.then(|| out.clone()),
     };
-    let images = save_images.then_some(out.as_path());
-    let n = runner::run_saving_images(&gpu, &suite, &groups, &opts, images, &mut sink)?;
+    let n = runner::run(&gpu, &suite, &groups, &opts, &mut sink)?;
     bar.finish_and_clear();
     eprintln!(
         "mfx: wrote {n} rows ({} failed, {} skipped) to {}",

@@ -160,6 +160,8 @@ pub struct RunOptions {
     pub git_rev: String,
     /// (I, N) of `--shard I/N`.
     pub shard: (usize, usize),
+    /// Folder where studies save each point's image (`--save-images`), or none.
+    pub save_images: Option<std::path::PathBuf>,
 }
 
 /// Expands every study of the suite into groups, in suite order (deterministic: the shard
@@ -230,18 +232,6 @@ pub fn run(
     suite: &Suite,
     groups: &[Group],
     opts: &RunOptions,
-    sink: &mut dyn Sink,
-) -> Result<usize> {
-    run_saving_images(gpu, suite, groups, opts, None, sink)
-}
-
-/// `run`, and studies save each point's image under `images_dir/images/` (`--save-images`).
-pub fn run_saving_images(
-    gpu: &Gpu,
-    suite: &Suite,
-    groups: &[Group],
-    opts: &RunOptions,
-    images_dir: Option<&std::path::Path>,
     sink: &mut dyn Sink,
 ) -> Result<usize> {
     let software = gpu.facts.is_software;
@@ -337,7 +327,7 @@ pub fn run_saving_images(
         let gscene = GpuScene::upload(gpu, &scene, group.width, group.height);
         let spec = &suite.studies[group.study_index];
         let mut ctx = GroupCtx::new(gpu, suite, spec, group, &scene, &gscene, reps, suite.warmup);
-        ctx.images_dir = images_dir.map(|d| d.to_path_buf());
+        ctx.images_dir = opts.save_images.clone();
         let add_scene = |row: &mut Row| {
             row.set("triangles", scene.mesh.triangle_count())
                 .set("vertices", scene.mesh.vertex_count());

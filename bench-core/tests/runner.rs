@@ -23,6 +23,7 @@ fn run(text: &str) -> Vec<Row> {
         run_id: "t".into(),
         git_rev: "t".into(),
         shard: (0, 1),
+        save_images: None,
     };
     let written = runner::run(&gpu, &suite, &groups, &opts, &mut sink).unwrap();
     assert_eq!(written, n);

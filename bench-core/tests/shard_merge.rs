@@ -17,9 +17,9 @@ fn sweep(gpu: &bench_core::Gpu, suite: &Suite, shard: (usize, usize), out: &Path
         run_id: format!("test-shard{}of{}", shard.0, shard.1),
         git_rev: "test".into(),
         shard,
+        save_images: images.then(|| out.to_path_buf()),
     };
-    let n = runner::run_saving_images(gpu, suite, &groups, &opts, images.then_some(out), &mut sink)
-        .unwrap();
+    let n = runner::run(gpu, suite, &groups, &opts, &mut sink).unwrap();
     assert_eq!(n, runner::rows_in(&groups));
 }
 
