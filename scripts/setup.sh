@@ -5,7 +5,8 @@ set -euo pipefail
 need=()
 ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1' || need+=(libvulkan1)
 # Any Vulkan ICD (NVIDIA, AMD, Intel, lavapipe) is enough; install lavapipe only when none exists.
-if ! ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json /usr/local/nvidia/share/vulkan/icd.d/*.json >/dev/null 2>&1; then
+icds=$(shopt -s nullglob; echo /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json /usr/local/nvidia/share/vulkan/icd.d/*.json)
+if [ -z "$icds" ]; then
   need+=(mesa-vulkan-drivers)
 fi
 # GL backend (wgpu's `--backend gl` on Mesa llvmpipe) needs EGL.

@@ -5,3 +5,5 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
 cargo test --workspace
+# Sharding on a one-node Slurm cluster, the cross-backend report, the report in headless Chromium.
+bash scripts/test-distrib.sh

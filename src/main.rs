@@ -424,7 +424,7 @@ fn sweep(
         gpu.facts.name,
         gpu.facts.backend,
         gpu.facts.device_type,
-        if gpu.facts.is_software {
+        if gpu.facts.is_software && suite.software.is_some() {
             " [software profile]"
         } else {
             ""
@@ -549,6 +549,10 @@ fn render(job: &RenderJob) -> Result<()> {
     let cam_file = CameraFile::of(&scene.camera, w, h, &world_from_object);
     let cam_json = serde_json::to_string_pretty(&cam_file)?;
     if let Some(p) = &job.camera_out {
+        if let Some(parent) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent)
+                .with_context(|| format!("creating {}", parent.display()))?;
+        }
         std::fs::write(p, &cam_json).with_context(|| format!("writing {}", p.display()))?;
         println!("camera -> {}", p.display());
     }

@@ -31,6 +31,9 @@ pub struct Merged {
     pub rows: usize,
     pub duplicates: Vec<Duplicate>,
     pub images_copied: usize,
+    /// `image_file`s of merged rows that no input folder held (e.g. a run copied without its
+    /// `images/`): reported, never silently left dangling.
+    pub images_missing: Vec<String>,
     pub out_csv: PathBuf,
 }
 
@@ -45,6 +48,13 @@ impl Merged {
         );
         if self.images_copied > 0 {
             s.push_str(&format!("; {} images copied", self.images_copied));
+        }
+        if let Some(first) = self.images_missing.first() {
+            s.push_str(&format!(
+                "\n{} rows name an image that no input folder holds (first: {first}); the \
+                 report cannot compare those points' images",
+                self.images_missing.len()
+            ));
         }
         if !self.duplicates.is_empty() {
             s.push_str(&format!(
@@ -239,6 +249,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
         w.flush().map_err(|e| io(&dup_csv, e))?;
     }
     let images_copied = copy_images(&files, out)?;
+    let images_missing = missing_images(&out_csv, out)?;
     let mut log = std::fs::File::create(out.join("merged_from.txt")).map_err(|e| io(out, e))?;
     for f in &files {
         writeln!(log, "{}", f.display()).map_err(|e| io(out, e))?;
@@ -248,6 +259,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
         rows,
         duplicates: dups.into_iter().map(|(_, _, d)| d).collect(),
         images_copied,
+        images_missing,
         out_csv,
     })
 }
@@ -273,6 +285,24 @@ fn copy_images(files: &[PathBuf], out: &Path) -> Result<usize> {
         }
     }
     Ok(n)
+}
+
+/// The `image_file` cells of a merged runs.csv that name no file under `out`.
+fn missing_images(csv_path: &Path, out: &Path) -> Result<Vec<String>> {
+    let mut rdr = csv::Reader::from_path(csv_path).map_err(|e| io(csv_path, e))?;
+    let h = rdr.headers().map_err(|e| io(csv_path, e))?.clone();
+    let Some(i) = h.iter().position(|c| c == "image_file") else {
+        return Ok(Vec::new());
+    };
+    let mut missing = Vec::new();
+    for r in rdr.records() {
+        let r = r.map_err(|e| io(csv_path, e))?;
+        let f = r.get(i).unwrap_or("");
+        if !f.is_empty() && !out.join(f).is_file() {
+            missing.push(f.to_string());
+        }
+    }
+    Ok(missing)
 }
 
 /// The distinct point keys of a runs.csv (for shard/merge equality checks).
@@ -343,6 +373,31 @@ mod tests {
         );
         let keys = point_keys(&t.join("out/runs.csv")).unwrap();
         assert_eq!(keys, ["k1", "k2", "k2"]);
+    }
+
+    #[test]
+    fn copies_images_and_reports_the_missing_ones() {
+        let t = tmp("images");
+        let hi = "schema,point_key,adapter,backend,status,image_file\n";
+        let a = write(&t, "a", &format!("{hi}1,k1,gpu,vulkan,ok,images/a.npy\n"));
+        std::fs::create_dir_all(a.join("images")).unwrap();
+        std::fs::write(a.join("images/a.npy"), b"x").unwrap();
+        // b was copied without its images/ folder.
+        let b = write(
+            &t,
+            "b",
+            &format!("{hi}1,k1,cpu,gl,ok,images/b.npy\n1,k2,cpu,gl,ok,\n"),
+        );
+        let m = merge(&[a, b], &t.join("out")).unwrap();
+        assert_eq!(m.images_copied, 1);
+        assert!(t.join("out/images/a.npy").is_file());
+        assert_eq!(m.images_missing, ["images/b.npy"]);
+        assert!(
+            m.summary()
+                .contains("1 rows name an image that no input folder holds"),
+            "{}",
+            m.summary()
+        );
     }
 
     #[test]

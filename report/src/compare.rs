@@ -93,6 +93,11 @@ fn num(v: f64) -> String {
     }
 }
 
+/// A CSV number cell, shortened like `num`; text that is not a number is kept (escaped).
+fn cell(s: &str) -> String {
+    s.parse::<f64>().map(num).unwrap_or_else(|_| esc(s))
+}
+
 fn geomean(v: &[f64]) -> Option<f64> {
     let v: Vec<f64> = v
         .iter()
@@ -430,8 +435,8 @@ pub fn compare(
                 esc(b),
                 num(*max),
                 num(*rms),
-                esc(ea),
-                esc(eb)
+                cell(ea),
+                cell(eb)
             );
         }
         html.push_str("</table>");
@@ -567,6 +572,29 @@ mod tests {
             .is_none());
         // Default baseline: the first CPU adapter.
         assert_eq!(baseline(&runs, None).unwrap(), "llvmpipe (vulkan)");
+    }
+
+    #[test]
+    fn a_merged_report_names_platforms_and_every_image_exists() {
+        let d = setup("page");
+        let page = crate::build(&d, None).unwrap();
+        let html = std::fs::read_to_string(&page).unwrap();
+        for t in ["runs", "speedup", "agreement", "rows", "notok"] {
+            assert!(html.contains(&format!("id=\"{t}\"")), "no table {t}");
+        }
+        // The rows table says which platform each row ran on.
+        assert!(html.contains("<td>GPU (vulkan)</td>"), "{html}");
+        assert!(html.contains("<td>llvmpipe (gl)</td>"), "{html}");
+        // Every image the page shows is on disk (the browser check's precondition).
+        let srcs: Vec<&str> = html
+            .split("<img src=\"")
+            .skip(1)
+            .map(|s| &s[..s.find('"').unwrap()])
+            .collect();
+        assert!(srcs.len() >= 2, "{srcs:?}");
+        for s in srcs {
+            assert!(page.parent().unwrap().join(s).is_file(), "{s} missing");
+        }
     }
 
     #[test]

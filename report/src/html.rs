@@ -75,11 +75,13 @@ pub fn page(runs: &Runs, sections: &[(String, Vec<Figure>)], extra_html: &str) -
     }
     h.push_str(extra_html);
     // Summary of ok rows.
-    h.push_str("<h2>Rows</h2><table id=\"rows\"><tr><th>study</th><th>scene</th><th>resolution</th><th>method</th><th>axes</th><th>GPU ms (median)</th><th>× floor</th><th>speedup vs depth_peel</th><th>RMSE</th><th>max abs err</th><th>flag</th></tr>");
+    h.push_str("<h2>Rows</h2><table id=\"rows\"><tr><th>adapter (backend)</th><th>study</th><th>scene</th><th>resolution</th><th>method</th><th>axes</th><th>GPU ms (median)</th><th>× floor</th><th>speedup vs depth_peel</th><th>RMSE</th><th>max abs err</th><th>flag</th></tr>");
     for r in runs.rows.iter().filter(|r| r.ok()) {
         let _ = write!(
             h,
-            "<tr><td>{}</td><td>{}</td><td>{}x{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{} ({})</td><td>{}</td><td>{}</td><td>{}x{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(r.get("adapter")),
+            esc(r.get("backend")),
             esc(r.get("study")),
             esc(r.get("scene_label")),
             r.get("width"),

@@ -20,7 +20,32 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
     let runs = Runs::load(&csv)?;
     let out = dir.join("report");
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    let mut sections = studies::all_figures(&runs, &out)?;
+    // Each study's figures read one platform's rows: a merged CSV (several adapters or backends)
+    // gets one set per platform, in its own subfolder, so no chart mixes two machines' rows.
+    let plats = compare::platforms(&runs);
+    let mut sections = Vec::new();
+    if plats.len() < 2 {
+        sections = studies::all_figures(&runs, &out)?;
+    } else {
+        for (i, p) in plats.iter().enumerate() {
+            let mut one = runs.clone();
+            one.rows.retain(|r| compare::platform(r) == *p);
+            let sub = format!("platform{i}");
+            let dir = out.join(&sub);
+            std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+            for (title, figs) in studies::all_figures(&one, &dir)? {
+                let figs = figs
+                    .into_iter()
+                    .map(|mut f| {
+                        f.stem = format!("{sub}/{}", f.stem);
+                        f.title = format!("{} [{p}]", f.title);
+                        f
+                    })
+                    .collect();
+                sections.push((format!("{title} — {p}"), figs));
+            }
+        }
+    }
     // More than one adapter or backend (a merged CSV): compare them.
     let mut extra = String::new();
     if let Some(c) = compare::compare(&runs, dir, &out, baseline)? {

@@ -36,6 +36,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("buckets", include_str!("../suites/buckets.toml")),
     ("shadows", include_str!("../suites/shadows.toml")),
     ("shadows-ci", include_str!("../suites/shadows-ci.toml")),
+    ("backends", include_str!("../suites/backends.toml")),
 ];
 
 #[derive(Clone, Debug)]
