@@ -8,7 +8,9 @@
 //! | `shells` | nested closed spheres or boxes around the view axis         | max depth complexity 2n |
 //! | `quads`  | d overlapping screen-parallel quads at distinct depths      | max depth complexity d  |
 //! | `obj`    | an OBJ file (tobj), normalised into view, grid-instanced    | —                       |
+//! | `city`   | ground + box buildings (or a closed room) with many lights  | — (shading studies)     |
 
+pub mod city;
 pub mod grass;
 pub mod quads;
 pub mod shells;
@@ -156,6 +158,14 @@ pub struct Light {
     pub length: f32,
 }
 
+/// A directional light (the sun) for the shading studies; `None` on a scene without one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sun {
+    /// Unit vector from the surface towards the sun, world space.
+    pub direction: [f32; 3],
+    pub color: [f32; 3],
+}
+
 /// A scene ready to render.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -167,6 +177,8 @@ pub struct Scene {
     pub analytic_max_depth_complexity: Option<u32>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    /// Directional light of the shading studies (none: no sun feature anywhere).
+    pub sun: Option<Sun>,
 }
 
 impl Scene {
@@ -179,6 +191,7 @@ impl Scene {
             analytic_max_depth_complexity: None,
             materials: Vec::new(),
             lights: Vec::new(),
+            sun: None,
         }
     }
     pub fn name(&self) -> &str {
@@ -214,6 +227,7 @@ impl SceneSpec {
             "shells" => shells::build(self)?,
             "quads" => quads::build(self)?,
             "obj" => obj::build(self)?,
+            "city" => city::build(self)?,
             other => {
                 return Err(SceneError::UnknownGenerator(
                     other.to_string(),
@@ -235,7 +249,7 @@ impl SceneSpec {
 }
 
 /// Generator names, for `mfx list scenes`.
-pub const GENERATORS: &[&str] = &["grass", "shells", "quads", "obj"];
+pub const GENERATORS: &[&str] = &["grass", "shells", "quads", "obj", "city"];
 
 /// One-line description per generator, for `mfx list scenes`.
 pub fn describe(generator: &str) -> &'static str {
@@ -244,6 +258,7 @@ pub fn describe(generator: &str) -> &'static str {
         "shells" => "count, shape=sphere|box, segments, alpha, seed: nested closed shells, max depth complexity 2·count",
         "quads" => "depth_complexity=d, alpha, tilt, seed: d quads over the centre at distinct depths",
         "obj" => "path, instances, alpha: an OBJ file via tobj, normalised, instanced on a grid",
+        "city" => "lights=N, blocks, room, sun, kinds=mixed|point|spot|line, range, seed: box city (or closed room) with N finite-range lights and materials",
         _ => "",
     }
 }

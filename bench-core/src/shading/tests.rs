@@ -1,0 +1,285 @@
+//! Shading tests on lavapipe (tiny city scenes): every path against the f64 reference, the
+//! culling proof, the per-id tile lists, and the CPU path's determinism.
+
+use std::sync::OnceLock;
+
+use scenarios::{ParamValue, Params, Scene, SceneSpec};
+
+use super::cpu_tiled::{self, CpuOptions, TileList};
+use super::gpu_paths::{Deferred, Path};
+use super::reference::{self, intensity_att, surface};
+use super::{class, pixel_class, GBuffer, ShadeSetup};
+use crate::gpu::{Gpu, GpuOptions};
+use crate::gpu_scene::GpuScene;
+use crate::methods::Prepared;
+use crate::timing::GpuTimer;
+
+pub(crate) fn gpu() -> &'static Gpu {
+    static G: OnceLock<Gpu> = OnceLock::new();
+    G.get_or_init(|| Gpu::new(&GpuOptions::default()).expect("a Vulkan adapter (lavapipe)"))
+}
+
+pub(crate) fn city(lights: i64, room: bool) -> Scene {
+    SceneSpec::new(
+        "city",
+        Params::new()
+            .with("lights", ParamValue::Int(lights))
+            .with("blocks", ParamValue::Int(3))
+            .with("room", ParamValue::Bool(room)),
+    )
+    .build()
+    .unwrap()
+}
+
+/// Tolerance of an f32 path against the f64 reference, per channel, relative to max(1, |ref|):
+/// f32 rounding of N·H is amplified by the specular power (up to 2^11) and the position
+/// reconstruction from depth loses ~1e-5 relative; lavapipe shows 2.6e-4 (printed by the
+/// tests), 2e-3 leaves 8× margin yet catches any model error (a wrong term is ≥ 10% somewhere).
+pub(crate) const PATH_TOL: f64 = 2e-3;
+
+pub(crate) fn max_rel_err(r: &[[f64; 4]], g: &[[f32; 4]]) -> f64 {
+    assert_eq!(r.len(), g.len());
+    let mut m = 0.0f64;
+    for (a, b) in r.iter().zip(g) {
+        for c in 0..4 {
+            let e = (b[c] as f64 - a[c]).abs() / a[c].abs().max(1.0);
+            m = m.max(if e.is_finite() { e } else { f64::INFINITY });
+        }
+    }
+    m
+}
+
+struct Run {
+    d: Deferred,
+    gb: GBuffer,
+    setup: ShadeSetup,
+    image: Vec<[f32; 4]>,
+    reference: Vec<[f64; 4]>,
+}
+
+fn run(scene: &Scene, size: u32, path: Path, tau: f64, store: bool) -> Run {
+    let g = gpu();
+    let gs = GpuScene::upload(g, scene, size, size);
+    let mut d = Deferred::new(g, scene, &gs, path, tau, store).unwrap();
+    let mut timer = GpuTimer::new(g);
+    timer.begin_frame();
+    d.frame(g, &gs, &mut timer).unwrap();
+    g.wait().unwrap();
+    let image = d.read_image(g).unwrap();
+    let gb = d.read_gbuffer(g).unwrap();
+    let setup = ShadeSetup::new(scene, size, size);
+    let reference = reference::shade(&setup, &gb);
+    Run {
+        d,
+        gb,
+        setup,
+        image,
+        reference,
+    }
+}
+
+#[test]
+fn scene_has_sky_geometry_and_lit_pixels() {
+    let s = city(24, false);
+    let r = run(&s, 64, Path::Naive, 0.0, false);
+    let sky = (0..r.gb.pixels()).filter(|&i| r.gb.is_sky(i)).count();
+    assert!(sky > 0 && sky < r.gb.pixels() / 2, "sky pixels: {sky}");
+    // Some pixels get local light beyond ambient + sun: the lights reach the geometry.
+    let t = reference::all_terms(&r.setup, &r.gb);
+    let lit = t.iter().filter(|t| t.diffuse.max_element() > 1.5).count();
+    assert!(lit > 0);
+}
+
+#[test]
+fn naive_and_volumes_equal_reference() {
+    let s = city(48, false);
+    for path in [Path::Naive, Path::Volumes] {
+        let r = run(&s, 64, path, 0.0, false);
+        let e = max_rel_err(&r.reference, &r.image);
+        println!("{path:?}: max_rel_err {e:.2e}");
+        assert!(e < PATH_TOL, "{path:?}: {e}");
+    }
+}
+
+#[test]
+fn tiled_equals_reference_at_zero_threshold() {
+    let s = city(48, false);
+    for path in [
+        Path::Tiled { tile: 8, levels: 1 },
+        Path::Tiled {
+            tile: 16,
+            levels: 1,
+        },
+        Path::Tiled {
+            tile: 32,
+            levels: 1,
+        },
+        Path::Tiled {
+            tile: 64,
+            levels: 1,
+        },
+        Path::Tiled {
+            tile: 64,
+            levels: 2,
+        },
+    ] {
+        let r = run(&s, 80, path, 0.0, false);
+        let e = max_rel_err(&r.reference, &r.image);
+        println!("{path:?}: max_rel_err {e:.2e}");
+        assert!(e < PATH_TOL, "{path:?}: {e}");
+        assert_eq!(r.d.overflow(gpu()).unwrap(), [0, 0]);
+    }
+}
+
+/// Every light missing from a tile's list has I·att ≤ τ at every non-sky pixel of the tile
+/// (evaluated in f64 at the reference's positions).
+fn check_culled_below(r: &Run, lists: &[TileList], tau: f64) -> usize {
+    let mut culled = 0;
+    for tl in lists {
+        let mut keep = vec![false; r.setup.lights.len()];
+        for &l in &tl.lights {
+            keep[l as usize] = true;
+        }
+        for y in tl.rect[1]..tl.rect[3] {
+            for x in tl.rect[0]..tl.rect[2] {
+                let i = (y * r.gb.width + x) as usize;
+                if r.gb.is_sky(i) {
+                    continue;
+                }
+                let p = surface(&r.setup, &r.gb, i).pos;
+                for (li, l) in r.setup.lights.iter().enumerate() {
+                    if !keep[li] {
+                        let v = intensity_att(l, p);
+                        assert!(
+                            v <= tau * (1.0 + 1e-6) + 1e-9,
+                            "light {li} culled from tile {:?} reaches {v} > τ {tau} at ({x},{y})",
+                            tl.rect
+                        );
+                        culled += 1;
+                    }
+                }
+            }
+        }
+    }
+    culled
+}
+
+#[test]
+fn gpu_culled_lights_stay_below_threshold() {
+    let s = city(64, false);
+    for tau in [0.0, 0.05, 0.3] {
+        let r = run(
+            &s,
+            64,
+            Path::Tiled {
+                tile: 16,
+                levels: 1,
+            },
+            tau,
+            true,
+        );
+        let lists = r.d.tile_lists(gpu()).unwrap().unwrap();
+        let tl: Vec<TileList> = lists
+            .into_iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let (tx, ty) = (i as u32 % 4, i as u32 / 4);
+                TileList {
+                    rect: [tx * 16, ty * 16, tx * 16 + 16, ty * 16 + 16],
+                    lights: l,
+                }
+            })
+            .collect();
+        let culled = check_culled_below(&r, &tl, tau);
+        // The test must be able to fail: culling has to actually drop lights here.
+        assert!(culled > 0, "τ {tau}: nothing was culled");
+    }
+}
+
+#[test]
+fn cpu_path_equals_reference_is_deterministic_and_culls_soundly() {
+    let s = city(64, false);
+    let r = run(&s, 80, Path::Naive, 0.0, false);
+    for tau in [0.0, 0.1] {
+        let lights = r.setup.gpu_lights(tau);
+        let mut first: Option<Vec<[f32; 4]>> = None;
+        for threads in [1, 2, 3, 8] {
+            let o = CpuOptions {
+                threads,
+                keep_lists: true,
+                ..Default::default()
+            };
+            let res = cpu_tiled::shade(&r.setup, &r.gb, &lights, &o);
+            if tau == 0.0 {
+                let e = max_rel_err(&r.reference, &res.image);
+                assert!(e < PATH_TOL, "cpu: {e}");
+            }
+            let bits: Vec<[u32; 4]> = res.image.iter().map(|p| p.map(f32::to_bits)).collect();
+            match &first {
+                None => {
+                    let c1 = check_culled_below(&r, &res.lists, tau);
+                    let c2 = check_culled_below(&r, &res.sub_lists, tau);
+                    assert!(c1 > 0 && c2 > c1, "culls: tile {c1}, sub-tile {c2}");
+                    first = Some(res.image.clone());
+                }
+                Some(f) => {
+                    let fb: Vec<[u32; 4]> = f.iter().map(|p| p.map(f32::to_bits)).collect();
+                    assert_eq!(fb, bits, "{threads} threads differ from 1 thread");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn classified_lists_every_tile_once_and_matches_uber() {
+    for room in [false, true] {
+        let s = city(32, room);
+        let rc = run(&s, 64, Path::Classified { uber: false }, 0.0, false);
+        let ru = run(&s, 64, Path::Classified { uber: true }, 0.0, false);
+        let e = max_rel_err(&rc.reference, &rc.image);
+        assert!(e < PATH_TOL, "classified room={room}: {e}");
+        let e = max_rel_err(&ru.reference, &ru.image);
+        assert!(e < PATH_TOL, "uber room={room}: {e}");
+        let (ids, counts, offsets, list) = rc.d.classification(gpu()).unwrap().unwrap();
+        let (tx, ty) = rc.d.class_tiles().unwrap();
+        let n = (tx * ty) as usize;
+        let mut seen = vec![0u32; n];
+        for id in 0..16usize {
+            let range = offsets[id] as usize..(offsets[id] + counts[id]) as usize;
+            for &t in &list[range] {
+                seen[t as usize] += 1;
+                assert_eq!(
+                    ids[t as usize], id as u32,
+                    "tile {t} listed under the wrong id"
+                );
+            }
+        }
+        assert!(
+            seen.iter().all(|&c| c == 1),
+            "a tile is missing or repeated"
+        );
+        // GPU ids equal the CPU classification of the same G-buffer.
+        for t in 0..n {
+            let (x0, y0) = ((t as u32 % tx) * 4, (t as u32 / tx) * 4);
+            let mut bits = 0;
+            for y in y0..(y0 + 4).min(64) {
+                for x in x0..(x0 + 4).min(64) {
+                    bits |= pixel_class(&rc.setup, &rc.gb, (y * 64 + x) as usize);
+                }
+            }
+            assert_eq!(ids[t], bits, "tile {t}");
+        }
+        if room {
+            // No sky, no sun: those permutations are neither compiled nor drawn.
+            assert_eq!(rc.d.permutations, 2);
+            for id in 0..16u32 {
+                if id & (class::SKY | class::SUN) != 0 {
+                    assert_eq!(counts[id as usize], 0);
+                }
+            }
+        } else {
+            assert_eq!(rc.d.permutations, 9);
+        }
+    }
+}
