@@ -27,6 +27,8 @@ use crate::{ParamValue, Params, Result, SceneError, SceneSpec};
 pub const BUILTIN: &[(&str, &str)] = &[
     ("smoke", include_str!("../suites/smoke.toml")),
     ("default", include_str!("../suites/default.toml")),
+    ("deferred", include_str!("../suites/deferred.toml")),
+    ("deferred-ci", include_str!("../suites/deferred-ci.toml")),
 ];
 
 #[derive(Clone, Debug)]

@@ -28,7 +28,6 @@ const PATHS_WGSL: &str = include_str!("paths.wgsl");
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// Per-tile list capacity when lists are kept for inspection (tests, debug views).
 pub const LIST_CAP: u32 = 1024;
-pub const MAX_TILE_LIGHTS: u32 = 1024;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Path {
@@ -206,7 +205,6 @@ struct Tiled {
     groups: (u32, u32),
     tile_counts: wgpu::Buffer,
     tile_lists: wgpu::Buffer,
-    stats: wgpu::Buffer,
     store_lists: bool,
 }
 
@@ -461,7 +459,6 @@ impl Deferred {
                         },
                         storage_entry(1, false, wgpu::ShaderStages::COMPUTE),
                         storage_entry(2, false, wgpu::ShaderStages::COMPUTE),
-                        storage_entry(3, false, wgpu::ShaderStages::COMPUTE),
                     ],
                 });
                 let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -488,13 +485,6 @@ impl Deferred {
                     },
                     wgpu::BufferUsages::empty(),
                 );
-                let stats = storage_buf(
-                    gpu,
-                    &mut alloc,
-                    "tile stats",
-                    16,
-                    wgpu::BufferUsages::empty(),
-                );
                 let wg = if tile == 8 { 8 } else { 16 };
                 let c = consts(&[
                     ("TILE", tile as f64),
@@ -516,7 +506,6 @@ impl Deferred {
                         },
                         bge(1, &tile_counts),
                         bge(2, &tile_lists),
-                        bge(3, &stats),
                     ],
                 });
                 Kind::Tiled(Tiled {
@@ -525,7 +514,6 @@ impl Deferred {
                     groups: tiles,
                     tile_counts,
                     tile_lists,
-                    stats,
                     store_lists,
                 })
             }
@@ -701,7 +689,6 @@ impl Deferred {
                 }
             }
             Kind::Tiled(t) => {
-                enc.clear_buffer(&t.stats, 0, None);
                 let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("cull+shade"),
                     timestamp_writes: timer.compute_pass("cull+shade"),
@@ -791,17 +778,6 @@ impl Deferred {
                 ))
             }
             _ => Ok(None),
-        }
-    }
-
-    /// Tiled: [tiles over the level-1 cap, sub-tiles over the level-2 cap].
-    pub fn overflow(&self, gpu: &Gpu) -> Result<[u32; 2]> {
-        match &self.kind {
-            Kind::Tiled(t) => {
-                let s: Vec<u32> = read_vec(gpu, &t.stats, 4)?;
-                Ok([s[0], s[1]])
-            }
-            _ => Ok([0, 0]),
         }
     }
 

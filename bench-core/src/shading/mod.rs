@@ -16,6 +16,7 @@
 //! where att is exactly 0, so the culled paths equal the unculled ones up to rounding.
 
 pub mod cpu_tiled;
+pub mod debug;
 pub mod gbuffer;
 pub mod gpu_paths;
 pub mod reference;

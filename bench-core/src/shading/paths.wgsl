@@ -174,24 +174,26 @@ fn vs_tile(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
 }
 
 // ---- GPU compute tiled: per-tile depth bounds, light culling, shading (BF3 on a GPU) ----
+// Lights are culled in batches of BATCH (the shared list's size), so no list can overflow at
+// any light count: each batch is culled into the tile list (and, two-level, from there into
+// the sub-tile lists), then every thread adds the batch's kept lights to its pixels' sums.
 
 override TILE: u32 = 16u;
 override WG: u32 = 16u;
 override PPT: u32 = 1u;
 override STORE_LISTS: bool = false;
 override LIST_CAP: u32 = 1u;
-const MAX_TILE_LIGHTS: u32 = 1024u;
-const SUB_CAP: u32 = 256u;
+const BATCH: u32 = 256u;
 
 @group(2) @binding(0) var out_tex: texture_storage_2d<rgba32float, write>;
 @group(2) @binding(1) var<storage, read_write> tile_counts: array<u32>;
 @group(2) @binding(2) var<storage, read_write> tile_lists: array<u32>;
-@group(2) @binding(3) var<storage, read_write> stats: array<atomic<u32>, 4>;
 
 var<workgroup> zmin_u: atomic<u32>;
 var<workgroup> zmax_u: atomic<u32>;
 var<workgroup> n_lights: atomic<u32>;
-var<workgroup> tile_lights: array<u32, MAX_TILE_LIGHTS>;
+var<workgroup> kept_total: u32;
+var<workgroup> tile_lights: array<u32, BATCH>;
 var<workgroup> planes: array<vec4<f32>, 6>;
 var<workgroup> sub_zmin: array<atomic<u32>, 8>;
 var<workgroup> sub_zmax: array<atomic<u32>, 8>;
@@ -199,76 +201,85 @@ var<workgroup> sub_n: array<atomic<u32>, 8>;
 var<workgroup> sub_planes: array<array<vec4<f32>, 6>, 8>;
 var<workgroup> sub_lights: array<u32, 2048>;
 
-fn shade_list(g: GPixel, base: u32, n: u32, sub: bool) -> vec4<f32> {
-    if g.sky {
-        return vec4<f32>(sh.sky.xyz, 1.0);
+fn tile_init(li: u32) {
+    if li == 0u {
+        atomicStore(&zmin_u, 0x7f7fffffu);
+        atomicStore(&zmax_u, 0u);
+        kept_total = 0u;
     }
-    var acc = acc_zero();
+    if li < 8u {
+        atomicStore(&sub_zmin[li], 0x7f7fffffu);
+        atomicStore(&sub_zmax[li], 0u);
+    }
+}
+
+// Culls lights [base, end) against the tile frustum into tile_lights; returns how many.
+fn cull_batch(li: u32, t: u32, base: u32, end: u32, all_sky: bool) -> u32 {
+    workgroupBarrier();
+    if li == 0u {
+        atomicStore(&n_lights, 0u);
+    }
+    if li < 8u {
+        atomicStore(&sub_n[li], 0u);
+    }
+    workgroupBarrier();
+    for (var i = base + li; i < end; i += WG * WG) {
+        if !all_sky && !sphere_outside(planes, lights[i].cull.xyz, lights[i].cull.w) {
+            tile_lights[atomicAdd(&n_lights, 1u)] = i;
+        }
+    }
+    workgroupBarrier();
+    let m = atomicLoad(&n_lights);
+    if STORE_LISTS {
+        for (var k = li; k < m; k += WG * WG) {
+            let o = kept_total + k;
+            if o < LIST_CAP {
+                tile_lists[t * LIST_CAP + o] = tile_lights[k];
+            }
+        }
+    }
+    return m;
+}
+
+fn end_batch(li: u32, m: u32) {
+    workgroupBarrier();
+    if li == 0u {
+        kept_total += m;
+    }
+}
+
+fn add_lights(acc: ptr<function, Acc>, g: GPixel, base: u32, m: u32, sub: bool) {
     let v = normalize(-g.pos);
     let p = spec_power(g.smoothness);
     let norm = (p + 8.0) / 8.0;
-    for (var k = 0u; k < n; k++) {
+    for (var k = 0u; k < m; k++) {
         var li: u32;
         if sub {
             li = sub_lights[base + k];
         } else {
             li = tile_lights[k];
         }
-        acc_light(&acc, lights[li], g, v, p, norm, true);
+        acc_light(acc, lights[li], g, v, p, norm, true);
     }
-    acc_sun(&acc, sh, g, v, p, norm, true);
+}
+
+fn finish_pixel(g: GPixel, acc_in: Acc) -> vec4<f32> {
+    var acc = acc_in;
+    if !g.sky {
+        let v = normalize(-g.pos);
+        let p = spec_power(g.smoothness);
+        acc_sun(&acc, sh, g, v, p, (p + 8.0) / 8.0, true);
+    }
     return compose(sh, g, acc);
 }
 
-fn tile_bounds(origin: vec2<u32>, size: vec2<u32>) -> vec4<f32> {
-    let hi = min(origin + vec2<u32>(TILE), size);
-    return vec4<f32>(vec2<f32>(origin), vec2<f32>(hi));
+fn z_bits(p: vec2<u32>) -> u32 {
+    // View distance > 0: its f32 bits order like the value.
+    return bitcast<u32>(-view_pos(sh, p, textureLoad(t_depth, p, 0)).z);
 }
 
-fn cull_tile(li: u32, t: u32, origin: vec2<u32>, size: vec2<u32>) -> u32 {
-    if li == 0u {
-        let r = tile_bounds(origin, size);
-        planes = tile_planes(sh, r.x, r.y, r.z, r.w, bitcast<f32>(atomicLoad(&zmin_u)), bitcast<f32>(atomicLoad(&zmax_u)));
-    }
-    workgroupBarrier();
-    let all_sky = atomicLoad(&zmin_u) > atomicLoad(&zmax_u);
-    let nthreads = WG * WG;
-    for (var i = li; i < sh.counts.x; i += nthreads) {
-        if !all_sky && !sphere_outside(planes, lights[i].cull.xyz, lights[i].cull.w) {
-            let k = atomicAdd(&n_lights, 1u);
-            if k < MAX_TILE_LIGHTS {
-                tile_lights[k] = i;
-            }
-        }
-    }
-    workgroupBarrier();
-    let n_all = atomicLoad(&n_lights);
-    let n = min(n_all, MAX_TILE_LIGHTS);
-    if li == 0u {
-        tile_counts[t] = n_all;
-        if n_all > MAX_TILE_LIGHTS {
-            atomicAdd(&stats[0], 1u);
-        }
-    }
-    if STORE_LISTS {
-        for (var k = li; k < min(n, LIST_CAP); k += nthreads) {
-            tile_lists[t * LIST_CAP + k] = tile_lights[k];
-        }
-    }
-    return n;
-}
-
-fn tile_init(li: u32) {
-    if li == 0u {
-        atomicStore(&zmin_u, 0x7f7fffffu);
-        atomicStore(&zmax_u, 0u);
-        atomicStore(&n_lights, 0u);
-    }
-    if li < 8u {
-        atomicStore(&sub_zmin[li], 0x7f7fffffu);
-        atomicStore(&sub_zmax[li], 0u);
-        atomicStore(&sub_n[li], 0u);
-    }
+fn in_screen(p: vec2<u32>) -> bool {
+    return p.x < u32(sh.viewport.x) && p.y < u32(sh.viewport.y);
 }
 
 @compute @workgroup_size(WG, WG)
@@ -277,25 +288,49 @@ fn cs_tiled(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id)
     workgroupBarrier();
     let size = vec2<u32>(sh.viewport.xy);
     let origin = wid.xy * TILE;
-    for (var dy = 0u; dy < PPT; dy++) {
-        for (var dx = 0u; dx < PPT; dx++) {
-            let p = origin + lid.xy * PPT + vec2<u32>(dx, dy);
-            if p.x < size.x && p.y < size.y && textureLoad(t_mat, p, 0).x != SKY_MATERIAL {
-                // View distance > 0: its f32 bits order like the value.
-                let z = bitcast<u32>(-view_pos(sh, p, textureLoad(t_depth, p, 0)).z);
-                atomicMin(&zmin_u, z);
-                atomicMax(&zmax_u, z);
-            }
+    let t = wid.y * nwg.x + wid.x;
+    let npx = PPT * PPT;
+    for (var k = 0u; k < npx; k++) {
+        let p = origin + lid.xy * PPT + vec2<u32>(k % PPT, k / PPT);
+        if in_screen(p) && textureLoad(t_mat, p, 0).x != SKY_MATERIAL {
+            let z = z_bits(p);
+            atomicMin(&zmin_u, z);
+            atomicMax(&zmax_u, z);
         }
     }
     workgroupBarrier();
-    let n = cull_tile(li, wid.y * nwg.x + wid.x, origin, size);
-    for (var dy = 0u; dy < PPT; dy++) {
-        for (var dx = 0u; dx < PPT; dx++) {
-            let p = origin + lid.xy * PPT + vec2<u32>(dx, dy);
-            if p.x < size.x && p.y < size.y {
-                textureStore(out_tex, p, shade_list(load_pixel(p), 0u, n, false));
+    if li == 0u {
+        let hi = min(origin + vec2<u32>(TILE), size);
+        planes = tile_planes(sh, f32(origin.x), f32(origin.y), f32(hi.x), f32(hi.y), bitcast<f32>(atomicLoad(&zmin_u)), bitcast<f32>(atomicLoad(&zmax_u)));
+    }
+    let all_sky = atomicLoad(&zmin_u) > atomicLoad(&zmax_u);
+    var acc: array<Acc, 16>;
+    for (var k = 0u; k < npx; k++) {
+        acc[k] = acc_zero();
+    }
+    let n = sh.counts.x;
+    for (var base = 0u; base < n; base += BATCH) {
+        let m = cull_batch(li, t, base, min(base + BATCH, n), all_sky);
+        for (var k = 0u; k < npx; k++) {
+            let p = origin + lid.xy * PPT + vec2<u32>(k % PPT, k / PPT);
+            if in_screen(p) {
+                let g = load_pixel(p);
+                if !g.sky {
+                    var a = acc[k];
+                    add_lights(&a, g, 0u, m, false);
+                    acc[k] = a;
+                }
             }
+        }
+        end_batch(li, m);
+    }
+    if li == 0u {
+        tile_counts[t] = kept_total;
+    }
+    for (var k = 0u; k < npx; k++) {
+        let p = origin + lid.xy * PPT + vec2<u32>(k % PPT, k / PPT);
+        if in_screen(p) {
+            textureStore(out_tex, p, finish_pixel(load_pixel(p), acc[k]));
         }
     }
 }
@@ -308,48 +343,66 @@ fn cs_tiled2(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id
     workgroupBarrier();
     let size = vec2<u32>(sh.viewport.xy);
     let origin = wid.xy * 64u;
+    let t = wid.y * nwg.x + wid.x;
     let s = (lid.y / 4u) * 2u + lid.x / 8u;
-    for (var dy = 0u; dy < 4u; dy++) {
-        for (var dx = 0u; dx < 4u; dx++) {
-            let p = origin + lid.xy * 4u + vec2<u32>(dx, dy);
-            if p.x < size.x && p.y < size.y && textureLoad(t_mat, p, 0).x != SKY_MATERIAL {
-                let z = bitcast<u32>(-view_pos(sh, p, textureLoad(t_depth, p, 0)).z);
-                atomicMin(&zmin_u, z);
-                atomicMax(&zmax_u, z);
-                atomicMin(&sub_zmin[s], z);
-                atomicMax(&sub_zmax[s], z);
-            }
+    for (var k = 0u; k < 16u; k++) {
+        let p = origin + lid.xy * 4u + vec2<u32>(k % 4u, k / 4u);
+        if in_screen(p) && textureLoad(t_mat, p, 0).x != SKY_MATERIAL {
+            let z = z_bits(p);
+            atomicMin(&zmin_u, z);
+            atomicMax(&zmax_u, z);
+            atomicMin(&sub_zmin[s], z);
+            atomicMax(&sub_zmax[s], z);
         }
     }
     workgroupBarrier();
-    let n1 = cull_tile(li, wid.y * nwg.x + wid.x, origin, size);
+    if li == 0u {
+        let hi = min(origin + vec2<u32>(64u), size);
+        planes = tile_planes(sh, f32(origin.x), f32(origin.y), f32(hi.x), f32(hi.y), bitcast<f32>(atomicLoad(&zmin_u)), bitcast<f32>(atomicLoad(&zmax_u)));
+    }
     if li < 8u {
         let so = origin + vec2<u32>((li % 2u) * 32u, (li / 2u) * 16u);
         let hi = min(so + vec2<u32>(32u, 16u), size);
         sub_planes[li] = tile_planes(sh, f32(so.x), f32(so.y), f32(hi.x), f32(hi.y), bitcast<f32>(atomicLoad(&sub_zmin[li])), bitcast<f32>(atomicLoad(&sub_zmax[li])));
     }
-    workgroupBarrier();
-    let j = (lid.x % 8u) + (lid.y % 4u) * 8u;
+    let all_sky = atomicLoad(&zmin_u) > atomicLoad(&zmax_u);
     let sub_sky = atomicLoad(&sub_zmin[s]) > atomicLoad(&sub_zmax[s]);
-    for (var k = j; k < n1; k += 32u) {
-        let i = tile_lights[k];
-        if !sub_sky && !sphere_outside(sub_planes[s], lights[i].cull.xyz, lights[i].cull.w) {
-            let m = atomicAdd(&sub_n[s], 1u);
-            if m < SUB_CAP {
-                sub_lights[s * SUB_CAP + m] = i;
-            } else if m == SUB_CAP {
-                atomicAdd(&stats[1], 1u);
+    let j = (lid.x % 8u) + (lid.y % 4u) * 8u;
+    var acc: array<Acc, 16>;
+    for (var k = 0u; k < 16u; k++) {
+        acc[k] = acc_zero();
+    }
+    let n = sh.counts.x;
+    for (var base = 0u; base < n; base += BATCH) {
+        let m = cull_batch(li, t, base, min(base + BATCH, n), all_sky);
+        for (var k = j; k < m; k += 32u) {
+            let i = tile_lights[k];
+            if !sub_sky && !sphere_outside(sub_planes[s], lights[i].cull.xyz, lights[i].cull.w) {
+                sub_lights[s * BATCH + atomicAdd(&sub_n[s], 1u)] = i;
             }
         }
-    }
-    workgroupBarrier();
-    let n2 = min(atomicLoad(&sub_n[s]), SUB_CAP);
-    for (var dy = 0u; dy < 4u; dy++) {
-        for (var dx = 0u; dx < 4u; dx++) {
-            let p = origin + lid.xy * 4u + vec2<u32>(dx, dy);
-            if p.x < size.x && p.y < size.y {
-                textureStore(out_tex, p, shade_list(load_pixel(p), s * SUB_CAP, n2, true));
+        workgroupBarrier();
+        let m2 = atomicLoad(&sub_n[s]);
+        for (var k = 0u; k < 16u; k++) {
+            let p = origin + lid.xy * 4u + vec2<u32>(k % 4u, k / 4u);
+            if in_screen(p) {
+                let g = load_pixel(p);
+                if !g.sky {
+                    var a = acc[k];
+                    add_lights(&a, g, s * BATCH, m2, true);
+                    acc[k] = a;
+                }
             }
+        }
+        end_batch(li, m);
+    }
+    if li == 0u {
+        tile_counts[t] = kept_total;
+    }
+    for (var k = 0u; k < 16u; k++) {
+        let p = origin + lid.xy * 4u + vec2<u32>(k % 4u, k / 4u);
+        if in_screen(p) {
+            textureStore(out_tex, p, finish_pixel(load_pixel(p), acc[k]));
         }
     }
 }

@@ -6,6 +6,7 @@
 //! | kind      | what it measures                                                     |
 //! |-----------|----------------------------------------------------------------------|
 //! | `methods` | multi-fragment capture methods vs the exact CPU reference            |
+//! | `deferred`| deferred shading paths (naive, volumes, tiled, classified, CPU tiles) |
 
 pub mod deferred;
 pub mod geometry;
@@ -132,7 +133,10 @@ pub trait Study: Sync {
 }
 
 pub fn all() -> Vec<Box<dyn Study>> {
-    vec![Box::new(methods::MethodsStudy)]
+    vec![
+        Box::new(methods::MethodsStudy),
+        Box::new(deferred::DeferredStudy),
+    ]
 }
 
 pub fn by_kind(kind: &str) -> Option<Box<dyn Study>> {
