@@ -28,6 +28,9 @@ pub struct CpuOptions {
     pub quad_skip: bool,
     /// Keep the per-tile (and per-sub-tile) light lists for inspection.
     pub keep_lists: bool,
+    /// Light pre-pass output instead of the shaded colour: RGB = Σ diffuse light (sun
+    /// included), A = Σ lum(contrib)·spec_term; sky pixels 0.
+    pub light_buffer: bool,
 }
 
 impl Default for CpuOptions {
@@ -38,6 +41,7 @@ impl Default for CpuOptions {
             threads: 1,
             quad_skip: true,
             keep_lists: false,
+            light_buffer: false,
         }
     }
 }
@@ -264,6 +268,7 @@ fn shade_tile(
                         [sub[2], sub[3]],
                         &pos,
                         opts.quad_skip,
+                        opts.light_buffer,
                         &mut out,
                     );
                     qx += 4;
@@ -290,6 +295,7 @@ fn shade_quad(
     end: [u32; 2],
     pos: &[[f32; 3]],
     quad_skip: bool,
+    light_buffer: bool,
     out: &mut TileOut,
 ) {
     const N: usize = 16;
@@ -320,7 +326,7 @@ fn shade_quad(
         norm[k] = (pw[k] + 8.0) / 8.0;
     }
     let mut diff = [[0f32; 3]; N];
-    let mut spec = [[0f32; 3]; N];
+    let mut spec = [[0f32; 4]; N];
     let mut att = [0f32; N];
     let (mut lx, mut ly, mut lz) = ([0f32; N], [0f32; N], [0f32; N]);
     let add = |k: usize,
@@ -328,7 +334,7 @@ fn shade_quad(
                color: [f32; 3],
                a: f32,
                diff: &mut [[f32; 3]; N],
-               spec: &mut [[f32; 3]; N]| {
+               spec: &mut [[f32; 4]; N]| {
         let ndl = nx[k] * l[0] + ny[k] * l[1] + nz[k] * l[2];
         if ndl <= 0.0 || a <= 0.0 {
             return;
@@ -347,6 +353,7 @@ fn shade_quad(
             diff[k][j] += c[j];
             spec[k][j] += c[j] * st;
         }
+        spec[k][3] += (c[0] * 0.2126 + c[1] * 0.7152 + c[2] * 0.0722) * st;
     };
     for &li in list {
         let l = &lights[li as usize];
@@ -416,6 +423,14 @@ fn shade_quad(
         }
         let gi = gidx[k];
         let o = &mut out.pixels[(y * tw + x) as usize];
+        if light_buffer {
+            *o = if active[k] {
+                [diff[k][0], diff[k][1], diff[k][2], spec[k][3]]
+            } else {
+                [0.0; 4]
+            };
+            continue;
+        }
         if !active[k] {
             *o = [SKY[0], SKY[1], SKY[2], 1.0];
             continue;

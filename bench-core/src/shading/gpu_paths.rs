@@ -24,7 +24,7 @@ use crate::methods::{read_vec, storage_entry, texture_entry, Capture, FrameStats
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
-const PATHS_WGSL: &str = include_str!("paths.wgsl");
+pub const PATHS_WGSL: &str = include_str!("paths.wgsl");
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// Per-tile list capacity when lists are kept for inspection (tests, debug views).
 pub const LIST_CAP: u32 = 1024;
@@ -168,7 +168,49 @@ impl ShadeInputs {
                     },
                 ],
             })),
-            _ => None,
+            _ => {
+                // Light pre-pass: no surface targets; 1×1 stand-ins keep one layout for all
+                // paths (the LIGHT_BUFFER permutations never read them).
+                let t = |f| {
+                    d.create_texture(&wgpu::TextureDescriptor {
+                        label: Some("surface stand-in"),
+                        size: wgpu::Extent3d {
+                            width: 1,
+                            height: 1,
+                            depth_or_array_layers: 1,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format: f,
+                        usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                        view_formats: &[],
+                    })
+                };
+                let (a, s, m) = (
+                    t(wgpu::TextureFormat::Rgba8Unorm),
+                    t(wgpu::TextureFormat::Rgba8Unorm),
+                    t(wgpu::TextureFormat::R32Uint),
+                );
+                Some(d.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("surface stand-in"),
+                    layout: &bgl1,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: wgpu::BindingResource::TextureView(&view(&a)),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::TextureView(&view(&s)),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::TextureView(&view(&m)),
+                        },
+                    ],
+                }))
+            }
         };
         ShadeInputs {
             module: module(gpu, "shading paths", PATHS_WGSL),
@@ -248,7 +290,8 @@ pub struct Deferred {
     pub permutations: u32,
 }
 
-fn render_pipeline(
+#[allow(clippy::too_many_arguments)]
+pub fn render_pipeline(
     gpu: &Gpu,
     label: &str,
     layout: &wgpu::PipelineLayout,
@@ -294,7 +337,7 @@ fn render_pipeline(
         })
 }
 
-fn compute_pipeline(
+pub fn compute_pipeline(
     gpu: &Gpu,
     label: &str,
     layout: &wgpu::PipelineLayout,
@@ -316,7 +359,7 @@ fn compute_pipeline(
         })
 }
 
-fn storage_buf(
+pub fn storage_buf(
     gpu: &Gpu,
     alloc: &mut AllocCounter,
     label: &str,
@@ -334,7 +377,7 @@ fn storage_buf(
     )
 }
 
-fn bge(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+pub fn bge(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry {
         binding,
         resource: b.as_entire_binding(),
@@ -654,6 +697,16 @@ impl Deferred {
 
     /// Encodes the shading passes (after the G-buffer pass) into `enc`.
     pub fn encode_shading(&self, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) {
+        self.encode_shading_labelled(enc, timer, "")
+    }
+
+    /// The same, with every pass label prefixed (a second view's passes stay apart).
+    pub fn encode_shading_labelled(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        prefix: &str,
+    ) {
         let inp = &self.inputs;
         let bind1 = inp.bind1.as_ref().expect("deferred has the full G-buffer");
         let hdr_view = self.hdr.create_view(&Default::default());
@@ -675,7 +728,7 @@ impl Deferred {
                     label: Some("shade"),
                     color_attachments: &att,
                     depth_stencil_attachment: None,
-                    timestamp_writes: timer.render_pass("shade"),
+                    timestamp_writes: timer.render_pass(&format!("{prefix}shade")),
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
@@ -691,7 +744,7 @@ impl Deferred {
             Kind::Tiled(t) => {
                 let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("cull+shade"),
-                    timestamp_writes: timer.compute_pass("cull+shade"),
+                    timestamp_writes: timer.compute_pass(&format!("{prefix}cull+shade")),
                 });
                 pass.set_pipeline(&t.pipeline);
                 pass.set_bind_group(0, &inp.bind0, &[]);
@@ -705,7 +758,7 @@ impl Deferred {
                 {
                     let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some("classify"),
-                        timestamp_writes: timer.compute_pass("classify"),
+                        timestamp_writes: timer.compute_pass(&format!("{prefix}classify")),
                     });
                     pass.set_bind_group(0, &inp.bind0, &[]);
                     pass.set_bind_group(1, bind1, &[]);
@@ -722,7 +775,7 @@ impl Deferred {
                     label: Some("tile draws"),
                     color_attachments: &att,
                     depth_stencil_attachment: None,
-                    timestamp_writes: timer.render_pass("tile draws"),
+                    timestamp_writes: timer.render_pass(&format!("{prefix}tile draws")),
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });

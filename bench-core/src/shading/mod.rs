@@ -19,6 +19,7 @@ pub mod cpu_tiled;
 pub mod debug;
 pub mod gbuffer;
 pub mod gpu_paths;
+pub mod prepass;
 pub mod reference;
 #[cfg(test)]
 mod tests;

@@ -16,12 +16,24 @@ override F_GEOM: bool = true;
 override F_SUN: bool = true;
 override F_SPEC: bool = true;
 override F_LIGHTS: bool = true;
+// Light pre-pass: write the light buffer (Σ diffuse RGB, Σ lum·spec in A, times LB_SCALE).
+override LIGHT_BUFFER: bool = false;
+override LB_SCALE: f32 = 1.0;
+
+fn light_buffer_value(g: GPixel, acc: Acc) -> vec4<f32> {
+    if g.sky {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(acc.diffuse, acc.spec_lum) * LB_SCALE;
+}
 
 fn load_pixel(p: vec2<u32>) -> GPixel {
     var g: GPixel;
     g.mat = textureLoad(t_mat, p, 0).x;
-    g.sky = g.mat == SKY_MATERIAL;
     let d = textureLoad(t_depth, p, 0);
+    // Sky = nothing rasterised: the clear depth (the material id marks the same pixels; the
+    // light pre-pass has only depth and normals).
+    g.sky = d == sh.misc.y;
     g.pos = view_pos(sh, p, d);
     let n = textureLoad(t_normal, p, 0);
     g.n = n.xyz;
@@ -48,6 +60,9 @@ fn pixel_bits(g: GPixel) -> u32 {
 
 // Every light at this pixel, with only the features of this permutation.
 fn shade_all(g: GPixel) -> vec4<f32> {
+    if g.sky && LIGHT_BUFFER {
+        return vec4<f32>(0.0);
+    }
     if g.sky {
         if F_SKY {
             return vec4<f32>(sh.sky.xyz, 1.0);
@@ -70,6 +85,9 @@ fn shade_all(g: GPixel) -> vec4<f32> {
     if F_SUN {
         acc_sun(&acc, sh, g, v, p, norm, F_SPEC);
     }
+    if LIGHT_BUFFER {
+        return light_buffer_value(g, acc);
+    }
     return compose(sh, g, acc);
 }
 
@@ -88,6 +106,18 @@ fn vs_fullscreen(@builtin(vertex_index) i: u32) -> FsOut {
 @fragment
 fn fs_shade(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     return shade_all(load_pixel(vec2<u32>(frag.xy)));
+}
+
+struct SplitOut {
+    @location(0) diffuse: vec4<f32>,
+    @location(1) spec: vec4<f32>,
+};
+
+// Light pre-pass into two targets (RG11B10 diffuse has no alpha: the specular term goes to R16F).
+@fragment
+fn fs_shade_split(@builtin(position) frag: vec4<f32>) -> SplitOut {
+    let v = shade_all(load_pixel(vec2<u32>(frag.xy)));
+    return SplitOut(vec4<f32>(v.xyz, 1.0), vec4<f32>(v.w, 0.0, 0.0, 1.0));
 }
 
 // ---- classified (Split/Second): 4×4 tiles, ids, per-id lists, one draw per id ----
@@ -270,6 +300,9 @@ fn finish_pixel(g: GPixel, acc_in: Acc) -> vec4<f32> {
         let p = spec_power(g.smoothness);
         acc_sun(&acc, sh, g, v, p, (p + 8.0) / 8.0, true);
     }
+    if LIGHT_BUFFER {
+        return light_buffer_value(g, acc);
+    }
     return compose(sh, g, acc);
 }
 
@@ -292,7 +325,7 @@ fn cs_tiled(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id)
     let npx = PPT * PPT;
     for (var k = 0u; k < npx; k++) {
         let p = origin + lid.xy * PPT + vec2<u32>(k % PPT, k / PPT);
-        if in_screen(p) && textureLoad(t_mat, p, 0).x != SKY_MATERIAL {
+        if in_screen(p) && textureLoad(t_depth, p, 0) != sh.misc.y {
             let z = z_bits(p);
             atomicMin(&zmin_u, z);
             atomicMax(&zmax_u, z);
@@ -347,7 +380,7 @@ fn cs_tiled2(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id
     let s = (lid.y / 4u) * 2u + lid.x / 8u;
     for (var k = 0u; k < 16u; k++) {
         let p = origin + lid.xy * 4u + vec2<u32>(k % 4u, k / 4u);
-        if in_screen(p) && textureLoad(t_mat, p, 0).x != SKY_MATERIAL {
+        if in_screen(p) && textureLoad(t_depth, p, 0) != sh.misc.y {
             let z = z_bits(p);
             atomicMin(&zmin_u, z);
             atomicMax(&zmax_u, z);

@@ -137,3 +137,34 @@ pub fn shade(setup: &ShadeSetup, gb: &GBuffer) -> Vec<[f64; 4]> {
 pub fn image_from_terms(gb: &GBuffer, t: &[Terms]) -> Vec<[f64; 4]> {
     (0..gb.pixels()).map(|i| compose(gb, i, &t[i])).collect()
 }
+
+/// The light pre-pass image in f64 from the same terms: the light buffer keeps Σ diffuse RGB
+/// and only the luminance of the specular sum (A); dielectrics use albedo·(D + ambient) +
+/// specular·A, metals (albedo 0) specular·A·D/lum(D). Its distance from [`compose`] is the
+/// specular colour the RGB+A packing loses, before any light-buffer format rounding.
+pub fn prepass_compose(gb: &GBuffer, i: usize, t: &Terms) -> [f64; 4] {
+    if gb.is_sky(i) {
+        return [SKY[0] as f64, SKY[1] as f64, SKY[2] as f64, 1.0];
+    }
+    let a = gb.albedo[i];
+    let s = gb.spec[i];
+    let mut out = [0.0, 0.0, 0.0, 1.0];
+    if a == [0.0; 3] {
+        let l = t.diffuse.x * LUM[0] + t.diffuse.y * LUM[1] + t.diffuse.z * LUM[2];
+        for c in 0..3 {
+            let chroma = if l > 1e-6 { t.diffuse[c] / l } else { 0.0 };
+            out[c] = s[c] as f64 * t.spec_lum * chroma;
+        }
+    } else {
+        for c in 0..3 {
+            out[c] = a[c] as f64 * (t.diffuse[c] + AMBIENT[c] as f64) + s[c] as f64 * t.spec_lum;
+        }
+    }
+    out
+}
+
+pub fn prepass_image(gb: &GBuffer, t: &[Terms]) -> Vec<[f64; 4]> {
+    (0..gb.pixels())
+        .map(|i| prepass_compose(gb, i, &t[i]))
+        .collect()
+}

@@ -1,6 +1,8 @@
 //! Shading tests on lavapipe (tiny city scenes): every path against the f64 reference, the
 //! culling proof, the per-id tile lists, and the CPU path's determinism.
 
+#![allow(clippy::needless_range_loop)]
+
 use std::sync::OnceLock;
 
 use scenarios::{ParamValue, Params, Scene, SceneSpec};
@@ -300,5 +302,120 @@ fn classified_lists_every_tile_once_and_matches_uber() {
         } else {
             assert_eq!(rc.d.permutations, 9);
         }
+    }
+}
+
+mod prepass_tests {
+    use super::*;
+    use crate::shading::prepass::{Accum, LbFormat, PrePass};
+
+    /// RGBA16F light buffer: f16 keeps 11 bits (4.9e-4 relative), the metal model divides by
+    /// lum(D); lavapipe shows ~1e-3 relative, 5e-3 leaves 5× margin.
+    const LB_TOL: f64 = 5e-3;
+
+    fn frame(s: &Scene, fmt: LbFormat, accum: Accum, view2: bool) -> (PrePass, GpuScene) {
+        let g = gpu();
+        let gs = GpuScene::upload(g, s, 64, 64);
+        let mut p = PrePass::new(g, s, &gs, fmt, accum, 0.0, view2).unwrap();
+        let mut timer = GpuTimer::new(g);
+        timer.begin_frame();
+        p.frame(g, &gs, &mut timer).unwrap();
+        g.wait().unwrap();
+        (p, gs)
+    }
+
+    #[test]
+    fn prepass_image_equals_packed_reference_and_loss_is_bounded() {
+        let s = city(48, false);
+        let g = gpu();
+        let r = run(&s, 64, Path::Naive, 0.0, false);
+        let terms = reference::all_terms(&r.setup, &r.gb);
+        let packed = reference::prepass_image(&r.gb, &terms);
+        for accum in [Accum::Naive, Accum::Tiled { tile: 16 }] {
+            let (p, _) = frame(&s, LbFormat::Rgba16F, accum, false);
+            let img = p.read_image(g).unwrap();
+            let e = max_rel_err(&packed, &img);
+            println!("{accum:?}: vs packed {e:.2e}");
+            assert!(e < LB_TOL, "{accum:?}: {e}");
+        }
+        // The packing loss: dielectric pixels lose spec·(S − A) per channel (4% grey specular
+        // here); metals replace the specular chroma by the diffuse light's. It is real (> 0)
+        // and bounded by spec·|S − A| per pixel.
+        let mut loss = 0.0f64;
+        for i in 0..r.gb.pixels() {
+            if r.gb.is_sky(i) || r.gb.albedo[i] == [0.0; 3] {
+                continue;
+            }
+            for c in 0..3 {
+                let d = (packed[i][c] - r.reference[i][c]).abs();
+                let bound =
+                    r.gb.spec[i][c] as f64 * (terms[i].specular[c] - terms[i].spec_lum).abs();
+                assert!(
+                    d <= bound * (1.0 + 1e-9) + 1e-12,
+                    "pixel {i}: {d} > {bound}"
+                );
+                loss = loss.max(d);
+            }
+        }
+        assert!(loss > 0.0);
+    }
+
+    #[test]
+    fn cpu_light_buffer_equals_gpu_and_any_thread_count() {
+        let s = city(48, false);
+        let g = gpu();
+        let (p, _) = frame(&s, LbFormat::Rgba16F, Accum::Naive, false);
+        let gpu_lb = p.read_light_buffer(g).unwrap();
+        let gb = p.gbuf.read(g).unwrap();
+        let setup = ShadeSetup::new(&s, 64, 64);
+        let lights = setup.gpu_lights(0.0);
+        let mut first: Option<Vec<[u32; 4]>> = None;
+        for threads in [1, 3] {
+            let o = CpuOptions {
+                threads,
+                light_buffer: true,
+                ..Default::default()
+            };
+            let r = cpu_tiled::shade(&setup, &gb, &lights, &o);
+            let mut m = 0.0f64;
+            for (a, b) in r.image.iter().zip(&gpu_lb) {
+                for c in 0..4 {
+                    m = m.max((a[c] - b[c]).abs() as f64 / (a[c].abs() as f64).max(1.0));
+                }
+            }
+            assert!(m < LB_TOL, "CPU vs GPU light buffer: {m}");
+            let bits: Vec<[u32; 4]> = r.image.iter().map(|p| p.map(f32::to_bits)).collect();
+            match &first {
+                None => first = Some(bits),
+                Some(f) => assert_eq!(f, &bits, "{threads} threads"),
+            }
+        }
+    }
+
+    #[test]
+    fn overlapped_frame_equals_serial_frame() {
+        let s = city(48, false);
+        let g = gpu();
+        let mut imgs = vec![];
+        for overlap in [false, true] {
+            let (p, _) = frame(
+                &s,
+                LbFormat::Rgba16F,
+                Accum::Cpu {
+                    threads: 2,
+                    overlap,
+                },
+                true,
+            );
+            let view2 = p.view2.as_ref().unwrap().1.read_image(g).unwrap();
+            imgs.push((p.read_image(g).unwrap(), view2));
+        }
+        assert!(imgs[0].0 == imgs[1].0, "main view differs with overlap");
+        assert!(imgs[0].1 == imgs[1].1, "second view differs with overlap");
+        // And the CPU-lit image is the packed reference within the light-buffer tolerance.
+        let r = run(&s, 64, Path::Naive, 0.0, false);
+        let packed = reference::prepass_image(&r.gb, &reference::all_terms(&r.setup, &r.gb));
+        let e = max_rel_err(&packed, &imgs[0].0);
+        assert!(e < LB_TOL, "cpu prepass vs packed reference: {e}");
     }
 }

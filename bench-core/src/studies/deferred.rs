@@ -231,6 +231,7 @@ impl Study for DeferredStudy {
                     threads,
                     quad_skip: true,
                     keep_lists: false,
+                    light_buffer: false,
                 };
                 let mut samples = Vec::new();
                 let mut last = None;

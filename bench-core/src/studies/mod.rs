@@ -7,6 +7,7 @@
 //! |-----------|----------------------------------------------------------------------|
 //! | `methods` | multi-fragment capture methods vs the exact CPU reference            |
 //! | `deferred`| deferred shading paths (naive, volumes, tiled, classified, CPU tiles) |
+//! | `prepass` | light pre-pass vs deferred; light buffer on CPU cores, overlapped     |
 
 pub mod deferred;
 pub mod geometry;
@@ -136,6 +137,7 @@ pub fn all() -> Vec<Box<dyn Study>> {
     vec![
         Box::new(methods::MethodsStudy),
         Box::new(deferred::DeferredStudy),
+        Box::new(prepass::PrepassStudy),
     ]
 }
 
