@@ -1,6 +1,6 @@
 //! `mfx`: sweep multi-fragment methods on a GPU, log tidy CSV, and report.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use bench_core::methods;
@@ -65,8 +65,22 @@ enum Cmd {
         /// Skip the report after the sweep.
         #[arg(long)]
         no_report: bool,
+        /// Save each point's image as OUT/images/<hash>.npy (for cross-backend comparison).
+        #[arg(long)]
+        save_images: bool,
         #[command(flatten)]
         gpu: GpuArgs,
+    },
+    /// Merge run folders (shards, machines) into one runs.csv; duplicates are reported.
+    Merge {
+        /// Run folders, folders of run folders (one level down), or runs.csv files.
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        #[arg(long)]
+        out: PathBuf,
+        /// Exit with an error when a point appears twice (instead of keeping the first).
+        #[arg(long)]
+        strict: bool,
     },
     /// Turn a run folder's runs.csv into PNG/SVG plots and an HTML page.
     Report {
@@ -85,20 +99,34 @@ enum Cmd {
         /// Render an OBJ file (the `obj` scene generator).
         #[arg(long)]
         obj: Option<PathBuf>,
+        /// Method, or a comma-separated list with --reference-out (one image each).
         #[arg(long, default_value = "depth_peel")]
         method: String,
         /// Method axis, repeatable: --axis max_layers=16
         #[arg(long = "axis")]
         axes: Vec<String>,
-        #[arg(long, default_value_t = 256)]
-        width: u32,
-        #[arg(long, default_value_t = 256)]
-        height: u32,
+        /// Width in pixels (default 256, or the --camera-in file's).
         #[arg(long)]
-        png: PathBuf,
+        width: Option<u32>,
+        /// Height in pixels (default 256, or the --camera-in file's).
+        #[arg(long)]
+        height: Option<u32>,
+        /// Write the method's image (composited over white) here.
+        #[arg(long)]
+        png: Option<PathBuf>,
         /// Also write the CPU reference composite here.
         #[arg(long)]
         reference_png: Option<PathBuf>,
+        /// Write the camera (row-major clip-from-world matrix, wgpu conventions) as JSON.
+        #[arg(long)]
+        camera_out: Option<PathBuf>,
+        /// Render from the camera in this JSON (as written by --camera-out).
+        #[arg(long)]
+        camera_in: Option<PathBuf>,
+        /// Write ground truth here: depth complexity (uint16 .npy + 16-bit PNG), the reference
+        /// composite and each method's image (float32 RGBA .npy + PNG), and camera.json.
+        #[arg(long)]
+        reference_out: Option<PathBuf>,
         #[command(flatten)]
         gpu: GpuArgs,
     },
@@ -173,8 +201,25 @@ fn run(cli: Cli) -> Result<()> {
             out,
             shard,
             no_report,
+            save_images,
             gpu,
-        } => sweep(&suite, out, shard, no_report, &gpu),
+        } => sweep(&suite, out, shard, no_report, save_images, &gpu),
+        Cmd::Merge {
+            inputs,
+            out,
+            strict,
+        } => {
+            let m = bench_core::merge::merge(&inputs, &out)?;
+            println!("{}", m.summary());
+            if strict && !m.duplicates.is_empty() {
+                bail!(
+                    "{} duplicate points (--strict); see {}",
+                    m.duplicates.len(),
+                    out.join("duplicates.csv").display()
+                );
+            }
+            Ok(())
+        }
         Cmd::Report { dir, baseline } => {
             let page = report::build(&dir, baseline.as_deref())
                 .with_context(|| format!("report of {}", dir.display()))?;
@@ -191,6 +236,9 @@ fn run(cli: Cli) -> Result<()> {
             height,
             png,
             reference_png,
+            camera_out,
+            camera_in,
+            reference_out,
             gpu,
         } => {
             let mut p = Params::new();
@@ -211,16 +259,22 @@ fn run(cli: Cli) -> Result<()> {
                 let (k, v) = parse_kv(kv)?;
                 a.set(&k, v);
             }
-            render(
-                &SceneSpec::new(&generator, p),
-                &method,
-                &a,
+            if png.is_none() && camera_out.is_none() && reference_out.is_none() {
+                bail!("nothing to write: give --png, --camera-out and/or --reference-out");
+            }
+            render(&RenderJob {
+                spec: SceneSpec::new(&generator, p),
+                methods: method.split(',').map(|m| m.trim().to_string()).collect(),
+                axes: a,
                 width,
                 height,
-                &png,
-                reference_png.as_deref(),
-                &gpu,
-            )
+                png,
+                reference_png,
+                camera_out,
+                camera_in,
+                reference_out,
+                gpu,
+            })
         }
         Cmd::ShadingViews {
             scene,
@@ -337,8 +391,17 @@ fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
                 a.features() & bench_core::gpu::wanted_features(),
             );
             println!(
-                "  [{i}] {} ({}, {}, driver {} {})",
-                facts.name, facts.backend, facts.device_type, facts.driver, facts.driver_info
+                "  [{i}] {} ({}, {}, driver {} {}, pci {})",
+                facts.name,
+                facts.backend,
+                facts.device_type,
+                facts.driver,
+                facts.driver_info,
+                if info.device_pci_bus_id.is_empty() {
+                    "-"
+                } else {
+                    &info.device_pci_bus_id
+                }
             );
             println!("      features: {}", facts.features);
             let l = a.limits();
@@ -389,6 +452,7 @@ fn sweep(
     out: Option<PathBuf>,
     shard: Option<(usize, usize)>,
     no_report: bool,
+    save_images: bool,
     gpu_args: &GpuArgs,
 ) -> Result<()> {
     let suite = Suite::load(suite_name)?;
@@ -405,6 +469,8 @@ fn sweep(
     let out = out.unwrap_or_else(|| PathBuf::from("results").join(&run_id));
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     let csv_path = out.join("runs.csv");
+    // Studies that write images (shadows) put them beside the CSV.
+    std::env::set_var("MFX_OUT_DIR", &out);
     eprintln!(
         "mfx: suite '{}' on {} ({}, {}){}: {} groups, {} rows -> {}",
         suite.name,
@@ -437,6 +503,7 @@ fn sweep(
         run_id,
         git_rev: runner::git_rev(),
         shard,
+        save_images: save_images.then(|| out.clone()),
     };
     let n = runner::run(&gpu, &suite, &groups, &opts, &mut sink)?;
     bar.finish_and_clear();
@@ -483,52 +550,163 @@ fn civil_from_days(z: i64) -> (i64, u32, u32) {
     (yoe + era * 400 + (m <= 2) as i64, m, d)
 }
 
-#[allow(clippy::too_many_arguments)]
-fn render(
-    spec: &SceneSpec,
-    method: &str,
-    axes: &Params,
-    w: u32,
-    h: u32,
-    png: &Path,
-    reference_png: Option<&Path>,
-    gpu_args: &GpuArgs,
-) -> Result<()> {
-    let scene = spec.build()?;
-    let m = methods::by_name(method)
-        .with_context(|| format!("unknown method '{method}' (see `mfx list methods`)"))?;
-    let gpu = Gpu::new(&gpu_args.options())?;
-    m.supports(&gpu, axes)
-        .map_err(|why| anyhow::anyhow!("{method} cannot run here: {why}"))?;
-    let gscene = bench_core::gpu_scene::GpuScene::upload(&gpu, &scene, w, h);
-    let mut measured = runner::measure(&gpu, &gscene, m.as_ref(), axes, 0, 1)?;
-    let cap = measured.prepared.readback(&gpu, &gscene)?;
-    let img = cap
-        .image
-        .with_context(|| format!("{method} produces no image"))?;
-    bench_core::image_io::write_png(png, w, h, &img, [1.0, 1.0, 1.0])?;
-    println!(
-        "{}: {} on {} at {w}x{h} -> {}",
-        gpu.facts.name,
-        method,
-        spec.label(),
-        png.display()
-    );
-    if let Some(r) = reference_png {
-        let lists = bench_core::reference::rasterize(&scene, w, h);
-        let reference = bench_core::effects::reference_image("transparency", &lists, cap.expected)
-            .expect("known effect");
-        let ref32: Vec<[f32; 4]> = reference.iter().map(|p| p.map(|c| c as f32)).collect();
-        bench_core::image_io::write_png(r, w, h, &ref32, [1.0, 1.0, 1.0])?;
-        let e =
-            bench_core::metrics::image_error(&reference, &img, bench_core::metrics::BAD_PIXEL_TOL);
+struct RenderJob {
+    spec: SceneSpec,
+    methods: Vec<String>,
+    axes: Params,
+    width: Option<u32>,
+    height: Option<u32>,
+    png: Option<PathBuf>,
+    reference_png: Option<PathBuf>,
+    camera_out: Option<PathBuf>,
+    camera_in: Option<PathBuf>,
+    reference_out: Option<PathBuf>,
+    gpu: GpuArgs,
+}
+
+fn render(job: &RenderJob) -> Result<()> {
+    use bench_core::image_io;
+    use scenarios::camera::CameraFile;
+    let mut scene = job.spec.build()?;
+    let (mut w, mut h) = (job.width.unwrap_or(256), job.height.unwrap_or(256));
+    if let Some(path) = &job.camera_in {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        let cam: CameraFile = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not a camera JSON", path.display()))?;
+        cam.apply(&mut scene.camera)
+            .map_err(|why| anyhow::anyhow!("{}: {why}", path.display()))?;
+        // The matrix holds the aspect ratio: a different size would stretch the image.
+        for (given, file, what) in [
+            (job.width, cam.width, "width"),
+            (job.height, cam.height, "height"),
+        ] {
+            if given.is_some_and(|g| g != file) {
+                bail!(
+                    "--{what} {} differs from {}'s {what} {file}: the camera matrix is made for its own size",
+                    given.unwrap_or(0),
+                    path.display()
+                );
+            }
+        }
+        (w, h) = (cam.width, cam.height);
+    }
+    if w == 0 || h == 0 {
+        bail!("width and height must be at least 1 (got {w}x{h})");
+    }
+    let world_from_object = if job.spec.generator == "obj" {
+        scenarios::obj::world_from_file(&job.spec)?
+    } else {
+        Vec::new()
+    };
+    let cam_file = CameraFile::of(&scene.camera, w, h, &world_from_object);
+    let cam_json = serde_json::to_string_pretty(&cam_file)?;
+    if let Some(p) = &job.camera_out {
+        std::fs::write(p, &cam_json).with_context(|| format!("writing {}", p.display()))?;
+        println!("camera -> {}", p.display());
+    }
+    if job.methods.len() > 1 && (job.png.is_some() || job.reference_png.is_some()) {
+        bail!("--png and --reference-png take one method; use --reference-out DIR for several");
+    }
+    let need_gpu = job.png.is_some() || job.reference_out.is_some();
+    let lists = (job.reference_out.is_some() || job.reference_png.is_some())
+        .then(|| bench_core::reference::rasterize(&scene, w, h));
+    if let (Some(dir), Some(lists)) = (&job.reference_out, &lists) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        std::fs::write(dir.join("camera.json"), &cam_json)?;
+        let dc = lists.depth_complexity();
+        let max = lists.max_depth_complexity();
+        if max > u16::MAX as u32 {
+            bail!("depth complexity {max} does not fit uint16: render a smaller scene");
+        }
+        let dc16: Vec<u16> = dc.iter().map(|&d| d as u16).collect();
+        image_io::write_npy(
+            &dir.join("depth_complexity.npy"),
+            &[h as u64, w as u64],
+            &dc16,
+        )?;
+        image_io::write_png16(&dir.join("depth_complexity.png"), w, h, &dc16)?;
+        let reference: Vec<[f32; 4]> = lists
+            .composite()
+            .iter()
+            .map(|p| p.map(|c| c as f32))
+            .collect();
+        image_io::write_npy_rgba(&dir.join("reference.npy"), w, h, &reference)?;
+        image_io::write_png(
+            &dir.join("reference.png"),
+            w,
+            h,
+            &reference,
+            [1.0, 1.0, 1.0],
+        )?;
         println!(
-            "reference -> {}; rmse {:.3e}, max abs {:.3e}, bad pixels {:.4}%",
-            r.display(),
-            e.rmse,
-            e.max_abs,
-            100.0 * e.bad_pixel_frac
+            "reference -> {}: depth complexity max {max}, {} fragments",
+            dir.display(),
+            lists.total_fragments()
         );
+    }
+    if !need_gpu {
+        return Ok(());
+    }
+    let gpu = Gpu::new(&job.gpu.options())?;
+    let gscene = bench_core::gpu_scene::GpuScene::upload(&gpu, &scene, w, h);
+    for method in &job.methods {
+        let m = methods::by_name(method)
+            .with_context(|| format!("unknown method '{method}' (see `mfx list methods`)"))?;
+        if let Err(why) = m.supports(&gpu, &job.axes) {
+            if job.methods.len() == 1 {
+                bail!("{method} cannot run here: {why}");
+            }
+            println!("{method}: skipped ({why})");
+            continue;
+        }
+        let mut measured = runner::measure(&gpu, &gscene, m.as_ref(), &job.axes, 0, 1)?;
+        let cap = measured.prepared.readback(&gpu, &gscene)?;
+        let img = cap
+            .image
+            .with_context(|| format!("{method} produces no image"))?;
+        if let Some(png) = &job.png {
+            image_io::write_png(png, w, h, &img, [1.0, 1.0, 1.0])?;
+            println!(
+                "{}: {} on {} at {w}x{h} -> {}",
+                gpu.facts.name,
+                method,
+                job.spec.label(),
+                png.display()
+            );
+        }
+        if let Some(dir) = &job.reference_out {
+            image_io::write_npy_rgba(&dir.join(format!("{method}.npy")), w, h, &img)?;
+            image_io::write_png(
+                &dir.join(format!("{method}.png")),
+                w,
+                h,
+                &img,
+                [1.0, 1.0, 1.0],
+            )?;
+        }
+        if let Some(lists) = &lists {
+            let reference =
+                bench_core::effects::reference_image("transparency", lists, cap.expected)
+                    .expect("known effect");
+            if let Some(r) = &job.reference_png {
+                let ref32: Vec<[f32; 4]> = reference.iter().map(|p| p.map(|c| c as f32)).collect();
+                image_io::write_png(r, w, h, &ref32, [1.0, 1.0, 1.0])?;
+                println!("reference -> {}", r.display());
+            }
+            let e = bench_core::metrics::image_error(
+                &reference,
+                &img,
+                bench_core::metrics::BAD_PIXEL_TOL,
+            );
+            println!(
+                "{method} on {}: rmse {:.3e}, max abs {:.3e}, bad pixels {:.4}% vs the reference",
+                gpu.facts.name,
+                e.rmse,
+                e.max_abs,
+                100.0 * e.bad_pixel_frac
+            );
+        }
     }
     Ok(())
 }

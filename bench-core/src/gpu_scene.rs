@@ -82,7 +82,10 @@ impl GpuScene {
         let indices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("indices"),
             contents: bytemuck::cast_slice(&m.indices),
-            usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE,
+            // COPY_SRC: kbuffer_rmw's heuristics read the indices back to sort triangles.
+            usage: wgpu::BufferUsages::INDEX
+                | wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC,
         });
         let camera_data = camera_uniform(scene, width, height);
         let camera = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {

@@ -7,6 +7,7 @@ pub mod effects;
 pub mod gpu;
 pub mod gpu_scene;
 pub mod image_io;
+pub mod merge;
 pub mod methods;
 pub mod metrics;
 pub mod record;
@@ -14,6 +15,7 @@ pub mod reference;
 pub mod runner;
 pub mod shading;
 pub mod studies;
+pub mod testing;
 pub mod timing;
 
 pub use gpu::{BackendChoice, Gpu, GpuOptions};

@@ -75,7 +75,7 @@ pub const AXES: &[Column] = &[
     ),
     c(
         "payload",
-        "what is stored per fragment: depth | rgba_depth | depth_normal | depth_id",
+        "what is stored per fragment: depth (signed linear depth) | rgba_depth | depth_normal | depth_id | rgba_viewz | all (uber)",
     ),
     c(
         "occlusion_stop",
@@ -88,6 +88,22 @@ pub const AXES: &[Column] = &[
     c(
         "variant",
         "method-specific variant (e.g. heuristics on/off, naive vs stable thickness)",
+    ),
+    c(
+        "bucket_count",
+        "bucket methods: buckets per pixel per pass (8/16/32; 8 attachments × 4 channels, paired uses 2 channels per bucket)",
+    ),
+    c(
+        "bucket_mode",
+        "bucket methods: uniform (depth range split evenly: bdp, bdp2) | adaptive (histogram-equalised: adp)",
+    ),
+    c(
+        "bucket_pairing",
+        "bucket methods: single (one fragment per bucket) | paired (nearest and farthest of each bucket)",
+    ),
+    c(
+        "hist_bins",
+        "adaptive bucket peeling: bins of the per-pixel depth-occupancy histogram (256/1024/2048)",
     ),
 ];
 
@@ -121,6 +137,7 @@ pub const METRICS: &[Column] = &[
     c("vertices_per_s", "vertices (index count for indexed draws) per second of GPU time"),
     c("vs_invocations", "vertex shader invocations per frame (pipeline statistics query)"),
     c("ps_invocations", "fragment shader invocations per frame (pipeline statistics query)"),
+    c("image_file", "the point's image saved by `mfx sweep --save-images`: images/<hash>.npy, float32 H×W×4 premultiplied RGBA (empty otherwise)"),
     c("notes", "free text: anything a reader must know about this row"),
 ];
 

@@ -160,6 +160,8 @@ pub struct RunOptions {
     pub git_rev: String,
     /// (I, N) of `--shard I/N`.
     pub shard: (usize, usize),
+    /// Folder where studies save each point's image (`--save-images`), or none.
+    pub save_images: Option<std::path::PathBuf>,
 }
 
 /// Expands every study of the suite into groups, in suite order (deterministic: the shard
@@ -325,6 +327,7 @@ pub fn run(
         let gscene = GpuScene::upload(gpu, &scene, group.width, group.height);
         let spec = &suite.studies[group.study_index];
         let mut ctx = GroupCtx::new(gpu, suite, spec, group, &scene, &gscene, reps, suite.warmup);
+        ctx.images_dir = opts.save_images.clone();
         let add_scene = |row: &mut Row| {
             row.set("triangles", scene.mesh.triangle_count())
                 .set("vertices", scene.mesh.vertex_count());

@@ -1,7 +1,34 @@
-//! CSV → plots → HTML. Never touches a GPU: reports can be built from CSVs made elsewhere.
+//! CSV → plots → HTML. Never touches a GPU: a report can be built from CSVs made on other
+//! machines, merged, or years old. `build(dir)` reads `dir/runs.csv` and writes
+//! `dir/report/index.html` with PNG and SVG figures beside it.
+
+pub mod charts;
+pub mod compare;
+pub mod data;
+pub mod html;
+pub mod studies;
 
 use std::path::{Path, PathBuf};
 
-pub fn build(dir: &Path, _baseline: Option<&str>) -> anyhow::Result<PathBuf> {
-    Ok(dir.join("index.html"))
+use anyhow::{Context, Result};
+
+pub use data::{Rec, Runs};
+
+/// Builds the report of a run folder; returns the page's path.
+pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
+    let csv = dir.join("runs.csv");
+    let runs = Runs::load(&csv)?;
+    let out = dir.join("report");
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let mut sections = studies::all_figures(&runs, &out)?;
+    // More than one adapter or backend (a merged CSV): compare them.
+    let mut extra = String::new();
+    if let Some(c) = compare::compare(&runs, dir, &out, baseline)? {
+        sections.push(("Adapters and backends".to_string(), c.figures));
+        extra = c.html;
+    }
+    let page = html::page(&runs, &sections, &extra);
+    let path = out.join("index.html");
+    std::fs::write(&path, page).with_context(|| format!("writing {}", path.display()))?;
+    Ok(path)
 }

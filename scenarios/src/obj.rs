@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{DMat4, DVec3, Vec3};
 
 use crate::scenes::{frame_sphere, Mesh, ObjectInfo, Scene, SceneSpec};
 use crate::{Result, SceneError};
@@ -91,6 +91,14 @@ pub fn face_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
 
 /// Centres the mesh at the origin and scales it into the unit sphere.
 pub fn normalise(mesh: &mut Mesh) {
+    let (centre, s) = normalisation(mesh);
+    for p in &mut mesh.positions {
+        *p = ((Vec3::from(*p) - centre) * s).into();
+    }
+}
+
+/// The centre and scale `normalise` applies: p' = (p − centre) · scale.
+fn normalisation(mesh: &Mesh) -> (Vec3, f32) {
     let (lo, hi) = mesh.bounds();
     let centre = (lo + hi) * 0.5;
     let radius = mesh
@@ -99,9 +107,45 @@ pub fn normalise(mesh: &mut Mesh) {
         .map(|p| (Vec3::from(*p) - centre).length())
         .fold(0.0f32, f32::max);
     let s = if radius > 0.0 { 1.0 / radius } else { 1.0 };
-    for p in &mut mesh.positions {
-        *p = ((Vec3::from(*p) - centre) * s).into();
+    (centre, s)
+}
+
+fn affine(centre: Vec3, s: f32) -> DMat4 {
+    DMat4::from_scale(DVec3::splat(s as f64)) * DMat4::from_translation(-centre.as_dvec3())
+}
+
+/// Grid offset of instance `k` of `n` in `instance_grid`.
+fn grid_offset(k: u32, n: u32) -> Vec3 {
+    let cols = (n as f32).sqrt().ceil() as u32;
+    Vec3::new(
+        (k % cols) as f32 * 1.6,
+        (k / cols) as f32 * 1.6,
+        (k % 3) as f32 * 0.3,
+    )
+}
+
+/// For an `obj` scene: per instance, the matrix taking the OBJ file's own vertex coordinates to
+/// the scene's world coordinates (the normalisation and grid placement `build` applies, in f64;
+/// the GPU's positions are these in f32, so they agree to f32 rounding).
+pub fn world_from_file(spec: &SceneSpec) -> Result<Vec<DMat4>> {
+    let label = spec.label();
+    let mut r = spec.params.reader(&label);
+    let path = r.opt_string("path")?.unwrap_or_default();
+    let instances = r.int("instances", 1, 1, 4096)? as u32;
+    let mut mesh = load(Path::new(&path))?;
+    let (c1, s1) = normalisation(&mesh);
+    let first = affine(c1, s1);
+    if instances <= 1 {
+        return Ok(vec![first]);
     }
+    normalise(&mut mesh);
+    let grid = instance_grid_raw(&mesh, instances);
+    let (c2, s2) = normalisation(&grid);
+    Ok((0..instances)
+        .map(|k| {
+            affine(c2, s2) * DMat4::from_translation(grid_offset(k, instances).as_dvec3()) * first
+        })
+        .collect())
 }
 
 /// Replicates `mesh` on a √n×√n grid in the x–y plane (object id = instance), renormalised.
@@ -109,14 +153,15 @@ pub fn instance_grid(mesh: &Mesh, n: u32) -> Mesh {
     if n <= 1 {
         return mesh.clone();
     }
-    let cols = (n as f32).sqrt().ceil() as u32;
+    let mut out = instance_grid_raw(mesh, n);
+    normalise(&mut out);
+    out
+}
+
+fn instance_grid_raw(mesh: &Mesh, n: u32) -> Mesh {
     let mut out = Mesh::default();
     for k in 0..n {
-        let offset = Vec3::new(
-            (k % cols) as f32 * 1.6,
-            (k / cols) as f32 * 1.6,
-            (k % 3) as f32 * 0.3,
-        );
+        let offset = grid_offset(k, n);
         let mut inst = mesh.clone();
         for p in &mut inst.positions {
             *p = (Vec3::from(*p) + offset).into();
@@ -124,7 +169,6 @@ pub fn instance_grid(mesh: &Mesh, n: u32) -> Mesh {
         inst.object_ids.iter_mut().for_each(|id| *id = k);
         out.append(&inst);
     }
-    normalise(&mut out);
     out
 }
 

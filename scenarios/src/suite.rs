@@ -29,6 +29,13 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("default", include_str!("../suites/default.toml")),
     ("deferred", include_str!("../suites/deferred.toml")),
     ("deferred-ci", include_str!("../suites/deferred-ci.toml")),
+    ("stability", include_str!("../suites/stability.toml")),
+    ("stability_ci", include_str!("../suites/stability_ci.toml")),
+    ("effects", include_str!("../suites/effects.toml")),
+    ("methods", include_str!("../suites/methods.toml")),
+    ("buckets", include_str!("../suites/buckets.toml")),
+    ("shadows", include_str!("../suites/shadows.toml")),
+    ("shadows-ci", include_str!("../suites/shadows-ci.toml")),
 ];
 
 #[derive(Clone, Debug)]
@@ -134,8 +141,7 @@ impl Suite {
                     .map_err(&err)?,
                 max_triangles: t
                     .get("max_triangles")
-                    .map(|v| v.as_integer().map(|i| i as u64))
-                    .flatten(),
+                    .and_then(|v| v.as_integer().map(|i| i as u64)),
                 reps: t.get("reps").and_then(|v| v.as_integer()).map(|i| i as u32),
             });
         }

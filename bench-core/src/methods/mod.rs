@@ -4,15 +4,36 @@
 //! |----------------|--------------------------------|----------------------------|-----------------|---------------------------|
 //! | `floor_depth`  | the yardstick (issue "Compare GPUs") | — (no image)          | 1               | 4 B depth                 |
 //! | `floor_opaque` | the yardstick, one colour       | — (no image)              | 1               | 4 B depth + 4 B RGBA8     |
-//! | `depth_peel`   | Everitt 2001, classic front-to-back peeling | exact up to `max_layers`; coplanar ties lost | layers + 1 | 2×4 B depth + 16 B layer + 20 B accumulation |
+//! | `depth_peel`   | Everitt 2001, classic front-to-back peeling; every effect via the fold | exact up to `max_layers`; coplanar ties lost (`variant=tiebreak` keeps them) | layers + 1 | 2×4 B depth + 4–36 B layer payload + 64 B fold state + 16 B per output image + 4 B count |
+//! | `dual_peel`    | Bavoil & Myers 2008, dual depth peeling (MAX blending, nearest + farthest per pass) | exact up to `max_layers`; coplanar ties merged | ⌈layers/2⌉ + 1 | 2×8 B depth + 2×16 B layers + 2×16 B accumulation + 16 B image + 4 B count |
+//! | `kbuffer_rmw`  | Bavoil 2007 ch. 4, k-buffer by non-atomic read-modify-write insertion | k nearest, but RMW hazards (measured: `hazard_rate`) | 1 (+ resolve) | k × (4 B key + 32 B entry) + 16 B image |
+//! | `kbuffer_atomic` | hazard-free k-buffer: 32-bit atomicMax bubbling of depth keys, then a payload pass | exact k nearest (ties get their own slots) | 2 (+ resolve) | k × (4 B key + 4 B claim + 32 B entry) + 16 B image |
+//! | `linked_list`  | Yang et al. 2010, per-pixel linked lists (atomic heads, one node pool), sorted in the resolve | exact within the pool (`layers` nodes per pixel on average); overflow counted | 1 (+ resolve) | 28 B (head, lost, count, image) + layers × 32 B node |
+//! | `wboit`        | McGuire & Bavoil 2013, weighted blended OIT | approximate (exact for one layer or one colour/alpha) | 1 (+ resolve) | 8 B RGBA16F + 2 B R16F + 16 B result |
+//! | `bdp`          | Liu et al., GPU Pro ch. 1, uniform bucket depth peeling | approximate: exact iff ≤1 fragment per bucket (2 if paired); collisions counted | 2 | 8 B range + 4 B × channels (≤32) + 68 B resolve |
+//! | `bdp2`         | Liu et al., GPU Pro ch. 1, two-pass BDP | approximate: 2 fragments per bucket; collisions counted | 3 | 8 B range + 2 × 4 B × K + 68 B resolve |
+//! | `adp`          | Liu et al., GPU Pro ch. 1, adaptive (histogram-equalised) BDP | approximate: fragments sharing a histogram bin collide | 2 + ⌈occupied bins / K⌉ | hist_bins/8 B + 8 B × K + 8 B range + 68 B resolve |
 //!
 //! Every method implements [`Method`] (what it is, which axes and features it needs, and
 //! `prepare`, which creates every GPU object) and [`Prepared`] (`frame`, the timed per-frame
 //! work, and `readback`). Nothing assumes a render pass: a compute-only method only has to fill
-//! the same [`Capture`]. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL.
+//! the same [`Capture`]. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL;
+//! `effects.wgsl` ([`EFFECTS_WGSL`]) is the effects fold, and `packing` the float colour packing
+//! shared with the bucket methods.
 
+pub mod adp;
+pub mod bdp;
+pub mod bdp2;
+pub mod bucket;
 pub mod depth_peel;
+pub mod dual_peel;
 pub mod floor;
+pub mod kbuffer_atomic;
+pub mod kbuffer_rmw;
+pub mod linked_list;
+pub mod packing;
+pub mod store;
+pub mod wboit;
 
 use scenarios::Params;
 
@@ -23,6 +44,15 @@ use crate::Result;
 
 /// WGSL shared by every raster method: the camera uniform and the standard vertex stage.
 pub const COMMON_WGSL: &str = include_str!("common.wgsl");
+
+/// The effects fold (`fold_init_at` / `fold_step` / `fold_finish_image`, override `EFFECT`):
+/// prepend it to a method's WGSL and set `effects::EffectConfig::constants` on the pipelines
+/// that call the fold.
+pub const EFFECTS_WGSL: &str = include_str!("effects.wgsl");
+
+/// Bytes of one `FoldState` in `effects.wgsl` (three vec4 + two u32, padded to 16): methods that
+/// keep fold states in a per-pixel buffer between passes size it with this.
+pub const FOLD_STATE_BYTES: u64 = 64;
 
 /// Which reference a capture is judged against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -113,6 +143,11 @@ pub trait Prepared {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture>;
     /// Bytes of buffers and textures this method allocated.
     fn bytes_allocated(&self) -> u64;
+    /// Judges what only the method can judge against the exact reference (e.g. the k-buffer's
+    /// captured depths vs the true k nearest → `hazard_pixels`); called after `readback`.
+    fn judge(&mut self, cap: &mut Capture, reference: &crate::reference::FragmentLists) {
+        let _ = (cap, reference);
+    }
 }
 
 /// Every method, in listing order.
@@ -121,6 +156,14 @@ pub fn all() -> Vec<Box<dyn Method>> {
         Box::new(floor::FloorDepth),
         Box::new(floor::FloorOpaque),
         Box::new(depth_peel::DepthPeel),
+        Box::new(dual_peel::DualPeel),
+        Box::new(kbuffer_rmw::KBufferRmw),
+        Box::new(kbuffer_atomic::KBufferAtomic),
+        Box::new(linked_list::LinkedList),
+        Box::new(wboit::Wboit),
+        Box::new(bdp::Bdp),
+        Box::new(bdp2::Bdp2),
+        Box::new(adp::Adp),
     ]
 }
 

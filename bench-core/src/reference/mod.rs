@@ -52,6 +52,20 @@ impl FragmentLists {
         self.frags.len() as u64
     }
 
+    /// Pixels where two consecutive fragments (nearest first) are within `ulps` f32 steps of
+    /// each other in window depth: a method comparing f32 depths cannot order or separate them
+    /// (intersecting or coplanar geometry).
+    pub fn depth_tie_pixels(&self, ulps: u32) -> Vec<bool> {
+        (0..self.pixels())
+            .map(|p| {
+                self.pixel(p).windows(2).any(|w| {
+                    let (a, b) = (w[0].depth as f32, w[1].depth as f32);
+                    (a.to_bits() as i64 - b.to_bits() as i64).unsigned_abs() <= ulps as u64
+                })
+            })
+            .collect()
+    }
+
     /// Front-to-back "under" compositing of at most `k` nearest fragments per pixel, as
     /// premultiplied RGBA with A = 1 − transmittance (no background).
     pub fn composite_first(&self, k: usize) -> Vec<[f64; 4]> {
@@ -72,8 +86,8 @@ pub fn composite<'a>(frags: impl Iterator<Item = &'a RefFragment>) -> [f64; 4] {
     for f in frags {
         let a = f.color[3];
         let t = 1.0 - acc[3];
-        for c in 0..3 {
-            acc[c] += t * a * f.color[c];
+        for (c, fc) in acc.iter_mut().zip(&f.color).take(3) {
+            *c += t * a * fc;
         }
         acc[3] += t * a;
     }

@@ -60,10 +60,7 @@ struct Tri {
 }
 
 fn lerp(a: &ClipVert, b: &ClipVert, t: f64) -> ClipVert {
-    let mut attrs = [0.0; 8];
-    for i in 0..8 {
-        attrs[i] = a.attrs[i] + (b.attrs[i] - a.attrs[i]) * t;
-    }
+    let attrs = std::array::from_fn(|i| a.attrs[i] + (b.attrs[i] - a.attrs[i]) * t);
     ClipVert {
         clip: a.clip + (b.clip - a.clip) * t,
         attrs,

@@ -48,8 +48,10 @@ fn two_overlapping_quads_composite_under_in_depth_order() {
             want[c]
         );
     }
-    // A corner pixel is covered by the big far quad only.
-    assert_eq!(fl.at(9, 9).len(), 1);
+    // Far quad: ±1 at distance 11 with a 30° fov spans ±5.4 px around the centre; the near one
+    // ±3.3 px: pixel (12,12) sees the far quad only.
+    assert_eq!(fl.at(12, 12).len(), 1);
+    assert_eq!(fl.at(12, 12)[0].object_id, 1);
     assert_eq!(fl.at(0, 0).len(), 0);
 }
 
@@ -168,4 +170,26 @@ fn geometry_behind_the_eye_and_beyond_far_is_clipped() {
     let s = scene_with(m);
     let fl = rasterize(&s, 16, 16);
     assert_eq!(fl.total_fragments(), 0);
+}
+
+#[test]
+fn depth_ties_are_detected_only_where_fragments_are_within_f32_ulps() {
+    let mut m = Mesh::default();
+    quad(&mut m, 1.0, 0.0, [1.0, 0.0, 0.0, 0.5], 0);
+    quad(&mut m, 1.0, 0.0, [0.0, 1.0, 0.0, 0.5], 1); // coplanar: a tie everywhere it covers
+    quad(&mut m, 0.3, 2.0, [0.0, 0.0, 1.0, 0.5], 2); // well separated
+    let s = scene_with(m);
+    let fl = rasterize(&s, 32, 32);
+    let ties = fl.depth_tie_pixels(2);
+    let p = 16 * 32 + 16;
+    assert!(ties[p], "coplanar pair at the centre is a tie");
+    assert!(!ties[0], "empty pixel has no tie");
+    let mut m2 = Mesh::default();
+    quad(&mut m2, 1.0, 0.0, [1.0, 0.0, 0.0, 0.5], 0);
+    quad(&mut m2, 1.0, 1.0, [0.0, 1.0, 0.0, 0.5], 1);
+    let fl2 = rasterize(&scene_with(m2), 32, 32);
+    assert!(
+        !fl2.depth_tie_pixels(2)[p],
+        "layers 1 unit apart are no tie"
+    );
 }

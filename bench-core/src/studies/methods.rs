@@ -34,7 +34,19 @@ impl Study for MethodsStudy {
                         .join(", ")
                 ))
             })?;
-            for params in axis_product(&spec.axes, m.axes()) {
+            // The effect axis is expanded for every method: one that resolves no effects fold
+            // gets a `skipped` row for each effect but transparency, never a silent gap.
+            let mut names: Vec<&str> = m.axes().to_vec();
+            if !names.contains(&"effect") {
+                names.push("effect");
+            }
+            if let Some(effs) = spec.axes.get("effect") {
+                for e in effs {
+                    let s = e.to_string();
+                    effects::Effect::parse(&s).map_err(CoreError::Param)?;
+                }
+            }
+            for params in axis_product(&spec.axes, &names) {
                 out.push(PointSpec {
                     method: name.clone(),
                     params,
@@ -45,6 +57,18 @@ impl Study for MethodsStudy {
     }
 
     fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
+        run_methods_group(ctx, emit, &|_, _| {})
+    }
+}
+
+/// Runs every point of a methods-like group (also used by the `stability` study, which adds
+/// its columns through `extra` on each row before it is emitted).
+pub fn run_methods_group(
+    ctx: &GroupCtx<'_>,
+    emit: &mut Emit<'_>,
+    extra: &dyn Fn(&mut Row, &PointSpec),
+) -> Result<()> {
+    {
         // depth_peel first so every other row can carry its speedup over it.
         let mut order: Vec<usize> = (0..ctx.group.points.len()).collect();
         order.sort_by_key(|&i| ctx.group.points[i].method != "depth_peel");
@@ -53,10 +77,30 @@ impl Study for MethodsStudy {
             let pt = &ctx.group.points[i];
             let method = methods::by_name(&pt.method).expect("checked in points()");
             let mut row = Row::new();
-            row.set("method", &pt.method)
-                .set("exact", method.exact())
-                .set("effect", "transparency");
+            row.set("method", &pt.method).set("exact", method.exact());
             set_params(&mut row, &pt.params)?;
+            extra(&mut row, pt);
+            let effect = match effects::EffectConfig::from_params(&pt.params) {
+                Ok(e) => e,
+                Err(why) => {
+                    emit(i, skipped_row(row, &why))?;
+                    continue;
+                }
+            };
+            row.set("effect", effect.effect.name());
+            if let Some(p) = payload_of(method.as_ref(), &pt.params, &effect) {
+                row.set("payload", p);
+            }
+            if effect.effect != effects::Effect::Transparency && !method.axes().contains(&"effect")
+            {
+                let why = format!(
+                    "{} resolves no effects fold (it stores colour only): it cannot supply {}",
+                    pt.method,
+                    effect.effect.name()
+                );
+                emit(i, skipped_row(row, &why))?;
+                continue;
+            }
             if let Err(why) = method.supports(ctx.gpu, &pt.params) {
                 emit(i, skipped_row(row, &why))?;
                 continue;
@@ -76,7 +120,7 @@ impl Study for MethodsStudy {
                 }
             };
             set_timing(&mut row, &m, ctx);
-            let cap = match m.prepared.readback(ctx.gpu, ctx.gscene) {
+            let mut cap = match m.prepared.readback(ctx.gpu, ctx.gscene) {
                 Ok(c) => c,
                 Err(e) => {
                     emit(i, failed_row(row, &format!("readback: {e}")))?;
@@ -84,21 +128,60 @@ impl Study for MethodsStudy {
                 }
             };
             let lists = ctx.reference();
+            m.prepared.judge(&mut cap, lists);
             set_reference_columns(&mut row, lists);
             let dc = lists.depth_complexity();
             let k = match cap.expected {
                 Expected::All => u32::MAX,
                 Expected::FirstK(k) => k,
             };
-            let overflow = dc.iter().filter(|&&d| d > k).count();
+            // Beyond a FirstK capacity, or as the method counted it (pools, unpeeled layers).
+            let overflow = dc
+                .iter()
+                .filter(|&&d| d > k)
+                .count()
+                .max(cap.overflow_pixels.unwrap_or(0) as usize);
             row.set_f("overflow_rate", overflow as f64 / dc.len().max(1) as f64);
             let mut flag = cap.flag.clone();
             if overflow > 0 && flag.is_none() {
                 flag = Some("overflow".into());
             }
+            if let Some(counts) = &cap.counts {
+                // Fragments the method should have captured (within its k) but did not. At a
+                // pixel whose f64 reference has exact depth ties this is the coplanar loss of
+                // strict peeling; elsewhere distinct layers merged in the method's own depth
+                // precision (e.g. a large far/near ratio).
+                let (mut coplanar, mut precision) = (0u64, 0u64);
+                for (p, (&d, &c)) in dc.iter().zip(counts).enumerate() {
+                    let lost = d.min(k).saturating_sub(c) as u64;
+                    if lost > 0 {
+                        let f = lists.pixel(p);
+                        if f.windows(2).any(|w| w[0].depth == w[1].depth) {
+                            coplanar += lost;
+                        } else {
+                            precision += lost;
+                        }
+                    }
+                }
+                row.set("lost_fragments", coplanar + precision);
+                if coplanar > 0 {
+                    flag.get_or_insert_with(|| "lost_coplanar".into());
+                } else if precision > 0 {
+                    flag.get_or_insert_with(|| "precision".into());
+                }
+            }
             if let Some(img) = &cap.image {
-                let reference = effects::reference_image("transparency", lists, cap.expected)
-                    .expect("known effect");
+                let reference = effect.reference(ctx.scene, lists, cap.expected);
+                if reference.len() != img.len() {
+                    let why = format!(
+                        "image has {} pixels, the {} reference {}",
+                        img.len(),
+                        effect.effect.name(),
+                        reference.len()
+                    );
+                    emit(i, failed_row(row, &why))?;
+                    continue;
+                }
                 let e = image_error(&reference, img, BAD_PIXEL_TOL);
                 row.set_f("rmse", e.rmse)
                     .set_f("psnr_db", e.psnr_db)
@@ -109,6 +192,7 @@ impl Study for MethodsStudy {
                 if e.non_finite > 0 {
                     flag.get_or_insert_with(|| "precision".into());
                 }
+                ctx.save_image(&mut row, &pt.method, &pt.params, img)?;
             }
             if let Some(counts) = &cap.counts {
                 let expected: Vec<u32> = dc.iter().map(|&d| d.min(k)).collect();
@@ -134,7 +218,11 @@ impl Study for MethodsStudy {
                 row.set("flag", f);
             }
             if !cap.notes.is_empty() {
-                row.set("notes", &cap.notes);
+                let prev = row
+                    .get("notes")
+                    .map(|n| format!("{n}; "))
+                    .unwrap_or_default();
+                row.set("notes", format!("{prev}{}", cap.notes));
             }
             if let Some(g) = m.gpu_ms.map(|s| s.median) {
                 if pt.method == "depth_peel" && peel_ms.is_none() {
@@ -150,6 +238,29 @@ impl Study for MethodsStudy {
         }
         Ok(())
     }
+}
+
+/// The `payload` column: what the point stores per fragment, for methods that specialise it.
+fn payload_of(
+    method: &dyn methods::Method,
+    params: &scenarios::Params,
+    effect: &effects::EffectConfig,
+) -> Option<&'static str> {
+    if method.name() == "depth_peel" {
+        return methods::depth_peel::payload_name(params);
+    }
+    if !method.axes().contains(&"specialisation") {
+        return None;
+    }
+    match params.get("specialisation") {
+        Some(scenarios::ParamValue::Str(s)) if s == "uber" => Some(effects::Payload::ALL.name()),
+        _ => Some(effect.effect.payload().name()),
+    }
+}
+
+/// True if some pixel holds two fragments at exactly the same window depth.
+pub fn has_depth_ties(lists: &crate::reference::FragmentLists) -> bool {
+    (0..lists.pixels()).any(|p| lists.pixel(p).windows(2).any(|w| w[0].depth == w[1].depth))
 }
 
 /// Scene columns that need the reference (depth complexity, true fragments).

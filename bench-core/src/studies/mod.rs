@@ -8,6 +8,8 @@
 //! | `methods` | multi-fragment capture methods vs the exact CPU reference            |
 //! | `deferred`| deferred shading paths (naive, volumes, tiled, classified, CPU tiles) |
 //! | `prepass` | light pre-pass vs deferred; light buffer on CPU cores, overlapped     |
+//! | `stability` | stiff/extreme inputs: methods study + case, stiffness, lost fragments |
+//! | `shadows` | layered soft shadow maps from an area light vs a ray-traced reference |
 
 pub mod deferred;
 pub mod geometry;
@@ -28,6 +30,7 @@ use crate::Result;
 
 /// Columns owned by individual studies (appended after the shared axes, in this order).
 pub const STUDY_COLUMNS: &[&[Column]] = &[
+    crate::effects::COLUMNS,
     geometry::COLUMNS,
     stability::COLUMNS,
     deferred::COLUMNS,
@@ -80,6 +83,8 @@ pub struct GroupCtx<'a> {
     pub warmup: u32,
     /// floor_depth median GPU ms of this group, when measured.
     pub floor_ms: Option<f64>,
+    /// Where `save_image` writes point images (`mfx sweep --save-images`); none = not saved.
+    pub images_dir: Option<std::path::PathBuf>,
     reference: OnceCell<FragmentLists>,
 }
 
@@ -105,6 +110,7 @@ impl<'a> GroupCtx<'a> {
             reps,
             warmup,
             floor_ms: None,
+            images_dir: None,
             reference: OnceCell::new(),
         }
     }
@@ -117,6 +123,37 @@ impl<'a> GroupCtx<'a> {
 
     pub fn has_reference(&self) -> bool {
         self.reference.get().is_some()
+    }
+
+    /// Saves a point's image when `--save-images` is on and records it in `image_file`, so the
+    /// report can compare the same point across adapters and backends. The name hashes the
+    /// point key, adapter and backend: runs from many machines merge into one `images/`.
+    pub fn save_image(
+        &self,
+        row: &mut Row,
+        method: &str,
+        params: &Params,
+        img: &[[f32; 4]],
+    ) -> Result<()> {
+        let Some(dir) = &self.images_dir else {
+            return Ok(());
+        };
+        let f = &self.gpu.facts;
+        let key = self.group.point_key(method, params);
+        let name = format!(
+            "images/{}.npy",
+            crate::image_io::point_hash(&key, &f.name, &f.backend)
+        );
+        std::fs::create_dir_all(dir.join("images"))
+            .map_err(|e| crate::CoreError::Io(format!("{}: {e}", dir.display())))?;
+        crate::image_io::write_npy_rgba(
+            &dir.join(&name),
+            self.group.width,
+            self.group.height,
+            img,
+        )?;
+        row.set("image_file", name);
+        Ok(())
     }
 }
 
@@ -138,6 +175,8 @@ pub fn all() -> Vec<Box<dyn Study>> {
         Box::new(methods::MethodsStudy),
         Box::new(deferred::DeferredStudy),
         Box::new(prepass::PrepassStudy),
+        Box::new(stability::StabilityStudy),
+        Box::new(shadows::ShadowsStudy),
     ]
 }
 

@@ -1,6 +1,158 @@
-//! The `stability` study (stub: see the issue that owns it).
+//! The `stability` study (issue 5): stiff and extreme inputs, per method, judged against the
+//! f64 reference. It is the `methods` study (same points, same judging, same columns: one code
+//! path decides what "right" means) plus three columns that say which case a row belongs to
+//! and how stiff its input is, so a plot can draw error against stiffness per method:
+//!
+//! ```toml
+//! [[study]]
+//! kind = "stability"
+//! case = "near_far"            # the case's name (→ stability_case)
+//! stiffness = "far_over_near"  # how stiffness_value is computed (see `stiffness_value`)
+//! methods = ["depth_peel"]
+//! ```
+//!
+//! Why a study of its own rather than `methods` points with extra parameters: the case name and
+//! stiffness are properties of the scene × method pair, not sweep axes of a method, and keeping
+//! them out of `point_key`'s axes keeps the methods study's points comparable across suites.
 
-use crate::record::Column;
+use scenarios::{ParamValue, StudySpec};
+
+use super::methods::{run_methods_group, MethodsStudy};
+use super::{Emit, GroupCtx, PointSpec, Study};
+use crate::effects::EffectConfig;
+use crate::record::{Column, Row};
+use crate::{CoreError, Result};
 
 /// CSV columns this study owns (documented in results/README.md).
-pub const COLUMNS: &[Column] = &[];
+pub const COLUMNS: &[Column] = &[
+    Column {
+        name: "stability_case",
+        doc: "stability: the stiff case (near_far, coplanar, close_layers, high_complexity, thickness, alpha, packing, extreme_geometry)",
+    },
+    Column {
+        name: "stiffness",
+        doc: "stability: what stiffness_value measures (far_over_near, sigma_l, distance_over_wall, depth_gap_min, depth_complexity, or a scene/axis parameter name)",
+    },
+    Column {
+        name: "stiffness_value",
+        doc: "stability: the case's stiffness parameter (e.g. far/near ratio, σ·l, layer separation in window depth)",
+    },
+    Column {
+        name: "lost_fragments",
+        doc: "fragments within the method's capacity that it did not capture (sum over pixels; coplanar loss when the reference has depth ties)",
+    },
+];
+
+/// Computed stiffness measures; any other name is read from the scene's or the point's params.
+pub const STIFFNESS: &[&str] = &[
+    "far_over_near",
+    "sigma_l",
+    "distance_over_wall",
+    "depth_gap_min",
+    "depth_complexity",
+];
+
+pub struct StabilityStudy;
+
+fn extra_str<'a>(spec: &'a StudySpec, k: &str) -> Result<&'a str> {
+    match spec.extra.get(k) {
+        Some(v) if v.as_str().is_some() => Ok(v.as_str().unwrap_or_default()),
+        Some(other) => Err(CoreError::Param(format!(
+            "stability study: '{k}' must be a string, got {other}"
+        ))),
+        None => Err(CoreError::Param(format!(
+            "stability study: missing '{k}' (e.g. case = \"near_far\", stiffness = \"far_over_near\")"
+        ))),
+    }
+}
+
+fn as_f64(v: &ParamValue) -> Option<f64> {
+    match v {
+        ParamValue::Int(i) => Some(*i as f64),
+        ParamValue::Float(x) => Some(*x),
+        ParamValue::Bool(b) => Some(*b as u8 as f64),
+        ParamValue::Str(_) => None,
+    }
+}
+
+/// The value of stiffness measure `name` for point `pt` of the group.
+pub fn stiffness_value(ctx: &GroupCtx<'_>, pt: &PointSpec, name: &str) -> Option<f64> {
+    let cam = &ctx.scene.camera;
+    match name {
+        "far_over_near" => Some(cam.far / cam.near),
+        "sigma_l" => {
+            let sigma = EffectConfig::from_params(&pt.params).ok()?.sigma;
+            let lists = ctx.reference();
+            let lmax = (0..lists.pixels())
+                .map(|p| {
+                    lists
+                        .pixel(p)
+                        .iter()
+                        .map(crate::effects::signed_view_z)
+                        .sum::<f64>()
+                })
+                .fold(0.0, f64::max);
+            Some(sigma * lmax)
+        }
+        "distance_over_wall" => {
+            let p = &ctx.group.scene.params;
+            Some(as_f64(p.get("distance")?)? / as_f64(p.get("wall")?)?)
+        }
+        "depth_gap_min" => {
+            let lists = ctx.reference();
+            (0..lists.pixels())
+                .flat_map(|p| {
+                    lists
+                        .pixel(p)
+                        .windows(2)
+                        .map(|w| (w[1].depth - w[0].depth).abs())
+                })
+                .filter(|g| *g > 0.0)
+                .min_by(f64::total_cmp)
+        }
+        "depth_complexity" => Some(ctx.reference().max_depth_complexity() as f64),
+        other => ctx
+            .group
+            .scene
+            .params
+            .get(other)
+            .or_else(|| pt.params.get(other))
+            .and_then(as_f64),
+    }
+}
+
+impl Study for StabilityStudy {
+    fn kind(&self) -> &'static str {
+        "stability"
+    }
+    fn describe(&self) -> &'static str {
+        "stiff and extreme inputs: finite output, error vs the f64 reference and a flag per method, against a stiffness parameter"
+    }
+    fn points(&self, spec: &StudySpec) -> Result<Vec<PointSpec>> {
+        extra_str(spec, "case")?;
+        let s = extra_str(spec, "stiffness")?;
+        // A parameter name is accepted only if some scene or axis defines it: a typo is an error.
+        let defined = STIFFNESS.contains(&s)
+            || spec.axes.contains_key(s)
+            || spec.scenes.iter().any(|sc| sc.params.get(s).is_some());
+        if !defined {
+            return Err(CoreError::Param(format!(
+                "stability study: stiffness '{s}' is neither one of {} nor a scene or axis parameter",
+                STIFFNESS.join(", ")
+            )));
+        }
+        MethodsStudy.points(spec)
+    }
+    fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
+        let case = extra_str(ctx.study, "case")?.to_string();
+        let stiffness = extra_str(ctx.study, "stiffness")?.to_string();
+        let add = |row: &mut Row, pt: &PointSpec| {
+            row.set("stability_case", &case)
+                .set("stiffness", &stiffness);
+            if let Some(v) = stiffness_value(ctx, pt, &stiffness) {
+                row.set_f("stiffness_value", v);
+            }
+        };
+        run_methods_group(ctx, emit, &add)
+    }
+}

@@ -62,11 +62,14 @@ pub fn build(spec: &SceneSpec) -> Result<Scene> {
         }
     }
     let eye = DVec3::new(0.0, side as f64 * 1.1 + 1.5, side as f64 * 1.6 + 2.0);
+    // Near plane at 15% of the eye distance (in front of the nearest blade): depth precision
+    // for the patch, not for empty space in front of the camera.
+    let near = eye.length() * 0.15;
     let camera = Camera::look_at(
         eye,
         DVec3::new(0.0, 0.3, 0.0),
         50.0,
-        0.1,
+        near,
         eye.length() * 4.0,
     );
     let mut scene = Scene::new(spec.clone(), mesh, camera);

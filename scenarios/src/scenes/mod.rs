@@ -9,11 +9,18 @@
 //! | `quads`  | d overlapping screen-parallel quads at distinct depths      | max depth complexity d  |
 //! | `obj`    | an OBJ file (tobj), normalised into view, grid-instanced    | —                       |
 //! | `city`   | ground + box buildings (or a closed room) with many lights  | — (shading studies)     |
+//! | `slabs`  | tiles² stacks of nested thin closed boxes far away (stiff)  | max depth complexity 2n |
+//! | `csg_pair` | two overlapping closed solids, ids 0 and 1 (CSG operands) | ≤ 4 per pixel           |
+//! | `coplanar` | layers of exactly duplicated quads (z-fighting)          | layers · copies         |
+//! | `extreme` | degenerate triangles, ±1e7 vertices, a view-covering triangle | —                    |
+//! | `soft_shadow` | occluders over a ground plane under a square area light | ray-traced visibility |
 
 pub mod city;
 pub mod grass;
 pub mod quads;
 pub mod shells;
+pub mod soft_shadow;
+pub mod stiff;
 
 use glam::{DVec3, Vec3};
 
@@ -81,7 +88,7 @@ impl Mesh {
         if self.indices.is_empty() {
             return Err(format!("{what}: no triangles"));
         }
-        if self.indices.len() % 3 != 0 {
+        if !self.indices.len().is_multiple_of(3) {
             return Err(format!(
                 "{what}: index count {} is not a multiple of 3",
                 self.indices.len()
@@ -166,6 +173,16 @@ pub struct Sun {
     pub color: [f32; 3],
 }
 
+/// A square area light (the `shadows` study): the light's camera sits at the square's centre and
+/// looks along its normal; the square's sides follow the camera's x and y axes. `camera.fovy`
+/// and `camera.near`/`far` frame the shadow map (aspect 1).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AreaLight {
+    pub camera: Camera,
+    /// Side length of the square, world units.
+    pub size: f64,
+}
+
 /// A scene ready to render.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -179,6 +196,8 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Directional light of the shading studies (none: no sun feature anywhere).
     pub sun: Option<Sun>,
+    /// The square area light of soft-shadow scenes (None elsewhere).
+    pub area_light: Option<AreaLight>,
 }
 
 impl Scene {
@@ -192,6 +211,7 @@ impl Scene {
             materials: Vec::new(),
             lights: Vec::new(),
             sun: None,
+            area_light: None,
         }
     }
     pub fn name(&self) -> &str {
@@ -228,6 +248,11 @@ impl SceneSpec {
             "quads" => quads::build(self)?,
             "obj" => obj::build(self)?,
             "city" => city::build(self)?,
+            "slabs" => stiff::slabs(self)?,
+            "csg_pair" => stiff::csg_pair(self)?,
+            "coplanar" => stiff::coplanar(self)?,
+            "extreme" => stiff::extreme(self)?,
+            "soft_shadow" => soft_shadow::build(self)?,
             other => {
                 return Err(SceneError::UnknownGenerator(
                     other.to_string(),
@@ -249,7 +274,18 @@ impl SceneSpec {
 }
 
 /// Generator names, for `mfx list scenes`.
-pub const GENERATORS: &[&str] = &["grass", "shells", "quads", "obj", "city"];
+pub const GENERATORS: &[&str] = &[
+    "grass",
+    "shells",
+    "quads",
+    "obj",
+    "slabs",
+    "csg_pair",
+    "coplanar",
+    "extreme",
+    "soft_shadow",
+    "city",
+];
 
 /// One-line description per generator, for `mfx list scenes`.
 pub fn describe(generator: &str) -> &'static str {
@@ -259,6 +295,11 @@ pub fn describe(generator: &str) -> &'static str {
         "quads" => "depth_complexity=d, alpha, tilt, seed: d quads over the centre at distinct depths",
         "obj" => "path, instances, alpha: an OBJ file via tobj, normalised, instanced on a grid",
         "city" => "lights=N, blocks, room, sun, kinds=mixed|point|spot|line, range, seed: box city (or closed room) with N finite-range lights and materials",
+        "slabs" => "count, tiles, distance, wall, alpha, reversed_z, seed: tiles² stacks of count nested thin closed boxes far away (thickness cancellation)",
+        "csg_pair" => "offset, segments, shape=sphere|box, alpha: two overlapping closed solids, ids 0 (A) and 1 (B)",
+        "coplanar" => "layers, copies, alpha, reversed_z: layers of exactly duplicated quads (z-fighting), max depth complexity layers·copies",
+        "extreme" => "coord, degenerate, alpha, seed: zero-area triangles, a view-covering triangle and vertices at ±coord",
+        "soft_shadow" => "case=spheres|leaves|slabs|tangent|quad|obj, light_size, light_height, …: occluders over a ground plane under a square area light",
         _ => "",
     }
 }

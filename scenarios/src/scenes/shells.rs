@@ -64,12 +64,12 @@ pub fn sphere(radius: f32, seg: u32, color: [f32; 4], id: u32) -> Mesh {
         for i in 0..seg {
             let a = j * row + i;
             let b = a + row;
-            // Skip the degenerate triangles at the poles.
+            // Counter-clockwise seen from outside (front faces outward); skip the pole degenerates.
             if j != 0 {
-                m.indices.extend_from_slice(&[a, b, a + 1]);
+                m.indices.extend_from_slice(&[a, a + 1, b]);
             }
             if j != rings - 1 {
-                m.indices.extend_from_slice(&[a + 1, b, b + 1]);
+                m.indices.extend_from_slice(&[a + 1, b + 1, b]);
             }
         }
     }

@@ -1,109 +1,245 @@
 //! Classic depth peeling (Everitt 2001, "Interactive Order-Independent Transparency"): the exact
-//! baseline. One geometry pass per layer, front to back; each layer is composited under the
-//! accumulated colour by a compute pass. With `occlusion_stop` (default) an occlusion query per
-//! pass ends peeling at the first pass that writes nothing (a CPU round trip per pass, as in the
-//! original); otherwise exactly `max_layers` passes run in one submission.
+//! baseline. One geometry pass per layer, front to back; after each, a compute pass feeds the
+//! layer's fragments to the effects fold (`effects.wgsl`), whose per-pixel `FoldState` (64 B)
+//! stays in a storage buffer between passes, so depth peeling supplies every effect. With
+//! `occlusion_stop` (default) an occlusion query per pass ends peeling at the first pass that
+//! writes nothing (a CPU round trip per pass, as in the original); otherwise exactly
+//! `max_layers` passes run in one submission.
+//!
+//! Axes: `max_layers`, `occlusion_stop`, the effect axes (`effects::AXES`), `specialisation`
+//! (`specialised`, default: store, fetch and read only the effect's payload; `uber`: all
+//! attributes fetched and colour + normal + view depth + id stored every pass) and `variant`
+//! (`+`-separated: `tiebreak` peels on (depth, object id) pairs so coplanar fragments with
+//! distinct ids are not lost, at the cost of the full payload; `naive`/`stable` pick the
+//! thickness arithmetic).
 
 use scenarios::Params;
 
 use super::floor::{clear_depth, depth_state};
 use super::{
-    bool_param, camera_entry, int_param, read_vec, shader, storage_entry, texture_entry, Capture,
-    Expected, FrameStats, Method, Prepared,
+    bool_param, camera_entry, int_param, read_vec, shader, storage_entry, str_param, texture_entry,
+    Capture, Expected, FrameStats, Method, Prepared, EFFECTS_WGSL, FOLD_STATE_BYTES,
 };
+use crate::effects::{self, EffectConfig, Payload};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
 const WGSL: &str = include_str!("depth_peel.wgsl");
-const LAYER_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+const Z_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// `struct FoldState` in effects.wgsl: three vec4 + two u32, rounded up to its 16-byte alignment.
 
 pub struct DepthPeel;
+
+/// A point's configuration, read from its axes.
+#[derive(Clone, Copy, Debug)]
+struct Config {
+    max_layers: u32,
+    occlusion_stop: bool,
+    uber: bool,
+    tiebreak: bool,
+    effect: EffectConfig,
+}
+
+impl Config {
+    fn read(params: &Params) -> std::result::Result<Config, String> {
+        effects::check_variant(params, &["classic", "tiebreak", "naive", "stable"])?;
+        Ok(Config {
+            max_layers: int_param(params, "max_layers", 64, 1, 4096)? as u32,
+            occlusion_stop: bool_param(params, "occlusion_stop", true)?,
+            uber: str_param(
+                params,
+                "specialisation",
+                "specialised",
+                &["specialised", "uber"],
+            )? == "uber",
+            tiebreak: effects::variant_has(params, "tiebreak")?,
+            effect: EffectConfig::from_params(params)?,
+        })
+    }
+
+    /// What each layer stores: the effect's payload, or everything (uber; tiebreak needs ids
+    /// and is kept on the full payload rather than multiplying the variants).
+    fn payload(&self) -> Payload {
+        if self.uber || self.tiebreak {
+            Payload::ALL
+        } else {
+            self.effect.effect.payload()
+        }
+    }
+}
+
+/// The `payload` column value of a depth_peel point (also used by the studies).
+pub fn payload_name(params: &Params) -> Option<&'static str> {
+    Config::read(params).ok().map(|c| c.payload().name())
+}
 
 impl Method for DepthPeel {
     fn name(&self) -> &'static str {
         "depth_peel"
     }
     fn describe(&self) -> &'static str {
-        "Everitt 2001: exact front-to-back peeling, one geometry pass per layer (+1 empty pass with occlusion_stop)"
+        "Everitt 2001: exact front-to-back peeling, one geometry pass per layer (+1 empty pass with occlusion_stop); every effect via a per-pixel fold state"
     }
     fn exact(&self) -> bool {
         true
     }
     fn axes(&self) -> &'static [&'static str] {
-        &["max_layers", "occlusion_stop"]
+        &[
+            "max_layers",
+            "occlusion_stop",
+            "specialisation",
+            "variant",
+            "effect",
+            "sigma",
+            "csg_a",
+            "csg_b",
+            "dof_near",
+            "dof_far",
+        ]
     }
     fn supports(&self, gpu: &Gpu, params: &Params) -> std::result::Result<(), String> {
-        int_param(params, "max_layers", 64, 1, 4096)?;
-        bool_param(params, "occlusion_stop", true)?;
-        if !gpu.renderable(LAYER_FORMAT) {
-            return Err(format!(
-                "{LAYER_FORMAT:?} is not renderable on this adapter"
-            ));
+        let cfg = Config::read(params)?;
+        let p = cfg.payload();
+        for (need, f) in [
+            (p.color || p.normal, COLOR_FORMAT),
+            (p.view_z, Z_FORMAT),
+            (p.object_id, ID_FORMAT),
+        ] {
+            if need && !gpu.renderable(f) {
+                return Err(format!("{f:?} is not renderable on this adapter"));
+            }
         }
         Ok(())
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
-        let max_layers =
-            int_param(params, "max_layers", 64, 1, 4096).map_err(CoreError::Param)? as u32;
-        let occlusion_stop =
-            bool_param(params, "occlusion_stop", true).map_err(CoreError::Param)?;
-        Ok(Box::new(PreparedPeel::new(
-            gpu,
-            scene,
-            max_layers,
-            occlusion_stop,
-        )))
+        let cfg = Config::read(params).map_err(CoreError::Param)?;
+        Ok(Box::new(PreparedPeel::new(gpu, scene, cfg)))
+    }
+}
+
+/// The entry points and formats of one payload.
+struct Variant {
+    vs: &'static str,
+    attrs: Attrs,
+    fs: &'static str,
+    resolve: &'static str,
+    /// Colour targets in location order, each with the resolve binding that reads it.
+    targets: &'static [(wgpu::TextureFormat, u32)],
+}
+
+fn variant(p: Payload) -> Variant {
+    let attrs = |normal, color, object_id| Attrs {
+        normal,
+        color,
+        object_id,
+    };
+    match p {
+        Payload::RGBA => Variant {
+            vs: "vs_pc",
+            attrs: attrs(false, true, false),
+            fs: "fs_rgba",
+            resolve: "resolve_rgba",
+            targets: &[(COLOR_FORMAT, 0)],
+        },
+        Payload::DEPTH => Variant {
+            vs: "vs_p",
+            attrs: Attrs::POSITION_ONLY,
+            fs: "fs_z",
+            resolve: "resolve_z",
+            targets: &[(Z_FORMAT, 2)],
+        },
+        Payload::DEPTH_NORMAL => Variant {
+            vs: "vs_pn",
+            attrs: attrs(true, false, false),
+            fs: "fs_zn",
+            resolve: "resolve_zn",
+            targets: &[(COLOR_FORMAT, 3)],
+        },
+        Payload::DEPTH_ID => Variant {
+            vs: "vs_pi",
+            attrs: attrs(false, false, true),
+            fs: "fs_id",
+            resolve: "resolve_id",
+            targets: &[(ID_FORMAT, 4)],
+        },
+        Payload::RGBA_VIEWZ => Variant {
+            vs: "vs_pc",
+            attrs: attrs(false, true, false),
+            fs: "fs_rgbaz",
+            resolve: "resolve_rgbaz",
+            targets: &[(COLOR_FORMAT, 0), (Z_FORMAT, 2)],
+        },
+        _ => Variant {
+            vs: "vs_full",
+            attrs: Attrs::ALL,
+            fs: "fs_all",
+            resolve: "resolve_all",
+            targets: &[(COLOR_FORMAT, 0), (COLOR_FORMAT, 3), (ID_FORMAT, 4)],
+        },
     }
 }
 
 struct PreparedPeel {
     first: wgpu::RenderPipeline,
     peel: wgpu::RenderPipeline,
-    composite: wgpu::ComputePipeline,
-    /// Per parity p: pass i (i % 2 == p) writes depth[p] and reads depth[1 − p].
+    resolve: wgpu::ComputePipeline,
+    begin: wgpu::ComputePipeline,
+    end: wgpu::ComputePipeline,
+    attrs: Attrs,
+    /// Per parity p: pass i (i % 2 == p) writes depth[p] (and ids[p]) and reads the other.
     peel_bind: [wgpu::BindGroup; 2],
-    composite_bind: [wgpu::BindGroup; 2],
+    resolve_bind: [wgpu::BindGroup; 2],
     depth_views: [wgpu::TextureView; 2],
-    layer_view: wgpu::TextureView,
-    accum: wgpu::Buffer,
+    /// Colour attachments per parity (only the id target alternates, for the tie-break).
+    target_views: [Vec<wgpu::TextureView>; 2],
+    image: wgpu::Buffer,
     counts: wgpu::Buffer,
+    images: usize,
     occlusion: wgpu::QuerySet,
     occ_resolve: wgpu::Buffer,
     occ_read: wgpu::Buffer,
-    max_layers: u32,
-    occlusion_stop: bool,
+    cfg: Config,
     reversed: bool,
     alloc: AllocCounter,
 }
 
 impl PreparedPeel {
-    fn new(gpu: &Gpu, scene: &GpuScene, max_layers: u32, occlusion_stop: bool) -> Self {
+    fn new(gpu: &Gpu, scene: &GpuScene, cfg: Config) -> Self {
         let d = &gpu.device;
         let (w, h) = (scene.width, scene.height);
-        let module = shader(gpu, "depth_peel", WGSL);
+        let module = shader(gpu, "depth_peel", &format!("{EFFECTS_WGSL}\n{WGSL}"));
+        let var = variant(cfg.payload());
         let frag = wgpu::ShaderStages::FRAGMENT;
         let comp = wgpu::ShaderStages::COMPUTE;
+        let mut alloc = AllocCounter::default();
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+
         let peel_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("peel"),
             entries: &[
                 camera_entry(0),
                 texture_entry(1, wgpu::TextureSampleType::Depth, frag),
+                texture_entry(2, wgpu::TextureSampleType::Uint, frag),
             ],
         });
-        let comp_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("peel composite"),
-            entries: &[
-                texture_entry(
-                    0,
-                    wgpu::TextureSampleType::Float { filterable: false },
-                    comp,
-                ),
-                texture_entry(1, wgpu::TextureSampleType::Depth, comp),
-                storage_entry(2, false, comp),
-                storage_entry(3, false, comp),
-            ],
+        let sample_type = |f: wgpu::TextureFormat| match f {
+            ID_FORMAT => wgpu::TextureSampleType::Uint,
+            _ => wgpu::TextureSampleType::Float { filterable: false },
+        };
+        let mut resolve_entries = vec![texture_entry(1, wgpu::TextureSampleType::Depth, comp)];
+        for &(f, binding) in var.targets {
+            resolve_entries.push(texture_entry(binding, sample_type(f), comp));
+        }
+        for b in 5..=7 {
+            resolve_entries.push(storage_entry(b, false, comp));
+        }
+        let resolve_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("peel resolve"),
+            entries: &resolve_entries,
         });
         let peel_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("peel"),
@@ -111,21 +247,27 @@ impl PreparedPeel {
             immediate_size: 0,
         });
         let comp_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("peel composite"),
-            bind_group_layouts: &[Some(&peel_bgl), Some(&comp_bgl)],
+            label: Some("peel resolve"),
+            bind_group_layouts: &[Some(&peel_bgl), Some(&resolve_bgl)],
             immediate_size: 0,
         });
-        let layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
-            .into_iter()
-            .map(Some)
+        let layouts: Vec<_> = GpuScene::layouts(var.attrs).into_iter().map(Some).collect();
+        let targets: Vec<_> = var
+            .targets
+            .iter()
+            .map(|&(format, _)| {
+                Some(wgpu::ColorTargetState {
+                    format,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })
+            })
             .collect();
-        let targets = [Some(wgpu::ColorTargetState {
-            format: LAYER_FORMAT,
-            blend: None,
-            write_mask: wgpu::ColorWrites::ALL,
-        })];
         let make = |peel: bool| {
-            let constants = [("PEEL", if peel { 1.0 } else { 0.0 })];
+            let constants = [
+                ("PEEL", if peel { 1.0 } else { 0.0 }),
+                ("TIEBREAK", if cfg.tiebreak { 1.0 } else { 0.0 }),
+            ];
             let opts = wgpu::PipelineCompilationOptions {
                 constants: &constants,
                 zero_initialize_workgroup_memory: false,
@@ -135,7 +277,7 @@ impl PreparedPeel {
                 layout: Some(&peel_layout),
                 vertex: wgpu::VertexState {
                     module: &module,
-                    entry_point: Some("vs_full"),
+                    entry_point: Some(var.vs),
                     compilation_options: Default::default(),
                     buffers: &layouts,
                 },
@@ -144,7 +286,7 @@ impl PreparedPeel {
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
-                    entry_point: Some("fs_peel"),
+                    entry_point: Some(var.fs),
                     compilation_options: opts,
                     targets: &targets,
                 }),
@@ -154,17 +296,24 @@ impl PreparedPeel {
         };
         let first = make(false);
         let peel = make(true);
-        let composite = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("peel composite"),
-            layout: Some(&comp_layout),
-            module: &module,
-            entry_point: Some("composite"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let fold_constants = cfg.effect.constants();
+        let compute = |entry: &str| {
+            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&comp_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &fold_constants,
+                    zero_initialize_workgroup_memory: false,
+                },
+                cache: None,
+            })
+        };
+        let resolve = compute(var.resolve);
+        let begin = compute("fold_begin");
+        let end = compute("fold_end");
 
-        let mut alloc = AllocCounter::default();
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
         let depth_tex = [0, 1].map(|i| {
             alloc.texture(
                 gpu,
@@ -176,16 +325,54 @@ impl PreparedPeel {
             )
         });
         let depth_views = [0, 1].map(|i| depth_tex[i].create_view(&Default::default()));
-        let layer_view = alloc
-            .texture(gpu, "peel layer", w, h, LAYER_FORMAT, usage)
+        // One texture per target; the id target gets a second one when the tie-break reads
+        // the previous layer's ids.
+        let mut views: Vec<[wgpu::TextureView; 2]> = Vec::new();
+        for &(f, binding) in var.targets {
+            let a = alloc
+                .texture(gpu, &format!("peel layer {binding}"), w, h, f, usage)
+                .create_view(&Default::default());
+            let b = if cfg.tiebreak && f == ID_FORMAT {
+                alloc
+                    .texture(gpu, &format!("peel layer {binding}'"), w, h, f, usage)
+                    .create_view(&Default::default())
+            } else {
+                a.clone()
+            };
+            views.push([a, b]);
+        }
+        let target_views = [0, 1].map(|p| views.iter().map(|v| v[p].clone()).collect::<Vec<_>>());
+        let dummy_id = d
+            .create_texture(&wgpu::TextureDescriptor {
+                label: Some("peel no ids"),
+                size: wgpu::Extent3d {
+                    width: 1,
+                    height: 1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: ID_FORMAT,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
             .create_view(&Default::default());
+        let id_target = var.targets.iter().position(|&(f, _)| f == ID_FORMAT);
+
         let px = (w * h) as u64;
+        let images = cfg.effect.effect.image_count();
         let st = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_SRC
             | wgpu::BufferUsages::COPY_DST;
-        let accum = alloc.buffer(gpu, "peel accum", px * 16, st);
+        let fold = alloc.buffer(gpu, "peel fold state", px * FOLD_STATE_BYTES, st);
         let counts = alloc.buffer(gpu, "peel counts", px * 4, st);
+        let image = alloc.buffer(gpu, "peel image", px * 16 * images as u64, st);
         let peel_bind = [0usize, 1].map(|p| {
+            let prev_id = match (cfg.tiebreak, id_target) {
+                (true, Some(t)) => &views[t][1 - p],
+                _ => &dummy_id,
+            };
             d.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("peel"),
                 layout: &peel_bgl,
@@ -198,31 +385,34 @@ impl PreparedPeel {
                         binding: 1,
                         resource: wgpu::BindingResource::TextureView(&depth_views[1 - p]),
                     },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::TextureView(prev_id),
+                    },
                 ],
             })
         });
-        let composite_bind = [0usize, 1].map(|p| {
+        let resolve_bind = [0usize, 1].map(|p| {
+            let mut entries = vec![wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::TextureView(&depth_views[p]),
+            }];
+            for (t, &(_, binding)) in var.targets.iter().enumerate() {
+                entries.push(wgpu::BindGroupEntry {
+                    binding,
+                    resource: wgpu::BindingResource::TextureView(&views[t][p]),
+                });
+            }
+            for (binding, buf) in [(5, &fold), (6, &counts), (7, &image)] {
+                entries.push(wgpu::BindGroupEntry {
+                    binding,
+                    resource: buf.as_entire_binding(),
+                });
+            }
             d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("peel composite"),
-                layout: &comp_bgl,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&layer_view),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&depth_views[p]),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: accum.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: counts.as_entire_binding(),
-                    },
-                ],
+                label: Some("peel resolve"),
+                layout: &resolve_bgl,
+                entries: &entries,
             })
         });
         let occlusion = d.create_query_set(&wgpu::QuerySetDescriptor {
@@ -245,24 +435,46 @@ impl PreparedPeel {
         PreparedPeel {
             first,
             peel,
-            composite,
+            resolve,
+            begin,
+            end,
+            attrs: var.attrs,
             peel_bind,
-            composite_bind,
+            resolve_bind,
             depth_views,
-            layer_view,
-            accum,
+            target_views,
+            image,
             counts,
+            images,
             occlusion,
             occ_resolve,
             occ_read,
-            max_layers,
-            occlusion_stop,
+            cfg,
             reversed: scene.reversed_z,
             alloc,
         }
     }
 
-    /// Encodes peel pass `i` and its composite.
+    fn dispatch(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        timer: &mut GpuTimer,
+        label: &str,
+        pipeline: &wgpu::ComputePipeline,
+        p: usize,
+    ) {
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: timer.compute_pass(label),
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.peel_bind[p], &[]);
+        pass.set_bind_group(1, &self.resolve_bind[p], &[]);
+        pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
+    }
+
+    /// Encodes peel pass `i` and its resolve into the fold.
     fn encode_layer(
         &self,
         enc: &mut wgpu::CommandEncoder,
@@ -271,18 +483,25 @@ impl PreparedPeel {
         i: u32,
     ) {
         let p = (i % 2) as usize;
+        let occlusion_stop = self.cfg.occlusion_stop;
         {
+            let color_attachments: Vec<_> = self.target_views[p]
+                .iter()
+                .map(|view| {
+                    Some(wgpu::RenderPassColorAttachment {
+                        view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })
+                })
+                .collect();
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("peel"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.layer_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
+                color_attachments: &color_attachments,
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &self.depth_views[p],
                     depth_ops: Some(wgpu::Operations {
@@ -292,30 +511,21 @@ impl PreparedPeel {
                     stencil_ops: None,
                 }),
                 timestamp_writes: timer.render_pass("peel"),
-                occlusion_query_set: self.occlusion_stop.then_some(&self.occlusion),
+                occlusion_query_set: occlusion_stop.then_some(&self.occlusion),
                 multiview_mask: None,
             });
             pass.set_pipeline(if i == 0 { &self.first } else { &self.peel });
             pass.set_bind_group(0, &self.peel_bind[p], &[]);
-            if self.occlusion_stop {
+            if occlusion_stop {
                 pass.begin_occlusion_query(0);
             }
-            scene.draw(&mut pass, Attrs::ALL);
-            if self.occlusion_stop {
+            scene.draw(&mut pass, self.attrs);
+            if occlusion_stop {
                 pass.end_occlusion_query();
             }
         }
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("composite"),
-                timestamp_writes: timer.compute_pass("composite"),
-            });
-            pass.set_pipeline(&self.composite);
-            pass.set_bind_group(0, &self.peel_bind[p], &[]);
-            pass.set_bind_group(1, &self.composite_bind[p], &[]);
-            pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
-        }
-        if self.occlusion_stop {
+        self.dispatch(enc, scene, timer, "resolve", &self.resolve, p);
+        if occlusion_stop {
             enc.resolve_query_set(&self.occlusion, 0..1, &self.occ_resolve, 0);
             enc.copy_buffer_to_buffer(&self.occ_resolve, 0, &self.occ_read, 0, 8);
         }
@@ -325,26 +535,24 @@ impl PreparedPeel {
 impl Prepared for PreparedPeel {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.clear_buffer(&self.accum, 0, None);
-        enc.clear_buffer(&self.counts, 0, None);
+        self.dispatch(&mut enc, scene, timer, "fold_begin", &self.begin, 0);
         let mut stats = FrameStats::default();
-        for i in 0..self.max_layers {
+        for i in 0..self.cfg.max_layers {
             self.encode_layer(&mut enc, scene, timer, i);
             stats.geometry_passes += 1;
-            if self.occlusion_stop {
+            if self.cfg.occlusion_stop {
                 // The classic algorithm: the CPU reads the query before deciding on another pass.
                 gpu.queue.submit([enc.finish()]);
                 let bytes = gpu.map_read(&self.occ_read)?;
                 let samples = u64::from_le_bytes(bytes[..8].try_into().unwrap());
-                if samples == 0 {
-                    return Ok(stats);
-                }
-                stats.layers += 1;
                 enc = gpu.device.create_command_encoder(&Default::default());
-            } else {
-                stats.layers += 1;
+                if samples == 0 {
+                    break;
+                }
             }
+            stats.layers += 1;
         }
+        self.dispatch(&mut enc, scene, timer, "fold_end", &self.end, 0);
         gpu.queue.submit([enc.finish()]);
         Ok(stats)
     }
@@ -352,11 +560,9 @@ impl Prepared for PreparedPeel {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let n = scene.pixels();
         let mut cap = Capture::empty();
-        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.accum, n)?);
-        let counts = read_vec::<u32>(gpu, &self.counts, n)?;
-        cap.expected = Expected::FirstK(self.max_layers);
-        cap.overflow_pixels = None;
-        cap.counts = Some(counts);
+        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n * self.images)?);
+        cap.counts = Some(read_vec::<u32>(gpu, &self.counts, n)?);
+        cap.expected = Expected::FirstK(self.cfg.max_layers);
         Ok(cap)
     }
 

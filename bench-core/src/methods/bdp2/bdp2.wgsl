@@ -1,0 +1,27 @@
+// Two-pass bucket depth peeling (Liu et al., GPU Pro ch. 1, BDP2). Pass 1 is uniform BDP with
+// the keyed packing: each bucket keeps its farthest fragment (largest in-bucket key). Pass 2
+// reads pass 1 and keeps, per bucket, the largest key strictly below it: the next fragment of
+// the sub-interval, so a bucket holds two fragments and collisions need three. Fragments of one
+// key (within 1/127 of a bucket width) are indistinguishable and merge.
+
+@fragment
+fn fs_first(in: Varyings) -> BucketOut {
+    let zr = depth_range(vec2<i32>(in.clip.xy));
+    let t = rel_position(in.clip.z, zr);
+    let b = uniform_bucket(t);
+    return emit(b, pack_keyed(bucket_key(t, b), in.color), NO_CHANNEL, 0.0);
+}
+
+@fragment
+fn fs_second(in: Varyings) -> BucketOut {
+    let px = vec2<i32>(in.clip.xy);
+    let zr = depth_range(px);
+    let t = rel_position(in.clip.z, zr);
+    let b = uniform_bucket(t);
+    let k = bucket_key(t, b);
+    let first = slot_a(px, b);
+    if first == 0.0 || k >= keyed_key(first) {
+        discard;
+    }
+    return emit(b, pack_keyed(k, in.color), NO_CHANNEL, 0.0);
+}

@@ -1,0 +1,1026 @@
+//! What `bdp`, `bdp2` and `adp` share (Liu et al., "Multi-Fragment Effects on the GPU Using
+//! Bucket Sort", GPU Pro ch. 1): the GPU frame ([`PreparedBucket`]) and the CPU twins of every
+//! per-pixel rule in `bucket.wgsl` and the methods' WGSL (vello style: same names, same f32
+//! arithmetic), which tests use to name the pixel and fragment that went wrong.
+//!
+//! Frame: a depth-range pre-pass (RG32Float, MAX blending of (−d, d)) → [adp: histogram pass +
+//! equalisation] → routing pass(es) into K buckets on up to 8 RGBA32F attachments with MAX
+//! blending → a compute resolve that walks the buckets nearest first through the effects fold.
+//!
+//! Collisions are counted exactly, per pixel, as (true fragments) − (fragments captured): the
+//! captured count comes from the resolve, the true count from an untimed fragment-counter pass
+//! (one atomicAdd per fragment) run in `readback`, so the timed frame carries no counter. Tests
+//! check this GPU count against the CPU twin routing the reference fragment lists.
+
+use scenarios::Params;
+
+use super::{
+    camera_entry, read_vec, storage_entry, texture_entry, Capture, Expected, FrameStats,
+    FOLD_STATE_BYTES,
+};
+use crate::gpu::Gpu;
+use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::reference::FragmentLists;
+use crate::timing::GpuTimer;
+use crate::Result;
+
+const WGSL: &str = include_str!("bucket.wgsl");
+const EFFECTS_WGSL: &str = include_str!("../effects.wgsl");
+const SLOT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+const RANGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+/// Float channels one routing pass can write: 8 attachments × 4 channels.
+pub const MAX_CHANNELS: u32 = 32;
+const MIN_NORMAL_BITS: u32 = 0x0080_0000;
+/// std430 size of `FoldState` (vec4, vec4, u32, u32, padded to 16).
+const PASS_STRIDE: u64 = 256;
+
+/// Which bucket method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// BDP: uniform sub-intervals, one pass; `paired` keeps nearest and farthest per bucket.
+    Uniform { paired: bool },
+    /// BDP2: uniform, a second pass keeps the next fragment of each bucket.
+    TwoPass,
+    /// ADP: histogram-equalised sub-intervals, passes of K buckets.
+    Adaptive { hist_bins: u32 },
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct Config {
+    pub kind: Kind,
+    /// Buckets per pass (K).
+    pub buckets: u32,
+}
+
+impl Config {
+    /// Float channels per routing pass.
+    pub fn channels(&self) -> u32 {
+        match self.kind {
+            Kind::Uniform { paired: true } => 2 * self.buckets,
+            _ => self.buckets,
+        }
+    }
+    pub fn attachments(&self) -> u32 {
+        self.channels().div_ceil(4)
+    }
+    fn mode(&self) -> u32 {
+        match self.kind {
+            Kind::Uniform { paired: false } => 0,
+            Kind::Uniform { paired: true } => 1,
+            Kind::TwoPass => 2,
+            Kind::Adaptive { .. } => 3,
+        }
+    }
+    fn hist_bins(&self) -> u32 {
+        match self.kind {
+            Kind::Adaptive { hist_bins } => hist_bins,
+            _ => 32,
+        }
+    }
+    /// Most routing passes a frame may need (adp: every bin occupied).
+    pub fn max_passes(&self) -> u32 {
+        match self.kind {
+            Kind::Adaptive { hist_bins } => hist_bins.div_ceil(self.buckets),
+            _ => 1,
+        }
+    }
+}
+
+/// Reads the shared axes: `bucket_count` (8/16/32 by default 16), checked against the channels.
+pub fn buckets_param(params: &Params, paired: bool) -> std::result::Result<u32, String> {
+    let k = super::int_param(params, "bucket_count", 16, 1, MAX_CHANNELS as i64)? as u32;
+    let channels = if paired { 2 * k } else { k };
+    if channels > MAX_CHANNELS {
+        return Err(format!(
+            "bucket_count = {k}{} needs {channels} float channels; one pass has {MAX_CHANNELS} (8 attachments × 4)",
+            if paired { " paired (2 channels per bucket)" } else { "" }
+        ));
+    }
+    Ok(k)
+}
+
+/// What every bucket method checks: blendable RGBA32F/RG32F and enough attachments.
+pub fn supports_targets(gpu: &Gpu, cfg: &Config) -> std::result::Result<(), String> {
+    if !gpu.has(wgpu::Features::FLOAT32_BLENDABLE) {
+        return Err("adapter lacks FLOAT32_BLENDABLE (MAX blending on RGBA32F/RG32F)".into());
+    }
+    for f in [SLOT_FORMAT, RANGE_FORMAT] {
+        if !gpu.renderable(f) {
+            return Err(format!("{f:?} is not renderable on this adapter"));
+        }
+    }
+    let n = cfg.attachments();
+    if n > gpu.limits.max_color_attachments {
+        return Err(format!(
+            "{n} colour attachments needed, adapter allows {}",
+            gpu.limits.max_color_attachments
+        ));
+    }
+    if n * 16 > gpu.limits.max_color_attachment_bytes_per_sample {
+        return Err(format!(
+            "{} bytes per sample needed, adapter allows {}",
+            n * 16,
+            gpu.limits.max_color_attachment_bytes_per_sample
+        ));
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------
+// CPU twins (same names and f32 arithmetic as the WGSL).
+
+/// Nearness-relative position of window depth `d` in [zmin, zmax]: 0 nearest, 1 farthest.
+pub fn rel_position(d: f32, zmin: f32, zmax: f32, reversed: bool) -> f32 {
+    let span = zmax - zmin;
+    if span.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return 0.0;
+    }
+    if reversed {
+        ((zmax - d) / span).clamp(0.0, 1.0)
+    } else {
+        ((d - zmin) / span).clamp(0.0, 1.0)
+    }
+}
+
+pub fn uniform_bucket(t: f32, k: u32) -> u32 {
+    ((t * k as f32) as u32).min(k - 1)
+}
+
+pub fn bucket_key(t: f32, b: u32, k: u32) -> u32 {
+    let r = t * k as f32 - b as f32;
+    ((r.max(0.0) * 127.0) as u32).min(126)
+}
+
+pub fn adp_bin(t: f32, bins: u32) -> u32 {
+    ((t * bins as f32) as u32).min(bins - 1)
+}
+
+fn q(x: f32, levels: f32) -> u32 {
+    (x.clamp(0.0, 1.0) * levels + 0.5).floor() as u32
+}
+
+/// RGBA → a positive normal f32 (R, G, B 7 bits, alpha 0..1015): the payload p < 127·2^24 sits at
+/// bits p + 2^23, so the value lies in [f32::MIN_POSITIVE, f32::MAX] — never 0 (empty),
+/// denormal, Inf or NaN — and MAX blending orders it like p. Quantisation: RGB ±1/254, A ±1/2030.
+pub fn pack_color(c: [f32; 4]) -> f32 {
+    let p =
+        (q(c[3], 1015.0) << 21) | (q(c[0], 127.0) << 14) | (q(c[1], 127.0) << 7) | q(c[2], 127.0);
+    f32::from_bits(p + MIN_NORMAL_BITS)
+}
+
+pub fn unpack_color(v: f32) -> [f32; 4] {
+    let p = v.to_bits() - MIN_NORMAL_BITS;
+    [
+        ((p >> 14) & 127) as f32 / 127.0,
+        ((p >> 7) & 127) as f32 / 127.0,
+        (p & 127) as f32 / 127.0,
+        (p >> 21) as f32 / 1015.0,
+    ]
+}
+
+/// Order key 0..126 above RGBA at 6 bits each (±1/126): MAX keeps the largest key with its colour.
+pub fn pack_keyed(key: u32, c: [f32; 4]) -> f32 {
+    let p = (key.min(126) << 24)
+        | (q(c[0], 63.0) << 18)
+        | (q(c[1], 63.0) << 12)
+        | (q(c[2], 63.0) << 6)
+        | q(c[3], 63.0);
+    f32::from_bits(p + MIN_NORMAL_BITS)
+}
+
+pub fn keyed_key(v: f32) -> u32 {
+    (v.to_bits() - MIN_NORMAL_BITS) >> 24
+}
+
+pub fn keyed_color(v: f32) -> [f32; 4] {
+    let p = v.to_bits() - MIN_NORMAL_BITS;
+    [
+        ((p >> 18) & 63) as f32 / 63.0,
+        ((p >> 12) & 63) as f32 / 63.0,
+        ((p >> 6) & 63) as f32 / 63.0,
+        (p & 63) as f32 / 63.0,
+    ]
+}
+
+/// ADP equalisation of one pixel: the bins of ranks pass·K .. pass·K + K among the occupied
+/// bins of `hist` (words of 32 bins, bin 0 nearest), `u32::MAX` where there are fewer.
+pub fn adp_equalise(hist: &[u32], k: u32, pass: u32) -> Vec<u32> {
+    let first = (pass * k) as usize;
+    let occupied =
+        (0..hist.len() as u32 * 32).filter(|&b| hist[(b / 32) as usize] >> (b % 32) & 1 == 1);
+    let mut out: Vec<u32> = occupied.skip(first).take(k as usize).collect();
+    out.resize(k as usize, u32::MAX);
+    out
+}
+
+/// One reference fragment as the GPU routes it.
+#[derive(Clone, Copy, Debug)]
+pub struct Routed {
+    /// Index in the pixel's reference list (nearest first).
+    pub index: usize,
+    /// Nearness position t in [0, 1].
+    pub t: f32,
+    /// Bucket (bdp, bdp2) or occupied histogram bin (adp).
+    pub bucket: u32,
+    /// In-bucket key (paired, bdp2).
+    pub key: u32,
+    /// Distance of t·K (or t·bins) from the nearest bucket boundary, in buckets: a small
+    /// margin means f32 rounding on the GPU could route it differently.
+    pub margin: f32,
+}
+
+/// The routing twin for one pixel of the reference: zmin/zmax are the pixel's reference
+/// extremes in f32, exactly what the pre-pass stores.
+pub fn route_pixel(
+    cfg: &Config,
+    frags: &[crate::reference::RefFragment],
+    reversed: bool,
+) -> Vec<Routed> {
+    if frags.is_empty() {
+        return Vec::new();
+    }
+    let ds: Vec<f32> = frags.iter().map(|f| f.depth as f32).collect();
+    let zmin = ds.iter().copied().fold(f32::INFINITY, f32::min);
+    let zmax = ds.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    ds.iter()
+        .enumerate()
+        .map(|(index, &d)| {
+            let t = rel_position(d, zmin, zmax, reversed);
+            let (bucket, key, scale) = match cfg.kind {
+                Kind::Adaptive { hist_bins } => (adp_bin(t, hist_bins), 0, hist_bins as f32),
+                _ => {
+                    let b = uniform_bucket(t, cfg.buckets);
+                    (b, bucket_key(t, b, cfg.buckets), cfg.buckets as f32)
+                }
+            };
+            let x = t * scale;
+            let margin = if x <= 0.0 || x >= scale {
+                f32::INFINITY
+            } else {
+                (x - x.round()).abs()
+            };
+            Routed {
+                index,
+                t,
+                bucket,
+                key,
+                margin,
+            }
+        })
+        .collect()
+}
+
+/// Fragments the method captures in one pixel, from the twin's routing (see the WGSL resolve).
+pub fn captured_in_pixel(cfg: &Config, routed: &[Routed]) -> u32 {
+    use std::collections::BTreeMap;
+    let mut per_bucket: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
+    for r in routed {
+        per_bucket.entry(r.bucket).or_default().push(r.key);
+    }
+    per_bucket
+        .values()
+        .map(|keys| match cfg.kind {
+            Kind::Uniform { paired: false } | Kind::Adaptive { .. } => 1,
+            Kind::Uniform { paired: true } => {
+                let lo = keys.iter().min().unwrap();
+                let hi = keys.iter().max().unwrap();
+                if lo == hi {
+                    1
+                } else {
+                    2
+                }
+            }
+            Kind::TwoPass => {
+                let distinct: std::collections::BTreeSet<_> = keys.iter().collect();
+                distinct.len().min(2) as u32
+            }
+        })
+        .sum()
+}
+
+/// The twin's per-pixel captured counts over a whole frame.
+pub fn twin_captured(cfg: &Config, lists: &FragmentLists) -> Vec<u32> {
+    (0..lists.pixels())
+        .map(|p| captured_in_pixel(cfg, &route_pixel(cfg, lists.pixel(p), lists.reversed_z)))
+        .collect()
+}
+
+/// The twin's collision count: true fragments not individually captured.
+pub fn twin_collisions(cfg: &Config, lists: &FragmentLists) -> u64 {
+    let cap = twin_captured(cfg, lists);
+    (0..lists.pixels())
+        .map(|p| lists.pixel(p).len() as u64 - cap[p] as u64)
+        .sum()
+}
+
+// ---------------------------------------------------------------------------------------------
+// The GPU side.
+
+/// `struct BucketOut` and `emit` for `n` attachments: writes v0 into channel ch0, v1 into ch1,
+/// 0 into every other channel (MAX blending then keeps the largest per channel).
+fn outputs_wgsl(n: u32) -> String {
+    let mut s = String::from("struct BucketOut {\n");
+    for i in 0..n {
+        s += &format!("    @location({i}) o{i}: vec4<f32>,\n");
+    }
+    s += "};\n\nfn lane(base: u32, ch0: u32, v0: f32, ch1: u32, v1: f32) -> vec4<f32> {\n";
+    s += "    let c = vec4<u32>(base, base + 1u, base + 2u, base + 3u);\n";
+    s += "    return select(vec4<f32>(0.0), vec4<f32>(v0), c == vec4<u32>(ch0)) + select(vec4<f32>(0.0), vec4<f32>(v1), c == vec4<u32>(ch1));\n}\n\n";
+    s += "fn emit(ch0: u32, v0: f32, ch1: u32, v1: f32) -> BucketOut {\n    var o: BucketOut;\n";
+    for i in 0..n {
+        s += &format!("    o.o{i} = lane({}u, ch0, v0, ch1, v1);\n", 4 * i);
+    }
+    s += "    return o;\n}\n";
+    s
+}
+
+fn max_blend() -> wgpu::BlendState {
+    let c = wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Max,
+    };
+    wgpu::BlendState { color: c, alpha: c }
+}
+
+/// An RGBA32F 2D array: one layer per attachment; layer views for rendering, an array view for reading.
+struct Slots {
+    layers: Vec<wgpu::TextureView>,
+    /// Kept alive for the bind group.
+    _array: wgpu::TextureView,
+    bind: wgpu::BindGroup,
+}
+
+pub struct PreparedBucket {
+    cfg: Config,
+    bounds: wgpu::RenderPipeline,
+    route: wgpu::RenderPipeline,
+    second: Option<wgpu::RenderPipeline>,
+    hist_pass: Option<wgpu::RenderPipeline>,
+    equalise: Option<wgpu::ComputePipeline>,
+    count: wgpu::RenderPipeline,
+    resolve: wgpu::ComputePipeline,
+    cam_bind: wgpu::BindGroup,
+    main_bind: wgpu::BindGroup,
+    range_view: wgpu::TextureView,
+    slots_a: Slots,
+    slots_b: Option<Slots>,
+    frag_count: wgpu::Buffer,
+    hist: wgpu::Buffer,
+    adp_bounds: wgpu::Buffer,
+    occupied_max: wgpu::Buffer,
+    occ_read: wgpu::Buffer,
+    accum: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    /// Routing passes of the last frame (adp: ⌈max occupied bins / K⌉).
+    pub last_passes: u32,
+    alloc: AllocCounter,
+}
+
+impl PreparedBucket {
+    /// `method_wgsl` holds the method's fragment entry points (`fs_route`, and `fs_first` /
+    /// `fs_second` for bdp2, `fs_hist` / `equalise` for adp).
+    pub fn new(
+        gpu: &Gpu,
+        scene: &GpuScene,
+        cfg: Config,
+        method_wgsl: &str,
+    ) -> Result<PreparedBucket> {
+        let d = &gpu.device;
+        let (w, h) = (scene.width, scene.height);
+        let px = w as u64 * h as u64;
+        let body = format!(
+            "{EFFECTS_WGSL}\n{WGSL}\n{}\n{method_wgsl}",
+            outputs_wgsl(cfg.attachments())
+        );
+        let module = super::shader(gpu, "bucket", &body);
+        let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
+        let cam_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("bucket camera"),
+            entries: &[camera_entry(0)],
+        });
+        let mut main_entries = vec![
+            camera_entry(0),
+            texture_entry(1, wgpu::TextureSampleType::Float { filterable: false }, fc),
+            wgpu::BindGroupLayoutEntry {
+                binding: 2,
+                visibility: fc,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: true,
+                    min_binding_size: wgpu::BufferSize::new(16),
+                },
+                count: None,
+            },
+        ];
+        for b in 3..=9 {
+            main_entries.push(storage_entry(b, false, fc));
+        }
+        let main_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("bucket main"),
+            entries: &main_entries,
+        });
+        let arr_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("bucket slots"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: fc,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2Array,
+                    multisampled: false,
+                },
+                count: None,
+            }],
+        });
+        let layout = |label: &str, groups: &[&wgpu::BindGroupLayout]| {
+            let g: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().map(|g| Some(*g)).collect();
+            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: &g,
+                immediate_size: 0,
+            })
+        };
+        let cam_layout = layout("bucket bounds", &[&cam_bgl]);
+        let main_layout = layout("bucket main", &[&main_bgl]);
+        let second_layout = layout("bucket second", &[&main_bgl, &arr_bgl]);
+        let resolve_layout = layout("bucket resolve", &[&main_bgl, &arr_bgl, &arr_bgl]);
+
+        let constants = [
+            ("K", cfg.buckets as f64),
+            ("MODE", cfg.mode() as f64),
+            ("HIST_BINS", cfg.hist_bins() as f64),
+            (
+                "PAIRED",
+                if cfg.kind == (Kind::Uniform { paired: true }) {
+                    1.0
+                } else {
+                    0.0
+                },
+            ),
+            ("EFFECT", 0.0),
+        ];
+        // Every override a stage can see must be known to it; pass only those the module declares.
+        let declared: Vec<(&str, f64)> = constants
+            .iter()
+            .copied()
+            .filter(|(n, _)| body.contains(&format!("override {n}")))
+            .collect();
+        let opts = || wgpu::PipelineCompilationOptions {
+            constants: &declared,
+            zero_initialize_workgroup_memory: false,
+        };
+        let all_layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
+            .into_iter()
+            .map(Some)
+            .collect();
+        let pos_layouts: Vec<_> = GpuScene::layouts(Attrs::POSITION_ONLY)
+            .into_iter()
+            .map(Some)
+            .collect();
+        let slot_targets: Vec<Option<wgpu::ColorTargetState>> = (0..cfg.attachments())
+            .map(|_| {
+                Some(wgpu::ColorTargetState {
+                    format: SLOT_FORMAT,
+                    blend: Some(max_blend()),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })
+            })
+            .collect();
+        let render = |label: &str,
+                      pl: &wgpu::PipelineLayout,
+                      vs: &str,
+                      fs: &str,
+                      targets: &[Option<wgpu::ColorTargetState>]| {
+            let position_only = vs == "vs_position";
+            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(pl),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(vs),
+                    compilation_options: opts(),
+                    buffers: if position_only {
+                        &pos_layouts
+                    } else {
+                        &all_layouts
+                    },
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs),
+                    compilation_options: opts(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let range_target = [Some(wgpu::ColorTargetState {
+            format: RANGE_FORMAT,
+            blend: Some(max_blend()),
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        // Passes that only touch storage still need a target; nothing is written to it.
+        let silent_target = [Some(wgpu::ColorTargetState {
+            format: SLOT_FORMAT,
+            blend: None,
+            write_mask: wgpu::ColorWrites::empty(),
+        })];
+        let bounds = render(
+            "bucket depth range",
+            &cam_layout,
+            "vs_position",
+            "fs_bounds",
+            &range_target,
+        );
+        let count = render(
+            "bucket count",
+            &main_layout,
+            "vs_position",
+            "fs_count",
+            &silent_target,
+        );
+        let (route, second, hist_pass) = match cfg.kind {
+            Kind::Uniform { .. } => (
+                render(
+                    "bdp route",
+                    &main_layout,
+                    "vs_full",
+                    "fs_route",
+                    &slot_targets,
+                ),
+                None,
+                None,
+            ),
+            Kind::TwoPass => (
+                render(
+                    "bdp2 first",
+                    &main_layout,
+                    "vs_full",
+                    "fs_first",
+                    &slot_targets,
+                ),
+                Some(render(
+                    "bdp2 second",
+                    &second_layout,
+                    "vs_full",
+                    "fs_second",
+                    &slot_targets,
+                )),
+                None,
+            ),
+            Kind::Adaptive { .. } => (
+                render(
+                    "adp route",
+                    &main_layout,
+                    "vs_full",
+                    "fs_route",
+                    &slot_targets,
+                ),
+                None,
+                Some(render(
+                    "adp histogram",
+                    &main_layout,
+                    "vs_full",
+                    "fs_hist",
+                    &silent_target,
+                )),
+            ),
+        };
+        let compute = |label: &str, pl: &wgpu::PipelineLayout, entry: &str| {
+            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(pl),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: opts(),
+                cache: None,
+            })
+        };
+        let resolve = compute("bucket resolve", &resolve_layout, "resolve");
+        let equalise = matches!(cfg.kind, Kind::Adaptive { .. })
+            .then(|| compute("adp equalise", &main_layout, "equalise"));
+
+        let mut alloc = AllocCounter::default();
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let range_view = alloc
+            .texture(gpu, "bucket depth range", w, h, RANGE_FORMAT, usage)
+            .create_view(&Default::default());
+        let mut make_slots = |label: &str| {
+            let layers = cfg.attachments();
+            alloc.bytes += px * 16 * layers as u64;
+            let tex = d.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: layers,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: SLOT_FORMAT,
+                usage: usage | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            });
+            let layer_views = (0..layers)
+                .map(|l| {
+                    tex.create_view(&wgpu::TextureViewDescriptor {
+                        dimension: Some(wgpu::TextureViewDimension::D2),
+                        base_array_layer: l,
+                        array_layer_count: Some(1),
+                        ..Default::default()
+                    })
+                })
+                .collect();
+            let array = tex.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            });
+            let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout: &arr_bgl,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&array),
+                }],
+            });
+            Slots {
+                layers: layer_views,
+                _array: array,
+                bind,
+            }
+        };
+        let slots_a = make_slots("bucket slots");
+        let slots_b = (cfg.kind == Kind::TwoPass).then(|| make_slots("bdp2 second slots"));
+
+        let st = wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST;
+        let adaptive = matches!(cfg.kind, Kind::Adaptive { .. });
+        let frag_count = alloc.buffer(gpu, "bucket fragment counter", px * 4, st);
+        let hist_bytes = if adaptive {
+            px * (cfg.hist_bins() / 32) as u64 * 4
+        } else {
+            4
+        };
+        let hist = alloc.buffer(gpu, "adp histogram", hist_bytes, st);
+        let bounds_bytes = if adaptive {
+            px * cfg.buckets as u64 * 4
+        } else {
+            4
+        };
+        let adp_bounds = alloc.buffer(gpu, "adp bounds", bounds_bytes, st);
+        let occupied_max = alloc.buffer(gpu, "adp occupied max", 4, st);
+        let occ_read = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("adp occupied read"),
+            size: 4,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let fold_states = alloc.buffer(gpu, "bucket fold states", px * FOLD_STATE_BYTES, st);
+        let accum = alloc.buffer(gpu, "bucket accum", px * 16, st);
+        let counts = alloc.buffer(gpu, "bucket counts", px * 4, st);
+        let passes = cfg.max_passes() as u64;
+        let pass_data: Vec<u8> = (0..passes)
+            .flat_map(|p| {
+                let mut v = vec![0u8; PASS_STRIDE as usize];
+                v[..4].copy_from_slice(&(p as u32).to_le_bytes());
+                v
+            })
+            .collect();
+        let pass_info = alloc.buffer(
+            gpu,
+            "bucket pass info",
+            passes * PASS_STRIDE,
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        gpu.queue.write_buffer(&pass_info, 0, &pass_data);
+
+        let cam_bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("bucket camera"),
+            layout: &cam_bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: scene.camera.as_entire_binding(),
+            }],
+        });
+        let main_bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("bucket main"),
+            layout: &main_bgl,
+            entries: &[
+                buf(0, &scene.camera),
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&range_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &pass_info,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(16),
+                    }),
+                },
+                buf(3, &frag_count),
+                buf(4, &hist),
+                buf(5, &adp_bounds),
+                buf(6, &occupied_max),
+                buf(7, &fold_states),
+                buf(8, &accum),
+                buf(9, &counts),
+            ],
+        });
+        Ok(PreparedBucket {
+            cfg,
+            bounds,
+            route,
+            second,
+            hist_pass,
+            equalise,
+            count,
+            resolve,
+            cam_bind,
+            main_bind,
+            range_view,
+            slots_a,
+            slots_b,
+            frag_count,
+            hist,
+            adp_bounds,
+            occupied_max,
+            occ_read,
+            accum,
+            counts,
+            last_passes: 0,
+            alloc,
+        })
+    }
+
+    fn pass_offset(p: u32) -> u32 {
+        (p as u64 * PASS_STRIDE) as u32
+    }
+
+    fn slot_attachments(
+        views: &[wgpu::TextureView],
+    ) -> Vec<Option<wgpu::RenderPassColorAttachment<'_>>> {
+        views
+            .iter()
+            .map(|v| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view: v,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect()
+    }
+
+    /// A geometry pass of `pipeline` into `targets` (cleared to 0 = empty).
+    #[allow(clippy::too_many_arguments)]
+    fn geometry_pass(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        timer: &mut GpuTimer,
+        label: &str,
+        pipeline: &wgpu::RenderPipeline,
+        targets: &[wgpu::TextureView],
+        extra: Option<&wgpu::BindGroup>,
+        pass_index: u32,
+    ) {
+        let att = Self::slot_attachments(targets);
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
+            color_attachments: &att,
+            depth_stencil_attachment: None,
+            timestamp_writes: timer.render_pass(label),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.main_bind, &[Self::pass_offset(pass_index)]);
+        if let Some(b) = extra {
+            pass.set_bind_group(1, b, &[]);
+        }
+        scene.draw(&mut pass, Attrs::ALL);
+    }
+
+    fn compute_pass(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        timer: &mut GpuTimer,
+        label: &str,
+        pipeline: &wgpu::ComputePipeline,
+        pass_index: u32,
+    ) {
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: timer.compute_pass(label),
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.main_bind, &[Self::pass_offset(pass_index)]);
+        pass.set_bind_group(1, &self.slots_a.bind, &[]);
+        let b = self.slots_b.as_ref().unwrap_or(&self.slots_a);
+        pass.set_bind_group(2, &b.bind, &[]);
+        pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
+    }
+
+    /// Routing pass `p` and its resolve (adp: equalisation first).
+    fn route_and_resolve(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        timer: &mut GpuTimer,
+        p: u32,
+    ) {
+        if let Some(eq) = &self.equalise {
+            self.compute_pass(enc, scene, timer, "equalise", eq, p);
+        }
+        self.geometry_pass(
+            enc,
+            scene,
+            timer,
+            "route",
+            &self.route,
+            &self.slots_a.layers,
+            None,
+            p,
+        );
+        if let (Some(second), Some(b)) = (&self.second, &self.slots_b) {
+            self.geometry_pass(
+                enc,
+                scene,
+                timer,
+                "second",
+                second,
+                &b.layers,
+                Some(&self.slots_a.bind),
+                p,
+            );
+        }
+        self.compute_pass(enc, scene, timer, "resolve", &self.resolve, p);
+    }
+
+    /// Reads the adp histogram (words per pixel) and the last pass's bounds (K per pixel).
+    pub fn read_adp(&self, gpu: &Gpu, scene: &GpuScene) -> Result<(Vec<u32>, Vec<u32>)> {
+        let n = scene.pixels();
+        let words = (self.cfg.hist_bins() / 32) as usize;
+        Ok((
+            read_vec::<u32>(gpu, &self.hist, n * words)?,
+            read_vec::<u32>(gpu, &self.adp_bounds, n * self.cfg.buckets as usize)?,
+        ))
+    }
+
+    /// Runs the untimed fragment counter: true fragments per pixel as the GPU rasterizes them.
+    pub fn count_fragments(&self, gpu: &Gpu, scene: &GpuScene) -> Result<Vec<u32>> {
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.clear_buffer(&self.frag_count, 0, None);
+        {
+            let att = [Some(wgpu::RenderPassColorAttachment {
+                view: &self.slots_a.layers[0],
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })];
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("bucket count"),
+                color_attachments: &att,
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.count);
+            pass.set_bind_group(0, &self.main_bind, &[0]);
+            scene.draw(&mut pass, Attrs::POSITION_ONLY);
+        }
+        gpu.queue.submit([enc.finish()]);
+        read_vec::<u32>(gpu, &self.frag_count, scene.pixels())
+    }
+}
+
+impl super::Prepared for PreparedBucket {
+    fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        let mut stats = FrameStats::default();
+        {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("depth range"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &self.range_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        // Below every (−d, d) with d in [0, 1]: an untouched pixel reads zmax < zmin.
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: -2.0,
+                            g: -2.0,
+                            b: 0.0,
+                            a: 0.0,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: timer.render_pass("depth range"),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.bounds);
+            pass.set_bind_group(0, &self.cam_bind, &[]);
+            scene.draw(&mut pass, Attrs::POSITION_ONLY);
+        }
+        stats.geometry_passes += 1;
+        if let Some(hist_pass) = &self.hist_pass {
+            enc.clear_buffer(&self.hist, 0, None);
+            enc.clear_buffer(&self.occupied_max, 0, None);
+            self.geometry_pass(
+                &mut enc,
+                scene,
+                timer,
+                "histogram",
+                hist_pass,
+                &self.slots_a.layers[..1],
+                None,
+                0,
+            );
+            stats.geometry_passes += 1;
+        }
+        self.route_and_resolve(&mut enc, scene, timer, 0);
+        stats.geometry_passes += if self.second.is_some() { 2 } else { 1 };
+        let mut passes = 1;
+        if self.equalise.is_some() {
+            // The pass count depends on the most occupied bins of any pixel: one CPU round trip,
+            // like depth peeling's occlusion query.
+            enc.copy_buffer_to_buffer(&self.occupied_max, 0, &self.occ_read, 0, 4);
+            gpu.queue.submit([enc.finish()]);
+            let bytes = gpu.map_read(&self.occ_read)?;
+            let max_occupied = u32::from_le_bytes(bytes[..4].try_into().unwrap());
+            passes = max_occupied
+                .div_ceil(self.cfg.buckets)
+                .clamp(1, self.cfg.max_passes());
+            enc = gpu.device.create_command_encoder(&Default::default());
+            for p in 1..passes {
+                self.route_and_resolve(&mut enc, scene, timer, p);
+                stats.geometry_passes += 1;
+            }
+        }
+        gpu.queue.submit([enc.finish()]);
+        self.last_passes = passes;
+        stats.layers = passes;
+        Ok(stats)
+    }
+
+    fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
+        let n = scene.pixels();
+        let mut cap = Capture::empty();
+        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.accum, n)?);
+        let counts = read_vec::<u32>(gpu, &self.counts, n)?;
+        let truth = self.count_fragments(gpu, scene)?;
+        let collisions: u64 = truth
+            .iter()
+            .zip(&counts)
+            .map(|(&t, &c)| t.saturating_sub(c) as u64)
+            .sum();
+        cap.expected = Expected::All;
+        cap.collision_fragments = Some(collisions);
+        if collisions > 0 {
+            cap.flag = Some("collision".into());
+        }
+        cap.counts = Some(counts);
+        cap.notes = format!(
+            "collisions = GPU fragment count (untimed counter pass) − captured, per pixel; {} routing pass(es)",
+            self.last_passes
+        );
+        Ok(cap)
+    }
+
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+fn buf(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: b.as_entire_binding(),
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod testing;
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,459 @@
+//! Dual depth peeling (Bavoil & Myers 2008, "Order Independent Transparency with Dual Depth
+//! Peeling"): MAX blending on a RG32F target keeps the nearest and farthest unpeeled depth per
+//! pixel, so each geometry pass peels two layers: the nearest is composited under a front
+//! accumulation, the farthest over a back accumulation, and one final pass combines them.
+//! ⌈n/2⌉ + 1 geometry passes for n layers. Needs FLOAT32_BLENDABLE (skipped without it).
+//! Axes like `depth_peel`: `max_layers` (⌈max_layers/2⌉ peel passes at most; pixels left with
+//! fragments are counted as `overflow_pixels`) and `occlusion_stop` (a count of pixels with
+//! fragments left, read by the CPU after each pass, ends peeling when it reaches 0; otherwise
+//! exactly ⌈max_layers/2⌉ peel passes in one submission). Exact except coplanar ties. The
+//! resolve is front-to-back and back-to-front at once, so it does not use the effects fold.
+
+use scenarios::Params;
+
+use super::store::{compute_pipeline, STORAGE_RW};
+use super::{
+    bool_param, camera_entry, int_param, read_vec, shader, storage_entry, texture_entry, Capture,
+    Expected, FrameStats, Method, Prepared,
+};
+use crate::gpu::Gpu;
+use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::timing::GpuTimer;
+use crate::{CoreError, Result};
+
+const WGSL: &str = include_str!("dual_peel.wgsl");
+const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+const LAYER_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The "nothing here" value of the MAX-blended depth target (−BIG in the WGSL).
+const BIG: f64 = 3.0e38;
+
+pub struct DualPeel;
+
+impl Method for DualPeel {
+    fn name(&self) -> &'static str {
+        "dual_peel"
+    }
+    fn describe(&self) -> &'static str {
+        "Bavoil & Myers 2008: dual depth peeling (RG32F MAX blending), exact up to max_layers; ⌈n/2⌉+1 geometry passes; 2×8 B depth + 2×16 B layers + 2×16 B accumulation + 20 B per pixel"
+    }
+    fn exact(&self) -> bool {
+        true
+    }
+    fn axes(&self) -> &'static [&'static str] {
+        &["max_layers", "occlusion_stop"]
+    }
+    fn required_features(&self) -> wgpu::Features {
+        wgpu::Features::FLOAT32_BLENDABLE
+    }
+    fn supports(&self, gpu: &Gpu, params: &Params) -> std::result::Result<(), String> {
+        int_param(params, "max_layers", 64, 1, 4096)?;
+        bool_param(params, "occlusion_stop", true)?;
+        if !gpu.has(wgpu::Features::FLOAT32_BLENDABLE) {
+            return Err("adapter lacks FLOAT32_BLENDABLE (MAX blending of RG32F)".into());
+        }
+        for f in [DEPTH_FORMAT, LAYER_FORMAT] {
+            if !gpu.renderable(f) {
+                return Err(format!("{f:?} is not renderable on this adapter"));
+            }
+        }
+        Ok(())
+    }
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
+        let max_layers =
+            int_param(params, "max_layers", 64, 1, 4096).map_err(CoreError::Param)? as u32;
+        let occlusion_stop =
+            bool_param(params, "occlusion_stop", true).map_err(CoreError::Param)?;
+        Ok(Box::new(PreparedDual::new(
+            gpu,
+            scene,
+            max_layers.div_ceil(2),
+            occlusion_stop,
+        )))
+    }
+}
+
+struct PreparedDual {
+    init: wgpu::RenderPipeline,
+    peel: wgpu::RenderPipeline,
+    composite: wgpu::ComputePipeline,
+    combine: wgpu::ComputePipeline,
+    /// Per parity q: peel pass i (i % 2 == q) reads depth[1 − q] and writes depth[q].
+    peel_bind: [wgpu::BindGroup; 2],
+    comp_bind: [wgpu::BindGroup; 2],
+    depth: [wgpu::TextureView; 2],
+    front: wgpu::TextureView,
+    back: wgpu::TextureView,
+    front_acc: wgpu::Buffer,
+    back_acc: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    remaining: wgpu::Buffer,
+    remaining_read: wgpu::Buffer,
+    image: wgpu::Buffer,
+    max_peels: u32,
+    occlusion_stop: bool,
+    alloc: AllocCounter,
+}
+
+impl PreparedDual {
+    fn new(gpu: &Gpu, scene: &GpuScene, max_peels: u32, occlusion_stop: bool) -> Self {
+        let d = &gpu.device;
+        let (w, h) = (scene.width, scene.height);
+        let module = shader(gpu, "dual_peel", WGSL);
+        let frag = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
+        let comp = wgpu::ShaderStages::COMPUTE;
+        let float = wgpu::TextureSampleType::Float { filterable: false };
+        let peel_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("dual peel"),
+            entries: &[camera_entry(0), texture_entry(1, float, frag)],
+        });
+        let mut ce: Vec<_> = (0..4).map(|b| texture_entry(b, float, comp)).collect();
+        ce.extend((4..9).map(|b| storage_entry(b, false, comp)));
+        let comp_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("dual peel composite"),
+            entries: &ce,
+        });
+        let peel_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("dual peel"),
+            bind_group_layouts: &[Some(&peel_bgl)],
+            immediate_size: 0,
+        });
+        let comp_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("dual peel composite"),
+            bind_group_layouts: &[Some(&peel_bgl), Some(&comp_bgl)],
+            immediate_size: 0,
+        });
+        let max = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Max,
+        };
+        let target = |format| {
+            Some(wgpu::ColorTargetState {
+                format,
+                blend: Some(wgpu::BlendState {
+                    color: max,
+                    alpha: max,
+                }),
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        };
+        let layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
+            .into_iter()
+            .map(Some)
+            .collect();
+        let make = |label: &str, fs: &str, targets: &[Option<wgpu::ColorTargetState>]| {
+            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&peel_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_full"),
+                    compilation_options: Default::default(),
+                    buffers: &layouts,
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let init = make("dual peel init", "fs_init", &[target(DEPTH_FORMAT)]);
+        let peel = make(
+            "dual peel",
+            "fs_peel",
+            &[
+                target(DEPTH_FORMAT),
+                target(LAYER_FORMAT),
+                target(LAYER_FORMAT),
+            ],
+        );
+        let composite = compute_pipeline(
+            gpu,
+            "dual composite",
+            &comp_layout,
+            &module,
+            "composite",
+            &[],
+        );
+        let combine = compute_pipeline(gpu, "dual combine", &comp_layout, &module, "combine", &[]);
+
+        let mut alloc = AllocCounter::default();
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let depth = [0, 1].map(|i| {
+            alloc
+                .texture(gpu, &format!("dual depth {i}"), w, h, DEPTH_FORMAT, usage)
+                .create_view(&Default::default())
+        });
+        let front = alloc
+            .texture(gpu, "dual front layer", w, h, LAYER_FORMAT, usage)
+            .create_view(&Default::default());
+        let back = alloc
+            .texture(gpu, "dual back layer", w, h, LAYER_FORMAT, usage)
+            .create_view(&Default::default());
+        let px = scene.pixels() as u64;
+        let front_acc = alloc.buffer(gpu, "dual front accum", px * 16, STORAGE_RW);
+        let back_acc = alloc.buffer(gpu, "dual back accum", px * 16, STORAGE_RW);
+        let counts = alloc.buffer(gpu, "dual counts", px * 4, STORAGE_RW);
+        let image = alloc.buffer(gpu, "dual image", px * 16, STORAGE_RW);
+        let remaining = alloc.buffer(gpu, "dual remaining", 4, STORAGE_RW);
+        let remaining_read = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("dual remaining read"),
+            size: 4,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        fn tex(v: &wgpu::TextureView) -> wgpu::BindingResource<'_> {
+            wgpu::BindingResource::TextureView(v)
+        }
+        let peel_bind = [0usize, 1].map(|q| {
+            d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("dual peel"),
+                layout: &peel_bgl,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: scene.camera.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: tex(&depth[1 - q]),
+                    },
+                ],
+            })
+        });
+        let comp_bind = [0usize, 1].map(|q| {
+            let res = [
+                tex(&depth[1 - q]),
+                tex(&depth[q]),
+                tex(&front),
+                tex(&back),
+                front_acc.as_entire_binding(),
+                back_acc.as_entire_binding(),
+                counts.as_entire_binding(),
+                remaining.as_entire_binding(),
+                image.as_entire_binding(),
+            ];
+            let entries: Vec<_> = res
+                .into_iter()
+                .enumerate()
+                .map(|(b, resource)| wgpu::BindGroupEntry {
+                    binding: b as u32,
+                    resource,
+                })
+                .collect();
+            d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("dual peel composite"),
+                layout: &comp_bgl,
+                entries: &entries,
+            })
+        });
+        PreparedDual {
+            init,
+            peel,
+            composite,
+            combine,
+            peel_bind,
+            comp_bind,
+            depth,
+            front,
+            back,
+            front_acc,
+            back_acc,
+            counts,
+            remaining,
+            remaining_read,
+            image,
+            max_peels,
+            occlusion_stop,
+            alloc,
+        }
+    }
+
+    fn attachment(
+        view: &wgpu::TextureView,
+        clear: f64,
+    ) -> Option<wgpu::RenderPassColorAttachment<'_>> {
+        Some(wgpu::RenderPassColorAttachment {
+            view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color {
+                    r: clear,
+                    g: clear,
+                    b: clear,
+                    a: clear,
+                }),
+                store: wgpu::StoreOp::Store,
+            },
+        })
+    }
+
+    fn compute(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        scene: &GpuScene,
+        q: usize,
+        combine: bool,
+    ) {
+        let label = if combine { "combine" } else { "composite" };
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: timer.compute_pass(label),
+        });
+        pass.set_pipeline(if combine {
+            &self.combine
+        } else {
+            &self.composite
+        });
+        pass.set_bind_group(0, &self.peel_bind[q], &[]);
+        pass.set_bind_group(1, &self.comp_bind[q], &[]);
+        pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
+    }
+}
+
+impl Prepared for PreparedDual {
+    fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.clear_buffer(&self.front_acc, 0, None);
+        enc.clear_buffer(&self.back_acc, 0, None);
+        enc.clear_buffer(&self.counts, 0, None);
+        enc.clear_buffer(&self.remaining, 0, None);
+        {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("init"),
+                color_attachments: &[Self::attachment(&self.depth[0], -BIG)],
+                depth_stencil_attachment: None,
+                timestamp_writes: timer.render_pass("init"),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.init);
+            // Parity 0 reads depth[1]: the init pass writes depth[0] and reads nothing.
+            pass.set_bind_group(0, &self.peel_bind[0], &[]);
+            scene.draw(&mut pass, Attrs::ALL);
+        }
+        let mut stats = FrameStats {
+            geometry_passes: 1,
+            layers: 0,
+        };
+        let mut last_q = 0;
+        for i in 1..=self.max_peels {
+            let q = (i % 2) as usize;
+            {
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("peel"),
+                    color_attachments: &[
+                        Self::attachment(&self.depth[q], -BIG),
+                        Self::attachment(&self.front, 0.0),
+                        Self::attachment(&self.back, 0.0),
+                    ],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: timer.render_pass("peel"),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&self.peel);
+                pass.set_bind_group(0, &self.peel_bind[q], &[]);
+                scene.draw(&mut pass, Attrs::ALL);
+            }
+            enc.clear_buffer(&self.remaining, 0, None);
+            self.compute(&mut enc, timer, scene, q, false);
+            stats.geometry_passes += 1;
+            stats.layers += 2;
+            last_q = q;
+            if self.occlusion_stop && i < self.max_peels {
+                // Like classic peeling's occlusion query: the CPU reads the count before
+                // deciding on another pass.
+                enc.copy_buffer_to_buffer(&self.remaining, 0, &self.remaining_read, 0, 4);
+                gpu.queue.submit([enc.finish()]);
+                let bytes = gpu.map_read(&self.remaining_read)?;
+                enc = gpu.device.create_command_encoder(&Default::default());
+                if u32::from_le_bytes(bytes[..4].try_into().unwrap()) == 0 {
+                    break;
+                }
+            }
+        }
+        self.compute(&mut enc, timer, scene, last_q, true);
+        gpu.queue.submit([enc.finish()]);
+        Ok(stats)
+    }
+
+    fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
+        let n = scene.pixels();
+        let mut cap = Capture::empty();
+        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n)?);
+        cap.counts = Some(read_vec::<u32>(gpu, &self.counts, n)?);
+        cap.expected = Expected::All;
+        let left = read_vec::<u32>(gpu, &self.remaining, 1)?[0] as u64;
+        cap.overflow_pixels = Some(left);
+        if left > 0 {
+            cap.flag = Some("overflow".into());
+            cap.notes = format!(
+                "{left} pixels kept unpeeled middle layers after {} peel passes",
+                self.max_peels
+            );
+        }
+        Ok(cap)
+    }
+
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use scenarios::ParamValue::{Bool, Int};
+
+    use super::*;
+    use crate::methods::store::testing::{count_mismatch, max_err, params, run, scene};
+
+    /// Front and back halves composited separately then combined: a few f32 ulps per layer.
+    const IMAGE_TOL: f64 = 2e-5;
+
+    #[test]
+    fn equals_the_reference_with_half_the_passes() {
+        let shells = scene("shells", &[("count", Int(3)), ("segments", Int(12))]);
+        let quads = scene("quads", &[("depth_complexity", Int(7))]);
+        let grass = scene("grass", &[("blades", Int(200))]);
+        for (name, s) in [("shells", &shells), ("quads", &quads), ("grass", &grass)] {
+            for stop in [true, false] {
+                let p = params(&[("max_layers", Int(64)), ("occlusion_stop", Bool(stop))]);
+                let (cap, lists) = run(&DualPeel, s, 40, 40, &p);
+                assert_eq!(cap.overflow_pixels, Some(0), "{name}: {}", cap.notes);
+                let (e, at) = max_err(&cap, &lists);
+                assert!(
+                    e <= IMAGE_TOL,
+                    "{name} stop={stop}: error {e} at pixel {at}"
+                );
+                let (bad, first) = count_mismatch(&cap, &lists, u32::MAX);
+                assert_eq!(bad, 0, "{name}: counts differ first at {first:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn passes_are_half_the_layers_plus_one_and_too_few_are_reported() {
+        let s = scene("quads", &[("depth_complexity", Int(7))]);
+        let gpu = crate::methods::store::testing::gpu();
+        let gs = GpuScene::upload(gpu, &s, 32, 32);
+        let p = params(&[("max_layers", Int(64))]);
+        let m = crate::runner::measure(gpu, &gs, &DualPeel, &p, 0, 1).unwrap();
+        let n = crate::reference::rasterize(&s, 32, 32).max_depth_complexity();
+        assert_eq!(m.frame.geometry_passes, n.div_ceil(2) + 1, "{n} layers");
+        // Four layers' worth of passes on seven layers: the middle is missing, and said so.
+        let p = params(&[("max_layers", Int(4)), ("occlusion_stop", Bool(false))]);
+        let (cap, _) = run(&DualPeel, &s, 32, 32, &p);
+        assert!(cap.overflow_pixels.unwrap() > 0);
+        assert_eq!(cap.flag.as_deref(), Some("overflow"));
+    }
+}

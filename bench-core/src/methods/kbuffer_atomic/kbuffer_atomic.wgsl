@@ -1,0 +1,93 @@
+// A hazard-free k-buffer: the same K nearest as kbuffer_rmw, with atomics.
+// Pass 1 (keys): every fragment bubbles its depth key through the pixel's K slots with 32-bit
+// atomicMax (larger key = nearer): a slot keeps the larger of (old, new), the smaller carries on
+// to the next slot, an empty slot (0) ends the walk. Every step is one atomic, so no insertion is
+// ever lost; the slots end sorted, nearest first, holding the K nearest keys.
+// Pass 2 (payload): every fragment whose key is in its pixel's slots claims the first unclaimed
+// slot with that key (atomicAdd on a claim counter, so exact depth ties get one slot each) and
+// writes its payload there. 64-bit atomicMin of (depth << 32 | payload) would need one pass, but
+// naga allows 64-bit min/max only without a return value (SHADER_INT64_ATOMIC_MIN_MAX), and the
+// bubbling needs the returned old value; 32-bit atomics work everywhere.
+
+override K: u32 = 8u;
+
+struct Entry {
+    color: vec4<f32>,
+    depth: f32,
+    view_z: f32,
+    object_id: u32,
+    // bit 0: front facing
+    flags: u32,
+};
+
+@group(0) @binding(1) var<storage, read_write> keys: array<atomic<u32>>;
+@group(0) @binding(2) var<storage, read_write> entries: array<Entry>;
+@group(0) @binding(3) var<storage, read_write> out_image: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read_write> claims: array<atomic<u32>>;
+
+// Window depth → key with "larger is nearer" for both depth conventions; never 0.
+fn near_key(d: f32) -> u32 {
+    let b = bitcast<u32>(d) & 0x7fffffffu;
+    return select(~b, max(b, 1u), camera.near_far.z > 0.5);
+}
+
+fn slot_base(clip: vec4<f32>) -> u32 {
+    return (u32(clip.y) * u32(camera.viewport.x) + u32(clip.x)) * K;
+}
+
+@fragment
+fn fs_keys(in: Varyings) {
+    let base = slot_base(in.clip);
+    var v = near_key(in.clip.z);
+    // Slots only grow and a key reaches the last slot only through all others, so a last slot
+    // at least as near as v means K fragments at least as near exist: v cannot enter.
+    if atomicLoad(&keys[base + K - 1u]) >= v {
+        return;
+    }
+    for (var i = 0u; i < K; i = i + 1u) {
+        let old = atomicMax(&keys[base + i], v);
+        if old == 0u {
+            return;
+        }
+        v = min(old, v);
+    }
+}
+
+@fragment
+fn fs_payload(in: Varyings, @builtin(front_facing) ff: bool) {
+    let base = slot_base(in.clip);
+    let key = near_key(in.clip.z);
+    for (var i = 0u; i < K; i = i + 1u) {
+        let s = atomicLoad(&keys[base + i]);
+        // Sorted nearest first: past this key (or at the empty tail) it is not captured.
+        if s < key {
+            return;
+        }
+        if s == key && atomicAdd(&claims[base + i], 1u) == 0u {
+            entries[base + i] = Entry(in.color, in.clip.z, in.view_z, in.object_id, select(0u, 1u, ff));
+            return;
+        }
+    }
+}
+
+// ---- resolve: walk each pixel's slots nearest first through the effects fold ----
+
+@compute @workgroup_size(8, 8)
+fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
+    let w = u32(camera.viewport.x);
+    let h = u32(camera.viewport.y);
+    if id.x >= w || id.y >= h {
+        return;
+    }
+    let p = id.y * w + id.x;
+    let base = p * K;
+    var s = fold_init();
+    for (var i = 0u; i < K; i = i + 1u) {
+        if atomicLoad(&keys[base + i]) == 0u {
+            break;
+        }
+        let e = entries[base + i];
+        fold_step(&s, Frag(e.depth, e.view_z, e.color, vec3<f32>(0.0), e.object_id, (e.flags & 1u) != 0u));
+    }
+    out_image[p] = fold_finish(s);
+}

@@ -1,0 +1,83 @@
+// The k-buffer of Bavoil 2007 (thesis ch. 4): each pixel keeps its K nearest fragments sorted,
+// nearest first, and every fragment inserts itself by insertion sort with plain loads and stores
+// (read-modify-write) of the pixel's storage: no atomics, no ordering between fragments of one
+// pixel in flight at once, so concurrent fragments can read the same state and one overwrite the
+// other's insertion: the RMW hazards the thesis describes (measured against the CPU reference).
+
+override K: u32 = 8u;
+
+// What a slot keeps for the effects fold (32 B).
+struct Entry {
+    color: vec4<f32>,
+    depth: f32,
+    view_z: f32,
+    object_id: u32,
+    // bit 0: front facing
+    flags: u32,
+};
+
+// Per pixel K keys, larger = nearer, 0 = empty (so a cleared buffer is an empty k-buffer).
+@group(0) @binding(1) var<storage, read_write> keys: array<u32>;
+@group(0) @binding(2) var<storage, read_write> entries: array<Entry>;
+@group(0) @binding(3) var<storage, read_write> out_image: array<vec4<f32>>;
+
+// Window depth → key with "larger is nearer" for both depth conventions; never 0.
+fn near_key(d: f32) -> u32 {
+    let b = bitcast<u32>(d) & 0x7fffffffu;
+    return select(~b, max(b, 1u), camera.near_far.z > 0.5);
+}
+
+@fragment
+fn fs_insert(in: Varyings, @builtin(front_facing) ff: bool) {
+    let base = (u32(in.clip.y) * u32(camera.viewport.x) + u32(in.clip.x)) * K;
+    let key = near_key(in.clip.z);
+    // Full and not nearer than the farthest kept: nothing to insert.
+    if keys[base + K - 1u] >= key {
+        return;
+    }
+    // Start at the first empty slot (or the last one when full).
+    var j = K - 1u;
+    loop {
+        if j == 0u || keys[base + j - 1u] != 0u {
+            break;
+        }
+        j = j - 1u;
+    }
+    // Shift farther fragments back by one (equal keys stay ahead: stable, like the CPU twin).
+    loop {
+        if j == 0u {
+            break;
+        }
+        let prev = keys[base + j - 1u];
+        if prev >= key {
+            break;
+        }
+        keys[base + j] = prev;
+        entries[base + j] = entries[base + j - 1u];
+        j = j - 1u;
+    }
+    keys[base + j] = key;
+    entries[base + j] = Entry(in.color, in.clip.z, in.view_z, in.object_id, select(0u, 1u, ff));
+}
+
+// ---- resolve: walk each pixel's slots nearest first through the effects fold ----
+
+@compute @workgroup_size(8, 8)
+fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
+    let w = u32(camera.viewport.x);
+    let h = u32(camera.viewport.y);
+    if id.x >= w || id.y >= h {
+        return;
+    }
+    let p = id.y * w + id.x;
+    let base = p * K;
+    var s = fold_init();
+    for (var i = 0u; i < K; i = i + 1u) {
+        if keys[base + i] == 0u {
+            break;
+        }
+        let e = entries[base + i];
+        fold_step(&s, Frag(e.depth, e.view_z, e.color, vec3<f32>(0.0), e.object_id, (e.flags & 1u) != 0u));
+    }
+    out_image[p] = fold_finish(s);
+}

@@ -1,0 +1,304 @@
+//! Shared plumbing of the methods that write fragments into storage buffers from the fragment
+//! stage (k-buffers, linked lists): a pass with no colour output (wgpu refuses a render pass
+//! without attachments, so a depth attachment with an always-pass, never-write test stands in),
+//! compute pipelines with the `EFFECT` override, and the k-nearest judge (hazards).
+
+use crate::gpu::Gpu;
+use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::reference::FragmentLists;
+use crate::timing::GpuTimer;
+
+/// Layout of `struct Entry` in the WGSL (32 B): what a captured fragment keeps for the fold.
+pub const ENTRY_BYTES: u64 = 32;
+
+/// The stand-in depth attachment of a storage-only pass (never tested, never written).
+pub fn dummy_depth(gpu: &Gpu, alloc: &mut AllocCounter, scene: &GpuScene) -> wgpu::TextureView {
+    alloc
+        .texture(
+            gpu,
+            "storage pass depth (unused)",
+            scene.width,
+            scene.height,
+            wgpu::TextureFormat::Depth32Float,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        )
+        .create_view(&Default::default())
+}
+
+/// A render pipeline over the full vertex stage whose fragment stage only writes storage.
+pub fn storage_pipeline(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    fs: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::RenderPipeline {
+    let layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
+        .into_iter()
+        .map(Some)
+        .collect();
+    gpu.device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("vs_full"),
+                compilation_options: Default::default(),
+                buffers: &layouts,
+            },
+            // Both faces: transparency sees back faces too (like the reference).
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some(fs),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    zero_initialize_workgroup_memory: false,
+                },
+                targets: &[],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+}
+
+/// Begins a storage-only render pass on the stand-in depth attachment.
+pub fn storage_pass<'e>(
+    enc: &'e mut wgpu::CommandEncoder,
+    depth: &wgpu::TextureView,
+    timer: &mut GpuTimer,
+    label: &str,
+) -> wgpu::RenderPass<'e> {
+    enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Discard,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: timer.render_pass(label),
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}
+
+pub fn compute_pipeline(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    gpu.device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            module,
+            entry_point: Some(entry),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                zero_initialize_workgroup_memory: false,
+            },
+            cache: None,
+        })
+}
+
+/// Storage usage for per-pixel buffers that are cleared per frame and read back.
+pub const STORAGE_RW: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::COPY_DST);
+
+/// A bind group over whole buffers at bindings 0, 1, 2, … in order.
+pub fn bind_buffers(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
+/// Whether a buffer of `bytes` can be bound as one storage buffer here; Err names the limit.
+pub fn check_storage_size(gpu: &Gpu, what: &str, bytes: u64) -> crate::Result<()> {
+    let lim = gpu
+        .limits
+        .max_storage_buffer_binding_size
+        .min(gpu.limits.max_buffer_size);
+    if bytes > lim {
+        return Err(crate::CoreError::OutOfMemory(format!(
+            "{what} needs {bytes} B, over the adapter's storage binding limit of {lim} B"
+        )));
+    }
+    Ok(())
+}
+
+/// Window depth of a k-buffer key (the WGSL `near_key`: larger = nearer, 0 = empty).
+pub fn key_depth(key: u32, reversed: bool) -> f32 {
+    f32::from_bits(if reversed { key } else { !key })
+}
+
+/// Near-tie tolerance of the k-nearest judge (window depth).
+pub const DEPTH_TOL: f64 = 1e-5;
+
+/// Pixels whose captured depths (nearest first, `k` slots per pixel, `None` = empty) are not
+/// the reference's true k nearest: count and the first such pixel.
+pub fn k_nearest_mismatch(
+    captured: &[Option<f32>],
+    k: usize,
+    lists: &FragmentLists,
+) -> (u64, Option<usize>) {
+    let mut bad = 0u64;
+    let mut first = None;
+    let mut truth = Vec::new();
+    for p in 0..lists.pixels() {
+        truth.clear();
+        truth.extend(lists.pixel(p).iter().map(|f| f.depth));
+        if !same_k_nearest(&captured[p * k..(p + 1) * k], &truth, k) {
+            bad += 1;
+            first.get_or_insert(p);
+        }
+    }
+    (bad, first)
+}
+
+/// Whether `slots` (nearest first) hold the k nearest of `truth` (all of a pixel's fragment
+/// depths, nearest first). The GPU interpolates depth in f32 with its own plane equations, so a
+/// captured depth can sit ~1e-4 from the f64 value on steep (grazing) triangles: each captured
+/// depth is matched to the true fragment of nearest depth, and the capture is right when the
+/// matches are exactly the first k fragments, each once. A lost or duplicated fragment breaks
+/// that; near-ties (gap under the GPU's error) may match crosswise, so sorted depths equal
+/// within [`DEPTH_TOL`] also count as right.
+pub fn same_k_nearest(slots: &[Option<f32>], truth: &[f64], k: usize) -> bool {
+    let got: Vec<f64> = slots.iter().map_while(|s| s.map(f64::from)).collect();
+    let n = truth.len().min(k);
+    if got.len() != n {
+        return false;
+    }
+    let mut used = vec![false; truth.len()];
+    let matched = got.iter().all(|g| {
+        let j = (0..truth.len())
+            .min_by(|&a, &b| (truth[a] - g).abs().total_cmp(&(truth[b] - g).abs()))
+            .expect("n > 0 here");
+        let fresh = j < n && !used[j];
+        used[j] = true;
+        fresh
+    });
+    matched
+        || got
+            .iter()
+            .zip(truth)
+            .all(|(g, w)| (g - w).abs() <= DEPTH_TOL)
+}
+
+#[cfg(test)]
+pub mod testing {
+    //! GPU test helpers: one lavapipe device per test binary, a method run on a scene, judged.
+    use std::sync::OnceLock;
+
+    use scenarios::{Params, Scene};
+
+    use crate::gpu::{Gpu, GpuOptions};
+    use crate::gpu_scene::GpuScene;
+    use crate::methods::{Capture, Method};
+    use crate::reference::{rasterize, FragmentLists};
+
+    pub fn gpu() -> &'static Gpu {
+        static GPU: OnceLock<Gpu> = OnceLock::new();
+        GPU.get_or_init(|| {
+            std::env::set_var("XDG_RUNTIME_DIR", "/tmp");
+            Gpu::new(&GpuOptions::default()).expect("a Vulkan adapter (lavapipe: scripts/setup)")
+        })
+    }
+
+    pub fn scene(generator: &str, kv: &[(&str, scenarios::ParamValue)]) -> Scene {
+        let mut p = Params::new();
+        for (k, v) in kv {
+            p.0.insert(k.to_string(), v.clone());
+        }
+        scenarios::SceneSpec::new(generator, p)
+            .build()
+            .expect("scene builds")
+    }
+
+    pub fn params(kv: &[(&str, scenarios::ParamValue)]) -> Params {
+        let mut p = Params::new();
+        for (k, v) in kv {
+            p.0.insert(k.to_string(), v.clone());
+        }
+        p
+    }
+
+    /// Runs one frame of `method` on `scene` at w×h and returns the judged capture and the
+    /// reference lists.
+    pub fn run(
+        method: &dyn Method,
+        scene: &Scene,
+        w: u32,
+        h: u32,
+        params: &Params,
+    ) -> (Capture, FragmentLists) {
+        let gpu = gpu();
+        method.supports(gpu, params).expect("supported here");
+        let gs = GpuScene::upload(gpu, scene, w, h);
+        let mut m = crate::runner::measure(gpu, &gs, method, params, 0, 1).expect("runs");
+        let mut cap = m.prepared.readback(gpu, &gs).expect("reads back");
+        let lists = rasterize(scene, w, h);
+        m.prepared.judge(&mut cap, &lists);
+        (cap, lists)
+    }
+
+    /// Max per-channel error of `cap` against the reference of its `expected` set.
+    pub fn max_err(cap: &Capture, lists: &FragmentLists) -> (f64, usize) {
+        let reference =
+            crate::effects::reference_image("transparency", lists, cap.expected).unwrap();
+        let img = cap.image.as_ref().expect("an image");
+        let mut worst = (0.0f64, 0usize);
+        for (p, (r, g)) in reference.iter().zip(img).enumerate() {
+            for c in 0..4 {
+                let e = (r[c] - g[c] as f64).abs();
+                // NaN counts as the worst error.
+                if e.is_nan() || e > worst.0 {
+                    worst = (e, p);
+                }
+            }
+        }
+        worst
+    }
+
+    /// Pixels whose captured count differs from min(true depth complexity, k); first such.
+    pub fn count_mismatch(cap: &Capture, lists: &FragmentLists, k: u32) -> (usize, Option<usize>) {
+        let counts = cap.counts.as_ref().expect("counts");
+        let dc = lists.depth_complexity();
+        let bad: Vec<usize> = (0..dc.len())
+            .filter(|&p| counts[p] != dc[p].min(k))
+            .collect();
+        (bad.len(), bad.first().copied())
+    }
+}

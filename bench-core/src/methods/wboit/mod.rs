@@ -1,0 +1,309 @@
+//! Weighted blended OIT (McGuire & Bavoil 2013): one geometry pass into an RGBA16F weighted sum
+//! (additive blending) and an R16F revealage (multiplicative blending), then a compute resolve.
+//! Approximate (`exact() = false`): its error vs the reference is what the rows report. It walks
+//! no fragment list, so the effects fold does not apply (transparency only).
+
+use scenarios::Params;
+
+use super::store::{compute_pipeline, STORAGE_RW};
+use super::{
+    camera_entry, read_vec, shader, storage_entry, texture_entry, Capture, Expected, FrameStats,
+    Method, Prepared,
+};
+use crate::gpu::Gpu;
+use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::timing::GpuTimer;
+use crate::Result;
+
+const WGSL: &str = include_str!("wboit.wgsl");
+const ACCUM: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+const REVEAL: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
+
+pub struct Wboit;
+
+impl Method for Wboit {
+    fn name(&self) -> &'static str {
+        "wboit"
+    }
+    fn describe(&self) -> &'static str {
+        "McGuire & Bavoil 2013: weighted blended OIT, approximate; 1 geometry pass + resolve; 8 B RGBA16F + 2 B R16F + 16 B result per pixel"
+    }
+    fn exact(&self) -> bool {
+        false
+    }
+    fn supports(&self, gpu: &Gpu, _: &Params) -> std::result::Result<(), String> {
+        for f in [ACCUM, REVEAL] {
+            if !gpu.renderable(f) {
+                return Err(format!("{f:?} is not renderable on this adapter"));
+            }
+        }
+        Ok(())
+    }
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Params) -> Result<Box<dyn Prepared>> {
+        Ok(Box::new(PreparedWboit::new(gpu, scene)))
+    }
+}
+
+struct PreparedWboit {
+    accum_pass: wgpu::RenderPipeline,
+    resolve: wgpu::ComputePipeline,
+    cam_bind: wgpu::BindGroup,
+    res_bind: wgpu::BindGroup,
+    accum: wgpu::TextureView,
+    reveal: wgpu::TextureView,
+    image: wgpu::Buffer,
+    alloc: AllocCounter,
+}
+
+impl PreparedWboit {
+    fn new(gpu: &Gpu, scene: &GpuScene) -> Self {
+        let d = &gpu.device;
+        let module = shader(gpu, "wboit", WGSL);
+        let comp = wgpu::ShaderStages::COMPUTE;
+        let cam_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("wboit camera"),
+            entries: &[camera_entry(0)],
+        });
+        let float = wgpu::TextureSampleType::Float { filterable: false };
+        let res_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("wboit resolve"),
+            entries: &[
+                camera_entry(0),
+                texture_entry(1, float, comp),
+                texture_entry(2, float, comp),
+                storage_entry(3, false, comp),
+            ],
+        });
+        let layout = |bgl: &wgpu::BindGroupLayout| {
+            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("wboit"),
+                bind_group_layouts: &[Some(bgl)],
+                immediate_size: 0,
+            })
+        };
+        let add = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        // dst · (1 − src): the revealage product.
+        let mul = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::Zero,
+            dst_factor: wgpu::BlendFactor::OneMinusSrc,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let targets = [
+            Some(wgpu::ColorTargetState {
+                format: ACCUM,
+                blend: Some(wgpu::BlendState {
+                    color: add,
+                    alpha: add,
+                }),
+                write_mask: wgpu::ColorWrites::ALL,
+            }),
+            Some(wgpu::ColorTargetState {
+                format: REVEAL,
+                blend: Some(wgpu::BlendState {
+                    color: mul,
+                    alpha: mul,
+                }),
+                write_mask: wgpu::ColorWrites::ALL,
+            }),
+        ];
+        let layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
+            .into_iter()
+            .map(Some)
+            .collect();
+        let accum_pass = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("wboit accumulate"),
+            layout: Some(&layout(&cam_bgl)),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_full"),
+                compilation_options: Default::default(),
+                buffers: &layouts,
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_accum"),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let resolve = compute_pipeline(
+            gpu,
+            "wboit resolve",
+            &layout(&res_bgl),
+            &module,
+            "resolve",
+            &[],
+        );
+        let mut alloc = AllocCounter::default();
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let (w, h) = (scene.width, scene.height);
+        let accum = alloc
+            .texture(gpu, "wboit accum", w, h, ACCUM, usage)
+            .create_view(&Default::default());
+        let reveal = alloc
+            .texture(gpu, "wboit revealage", w, h, REVEAL, usage)
+            .create_view(&Default::default());
+        let image = alloc.buffer(gpu, "wboit image", scene.pixels() as u64 * 16, STORAGE_RW);
+        let cam_bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("wboit camera"),
+            layout: &cam_bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: scene.camera.as_entire_binding(),
+            }],
+        });
+        let res_bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("wboit resolve"),
+            layout: &res_bgl,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: scene.camera.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&accum),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&reveal),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: image.as_entire_binding(),
+                },
+            ],
+        });
+        PreparedWboit {
+            accum_pass,
+            resolve,
+            cam_bind,
+            res_bind,
+            accum,
+            reveal,
+            image,
+            alloc,
+        }
+    }
+}
+
+impl Prepared for PreparedWboit {
+    fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        {
+            let att = |view, clear: f64| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: clear,
+                            g: clear,
+                            b: clear,
+                            a: clear,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            };
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("accumulate"),
+                color_attachments: &[att(&self.accum, 0.0), att(&self.reveal, 1.0)],
+                depth_stencil_attachment: None,
+                timestamp_writes: timer.render_pass("accumulate"),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.accum_pass);
+            pass.set_bind_group(0, &self.cam_bind, &[]);
+            scene.draw(&mut pass, Attrs::ALL);
+        }
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("resolve"),
+                timestamp_writes: timer.compute_pass("resolve"),
+            });
+            pass.set_pipeline(&self.resolve);
+            pass.set_bind_group(0, &self.res_bind, &[]);
+            pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
+        }
+        gpu.queue.submit([enc.finish()]);
+        Ok(FrameStats {
+            geometry_passes: 1,
+            layers: 1,
+        })
+    }
+
+    fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
+        let mut cap = Capture::empty();
+        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, scene.pixels())?);
+        cap.expected = Expected::All;
+        cap.notes = "approximate: weighted average colour (RGBA16F), revealage R16F".into();
+        Ok(cap)
+    }
+
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use scenarios::ParamValue::Int;
+
+    use super::*;
+    use crate::methods::store::testing::{max_err, run, scene};
+
+    /// f16 has an 11-bit significand: each stored sum or product is within 2^-11 relative, so a
+    /// pixel of n layers (n rounded additions in each channel of the sum, n rounded products in
+    /// the revealage, one division) stays within (2n + 2)·2^-11 of the exact value (≤ 1).
+    fn f16_bound(layers: u32) -> f64 {
+        (2 * layers + 2) as f64 * 2f64.powi(-11)
+    }
+
+    #[test]
+    fn exact_up_to_f16_rounding_on_one_layer() {
+        let s = scene("quads", &[("depth_complexity", Int(1))]);
+        let (cap, lists) = run(&Wboit, &s, 32, 32, &Default::default());
+        assert_eq!(lists.max_depth_complexity(), 1);
+        let (e, at) = max_err(&cap, &lists);
+        assert!(e <= f16_bound(1), "error {e} at pixel {at}");
+    }
+
+    #[test]
+    fn exact_up_to_f16_rounding_when_every_layer_has_one_colour() {
+        // WBOIT's weighted average of one colour is that colour, and its revealage is the exact
+        // transmittance: the only error is rounding.
+        let mut s = scene("quads", &[("depth_complexity", Int(6))]);
+        for c in s.mesh.colors.iter_mut() {
+            *c = [0.8, 0.3, 0.1, 0.4];
+        }
+        let (cap, lists) = run(&Wboit, &s, 32, 32, &Default::default());
+        let n = lists.max_depth_complexity();
+        assert!(n >= 4, "the scene has several layers ({n})");
+        let (e, at) = max_err(&cap, &lists);
+        assert!(
+            e <= f16_bound(n),
+            "error {e} at pixel {at} (bound {})",
+            f16_bound(n)
+        );
+        // And with distinct colours it is approximate: the error is reported, not hidden.
+        let s = scene("quads", &[("depth_complexity", Int(6))]);
+        let (cap, lists) = run(&Wboit, &s, 32, 32, &Default::default());
+        let (e, _) = max_err(&cap, &lists);
+        assert!(
+            e > f16_bound(n),
+            "distinct colours give a real approximation error ({e})"
+        );
+    }
+}

@@ -1,0 +1,454 @@
+//! The `shadows` study (issue 7): layered soft shadow maps (Bavoil 2007, thesis ch. 5) from a
+//! square area light, swept over their quality parameters and judged against a CPU ray tracer.
+//!
+//! Per scene × resolution group: one untimed frame gives the eye's G-buffer points; the ray
+//! tracer ([`raytrace`]) shoots `shadow_rays` stratified rays per pixel from exactly those points
+//! (cached across groups of the same scene, resolution and ray count); then every point (a
+//! configuration of [`layered::AXES`]) is timed by the runner's `measure` and its visibility is
+//! compared pixel by pixel: RMSE, signed mean (light bleeding > 0, overshadowing < 0), max.
+//! Images (reference, result, signed difference) go to `$MFX_OUT_DIR/images/shadows/` when the
+//! CLI sets it (`mfx sweep` does).
+//!
+//! Study keys: `shadow_rays` (m², default 64), `images` (default true).
+
+pub mod layered;
+pub mod raytrace;
+pub mod twin;
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use glam::{DVec3, Vec3};
+use scenarios::suite::axis_product;
+use scenarios::{ParamValue, Params, StudySpec};
+
+use super::{Emit, GroupCtx, PointSpec, Study};
+use crate::methods::{Method, Prepared};
+use crate::record::{Column, Row};
+use crate::runner::{failed_row, measure, set_params, set_timing, skipped_row};
+use crate::timing::GpuTimer;
+use crate::{CoreError, Result};
+use layered::{Config, LayeredSsm};
+use raytrace::{Bvh, LightFrame};
+
+const fn c(name: &'static str, doc: &'static str) -> Column {
+    Column { name, doc }
+}
+
+/// CSV columns this study owns (documented in results/README.md).
+pub const COLUMNS: &[Column] = &[
+    c("shadow_map_res", "shadows: shadow-map side in texels (square; one texture per light layer)"),
+    c("max_nspp", "shadows: most shadow-map samples per pixel in the search region; above it the stride grows (floor(sqrt) per axis)"),
+    c("bias_mode", "shadows: depth bias: midpoint (half-way to the next layer; the last layer falls back to gmax) | slope (gscale·max(|ddx|,|ddy|) clamped by gmax) | hybrid (the larger)"),
+    c("gscale", "shadows: slope-bias scale, times the layer's depth change per texel"),
+    c("gmax", "shadows: clamp of the slope bias and the midpoint fallback, world units"),
+    c("hsm", "shadows: true if the search region is refined by two iterations over the min-depth pyramid"),
+    c("shadow_rays", "shadows: reference rays per pixel (m×m jittered strata on the light square)"),
+    c("shadow_pixels", "shadows: pixels evaluated (a visible surface inside the light's frustum)"),
+    c("vis_rmse", "shadows: RMSE of light visibility (0..1) vs the ray-traced reference, over evaluated pixels"),
+    c("vis_bias", "shadows: mean signed visibility error (GPU − reference): > 0 light bleeding, < 0 overshadowing"),
+    c("vis_max_abs_err", "shadows: largest absolute visibility error of any evaluated pixel"),
+    c("vis_bleed_mean", "shadows: mean of max(GPU − reference, 0): light bleeding alone"),
+    c("vis_overshadow_mean", "shadows: mean of max(reference − GPU, 0): overshadowing alone"),
+    c("reference_ms", "shadows: CPU wall time of the ray-traced reference of this scene and resolution, ms (computed once, cached)"),
+];
+
+const METHOD: &str = "layered_ssm";
+const STUDY_KEYS: &[&str] = &["shadow_rays", "images"];
+
+pub struct ShadowsStudy;
+
+/// Study-table settings (outside the swept axes).
+struct Settings {
+    /// Rays per axis of the light square (shadow_rays = m²).
+    rays_per_axis: u32,
+    images: bool,
+}
+
+fn settings(spec: &StudySpec) -> Result<Settings> {
+    if let Some(k) = spec
+        .extra
+        .keys()
+        .find(|k| !STUDY_KEYS.contains(&k.as_str()))
+    {
+        return Err(CoreError::Param(format!(
+            "unknown key '{k}' in the shadows study (known: {})",
+            STUDY_KEYS.join(", ")
+        )));
+    }
+    let rays = match spec.extra.get("shadow_rays") {
+        None => 64,
+        Some(v) => v
+            .as_integer()
+            .ok_or_else(|| CoreError::Param(format!("shadow_rays must be an integer, got {v}")))?,
+    };
+    let m = (rays.max(0) as f64).sqrt().round() as i64;
+    if !(1..=4096).contains(&m) || m * m != rays {
+        return Err(CoreError::Param(format!(
+            "shadow_rays = {rays} must be a perfect square m² with 1 ≤ m ≤ 4096 (the strata are m×m)"
+        )));
+    }
+    let images = match spec.extra.get("images") {
+        None => true,
+        Some(v) => v
+            .as_bool()
+            .ok_or_else(|| CoreError::Param(format!("images must be true or false, got {v}")))?,
+    };
+    Ok(Settings {
+        rays_per_axis: m as u32,
+        images,
+    })
+}
+
+impl Study for ShadowsStudy {
+    fn kind(&self) -> &'static str {
+        "shadows"
+    }
+    fn describe(&self) -> &'static str {
+        "layered soft shadow maps (Bavoil ch. 5) from a square area light vs a ray-traced reference"
+    }
+    fn points(&self, spec: &StudySpec) -> Result<Vec<PointSpec>> {
+        if let Some(m) = spec.methods.iter().find(|m| *m != METHOD) {
+            return Err(CoreError::Param(format!(
+                "the shadows study runs '{METHOD}' only, not '{m}' (leave `methods` out)"
+            )));
+        }
+        if let Some(a) = spec
+            .axes
+            .keys()
+            .find(|a| !layered::AXES.contains(&a.as_str()))
+        {
+            return Err(CoreError::Param(format!(
+                "unknown shadows axis '{a}' (known: {})",
+                layered::AXES.join(", ")
+            )));
+        }
+        settings(spec)?;
+        Ok(axis_product(&spec.axes, layered::AXES)
+            .into_iter()
+            .map(|params| PointSpec {
+                method: METHOD.into(),
+                params,
+            })
+            .collect())
+    }
+
+    fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
+        let set = settings(ctx.study)?;
+        let base_row = |params: &Params| -> Result<Row> {
+            let mut row = Row::new();
+            row.set("method", METHOD).set("exact", false);
+            set_params(&mut row, params)?;
+            row.set("shadow_rays", set.rays_per_axis * set.rays_per_axis);
+            Ok(row)
+        };
+        let Some(light) = ctx.scene.area_light.clone() else {
+            for (i, p) in ctx.group.points.iter().enumerate() {
+                let why = format!(
+                    "scene {} has no area light (use the soft_shadow generator)",
+                    ctx.scene.label()
+                );
+                emit(i, skipped_row(base_row(&p.params)?, &why))?;
+            }
+            return Ok(());
+        };
+        let method = LayeredSsm::new(light);
+        let reference = match group_reference(ctx, &method, set.rays_per_axis) {
+            Ok(r) => r,
+            Err(e) => {
+                for (i, p) in ctx.group.points.iter().enumerate() {
+                    emit(
+                        i,
+                        failed_row(base_row(&p.params)?, &format!("reference: {e}")),
+                    )?;
+                }
+                return Ok(());
+            }
+        };
+        let (w, h) = (ctx.group.width, ctx.group.height);
+        let img_dir = if set.images {
+            std::env::var_os("MFX_OUT_DIR").map(|d| {
+                PathBuf::from(d)
+                    .join("images")
+                    .join("shadows")
+                    .join(format!(
+                        "{}-{}-{w}x{h}",
+                        ctx.group.study_index,
+                        sanitize(&ctx.scene.label())
+                    ))
+            })
+        } else {
+            None
+        };
+        if let Some(dir) = &img_dir {
+            std::fs::create_dir_all(dir)
+                .map_err(|e| CoreError::Io(format!("{}: {e}", dir.display())))?;
+            write_visibility_png(&dir.join("reference.png"), w, h, &reference.vis)?;
+        }
+        // Images of the last point of each layer count: with the suite's ascending axis values
+        // that is its finest configuration (largest shadow map and max_nspp).
+        let layers_of = |p: &PointSpec| Config::from_params(&p.params).map(|c| c.layers).ok();
+        let imaged: Vec<usize> = (0..ctx.group.points.len())
+            .filter(|&i| {
+                let k = layers_of(&ctx.group.points[i]);
+                k.is_some() && ctx.group.points[i + 1..].iter().all(|q| layers_of(q) != k)
+            })
+            .collect();
+        for (i, pt) in ctx.group.points.iter().enumerate() {
+            let mut row = base_row(&pt.params)?;
+            row.set_f("reference_ms", reference.ms);
+            if let Err(why) = method.supports(ctx.gpu, &pt.params) {
+                emit(i, skipped_row(row, &why))?;
+                continue;
+            }
+            let mut m = match measure(
+                ctx.gpu, ctx.gscene, &method, &pt.params, ctx.warmup, ctx.reps,
+            ) {
+                Ok(m) => m,
+                Err(e) => {
+                    emit(i, failed_row(row, &e.to_string()))?;
+                    continue;
+                }
+            };
+            set_timing(&mut row, &m, ctx);
+            let got = match m.prepared.readback(ctx.gpu, ctx.gscene) {
+                Ok(cap) => cap.image.unwrap_or_default(),
+                Err(e) => {
+                    emit(i, failed_row(row, &format!("readback: {e}")))?;
+                    continue;
+                }
+            };
+            let got: Vec<f32> = got.iter().map(|p| p[0]).collect();
+            let e = compare(&reference.vis, &got);
+            row.set("shadow_pixels", e.evaluated)
+                .set_f("vis_rmse", e.rmse)
+                .set_f("vis_bias", e.bias)
+                .set_f("vis_max_abs_err", e.max_abs)
+                .set_f("vis_bleed_mean", e.bleed)
+                .set_f("vis_overshadow_mean", e.overshadow);
+            if e.unevaluated > 0 || e.non_finite > 0 {
+                row.set("flag", "precision").set(
+                    "notes",
+                    format!(
+                        "{} reference pixels the GPU did not evaluate, {} non-finite (counted as error 1)",
+                        e.unevaluated, e.non_finite
+                    ),
+                );
+            }
+            if let Some(dir) = &img_dir {
+                if imaged.contains(&i) {
+                    let k = layers_of(pt).unwrap_or(0);
+                    let stem = format!("p{i}-layers{k}");
+                    let vis: Vec<Option<f64>> = got
+                        .iter()
+                        .map(|&v| (v >= 0.0).then_some(v as f64))
+                        .collect();
+                    write_visibility_png(&dir.join(format!("{stem}-result.png")), w, h, &vis)?;
+                    write_diff_png(
+                        &dir.join(format!("{stem}-diff.png")),
+                        w,
+                        h,
+                        &reference.vis,
+                        &got,
+                    )?;
+                }
+            }
+            emit(i, row)?;
+        }
+        Ok(())
+    }
+}
+
+/// Ray-traced visibility of a group's pixels (None where not evaluated) and its cost.
+pub struct Reference {
+    pub vis: Vec<Option<f64>>,
+    pub ms: f64,
+}
+
+/// Recent references by scene|resolution|rays: a suite's several studies share a scene.
+static CACHE: Mutex<Vec<(String, Arc<Reference>)>> = Mutex::new(Vec::new());
+const CACHE_ENTRIES: usize = 8;
+
+fn group_reference(ctx: &GroupCtx<'_>, method: &LayeredSsm, m: u32) -> Result<Arc<Reference>> {
+    let key = format!(
+        "{}|{}x{}|{m}",
+        ctx.scene.label(),
+        ctx.group.width,
+        ctx.group.height
+    );
+    if let Some((_, r)) = CACHE.lock().unwrap().iter().find(|(k, _)| *k == key) {
+        return Ok(r.clone());
+    }
+    let points = gbuffer_points(ctx.gpu, ctx.gscene, method)?;
+    let r = Arc::new(reference(
+        ctx.scene,
+        &method.light,
+        &points,
+        ctx.group.width,
+        m,
+    ));
+    let mut cache = CACHE.lock().unwrap();
+    cache.push((key, r.clone()));
+    if cache.len() > CACHE_ENTRIES {
+        cache.remove(0);
+    }
+    Ok(r)
+}
+
+/// One untimed frame of the cheapest configuration: the eye's G-buffer does not depend on it.
+pub fn gbuffer_points(
+    gpu: &crate::Gpu,
+    gscene: &crate::gpu_scene::GpuScene,
+    method: &LayeredSsm,
+) -> Result<Vec<Option<DVec3>>> {
+    let params = Params::new()
+        .with("shadow_map_res", ParamValue::Int(16))
+        .with("layers", ParamValue::Int(1))
+        .with("max_nspp", ParamValue::Int(1));
+    method.supports(gpu, &params).map_err(CoreError::Param)?;
+    let mut prep = method.prepare_ssm(gpu, gscene, &params)?;
+    let mut timer = GpuTimer::new(gpu);
+    timer.begin_frame();
+    prep.frame(gpu, gscene, &mut timer)?;
+    gpu.wait()?;
+    Ok(prep
+        .read_points(gpu, gscene)?
+        .into_iter()
+        .map(|p| p.map(|p| Vec3::from(p).as_dvec3()))
+        .collect())
+}
+
+/// The reference over the points the light can see: in front of its near plane and inside its
+/// frustum (the same test the shader makes, in f64), None elsewhere.
+pub fn reference(
+    scene: &scenarios::Scene,
+    light: &scenarios::AreaLight,
+    points: &[Option<DVec3>],
+    width: u32,
+    m: u32,
+) -> Reference {
+    let t0 = std::time::Instant::now();
+    let bvh = Bvh::from_scene(scene);
+    let frame = LightFrame::of(light);
+    let f = 1.0 / (light.camera.fovy * 0.5).tan();
+    let inside: Vec<Option<DVec3>> = points
+        .iter()
+        .map(|p| {
+            p.filter(|p| {
+                let v = *p - frame.center;
+                let z = v.dot(frame.forward);
+                let x = v.dot(frame.right) * f / z;
+                let y = v.dot(frame.up) * f / z;
+                z > light.camera.near && x.abs() <= 1.0 && y.abs() <= 1.0
+            })
+        })
+        .collect();
+    let vis = raytrace::visibility_image(&bvh, &frame, &inside, width as usize, m);
+    Reference {
+        vis,
+        ms: t0.elapsed().as_secs_f64() * 1e3,
+    }
+}
+
+/// Visibility error over the pixels the reference evaluates.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct VisError {
+    pub evaluated: u64,
+    pub rmse: f64,
+    /// Signed mean (GPU − reference).
+    pub bias: f64,
+    pub max_abs: f64,
+    pub bleed: f64,
+    pub overshadow: f64,
+    /// Reference pixels the GPU marked as not evaluated (−1).
+    pub unevaluated: u64,
+    pub non_finite: u64,
+}
+
+pub fn compare(reference: &[Option<f64>], got: &[f32]) -> VisError {
+    let mut e = VisError::default();
+    let (mut se, mut sum, mut bl, mut os) = (0.0, 0.0, 0.0, 0.0);
+    for (r, &g) in reference.iter().zip(got) {
+        let Some(r) = r else { continue };
+        e.evaluated += 1;
+        let d = if !g.is_finite() {
+            e.non_finite += 1;
+            1.0
+        } else if g < 0.0 {
+            e.unevaluated += 1;
+            1.0
+        } else {
+            g as f64 - r
+        };
+        se += d * d;
+        sum += d;
+        bl += d.max(0.0);
+        os += (-d).max(0.0);
+        e.max_abs = e.max_abs.max(d.abs());
+    }
+    let n = e.evaluated.max(1) as f64;
+    e.rmse = (se / n).sqrt();
+    e.bias = sum / n;
+    e.bleed = bl / n;
+    e.overshadow = os / n;
+    e
+}
+
+/// A scene label as a folder name: `soft_shadow(case=leaves)` → `soft_shadow_case=leaves`.
+fn sanitize(s: &str) -> String {
+    let keep = |c: char| c.is_ascii_alphanumeric() || matches!(c, '=' | '-' | '.');
+    s.chars()
+        .map(|c| if keep(c) { c } else { '_' })
+        .collect::<String>()
+        .trim_matches('_')
+        .to_string()
+}
+
+/// Grey visibility (black = in shadow); pixels not evaluated in dark blue.
+pub fn write_visibility_png(
+    path: &std::path::Path,
+    w: u32,
+    h: u32,
+    vis: &[Option<f64>],
+) -> Result<()> {
+    let mut bytes = Vec::with_capacity(vis.len() * 3);
+    for v in vis {
+        match v {
+            Some(v) => {
+                let g = (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+                bytes.extend_from_slice(&[g, g, g]);
+            }
+            None => bytes.extend_from_slice(&[20, 20, 60]),
+        }
+    }
+    image::save_buffer(path, &bytes, w, h, image::ColorType::Rgb8)
+        .map_err(|e| CoreError::Io(format!("{}: {e}", path.display())))
+}
+
+/// Signed difference GPU − reference: red = light bleeding, blue = overshadowing, full colour at
+/// |difference| ≥ 0.5; black where equal, dark grey where not evaluated.
+pub fn write_diff_png(
+    path: &std::path::Path,
+    w: u32,
+    h: u32,
+    reference: &[Option<f64>],
+    got: &[f32],
+) -> Result<()> {
+    let mut bytes = Vec::with_capacity(reference.len() * 3);
+    for (r, &g) in reference.iter().zip(got) {
+        match r {
+            Some(r) => {
+                let d = g as f64 - r;
+                let red = ((d * 2.0).clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+                let blue = ((-d * 2.0).clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+                bytes.extend_from_slice(&[red, 0, blue]);
+            }
+            None => bytes.extend_from_slice(&[40, 40, 40]),
+        }
+    }
+    image::save_buffer(path, &bytes, w, h, image::ColorType::Rgb8)
+        .map_err(|e| CoreError::Io(format!("{}: {e}", path.display())))
+}
+
+#[cfg(test)]
+mod tests;

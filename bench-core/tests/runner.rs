@@ -1,0 +1,108 @@
+//! The runner's promises: every point gets a row; bad values are skipped or errors, not panics.
+
+use bench_core::record::{Row, Sink};
+use bench_core::runner::{self, RunOptions};
+use bench_core::testing;
+use scenarios::Suite;
+
+struct Collect(Vec<Row>);
+impl Sink for Collect {
+    fn point_done(&mut self, row: &Row) -> bench_core::Result<()> {
+        self.0.push(row.clone());
+        Ok(())
+    }
+}
+
+fn run(text: &str) -> Vec<Row> {
+    let gpu = testing::gpu();
+    let suite = Suite::parse(text, "test").unwrap();
+    let groups = runner::expand(&suite, gpu.facts.is_software).unwrap();
+    let n = runner::rows_in(&groups);
+    let mut sink = Collect(Vec::new());
+    let opts = RunOptions {
+        run_id: "t".into(),
+        git_rev: "t".into(),
+        shard: (0, 1),
+        save_images: None,
+    };
+    let written = runner::run(&gpu, &suite, &groups, &opts, &mut sink).unwrap();
+    assert_eq!(written, n);
+    assert_eq!(sink.0.len(), n, "one row per point, floors included");
+    sink.0
+}
+
+#[test]
+fn out_of_range_axis_is_a_skipped_row_with_reason() {
+    let rows = run(r#"
+        reps = 1
+        warmup = 0
+        resolutions = [[16, 16]]
+        [[study]]
+        kind = "methods"
+        methods = ["depth_peel"]
+        axes = { max_layers = [0, 4] }
+        [[study.scenes]]
+        generator = "quads"
+        depth_complexity = 2
+    "#);
+    let peel: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.get("method") == Some("depth_peel"))
+        .collect();
+    assert_eq!(peel.len(), 2);
+    let bad = peel
+        .iter()
+        .find(|r| r.get("max_layers") == Some("0"))
+        .unwrap();
+    assert_eq!(bad.get("status"), Some("skipped"));
+    assert!(
+        bad.get("reason").unwrap().contains("max_layers"),
+        "reason names the axis: {:?}",
+        bad.get("reason")
+    );
+    let good = peel
+        .iter()
+        .find(|r| r.get("max_layers") == Some("4"))
+        .unwrap();
+    assert_eq!(good.get("status"), Some("ok"));
+    assert!(
+        good.get("x_floor").is_some(),
+        "x_floor is filled from the floor rows"
+    );
+}
+
+#[test]
+fn a_scene_that_cannot_be_built_fails_every_row_of_its_group_with_the_reason() {
+    let rows = run(r#"
+        reps = 1
+        warmup = 0
+        resolutions = [[16, 16]]
+        [[study]]
+        kind = "methods"
+        methods = ["depth_peel"]
+        [[study.scenes]]
+        generator = "obj"
+        path = "/nonexistent/mesh.obj"
+    "#);
+    assert_eq!(rows.len(), 3);
+    for r in &rows {
+        assert_eq!(r.get("status"), Some("failed"));
+        assert!(
+            r.get("reason").unwrap().contains("/nonexistent/mesh.obj"),
+            "{:?}",
+            r.get("reason")
+        );
+    }
+}
+
+#[test]
+fn unknown_method_and_study_are_errors_before_any_gpu_work() {
+    let s = Suite::parse("[[study]]\nkind = \"methods\"\nmethods = [\"nope\"]\n[[study.scenes]]\ngenerator = \"quads\"\n", "t").unwrap();
+    let e = runner::expand(&s, false).unwrap_err().to_string();
+    assert!(e.contains("unknown method 'nope'"), "{e}");
+    let s = Suite::parse("[[study]]\nkind = \"nope\"\n", "t").unwrap();
+    assert!(runner::expand(&s, false)
+        .unwrap_err()
+        .to_string()
+        .contains("unknown kind 'nope'"));
+}

@@ -1,0 +1,580 @@
+//! Cross-adapter and cross-backend comparison, drawn when a CSV (usually `mfx merge`d from
+//! several machines) holds more than one platform (adapter × backend): GPU time per method and
+//! scene per platform (grouped bars, log scale), each platform's speedup over a baseline
+//! platform (`mfx report --baseline NAME`), and how closely the same point's images agree across
+//! platforms (max and RMS difference of the saved images, `mfx sweep --save-images`).
+//!
+//! Points are matched by `point_key` (study|scene|resolution|method|axes), so two platforms are
+//! compared only on exactly the same scene, resolution and configuration.
+
+use std::collections::BTreeMap;
+use std::fmt::Write;
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+
+use crate::charts::{Bars, Figure, Pt};
+use crate::data::{Rec, Runs};
+use crate::studies::methods::CONFIG_AXES;
+
+/// What the comparison adds to the page.
+pub struct Comparison {
+    pub figures: Vec<Figure>,
+    /// Tables (speedups, image agreement) as HTML.
+    pub html: String,
+    /// The largest max-abs image difference between platforms, with its point and platforms.
+    pub worst_image_diff: Option<(f64, String, String, String)>,
+}
+
+/// "adapter (backend)": the unit compared.
+pub fn platform(r: &Rec) -> String {
+    format!("{} ({})", r.get("adapter"), r.get("backend"))
+}
+
+pub fn platforms(runs: &Runs) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for r in &runs.rows {
+        let p = platform(r);
+        if !out.contains(&p) {
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// The baseline platform: the first whose "adapter (backend)" contains `name` (case-insensitive),
+/// or by default the first CPU adapter (lavapipe/llvmpipe), else the first platform.
+pub fn baseline(runs: &Runs, name: Option<&str>) -> Result<String> {
+    let all = platforms(runs);
+    match name {
+        Some(n) => all
+            .iter()
+            .find(|p| p.to_lowercase().contains(&n.to_lowercase()))
+            .cloned()
+            .with_context(|| {
+                format!(
+                    "--baseline '{n}' matches no adapter in the CSV (adapters: {})",
+                    all.join("; ")
+                )
+            }),
+        None => Ok(runs
+            .rows
+            .iter()
+            .find(|r| r.get("device_type") == "cpu")
+            .map(platform)
+            .or_else(|| all.first().cloned())
+            .unwrap_or_default()),
+    }
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+fn safe(s: &str) -> String {
+    s.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .take(60)
+        .collect()
+}
+
+fn num(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else if v.abs() >= 100.0 {
+        format!("{v:.0}")
+    } else if v.abs() >= 0.01 {
+        format!("{v:.3}")
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
+fn geomean(v: &[f64]) -> Option<f64> {
+    let v: Vec<f64> = v
+        .iter()
+        .copied()
+        .filter(|x| *x > 0.0 && x.is_finite())
+        .collect();
+    (!v.is_empty()).then(|| (v.iter().map(|x| x.ln()).sum::<f64>() / v.len() as f64).exp())
+}
+
+/// Max and RMS difference over all channels of two premultiplied RGBA images.
+pub fn image_diff(a: &[f32], b: &[f32]) -> Option<(f64, f64)> {
+    if a.len() != b.len() || a.is_empty() {
+        return None;
+    }
+    let (mut max, mut sq) = (0.0f64, 0.0f64);
+    for (x, y) in a.iter().zip(b) {
+        let d = (*x as f64 - *y as f64).abs();
+        // A NaN on one side is the largest possible disagreement, never hidden.
+        let d = if d.is_nan() { f64::INFINITY } else { d };
+        max = max.max(d);
+        sq += d * d;
+    }
+    Some((max, (sq / a.len() as f64).sqrt()))
+}
+
+fn read_image(path: &Path) -> Result<(Vec<u64>, Vec<f32>)> {
+    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    let npy = npyz::NpyFile::new(&bytes[..]).with_context(|| format!("{}", path.display()))?;
+    let shape = npy.shape().to_vec();
+    let v: Vec<f32> = npy
+        .into_vec()
+        .with_context(|| format!("{}: not float32", path.display()))?;
+    Ok((shape, v))
+}
+
+/// The comparison of a run folder's rows, or `None` when they hold one platform only.
+pub fn compare(
+    runs: &Runs,
+    run_dir: &Path,
+    out: &Path,
+    baseline_name: Option<&str>,
+) -> Result<Option<Comparison>> {
+    let plats = platforms(runs);
+    if plats.len() < 2 {
+        if let Some(n) = baseline_name {
+            bail!(
+                "--baseline '{n}': the CSV holds one adapter only ({})",
+                plats.join("")
+            );
+        }
+        return Ok(None);
+    }
+    let base = baseline(runs, baseline_name)?;
+    let ok: Vec<&Rec> = runs
+        .rows
+        .iter()
+        .filter(|r| r.ok() && r.f("gpu_ms_median").is_some())
+        .collect();
+    // point_key → platform → row
+    let mut by_point: BTreeMap<&str, BTreeMap<String, &Rec>> = BTreeMap::new();
+    let mut order: Vec<&str> = Vec::new();
+    for r in &ok {
+        let k = r.get("point_key");
+        if !by_point.contains_key(k) {
+            order.push(k);
+        }
+        by_point
+            .entry(k)
+            .or_default()
+            .entry(platform(r))
+            .or_insert(r);
+    }
+    let mut figures = Vec::new();
+    let mut html = String::new();
+    let _ = write!(
+        html,
+        "<h2>Adapters and backends: speedups and image agreement</h2><p>{} platforms (adapter, backend): {}. Baseline for \
+         speedups: <b>{}</b>{}.</p>",
+        plats.len(),
+        plats.iter().map(|p| esc(p)).collect::<Vec<_>>().join("; "),
+        esc(&base),
+        if baseline_name.is_none() {
+            " (default: the first CPU adapter; choose with <code>mfx report --baseline NAME</code>)"
+        } else {
+            ""
+        }
+    );
+
+    // 1. Time per method configuration, one chart per scene × resolution, one bar per platform.
+    let mut scenes: Vec<(String, String)> = Vec::new();
+    for r in &ok {
+        let s = (
+            r.get("scene_label").to_string(),
+            format!("{}x{}", r.get("width"), r.get("height")),
+        );
+        if !scenes.contains(&s) {
+            scenes.push(s);
+        }
+    }
+    for (label, res) in &scenes {
+        let here: Vec<&str> = order
+            .iter()
+            .copied()
+            .filter(|k| {
+                let r = by_point[k].values().next().expect("non-empty");
+                r.get("scene_label") == label
+                    && format!("{}x{}", r.get("width"), r.get("height")) == *res
+            })
+            .collect();
+        // Only points measured on at least two platforms say anything about platforms.
+        let here: Vec<&str> = here
+            .into_iter()
+            .filter(|k| by_point[k].len() >= 2)
+            .collect();
+        if here.is_empty() {
+            continue;
+        }
+        let categories: Vec<String> = here
+            .iter()
+            .map(|k| {
+                let r = by_point[k].values().next().expect("non-empty");
+                let study = r.get("study");
+                let c = r.config_label(CONFIG_AXES);
+                if study == "methods" || c.starts_with("floor_") {
+                    c
+                } else {
+                    format!("{study}: {c}")
+                }
+            })
+            .collect();
+        let series = plats
+            .iter()
+            .map(|p| {
+                let v = here
+                    .iter()
+                    .map(|k| {
+                        by_point[k].get(p).map(|r| {
+                            Pt::spread(
+                                0.0,
+                                r.f("gpu_ms_median").unwrap_or(0.0),
+                                r.f("gpu_ms_min"),
+                                r.f("gpu_ms_max"),
+                            )
+                        })
+                    })
+                    .collect();
+                (p.clone(), v)
+            })
+            .collect();
+        let bars = Bars {
+            title: format!("GPU time per platform — {label}, {res}"),
+            y_label: "GPU time per frame [ms]".into(),
+            log_y: true,
+            categories,
+            series,
+            reference: None,
+        };
+        figures.push(bars.draw(
+            out,
+            &format!("compare_time_{}_{res}", safe(label)),
+            "Median GPU time per frame of each configuration on each platform (whiskers: min–max \
+             of the timed repetitions), log scale. floor_depth/floor_opaque are the rasterisation \
+             floors of the same scene.",
+        )?);
+    }
+
+    // 2. Speedup over the baseline: per configuration, the geometric mean over scenes of
+    //    baseline ms / platform ms (whiskers: the smallest and largest scene).
+    let others: Vec<&String> = plats.iter().filter(|p| **p != base).collect();
+    let mut configs: Vec<String> = Vec::new();
+    // config → platform → speedups over the scenes
+    let mut speed: BTreeMap<String, BTreeMap<String, Vec<f64>>> = BTreeMap::new();
+    for k in &order {
+        let per = &by_point[k];
+        let Some(b) = per.get(&base).and_then(|r| r.f("gpu_ms_median")) else {
+            continue;
+        };
+        let r0 = per.values().next().expect("non-empty");
+        let c = r0.config_label(CONFIG_AXES);
+        for p in &others {
+            if let Some(t) = per.get(*p).and_then(|r| r.f("gpu_ms_median")) {
+                if t > 0.0 && b > 0.0 {
+                    if !configs.contains(&c) {
+                        configs.push(c.clone());
+                    }
+                    speed
+                        .entry(c.clone())
+                        .or_default()
+                        .entry((*p).clone())
+                        .or_default()
+                        .push(b / t);
+                }
+            }
+        }
+    }
+    if !configs.is_empty() {
+        let series = others
+            .iter()
+            .map(|p| {
+                let v = configs
+                    .iter()
+                    .map(|c| {
+                        let s = speed.get(c)?.get(*p)?;
+                        let g = geomean(s)?;
+                        let lo = s.iter().copied().fold(f64::INFINITY, f64::min);
+                        let hi = s.iter().copied().fold(0.0, f64::max);
+                        Some(Pt::spread(0.0, g, Some(lo), Some(hi)))
+                    })
+                    .collect();
+                ((*p).clone(), v)
+            })
+            .collect();
+        let bars = Bars {
+            title: format!("Speedup over {base}"),
+            y_label: "baseline GPU time / platform GPU time (×)".into(),
+            log_y: true,
+            categories: configs.clone(),
+            series,
+            reference: Some(1.0),
+        };
+        figures.push(bars.draw(
+            out,
+            "compare_speedup",
+            &format!(
+                "Per configuration: geometric mean over the scenes measured on both of \
+                 (GPU time on {base}) / (GPU time on the platform); whiskers: the smallest and \
+                 largest scene. Above 1 is faster than the baseline."
+            ),
+        )?);
+        let _ = write!(
+            html,
+            "<h3>Speedup over {}</h3><table id=\"speedup\"><tr><th>configuration</th>",
+            esc(&base)
+        );
+        for p in &others {
+            let _ = write!(html, "<th>{} (geomean, min–max, scenes)</th>", esc(p));
+        }
+        html.push_str("</tr>");
+        for c in &configs {
+            let _ = write!(html, "<tr><td>{}</td>", esc(c));
+            for p in &others {
+                match speed.get(c).and_then(|m| m.get(*p)) {
+                    Some(s) => {
+                        let lo = s.iter().copied().fold(f64::INFINITY, f64::min);
+                        let hi = s.iter().copied().fold(0.0, f64::max);
+                        let _ = write!(
+                            html,
+                            "<td>{}× ({}–{}, {})</td>",
+                            geomean(s).map(num).unwrap_or_default(),
+                            num(lo),
+                            num(hi),
+                            s.len()
+                        );
+                    }
+                    None => html.push_str("<td></td>"),
+                }
+            }
+            html.push_str("</tr>");
+        }
+        html.push_str("</table>");
+    }
+
+    // 3. Image agreement: the same point's images on two platforms.
+    let mut agree: Vec<(f64, f64, String, String, String, String, String)> = Vec::new();
+    let mut problems: Vec<String> = Vec::new();
+    let mut with_images = 0;
+    for k in &order {
+        let imgs: Vec<(&String, &Rec)> = by_point[k]
+            .iter()
+            .filter(|(_, r)| !r.get("image_file").is_empty())
+            .map(|(p, r)| (p, *r))
+            .collect();
+        if imgs.len() < 2 {
+            continue;
+        }
+        with_images += 1;
+        let mut loaded = Vec::new();
+        for (p, r) in &imgs {
+            let path = run_dir.join(r.get("image_file"));
+            match read_image(&path) {
+                Ok(img) => loaded.push((*p, *r, img)),
+                Err(e) => problems.push(format!("{}: {e:#}", esc(p))),
+            }
+        }
+        for i in 0..loaded.len() {
+            for j in i + 1..loaded.len() {
+                let (pa, ra, (sa, a)) = &loaded[i];
+                let (pb, rb, (sb, b)) = &loaded[j];
+                if sa != sb {
+                    problems.push(format!(
+                        "{}: image shapes differ ({sa:?} on {}, {sb:?} on {})",
+                        esc(k),
+                        esc(pa),
+                        esc(pb)
+                    ));
+                    continue;
+                }
+                if let Some((max, rms)) = image_diff(a, b) {
+                    agree.push((
+                        max,
+                        rms,
+                        k.to_string(),
+                        (*pa).clone(),
+                        (*pb).clone(),
+                        ra.get("rmse").to_string(),
+                        rb.get("rmse").to_string(),
+                    ));
+                }
+            }
+        }
+    }
+    agree.sort_by(|x, y| y.0.partial_cmp(&x.0).unwrap_or(std::cmp::Ordering::Equal));
+    html.push_str("<h3>Image agreement across platforms</h3>");
+    if agree.is_empty() {
+        html.push_str(
+            "<p>No point has saved images on two platforms (run the sweeps with \
+             <code>mfx sweep --save-images</code> and merge the folders).</p>",
+        );
+    } else {
+        let _ = write!(
+            html,
+            "<p>{with_images} points have images on two or more platforms. Difference of the \
+             premultiplied RGBA images over all pixels and channels (the same point should give \
+             the same image on every platform; each image's own RMSE vs the f64 CPU reference is \
+             beside it). Largest first.</p><table id=\"agreement\"><tr><th>point</th><th>platform \
+             A</th><th>platform B</th><th>max abs diff</th><th>RMS diff</th><th>RMSE A vs ref</th>\
+             <th>RMSE B vs ref</th></tr>"
+        );
+        for (max, rms, k, a, b, ea, eb) in &agree {
+            let _ = write!(
+                html,
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                esc(k),
+                esc(a),
+                esc(b),
+                num(*max),
+                num(*rms),
+                esc(ea),
+                esc(eb)
+            );
+        }
+        html.push_str("</table>");
+    }
+    if !problems.is_empty() {
+        let _ = write!(
+            html,
+            "<p class=\"failed\">Images that could not be compared ({}):</p><ul>",
+            problems.len()
+        );
+        for p in &problems {
+            let _ = write!(html, "<li>{p}</li>");
+        }
+        html.push_str("</ul>");
+    }
+    let worst_image_diff = agree
+        .first()
+        .map(|(m, _, k, a, b, _, _)| (*m, k.clone(), a.clone(), b.clone()));
+    Ok(Some(Comparison {
+        figures,
+        html,
+        worst_image_diff,
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write_npy(path: &Path, px: &[f32]) {
+        use npyz::WriterBuilder;
+        let mut w = npyz::WriteOptions::new()
+            .default_dtype()
+            .shape(&[1, (px.len() / 4) as u64, 4])
+            .writer(std::fs::File::create(path).unwrap())
+            .begin_nd()
+            .unwrap();
+        w.extend(px.iter().copied()).unwrap();
+        w.finish().unwrap();
+    }
+
+    const H: &str = "schema,point_key,study,scene,scene_label,width,height,method,max_layers,adapter,backend,device_type,status,gpu_ms_median,gpu_ms_min,gpu_ms_max,rmse,image_file";
+
+    fn setup(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("mfx-compare-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(d.join("images")).unwrap();
+        std::fs::create_dir_all(d.join("report")).unwrap();
+        let rows = [
+            "1,m|q|2x1|floor_depth|,methods,quads,q,2,1,floor_depth,,GPU,vulkan,discretegpu,ok,0.1,0.1,0.1,,",
+            "1,m|q|2x1|floor_depth|,methods,quads,q,2,1,floor_depth,,llvmpipe,vulkan,cpu,ok,1.0,1.0,1.0,,",
+            "1,m|q|2x1|depth_peel|max_layers=8,methods,quads,q,2,1,depth_peel,8,GPU,vulkan,discretegpu,ok,0.5,0.4,0.6,0,images/a.npy",
+            "1,m|q|2x1|depth_peel|max_layers=8,methods,quads,q,2,1,depth_peel,8,llvmpipe,vulkan,cpu,ok,20,19,21,0,images/b.npy",
+            "1,m|q|2x1|depth_peel|max_layers=8,methods,quads,q,2,1,depth_peel,8,llvmpipe,gl,cpu,ok,40,39,41,0,images/c.npy",
+            "1,m|q|2x1|depth_peel|max_layers=8,methods,quads,q,2,1,depth_peel,8,GPU,gl,discretegpu,skipped,,,,,",
+        ];
+        std::fs::write(d.join("runs.csv"), format!("{H}\n{}\n", rows.join("\n"))).unwrap();
+        write_npy(
+            &d.join("images/a.npy"),
+            &[0.5, 0.5, 0.5, 1.0, 0.0, 0.0, 0.0, 0.0],
+        );
+        write_npy(
+            &d.join("images/b.npy"),
+            &[0.5, 0.5, 0.5, 1.0, 0.0, 0.0, 0.0, 0.0],
+        );
+        write_npy(
+            &d.join("images/c.npy"),
+            &[0.5, 0.5, 0.5, 0.75, 0.0, 0.0, 0.0, 0.0],
+        );
+        d
+    }
+
+    #[test]
+    fn compares_platforms_speedups_and_images() {
+        let d = setup("ok");
+        let runs = Runs::load(&d.join("runs.csv")).unwrap();
+        let c = compare(&runs, &d, &d.join("report"), Some("llvmpipe (vulkan"))
+            .unwrap()
+            .unwrap();
+        // One time chart (one scene) and one speedup chart, both written.
+        assert_eq!(c.figures.len(), 2);
+        for f in &c.figures {
+            assert!(d.join("report").join(format!("{}.png", f.stem)).is_file());
+            assert!(d.join("report").join(format!("{}.svg", f.stem)).is_file());
+        }
+        // GPU over lavapipe: 20 / 0.5 = 40× for depth_peel, 1.0 / 0.1 = 10× for the floor.
+        assert!(
+            c.html
+                .contains("<td>depth_peel (max_layers=8)</td><td>40.000×"),
+            "{}",
+            c.html
+        );
+        assert!(
+            c.html.contains("<td>floor_depth</td><td>10.000×"),
+            "{}",
+            c.html
+        );
+        // Images: vulkan GPU = vulkan lavapipe exactly; GL differs by 0.25 in one of 8 channels.
+        let (max, key, _, _) = c.worst_image_diff.clone().unwrap();
+        assert_eq!(max, 0.25);
+        assert!(key.contains("depth_peel"));
+        assert!(c.html.contains("id=\"agreement\""));
+        assert_eq!(
+            c.html.matches("<td>0.250</td><td>0.088</td>").count(),
+            2,
+            "{}",
+            c.html
+        );
+        assert!(
+            c.html.contains("<td>0</td><td>0</td>"),
+            "the identical pair is listed: {}",
+            c.html
+        );
+    }
+
+    #[test]
+    fn one_platform_draws_nothing_and_a_bad_baseline_is_an_error() {
+        let d = setup("bad");
+        let runs = Runs::load(&d.join("runs.csv")).unwrap();
+        let e = compare(&runs, &d, &d.join("report"), Some("no such gpu"))
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("'no such gpu'") && e.contains("llvmpipe (gl)"),
+            "{e}"
+        );
+        let mut one = runs.clone();
+        one.rows
+            .retain(|r| r.get("adapter") == "GPU" && r.get("backend") == "vulkan");
+        assert!(compare(&one, &d, &d.join("report"), None)
+            .unwrap()
+            .is_none());
+        // Default baseline: the first CPU adapter.
+        assert_eq!(baseline(&runs, None).unwrap(), "llvmpipe (vulkan)");
+    }
+
+    #[test]
+    fn nan_is_the_largest_difference() {
+        assert_eq!(
+            image_diff(&[0.0, f32::NAN], &[0.0, 0.0]).unwrap().0,
+            f64::INFINITY
+        );
+        assert_eq!(image_diff(&[1.0], &[1.0, 2.0]), None);
+    }
+}

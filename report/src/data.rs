@@ -1,0 +1,102 @@
+//! Reading runs.csv: rows as column → text maps, with typed accessors.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+
+/// One CSV row.
+#[derive(Clone, Debug, Default)]
+pub struct Rec(pub BTreeMap<String, String>);
+
+impl Rec {
+    /// The cell, or "" when absent or empty.
+    pub fn get(&self, col: &str) -> &str {
+        self.0.get(col).map(|s| s.as_str()).unwrap_or("")
+    }
+    /// The cell as a finite-or-infinite float, `None` when empty or not a number.
+    pub fn f(&self, col: &str) -> Option<f64> {
+        let s = self.get(col);
+        if s.is_empty() {
+            return None;
+        }
+        s.parse::<f64>().ok()
+    }
+    pub fn ok(&self) -> bool {
+        self.get("status") == "ok"
+    }
+    /// Method plus its non-empty axis values: one series per configuration.
+    pub fn config_label(&self, axes: &[&str]) -> String {
+        let mut s = self.get("method").to_string();
+        let parts: Vec<String> = axes
+            .iter()
+            .filter(|a| !self.get(a).is_empty())
+            .map(|a| format!("{a}={}", self.get(a)))
+            .collect();
+        if !parts.is_empty() {
+            s.push_str(&format!(" ({})", parts.join(", ")));
+        }
+        s
+    }
+}
+
+/// The rows of one or more runs.csv files (same header required).
+#[derive(Clone, Debug, Default)]
+pub struct Runs {
+    pub header: Vec<String>,
+    pub rows: Vec<Rec>,
+    pub sources: Vec<PathBuf>,
+}
+
+impl Runs {
+    pub fn load(path: &Path) -> Result<Runs> {
+        let mut rdr =
+            csv::Reader::from_path(path).with_context(|| format!("reading {}", path.display()))?;
+        let header: Vec<String> = rdr
+            .headers()
+            .with_context(|| format!("{}: no header", path.display()))?
+            .iter()
+            .map(String::from)
+            .collect();
+        if !header.iter().any(|h| h == "schema") {
+            bail!(
+                "{}: not an mfx runs.csv (no 'schema' column)",
+                path.display()
+            );
+        }
+        let mut rows = Vec::new();
+        for (i, rec) in rdr.records().enumerate() {
+            let rec = rec.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
+            rows.push(Rec(header
+                .iter()
+                .cloned()
+                .zip(rec.iter().map(String::from))
+                .collect()));
+        }
+        Ok(Runs {
+            header,
+            rows,
+            sources: vec![path.to_path_buf()],
+        })
+    }
+
+    /// Rows of one study kind.
+    pub fn study(&self, kind: &str) -> Vec<&Rec> {
+        self.rows
+            .iter()
+            .filter(|r| r.get("study") == kind)
+            .collect()
+    }
+
+    /// Distinct non-empty values of a column, in first-seen order.
+    pub fn distinct<'a>(rows: impl IntoIterator<Item = &'a Rec>, col: &str) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for r in rows {
+            let v = r.get(col);
+            if !v.is_empty() && !out.iter().any(|o| o == v) {
+                out.push(v.to_string());
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,216 @@
+//! Figures of the `shadows` study (issue 7): layered soft shadow maps against the ray-traced
+//! reference — error vs GPU time per configuration, error (and its sign: light bleeding vs
+//! overshadowing) vs layers, error vs max_nspp, the bias parameters, and HSM on/off.
+
+use std::path::Path;
+
+use anyhow::Result;
+
+use crate::charts::{Figure, Pt, Series, XY};
+use crate::data::{Rec, Runs};
+
+fn safe(s: &str) -> String {
+    s.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .take(60)
+        .collect()
+}
+
+/// Rows of the layers × max_nspp sweep: bias, gscale, gmax and hsm left at their defaults
+/// (hybrid, 2, 0.1, on), so the bias and HSM sweeps (which set them) do not mix in.
+fn at_defaults(r: &Rec) -> bool {
+    ["bias_mode", "hsm", "gscale", "gmax"]
+        .iter()
+        .all(|c| r.get(c).is_empty())
+        && !r.get("layers").is_empty()
+        && !r.get("max_nspp").is_empty()
+}
+
+/// Groups rows into series named by `name`, points (x, y) sorted by x.
+fn series(
+    rows: &[&Rec],
+    name: impl Fn(&Rec) -> String,
+    xy: impl Fn(&Rec) -> Option<(f64, f64)>,
+) -> Vec<Series> {
+    let mut out: Vec<Series> = Vec::new();
+    for r in rows {
+        let Some((x, y)) = xy(r) else { continue };
+        let n = name(r);
+        match out.iter_mut().find(|s| s.name == n) {
+            Some(s) => s.points.push(Pt::new(x, y)),
+            None => out.push(Series {
+                name: n,
+                points: vec![Pt::new(x, y)],
+            }),
+        }
+    }
+    for s in &mut out {
+        s.points.sort_by(|a, b| a.x.total_cmp(&b.x));
+    }
+    out
+}
+
+pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
+    let rows: Vec<&Rec> = runs
+        .study("shadows")
+        .into_iter()
+        .filter(|r| r.ok() && r.get("method") == "layered_ssm")
+        .collect();
+    let mut figs = Vec::new();
+    for label in Runs::distinct(rows.iter().copied(), "scene_label") {
+        let g: Vec<&Rec> = rows
+            .iter()
+            .copied()
+            .filter(|r| r.get("scene_label") == label)
+            .collect();
+        let stem = safe(&label);
+        // Error vs time, every configuration, coloured by layer count.
+        let s = series(
+            &g,
+            |r| format!("{} layer(s)", r.get("layers")),
+            |r| Some((r.f("gpu_ms_median")?, r.f("vis_rmse")?)),
+        );
+        if !s.is_empty() {
+            figs.push(
+                XY {
+                    title: format!("Visibility error vs GPU time — {label}"),
+                    x_label: "GPU time per frame [ms]".into(),
+                    y_label: "visibility RMSE vs ray tracing".into(),
+                    log_x: true,
+                    log_y: true,
+                    lines: false,
+                    series: s,
+                }
+                .draw(dir, &format!("shadows_error_vs_time_{stem}"), "One point per configuration (every sweep of the suite); the reference is m×m stratified shadow rays per pixel from the same G-buffer points.")?,
+            );
+        }
+        let d: Vec<&Rec> = g.iter().copied().filter(|r| at_defaults(r)).collect();
+        // Error vs layers: does a third layer remove most light bleeding (the thesis's claim)?
+        let s = series(
+            &d,
+            |r| format!("nspp ≤ {}, {}²", r.get("max_nspp"), r.get("shadow_map_res")),
+            |r| Some((r.f("layers")?, r.f("vis_rmse")?)),
+        );
+        if s.iter().any(|s| s.points.len() > 1) {
+            figs.push(
+                XY {
+                    title: format!("Visibility error vs layers — {label}"),
+                    x_label: "shadow-map layers k".into(),
+                    y_label: "visibility RMSE".into(),
+                    log_x: false,
+                    log_y: false,
+                    lines: true,
+                    series: s,
+                }
+                .draw(
+                    dir,
+                    &format!("shadows_error_vs_layers_{stem}"),
+                    "Hybrid bias, HSM on. One line per max_nspp and shadow-map size.",
+                )?,
+            );
+        }
+        // The sign of the error vs layers: light bleeding (GPU too bright) and overshadowing.
+        let mut s = Vec::new();
+        for (col, what) in [
+            ("vis_bleed_mean", "light bleeding"),
+            ("vis_overshadow_mean", "overshadowing"),
+        ] {
+            s.extend(series(
+                &d,
+                |r| {
+                    format!(
+                        "{what}, nspp ≤ {}, {}²",
+                        r.get("max_nspp"),
+                        r.get("shadow_map_res")
+                    )
+                },
+                |r| Some((r.f("layers")?, r.f(col)?)),
+            ));
+        }
+        if s.iter().any(|s| s.points.len() > 1) {
+            figs.push(
+                XY {
+                    title: format!("Light bleeding and overshadowing vs layers — {label}"),
+                    x_label: "shadow-map layers k".into(),
+                    y_label: "mean of max(±(GPU − reference), 0)".into(),
+                    log_x: false,
+                    log_y: false,
+                    lines: true,
+                    series: s,
+                }
+                .draw(dir, &format!("shadows_bleeding_vs_layers_{stem}"), "Light bleeding: GPU visibility above the reference; overshadowing: below. Hybrid bias, HSM on.")?,
+            );
+        }
+        // Error vs samples per pixel.
+        let s = series(
+            &d,
+            |r| format!("k = {}, {}²", r.get("layers"), r.get("shadow_map_res")),
+            |r| Some((r.f("max_nspp")?, r.f("vis_rmse")?)),
+        );
+        if s.iter().any(|s| s.points.len() > 1) {
+            figs.push(
+                XY {
+                    title: format!("Visibility error vs max_nspp — {label}"),
+                    x_label: "max shadow-map samples per pixel".into(),
+                    y_label: "visibility RMSE".into(),
+                    log_x: true,
+                    log_y: false,
+                    lines: true,
+                    series: s,
+                }
+                .draw(dir, &format!("shadows_error_vs_nspp_{stem}"), "Above max_nspp the search region is sampled with a stride; each sample stands for its block of texels.")?,
+            );
+        }
+        // Bias: error vs gscale per mode and gmax.
+        let b: Vec<&Rec> = g
+            .iter()
+            .copied()
+            .filter(|r| !r.get("gscale").is_empty())
+            .collect();
+        let s = series(
+            &b,
+            |r| format!("{}, gmax {}", r.get("bias_mode"), r.get("gmax")),
+            |r| Some((r.f("gscale")?, r.f("vis_rmse")?)),
+        );
+        if !s.is_empty() {
+            figs.push(
+                XY {
+                    title: format!("Bias: error vs gscale — {label}"),
+                    x_label: "gscale (× depth change per texel)".into(),
+                    y_label: "visibility RMSE".into(),
+                    log_x: true,
+                    log_y: false,
+                    lines: true,
+                    series: s,
+                }
+                .draw(dir, &format!("shadows_bias_{stem}"), "midpoint ignores gscale (flat lines); slope and hybrid clamp the slope bias at gmax.")?,
+            );
+        }
+        // HSM on/off: GPU time vs max_nspp.
+        let h: Vec<&Rec> = g
+            .iter()
+            .copied()
+            .filter(|r| !r.get("hsm").is_empty() && r.get("gscale").is_empty())
+            .collect();
+        let s = series(
+            &h,
+            |r| format!("hsm {}, k = {}", r.get("hsm"), r.get("layers")),
+            |r| Some((r.f("max_nspp")?, r.f("gpu_ms_median")?)),
+        );
+        if s.iter().any(|s| s.name.starts_with("hsm false")) {
+            figs.push(
+                XY {
+                    title: format!("HSM on/off: GPU time vs max_nspp — {label}"),
+                    x_label: "max shadow-map samples per pixel".into(),
+                    y_label: "GPU time per frame [ms]".into(),
+                    log_x: true,
+                    log_y: true,
+                    lines: true,
+                    series: s,
+                }
+                .draw(dir, &format!("shadows_hsm_{stem}"), "The min-depth pyramid shrinks the search region before sampling; its error cost is in the error-vs-time chart.")?,
+            );
+        }
+    }
+    Ok(figs)
+}

@@ -1,0 +1,171 @@
+//! Figures of the `stability` study (issue 5): per case, error vs the case's stiffness parameter
+//! per method configuration; and, from the `methods` study, the specialisation speedup (uber GPU
+//! time over specialised) per effect.
+
+use std::path::Path;
+
+use anyhow::Result;
+
+use super::methods::{series_by_config, EXACT_FLOOR};
+use crate::charts::{Bars, Figure, Pt, XY};
+use crate::data::{Rec, Runs};
+
+fn safe(s: &str) -> String {
+    s.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .take(60)
+        .collect()
+}
+
+pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
+    let rows: Vec<&Rec> = runs
+        .study("stability")
+        .into_iter()
+        .filter(|r| r.ok() && !r.get("method").starts_with("floor_"))
+        .collect();
+    let mut figs = Vec::new();
+    for case in Runs::distinct(rows.iter().copied(), "stability_case") {
+        let g: Vec<&Rec> = rows
+            .iter()
+            .copied()
+            .filter(|r| r.get("stability_case") == case)
+            .collect();
+        let stiffness = g
+            .first()
+            .map(|r| r.get("stiffness").to_string())
+            .unwrap_or_default();
+        // A series per method configuration and depth convention (reversed-Z is a scene
+        // parameter, so it is folded into the name from the scene label).
+        let mut series = series_by_config(
+            &g,
+            |r| {
+                Some((
+                    r.f("stiffness_value")?.max(f64::MIN_POSITIVE),
+                    r.f("rmse")?.max(EXACT_FLOOR),
+                ))
+            },
+            false,
+        );
+        if g.iter()
+            .any(|r| r.get("scene_label").contains("reversed_z=true"))
+        {
+            series.clear();
+            for rev in [false, true] {
+                let sub: Vec<&Rec> = g
+                    .iter()
+                    .copied()
+                    .filter(|r| r.get("scene_label").contains("reversed_z=true") == rev)
+                    .collect();
+                for mut s in series_by_config(
+                    &sub,
+                    |r| Some((r.f("stiffness_value")?, r.f("rmse")?.max(EXACT_FLOOR))),
+                    false,
+                ) {
+                    s.name = format!(
+                        "{} [{}]",
+                        s.name,
+                        if rev { "reversed-Z" } else { "standard Z" }
+                    );
+                    series.push(s);
+                }
+            }
+        }
+        if series.iter().map(|s| s.points.len()).sum::<usize>() == 0 {
+            continue;
+        }
+        let positive_x = g
+            .iter()
+            .all(|r| r.f("stiffness_value").is_some_and(|v| v > 0.0));
+        let xy = XY {
+            title: format!("Error vs stiffness — {case}"),
+            x_label: stiffness.clone(),
+            y_label: "RMSE vs f64 reference".into(),
+            log_x: positive_x,
+            log_y: true,
+            lines: true,
+            series,
+        };
+        let flagged: Vec<String> = g
+            .iter()
+            .filter(|r| !r.get("flag").is_empty())
+            .map(|r| format!("{} ({})", r.get("flag"), r.get("stiffness_value")))
+            .collect();
+        let caption = format!(
+            "Exact results (RMSE 0) are drawn at {EXACT_FLOOR:.0e}. Flags: {}.",
+            if flagged.is_empty() {
+                "none".to_string()
+            } else {
+                flagged.join(", ")
+            }
+        );
+        figs.push(xy.draw(dir, &format!("stability_{}", safe(&case)), &caption)?);
+    }
+    figs.extend(specialisation(runs, dir)?);
+    Ok(figs)
+}
+
+/// Uber over specialised GPU time for every (scene, effect, other axes) pair present.
+fn specialisation(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
+    let rows: Vec<&Rec> = runs
+        .study("methods")
+        .into_iter()
+        .filter(|r| r.ok() && !r.get("specialisation").is_empty())
+        .collect();
+    let key = |r: &Rec| {
+        format!(
+            "{} {} {}x{} occlusion_stop={}",
+            r.get("method"),
+            r.get("scene_label"),
+            r.get("width"),
+            r.get("height"),
+            r.get("occlusion_stop")
+        )
+    };
+    let effects = Runs::distinct(rows.iter().copied(), "effect");
+    let mut cats: Vec<String> = Vec::new();
+    for r in &rows {
+        let k = key(r);
+        if !cats.contains(&k) {
+            cats.push(k);
+        }
+    }
+    let series: Vec<(String, Vec<Option<Pt>>)> = effects
+        .iter()
+        .map(|e| {
+            let vals = cats
+                .iter()
+                .map(|c| {
+                    let find = |s: &str| {
+                        rows.iter()
+                            .find(|r| {
+                                &key(r) == c && r.get("effect") == e && r.get("specialisation") == s
+                            })
+                            .and_then(|r| r.f("gpu_ms_median"))
+                    };
+                    match (find("uber"), find("specialised")) {
+                        (Some(u), Some(s)) if s > 0.0 => Some(Pt::new(0.0, u / s)),
+                        _ => None,
+                    }
+                })
+                .collect();
+            (e.clone(), vals)
+        })
+        .filter(|(_, v): &(String, Vec<Option<Pt>>)| v.iter().any(|p| p.is_some()))
+        .collect();
+    if series.is_empty() {
+        return Ok(Vec::new());
+    }
+    let bars = Bars {
+        title: "Specialisation speedup (uber / specialised GPU time)".into(),
+        y_label: "speedup (×)".into(),
+        log_y: false,
+        categories: cats,
+        series,
+        reference: Some(1.0),
+    };
+    Ok(vec![bars.draw(
+        dir,
+        "effects_specialisation_speedup",
+        "Uber: every attribute fetched and colour, normal, view depth and id stored per layer; specialised: only what the effect reads. Same scene, resolution, run; the line marks 1×.",
+    )?])
+}
