@@ -29,6 +29,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("default", include_str!("../suites/default.toml")),
     ("deferred", include_str!("../suites/deferred.toml")),
     ("deferred-ci", include_str!("../suites/deferred-ci.toml")),
+    ("prepass", include_str!("../suites/prepass.toml")),
+    ("prepass-ci", include_str!("../suites/prepass-ci.toml")),
     ("stability", include_str!("../suites/stability.toml")),
     ("stability_ci", include_str!("../suites/stability_ci.toml")),
     ("effects", include_str!("../suites/effects.toml")),

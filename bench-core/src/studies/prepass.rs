@@ -40,6 +40,8 @@ pub const COLUMNS: &[Column] = &[
     Column { name: "frame_ms", doc: "median wall-clock ms per frame, first submit to all GPU work done (both views when second_view)" },
     Column { name: "gpu_idle_ms", doc: "median frame_ms minus the frame's summed GPU pass times: time the GPU had no timed work" },
     Column { name: "latency_ms", doc: "median ms from submitting the pre-pass to the main view's final image being complete" },
+    Column { name: "gpu_gap_ms", doc: "median GPU-clock ms from the end of the pre-pass to the start of the material pass: the lights pass, or (CPU lighting) copy + map + CPU lighting + upload" },
+    Column { name: "gpu_busy_in_gap_ms", doc: "median timed GPU pass ms inside gpu_gap_ms: the lights pass, or (CPU lighting) the independent view that ran while the CPU lit — the measured overlap" },
     Column { name: "map_wait_ms", doc: "CPU lighting: median ms from submitting the pre-pass to the depth/normal read-back being mapped (blocking wait)" },
 ];
 
@@ -60,6 +62,21 @@ struct Timed {
     wall: Stats,
     idle: Stats,
     pass: BTreeMap<String, f64>,
+    /// (gap, busy in gap) medians on the GPU clock, where the frame has both passes.
+    gap: Option<(f64, f64)>,
+}
+
+/// GPU clock from the end of the pre-pass to the start of the material pass, and the timed
+/// pass time inside that interval (the lights pass, or the independent view's passes).
+fn gap_of(spans: &[(String, f64, f64)]) -> Option<(f64, f64)> {
+    let a = spans.iter().find(|s| s.0 == "prepass")?.2;
+    let b = spans.iter().find(|s| s.0 == "material")?.1;
+    let busy = spans
+        .iter()
+        .filter(|s| s.0 != "prepass" && s.0 != "material")
+        .map(|s| (s.2.min(b) - s.1.max(a)).max(0.0))
+        .sum();
+    Some(((b - a).max(0.0), busy))
 }
 
 /// Warm-up + timed frames of `frame`, each followed by a full GPU wait.
@@ -70,6 +87,7 @@ fn time_frames(
     let gpu = ctx.gpu;
     let mut timer = GpuTimer::new(gpu);
     let (mut g, mut w, mut idle) = (vec![], vec![], vec![]);
+    let (mut gap, mut busy) = (vec![], vec![]);
     let mut per: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     for rep in 0..ctx.warmup + ctx.reps {
         timer.begin_frame();
@@ -77,9 +95,14 @@ fn time_frames(
         frame(&mut timer)?;
         gpu.wait()?;
         let wall = t0.elapsed().as_secs_f64() * 1e3;
-        let passes = timer.read(gpu)?;
+        let spans = timer.read_spans(gpu)?;
+        let passes: Vec<(String, f64)> = spans.iter().map(|s| (s.0.clone(), s.2 - s.1)).collect();
         gpu.check_lost()?;
         if rep >= ctx.warmup {
+            if let Some((a, b)) = gap_of(&spans) {
+                gap.push(a);
+                busy.push(b);
+            }
             w.push(wall);
             if timer.enabled() {
                 let sum: f64 = passes.iter().map(|(_, ms)| ms).sum();
@@ -99,6 +122,9 @@ fn time_frames(
             .into_iter()
             .map(|(l, v)| (l, Stats::of(&v).map(|s| s.median).unwrap_or(0.0)))
             .collect(),
+        gap: Stats::of(&gap)
+            .zip(Stats::of(&busy))
+            .map(|(a, b)| (a.median, b.median)),
     })
 }
 
@@ -109,6 +135,10 @@ fn set_times(row: &mut Row, t: &Timed) {
             .set_f("gpu_ms_max", g.max)
             .set_f("gpu_ms_rel_noise", g.rel_noise)
             .set_f("gpu_idle_ms", t.idle.median);
+    }
+    if let Some((gap, busy)) = t.gap {
+        row.set_f("gpu_gap_ms", gap)
+            .set_f("gpu_busy_in_gap_ms", busy);
     }
     row.set_f("cpu_ms_median", t.wall.median)
         .set_f("cpu_ms_min", t.wall.min)
