@@ -74,6 +74,21 @@ fn time_ms(r: &Rec) -> Option<f64> {
     }
 }
 
+/// A short configuration label: "tiled 16px L2", "cpu_tiled 64px L1 ×8".
+fn short(r: &Rec) -> String {
+    let mut s = r.get("method").to_string();
+    if !r.get("tile_size").is_empty() {
+        s += &format!(" {}px", r.get("tile_size"));
+    }
+    if !r.get("cull_levels").is_empty() {
+        s += &format!(" L{}", r.get("cull_levels"));
+    }
+    if !r.get("thread_count").is_empty() {
+        s += &format!(" ×{}", r.get("thread_count"));
+    }
+    s
+}
+
 fn no_threshold(r: &Rec) -> bool {
     r.f("attenuation_threshold").unwrap_or(0.0) == 0.0
 }
@@ -130,7 +145,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                 let mut v: Vec<String> = base
                     .iter()
                     .filter(|r| r.get("method") == m)
-                    .map(|r| r.config_label(CONFIG_AXES))
+                    .map(|r| short(r))
                     .collect();
                 v.dedup();
                 v
@@ -152,7 +167,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                                 base.iter()
                                     .find(|r| {
                                         r.get("light_count") == lc
-                                            && &r.config_label(CONFIG_AXES) == c
+                                            && &short(r) == c
                                     })
                                     .and_then(|r| r.f("speedup_vs_naive"))
                                     .map(|v| Pt::new(0.0, v))
@@ -164,7 +179,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             figs.push(
                 Bars {
                     title: format!("Speedup over naive — {res}"),
-                    y_label: "naive ms / path ms".into(),
+                    y_label: "naive ms / path ms (px: tile, L: culling levels, ×: threads)".into(),
                     log_y: true,
                     categories: cfgs,
                     series,
