@@ -252,6 +252,29 @@ fn cpu_path_equals_reference_is_deterministic_and_culls_soundly() {
     }
 }
 
+/// The per-quad cull (skip a light when all 16 attenuations are 0) only drops exact zeros: the
+/// image is bit-identical with it off, and it does skip something on a many-light city.
+#[test]
+fn quad_skip_changes_nothing_but_the_work() {
+    let s = city(64, false);
+    let r = run(&s, 80, Path::Naive, 0.0, false);
+    let lights = r.setup.gpu_lights(0.0);
+    let shade = |quad_skip| {
+        let o = CpuOptions {
+            threads: 2,
+            quad_skip,
+            ..Default::default()
+        };
+        cpu_tiled::shade(&r.setup, &r.gb, &lights, &o)
+    };
+    let (on, off) = (shade(true), shade(false));
+    assert!(on.quad_skips > 0, "no quad was skipped");
+    assert_eq!(off.quad_skips, 0);
+    let bits =
+        |img: &[[f32; 4]]| -> Vec<[u32; 4]> { img.iter().map(|p| p.map(f32::to_bits)).collect() };
+    assert_eq!(bits(&on.image), bits(&off.image));
+}
+
 #[test]
 fn classified_lists_every_tile_once_and_matches_uber() {
     for room in [false, true] {

@@ -4,8 +4,8 @@
 //!
 //! Paths (`methods` in the suite): `naive`, `volumes`, `tiled`, `classified`, `uber`,
 //! `cpu_tiled` (see `shading::gpu_paths` and `shading::cpu_tiled`). Axes: `tile_size`,
-//! `cull_levels`, `attenuation_threshold` (tiled, volumes, cpu_tiled), `thread_count`
-//! (cpu_tiled). The light count is a scene parameter (`city(lights=N)`), recorded per row.
+//! `cull_levels`, `attenuation_threshold` (tiled, volumes, cpu_tiled), `thread_count` and
+//! `quad_skip` (cpu_tiled). The light count is a scene parameter (`city(lights=N)`), recorded per row.
 //! `naive` runs first in each group so every row carries `speedup_vs_naive`.
 //!
 //! Study options: `cpu_reps` (timed CPU frames per point, default 3: a single-thread frame at
@@ -17,7 +17,7 @@ use scenarios::{ParamValue, Params, Scene, StudySpec};
 use super::{Emit, GroupCtx, PointSpec, Study};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
-use crate::methods::{int_param, Capture, Method, Prepared};
+use crate::methods::{bool_param, int_param, Capture, Method, Prepared};
 use crate::metrics::{image_error, BAD_PIXEL_TOL};
 use crate::record::{Column, Row};
 use crate::runner::{failed_row, measure, set_params, set_timing, skipped_row};
@@ -35,6 +35,7 @@ pub const COLUMNS: &[Column] = &[
     Column { name: "cull_levels", doc: "light culling levels: 1 = per tile; 2 = 64×64 tile then 32×16 sub-tiles (BF3)" },
     Column { name: "attenuation_threshold", doc: "τ: a light is culled from a tile where peak intensity × attenuation ≤ τ at every point of it (0: only beyond its range)" },
     Column { name: "thread_count", doc: "CPU worker threads taking tiles from an atomic counter (CPU lighting paths)" },
+    Column { name: "quad_skip", doc: "CPU tile path: skip a light for a 4×4 quad when all 16 attenuations are 0 (BF3's per-quad cull); false = evaluate every kept light" },
     Column { name: "lights_per_tile_mean", doc: "mean lights kept per culling tile (level 1)" },
     Column { name: "lights_per_tile_max", doc: "most lights kept in any culling tile (level 1)" },
     Column { name: "class_ids_present", doc: "classified: classification ids with at least one 4×4 tile this frame" },
@@ -58,7 +59,12 @@ fn axes_of(path: &str) -> &'static [&'static str] {
     match path {
         "tiled" => &["tile_size", "cull_levels", "attenuation_threshold"],
         "volumes" => &["attenuation_threshold"],
-        "cpu_tiled" => &["thread_count", "cull_levels", "attenuation_threshold"],
+        "cpu_tiled" => &[
+            "thread_count",
+            "cull_levels",
+            "attenuation_threshold",
+            "quad_skip",
+        ],
         _ => &[],
     }
 }
@@ -223,13 +229,20 @@ impl Study for DeferredStudy {
                     emit(i, skipped_row(row, &levels.unwrap_err()))?;
                     continue;
                 };
-                row.set("tile_size", 64);
+                let quad_skip = match bool_param(&pt.params, "quad_skip", true) {
+                    Ok(q) => q,
+                    Err(e) => {
+                        emit(i, skipped_row(row, &e))?;
+                        continue;
+                    }
+                };
+                row.set("tile_size", 64).set("quad_skip", quad_skip);
                 let lights = setup.gpu_lights(tau);
                 let o = CpuOptions {
                     tile: 64,
                     sub: (levels == 2).then_some((32, 16)),
                     threads,
-                    quad_skip: true,
+                    quad_skip,
                     keep_lists: false,
                     light_buffer: false,
                 };

@@ -165,10 +165,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                         cfgs.iter()
                             .map(|c| {
                                 base.iter()
-                                    .find(|r| {
-                                        r.get("light_count") == lc
-                                            && &short(r) == c
-                                    })
+                                    .find(|r| r.get("light_count") == lc && &short(r) == c)
                                     .and_then(|r| r.f("speedup_vs_naive"))
                                     .map(|v| Pt::new(0.0, v))
                             })
@@ -219,6 +216,61 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                 .draw(dir, &format!("deferred_error_vs_time_{stem}"), "Each line walks the threshold τ (a light is culled from a tile where I·att ≤ τ everywhere in it); τ = 0 is the leftmost-error end.")?,
             );
         }
+        // BF3's culls one at a time (CPU path): time per culling level, quad skip on/off.
+        let culls: Vec<&Rec> = at
+            .iter()
+            .copied()
+            .filter(|r| r.get("method") == "cpu_tiled" && no_threshold(r) && outdoor(r))
+            .collect();
+        let tmax = culls
+            .iter()
+            .filter_map(|r| r.f("thread_count"))
+            .fold(0.0, f64::max);
+        let culls: Vec<&Rec> = culls
+            .into_iter()
+            .filter(|r| r.f("thread_count") == Some(tmax))
+            .collect();
+        let cats: Vec<String> = Runs::distinct(culls.iter().copied(), "cull_levels")
+            .into_iter()
+            .map(|l| format!("cull_levels={l}"))
+            .collect();
+        if culls.iter().any(|r| r.get("quad_skip") == "false") {
+            let series = ["true", "false"]
+                .iter()
+                .flat_map(|q| {
+                    Runs::distinct(culls.iter().copied(), "light_count")
+                        .into_iter()
+                        .map(|lc| {
+                            let v = cats
+                                .iter()
+                                .map(|c| {
+                                    culls
+                                        .iter()
+                                        .find(|r| {
+                                            format!("cull_levels={}", r.get("cull_levels")) == *c
+                                                && r.get("quad_skip") == *q
+                                                && r.get("light_count") == lc
+                                        })
+                                        .and_then(|r| Some(Pt::new(0.0, r.f("cpu_light_ms")?)))
+                                })
+                                .collect();
+                            (format!("quad skip {q}, {lc} lights"), v)
+                        })
+                        .collect::<Vec<_>>()
+                })
+                .collect();
+            figs.push(
+                Bars {
+                    title: format!("CPU tile path: each cull — {res}, {tmax} threads"),
+                    y_label: "CPU lighting ms per frame".into(),
+                    log_y: false,
+                    categories: cats,
+                    series,
+                    reference: None,
+                }
+                .draw(dir, &format!("deferred_cpu_culls_{stem}"), "cull_levels=1: lights culled per 64×64 tile; 2: again per 32×16 sub-tile. Quad skip: a light is skipped for a 4×4 quad when all 16 attenuations are 0 (image bit-identical, tested).")?,
+            );
+        }
         // CPU scaling over threads.
         let cpu: Vec<&Rec> = at
             .iter()
@@ -229,10 +281,11 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             &cpu,
             |r| {
                 format!(
-                    "{} lights, cull_levels={}, τ={}",
+                    "{} lights, cull_levels={}, τ={}, quad skip {}",
                     r.get("light_count"),
                     r.get("cull_levels"),
-                    r.get("attenuation_threshold")
+                    r.get("attenuation_threshold"),
+                    r.get("quad_skip")
                 )
             },
             |r| Some((r.f("thread_count")?, r.f("cpu_light_ms")?)),
