@@ -9,7 +9,8 @@
 //!    material reads the light buffer its own way (`prepass.wgsl`: dielectric vs metal).
 //!
 //! Light buffer formats: RGBA8 (light stored ÷ 8, clamped), RGBA16F, and RG11B10 + R16F (no
-//! alpha in RG11B10: the specular term goes to a second target; needs RG11B10UFLOAT_RENDERABLE).
+//! alpha in RG11B10: the specular term goes to a second target; needs RG11B10UFLOAT_RENDERABLE;
+//! written by the naive pass or packed on the CPU, not by the tiled compute kernel).
 //!
 //! The `cpu` accumulation: after the pre-pass, depth and normal are copied into MAP_READ
 //! buffers; `map_async` callbacks signal readiness and the CPU blocks in
@@ -111,9 +112,9 @@ pub fn supports(gpu: &Gpu, f: LbFormat, accum: Accum) -> std::result::Result<(),
         if !gpu.has(wgpu::Features::RG11B10UFLOAT_RENDERABLE) {
             return Err("adapter lacks RG11B10UFLOAT_RENDERABLE".into());
         }
-        if accum != Accum::Naive {
+        if matches!(accum, Accum::Tiled { .. }) {
             return Err(
-                "RG11B10 light buffer: only the fullscreen (naive) accumulation writes it (not a storage format; no CPU packer)"
+                "RG11B10 light buffer: the tiled compute kernel cannot write it (not a storage format); naive and cpu can"
                     .into(),
             );
         }
@@ -669,23 +670,11 @@ impl PrePass {
                 ..Default::default()
             };
             let r = cpu_tiled::shade(setup, &gb, lights, &o);
-            let bytes = pack(self.format, &r.image);
-            let bpp = self.format.bytes_per_pixel() as u32;
-            gpu.queue.write_texture(
-                wgpu::TexelCopyTextureInfo {
-                    texture: &self.lb0,
-                    mip_level: 0,
-                    origin: wgpu::Origin3d::ZERO,
-                    aspect: wgpu::TextureAspect::All,
-                },
-                &bytes,
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(w * bpp),
-                    rows_per_image: Some(h),
-                },
-                self.lb0.size(),
-            );
+            let (bytes0, bytes1) = pack(self.format, &r.image);
+            upload(gpu, &self.lb0, &bytes0);
+            if let (Some(t), Some(b)) = (&self.lb1, &bytes1) {
+                upload(gpu, t, b);
+            }
             let cpu_total = t_ready.elapsed().as_secs_f64() * 1e3;
             let mut enc = gpu.device.create_command_encoder(&Default::default());
             self.encode_second(&mut enc, gscene, timer);
@@ -749,9 +738,22 @@ impl PrePass {
                     .collect()
             }
             LbFormat::Rg11b10 => {
-                return Err(CoreError::Param(
-                    "RG11B10 light buffer read-back not implemented".into(),
-                ))
+                let b = read_texture(gpu, &self.lb0, 4, all)?;
+                let spec = read_texture(
+                    gpu,
+                    self.lb1.as_ref().expect("rg11b10 has a specular target"),
+                    2,
+                    all,
+                )?;
+                let hs: &[u16] = bytemuck::cast_slice(&spec);
+                bytemuck::cast_slice::<u8, u32>(&b)
+                    .iter()
+                    .zip(hs)
+                    .map(|(&p, &a)| {
+                        let c = unpack_rg11b10(p);
+                        [c[0], c[1], c[2], half::f16::from_bits(a).to_f32()]
+                    })
+                    .collect()
             }
         })
     }
@@ -831,20 +833,100 @@ pub fn decode_prepass(depth: &[u8], normal: &[u8], w: u32, h: u32, clear: f32) -
     g
 }
 
-/// The light buffer in its texture format (tightly packed rows).
-pub fn pack(f: LbFormat, lb: &[[f32; 4]]) -> Vec<u8> {
+/// The light buffer in its texture format(s), tightly packed rows: the first target, and the
+/// second (R16F specular) for RG11B10.
+pub fn pack(f: LbFormat, lb: &[[f32; 4]]) -> (Vec<u8>, Option<Vec<u8>>) {
     let s = f.scale();
+    let f16 = |v: f32| half::f16::from_f32(v).to_bits().to_le_bytes();
     match f {
-        LbFormat::Rgba8 => lb
-            .iter()
-            .flat_map(|p| p.map(|v| ((v * s).clamp(0.0, 1.0) * 255.0).round() as u8))
-            .collect(),
-        _ => lb
-            .iter()
-            .flat_map(|p| p.map(|v| half::f16::from_f32(v * s).to_bits()))
-            .flat_map(|h| h.to_le_bytes())
-            .collect(),
+        LbFormat::Rgba8 => (
+            lb.iter()
+                .flat_map(|p| p.map(|v| ((v * s).clamp(0.0, 1.0) * 255.0).round() as u8))
+                .collect(),
+            None,
+        ),
+        LbFormat::Rgba16F => (
+            lb.iter()
+                .flat_map(|p| p.map(|v| f16(v * s)))
+                .flatten()
+                .collect(),
+            None,
+        ),
+        LbFormat::Rg11b10 => (
+            lb.iter()
+                .flat_map(|p| pack_rg11b10([p[0], p[1], p[2]]).to_le_bytes())
+                .collect(),
+            Some(lb.iter().flat_map(|p| f16(p[3])).collect()),
+        ),
     }
+}
+
+/// An unsigned float with a 5-bit exponent (bias 15) and `m` mantissa bits, rounded to nearest;
+/// ≤ 0 and NaN give 0, too large the largest finite value.
+pub fn to_ufloat(v: f32, m: u32) -> u32 {
+    if v.is_nan() || v <= 0.0 {
+        return 0;
+    }
+    let max = (30 << m) | ((1 << m) - 1);
+    let b = v.to_bits();
+    let e = ((b >> 23) & 0xff) as i32 - 127 + 15;
+    if e > 30 {
+        return max;
+    }
+    let mant = ((b & 0x7f_ffff) | 0x80_0000) as u64;
+    let shift = 23 - m as i32 + if e <= 0 { 1 - e } else { 0 };
+    if shift > 25 {
+        return 0;
+    }
+    let q = ((mant + (1 << (shift - 1))) >> shift) as u32;
+    let r = if e <= 0 {
+        q
+    } else {
+        ((e as u32) << m) + q - (1 << m)
+    };
+    r.min(max)
+}
+
+pub fn from_ufloat(u: u32, m: u32) -> f32 {
+    let (e, f) = (u >> m, u & ((1 << m) - 1));
+    let frac = f as f32 / (1u32 << m) as f32;
+    if e == 0 {
+        frac * 2f32.powi(-14)
+    } else {
+        (1.0 + frac) * 2f32.powi(e as i32 - 15)
+    }
+}
+
+/// R and G: 6-bit mantissas (bits 0–10, 11–21), B: 5 bits (22–31), as in the texture format.
+pub fn pack_rg11b10(c: [f32; 3]) -> u32 {
+    to_ufloat(c[0], 6) | (to_ufloat(c[1], 6) << 11) | (to_ufloat(c[2], 5) << 22)
+}
+
+pub fn unpack_rg11b10(p: u32) -> [f32; 3] {
+    [
+        from_ufloat(p & 0x7ff, 6),
+        from_ufloat((p >> 11) & 0x7ff, 6),
+        from_ufloat(p >> 22, 5),
+    ]
+}
+
+fn upload(gpu: &Gpu, t: &wgpu::Texture, bytes: &[u8]) {
+    let bpp = (bytes.len() / (t.width() * t.height()) as usize) as u32;
+    gpu.queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: t,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        bytes,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(t.width() * bpp),
+            rows_per_image: Some(t.height()),
+        },
+        t.size(),
+    );
 }
 
 /// Pass label → ms of the last frame's passes (for `gpu_idle_ms`).
