@@ -321,7 +321,7 @@ impl PrepassStudy {
                     .set(
                         "notes",
                         format!(
-                            "CPU decode+light+pack+upload median {:.3} ms; readiness = map_async callback + blocking poll(Wait) on the pre-pass submission",
+                            "measured: frame_ms = wall clock from the pre-pass submit to both views done; cpu_light_ms = lighting only, decode+light+pack+upload median {:.3} ms; gpu_gap_ms/gpu_busy_in_gap_ms on the GPU clock (busy > 0 = the second view ran while the CPU lit); readiness = map_async callback + blocking poll(Wait) on the pre-pass submission (no spin); one frame in flight, nothing pipelined across frames",
                             median(s.iter().map(|f| f.cpu_total_ms))
                         ),
                     );
