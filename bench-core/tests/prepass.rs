@@ -88,8 +88,8 @@ fn prepass_rows_are_complete_and_impossible_points_are_skipped() {
 
 #[test]
 fn unknown_prepass_method_is_an_error_naming_it() {
-    let e = run(&SUITE.replace("\"prepass_cpu\"]", "\"prepass_gpu\"]"))
-        .err()
-        .expect("an error");
+    let Err(e) = run(&SUITE.replace("\"prepass_cpu\"]", "\"prepass_gpu\"]")) else {
+        panic!("an unknown method ran");
+    };
     assert!(e.to_string().contains("prepass_gpu"), "{e}");
 }
