@@ -26,6 +26,10 @@ pub struct CpuOptions {
     pub threads: usize,
     /// Skip a light for a 4×4 quad when all 16 attenuations are 0 (exact).
     pub quad_skip: bool,
+    /// BF3's "no specular" fast path, per 4×4 quad: when no pixel of the quad has a specular
+    /// colour, the specular term (half vector, power) is not evaluated (exact: it is multiplied
+    /// by 0). Not in light-buffer mode (the light buffer does not know the materials).
+    pub spec_skip: bool,
     /// Keep the per-tile (and per-sub-tile) light lists for inspection.
     pub keep_lists: bool,
     /// Light pre-pass output instead of the shaded colour: RGB = Σ diffuse light (sun
@@ -40,6 +44,7 @@ impl Default for CpuOptions {
             sub: Some((32, 16)),
             threads: 1,
             quad_skip: true,
+            spec_skip: true,
             keep_lists: false,
             light_buffer: false,
         }
@@ -66,6 +71,9 @@ pub struct CpuResult {
     /// Light evaluations skipped by the quad test / done.
     pub quad_skips: u64,
     pub quad_evals: u64,
+    /// 4×4 quads shaded without the specular term / all quads shaded.
+    pub spec_skipped_quads: u64,
+    pub quads: u64,
 }
 
 struct TileOut {
@@ -75,6 +83,8 @@ struct TileOut {
     subs: Vec<TileList>,
     skips: u64,
     evals: u64,
+    nospec: u64,
+    quads: u64,
 }
 
 /// Lights (with culling spheres for the threshold already in `lights`) on the G-buffer `gb`.
@@ -118,7 +128,7 @@ pub fn shade(
     let mut tile_counts = Vec::with_capacity(ntiles);
     let mut lists = Vec::new();
     let mut sub_lists = Vec::new();
-    let (mut quad_skips, mut quad_evals) = (0, 0);
+    let (mut quad_skips, mut quad_evals, mut spec_skipped_quads, mut quads) = (0, 0, 0, 0);
     for (i, o) in outs.into_iter().enumerate() {
         let o = o.into_inner().unwrap().expect("every tile was taken");
         let (x0, y0) = ((i as u32 % tx) * t, (i as u32 / tx) * t);
@@ -132,6 +142,8 @@ pub fn shade(
         sub_lists.extend(o.subs);
         quad_skips += o.skips;
         quad_evals += o.evals;
+        spec_skipped_quads += o.nospec;
+        quads += o.quads;
     }
     CpuResult {
         image,
@@ -141,6 +153,8 @@ pub fn shade(
         sub_lists,
         quad_skips,
         quad_evals,
+        spec_skipped_quads,
+        quads,
     }
 }
 
@@ -216,6 +230,8 @@ fn shade_tile(
         subs: Vec::new(),
         skips: 0,
         evals: 0,
+        nospec: 0,
+        quads: 0,
     };
     let (sw, sh) = opts.sub.unwrap_or((tw, th));
     let mut sy = 0;
@@ -268,6 +284,7 @@ fn shade_tile(
                         [sub[2], sub[3]],
                         &pos,
                         opts.quad_skip,
+                        opts.spec_skip && !opts.light_buffer,
                         opts.light_buffer,
                         &mut out,
                     );
@@ -295,6 +312,7 @@ fn shade_quad(
     end: [u32; 2],
     pos: &[[f32; 3]],
     quad_skip: bool,
+    spec_skip: bool,
     light_buffer: bool,
     out: &mut TileOut,
 ) {
@@ -325,6 +343,11 @@ fn shade_quad(
         pw[k] = (1.0 + 10.0 * n[3]).exp2();
         norm[k] = (pw[k] + 8.0) / 8.0;
     }
+    let no_spec = spec_skip && (0..N).all(|k| !active[k] || gb.spec[gidx[k]] == [0.0; 3]);
+    if active.iter().any(|&a| a) {
+        out.quads += 1;
+        out.nospec += no_spec as u64;
+    }
     let mut diff = [[0f32; 3]; N];
     let mut spec = [[0f32; 4]; N];
     let mut att = [0f32; N];
@@ -341,6 +364,12 @@ fn shade_quad(
         }
         let s = a * ndl;
         let c = [color[0] * s, color[1] * s, color[2] * s];
+        if no_spec {
+            for j in 0..3 {
+                diff[k][j] += c[j];
+            }
+            return;
+        }
         let (hx, hy, hz) = (l[0] + vx[k], l[1] + vy[k], l[2] + vz[k]);
         let hl = 1.0 / (hx * hx + hy * hy + hz * hz).sqrt();
         let ndh = ((nx[k] * hx + ny[k] * hy + nz[k] * hz) * hl).max(0.0);

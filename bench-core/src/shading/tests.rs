@@ -252,27 +252,34 @@ fn cpu_path_equals_reference_is_deterministic_and_culls_soundly() {
     }
 }
 
-/// The per-quad cull (skip a light when all 16 attenuations are 0) only drops exact zeros: the
-/// image is bit-identical with it off, and it does skip something on a many-light city.
+/// The per-quad culls only drop exact zeros: skipping a light whose 16 attenuations are all 0,
+/// and skipping the specular term of a quad without specular colour (matte buildings), leave the
+/// image bit-identical; on a many-light city both do skip something.
 #[test]
-fn quad_skip_changes_nothing_but_the_work() {
+fn quad_culls_change_nothing_but_the_work() {
     let s = city(64, false);
     let r = run(&s, 80, Path::Naive, 0.0, false);
     let lights = r.setup.gpu_lights(0.0);
-    let shade = |quad_skip| {
+    let shade = |quad_skip, spec_skip| {
         let o = CpuOptions {
             threads: 2,
             quad_skip,
+            spec_skip,
             ..Default::default()
         };
         cpu_tiled::shade(&r.setup, &r.gb, &lights, &o)
     };
-    let (on, off) = (shade(true), shade(false));
-    assert!(on.quad_skips > 0, "no quad was skipped");
-    assert_eq!(off.quad_skips, 0);
     let bits =
         |img: &[[f32; 4]]| -> Vec<[u32; 4]> { img.iter().map(|p| p.map(f32::to_bits)).collect() };
-    assert_eq!(bits(&on.image), bits(&off.image));
+    let off = shade(false, false);
+    assert_eq!((off.quad_skips, off.spec_skipped_quads), (0, 0));
+    for (q, sp) in [(true, false), (false, true), (true, true)] {
+        let on = shade(q, sp);
+        assert_eq!(on.quad_skips > 0, q, "quad skip {q}");
+        assert_eq!(on.spec_skipped_quads > 0, sp, "spec skip {sp}");
+        assert!(on.spec_skipped_quads < on.quads);
+        assert_eq!(bits(&on.image), bits(&off.image), "quad {q} spec {sp}");
+    }
 }
 
 #[test]

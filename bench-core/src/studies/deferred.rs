@@ -4,8 +4,8 @@
 //!
 //! Paths (`methods` in the suite): `naive`, `volumes`, `tiled`, `classified`, `uber`,
 //! `cpu_tiled` (see `shading::gpu_paths` and `shading::cpu_tiled`). Axes: `tile_size`,
-//! `cull_levels`, `attenuation_threshold` (tiled, volumes, cpu_tiled), `thread_count` and
-//! `quad_skip` (cpu_tiled). The light count is a scene parameter (`city(lights=N)`), recorded per row.
+//! `cull_levels`, `attenuation_threshold` (tiled, volumes, cpu_tiled), `thread_count`,
+//! `quad_skip` and `spec_skip` (cpu_tiled). The light count is a scene parameter (`city(lights=N)`), recorded per row.
 //! `naive` runs first in each group so every row carries `speedup_vs_naive`.
 //!
 //! Study options: `cpu_reps` (timed CPU frames per point, default 3: a single-thread frame at
@@ -36,6 +36,8 @@ pub const COLUMNS: &[Column] = &[
     Column { name: "attenuation_threshold", doc: "τ: a light is culled from a tile where peak intensity × attenuation ≤ τ at every point of it (0: only beyond its range)" },
     Column { name: "thread_count", doc: "CPU worker threads taking tiles from an atomic counter (CPU lighting paths)" },
     Column { name: "quad_skip", doc: "CPU tile path: skip a light for a 4×4 quad when all 16 attenuations are 0 (BF3's per-quad cull); false = evaluate every kept light" },
+    Column { name: "spec_skip", doc: "CPU tile path: BF3's no-specular fast path per 4×4 quad (no pixel with a specular colour: the specular term is not evaluated); exact" },
+    Column { name: "spec_skip_frac", doc: "CPU tile path: fraction of non-sky 4×4 quads shaded without the specular term" },
     Column { name: "lights_per_tile_mean", doc: "mean lights kept per culling tile (level 1)" },
     Column { name: "lights_per_tile_max", doc: "most lights kept in any culling tile (level 1)" },
     Column { name: "class_ids_present", doc: "classified: classification ids with at least one 4×4 tile this frame" },
@@ -64,6 +66,7 @@ fn axes_of(path: &str) -> &'static [&'static str] {
             "cull_levels",
             "attenuation_threshold",
             "quad_skip",
+            "spec_skip",
         ],
         _ => &[],
     }
@@ -236,13 +239,23 @@ impl Study for DeferredStudy {
                         continue;
                     }
                 };
-                row.set("tile_size", 64).set("quad_skip", quad_skip);
+                let spec_skip = match bool_param(&pt.params, "spec_skip", true) {
+                    Ok(q) => q,
+                    Err(e) => {
+                        emit(i, skipped_row(row, &e))?;
+                        continue;
+                    }
+                };
+                row.set("tile_size", 64)
+                    .set("quad_skip", quad_skip)
+                    .set("spec_skip", spec_skip);
                 let lights = setup.gpu_lights(tau);
                 let o = CpuOptions {
                     tile: 64,
                     sub: (levels == 2).then_some((32, 16)),
                     threads,
                     quad_skip,
+                    spec_skip,
                     keep_lists: false,
                     light_buffer: false,
                 };
@@ -259,7 +272,11 @@ impl Study for DeferredStudy {
                 let st = Stats::of(&samples).unwrap_or_default();
                 row.set_f("cpu_light_ms", st.median);
                 let pairs = (r.quad_skips + r.quad_evals).max(1);
-                row.set_f("quad_skip_frac", r.quad_skips as f64 / pairs as f64);
+                row.set_f("quad_skip_frac", r.quad_skips as f64 / pairs as f64)
+                    .set_f(
+                        "spec_skip_frac",
+                        r.spec_skipped_quads as f64 / r.quads.max(1) as f64,
+                    );
                 set_tile_stats(&mut row, &r.tile_counts);
                 if let Some(n) = naive_ms {
                     if st.median > 0.0 {

@@ -234,10 +234,19 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             .into_iter()
             .map(|l| format!("cull_levels={l}"))
             .collect();
-        if culls.iter().any(|r| r.get("quad_skip") == "false") {
-            let series = ["true", "false"]
+        if culls
+            .iter()
+            .any(|r| r.get("quad_skip") == "false" || r.get("spec_skip") == "false")
+        {
+            let combos = [
+                ("true", "true"),
+                ("true", "false"),
+                ("false", "true"),
+                ("false", "false"),
+            ];
+            let series = combos
                 .iter()
-                .flat_map(|q| {
+                .flat_map(|(q, sp)| {
                     Runs::distinct(culls.iter().copied(), "light_count")
                         .into_iter()
                         .map(|lc| {
@@ -249,15 +258,17 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                                         .find(|r| {
                                             format!("cull_levels={}", r.get("cull_levels")) == *c
                                                 && r.get("quad_skip") == *q
+                                                && r.get("spec_skip") == *sp
                                                 && r.get("light_count") == lc
                                         })
                                         .and_then(|r| Some(Pt::new(0.0, r.f("cpu_light_ms")?)))
                                 })
                                 .collect();
-                            (format!("quad skip {q}, {lc} lights"), v)
+                            (format!("quad skip {q}, spec skip {sp}, {lc} lights"), v)
                         })
                         .collect::<Vec<_>>()
                 })
+                .filter(|(_, v): &(String, Vec<Option<Pt>>)| v.iter().any(|p| p.is_some()))
                 .collect();
             figs.push(
                 Bars {
@@ -268,7 +279,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     series,
                     reference: None,
                 }
-                .draw(dir, &format!("deferred_cpu_culls_{stem}"), "cull_levels=1: lights culled per 64×64 tile; 2: again per 32×16 sub-tile. Quad skip: a light is skipped for a 4×4 quad when all 16 attenuations are 0 (image bit-identical, tested).")?,
+                .draw(dir, &format!("deferred_cpu_culls_{stem}"), "cull_levels=1: lights culled per 64×64 tile; 2: again per 32×16 sub-tile. Quad skip: a light is skipped for a 4×4 quad when all 16 attenuations are 0; spec skip: a quad without specular colour skips the specular term (both exact: image bit-identical, tested).")?,
             );
         }
         // CPU scaling over threads.
@@ -281,11 +292,12 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             &cpu,
             |r| {
                 format!(
-                    "{} lights, cull_levels={}, τ={}, quad skip {}",
+                    "{} lights, cull_levels={}, τ={}, quad skip {}, spec skip {}",
                     r.get("light_count"),
                     r.get("cull_levels"),
                     r.get("attenuation_threshold"),
-                    r.get("quad_skip")
+                    r.get("quad_skip"),
+                    r.get("spec_skip")
                 )
             },
             |r| Some((r.f("thread_count")?, r.f("cpu_light_ms")?)),
