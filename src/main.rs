@@ -130,6 +130,27 @@ enum Cmd {
         #[command(flatten)]
         gpu: GpuArgs,
     },
+    /// Deferred-shading debug views (classification ids, lights per tile, image) as PNGs.
+    ShadingViews {
+        #[arg(long, default_value = "city")]
+        scene: String,
+        /// Scene parameter, repeatable: --param lights=1024
+        #[arg(long = "param")]
+        params: Vec<String>,
+        #[arg(long, default_value_t = 1280)]
+        width: u32,
+        #[arg(long, default_value_t = 720)]
+        height: u32,
+        #[arg(long, default_value_t = 16)]
+        tile_size: u32,
+        #[arg(long, default_value_t = 0.0)]
+        attenuation_threshold: f64,
+        /// Folder for the PNGs (e.g. the run folder).
+        #[arg(long)]
+        out: PathBuf,
+        #[command(flatten)]
+        gpu: GpuArgs,
+    },
 }
 
 fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String> {
@@ -254,6 +275,38 @@ fn run(cli: Cli) -> Result<()> {
                 reference_out,
                 gpu,
             })
+        }
+        Cmd::ShadingViews {
+            scene,
+            params,
+            width,
+            height,
+            tile_size,
+            attenuation_threshold,
+            out,
+            gpu,
+        } => {
+            let mut p = Params::new();
+            for kv in &params {
+                let (k, v) = parse_kv(kv)?;
+                p.set(&k, v);
+            }
+            let scene = SceneSpec::new(&scene, p).build()?;
+            let g = Gpu::new(&gpu.options())?;
+            let (files, legend) = bench_core::shading::debug::write_views(
+                &g,
+                &scene,
+                width,
+                height,
+                tile_size,
+                attenuation_threshold,
+                &out,
+            )?;
+            for f in files {
+                println!("wrote {}", f.display());
+            }
+            println!("{legend}");
+            Ok(())
         }
     }
 }

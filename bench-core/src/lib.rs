@@ -13,6 +13,7 @@ pub mod metrics;
 pub mod record;
 pub mod reference;
 pub mod runner;
+pub mod shading;
 pub mod studies;
 pub mod testing;
 pub mod timing;

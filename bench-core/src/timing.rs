@@ -102,6 +102,37 @@ impl GpuTimer {
 
     /// Resolves and reads this frame's pass times in ms, in pass order. Empty without timestamps.
     pub fn read(&mut self, gpu: &Gpu) -> Result<Vec<(String, f64)>> {
+        let ticks = self.read_ticks(gpu)?;
+        Ok(self
+            .labels
+            .iter()
+            .zip(ticks.chunks(2))
+            .map(|(l, t)| {
+                let d = t[1].wrapping_sub(t[0]);
+                // A wrapped (negative) delta means the pass was not timed reliably: count it as 0.
+                let d = if d > u64::MAX / 2 { 0 } else { d };
+                (l.clone(), d as f64 * self.period_ns * 1e-6)
+            })
+            .collect())
+    }
+
+    /// This frame's passes as (label, start ms, end ms) on the GPU clock, relative to the
+    /// earliest timestamp of the frame (one queue: comparable across its submissions).
+    pub fn read_spans(&mut self, gpu: &Gpu) -> Result<Vec<(String, f64, f64)>> {
+        let ticks = self.read_ticks(gpu)?;
+        let Some(&t0) = ticks.iter().min() else {
+            return Ok(vec![]);
+        };
+        let ms = |t: u64| t.wrapping_sub(t0) as f64 * self.period_ns * 1e-6;
+        Ok(self
+            .labels
+            .iter()
+            .zip(ticks.chunks(2))
+            .map(|(l, t)| (l.clone(), ms(t[0]), ms(t[1]).max(ms(t[0]))))
+            .collect())
+    }
+
+    fn read_ticks(&mut self, gpu: &Gpu) -> Result<Vec<u64>> {
         let (Some(set), Some(resolve), Some(readback)) = (&self.set, &self.resolve, &self.readback)
         else {
             return Ok(vec![]);
@@ -115,18 +146,7 @@ impl GpuTimer {
         enc.copy_buffer_to_buffer(resolve, 0, readback, 0, n as u64 * 8);
         gpu.queue.submit([enc.finish()]);
         let bytes = gpu.map_read_range(readback, n as u64 * 8)?;
-        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-        Ok(self
-            .labels
-            .iter()
-            .enumerate()
-            .map(|(i, l)| {
-                let d = ticks[2 * i + 1].wrapping_sub(ticks[2 * i]);
-                // A wrapped (negative) delta means the pass was not timed reliably: count it as 0.
-                let d = if d > u64::MAX / 2 { 0 } else { d };
-                (l.clone(), d as f64 * self.period_ns * 1e-6)
-            })
-            .collect())
+        Ok(bytemuck::pod_collect_to_vec::<u8, u64>(&bytes))
     }
 }
 

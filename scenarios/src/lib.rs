@@ -11,7 +11,7 @@ pub mod suite;
 
 pub use camera::Camera;
 pub use params::{ParamValue, Params};
-pub use scenes::{AreaLight, Light, LightKind, Material, Mesh, ObjectInfo, Scene, SceneSpec};
+pub use scenes::{AreaLight, Light, LightKind, Material, Mesh, ObjectInfo, Scene, SceneSpec, Sun};
 pub use suite::{StudySpec, Suite};
 
 /// Errors from building scenes and reading suites. Each names the file, scene or value at fault.

@@ -1,6 +1,369 @@
-//! The `deferred` study (stub: see the issue that owns it).
+//! The `deferred` study (issue 6): tiled deferred shading with screen-space classification and
+//! tile light culling, on the GPU and on CPU cores, judged against the brute-force f64
+//! reference of the same G-buffer (`shading::reference`).
+//!
+//! Paths (`methods` in the suite): `naive`, `volumes`, `tiled`, `classified`, `uber`,
+//! `cpu_tiled` (see `shading::gpu_paths` and `shading::cpu_tiled`). Axes: `tile_size`,
+//! `cull_levels`, `attenuation_threshold` (tiled, volumes, cpu_tiled), `thread_count`,
+//! `quad_skip` and `spec_skip` (cpu_tiled). The light count is a scene parameter (`city(lights=N)`), recorded per row.
+//! `naive` runs first in each group so every row carries `speedup_vs_naive`.
+//!
+//! Study options: `cpu_reps` (timed CPU frames per point, default 3: a single-thread frame at
+//! 4K is seconds).
 
-use crate::record::Column;
+use scenarios::suite::axis_product;
+use scenarios::{ParamValue, Params, Scene, StudySpec};
+
+use super::{Emit, GroupCtx, PointSpec, Study};
+use crate::gpu::Gpu;
+use crate::gpu_scene::{AllocCounter, GpuScene};
+use crate::methods::{bool_param, int_param, Capture, Method, Prepared};
+use crate::metrics::{image_error, BAD_PIXEL_TOL};
+use crate::record::{Column, Row};
+use crate::runner::{failed_row, measure, set_params, set_timing, skipped_row};
+use crate::shading::cpu_tiled::{self, CpuOptions};
+use crate::shading::gbuffer::GBufferPass;
+use crate::shading::gpu_paths::{self, Deferred, Path};
+use crate::shading::{reference, GBuffer, ShadeSetup};
+use crate::timing::{GpuTimer, Stats};
+use crate::{CoreError, Result};
 
 /// CSV columns this study owns (documented in results/README.md).
-pub const COLUMNS: &[Column] = &[];
+pub const COLUMNS: &[Column] = &[
+    Column { name: "light_count", doc: "lights in the scene (point, spot and line lights, each with a finite range)" },
+    Column { name: "tile_size", doc: "screen tile side in pixels for light culling (8, 16, 32, 64)" },
+    Column { name: "cull_levels", doc: "light culling levels: 1 = per tile; 2 = 64×64 tile then 32×16 sub-tiles (BF3)" },
+    Column { name: "attenuation_threshold", doc: "τ: a light is culled from a tile where peak intensity × attenuation ≤ τ at every point of it (0: only beyond its range)" },
+    Column { name: "thread_count", doc: "CPU worker threads taking tiles from an atomic counter (CPU lighting paths)" },
+    Column { name: "quad_skip", doc: "CPU tile path: skip a light for a 4×4 quad when all 16 attenuations are 0 (BF3's per-quad cull); false = evaluate every kept light" },
+    Column { name: "spec_skip", doc: "CPU tile path: BF3's no-specular fast path per 4×4 quad (no pixel with a specular colour: the specular term is not evaluated); exact" },
+    Column { name: "spec_skip_frac", doc: "CPU tile path: fraction of non-sky 4×4 quads shaded without the specular term" },
+    Column { name: "lights_per_tile_mean", doc: "mean lights kept per culling tile (level 1)" },
+    Column { name: "lights_per_tile_max", doc: "most lights kept in any culling tile (level 1)" },
+    Column { name: "class_ids_present", doc: "classified: classification ids with at least one 4×4 tile this frame" },
+    Column { name: "permutations", doc: "shader permutations compiled and drawn (classified: one per id the scene can produce; uber: 1)" },
+    Column { name: "cpu_light_ms", doc: "median wall-clock ms of the CPU lighting of one frame (threads start to last tile done)" },
+    Column { name: "quad_skip_frac", doc: "CPU path: fraction of (light, 4×4 quad) pairs skipped because all 16 attenuations were 0" },
+    Column { name: "speedup_vs_naive", doc: "naive gpu_ms_median over this row's (GPU paths) or over cpu_light_ms (CPU paths), same scene, resolution and run" },
+    Column { name: "rel_err_max", doc: "largest per-channel error vs the f64 reference, relative to max(1, |reference|)" },
+];
+
+pub const PATHS: &[&str] = &[
+    "naive",
+    "volumes",
+    "tiled",
+    "classified",
+    "uber",
+    "cpu_tiled",
+];
+
+fn axes_of(path: &str) -> &'static [&'static str] {
+    match path {
+        "tiled" => &["tile_size", "cull_levels", "attenuation_threshold"],
+        "volumes" => &["attenuation_threshold"],
+        "cpu_tiled" => &[
+            "thread_count",
+            "cull_levels",
+            "attenuation_threshold",
+            "quad_skip",
+            "spec_skip",
+        ],
+        _ => &[],
+    }
+}
+
+/// The attenuation threshold axis (a number ≥ 0).
+pub fn threshold(params: &Params) -> std::result::Result<f64, String> {
+    match params.get("attenuation_threshold") {
+        None => Ok(0.0),
+        Some(ParamValue::Float(x)) if *x >= 0.0 && x.is_finite() => Ok(*x),
+        Some(ParamValue::Int(i)) if *i >= 0 => Ok(*i as f64),
+        Some(v) => Err(format!(
+            "attenuation_threshold must be a number >= 0, got {v}"
+        )),
+    }
+}
+
+fn gpu_path(name: &str, params: &Params) -> std::result::Result<Path, String> {
+    Ok(match name {
+        "naive" => Path::Naive,
+        "volumes" => Path::Volumes,
+        "classified" => Path::Classified { uber: false },
+        "uber" => Path::Classified { uber: true },
+        "tiled" => Path::Tiled {
+            tile: int_param(params, "tile_size", 16, 1, 4096)? as u32,
+            levels: int_param(params, "cull_levels", 1, 0, 16)? as u32,
+        },
+        other => return Err(format!("'{other}' is not a GPU shading path")),
+    })
+}
+
+/// A GPU path as a [`Method`], so the runner's `measure` times it like any other method.
+struct PathMethod<'a> {
+    scene: &'a Scene,
+    path: Path,
+    tau: f64,
+}
+
+impl Method for PathMethod<'_> {
+    fn name(&self) -> &'static str {
+        self.path.name()
+    }
+    fn describe(&self) -> &'static str {
+        "a deferred shading path (shading::gpu_paths)"
+    }
+    fn exact(&self) -> bool {
+        self.tau == 0.0
+    }
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Params) -> Result<Box<dyn Prepared>> {
+        Ok(Box::new(Deferred::new(
+            gpu, self.scene, scene, self.path, self.tau, false,
+        )?))
+    }
+}
+
+/// Renders the G-buffer once (untimed) and reads it back: the input of the reference and of
+/// the CPU paths.
+pub fn gbuffer_of(gpu: &Gpu, scene: &Scene, gscene: &GpuScene, prepass: bool) -> Result<GBuffer> {
+    let mut alloc = AllocCounter::default();
+    let gb = GBufferPass::new(gpu, scene, gscene, prepass, &mut alloc);
+    let mut timer = GpuTimer::new(gpu);
+    timer.begin_frame();
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    gb.encode(&mut enc, gscene, &mut timer, "gbuffer");
+    gpu.queue.submit([enc.finish()]);
+    gpu.wait()?;
+    gb.read(gpu)
+}
+
+pub fn rel_err_max(r: &[[f64; 4]], g: &[[f32; 4]]) -> f64 {
+    let mut m = 0.0f64;
+    for (a, b) in r.iter().zip(g) {
+        for c in 0..4 {
+            let e = (b[c] as f64 - a[c]).abs() / a[c].abs().max(1.0);
+            m = m.max(if e.is_finite() { e } else { f64::INFINITY });
+        }
+    }
+    m
+}
+
+fn set_error(row: &mut Row, reference: &[[f64; 4]], img: &[[f32; 4]]) {
+    let e = image_error(reference, img, BAD_PIXEL_TOL);
+    row.set_f("rmse", e.rmse)
+        .set_f("psnr_db", e.psnr_db)
+        .set_f("max_abs_err", e.max_abs)
+        .set_f("bad_pixel_frac", e.bad_pixel_frac)
+        .set_f("bad_pixel_tol", BAD_PIXEL_TOL)
+        .set("non_finite", e.non_finite)
+        .set_f("rel_err_max", rel_err_max(reference, img));
+    if e.non_finite > 0 {
+        row.set("flag", "precision");
+    }
+}
+
+pub struct DeferredStudy;
+
+impl Study for DeferredStudy {
+    fn kind(&self) -> &'static str {
+        "deferred"
+    }
+    fn describe(&self) -> &'static str {
+        "deferred shading paths (naive, light volumes, GPU tiled, classified, CPU tiled) vs the f64 reference"
+    }
+    fn points(&self, spec: &StudySpec) -> Result<Vec<PointSpec>> {
+        if let Some(v) = spec.extra.get("cpu_reps") {
+            if v.as_integer().is_none_or(|r| r < 1) {
+                return Err(CoreError::Param(format!(
+                    "cpu_reps must be an integer >= 1, got {v}"
+                )));
+            }
+        }
+        let mut out = Vec::new();
+        for name in &spec.methods {
+            if !PATHS.contains(&name.as_str()) {
+                return Err(CoreError::Param(format!(
+                    "unknown deferred path '{name}' (known: {})",
+                    PATHS.join(", ")
+                )));
+            }
+            for params in axis_product(&spec.axes, axes_of(name)) {
+                threshold(&params).map_err(CoreError::Param)?;
+                out.push(PointSpec {
+                    method: name.clone(),
+                    params,
+                });
+            }
+        }
+        Ok(out)
+    }
+
+    fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
+        let (gpu, scene, gscene) = (ctx.gpu, ctx.scene, ctx.gscene);
+        let setup = ShadeSetup::new(scene, gscene.width, gscene.height);
+        let gb = gbuffer_of(gpu, scene, gscene, false)?;
+        let reference = reference::shade(&setup, &gb);
+        let cpu_reps = ctx
+            .study
+            .extra
+            .get("cpu_reps")
+            .and_then(|v| v.as_integer())
+            .unwrap_or(3) as u32;
+        let mut order: Vec<usize> = (0..ctx.group.points.len()).collect();
+        order.sort_by_key(|&i| ctx.group.points[i].method != "naive");
+        let mut naive_ms: Option<f64> = None;
+        for i in order {
+            let pt = &ctx.group.points[i];
+            let mut row = Row::new();
+            row.set("method", &pt.method)
+                .set("light_count", scene.lights.len());
+            set_params(&mut row, &pt.params)?;
+            let tau = threshold(&pt.params).map_err(CoreError::Param)?;
+            row.set("exact", tau == 0.0);
+            if pt.method == "cpu_tiled" {
+                let threads = match int_param(&pt.params, "thread_count", 1, 1, 1024) {
+                    Ok(t) => t as usize,
+                    Err(e) => {
+                        emit(i, skipped_row(row, &e))?;
+                        continue;
+                    }
+                };
+                let levels = int_param(&pt.params, "cull_levels", 2, 1, 2);
+                let Ok(levels) = levels else {
+                    emit(i, skipped_row(row, &levels.unwrap_err()))?;
+                    continue;
+                };
+                let quad_skip = match bool_param(&pt.params, "quad_skip", true) {
+                    Ok(q) => q,
+                    Err(e) => {
+                        emit(i, skipped_row(row, &e))?;
+                        continue;
+                    }
+                };
+                let spec_skip = match bool_param(&pt.params, "spec_skip", true) {
+                    Ok(q) => q,
+                    Err(e) => {
+                        emit(i, skipped_row(row, &e))?;
+                        continue;
+                    }
+                };
+                row.set("tile_size", 64)
+                    .set("quad_skip", quad_skip)
+                    .set("spec_skip", spec_skip);
+                let lights = setup.gpu_lights(tau);
+                let o = CpuOptions {
+                    tile: 64,
+                    sub: (levels == 2).then_some((32, 16)),
+                    threads,
+                    quad_skip,
+                    spec_skip,
+                    keep_lists: false,
+                    light_buffer: false,
+                };
+                let mut samples = Vec::new();
+                let mut last = None;
+                for rep in 0..1 + cpu_reps {
+                    let r = cpu_tiled::shade(&setup, &gb, &lights, &o);
+                    if rep > 0 {
+                        samples.push(r.ms);
+                    }
+                    last = Some(r);
+                }
+                let r = last.expect("at least one frame");
+                let st = Stats::of(&samples).unwrap_or_default();
+                row.set_f("cpu_light_ms", st.median);
+                let pairs = (r.quad_skips + r.quad_evals).max(1);
+                row.set_f("quad_skip_frac", r.quad_skips as f64 / pairs as f64)
+                    .set_f(
+                        "spec_skip_frac",
+                        r.spec_skipped_quads as f64 / r.quads.max(1) as f64,
+                    );
+                set_tile_stats(&mut row, &r.tile_counts);
+                if let Some(n) = naive_ms {
+                    if st.median > 0.0 {
+                        row.set_f("speedup_vs_naive", n / st.median);
+                    }
+                }
+                set_error(&mut row, &reference, &r.image);
+                row.set(
+                    "notes",
+                    format!("cpu_reps={cpu_reps}; G-buffer read back once, untimed"),
+                );
+                emit(i, row)?;
+                continue;
+            }
+            let path = match gpu_path(&pt.method, &pt.params) {
+                Ok(p) => p,
+                Err(e) => {
+                    emit(i, skipped_row(row, &e))?;
+                    continue;
+                }
+            };
+            if let Path::Tiled { tile, levels } = path {
+                row.set("tile_size", tile).set("cull_levels", levels);
+            }
+            if let Err(why) = gpu_paths::supports(gpu, path) {
+                emit(i, skipped_row(row, &why))?;
+                continue;
+            }
+            let m = PathMethod { scene, path, tau };
+            let mut meas = match measure(gpu, gscene, &m, &pt.params, ctx.warmup, ctx.reps) {
+                Ok(m) => m,
+                Err(e) => {
+                    emit(i, failed_row(row, &e.to_string()))?;
+                    continue;
+                }
+            };
+            set_timing(&mut row, &meas, ctx);
+            let g = meas.gpu_ms.map(|s| s.median);
+            if pt.method == "naive" && naive_ms.is_none() {
+                naive_ms = g;
+            }
+            if let (Some(n), Some(g)) = (naive_ms, g) {
+                if g > 0.0 {
+                    row.set_f("speedup_vs_naive", n / g);
+                }
+            }
+            let cap: Capture = match meas.prepared.readback(gpu, gscene) {
+                Ok(c) => c,
+                Err(e) => {
+                    emit(i, failed_row(row, &format!("readback: {e}")))?;
+                    continue;
+                }
+            };
+            if let Some(img) = &cap.image {
+                set_error(&mut row, &reference, img);
+            }
+            // Path-specific facts need the concrete type: one more (untimed) prepared copy.
+            let d = Deferred::new(gpu, scene, gscene, path, tau, false)?;
+            let mut timer = GpuTimer::new(gpu);
+            timer.begin_frame();
+            let mut dd = d;
+            dd.frame(gpu, gscene, &mut timer)?;
+            gpu.wait()?;
+            row.set("permutations", dd.permutations);
+            if let Some(c) = dd.tile_counts(gpu)? {
+                set_tile_stats(&mut row, &c);
+            }
+            if let Some((_, counts, _, _)) = dd.classification(gpu)? {
+                row.set(
+                    "class_ids_present",
+                    counts.iter().filter(|&&c| c > 0).count(),
+                );
+            }
+            emit(i, row)?;
+        }
+        Ok(())
+    }
+}
+
+fn set_tile_stats(row: &mut Row, counts: &[u32]) {
+    let n = counts.len().max(1) as f64;
+    row.set_f(
+        "lights_per_tile_mean",
+        counts.iter().map(|&c| c as f64).sum::<f64>() / n,
+    )
+    .set(
+        "lights_per_tile_max",
+        counts.iter().max().copied().unwrap_or(0),
+    );
+}

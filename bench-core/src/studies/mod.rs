@@ -7,6 +7,8 @@
 //! |-----------|----------------------------------------------------------------------|
 //! | `methods` | multi-fragment capture methods vs the exact CPU reference            |
 //! | `geometry`| geometry feeding (Bavoil ch. 3): batches, formats, layout, indices, order |
+//! | `deferred`| deferred shading paths (naive, volumes, tiled, classified, CPU tiles) |
+//! | `prepass` | light pre-pass vs deferred; light buffer on CPU cores, overlapped     |
 //! | `stability` | stiff/extreme inputs: methods study + case, stiffness, lost fragments |
 //! | `shadows` | layered soft shadow maps from an area light vs a ray-traced reference |
 
@@ -173,6 +175,8 @@ pub fn all() -> Vec<Box<dyn Study>> {
     vec![
         Box::new(methods::MethodsStudy),
         Box::new(geometry::GeometryStudy),
+        Box::new(deferred::DeferredStudy),
+        Box::new(prepass::PrepassStudy),
         Box::new(stability::StabilityStudy),
         Box::new(shadows::ShadowsStudy),
     ]

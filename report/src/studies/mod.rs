@@ -2,7 +2,9 @@
 
 pub mod buckets;
 pub mod geometry;
+pub mod deferred;
 pub mod methods;
+pub mod prepass;
 pub mod shadows;
 pub mod stability;
 
@@ -41,6 +43,18 @@ pub fn all_figures(runs: &Runs, dir: &Path) -> Result<Vec<(String, Vec<Figure>)>
         out.push((
             "Soft shadows (layered shadow maps vs ray tracing)".to_string(),
             shadows::figures(runs, dir)?,
+        ));
+    }
+    if !runs.study("deferred").is_empty() {
+        out.push((
+            "Deferred shading (tiles, classification, CPU tiles)".to_string(),
+            deferred::figures(runs, dir)?,
+        ));
+    }
+    if !runs.study("prepass").is_empty() {
+        out.push((
+            "Light pre-pass (and the light buffer on CPU cores)".to_string(),
+            prepass::figures(runs, dir)?,
         ));
     }
     Ok(out)

@@ -9,12 +9,14 @@
 //! | `quads`  | d overlapping screen-parallel quads at distinct depths      | max depth complexity d  |
 //! | `mesh`   | a procedural large mesh (bumpy sphere or wavy grid), shared vertices | —     |
 //! | `obj`    | an OBJ file (tobj), normalised into view, grid-instanced    | —                       |
+//! | `city`   | ground + box buildings (or a closed room) with many lights  | — (shading studies)     |
 //! | `slabs`  | tiles² stacks of nested thin closed boxes far away (stiff)  | max depth complexity 2n |
 //! | `csg_pair` | two overlapping closed solids, ids 0 and 1 (CSG operands) | ≤ 4 per pixel           |
 //! | `coplanar` | layers of exactly duplicated quads (z-fighting)          | layers · copies         |
 //! | `extreme` | degenerate triangles, ±1e7 vertices, a view-covering triangle | —                    |
 //! | `soft_shadow` | occluders over a ground plane under a square area light | ray-traced visibility |
 
+pub mod city;
 pub mod grass;
 pub mod mesh;
 pub mod quads;
@@ -165,6 +167,14 @@ pub struct Light {
     pub length: f32,
 }
 
+/// A directional light (the sun) for the shading studies; `None` on a scene without one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sun {
+    /// Unit vector from the surface towards the sun, world space.
+    pub direction: [f32; 3],
+    pub color: [f32; 3],
+}
+
 /// A square area light (the `shadows` study): the light's camera sits at the square's centre and
 /// looks along its normal; the square's sides follow the camera's x and y axes. `camera.fovy`
 /// and `camera.near`/`far` frame the shadow map (aspect 1).
@@ -186,6 +196,8 @@ pub struct Scene {
     pub analytic_max_depth_complexity: Option<u32>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    /// Directional light of the shading studies (none: no sun feature anywhere).
+    pub sun: Option<Sun>,
     /// The square area light of soft-shadow scenes (None elsewhere).
     pub area_light: Option<AreaLight>,
 }
@@ -200,6 +212,7 @@ impl Scene {
             analytic_max_depth_complexity: None,
             materials: Vec::new(),
             lights: Vec::new(),
+            sun: None,
             area_light: None,
         }
     }
@@ -237,6 +250,7 @@ impl SceneSpec {
             "quads" => quads::build(self)?,
             "mesh" => mesh::build(self)?,
             "obj" => obj::build(self)?,
+            "city" => city::build(self)?,
             "slabs" => stiff::slabs(self)?,
             "csg_pair" => stiff::csg_pair(self)?,
             "coplanar" => stiff::coplanar(self)?,
@@ -274,6 +288,7 @@ pub const GENERATORS: &[&str] = &[
     "coplanar",
     "extreme",
     "soft_shadow",
+    "city",
 ];
 
 /// One-line description per generator, for `mfx list scenes`.
@@ -284,6 +299,7 @@ pub fn describe(generator: &str) -> &'static str {
         "quads" => "depth_complexity=d, alpha, tilt, seed: d quads over the centre at distinct depths",
         "mesh" => "triangles=N, shape=sphere|grid, alpha: a procedural large mesh with shared vertices (geometry study)",
         "obj" => "path, instances, alpha: an OBJ file via tobj, normalised, instanced on a grid",
+        "city" => "lights=N, blocks, room, sun, kinds=mixed|point|spot|line, range, seed: box city (or closed room) with N finite-range lights and materials",
         "slabs" => "count, tiles, distance, wall, alpha, reversed_z, seed: tiles² stacks of count nested thin closed boxes far away (thickness cancellation)",
         "csg_pair" => "offset, segments, shape=sphere|box, alpha: two overlapping closed solids, ids 0 (A) and 1 (B)",
         "coplanar" => "layers, copies, alpha, reversed_z: layers of exactly duplicated quads (z-fighting), max depth complexity layers·copies",

@@ -1,0 +1,474 @@
+//! The BF3 tile design on CPU cores ("another processor does the lighting"): worker threads
+//! (std threads, `threads` of them) take 64×64 tiles by atomically incrementing a shared tile
+//! counter (automatic load balancing); per tile they reconstruct positions, take the min/max
+//! view depth of the non-sky pixels, cull every light's sphere against the tile frustum, then
+//! (two-level) again per 32×16 sub-tile, and shade 4×4-pixel quads in structure-of-arrays form:
+//! 16 lanes per attribute, a light skipped for the whole quad when all 16 attenuations are 0.
+//!
+//! Deterministic for any thread count, bitwise: a pixel's value depends only on its own lanes
+//! and on the light list, which keeps light index order; which thread shades a tile does not
+//! matter. Output goes to per-tile chunks (no sharing), reordered to rows at the end.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
+
+use glam::{Mat4, Vec4};
+
+use super::{sphere_outside, tile_planes, GBuffer, GpuLight, ShadeSetup, AMBIENT, SKY};
+
+#[derive(Clone, Copy, Debug)]
+pub struct CpuOptions {
+    /// Tile side (BF3: 64).
+    pub tile: u32,
+    /// Sub-tile size for the second culling level (BF3: 32×16); `None`: one level.
+    pub sub: Option<(u32, u32)>,
+    pub threads: usize,
+    /// Skip a light for a 4×4 quad when all 16 attenuations are 0 (exact).
+    pub quad_skip: bool,
+    /// BF3's "no specular" fast path, per 4×4 quad: when no pixel of the quad has a specular
+    /// colour, the specular term (half vector, power) is not evaluated (exact: it is multiplied
+    /// by 0). Not in light-buffer mode (the light buffer does not know the materials).
+    pub spec_skip: bool,
+    /// Keep the per-tile (and per-sub-tile) light lists for inspection.
+    pub keep_lists: bool,
+    /// Light pre-pass output instead of the shaded colour: RGB = Σ diffuse light (sun
+    /// included), A = Σ lum(contrib)·spec_term; sky pixels 0.
+    pub light_buffer: bool,
+}
+
+impl Default for CpuOptions {
+    fn default() -> Self {
+        CpuOptions {
+            tile: 64,
+            sub: Some((32, 16)),
+            threads: 1,
+            quad_skip: true,
+            spec_skip: true,
+            keep_lists: false,
+            light_buffer: false,
+        }
+    }
+}
+
+/// A light list of one tile or sub-tile: its pixel rectangle and the lights kept.
+#[derive(Clone, Debug)]
+pub struct TileList {
+    pub rect: [u32; 4],
+    pub lights: Vec<u32>,
+}
+
+pub struct CpuResult {
+    /// Row-major RGBA.
+    pub image: Vec<[f32; 4]>,
+    /// Lights kept per level-1 tile (row-major tiles).
+    pub tile_counts: Vec<u32>,
+    /// Wall-clock ms of the lighting (threads start to last tile done).
+    pub ms: f64,
+    /// Level-1 lists, then (two-level) level-2 lists, when `keep_lists`.
+    pub lists: Vec<TileList>,
+    pub sub_lists: Vec<TileList>,
+    /// Light evaluations skipped by the quad test / done.
+    pub quad_skips: u64,
+    pub quad_evals: u64,
+    /// 4×4 quads shaded without the specular term / all quads shaded.
+    pub spec_skipped_quads: u64,
+    pub quads: u64,
+}
+
+struct TileOut {
+    pixels: Vec<[f32; 4]>,
+    count: u32,
+    list: Option<TileList>,
+    subs: Vec<TileList>,
+    skips: u64,
+    evals: u64,
+    nospec: u64,
+    quads: u64,
+}
+
+/// Lights (with culling spheres for the threshold already in `lights`) on the G-buffer `gb`.
+pub fn shade(
+    setup: &ShadeSetup,
+    gb: &GBuffer,
+    lights: &[GpuLight],
+    opts: &CpuOptions,
+) -> CpuResult {
+    let (w, h) = (gb.width, gb.height);
+    let t = opts.tile;
+    let (tx, ty) = (w.div_ceil(t), h.div_ceil(t));
+    let ntiles = (tx * ty) as usize;
+    let vfc = setup.view_from_clip_f32();
+    let sun = setup
+        .sun
+        .map(|(d, c)| (d.as_vec3().to_array(), c.as_vec3().to_array()));
+    let next = AtomicUsize::new(0);
+    let outs: Vec<Mutex<Option<TileOut>>> = (0..ntiles).map(|_| Mutex::new(None)).collect();
+    let t0 = Instant::now();
+    std::thread::scope(|s| {
+        for _ in 0..opts.threads.max(1) {
+            s.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                if i >= ntiles {
+                    break;
+                }
+                let rect = [
+                    (i as u32 % tx) * t,
+                    (i as u32 / tx) * t,
+                    ((i as u32 % tx) * t + t).min(w),
+                    ((i as u32 / tx) * t + t).min(h),
+                ];
+                let out = shade_tile(&vfc, gb, lights, sun, rect, opts);
+                *outs[i].lock().unwrap() = Some(out);
+            });
+        }
+    });
+    let ms = t0.elapsed().as_secs_f64() * 1e3;
+    let mut image = vec![[0.0f32; 4]; (w * h) as usize];
+    let mut tile_counts = Vec::with_capacity(ntiles);
+    let mut lists = Vec::new();
+    let mut sub_lists = Vec::new();
+    let (mut quad_skips, mut quad_evals, mut spec_skipped_quads, mut quads) = (0, 0, 0, 0);
+    for (i, o) in outs.into_iter().enumerate() {
+        let o = o.into_inner().unwrap().expect("every tile was taken");
+        let (x0, y0) = ((i as u32 % tx) * t, (i as u32 / tx) * t);
+        let tw = (x0 + t).min(w) - x0;
+        for (k, p) in o.pixels.iter().enumerate() {
+            let (x, y) = (x0 + k as u32 % tw, y0 + k as u32 / tw);
+            image[(y * w + x) as usize] = *p;
+        }
+        tile_counts.push(o.count);
+        lists.extend(o.list);
+        sub_lists.extend(o.subs);
+        quad_skips += o.skips;
+        quad_evals += o.evals;
+        spec_skipped_quads += o.nospec;
+        quads += o.quads;
+    }
+    CpuResult {
+        image,
+        tile_counts,
+        ms,
+        lists,
+        sub_lists,
+        quad_skips,
+        quad_evals,
+        spec_skipped_quads,
+        quads,
+    }
+}
+
+fn view_pos(vfc: &Mat4, w: u32, h: u32, x: u32, y: u32, d: f32) -> [f32; 3] {
+    let ndc_x = (x as f32 + 0.5) * (1.0 / w as f32) * 2.0 - 1.0;
+    let ndc_y = 1.0 - (y as f32 + 0.5) * (1.0 / h as f32) * 2.0;
+    let v = *vfc * Vec4::new(ndc_x, ndc_y, d, 1.0);
+    (v.truncate() / v.w).to_array()
+}
+
+fn cull(
+    vfc: &Mat4,
+    size: (u32, u32),
+    rect: [u32; 4],
+    zr: (f32, f32),
+    lights: &[GpuLight],
+    from: &mut dyn Iterator<Item = u32>,
+) -> Vec<u32> {
+    if zr.0 > zr.1 {
+        return Vec::new(); // all sky
+    }
+    let planes = tile_planes(
+        vfc,
+        size,
+        [
+            rect[0] as f32,
+            rect[1] as f32,
+            rect[2] as f32,
+            rect[3] as f32,
+        ],
+        zr.0,
+        zr.1,
+    );
+    from.filter(|&i| !sphere_outside(&planes, lights[i as usize].cull))
+        .collect()
+}
+
+#[allow(clippy::needless_range_loop)]
+fn shade_tile(
+    vfc: &Mat4,
+    gb: &GBuffer,
+    lights: &[GpuLight],
+    sun: Option<([f32; 3], [f32; 3])>,
+    rect: [u32; 4],
+    opts: &CpuOptions,
+) -> TileOut {
+    let (w, h) = (gb.width, gb.height);
+    let tw = rect[2] - rect[0];
+    let th = rect[3] - rect[1];
+    // Positions of the tile's pixels, and the depth range of its non-sky pixels.
+    let mut pos = vec![[0.0f32; 3]; (tw * th) as usize];
+    let mut zr = (f32::MAX, 0.0f32);
+    for y in 0..th {
+        for x in 0..tw {
+            let gi = ((rect[1] + y) * w + rect[0] + x) as usize;
+            if gb.is_sky(gi) {
+                continue;
+            }
+            let p = view_pos(vfc, w, h, rect[0] + x, rect[1] + y, gb.depth[gi]);
+            pos[(y * tw + x) as usize] = p;
+            zr.0 = zr.0.min(-p[2]);
+            zr.1 = zr.1.max(-p[2]);
+        }
+    }
+    let list = cull(vfc, (w, h), rect, zr, lights, &mut (0..lights.len() as u32));
+    let mut out = TileOut {
+        pixels: vec![[0.0; 4]; (tw * th) as usize],
+        count: list.len() as u32,
+        list: opts.keep_lists.then(|| TileList {
+            rect,
+            lights: list.clone(),
+        }),
+        subs: Vec::new(),
+        skips: 0,
+        evals: 0,
+        nospec: 0,
+        quads: 0,
+    };
+    let (sw, sh) = opts.sub.unwrap_or((tw, th));
+    let mut sy = 0;
+    while sy < th {
+        let mut sx = 0;
+        while sx < tw {
+            let sub = [sx, sy, (sx + sw).min(tw), (sy + sh).min(th)];
+            let sub_list = if opts.sub.is_some() {
+                let mut szr = (f32::MAX, 0.0f32);
+                for y in sub[1]..sub[3] {
+                    for x in sub[0]..sub[2] {
+                        let gi = ((rect[1] + y) * w + rect[0] + x) as usize;
+                        if !gb.is_sky(gi) {
+                            let z = -pos[(y * tw + x) as usize][2];
+                            szr.0 = szr.0.min(z);
+                            szr.1 = szr.1.max(z);
+                        }
+                    }
+                }
+                let abs = [
+                    rect[0] + sub[0],
+                    rect[1] + sub[1],
+                    rect[0] + sub[2],
+                    rect[1] + sub[3],
+                ];
+                let l = cull(vfc, (w, h), abs, szr, lights, &mut list.iter().copied());
+                if opts.keep_lists {
+                    out.subs.push(TileList {
+                        rect: abs,
+                        lights: l.clone(),
+                    });
+                }
+                l
+            } else {
+                list.clone()
+            };
+            // 4×4 quads of the sub-tile.
+            let mut qy = sub[1];
+            while qy < sub[3] {
+                let mut qx = sub[0];
+                while qx < sub[2] {
+                    shade_quad(
+                        gb,
+                        lights,
+                        sun,
+                        &sub_list,
+                        rect,
+                        tw,
+                        [qx, qy],
+                        [sub[2], sub[3]],
+                        &pos,
+                        opts.quad_skip,
+                        opts.spec_skip && !opts.light_buffer,
+                        opts.light_buffer,
+                        &mut out,
+                    );
+                    qx += 4;
+                }
+                qy += 4;
+            }
+            sx += sw;
+        }
+        sy += sh;
+    }
+    out
+}
+
+/// One 4×4 quad in SoA lanes: lane k is pixel (q.x + k%4, q.y + k/4) of the tile.
+#[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
+fn shade_quad(
+    gb: &GBuffer,
+    lights: &[GpuLight],
+    sun: Option<([f32; 3], [f32; 3])>,
+    list: &[u32],
+    rect: [u32; 4],
+    tw: u32,
+    q: [u32; 2],
+    end: [u32; 2],
+    pos: &[[f32; 3]],
+    quad_skip: bool,
+    spec_skip: bool,
+    light_buffer: bool,
+    out: &mut TileOut,
+) {
+    const N: usize = 16;
+    let mut active = [false; N];
+    let (mut px, mut py, mut pz) = ([0f32; N], [0f32; N], [0f32; N]);
+    let (mut nx, mut ny, mut nz) = ([0f32; N], [0f32; N], [0f32; N]);
+    let (mut vx, mut vy, mut vz) = ([0f32; N], [0f32; N], [0f32; N]);
+    let (mut pw, mut norm) = ([0f32; N], [0f32; N]);
+    let mut gidx = [0usize; N];
+    for k in 0..N {
+        let (x, y) = (q[0] + k as u32 % 4, q[1] + k as u32 / 4);
+        if x >= end[0] || y >= end[1] {
+            continue;
+        }
+        let gi = ((rect[1] + y) * gb.width + rect[0] + x) as usize;
+        gidx[k] = gi;
+        if gb.is_sky(gi) {
+            continue;
+        }
+        active[k] = true;
+        let p = pos[(y * tw + x) as usize];
+        (px[k], py[k], pz[k]) = (p[0], p[1], p[2]);
+        let n = gb.normal[gi];
+        (nx[k], ny[k], nz[k]) = (n[0], n[1], n[2]);
+        let il = 1.0 / (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        (vx[k], vy[k], vz[k]) = (-p[0] * il, -p[1] * il, -p[2] * il);
+        pw[k] = (1.0 + 10.0 * n[3]).exp2();
+        norm[k] = (pw[k] + 8.0) / 8.0;
+    }
+    let no_spec = spec_skip && (0..N).all(|k| !active[k] || gb.spec[gidx[k]] == [0.0; 3]);
+    if active.iter().any(|&a| a) {
+        out.quads += 1;
+        out.nospec += no_spec as u64;
+    }
+    let mut diff = [[0f32; 3]; N];
+    let mut spec = [[0f32; 4]; N];
+    let mut att = [0f32; N];
+    let (mut lx, mut ly, mut lz) = ([0f32; N], [0f32; N], [0f32; N]);
+    let add = |k: usize,
+               l: [f32; 3],
+               color: [f32; 3],
+               a: f32,
+               diff: &mut [[f32; 3]; N],
+               spec: &mut [[f32; 4]; N]| {
+        let ndl = nx[k] * l[0] + ny[k] * l[1] + nz[k] * l[2];
+        if ndl <= 0.0 || a <= 0.0 {
+            return;
+        }
+        let s = a * ndl;
+        let c = [color[0] * s, color[1] * s, color[2] * s];
+        if no_spec {
+            for j in 0..3 {
+                diff[k][j] += c[j];
+            }
+            return;
+        }
+        let (hx, hy, hz) = (l[0] + vx[k], l[1] + vy[k], l[2] + vz[k]);
+        let hl = 1.0 / (hx * hx + hy * hy + hz * hz).sqrt();
+        let ndh = ((nx[k] * hx + ny[k] * hy + nz[k] * hz) * hl).max(0.0);
+        let st = if ndh > 0.0 {
+            norm[k] * ndh.powf(pw[k])
+        } else {
+            0.0
+        };
+        for j in 0..3 {
+            diff[k][j] += c[j];
+            spec[k][j] += c[j] * st;
+        }
+        spec[k][3] += (c[0] * 0.2126 + c[1] * 0.7152 + c[2] * 0.0722) * st;
+    };
+    for &li in list {
+        let l = &lights[li as usize];
+        let kind = l.dir_kind[3] as u32;
+        let r2 = l.pos_range[3] * l.pos_range[3];
+        let mut any = false;
+        // SoA attenuation of all 16 lanes (the part that vectorises).
+        for k in 0..N {
+            let (mut qx, mut qy, mut qz) = (l.pos_range[0], l.pos_range[1], l.pos_range[2]);
+            if kind == 2 {
+                let t = ((px[k] - qx) * l.dir_kind[0]
+                    + (py[k] - qy) * l.dir_kind[1]
+                    + (pz[k] - qz) * l.dir_kind[2])
+                    .clamp(0.0, l.extra[0]);
+                qx += l.dir_kind[0] * t;
+                qy += l.dir_kind[1] * t;
+                qz += l.dir_kind[2] * t;
+            }
+            let (dx, dy, dz) = (qx - px[k], qy - py[k], qz - pz[k]);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let ok = active[k] && d2 < r2 && d2 >= 1e-12;
+            let d = d2.sqrt();
+            let id = 1.0 / d;
+            (lx[k], ly[k], lz[k]) = (dx * id, dy * id, dz * id);
+            let x = 1.0 - d2 / r2;
+            let mut a = x * x;
+            if kind == 1 {
+                let c = l.color_cos[3];
+                let cosang =
+                    -(lx[k] * l.dir_kind[0] + ly[k] * l.dir_kind[1] + lz[k] * l.dir_kind[2]);
+                let sf = ((cosang - c) / (1.0 - c)).clamp(0.0, 1.0);
+                a *= sf * sf;
+            }
+            att[k] = if ok { a } else { 0.0 };
+            any |= att[k] > 0.0;
+        }
+        if quad_skip && !any {
+            out.skips += 1;
+            continue;
+        }
+        out.evals += 1;
+        let color = [l.color_cos[0], l.color_cos[1], l.color_cos[2]];
+        for k in 0..N {
+            if att[k] > 0.0 {
+                add(
+                    k,
+                    [lx[k], ly[k], lz[k]],
+                    color,
+                    att[k],
+                    &mut diff,
+                    &mut spec,
+                );
+            }
+        }
+    }
+    if let Some((d, c)) = sun {
+        for k in 0..N {
+            if active[k] {
+                add(k, d, c, 1.0, &mut diff, &mut spec);
+            }
+        }
+    }
+    for k in 0..N {
+        let (x, y) = (q[0] + k as u32 % 4, q[1] + k as u32 / 4);
+        if x >= end[0] || y >= end[1] {
+            continue;
+        }
+        let gi = gidx[k];
+        let o = &mut out.pixels[(y * tw + x) as usize];
+        if light_buffer {
+            *o = if active[k] {
+                [diff[k][0], diff[k][1], diff[k][2], spec[k][3]]
+            } else {
+                [0.0; 4]
+            };
+            continue;
+        }
+        if !active[k] {
+            *o = [SKY[0], SKY[1], SKY[2], 1.0];
+            continue;
+        }
+        let a = gb.albedo[gi];
+        let s = gb.spec[gi];
+        for j in 0..3 {
+            o[j] = a[j] * (diff[k][j] + AMBIENT[j]) + s[j] * spec[k][j];
+        }
+        o[3] = 1.0;
+    }
+}

@@ -1,0 +1,373 @@
+//! The G-buffer pass of the shading studies: depth (Depth32Float), view-space normal +
+//! smoothness (Rgba16Float), albedo (Rgba8Unorm), specular colour (Rgba8Unorm) and material id
+//! (R32Uint, [`SKY_MATERIAL`] where nothing was drawn: the sky mark) — 24 bytes per pixel. The
+//! light pre-pass variant writes only depth and normal + smoothness (12 bytes per pixel).
+//! Also the read-back helpers that decode it for the f64 reference and the CPU tile path.
+
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+use super::{GBuffer, SKY_MATERIAL};
+use crate::gpu::Gpu;
+use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::methods::floor::{clear_depth, depth_state};
+use crate::methods::{camera_entry, shader, storage_entry};
+use crate::timing::GpuTimer;
+use crate::{CoreError, Result};
+
+const WGSL: &str = include_str!("gbuffer.wgsl");
+
+pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+pub const SPEC_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+pub const MAT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// Bytes per pixel written by the full G-buffer pass (depth + 4 targets).
+pub const FULL_BYTES_PER_PIXEL: u64 = 4 + 8 + 4 + 4 + 4;
+/// Bytes per pixel written by the light pre-pass's geometry pass (depth + normal).
+pub const PREPASS_BYTES_PER_PIXEL: u64 = 4 + 8;
+
+/// Matches `struct Material` in gbuffer.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub albedo_smooth: [f32; 4],
+    pub spec: [f32; 4],
+}
+
+/// The materials of a scene by object id (the default material where the scene has none).
+pub fn materials(scene: &scenarios::Scene) -> Vec<GpuMaterial> {
+    let n = scene
+        .mesh
+        .object_ids
+        .iter()
+        .max()
+        .map(|m| *m as usize + 1)
+        .unwrap_or(1)
+        .max(scene.materials.len());
+    (0..n)
+        .map(|i| {
+            let m = scene.materials.get(i).copied().unwrap_or_default();
+            GpuMaterial {
+                albedo_smooth: [m.albedo[0], m.albedo[1], m.albedo[2], m.smoothness],
+                spec: [m.specular[0], m.specular[1], m.specular[2], 0.0],
+            }
+        })
+        .collect()
+}
+
+/// The G-buffer targets and the pipeline that fills them.
+pub struct GBufferPass {
+    pub depth: wgpu::Texture,
+    pub normal: wgpu::Texture,
+    pub albedo: Option<wgpu::Texture>,
+    pub spec: Option<wgpu::Texture>,
+    pub mat: Option<wgpu::Texture>,
+    pub depth_view: wgpu::TextureView,
+    pipeline: wgpu::RenderPipeline,
+    bind0: wgpu::BindGroup,
+    bind1: wgpu::BindGroup,
+    pub materials: wgpu::Buffer,
+    reversed: bool,
+    /// True: depth + normal only (light pre-pass).
+    pub prepass: bool,
+}
+
+impl GBufferPass {
+    pub fn new(
+        gpu: &Gpu,
+        scene: &scenarios::Scene,
+        gscene: &GpuScene,
+        prepass: bool,
+        alloc: &mut AllocCounter,
+    ) -> GBufferPass {
+        let d = &gpu.device;
+        let (w, h) = (gscene.width, gscene.height);
+        let module = shader(gpu, "gbuffer", WGSL);
+        let bgl0 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gbuffer camera"),
+            entries: &[camera_entry(0)],
+        });
+        let bgl1 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gbuffer materials"),
+            entries: &[storage_entry(0, true, wgpu::ShaderStages::FRAGMENT)],
+        });
+        let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gbuffer"),
+            bind_group_layouts: &[Some(&bgl0), Some(&bgl1)],
+            immediate_size: 0,
+        });
+        let mats = materials(scene);
+        let materials = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("materials"),
+            contents: bytemuck::cast_slice(&mats),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        alloc.bytes += materials.size();
+        let bind0 = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("gbuffer camera"),
+            layout: &bgl0,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: gscene.camera.as_entire_binding(),
+            }],
+        });
+        let bind1 = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("gbuffer materials"),
+            layout: &bgl1,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: materials.as_entire_binding(),
+            }],
+        });
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC;
+        let depth = alloc.texture(
+            gpu,
+            "gb depth",
+            w,
+            h,
+            wgpu::TextureFormat::Depth32Float,
+            usage,
+        );
+        let normal = alloc.texture(gpu, "gb normal", w, h, NORMAL_FORMAT, usage);
+        let (albedo, spec, mat) = if prepass {
+            (None, None, None)
+        } else {
+            (
+                Some(alloc.texture(gpu, "gb albedo", w, h, ALBEDO_FORMAT, usage)),
+                Some(alloc.texture(gpu, "gb spec", w, h, SPEC_FORMAT, usage)),
+                Some(alloc.texture(gpu, "gb material", w, h, MAT_FORMAT, usage)),
+            )
+        };
+        let target = |f| {
+            Some(wgpu::ColorTargetState {
+                format: f,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        };
+        let targets: Vec<Option<wgpu::ColorTargetState>> = if prepass {
+            vec![target(NORMAL_FORMAT)]
+        } else {
+            vec![
+                target(NORMAL_FORMAT),
+                target(ALBEDO_FORMAT),
+                target(SPEC_FORMAT),
+                target(MAT_FORMAT),
+            ]
+        };
+        let attrs = Attrs::ALL;
+        let layouts = GpuScene::layouts(attrs);
+        let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("gbuffer"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_full"),
+                compilation_options: Default::default(),
+                buffers: &layouts.iter().map(|l| Some(l.clone())).collect::<Vec<_>>(),
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(depth_state(gscene.reversed_z, true)),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some(if prepass { "fs_prepass" } else { "fs_gbuffer" }),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let depth_view = depth.create_view(&Default::default());
+        GBufferPass {
+            depth,
+            normal,
+            albedo,
+            spec,
+            mat,
+            depth_view,
+            pipeline,
+            bind0,
+            bind1,
+            materials,
+            reversed: gscene.reversed_z,
+            prepass,
+        }
+    }
+
+    /// Encodes the geometry pass (timed as `label`).
+    pub fn encode(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        gscene: &GpuScene,
+        timer: &mut GpuTimer,
+        label: &str,
+    ) {
+        let views: Vec<wgpu::TextureView> = [
+            Some(&self.normal),
+            self.albedo.as_ref(),
+            self.spec.as_ref(),
+            self.mat.as_ref(),
+        ]
+        .into_iter()
+        .flatten()
+        .map(|t| t.create_view(&Default::default()))
+        .collect();
+        let att: Vec<Option<wgpu::RenderPassColorAttachment>> = views
+            .iter()
+            .enumerate()
+            .map(|(i, v)| {
+                let clear = if i == 3 {
+                    wgpu::Color {
+                        r: SKY_MATERIAL as f64,
+                        g: 0.0,
+                        b: 0.0,
+                        a: 0.0,
+                    }
+                } else {
+                    wgpu::Color::TRANSPARENT
+                };
+                Some(wgpu::RenderPassColorAttachment {
+                    view: v,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(clear),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect();
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
+            color_attachments: &att,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(clear_depth(self.reversed)),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timer.render_pass(label),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind0, &[]);
+        pass.set_bind_group(1, &self.bind1, &[]);
+        gscene.draw(&mut pass, Attrs::ALL);
+    }
+
+    /// Reads the G-buffer back and decodes it. For the pre-pass variant, albedo/spec come from
+    /// the material table (`mats`, by object id) is not possible (no id target): they are zero
+    /// and the material is 0 except where the depth is the clear value (sky).
+    pub fn read(&self, gpu: &Gpu) -> Result<GBuffer> {
+        let (w, h) = (self.depth.width(), self.depth.height());
+        let n = (w * h) as usize;
+        let depth: Vec<f32> = bytemuck::cast_slice(&read_texture(
+            gpu,
+            &self.depth,
+            4,
+            wgpu::TextureAspect::DepthOnly,
+        )?)
+        .to_vec();
+        let nb = read_texture(gpu, &self.normal, 8, wgpu::TextureAspect::All)?;
+        let halves: &[u16] = bytemuck::cast_slice(&nb);
+        let normal: Vec<[f32; 4]> = (0..n)
+            .map(|i| std::array::from_fn(|c| half::f16::from_bits(halves[i * 4 + c]).to_f32()))
+            .collect();
+        let unorm = |t: &Option<wgpu::Texture>| -> Result<Vec<[f32; 3]>> {
+            Ok(match t {
+                Some(t) => {
+                    let b = read_texture(gpu, t, 4, wgpu::TextureAspect::All)?;
+                    (0..n)
+                        .map(|i| std::array::from_fn(|c| b[i * 4 + c] as f32 / 255.0))
+                        .collect()
+                }
+                None => vec![[0.0; 3]; n],
+            })
+        };
+        let albedo = unorm(&self.albedo)?;
+        let spec = unorm(&self.spec)?;
+        let clear = clear_depth(self.reversed);
+        let material: Vec<u32> = match &self.mat {
+            Some(t) => {
+                bytemuck::cast_slice(&read_texture(gpu, t, 4, wgpu::TextureAspect::All)?).to_vec()
+            }
+            None => depth
+                .iter()
+                .map(|&d| if d == clear { SKY_MATERIAL } else { 0 })
+                .collect(),
+        };
+        Ok(GBuffer {
+            width: w,
+            height: h,
+            depth,
+            normal,
+            albedo,
+            spec,
+            material,
+        })
+    }
+}
+
+/// Bytes per row of a texture copy: padded to wgpu's 256-byte alignment.
+pub fn padded_row(width: u32, bpp: u32) -> u32 {
+    let unpadded = width * bpp;
+    unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
+}
+
+/// Copies a whole 2-D texture (one aspect) into a buffer and returns the tightly packed bytes.
+pub fn read_texture(
+    gpu: &Gpu,
+    tex: &wgpu::Texture,
+    bpp: u32,
+    aspect: wgpu::TextureAspect,
+) -> Result<Vec<u8>> {
+    let (w, h) = (tex.width(), tex.height());
+    let row = padded_row(w, bpp);
+    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("texture readback"),
+        size: row as u64 * h as u64,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    enc.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture: tex,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &staging,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        tex.size(),
+    );
+    gpu.queue.submit([enc.finish()]);
+    let bytes = gpu.map_read(&staging)?;
+    if bytes.len() < (row * h) as usize {
+        return Err(CoreError::Gpu("short texture read-back".into()));
+    }
+    let mut out = Vec::with_capacity((w * h * bpp) as usize);
+    for y in 0..h as usize {
+        let s = y * row as usize;
+        out.extend_from_slice(&bytes[s..s + (w * bpp) as usize]);
+    }
+    Ok(out)
+}
+
+/// Reads an Rgba32Float texture as RGBA pixels.
+pub fn read_rgba32f(gpu: &Gpu, tex: &wgpu::Texture) -> Result<Vec<[f32; 4]>> {
+    let b = read_texture(gpu, tex, 16, wgpu::TextureAspect::All)?;
+    Ok(bytemuck::cast_slice(&b).to_vec())
+}

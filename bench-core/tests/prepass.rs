@@ -1,0 +1,95 @@
+//! The `prepass` study through the runner on lavapipe: every point gets a row; the pre-pass
+//! rows carry error, render-target bytes and the packing loss; impossible points are skipped
+//! with their reason; an unknown method is an error naming it.
+
+use bench_core::record::{Row, Sink};
+use bench_core::runner::{self, RunOptions};
+use bench_core::testing;
+use scenarios::Suite;
+
+struct Collect(Vec<Row>);
+impl Sink for Collect {
+    fn point_done(&mut self, row: &Row) -> bench_core::Result<()> {
+        self.0.push(row.clone());
+        Ok(())
+    }
+}
+
+fn run(text: &str) -> bench_core::Result<Vec<Row>> {
+    let gpu = testing::gpu();
+    let suite = Suite::parse(text, "test").unwrap();
+    let groups = runner::expand(&suite, gpu.facts.is_software)?;
+    let n = runner::rows_in(&groups);
+    let mut sink = Collect(Vec::new());
+    let opts = RunOptions {
+        run_id: "t".into(),
+        git_rev: "t".into(),
+        shard: (0, 1),
+        save_images: None,
+    };
+    let written = runner::run(&gpu, &suite, &groups, &opts, &mut sink)?;
+    assert_eq!(written, n);
+    assert_eq!(sink.0.len(), n, "one row per point, floors included");
+    Ok(sink.0)
+}
+
+const SUITE: &str = r#"
+    reps = 1
+    warmup = 0
+    resolutions = [[48, 32]]
+    [[study]]
+    kind = "prepass"
+    methods = ["deferred", "prepass", "prepass_cpu"]
+    axes = { light_accum = ["tiled"], light_buffer_format = ["rgba16f", "rg11b10", "rgb9"], second_view = [true], thread_count = [2], overlap = [true] }
+    [[study.scenes]]
+    generator = "city"
+    blocks = 2
+    lights = 24
+"#;
+
+#[test]
+fn prepass_rows_are_complete_and_impossible_points_are_skipped() {
+    let rows = run(SUITE).unwrap();
+    let get = |r: &Row, c: &str| r.get(c).unwrap_or("").to_string();
+    let mut ok = 0;
+    for r in rows.iter().filter(|r| get(r, "study") == "prepass") {
+        let (m, f) = (get(r, "method"), get(r, "light_buffer_format"));
+        if m.starts_with("floor_") {
+            continue;
+        }
+        let status = get(r, "status");
+        if f == "rgb9" {
+            assert_eq!(status, "skipped");
+            assert!(get(r, "reason").contains("rgb9"), "{:?}", get(r, "reason"));
+        } else if f == "rg11b10" && m == "prepass" {
+            assert_eq!(status, "skipped", "tiled cannot write rg11b10");
+            assert!(get(r, "reason").contains("RG11B10"));
+        } else {
+            assert_eq!(status, "ok", "{m} {f}: {}", get(r, "reason"));
+            for c in ["rmse", "bytes_rt_written", "bytes_rt_read", "frame_ms"] {
+                assert!(!get(r, c).is_empty(), "{m} {f}: no {c}");
+            }
+            if m != "deferred" {
+                let loss: f64 = get(r, "spec_color_loss_rmse").parse().unwrap();
+                let rmse: f64 = get(r, "rmse").parse().unwrap();
+                // The error vs the full reference is the packing loss plus format rounding.
+                assert!(loss > 0.0 && (rmse - loss).abs() < 0.05 * loss + 1e-3);
+                assert!(!get(r, "latency_ms").is_empty());
+            }
+            if m == "prepass_cpu" {
+                assert!(!get(r, "cpu_light_ms").is_empty());
+            }
+            ok += 1;
+        }
+    }
+    // deferred ×1 (its axis is light_accum only) + prepass rgba16f + cpu rgba16f and rg11b10.
+    assert_eq!(ok, 4);
+}
+
+#[test]
+fn unknown_prepass_method_is_an_error_naming_it() {
+    let Err(e) = run(&SUITE.replace("\"prepass_cpu\"]", "\"prepass_gpu\"]")) else {
+        panic!("an unknown method ran");
+    };
+    assert!(e.to_string().contains("prepass_gpu"), "{e}");
+}

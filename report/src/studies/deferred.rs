@@ -1,0 +1,321 @@
+//! Figures of the `deferred` study (issue 6): time vs light count per shading path, speedup over
+//! naive, error vs time along the attenuation-threshold sweep, and the CPU tile path's scaling
+//! over threads. The debug views (tiles coloured by classification id, lights-per-tile heat maps)
+//! are PNGs from `mfx shading-views`, not CSV figures.
+
+use std::path::Path;
+
+use anyhow::Result;
+
+use crate::charts::{Bars, Figure, Pt, Series, XY};
+use crate::data::{Rec, Runs};
+
+/// Axes that tell configurations of one path apart.
+pub const CONFIG_AXES: &[&str] = &["tile_size", "cull_levels", "thread_count"];
+
+pub(crate) fn safe(s: &str) -> String {
+    s.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .take(60)
+        .collect()
+}
+
+/// Groups rows into series named by `name`, points sorted by x; a repeated (series, x) keeps
+/// its first row (a point measured again by another study of the suite).
+pub(crate) fn series(
+    rows: &[&Rec],
+    name: impl Fn(&Rec) -> String,
+    xy: impl Fn(&Rec) -> Option<(f64, f64)>,
+) -> Vec<Series> {
+    let mut out: Vec<Series> = Vec::new();
+    for r in rows {
+        let Some((x, y)) = xy(r) else { continue };
+        if !(x.is_finite() && y.is_finite()) {
+            continue;
+        }
+        let n = name(r);
+        match out.iter_mut().find(|s| s.name == n) {
+            Some(s) if s.points.iter().any(|p| p.x == x) => {}
+            Some(s) => s.points.push(Pt::new(x, y)),
+            None => out.push(Series {
+                name: n,
+                points: vec![Pt::new(x, y)],
+            }),
+        }
+    }
+    for s in &mut out {
+        s.points.sort_by(|a, b| a.x.total_cmp(&b.x));
+    }
+    out
+}
+
+pub(crate) fn resolution(r: &Rec) -> String {
+    format!("{}x{}", r.get("width"), r.get("height"))
+}
+
+/// Distinct resolutions of the rows, in first-seen order.
+pub(crate) fn resolutions(rows: &[&Rec]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for r in rows {
+        let v = resolution(r);
+        if !out.contains(&v) {
+            out.push(v);
+        }
+    }
+    out
+}
+
+/// The time of a row: GPU ms, or the CPU lighting ms of CPU paths.
+fn time_ms(r: &Rec) -> Option<f64> {
+    if r.get("method") == "cpu_tiled" {
+        r.f("cpu_light_ms")
+    } else {
+        r.f("gpu_ms_median")
+    }
+}
+
+/// A short configuration label: "tiled 16px L2", "cpu_tiled 64px L1 ×8".
+fn short(r: &Rec) -> String {
+    let mut s = r.get("method").to_string();
+    if !r.get("tile_size").is_empty() {
+        s += &format!(" {}px", r.get("tile_size"));
+    }
+    if !r.get("cull_levels").is_empty() {
+        s += &format!(" L{}", r.get("cull_levels"));
+    }
+    if !r.get("thread_count").is_empty() {
+        s += &format!(" ×{}", r.get("thread_count"));
+    }
+    s
+}
+
+fn no_threshold(r: &Rec) -> bool {
+    r.f("attenuation_threshold").unwrap_or(0.0) == 0.0
+}
+
+fn outdoor(r: &Rec) -> bool {
+    !r.get("scene_label").contains("room=true")
+}
+
+pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
+    let rows: Vec<&Rec> = runs
+        .study("deferred")
+        .into_iter()
+        .filter(|r| r.ok() && !r.get("method").starts_with("floor_"))
+        .collect();
+    let mut figs = Vec::new();
+    for res in resolutions(&rows) {
+        let at: Vec<&Rec> = rows
+            .iter()
+            .copied()
+            .filter(|r| resolution(r) == res)
+            .collect();
+        let stem = safe(&res);
+        // Time vs light count per path (no threshold, outdoor city).
+        let base: Vec<&Rec> = at
+            .iter()
+            .copied()
+            .filter(|r| no_threshold(r) && outdoor(r))
+            .collect();
+        let s = series(
+            &base,
+            |r| r.config_label(CONFIG_AXES),
+            |r| Some((r.f("light_count")?, time_ms(r)?)),
+        );
+        if s.iter().any(|s| s.points.len() > 1) {
+            figs.push(
+                XY {
+                    title: format!("Shading time vs light count — {res}"),
+                    x_label: "lights".into(),
+                    y_label: "time per frame [ms] (GPU; CPU lighting for cpu_tiled)".into(),
+                    log_x: true,
+                    log_y: true,
+                    lines: true,
+                    series: s,
+                }
+                .draw(dir, &format!("deferred_time_vs_lights_{stem}"), "Shading only (the G-buffer pass is shared). Attenuation threshold 0: culling drops a light only beyond its range, so every path is exact up to f32 rounding.")?,
+            );
+        }
+        // Speedup over naive, per light count.
+        let lcs = Runs::distinct(base.iter().copied(), "light_count");
+        let cfgs: Vec<String> = Runs::distinct(base.iter().copied(), "method")
+            .into_iter()
+            .filter(|m| m != "naive")
+            .flat_map(|m| {
+                let mut v: Vec<String> = base
+                    .iter()
+                    .filter(|r| r.get("method") == m)
+                    .map(|r| short(r))
+                    .collect();
+                v.dedup();
+                v
+            })
+            .fold(Vec::new(), |mut acc, c| {
+                if !acc.contains(&c) {
+                    acc.push(c);
+                }
+                acc
+            });
+        if !cfgs.is_empty() && base.iter().any(|r| r.f("speedup_vs_naive").is_some()) {
+            let series = lcs
+                .iter()
+                .map(|lc| {
+                    (
+                        format!("{lc} lights"),
+                        cfgs.iter()
+                            .map(|c| {
+                                base.iter()
+                                    .find(|r| r.get("light_count") == lc && &short(r) == c)
+                                    .and_then(|r| r.f("speedup_vs_naive"))
+                                    .map(|v| Pt::new(0.0, v))
+                            })
+                            .collect(),
+                    )
+                })
+                .collect();
+            figs.push(
+                Bars {
+                    title: format!("Speedup over naive — {res}"),
+                    y_label: "naive ms / path ms (px: tile, L: culling levels, ×: threads)".into(),
+                    log_y: true,
+                    categories: cfgs,
+                    series,
+                    reference: Some(1.0),
+                }
+                .draw(dir, &format!("deferred_speedup_{stem}"), "Naive = every light at every pixel, fullscreen. Classified vs uber isolates the gain of the Split/Second permutations; tiled at cull_levels=2 is BF3's 64 → 32×16 hierarchy.")?,
+            );
+        }
+        // Error vs time along the threshold sweep.
+        let thr: Vec<&Rec> = at
+            .iter()
+            .copied()
+            .filter(|r| !r.get("attenuation_threshold").is_empty() && outdoor(r))
+            .collect();
+        let s = series(
+            &thr,
+            |r| {
+                format!(
+                    "{} ({} lights)",
+                    r.config_label(&["tile_size", "cull_levels", "thread_count"]),
+                    r.get("light_count")
+                )
+            },
+            |r| Some((time_ms(r)?, r.f("rmse")?.max(1e-7))),
+        );
+        if s.iter().any(|s| s.points.len() > 1) {
+            figs.push(
+                XY {
+                    title: format!("Error vs time (attenuation threshold sweep) — {res}"),
+                    x_label: "time per frame [ms]".into(),
+                    y_label: "RMSE vs f64 reference".into(),
+                    log_x: true,
+                    log_y: true,
+                    lines: true,
+                    series: s,
+                }
+                .draw(dir, &format!("deferred_error_vs_time_{stem}"), "Each line walks the threshold τ (a light is culled from a tile where I·att ≤ τ everywhere in it); τ = 0 is the leftmost-error end.")?,
+            );
+        }
+        // BF3's culls one at a time (CPU path): time per culling level, quad skip on/off.
+        let culls: Vec<&Rec> = at
+            .iter()
+            .copied()
+            .filter(|r| r.get("method") == "cpu_tiled" && no_threshold(r) && outdoor(r))
+            .collect();
+        let tmax = culls
+            .iter()
+            .filter_map(|r| r.f("thread_count"))
+            .fold(0.0, f64::max);
+        let culls: Vec<&Rec> = culls
+            .into_iter()
+            .filter(|r| r.f("thread_count") == Some(tmax))
+            .collect();
+        let cats: Vec<String> = Runs::distinct(culls.iter().copied(), "cull_levels")
+            .into_iter()
+            .map(|l| format!("cull_levels={l}"))
+            .collect();
+        if culls
+            .iter()
+            .any(|r| r.get("quad_skip") == "false" || r.get("spec_skip") == "false")
+        {
+            let combos = [
+                ("true", "true"),
+                ("true", "false"),
+                ("false", "true"),
+                ("false", "false"),
+            ];
+            let series = combos
+                .iter()
+                .flat_map(|(q, sp)| {
+                    Runs::distinct(culls.iter().copied(), "light_count")
+                        .into_iter()
+                        .map(|lc| {
+                            let v = cats
+                                .iter()
+                                .map(|c| {
+                                    culls
+                                        .iter()
+                                        .find(|r| {
+                                            format!("cull_levels={}", r.get("cull_levels")) == *c
+                                                && r.get("quad_skip") == *q
+                                                && r.get("spec_skip") == *sp
+                                                && r.get("light_count") == lc
+                                        })
+                                        .and_then(|r| Some(Pt::new(0.0, r.f("cpu_light_ms")?)))
+                                })
+                                .collect();
+                            (format!("quad skip {q}, spec skip {sp}, {lc} lights"), v)
+                        })
+                        .collect::<Vec<_>>()
+                })
+                .filter(|(_, v): &(String, Vec<Option<Pt>>)| v.iter().any(|p| p.is_some()))
+                .collect();
+            figs.push(
+                Bars {
+                    title: format!("CPU tile path: each cull — {res}, {tmax} threads"),
+                    y_label: "CPU lighting ms per frame".into(),
+                    log_y: false,
+                    categories: cats,
+                    series,
+                    reference: None,
+                }
+                .draw(dir, &format!("deferred_cpu_culls_{stem}"), "cull_levels=1: lights culled per 64×64 tile; 2: again per 32×16 sub-tile. Quad skip: a light is skipped for a 4×4 quad when all 16 attenuations are 0; spec skip: a quad without specular colour skips the specular term (both exact: image bit-identical, tested).")?,
+            );
+        }
+        // CPU scaling over threads.
+        let cpu: Vec<&Rec> = at
+            .iter()
+            .copied()
+            .filter(|r| r.get("method") == "cpu_tiled")
+            .collect();
+        let s = series(
+            &cpu,
+            |r| {
+                format!(
+                    "{} lights, cull_levels={}, τ={}, quad skip {}, spec skip {}",
+                    r.get("light_count"),
+                    r.get("cull_levels"),
+                    r.get("attenuation_threshold"),
+                    r.get("quad_skip"),
+                    r.get("spec_skip")
+                )
+            },
+            |r| Some((r.f("thread_count")?, r.f("cpu_light_ms")?)),
+        );
+        if s.iter().any(|s| s.points.len() > 1) {
+            figs.push(
+                XY {
+                    title: format!("CPU tile path (BF3): time vs threads — {res}"),
+                    x_label: "worker threads".into(),
+                    y_label: "CPU lighting ms per frame".into(),
+                    log_x: true,
+                    log_y: true,
+                    lines: true,
+                    series: s,
+                }
+                .draw(dir, &format!("deferred_cpu_scaling_{stem}"), "Workers take 64×64 tiles from an atomic counter; SoA 4×4 quads. The G-buffer read-back is not timed.")?,
+            );
+        }
+    }
+    Ok(figs)
+}

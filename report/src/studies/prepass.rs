@@ -1,0 +1,247 @@
+//! Figures of the `prepass` study (issue 10): light pre-pass vs full deferred (time and error vs
+//! light count, render-target bytes per pixel), and the CPU-lit light buffer (frame time vs
+//! threads with and without the overlapping second view, against the GPU-only frame with the
+//! same second view; the GPU-clock gap between pre-pass and material pass and what filled it).
+
+use std::path::Path;
+
+use anyhow::Result;
+
+use super::deferred::{resolution, resolutions, safe, series};
+use crate::charts::{Bars, Figure, Pt, Series, XY};
+use crate::data::{Rec, Runs};
+
+const AXES: &[&str] = &["light_accum", "light_buffer_format"];
+
+/// "deferred" or "prepass <light buffer format>".
+fn short(r: &Rec) -> String {
+    format!("{} {}", r.get("method"), r.get("light_buffer_format"))
+        .trim()
+        .to_string()
+}
+
+fn single_view(r: &Rec) -> bool {
+    r.get("second_view") != "true"
+}
+
+pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
+    let rows: Vec<&Rec> = runs
+        .study("prepass")
+        .into_iter()
+        .filter(|r| r.ok() && !r.get("method").starts_with("floor_"))
+        .collect();
+    let mut figs = Vec::new();
+    for res in resolutions(&rows) {
+        let at: Vec<&Rec> = rows
+            .iter()
+            .copied()
+            .filter(|r| resolution(r) == res)
+            .collect();
+        let stem = safe(&res);
+        let one: Vec<&Rec> = at
+            .iter()
+            .copied()
+            .filter(|r| single_view(r) && r.get("method") != "prepass_cpu")
+            .collect();
+        // Time vs light count.
+        let s = series(
+            &one,
+            |r| r.config_label(AXES),
+            |r| Some((r.f("light_count")?, r.f("gpu_ms_median")?)),
+        );
+        if s.iter().any(|s| s.points.len() > 1) {
+            figs.push(
+                XY {
+                    title: format!("Light pre-pass vs full deferred: GPU time vs lights — {res}"),
+                    x_label: "lights".into(),
+                    y_label: "GPU ms per frame (all passes)".into(),
+                    log_x: true,
+                    log_y: true,
+                    lines: true,
+                    series: s,
+                }
+                .draw(dir, &format!("prepass_time_vs_lights_{stem}"), "deferred: G-buffer + shading (one geometry pass). prepass: depth+normal pre-pass, light buffer, second geometry pass with the materials.")?,
+            );
+        }
+        // Error vs light count, with the packing loss alone (f64) as its own line.
+        let mut s = series(
+            &one,
+            |r| r.config_label(AXES),
+            |r| Some((r.f("light_count")?, r.f("rmse")?.max(1e-7))),
+        );
+        s.extend(series(
+            &one,
+            |_| "packing loss alone (f64: diffuse RGB + specular luminance)".into(),
+            |r| Some((r.f("light_count")?, r.f("spec_color_loss_rmse")?.max(1e-7))),
+        ));
+        if s.iter().any(|s| s.points.len() > 1) {
+            figs.push(
+                XY {
+                    title: format!("Error vs the f64 reference — {res}"),
+                    x_label: "lights".into(),
+                    y_label: "RMSE vs f64 full shading".into(),
+                    log_x: true,
+                    log_y: true,
+                    lines: true,
+                    series: s,
+                }
+                .draw(dir, &format!("prepass_error_vs_lights_{stem}"), "The light buffer keeps the specular sum's luminance only (A): coloured lights lose the colour of their highlights (dielectrics: grey specular; metals: chroma of the diffuse light). rgba8 stores light ÷ 8 and clamps above 8.")?,
+            );
+        }
+        // Render-target bytes per pixel.
+        let cfgs: Vec<String> = {
+            let mut v: Vec<String> = Vec::new();
+            for r in &one {
+                let c = short(r);
+                if !v.contains(&c) && r.f("bytes_rt_written").is_some() {
+                    v.push(c);
+                }
+            }
+            v
+        };
+        if !cfgs.is_empty() {
+            let px = |r: &Rec| Some(r.f("width")? * r.f("height")?);
+            let col = |c: &str| -> Vec<Option<Pt>> {
+                cfgs.iter()
+                    .map(|cfg| {
+                        one.iter()
+                            .find(|r| &short(r) == cfg)
+                            .and_then(|r| Some(Pt::new(0.0, r.f(c)? / px(r)?)))
+                    })
+                    .collect()
+            };
+            let series = vec![
+                ("written".into(), col("bytes_rt_written")),
+                ("read".into(), col("bytes_rt_read")),
+            ];
+            figs.push(
+                Bars {
+                    title: format!("Render-target bytes per pixel — {res}"),
+                    y_label: "bytes per pixel per frame".into(),
+                    log_y: false,
+                    categories: cfgs,
+                    series,
+                    reference: None,
+                }
+                .draw(dir, &format!("prepass_rt_bytes_{stem}"), "One touch per pixel per target (overdraw not counted); deferred writes the full G-buffer (depth, normal, albedo, specular, material id) and the HDR image.")?,
+            );
+        }
+        // CPU lighting: frame time vs threads, overlap on/off, vs the GPU-only frame.
+        let cpu: Vec<&Rec> = at
+            .iter()
+            .copied()
+            .filter(|r| r.get("method") == "prepass_cpu")
+            .collect();
+        let mut s = series(
+            &cpu,
+            |r| {
+                format!(
+                    "CPU-lit, overlap={}, {} lights, {}",
+                    r.get("overlap"),
+                    r.get("light_count"),
+                    r.get("light_buffer_format")
+                )
+            },
+            |r| Some((r.f("thread_count")?, r.f("frame_ms")?)),
+        );
+        let tmin = cpu
+            .iter()
+            .filter_map(|r| r.f("thread_count"))
+            .fold(f64::INFINITY, f64::min);
+        let tmax = cpu
+            .iter()
+            .filter_map(|r| r.f("thread_count"))
+            .fold(0.0, f64::max);
+        let lit_on_cpu = |r: &Rec| {
+            cpu.iter().any(|c| {
+                c.get("light_count") == r.get("light_count")
+                    && c.get("light_buffer_format") == r.get("light_buffer_format")
+            })
+        };
+        for r in at.iter().filter(|r| {
+            r.get("method") == "prepass"
+                && r.get("second_view") == "true"
+                && r.get("light_accum") == "tiled"
+                && lit_on_cpu(r)
+                && tmax > tmin
+        }) {
+            if let Some(f) = r.f("frame_ms") {
+                let name = format!(
+                    "GPU-lit ({}), {} lights, {}",
+                    r.get("light_accum"),
+                    r.get("light_count"),
+                    r.get("light_buffer_format")
+                );
+                if !s.iter().any(|x| x.name == name) {
+                    s.push(Series {
+                        name,
+                        points: vec![Pt::new(tmin, f), Pt::new(tmax, f)],
+                    });
+                }
+            }
+        }
+        if s.iter().any(|s| s.points.len() > 1) {
+            figs.push(
+                XY {
+                    title: format!("CPU-lit light buffer: frame time vs threads — {res}"),
+                    x_label: "CPU worker threads".into(),
+                    y_label: "wall ms per frame (both views)".into(),
+                    log_x: true,
+                    log_y: true,
+                    lines: true,
+                    series: s,
+                }
+                .draw(dir, &format!("prepass_cpu_frame_{stem}"), "Every frame renders the main view and an independent second view. overlap=true submits the second view before the CPU lights, so the GPU renders it meanwhile; GPU-lit lines are the same two views with the light buffer lit on the GPU (flat: no threads).")?,
+            );
+        }
+        // The gap on the GPU clock and how much of it the second view filled.
+        let mut s = series(
+            &cpu,
+            |r| {
+                format!(
+                    "gap, overlap={}, {} lights",
+                    r.get("overlap"),
+                    r.get("light_count")
+                )
+            },
+            |r| Some((r.f("thread_count")?, r.f("gpu_gap_ms")?)),
+        );
+        s.extend(series(
+            &cpu,
+            |r| {
+                format!(
+                    "GPU busy in gap, overlap={}, {} lights",
+                    r.get("overlap"),
+                    r.get("light_count")
+                )
+            },
+            |r| Some((r.f("thread_count")?, r.f("gpu_busy_in_gap_ms")?.max(1e-3))),
+        ));
+        s.extend(series(
+            &cpu,
+            |r| {
+                format!(
+                    "CPU lighting, overlap={}, {} lights",
+                    r.get("overlap"),
+                    r.get("light_count")
+                )
+            },
+            |r| Some((r.f("thread_count")?, r.f("cpu_light_ms")?)),
+        ));
+        if s.iter().any(|s| s.points.len() > 1) {
+            figs.push(
+                XY {
+                    title: format!("CPU round trip on the GPU clock — {res}"),
+                    x_label: "CPU worker threads".into(),
+                    y_label: "ms".into(),
+                    log_x: true,
+                    log_y: true,
+                    lines: true,
+                    series: s,
+                }
+                .draw(dir, &format!("prepass_cpu_gap_{stem}"), "gap: GPU clock from the end of the pre-pass to the start of the material pass (copy, map, CPU lighting, upload). busy: timed GPU passes inside it (the second view when overlapped; drawn at 1e-3 when none). A software rasteriser (lavapipe) shares the CPU cores, so there it cannot overlap for free.")?,
+            );
+        }
+    }
+    Ok(figs)
+}
