@@ -106,3 +106,28 @@ fn unknown_method_and_study_are_errors_before_any_gpu_work() {
         .to_string()
         .contains("unknown kind 'nope'"));
 }
+
+#[test]
+fn method_axes_override_the_shared_axes_for_one_method_only() {
+    let text = "[[study]]\nkind = \"methods\"\nmethods = [\"depth_peel\", \"kbuffer_rmw\"]\n\
+                axes = { layers = [4, 8] }\n\
+                method_axes = { kbuffer_rmw = { variant = [\"plain\", \"heuristics\"] } }\n\
+                [[study.scenes]]\ngenerator = \"quads\"\n";
+    let s = Suite::parse(text, "t").unwrap();
+    let groups = runner::expand(&s, false).unwrap();
+    let pts: Vec<_> = groups.iter().flat_map(|g| g.points.iter()).collect();
+    let peel: Vec<_> = pts.iter().filter(|p| p.method == "depth_peel").collect();
+    let kbuf: Vec<_> = pts.iter().filter(|p| p.method == "kbuffer_rmw").collect();
+    // depth_peel reads neither `layers` nor the k-buffer's variants: one point, no variant.
+    assert_eq!(peel.len(), 1);
+    assert!(peel[0].params.get("variant").is_none());
+    // kbuffer_rmw: 2 layers × 2 variants.
+    assert_eq!(kbuf.len(), 4);
+    assert!(kbuf
+        .iter()
+        .any(|p| p.params.get("variant").map(|v| v.to_string()) == Some("heuristics".into())));
+    // An override for a method the study does not list is an error naming it.
+    let bad = text.replace("kbuffer_rmw = {", "wboit = {");
+    let e = Suite::parse(&bad, "t").unwrap_err().to_string();
+    assert!(e.contains("method_axes.wboit"), "{e}");
+}

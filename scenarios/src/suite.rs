@@ -70,6 +70,10 @@ pub struct StudySpec {
     pub kind: String,
     pub methods: Vec<String>,
     pub axes: BTreeMap<String, Vec<ParamValue>>,
+    /// Per-method axis overrides (`[study.method_axes.<method>]`): for that method they replace
+    /// the study's axes of the same name, so an axis one method reads with values another
+    /// method rejects (e.g. the k-buffer's `variant = "heuristics"`) need not split the table.
+    pub method_axes: BTreeMap<String, BTreeMap<String, Vec<ParamValue>>>,
     pub scenes: Vec<SceneSpec>,
     pub resolutions: Option<Vec<(u32, u32)>>,
     /// Everything else in the study table, for the study kind to read.
@@ -284,25 +288,26 @@ fn parse_study(t: &toml::Table) -> std::result::Result<StudySpec, String> {
             .collect::<std::result::Result<_, _>>()?,
         Some(_) => return Err("'methods' must be an array of strings".into()),
     };
-    let mut axes = BTreeMap::new();
-    if let Some(a) = t.get("axes") {
-        let at = a.as_table().ok_or("'axes' must be a table")?;
-        for (k, v) in at {
-            let vals = match v {
-                toml::Value::Array(arr) => arr
-                    .iter()
-                    .map(|x| {
-                        ParamValue::from_toml(x)
-                            .ok_or_else(|| format!("axis '{k}' must hold scalars"))
-                    })
-                    .collect::<std::result::Result<Vec<_>, _>>()?,
-                other => vec![ParamValue::from_toml(other)
-                    .ok_or_else(|| format!("axis '{k}' must be scalar or array"))?],
-            };
-            if vals.is_empty() {
-                return Err(format!("axis '{k}' is empty"));
+    let axes = match t.get("axes") {
+        None => BTreeMap::new(),
+        Some(a) => parse_axes(a.as_table().ok_or("'axes' must be a table")?)?,
+    };
+    let mut method_axes = BTreeMap::new();
+    if let Some(m) = t.get("method_axes") {
+        let mt = m
+            .as_table()
+            .ok_or("'method_axes' must be a table of method = { axis = [...] }")?;
+        for (name, v) in mt {
+            if !methods.contains(name) {
+                return Err(format!(
+                    "method_axes.{name}: '{name}' is not in this study's methods ({})",
+                    methods.join(", ")
+                ));
             }
-            axes.insert(k.clone(), vals);
+            let at = v
+                .as_table()
+                .ok_or_else(|| format!("method_axes.{name} must be a table of axes"))?;
+            method_axes.insert(name.clone(), parse_axes(at)?);
         }
     }
     let mut scenes = Vec::new();
@@ -323,17 +328,57 @@ fn parse_study(t: &toml::Table) -> std::result::Result<StudySpec, String> {
     }
     let resolutions = t.get("resolutions").map(resolutions).transpose()?;
     let mut extra = t.clone();
-    for k in ["kind", "methods", "axes", "scenes", "resolutions"] {
+    for k in [
+        "kind",
+        "methods",
+        "axes",
+        "method_axes",
+        "scenes",
+        "resolutions",
+    ] {
         extra.remove(k);
     }
     Ok(StudySpec {
         kind,
         methods,
         axes,
+        method_axes,
         scenes,
         resolutions,
         extra,
     })
+}
+
+fn parse_axes(at: &toml::Table) -> std::result::Result<BTreeMap<String, Vec<ParamValue>>, String> {
+    let mut axes = BTreeMap::new();
+    for (k, v) in at {
+        let vals = match v {
+            toml::Value::Array(arr) => arr
+                .iter()
+                .map(|x| {
+                    ParamValue::from_toml(x).ok_or_else(|| format!("axis '{k}' must hold scalars"))
+                })
+                .collect::<std::result::Result<Vec<_>, _>>()?,
+            other => vec![ParamValue::from_toml(other)
+                .ok_or_else(|| format!("axis '{k}' must be scalar or array"))?],
+        };
+        if vals.is_empty() {
+            return Err(format!("axis '{k}' is empty"));
+        }
+        axes.insert(k.clone(), vals);
+    }
+    Ok(axes)
+}
+
+/// The study's axes as `method` sees them: its `method_axes` entries replace the shared ones.
+pub fn axes_for_method(spec: &StudySpec, method: &str) -> BTreeMap<String, Vec<ParamValue>> {
+    let mut axes = spec.axes.clone();
+    if let Some(over) = spec.method_axes.get(method) {
+        for (k, v) in over {
+            axes.insert(k.clone(), v.clone());
+        }
+    }
+    axes
 }
 
 /// Cartesian product of the named axes (only those present in `axes`), in key order.

@@ -40,13 +40,14 @@ impl Study for MethodsStudy {
             if !names.contains(&"effect") {
                 names.push("effect");
             }
-            if let Some(effs) = spec.axes.get("effect") {
+            let axes = scenarios::suite::axes_for_method(spec, name);
+            if let Some(effs) = axes.get("effect") {
                 for e in effs {
                     let s = e.to_string();
                     effects::Effect::parse(&s).map_err(CoreError::Param)?;
                 }
             }
-            for params in axis_product(&spec.axes, &names) {
+            for params in axis_product(&axes, &names) {
                 out.push(PointSpec {
                     method: name.clone(),
                     params,

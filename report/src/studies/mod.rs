@@ -1,8 +1,8 @@
 //! Figures per study kind. Each module reads only the rows of its study.
 
 pub mod buckets;
-pub mod geometry;
 pub mod deferred;
+pub mod geometry;
 pub mod methods;
 pub mod prepass;
 pub mod shadows;
