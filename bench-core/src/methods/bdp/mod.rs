@@ -56,6 +56,12 @@ impl Method for Bdp {
     }
 }
 
+/// bdp's WGSL, for other methods' tests that compare against it.
+#[cfg(test)]
+pub(crate) fn tests_wgsl() -> &'static str {
+    WGSL
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -152,10 +158,4 @@ mod tests {
         }
         assert!(lost[1] < lost[0], "paired keeps two per bucket: {lost:?}");
     }
-}
-
-/// bdp's WGSL, for other methods' tests that compare against it.
-#[cfg(test)]
-pub(crate) fn tests_wgsl() -> &'static str {
-    WGSL
 }

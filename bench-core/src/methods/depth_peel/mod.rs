@@ -30,7 +30,6 @@ const WGSL: &str = include_str!("depth_peel.wgsl");
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const Z_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
-/// `struct FoldState` in effects.wgsl: three vec4 + two u32, rounded up to its 16-byte alignment.
 
 pub struct DepthPeel;
 
