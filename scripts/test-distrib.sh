@@ -38,7 +38,7 @@ out=$(TABLES=$tables MIN_IMAGES=5 bash scripts/check-report.sh "$tmp/cmp/merged"
 echo "$out"
 if grep -q PASSED <<<"$out"; then
     cp -r "$tmp/cmp/merged/report" "$tmp/broken"
-    victim=$(ls "$tmp/broken"/*.png | head -n 1)
+    victim=$(ls "$tmp/broken"/*.svg | head -n 1)
     rm "$victim"
     if TABLES=$tables bash scripts/check-report.sh "$tmp/broken" >"$tmp/broken.log" 2>&1; then
         cat "$tmp/broken.log"

@@ -64,9 +64,11 @@ pub fn page(runs: &Runs, sections: &[(String, Vec<Figure>)], extra_html: &str) -
     for (title, figs) in sections {
         let _ = write!(h, "<h2>{}</h2>", esc(title));
         for f in figs {
+            // The page shows the SVG (vector, small enough to commit with reference runs); the
+            // PNG beside it is for slides and is not tracked under results/reference/.
             let _ = write!(
                 h,
-                "<figure><img src=\"{0}.png\" alt=\"{1}\"><figcaption>{1}. {2} (<a href=\"{0}.svg\">SVG</a>)</figcaption></figure>",
+                "<figure><img src=\"{0}.svg\" alt=\"{1}\"><figcaption>{1}. {2} (<a href=\"{0}.png\">PNG</a>)</figcaption></figure>",
                 esc(&f.stem),
                 esc(&f.title),
                 esc(&f.caption)
