@@ -326,12 +326,14 @@ fn degenerate_and_huge_triangles_render_finite_and_match_32px() {
         );
     }
     // At ±1e20 the GPU's f32 guard-band clipping of a view-covering triangle is no longer
-    // exact (the suite records the error); the output must still be finite (checked in `run`).
-    run(
+    // exact (the suite records the error); the output must still be finite (checked in `run`),
+    // and so must the reference (it clips x and y to a guard band in f64 first) and the error.
+    let r = run(
         &SceneSpec::new("extreme", Params::new().with("coord", f(1e20))),
         &Params::new(),
         32,
     );
+    assert!(r.e.rmse.is_finite(), "reference at 1e20: rmse {}", r.e.rmse);
 }
 
 // ---- the suite's own tables through the runner: flags are set, nothing is silent ----

@@ -59,6 +59,9 @@ struct Tri {
     x1: u32,
 }
 
+/// Guard band half-width in NDC units (viewports are ±1): see `rasterize`.
+const GUARD: f64 = 1024.0;
+
 fn lerp(a: &ClipVert, b: &ClipVert, t: f64) -> ClipVert {
     let attrs = std::array::from_fn(|i| a.attrs[i] + (b.attrs[i] - a.attrs[i]) * t);
     ClipVert {
@@ -79,6 +82,27 @@ fn clip_plane(poly: &[ClipVert], d: impl Fn(&DVec4) -> f64) -> Vec<ClipVert> {
         }
         if (da >= 0.0) != (db >= 0.0) {
             out.push(lerp(a, b, da / (da - db)));
+        }
+    }
+    out
+}
+
+/// Clips to `sign·c[axis] ≤ GUARD·w`. The new vertices are put exactly on the plane: lerping
+/// between endpoints at ±1e20 cancels, and would scatter them by ~1e4 (back into the view).
+fn clip_guard(poly: &[ClipVert], axis: usize, sign: f64) -> Vec<ClipVert> {
+    let d = |c: &DVec4| GUARD * c.w - sign * c[axis];
+    let mut out = Vec::with_capacity(poly.len() + 2);
+    for i in 0..poly.len() {
+        let a = &poly[i];
+        let b = &poly[(i + 1) % poly.len()];
+        let (da, db) = (d(&a.clip), d(&b.clip));
+        if da >= 0.0 {
+            out.push(*a);
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            let mut v = lerp(a, b, da / (da - db));
+            v.clip[axis] = sign * GUARD * v.clip.w;
+            out.push(v);
         }
     }
     out
@@ -142,6 +166,23 @@ pub fn rasterize(scene: &Scene, width: u32, height: u32) -> FragmentLists {
             let poly = clip_plane(&verts, |c| c.z);
             let poly = if poly.len() >= 3 {
                 clip_plane(&poly, |c| c.w - c.z)
+            } else {
+                poly
+            };
+            // Guard band: a vertex far outside the view (|x| or |y| ≫ w, e.g. at 1e20) makes
+            // the edge functions cancel catastrophically even in f64, and the barycentrics (and
+            // so depth and attributes) come out as garbage or NaN. Clipping x and y to ±GUARD·w
+            // first changes no covered pixel (the planes lie far outside the viewport) and keeps
+            // screen coordinates within ~1e6 px. Only triangles that need it are clipped, so the
+            // snapped vertices of every other triangle are untouched.
+            let outside = |v: &ClipVert| {
+                v.clip.x.abs() > GUARD * v.clip.w || v.clip.y.abs() > GUARD * v.clip.w
+            };
+            let poly = if poly.len() >= 3 && poly.iter().any(outside) {
+                let p = clip_guard(&poly, 0, 1.0);
+                let p = clip_guard(&p, 0, -1.0);
+                let p = clip_guard(&p, 1, 1.0);
+                clip_guard(&p, 1, -1.0)
             } else {
                 poly
             };

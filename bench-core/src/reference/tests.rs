@@ -193,3 +193,38 @@ fn depth_ties_are_detected_only_where_fragments_are_within_f32_ulps() {
         "layers 1 unit apart are no tie"
     );
 }
+
+#[test]
+fn vertices_far_outside_the_view_give_exact_finite_fragments() {
+    // One triangle in the plane z = 0 whose vertices lie at ±1e20 (and one at ±1e3 for
+    // comparison): both cover every pixel, at the same depth, with finite attributes. Without
+    // the guard-band clip the 1e20 triangle's barycentrics cancel to NaN.
+    for far in [1e3f32, 1e20] {
+        let mut m = Mesh::default();
+        for p in [[-far, -far, 0.0], [far, -far, 0.0], [0.0, far, 0.0]] {
+            m.positions.push(p);
+            m.normals.push([0.0, 0.0, 1.0]);
+            m.colors.push([0.2, 0.4, 0.6, 0.5]);
+            m.object_ids.push(0);
+        }
+        m.indices.extend_from_slice(&[0, 1, 2]);
+        let fl = rasterize(&scene_with(m), 16, 16);
+        for y in 0..16 {
+            for x in 0..16 {
+                let f = fl.at(x, y);
+                assert_eq!(f.len(), 1, "far {far}: pixel ({x},{y})");
+                assert!(f[0].depth.is_finite() && f[0].depth > 0.0 && f[0].depth < 1.0);
+                assert!(
+                    (f[0].color[1] - 0.4).abs() < 1e-6,
+                    "far {far}: {:?}",
+                    f[0].color
+                );
+                assert!(
+                    (f[0].view_z - 10.0).abs() < 1e-6,
+                    "far {far}: {}",
+                    f[0].view_z
+                );
+            }
+        }
+    }
+}
