@@ -422,6 +422,11 @@ fn set_x_floor(row: &mut Row, floor_ms: Option<f64>) {
 
 /// `git describe`-like revision of the working tree, or `unknown`.
 pub fn git_rev() -> String {
+    // A revision embedded at build time wins: the device machine gets a copy of the working
+    // tree whose `.git` may be a stale snapshot, so asking git there names the wrong commit.
+    if let Some(rev) = option_env!("MFX_GIT_REV") {
+        return rev.to_string();
+    }
     let out = std::process::Command::new("git")
         .args(["rev-parse", "--short=12", "HEAD"])
         .output();
@@ -439,7 +444,7 @@ pub fn git_rev() -> String {
                 rev
             }
         }
-        _ => option_env!("MFX_GIT_REV").unwrap_or("unknown").to_string(),
+        _ => "unknown".to_string(),
     }
 }
 
