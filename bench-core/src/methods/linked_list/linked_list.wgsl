@@ -81,12 +81,14 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
         ix[j] = ni;
         n = n + 1u;
     }
-    var s = fold_init();
+    var s = fold_init_at(vec2<f32>(id.xy) + 0.5);
     for (var i = 0u; i < n; i = i + 1u) {
         let e = nodes[ix[i]];
         fold_step(&s, Frag(e.depth, e.view_z, e.color, vec3<f32>(0.0), e.object_id & 0x7fffffffu, (e.object_id >> 31u) != 0u));
     }
-    out_image[p] = fold_finish(s);
+    for (var k = 0u; k < fold_image_count(); k = k + 1u) {
+        out_image[k * w * h + p] = fold_finish_image(s, k);
+    }
     counts[p] = n;
     let gone = atomicLoad(&lost[p]) + dropped;
     if gone > 0u {

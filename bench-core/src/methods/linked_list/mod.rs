@@ -1,6 +1,7 @@
 //! Per-pixel linked-list A-buffer (Yang, Hensley, Grün & Thibieroz 2010): one geometry pass
 //! appends every fragment to its pixel's list (atomic head pointers, one node pool); a compute
-//! resolve sorts each list and folds it nearest first (effects fold). The pool is fixed:
+//! resolve sorts each list and folds it nearest first (the effects fold: every effect but Fresnel,
+//! whose normal the nodes do not store). The pool is fixed:
 //! `layers` × pixels nodes (`layers` = average nodes per pixel). Fragments that find the pool
 //! full, or lists longer than the resolve's sort capacity (128), are counted on the GPU and
 //! reported (`overflow_pixels`, flag `overflow`, lost fragments in notes), never silent.
@@ -15,6 +16,7 @@ use super::{
     camera_entry, int_param, read_vec, shader, storage_entry, Capture, Expected, FrameStats,
     Method, Prepared, EFFECTS_WGSL,
 };
+use crate::effects::{self, Effect, EffectConfig};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::timing::GpuTimer;
@@ -37,16 +39,31 @@ impl Method for LinkedList {
         true
     }
     fn axes(&self) -> &'static [&'static str] {
-        &["layers"]
+        &[
+            "layers", "effect", "sigma", "csg_a", "csg_b", "dof_near", "dof_far", "variant",
+        ]
     }
     fn supports(&self, _: &Gpu, params: &Params) -> std::result::Result<(), String> {
         int_param(params, "layers", 8, 1, 1024)?;
+        effect_config(params)?;
         Ok(())
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
         let layers = int_param(params, "layers", 8, 1, 1024).map_err(CoreError::Param)? as u64;
-        Ok(Box::new(PreparedList::new(gpu, scene, layers)?))
+        let effect = effect_config(params).map_err(CoreError::Param)?;
+        Ok(Box::new(PreparedList::new(gpu, scene, layers, &effect)?))
     }
+}
+
+/// The effect of a point: a node stores colour, window depth, view depth, object id and facing,
+/// so every effect but Fresnel (which needs the normal) folds from it.
+fn effect_config(params: &Params) -> std::result::Result<EffectConfig, String> {
+    effects::check_variant(params, &["naive", "stable"])?;
+    let e = EffectConfig::from_params(params)?;
+    if e.effect == Effect::Fresnel {
+        return Err("linked_list nodes store no normal: fresnel needs one".into());
+    }
+    Ok(e)
 }
 
 struct PreparedList {
@@ -60,11 +77,12 @@ struct PreparedList {
     lost: wgpu::Buffer,
     counts: wgpu::Buffer,
     pool: u64,
+    images: usize,
     alloc: AllocCounter,
 }
 
 impl PreparedList {
-    fn new(gpu: &Gpu, scene: &GpuScene, layers: u64) -> Result<Self> {
+    fn new(gpu: &Gpu, scene: &GpuScene, layers: u64, effect: &EffectConfig) -> Result<Self> {
         let d = &gpu.device;
         let px = scene.pixels() as u64;
         let pool = layers * px;
@@ -89,7 +107,9 @@ impl PreparedList {
             immediate_size: 0,
         });
         let pc = [("POOL", pool as f64)];
-        let rc = [("POOL", pool as f64), ("EFFECT", 0.0)];
+        let mut rc = vec![("POOL", pool as f64)];
+        rc.extend(effect.constants());
+        let images = effect.effect.image_count();
         let append = storage_pipeline(
             gpu,
             "linked_list append",
@@ -104,7 +124,7 @@ impl PreparedList {
         let depth = dummy_depth(gpu, &mut alloc, scene);
         let heads = alloc.buffer(gpu, "list heads", px * 4, STORAGE_RW);
         let nodes = alloc.buffer(gpu, "list nodes", pool * ENTRY_BYTES, STORAGE_RW);
-        let image = alloc.buffer(gpu, "list image", px * 16, STORAGE_RW);
+        let image = alloc.buffer(gpu, "list image", px * 16 * images as u64, STORAGE_RW);
         let counters = alloc.buffer(gpu, "list counters", 16, STORAGE_RW);
         let lost = alloc.buffer(gpu, "list lost", px * 4, STORAGE_RW);
         let counts = alloc.buffer(gpu, "list counts", px * 4, STORAGE_RW);
@@ -133,6 +153,7 @@ impl PreparedList {
             lost,
             counts,
             pool,
+            images,
             alloc,
         })
     }
@@ -169,7 +190,7 @@ impl Prepared for PreparedList {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let n = scene.pixels();
         let mut cap = Capture::empty();
-        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n)?);
+        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n * self.images)?);
         cap.counts = Some(read_vec::<u32>(gpu, &self.counts, n)?);
         cap.expected = Expected::All;
         let c = read_vec::<u32>(gpu, &self.counters, 4)?;
