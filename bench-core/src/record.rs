@@ -130,7 +130,7 @@ pub const METRICS: &[Column] = &[
     c("bad_pixel_tol", "the per-channel tolerance used for bad_pixel_frac"),
     c("non_finite", "NaN/Inf channels in the output (never hidden: they also make the pixel bad)"),
     c("layer_count_accuracy", "fraction of pixels whose captured fragment count equals the expected count"),
-    c("hazard_rate", "k-buffer: fraction of pixels whose captured set differs from the true k nearest"),
+    c("hazard_rate", "k-buffer: fraction of pixels whose captured set differs from the true k nearest, excluding pixels with an f32 depth tie among their k + 1 nearest (those are flagged lost_coplanar and counted in notes)"),
     c("collision_rate", "buckets: fraction of true fragments merged or lost by bucket collisions"),
     c("overflow_rate", "fraction of pixels whose fragments exceeded the method's capacity"),
     c("triangles_per_s", "triangles submitted per second of GPU time"),

@@ -169,23 +169,42 @@ pub const DEPTH_TOL: f64 = 1e-5;
 
 /// Pixels whose captured depths (nearest first, `k` slots per pixel, `None` = empty) are not
 /// the reference's true k nearest: count and the first such pixel.
-pub fn k_nearest_mismatch(
-    captured: &[Option<f32>],
-    k: usize,
-    lists: &FragmentLists,
-) -> (u64, Option<usize>) {
-    let mut bad = 0u64;
-    let mut first = None;
+pub fn k_nearest_mismatch(captured: &[Option<f32>], k: usize, lists: &FragmentLists) -> Mismatch {
+    let mut m = Mismatch::default();
     let mut truth = Vec::new();
     for p in 0..lists.pixels() {
         truth.clear();
         truth.extend(lists.pixel(p).iter().map(|f| f.depth));
         if !same_k_nearest(&captured[p * k..(p + 1) * k], &truth, k) {
-            bad += 1;
-            first.get_or_insert(p);
+            if f32_tie_among_nearest(&truth, k) {
+                m.ties += 1;
+                m.first_tie.get_or_insert(p);
+            } else {
+                m.hazards += 1;
+                m.first_hazard.get_or_insert(p);
+            }
         }
     }
-    (bad, first)
+    m
+}
+
+/// Pixels whose captured set is not the true k nearest, split by cause.
+#[derive(Debug, Default, Clone, Copy, PartialEq)]
+pub struct Mismatch {
+    /// No f32 depth tie among the pixel's k + 1 nearest: a read-modify-write race (or a raster
+    /// coverage disagreement with the reference, see `KSlots::judge`).
+    pub hazards: u64,
+    pub first_hazard: Option<usize>,
+    /// Two of the pixel's k + 1 nearest fragments have the same f32 depth: the GPU cannot order
+    /// (or keep both of) them, exactly as depth peeling loses such fragments (`lost_coplanar`).
+    pub ties: u64,
+    pub first_tie: Option<usize>,
+}
+
+/// Whether two of the k + 1 nearest depths round to the same f32.
+pub fn f32_tie_among_nearest(truth: &[f64], k: usize) -> bool {
+    let n = truth.len().min(k + 1);
+    truth[..n].windows(2).any(|w| w[0] as f32 == w[1] as f32)
 }
 
 /// Whether `slots` (nearest first) hold the k nearest of `truth` (all of a pixel's fragment
@@ -300,5 +319,23 @@ pub mod testing {
             .filter(|&p| counts[p] != dc[p].min(k))
             .collect();
         (bad.len(), bad.first().copied())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::f32_tie_among_nearest;
+
+    #[test]
+    fn ties_are_f32_equal_depths_among_the_k_plus_one_nearest() {
+        let d = 0.5f64;
+        let next = f64::from(f32::from_bits((d as f32).to_bits() + 1));
+        // Distinct in f64, one f32 value: the 2nd and 3rd nearest tie, inside k + 1 for k = 2.
+        assert!(f32_tie_among_nearest(&[0.1, d, d + 1e-12], 2));
+        // One f32 ulp apart: not a tie.
+        assert!(!f32_tie_among_nearest(&[0.1, d, next], 4));
+        // A tie beyond the k + 1 nearest does not explain a k-nearest mismatch.
+        assert!(!f32_tie_among_nearest(&[0.1, 0.2, d, d + 1e-12], 1));
+        assert!(!f32_tie_among_nearest(&[], 4));
     }
 }

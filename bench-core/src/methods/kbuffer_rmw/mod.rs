@@ -120,12 +120,24 @@ impl KSlots {
         if self.captured.len() != lists.pixels() * self.k as usize {
             return;
         }
-        let (bad, first) = store::k_nearest_mismatch(&self.captured, self.k as usize, lists);
-        cap.hazard_pixels = Some(bad);
-        if let Some(p) = first {
+        let m = store::k_nearest_mismatch(&self.captured, self.k as usize, lists);
+        cap.hazard_pixels = Some(m.hazards);
+        let mut notes = Vec::new();
+        if let Some(p) = m.first_hazard {
             cap.flag.get_or_insert_with(|| "hazard".into());
             let (x, y) = (p as u32 % lists.width, p as u32 / lists.width);
-            let note = format!("first hazard pixel ({x},{y})");
+            notes.push(format!("first hazard pixel ({x},{y})"));
+        }
+        if let Some(p) = m.first_tie {
+            // Not a race: the true k + 1 nearest hold an f32 depth tie the GPU cannot order.
+            cap.flag.get_or_insert_with(|| "lost_coplanar".into());
+            let (x, y) = (p as u32 % lists.width, p as u32 / lists.width);
+            notes.push(format!(
+                "{} pixels differ at f32 depth ties (not counted as hazards; first ({x},{y}))",
+                m.ties
+            ));
+        }
+        for note in notes {
             cap.notes = if cap.notes.is_empty() {
                 note
             } else {
