@@ -5,6 +5,16 @@
 //! (two-level) again per 32×16 sub-tile, and shade 4×4-pixel quads in structure-of-arrays form:
 //! 16 lanes per attribute, a light skipped for the whole quad when all 16 attenuations are 0.
 //!
+//! BF3's further culls, each switchable (all exact: the image is bit-identical with them off):
+//! - `cone_cull`: per sub-tile (per tile with one level), a cone bounding the unit normals of
+//!   its non-sky pixels (mean axis, largest angle) and a box bounding their view positions; a
+//!   light is dropped for the sub-tile when every direction from a point of the box to a point
+//!   of the light's source (its position; the segment's bounding ball for a line light) makes
+//!   more than 90° + [`CONE_MARGIN`] with every normal of the cone, so N·L ≤ 0 at every pixel.
+//! - `spec_skip`: no specular colour in a 4×4 quad → no specular term for it.
+//! - `diffuse_skip`: a diffuse-only light (the model's flag) is shaded without the specular
+//!   term; off, the term is evaluated and thrown away (the cost the flag saves).
+//!
 //! Deterministic for any thread count, bitwise: a pixel's value depends only on its own lanes
 //! and on the light list, which keeps light index order; which thread shades a tile does not
 //! matter. Output goes to per-tile chunks (no sharing), reordered to rows at the end.
@@ -16,6 +26,11 @@ use std::time::Instant;
 use glam::{Mat4, Vec4};
 
 use super::{sphere_outside, tile_planes, GBuffer, GpuLight, ShadeSetup, AMBIENT, SKY};
+
+/// Angular safety margin (radians) of the normal-cone cull: a light is dropped only when it is
+/// at least this much beyond facing away, so f32 rounding in the shading's N·L cannot flip a
+/// dropped light's sign (f32 direction errors are ~1e-6 rad at the distances the cull allows).
+pub const CONE_MARGIN: f64 = 0.01;
 
 #[derive(Clone, Copy, Debug)]
 pub struct CpuOptions {
@@ -30,6 +45,13 @@ pub struct CpuOptions {
     /// colour, the specular term (half vector, power) is not evaluated (exact: it is multiplied
     /// by 0). Not in light-buffer mode (the light buffer does not know the materials).
     pub spec_skip: bool,
+    /// BF3's normal-cone cull per sub-tile (exact; see the module doc).
+    pub cone_cull: bool,
+    /// The cone cull's margin in radians ([`CONE_MARGIN`]); tests make it negative to prove
+    /// that a non-conservative cull is caught.
+    pub cone_margin: f64,
+    /// Skip the specular term of diffuse-only lights (exact: it is 0 by the model).
+    pub diffuse_skip: bool,
     /// Keep the per-tile (and per-sub-tile) light lists for inspection.
     pub keep_lists: bool,
     /// Light pre-pass output instead of the shaded colour: RGB = Σ diffuse light (sun
@@ -45,6 +67,9 @@ impl Default for CpuOptions {
             threads: 1,
             quad_skip: true,
             spec_skip: true,
+            cone_cull: true,
+            cone_margin: CONE_MARGIN,
+            diffuse_skip: true,
             keep_lists: false,
             light_buffer: false,
         }
@@ -74,6 +99,11 @@ pub struct CpuResult {
     /// 4×4 quads shaded without the specular term / all quads shaded.
     pub spec_skipped_quads: u64,
     pub quads: u64,
+    /// (light, region) pairs dropped by the normal-cone cull / tested by it.
+    pub cone_culls: u64,
+    pub cone_tests: u64,
+    /// (light, quad) evaluations of diffuse-only lights done without the specular term.
+    pub diffuse_skips: u64,
 }
 
 struct TileOut {
@@ -85,6 +115,9 @@ struct TileOut {
     evals: u64,
     nospec: u64,
     quads: u64,
+    cone_culls: u64,
+    cone_tests: u64,
+    diffuse_skips: u64,
 }
 
 /// Lights (with culling spheres for the threshold already in `lights`) on the G-buffer `gb`.
@@ -129,6 +162,7 @@ pub fn shade(
     let mut lists = Vec::new();
     let mut sub_lists = Vec::new();
     let (mut quad_skips, mut quad_evals, mut spec_skipped_quads, mut quads) = (0, 0, 0, 0);
+    let (mut cone_culls, mut cone_tests, mut diffuse_skips) = (0, 0, 0);
     for (i, o) in outs.into_iter().enumerate() {
         let o = o.into_inner().unwrap().expect("every tile was taken");
         let (x0, y0) = ((i as u32 % tx) * t, (i as u32 / tx) * t);
@@ -144,6 +178,9 @@ pub fn shade(
         quad_evals += o.evals;
         spec_skipped_quads += o.nospec;
         quads += o.quads;
+        cone_culls += o.cone_culls;
+        cone_tests += o.cone_tests;
+        diffuse_skips += o.diffuse_skips;
     }
     CpuResult {
         image,
@@ -155,6 +192,9 @@ pub fn shade(
         quad_evals,
         spec_skipped_quads,
         quads,
+        cone_culls,
+        cone_tests,
+        diffuse_skips,
     }
 }
 
@@ -232,6 +272,9 @@ fn shade_tile(
         evals: 0,
         nospec: 0,
         quads: 0,
+        cone_culls: 0,
+        cone_tests: 0,
+        diffuse_skips: 0,
     };
     let (sw, sh) = opts.sub.unwrap_or((tw, th));
     let mut sy = 0;
@@ -268,6 +311,15 @@ fn shade_tile(
             } else {
                 list.clone()
             };
+            let sub_list = if opts.cone_cull {
+                let (kept, tested) =
+                    cone_cull(gb, lights, rect, tw, sub, &pos, opts.cone_margin, sub_list);
+                out.cone_tests += tested;
+                out.cone_culls += tested - kept.len() as u64;
+                kept
+            } else {
+                sub_list
+            };
             // 4×4 quads of the sub-tile.
             let mut qy = sub[1];
             while qy < sub[3] {
@@ -285,6 +337,7 @@ fn shade_tile(
                         &pos,
                         opts.quad_skip,
                         opts.spec_skip && !opts.light_buffer,
+                        opts.diffuse_skip,
                         opts.light_buffer,
                         &mut out,
                     );
@@ -313,6 +366,7 @@ fn shade_quad(
     pos: &[[f32; 3]],
     quad_skip: bool,
     spec_skip: bool,
+    diffuse_skip: bool,
     light_buffer: bool,
     out: &mut TileOut,
 ) {
@@ -352,10 +406,14 @@ fn shade_quad(
     let mut spec = [[0f32; 4]; N];
     let mut att = [0f32; N];
     let (mut lx, mut ly, mut lz) = ([0f32; N], [0f32; N], [0f32; N]);
+    // `d_only`: the light is diffuse-only (specular term 0 by the model). `no_spec`
+    // (quad without specular colour) or `diffuse_skip` skip the evaluation; otherwise a
+    // diffuse-only light's term is evaluated and thrown away (the cost the skip saves).
     let add = |k: usize,
                l: [f32; 3],
                color: [f32; 3],
                a: f32,
+               d_only: bool,
                diff: &mut [[f32; 3]; N],
                spec: &mut [[f32; 4]; N]| {
         let ndl = nx[k] * l[0] + ny[k] * l[1] + nz[k] * l[2];
@@ -364,7 +422,7 @@ fn shade_quad(
         }
         let s = a * ndl;
         let c = [color[0] * s, color[1] * s, color[2] * s];
-        if no_spec {
+        if no_spec || (d_only && diffuse_skip) {
             for j in 0..3 {
                 diff[k][j] += c[j];
             }
@@ -378,6 +436,13 @@ fn shade_quad(
         } else {
             0.0
         };
+        if d_only {
+            std::hint::black_box(st);
+            for j in 0..3 {
+                diff[k][j] += c[j];
+            }
+            return;
+        }
         for j in 0..3 {
             diff[k][j] += c[j];
             spec[k][j] += c[j] * st;
@@ -424,6 +489,8 @@ fn shade_quad(
             continue;
         }
         out.evals += 1;
+        let d_only = l.diffuse_only();
+        out.diffuse_skips += (d_only && diffuse_skip && !no_spec) as u64;
         let color = [l.color_cos[0], l.color_cos[1], l.color_cos[2]];
         for k in 0..N {
             if att[k] > 0.0 {
@@ -432,6 +499,7 @@ fn shade_quad(
                     [lx[k], ly[k], lz[k]],
                     color,
                     att[k],
+                    d_only,
                     &mut diff,
                     &mut spec,
                 );
@@ -441,7 +509,7 @@ fn shade_quad(
     if let Some((d, c)) = sun {
         for k in 0..N {
             if active[k] {
-                add(k, d, c, 1.0, &mut diff, &mut spec);
+                add(k, d, c, 1.0, false, &mut diff, &mut spec);
             }
         }
     }
@@ -471,4 +539,98 @@ fn shade_quad(
         }
         o[3] = 1.0;
     }
+}
+
+/// BF3's normal-cone cull of one region `sub` (tile-relative) of tile `rect`: keeps the lights
+/// of `list` that some pixel of it may face (see the module doc); returns them and how many
+/// were tested. f64 throughout, on the same f32 positions and normals the shading reads.
+#[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
+fn cone_cull(
+    gb: &GBuffer,
+    lights: &[GpuLight],
+    rect: [u32; 4],
+    tw: u32,
+    sub: [u32; 4],
+    pos: &[[f32; 3]],
+    margin: f64,
+    list: Vec<u32>,
+) -> (Vec<u32>, u64) {
+    let tested = list.len() as u64;
+    let (mut sum, mut lo, mut hi) = ([0f64; 3], [f64::MAX; 3], [f64::MIN; 3]);
+    let mut normals = Vec::with_capacity(((sub[2] - sub[0]) * (sub[3] - sub[1])) as usize);
+    for y in sub[1]..sub[3] {
+        for x in sub[0]..sub[2] {
+            let gi = ((rect[1] + y) * gb.width + rect[0] + x) as usize;
+            if gb.is_sky(gi) {
+                continue;
+            }
+            let p = pos[(y * tw + x) as usize];
+            for j in 0..3 {
+                lo[j] = lo[j].min(p[j] as f64);
+                hi[j] = hi[j].max(p[j] as f64);
+            }
+            let n = gb.normal[gi];
+            let n = [n[0] as f64, n[1] as f64, n[2] as f64];
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            if len == 0.0 {
+                continue; // N·L = 0 exactly: this pixel takes no light
+            }
+            let u = [n[0] / len, n[1] / len, n[2] / len];
+            for j in 0..3 {
+                sum[j] += u[j];
+            }
+            normals.push(u);
+        }
+    }
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let sl = dot(sum, sum).sqrt();
+    if normals.is_empty() || sl < 1e-6 * normals.len() as f64 {
+        return (list, tested);
+    }
+    let axis = [sum[0] / sl, sum[1] / sl, sum[2] / sl];
+    let cos_t = normals.iter().map(|&u| dot(u, axis)).fold(1.0f64, f64::min);
+    let theta = cos_t.clamp(-1.0, 1.0).acos();
+    if theta >= std::f64::consts::FRAC_PI_2 {
+        return (list, tested);
+    }
+    let bc = [
+        0.5 * (lo[0] + hi[0]),
+        0.5 * (lo[1] + hi[1]),
+        0.5 * (lo[2] + hi[2]),
+    ];
+    let half = [hi[0] - bc[0], hi[1] - bc[1], hi[2] - bc[2]];
+    let hb = dot(half, half).sqrt();
+    let bcl = dot(bc, bc).sqrt();
+    let kept = list
+        .into_iter()
+        .filter(|&i| {
+            let l = &lights[i as usize];
+            let (mut cs, mut rs) = (
+                [
+                    l.pos_range[0] as f64,
+                    l.pos_range[1] as f64,
+                    l.pos_range[2] as f64,
+                ],
+                0.0,
+            );
+            if l.dir_kind[3] as u32 == 2 {
+                let h = 0.5 * l.extra[0] as f64;
+                for j in 0..3 {
+                    cs[j] += l.dir_kind[j] as f64 * h;
+                }
+                rs = h * 1.001; // the f32 direction is unit only up to rounding
+            }
+            let m = [cs[0] - bc[0], cs[1] - bc[1], cs[2] - bc[2]];
+            let ml = dot(m, m).sqrt();
+            let rho = rs + hb;
+            // Too close to judge directions in f32: keep.
+            if ml - rho <= 1e-4 * (dot(cs, cs).sqrt() + bcl + 1.0) {
+                return true;
+            }
+            let phi = (rho / ml).asin();
+            let alpha = (dot(axis, m) / ml).clamp(-1.0, 1.0).acos();
+            alpha - theta - phi <= std::f64::consts::FRAC_PI_2 + margin
+        })
+        .collect();
+    (kept, tested)
 }

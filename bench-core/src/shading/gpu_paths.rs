@@ -418,11 +418,25 @@ impl Deferred {
         tau: f64,
         store_lists: bool,
     ) -> Result<Deferred> {
+        Self::new_with(gpu, scene, gscene, path, tau, store_lists, 0.0)
+    }
+
+    /// [`Deferred::new`] with `diffuse_only_frac` of the lights flagged diffuse-only
+    /// ([`ShadeSetup::with_diffuse_only`]).
+    pub fn new_with(
+        gpu: &Gpu,
+        scene: &Scene,
+        gscene: &GpuScene,
+        path: Path,
+        tau: f64,
+        store_lists: bool,
+        diffuse_only_frac: f64,
+    ) -> Result<Deferred> {
         supports(gpu, path).map_err(CoreError::Param)?;
         let d = &gpu.device;
         let (w, h) = (gscene.width, gscene.height);
         let mut alloc = AllocCounter::default();
-        let setup = ShadeSetup::new(scene, w, h);
+        let setup = ShadeSetup::new(scene, w, h).with_diffuse_only(diffuse_only_frac);
         let gbuf = GBufferPass::new(gpu, scene, gscene, false, &mut alloc);
         let tile = match path {
             Path::Tiled { tile, .. } => tile,

@@ -8,6 +8,7 @@
 // p = 2^(1 + 10·smoothness) normalised by (p + 8)/8 (BF3). contrib = colour·att·N·L;
 // diffuse += contrib, specular += contrib·spec_term, spec_lum += lum(contrib)·spec_term.
 // Pixel = albedo·(diffuse + ambient) + specular_colour·specular; sky pixels = sky colour.
+// A diffuse-only light (extra.y = 1) adds to diffuse only: its specular term is 0.
 
 struct Light {
     // view-space position (segment start for a line light), range
@@ -18,7 +19,7 @@ struct Light {
     color_cos: vec4<f32>,
     // culling sphere: centre, radius at the attenuation threshold (< 0: culled everywhere)
     cull: vec4<f32>,
-    // line length, 0, 0, 0
+    // line length, diffuse-only flag (1: the light has no specular term), 0, 0
     extra: vec4<f32>,
 };
 
@@ -104,7 +105,7 @@ fn acc_light(acc: ptr<function, Acc>, l: Light, g: GPixel, v: vec3<f32>, p: f32,
     }
     let contrib = l.color_cos.xyz * (att * ndl);
     (*acc).diffuse += contrib;
-    if with_spec {
+    if with_spec && l.extra.y < 0.5 {
         let h = normalize(ld + v);
         let ndh = max(dot(g.n, h), 0.0);
         var st = 0.0;

@@ -9,6 +9,10 @@
 //! use the segment's nearest point. Blinn-Phong, specular power p = 2^(1 + 10·smoothness) with
 //! the (p + 8)/8 normalisation. Pixel = albedo·(Σ diffuse + ambient) + specular·Σ specular,
 //! where the sun (if any) is one more light with att = 1; sky pixels are the sky colour.
+//! A light flagged *diffuse-only* (BF3) has a specular term of exactly 0 everywhere: it adds
+//! to Σ diffuse only (`GpuLight::extra[1]` = 1 on the GPU and the CPU path,
+//! `ViewLight::diffuse_only` in the reference); [`ShadeSetup::with_diffuse_only`] flags a
+//! fraction of a scene's lights.
 //!
 //! Culling with an attenuation threshold τ: a light of peak channel intensity I is dropped
 //! where I·att ≤ τ, i.e. beyond d_τ = r·sqrt(1 − sqrt(τ/I)); its culling sphere has that radius
@@ -47,7 +51,14 @@ pub struct GpuLight {
     pub dir_kind: [f32; 4],
     pub color_cos: [f32; 4],
     pub cull: [f32; 4],
+    /// Line length, diffuse-only flag (1: no specular term), 0, 0.
     pub extra: [f32; 4],
+}
+
+impl GpuLight {
+    pub fn diffuse_only(&self) -> bool {
+        self.extra[1] > 0.5
+    }
 }
 
 /// Matches `struct Shade` in light.wgsl.
@@ -75,6 +86,8 @@ pub struct ViewLight {
     pub range: f64,
     pub cos_outer: f64,
     pub length: f64,
+    /// No specular term (it is exactly 0): the light adds to Σ diffuse only.
+    pub diffuse_only: bool,
 }
 
 impl ViewLight {
@@ -143,6 +156,7 @@ impl ShadeSetup {
                 range: l.range as f64,
                 cos_outer: l.cos_outer as f64,
                 length: l.length as f64,
+                diffuse_only: false,
             })
             .collect();
         let sun = scene.sun.map(|s| {
@@ -161,6 +175,15 @@ impl ShadeSetup {
             clear_depth: cam.clear_depth(),
             reversed_z: cam.reversed_z,
         }
+    }
+
+    /// Flags `frac` (0..=1) of the lights diffuse-only, spread evenly over the light order:
+    /// light i is flagged when ⌊(i+1)·frac⌋ > ⌊i·frac⌋ (0.5: every second light).
+    pub fn with_diffuse_only(mut self, frac: f64) -> ShadeSetup {
+        for (i, l) in self.lights.iter_mut().enumerate() {
+            l.diffuse_only = ((i + 1) as f64 * frac).floor() > (i as f64 * frac).floor();
+        }
+        self
     }
 
     /// View-space position of pixel (x, y) at depth `d` (f64).
@@ -207,7 +230,12 @@ impl ShadeSetup {
                         l.cos_outer as f32,
                     ],
                     cull,
-                    extra: [l.length as f32, 0.0, 0.0, 0.0],
+                    extra: [
+                        l.length as f32,
+                        if l.diffuse_only { 1.0 } else { 0.0 },
+                        0.0,
+                        0.0,
+                    ],
                 }
             })
             .collect()

@@ -68,13 +68,25 @@ fn light_vector(l: &ViewLight, p: DVec3) -> (DVec3, f64) {
     (ld, att)
 }
 
-fn add(t: &mut Terms, s: &Surface, v: DVec3, ld: DVec3, color: DVec3, att: f64) {
+/// Adds one light; `diffuse_only`: its specular term is 0 (the model's diffuse-only flag).
+fn add(
+    t: &mut Terms,
+    s: &Surface,
+    v: DVec3,
+    ld: DVec3,
+    color: DVec3,
+    att: f64,
+    diffuse_only: bool,
+) {
     let ndl = s.n.dot(ld);
     if ndl <= 0.0 || att <= 0.0 {
         return;
     }
     let contrib = color * (att * ndl);
     t.diffuse += contrib;
+    if diffuse_only {
+        return;
+    }
     let (p, norm) = spec_power(s.smoothness);
     let h = (ld + v).normalize();
     let ndh = s.n.dot(h).max(0.0);
@@ -90,11 +102,11 @@ pub fn terms(setup: &ShadeSetup, s: &Surface) -> Terms {
     for l in &setup.lights {
         let (ld, att) = light_vector(l, s.pos);
         if att > 0.0 {
-            add(&mut t, s, v, ld, l.color, att);
+            add(&mut t, s, v, ld, l.color, att, l.diffuse_only);
         }
     }
     if let Some((d, c)) = setup.sun {
-        add(&mut t, s, v, d, c, 1.0);
+        add(&mut t, s, v, d, c, 1.0, false);
     }
     t
 }

@@ -60,16 +60,21 @@ struct Run {
 }
 
 fn run(scene: &Scene, size: u32, path: Path, tau: f64, store: bool) -> Run {
+    run_with(scene, size, path, tau, store, 0.0)
+}
+
+/// [`run`] with `diffuse_only` of the lights flagged diffuse-only (GPU path and reference).
+fn run_with(scene: &Scene, size: u32, path: Path, tau: f64, store: bool, diffuse_only: f64) -> Run {
     let g = gpu();
     let gs = GpuScene::upload(g, scene, size, size);
-    let mut d = Deferred::new(g, scene, &gs, path, tau, store).unwrap();
+    let mut d = Deferred::new_with(g, scene, &gs, path, tau, store, diffuse_only).unwrap();
     let mut timer = GpuTimer::new(g);
     timer.begin_frame();
     d.frame(g, &gs, &mut timer).unwrap();
     g.wait().unwrap();
     let image = d.read_image(g).unwrap();
     let gb = d.read_gbuffer(g).unwrap();
-    let setup = ShadeSetup::new(scene, size, size);
+    let setup = ShadeSetup::new(scene, size, size).with_diffuse_only(diffuse_only);
     let reference = reference::shade(&setup, &gb);
     Run {
         d,
@@ -280,6 +285,140 @@ fn quad_culls_change_nothing_but_the_work() {
         assert!(on.spec_skipped_quads < on.quads);
         assert_eq!(bits(&on.image), bits(&off.image), "quad {q} spec {sp}");
     }
+}
+
+fn bits(img: &[[f32; 4]]) -> Vec<[u32; 4]> {
+    img.iter().map(|p| p.map(f32::to_bits)).collect()
+}
+
+/// Pixels whose bits differ between two images.
+fn differing(a: &[[f32; 4]], b: &[[f32; 4]]) -> usize {
+    bits(a)
+        .iter()
+        .zip(bits(b))
+        .filter(|(x, y)| **x != *y)
+        .count()
+}
+
+/// BF3's normal-cone cull per sub-tile is exact: with it the image is bit-identical to the
+/// unculled path, at one and two levels, on an open city and a room (walls facing away from
+/// lights), and it does drop (light, 32×16 sub-tile) pairs. A deliberately non-conservative cone
+/// (margin −0.6 rad: drops lights up to ~34° short of facing away) must break bit-identity,
+/// which proves the comparison can catch an unsound cull.
+#[test]
+fn normal_cone_cull_is_exact_and_drops_lights() {
+    for room in [false, true] {
+        let s = city(64, room);
+        let r = run(&s, 80, Path::Naive, 0.0, false);
+        let lights = r.setup.gpu_lights(0.0);
+        let shade = |sub: Option<(u32, u32)>, cone_cull: bool, cone_margin: f64| {
+            let o = CpuOptions {
+                threads: 2,
+                sub,
+                cone_cull,
+                cone_margin,
+                ..Default::default()
+            };
+            cpu_tiled::shade(&r.setup, &r.gb, &lights, &o)
+        };
+        for sub in [Some((32, 16)), None] {
+            let off = shade(sub, false, cpu_tiled::CONE_MARGIN);
+            assert_eq!((off.cone_culls, off.cone_tests), (0, 0));
+            let on = shade(sub, true, cpu_tiled::CONE_MARGIN);
+            println!(
+                "room {room} sub {sub:?}: cone culls {} of {}",
+                on.cone_culls, on.cone_tests
+            );
+            assert_eq!(
+                differing(&on.image, &off.image),
+                0,
+                "room {room} sub {sub:?}: the cone cull changed the image"
+            );
+            // One 64×64 level: the tiles' normal cones are too wide to cull (exact, no work).
+            if sub.is_none() {
+                continue;
+            }
+            assert!(on.cone_culls > 0, "room {room} sub {sub:?}: nothing culled");
+            assert!(on.quad_evals < off.quad_evals);
+            assert_eq!(
+                differing(&on.image, &off.image),
+                0,
+                "room {room} sub {sub:?}: the cone cull changed the image"
+            );
+            let bad = shade(sub, true, -0.6);
+            assert!(bad.cone_culls > on.cone_culls);
+            let d = differing(&bad.image, &off.image);
+            println!("  non-conservative cone: {d} pixels differ");
+            assert!(d > 0, "room {room} sub {sub:?}: a wrong cull went unseen");
+        }
+    }
+}
+
+/// Diffuse-only lights: every GPU path and the CPU path still equal the f64 reference (whose
+/// diffuse-only lights have no specular term) with half the lights flagged; the flag changes
+/// the image (so a path ignoring it fails); the CPU path's specular skip is bit-identical to
+/// evaluating and discarding the term, and skips something.
+#[test]
+fn diffuse_only_lights_match_reference_in_every_path() {
+    let s = city(48, false);
+    let base = run(&s, 64, Path::Naive, 0.0, false);
+    for path in [
+        Path::Naive,
+        Path::Volumes,
+        Path::Tiled {
+            tile: 16,
+            levels: 1,
+        },
+        Path::Tiled {
+            tile: 64,
+            levels: 2,
+        },
+        Path::Classified { uber: false },
+        Path::Classified { uber: true },
+    ] {
+        let r = run_with(&s, 64, path, 0.0, false, 0.5);
+        assert_eq!(r.setup.lights.iter().filter(|l| l.diffuse_only).count(), 24);
+        let e = max_rel_err(&r.reference, &r.image);
+        println!("{path:?} diffuse-only 0.5: max_rel_err {e:.2e}");
+        assert!(e < PATH_TOL, "{path:?}: {e}");
+        // Ignoring the flag is an error the test sees: the unflagged image is far off.
+        let e0 = max_rel_err(&r.reference, &base.image);
+        assert!(e0 > 10.0 * PATH_TOL, "{path:?}: flag invisible ({e0})");
+    }
+    let setup = base.setup.clone().with_diffuse_only(0.5);
+    let reference = reference::shade(&setup, &base.gb);
+    let lights = setup.gpu_lights(0.0);
+    assert_eq!(lights.iter().filter(|l| l.diffuse_only()).count(), 24);
+    let shade = |diffuse_skip: bool, light_buffer: bool| {
+        let o = CpuOptions {
+            threads: 3,
+            diffuse_skip,
+            light_buffer,
+            ..Default::default()
+        };
+        cpu_tiled::shade(&setup, &base.gb, &lights, &o)
+    };
+    let on = shade(true, false);
+    let off = shade(false, false);
+    let e = max_rel_err(&reference, &on.image);
+    println!(
+        "cpu diffuse-only 0.5: max_rel_err {e:.2e}, skips {}",
+        on.diffuse_skips
+    );
+    assert!(e < PATH_TOL, "cpu: {e}");
+    assert!(on.diffuse_skips > 0 && off.diffuse_skips == 0);
+    assert_eq!(differing(&on.image, &off.image), 0);
+    // Light-buffer mode: Σ spec_lum drops the flagged lights too.
+    let lb_on = shade(true, true);
+    let lb_off = shade(false, true);
+    assert_eq!(differing(&lb_on.image, &lb_off.image), 0);
+    let t = reference::all_terms(&setup, &base.gb);
+    let mut m = 0.0f64;
+    for (i, p) in lb_on.image.iter().enumerate() {
+        let want = t[i].spec_lum;
+        m = m.max((p[3] as f64 - want).abs() / want.abs().max(1.0));
+    }
+    assert!(m < PATH_TOL, "light buffer spec_lum: {m}");
 }
 
 #[test]

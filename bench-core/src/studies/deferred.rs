@@ -5,11 +5,16 @@
 //! Paths (`methods` in the suite): `naive`, `volumes`, `tiled`, `classified`, `uber`,
 //! `cpu_tiled` (see `shading::gpu_paths` and `shading::cpu_tiled`). Axes: `tile_size`,
 //! `cull_levels`, `attenuation_threshold` (tiled, volumes, cpu_tiled), `thread_count`,
-//! `quad_skip` and `spec_skip` (cpu_tiled). The light count is a scene parameter (`city(lights=N)`), recorded per row.
+//! `quad_skip`, `spec_skip`, `cone_cull` and `diffuse_skip` (cpu_tiled), `diffuse_only_frac`
+//! (every path: the fraction of lights flagged diffuse-only, which changes the image, so the
+//! reference and the naive time are per fraction). The light count is a scene parameter
+//! (`city(lights=N)`), recorded per row.
 //! `naive` runs first in each group so every row carries `speedup_vs_naive`.
 //!
 //! Study options: `cpu_reps` (timed CPU frames per point, default 3: a single-thread frame at
 //! 4K is seconds).
+
+use std::collections::HashMap;
 
 use scenarios::suite::axis_product;
 use scenarios::{ParamValue, Params, Scene, StudySpec};
@@ -38,6 +43,11 @@ pub const COLUMNS: &[Column] = &[
     Column { name: "quad_skip", doc: "CPU tile path: skip a light for a 4×4 quad when all 16 attenuations are 0 (BF3's per-quad cull); false = evaluate every kept light" },
     Column { name: "spec_skip", doc: "CPU tile path: BF3's no-specular fast path per 4×4 quad (no pixel with a specular colour: the specular term is not evaluated); exact" },
     Column { name: "spec_skip_frac", doc: "CPU tile path: fraction of non-sky 4×4 quads shaded without the specular term" },
+    Column { name: "cone_cull", doc: "CPU tile path: BF3's normal-cone cull per 32×16 sub-tile (drop a light no pixel of the sub-tile can face: N·L ≤ 0 for the normal cone × position box); exact" },
+    Column { name: "cone_cull_frac", doc: "CPU tile path: fraction of (light, sub-tile) pairs that survived the frustum culls and were dropped by the normal-cone cull" },
+    Column { name: "diffuse_only_frac", doc: "fraction of the scene's lights flagged diffuse-only (no specular term, in every path and the reference)" },
+    Column { name: "diffuse_skip", doc: "CPU tile path: skip the specular evaluation of diffuse-only lights (false: evaluate it and discard it); exact" },
+    Column { name: "diffuse_skip_frac", doc: "CPU tile path: fraction of (light, 4×4 quad) evaluations done without the specular term because the light is diffuse-only" },
     Column { name: "lights_per_tile_mean", doc: "mean lights kept per culling tile (level 1)" },
     Column { name: "lights_per_tile_max", doc: "most lights kept in any culling tile (level 1)" },
     Column { name: "class_ids_present", doc: "classified: classification ids with at least one 4×4 tile this frame" },
@@ -59,16 +69,36 @@ pub const PATHS: &[&str] = &[
 
 fn axes_of(path: &str) -> &'static [&'static str] {
     match path {
-        "tiled" => &["tile_size", "cull_levels", "attenuation_threshold"],
-        "volumes" => &["attenuation_threshold"],
+        "tiled" => &[
+            "tile_size",
+            "cull_levels",
+            "attenuation_threshold",
+            "diffuse_only_frac",
+        ],
+        "volumes" => &["attenuation_threshold", "diffuse_only_frac"],
         "cpu_tiled" => &[
             "thread_count",
             "cull_levels",
             "attenuation_threshold",
             "quad_skip",
             "spec_skip",
+            "cone_cull",
+            "diffuse_skip",
+            "diffuse_only_frac",
         ],
-        _ => &[],
+        _ => &["diffuse_only_frac"],
+    }
+}
+
+/// The diffuse-only fraction axis (a number in 0..=1).
+pub fn diffuse_only_frac(params: &Params) -> std::result::Result<f64, String> {
+    match params.get("diffuse_only_frac") {
+        None => Ok(0.0),
+        Some(ParamValue::Float(x)) if (0.0..=1.0).contains(x) => Ok(*x),
+        Some(ParamValue::Int(i)) if (0..=1).contains(i) => Ok(*i as f64),
+        Some(v) => Err(format!(
+            "diffuse_only_frac must be a number in 0..=1, got {v}"
+        )),
     }
 }
 
@@ -103,6 +133,7 @@ struct PathMethod<'a> {
     scene: &'a Scene,
     path: Path,
     tau: f64,
+    diffuse_only: f64,
 }
 
 impl Method for PathMethod<'_> {
@@ -116,8 +147,14 @@ impl Method for PathMethod<'_> {
         self.tau == 0.0
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Params) -> Result<Box<dyn Prepared>> {
-        Ok(Box::new(Deferred::new(
-            gpu, self.scene, scene, self.path, self.tau, false,
+        Ok(Box::new(Deferred::new_with(
+            gpu,
+            self.scene,
+            scene,
+            self.path,
+            self.tau,
+            false,
+            self.diffuse_only,
         )?))
     }
 }
@@ -188,6 +225,7 @@ impl Study for DeferredStudy {
             }
             for params in axis_product(&spec.axes, axes_of(name)) {
                 threshold(&params).map_err(CoreError::Param)?;
+                diffuse_only_frac(&params).map_err(CoreError::Param)?;
                 out.push(PointSpec {
                     method: name.clone(),
                     params,
@@ -199,9 +237,11 @@ impl Study for DeferredStudy {
 
     fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
         let (gpu, scene, gscene) = (ctx.gpu, ctx.scene, ctx.gscene);
-        let setup = ShadeSetup::new(scene, gscene.width, gscene.height);
+        let setup0 = ShadeSetup::new(scene, gscene.width, gscene.height);
         let gb = gbuffer_of(gpu, scene, gscene, false)?;
-        let reference = reference::shade(&setup, &gb);
+        // The diffuse-only fraction changes the image: a setup, a reference and a naive time
+        // per fraction (keyed by its bits).
+        let mut references: HashMap<u64, (ShadeSetup, Vec<[f64; 4]>)> = HashMap::new();
         let cpu_reps = ctx
             .study
             .extra
@@ -210,7 +250,7 @@ impl Study for DeferredStudy {
             .unwrap_or(3) as u32;
         let mut order: Vec<usize> = (0..ctx.group.points.len()).collect();
         order.sort_by_key(|&i| ctx.group.points[i].method != "naive");
-        let mut naive_ms: Option<f64> = None;
+        let mut naive_by_frac: HashMap<u64, f64> = HashMap::new();
         for i in order {
             let pt = &ctx.group.points[i];
             let mut row = Row::new();
@@ -219,6 +259,14 @@ impl Study for DeferredStudy {
             set_params(&mut row, &pt.params)?;
             let tau = threshold(&pt.params).map_err(CoreError::Param)?;
             row.set("exact", tau == 0.0);
+            let frac = diffuse_only_frac(&pt.params).map_err(CoreError::Param)?;
+            row.set_f("diffuse_only_frac", frac);
+            let (setup, reference) = &*references.entry(frac.to_bits()).or_insert_with(|| {
+                let s = setup0.clone().with_diffuse_only(frac);
+                let r = reference::shade(&s, &gb);
+                (s, r)
+            });
+            let naive_ms = naive_by_frac.get(&frac.to_bits()).copied();
             if pt.method == "cpu_tiled" {
                 let threads = match int_param(&pt.params, "thread_count", 1, 1, 1024) {
                     Ok(t) => t as usize,
@@ -246,9 +294,25 @@ impl Study for DeferredStudy {
                         continue;
                     }
                 };
+                let cone_cull = match bool_param(&pt.params, "cone_cull", true) {
+                    Ok(q) => q,
+                    Err(e) => {
+                        emit(i, skipped_row(row, &e))?;
+                        continue;
+                    }
+                };
+                let diffuse_skip = match bool_param(&pt.params, "diffuse_skip", true) {
+                    Ok(q) => q,
+                    Err(e) => {
+                        emit(i, skipped_row(row, &e))?;
+                        continue;
+                    }
+                };
                 row.set("tile_size", 64)
                     .set("quad_skip", quad_skip)
-                    .set("spec_skip", spec_skip);
+                    .set("spec_skip", spec_skip)
+                    .set("cone_cull", cone_cull)
+                    .set("diffuse_skip", diffuse_skip);
                 let lights = setup.gpu_lights(tau);
                 let o = CpuOptions {
                     tile: 64,
@@ -256,13 +320,16 @@ impl Study for DeferredStudy {
                     threads,
                     quad_skip,
                     spec_skip,
+                    cone_cull,
+                    cone_margin: cpu_tiled::CONE_MARGIN,
+                    diffuse_skip,
                     keep_lists: false,
                     light_buffer: false,
                 };
                 let mut samples = Vec::new();
                 let mut last = None;
                 for rep in 0..1 + cpu_reps {
-                    let r = cpu_tiled::shade(&setup, &gb, &lights, &o);
+                    let r = cpu_tiled::shade(setup, &gb, &lights, &o);
                     if rep > 0 {
                         samples.push(r.ms);
                     }
@@ -276,6 +343,14 @@ impl Study for DeferredStudy {
                     .set_f(
                         "spec_skip_frac",
                         r.spec_skipped_quads as f64 / r.quads.max(1) as f64,
+                    )
+                    .set_f(
+                        "cone_cull_frac",
+                        r.cone_culls as f64 / r.cone_tests.max(1) as f64,
+                    )
+                    .set_f(
+                        "diffuse_skip_frac",
+                        r.diffuse_skips as f64 / r.quad_evals.max(1) as f64,
                     );
                 set_tile_stats(&mut row, &r.tile_counts);
                 if let Some(n) = naive_ms {
@@ -283,7 +358,7 @@ impl Study for DeferredStudy {
                         row.set_f("speedup_vs_naive", n / st.median);
                     }
                 }
-                set_error(&mut row, &reference, &r.image);
+                set_error(&mut row, reference, &r.image);
                 row.set(
                     "notes",
                     format!("cpu_reps={cpu_reps}; G-buffer read back once, untimed"),
@@ -305,7 +380,12 @@ impl Study for DeferredStudy {
                 emit(i, skipped_row(row, &why))?;
                 continue;
             }
-            let m = PathMethod { scene, path, tau };
+            let m = PathMethod {
+                scene,
+                path,
+                tau,
+                diffuse_only: frac,
+            };
             let mut meas = match measure(gpu, gscene, &m, &pt.params, ctx.warmup, ctx.reps) {
                 Ok(m) => m,
                 Err(e) => {
@@ -316,8 +396,11 @@ impl Study for DeferredStudy {
             set_timing(&mut row, &meas, ctx);
             let g = meas.gpu_ms.map(|s| s.median);
             if pt.method == "naive" && naive_ms.is_none() {
-                naive_ms = g;
+                if let Some(g) = g {
+                    naive_by_frac.insert(frac.to_bits(), g);
+                }
             }
+            let naive_ms = naive_by_frac.get(&frac.to_bits()).copied();
             if let (Some(n), Some(g)) = (naive_ms, g) {
                 if g > 0.0 {
                     row.set_f("speedup_vs_naive", n / g);
@@ -331,10 +414,10 @@ impl Study for DeferredStudy {
                 }
             };
             if let Some(img) = &cap.image {
-                set_error(&mut row, &reference, img);
+                set_error(&mut row, reference, img);
             }
             // Path-specific facts need the concrete type: one more (untimed) prepared copy.
-            let d = Deferred::new(gpu, scene, gscene, path, tau, false)?;
+            let d = Deferred::new_with(gpu, scene, gscene, path, tau, false, frac)?;
             let mut timer = GpuTimer::new(gpu);
             timer.begin_frame();
             let mut dd = d;
