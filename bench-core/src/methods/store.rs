@@ -104,6 +104,20 @@ pub fn compute_pipeline(
     entry: &str,
     constants: &[(&str, f64)],
 ) -> wgpu::ComputePipeline {
+    compute_pipeline_with(gpu, label, layout, module, entry, constants, false)
+}
+
+/// `compute_pipeline`, choosing whether workgroup memory starts zeroed (the shading kernels
+/// rely on it; the methods' kernels initialise what they use and skip the cost).
+pub fn compute_pipeline_with(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    constants: &[(&str, f64)],
+    zero_initialize_workgroup_memory: bool,
+) -> wgpu::ComputePipeline {
     gpu.device
         .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(label),
@@ -112,7 +126,7 @@ pub fn compute_pipeline(
             entry_point: Some(entry),
             compilation_options: wgpu::PipelineCompilationOptions {
                 constants,
-                zero_initialize_workgroup_memory: false,
+                zero_initialize_workgroup_memory,
             },
             cache: None,
         })
