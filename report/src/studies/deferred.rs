@@ -53,13 +53,17 @@ pub(crate) fn resolution(r: &Rec) -> String {
     format!("{}x{}", r.get("width"), r.get("height"))
 }
 
-/// Distinct resolutions of the rows, in first-seen order.
-pub(crate) fn resolutions(rows: &[&Rec]) -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
-    for r in rows {
-        let v = resolution(r);
-        if !out.contains(&v) {
-            out.push(v);
+/// The study's ok rows (floors left out) grouped by resolution, in first-seen order.
+pub(crate) fn rows_by_resolution<'a>(runs: &'a Runs, study: &str) -> Vec<(String, Vec<&'a Rec>)> {
+    let mut out: Vec<(String, Vec<&Rec>)> = Vec::new();
+    for r in runs.study(study) {
+        if !r.ok() || r.get("method").starts_with("floor_") {
+            continue;
+        }
+        let res = resolution(r);
+        match out.iter_mut().find(|(k, _)| *k == res) {
+            Some((_, v)) => v.push(r),
+            None => out.push((res, vec![r])),
         }
     }
     out
@@ -98,18 +102,8 @@ fn outdoor(r: &Rec) -> bool {
 }
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
-    let rows: Vec<&Rec> = runs
-        .study("deferred")
-        .into_iter()
-        .filter(|r| r.ok() && !r.get("method").starts_with("floor_"))
-        .collect();
     let mut figs = Vec::new();
-    for res in resolutions(&rows) {
-        let at: Vec<&Rec> = rows
-            .iter()
-            .copied()
-            .filter(|r| resolution(r) == res)
-            .collect();
+    for (res, at) in rows_by_resolution(runs, "deferred") {
         let stem = safe(&res);
         // Time vs light count per path (no threshold, outdoor city).
         let base: Vec<&Rec> = at

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use super::deferred::{resolution, resolutions, safe, series};
+use super::deferred::{rows_by_resolution, safe, series};
 use crate::charts::{Bars, Figure, Pt, Series, XY};
 use crate::data::{Rec, Runs};
 
@@ -25,18 +25,8 @@ fn single_view(r: &Rec) -> bool {
 }
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
-    let rows: Vec<&Rec> = runs
-        .study("prepass")
-        .into_iter()
-        .filter(|r| r.ok() && !r.get("method").starts_with("floor_"))
-        .collect();
     let mut figs = Vec::new();
-    for res in resolutions(&rows) {
-        let at: Vec<&Rec> = rows
-            .iter()
-            .copied()
-            .filter(|r| resolution(r) == res)
-            .collect();
+    for (res, at) in rows_by_resolution(runs, "prepass") {
         let stem = safe(&res);
         let one: Vec<&Rec> = at
             .iter()
