@@ -490,28 +490,7 @@ impl Deferred {
                 Kind::Raster(Raster { base, volumes })
             }
             Path::Tiled { tile, levels } => {
-                let bgl2 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                    label: Some("tiled"),
-                    entries: &[
-                        wgpu::BindGroupLayoutEntry {
-                            binding: 0,
-                            visibility: wgpu::ShaderStages::COMPUTE,
-                            ty: wgpu::BindingType::StorageTexture {
-                                access: wgpu::StorageTextureAccess::WriteOnly,
-                                format: HDR_FORMAT,
-                                view_dimension: wgpu::TextureViewDimension::D2,
-                            },
-                            count: None,
-                        },
-                        storage_entry(1, false, wgpu::ShaderStages::COMPUTE),
-                        storage_entry(2, false, wgpu::ShaderStages::COMPUTE),
-                    ],
-                });
-                let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                    label: Some("tiled"),
-                    bind_group_layouts: &[Some(&inputs.bgl0), Some(&inputs.bgl1), Some(&bgl2)],
-                    immediate_size: 0,
-                });
+                let (bgl2, layout) = tiled_layout(gpu, &inputs, "tiled", HDR_FORMAT);
                 let n = (tiles.0 * tiles.1) as u64;
                 let tile_counts = storage_buf(
                     gpu,
@@ -886,4 +865,38 @@ impl Prepared for Deferred {
     fn bytes_allocated(&self) -> u64 {
         self.alloc.bytes
     }
+}
+
+/// The tiled kernels' group 2 (the output storage texture, tile light counts and lists) and the
+/// pipeline layout over the shared G-buffer inputs (groups 0 and 1).
+pub fn tiled_layout(
+    gpu: &Gpu,
+    inputs: &ShadeInputs,
+    label: &str,
+    format: wgpu::TextureFormat,
+) -> (wgpu::BindGroupLayout, wgpu::PipelineLayout) {
+    let d = &gpu.device;
+    let bgl2 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::StorageTexture {
+                    access: wgpu::StorageTextureAccess::WriteOnly,
+                    format,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                },
+                count: None,
+            },
+            storage_entry(1, false, wgpu::ShaderStages::COMPUTE),
+            storage_entry(2, false, wgpu::ShaderStages::COMPUTE),
+        ],
+    });
+    let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &[Some(&inputs.bgl0), Some(&inputs.bgl1), Some(&bgl2)],
+        immediate_size: 0,
+    });
+    (bgl2, layout)
 }

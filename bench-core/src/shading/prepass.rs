@@ -275,28 +275,8 @@ impl PrePass {
                     &format!("texture_storage_2d<{}, write>", format.wgsl_storage()),
                 );
                 let m = module(gpu, "light accumulation (tiled)", &src);
-                let bgl2 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                    label: Some("tiled light buffer"),
-                    entries: &[
-                        wgpu::BindGroupLayoutEntry {
-                            binding: 0,
-                            visibility: wgpu::ShaderStages::COMPUTE,
-                            ty: wgpu::BindingType::StorageTexture {
-                                access: wgpu::StorageTextureAccess::WriteOnly,
-                                format: f0,
-                                view_dimension: wgpu::TextureViewDimension::D2,
-                            },
-                            count: None,
-                        },
-                        storage_entry(1, false, wgpu::ShaderStages::COMPUTE),
-                        storage_entry(2, false, wgpu::ShaderStages::COMPUTE),
-                    ],
-                });
-                let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                    label: Some("tiled light buffer"),
-                    bind_group_layouts: &[Some(&inputs.bgl0), Some(&inputs.bgl1), Some(&bgl2)],
-                    immediate_size: 0,
-                });
+                let (bgl2, layout) =
+                    super::gpu_paths::tiled_layout(gpu, &inputs, "tiled light buffer", f0);
                 let n = (tiles.0 * tiles.1) as u64;
                 let e = wgpu::BufferUsages::empty();
                 let counts =
