@@ -276,6 +276,67 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                 .draw(dir, &format!("deferred_cpu_culls_{stem}"), "cull_levels=1: lights culled per 64×64 tile; 2: again per 32×16 sub-tile. Quad skip: a light is skipped for a 4×4 quad when all 16 attenuations are 0; spec skip: a quad without specular colour skips the specular term (both exact: image bit-identical, tested).")?,
             );
         }
+        // BF3's normal-cone cull and diffuse-only skip, each on/off, per scene and fraction of
+        // diffuse-only lights.
+        let bf3: Vec<&Rec> = at
+            .iter()
+            .copied()
+            .filter(|r| r.get("method") == "cpu_tiled" && !r.get("cone_cull").is_empty())
+            .collect();
+        if bf3
+            .iter()
+            .any(|r| r.get("cone_cull") == "false" || r.get("diffuse_skip") == "false")
+        {
+            let key = |r: &Rec| {
+                format!(
+                    "{}, diffuse-only {}",
+                    if outdoor(r) { "city" } else { "room" },
+                    r.get("diffuse_only_frac")
+                )
+            };
+            let mut cats: Vec<String> = Vec::new();
+            for r in &bf3 {
+                let k = key(r);
+                if !cats.contains(&k) {
+                    cats.push(k);
+                }
+            }
+            let series = [
+                ("true", "true"),
+                ("true", "false"),
+                ("false", "true"),
+                ("false", "false"),
+            ]
+            .iter()
+            .map(|(cone, dif)| {
+                let v = cats
+                    .iter()
+                    .map(|c| {
+                        bf3.iter()
+                            .find(|r| {
+                                key(r) == *c
+                                    && r.get("cone_cull") == *cone
+                                    && r.get("diffuse_skip") == *dif
+                            })
+                            .and_then(|r| Some(Pt::new(0.0, r.f("cpu_light_ms")?)))
+                    })
+                    .collect();
+                (format!("cone cull {cone}, diffuse skip {dif}"), v)
+            })
+            .filter(|(_, v): &(String, Vec<Option<Pt>>)| v.iter().any(|p| p.is_some()))
+            .collect();
+            figs.push(
+                Bars {
+                    title: format!("CPU tile path: normal-cone cull and diffuse-only skip — {res}"),
+                    y_label: "CPU lighting ms per frame".into(),
+                    log_y: false,
+                    categories: cats,
+                    series,
+                    reference: None,
+                }
+                .draw(dir, &format!("deferred_cpu_bf3_culls_{stem}"), "Cone cull: a light is dropped for a 32×16 sub-tile when no normal in the sub-tile's cone can face it from any point of its position box (exact: image bit-identical, tested). Diffuse skip: lights flagged diffuse-only skip the specular term.")?,
+            );
+        }
         // CPU scaling over threads.
         let cpu: Vec<&Rec> = at
             .iter()
