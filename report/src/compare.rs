@@ -14,7 +14,7 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 
 use crate::charts::{Bars, Figure, Pt};
-use crate::data::{Rec, Runs};
+use crate::data::{resolution, Rec, Runs};
 use crate::studies::methods::CONFIG_AXES;
 
 /// What the comparison adds to the page.
@@ -189,10 +189,7 @@ pub fn compare(
     // 1. Time per method configuration, one chart per scene × resolution, one bar per platform.
     let mut scenes: Vec<(String, String)> = Vec::new();
     for r in &ok {
-        let s = (
-            r.get("scene_label").to_string(),
-            format!("{}x{}", r.get("width"), r.get("height")),
-        );
+        let s = (r.get("scene_label").to_string(), resolution(r));
         if !scenes.contains(&s) {
             scenes.push(s);
         }
@@ -203,8 +200,7 @@ pub fn compare(
             .copied()
             .filter(|k| {
                 let r = by_point[k].values().next().expect("non-empty");
-                r.get("scene_label") == label
-                    && format!("{}x{}", r.get("width"), r.get("height")) == *res
+                r.get("scene_label") == label && resolution(r) == *res
             })
             .collect();
         // Only points measured on at least two platforms say anything about platforms.

@@ -88,6 +88,22 @@ impl Runs {
             .collect()
     }
 
+    /// Rows grouped by `key`, groups in first-seen order (rows keep their order within a group).
+    pub fn group_by<'a>(
+        rows: impl IntoIterator<Item = &'a Rec>,
+        key: impl Fn(&Rec) -> String,
+    ) -> Vec<(String, Vec<&'a Rec>)> {
+        let mut out: Vec<(String, Vec<&'a Rec>)> = Vec::new();
+        for r in rows {
+            let k = key(r);
+            match out.iter_mut().find(|(g, _)| *g == k) {
+                Some((_, v)) => v.push(r),
+                None => out.push((k, vec![r])),
+            }
+        }
+        out
+    }
+
     /// Distinct non-empty values of a column, in first-seen order.
     pub fn distinct<'a>(rows: impl IntoIterator<Item = &'a Rec>, col: &str) -> Vec<String> {
         let mut out: Vec<String> = Vec::new();
@@ -99,4 +115,9 @@ impl Runs {
         }
         out
     }
+}
+
+/// A row's resolution as `WxH`.
+pub fn resolution(r: &Rec) -> String {
+    format!("{}x{}", r.get("width"), r.get("height"))
 }

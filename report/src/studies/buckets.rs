@@ -6,7 +6,7 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::charts::{Figure, XY};
-use crate::data::{Rec, Runs};
+use crate::data::{resolution, Rec, Runs};
 
 use super::methods::series_by_config;
 
@@ -18,27 +18,8 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         .filter(|r| r.ok() && r.f("collision_rate").is_some())
         .collect();
     let mut figs = Vec::new();
-    let resolutions: Vec<String> = rows
-        .iter()
-        .map(|r| format!("{}x{}", r.get("width"), r.get("height")))
-        .fold(Vec::new(), |mut v, s| {
-            if !v.contains(&s) {
-                v.push(s);
-            }
-            v
-        });
-    for res in resolutions {
-        let at_res: Vec<&Rec> = rows
-            .iter()
-            .copied()
-            .filter(|r| format!("{}x{}", r.get("width"), r.get("height")) == res)
-            .collect();
-        for generator in Runs::distinct(at_res.iter().copied(), "scene") {
-            let g: Vec<&Rec> = at_res
-                .iter()
-                .copied()
-                .filter(|r| r.get("scene") == generator)
-                .collect();
+    for (res, at_res) in Runs::group_by(rows.iter().copied(), resolution) {
+        for (generator, g) in Runs::group_by(at_res.iter().copied(), |r| r.get("scene").into()) {
             let series = series_by_config(
                 &g,
                 |r| Some((r.f("depth_complexity_max")?, r.f("collision_rate")?)),

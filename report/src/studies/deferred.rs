@@ -8,7 +8,7 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::charts::{Bars, Figure, Pt, Series, XY};
-use crate::data::{Rec, Runs};
+use crate::data::{resolution, Rec, Runs};
 
 /// Axes that tell configurations of one path apart.
 pub const CONFIG_AXES: &[&str] = &["tile_size", "cull_levels", "thread_count"];
@@ -49,24 +49,13 @@ pub(crate) fn series(
     out
 }
 
-pub(crate) fn resolution(r: &Rec) -> String {
-    format!("{}x{}", r.get("width"), r.get("height"))
-}
-
 /// The study's ok rows (floors left out) grouped by resolution, in first-seen order.
 pub(crate) fn rows_by_resolution<'a>(runs: &'a Runs, study: &str) -> Vec<(String, Vec<&'a Rec>)> {
-    let mut out: Vec<(String, Vec<&Rec>)> = Vec::new();
-    for r in runs.study(study) {
-        if !r.ok() || r.get("method").starts_with("floor_") {
-            continue;
-        }
-        let res = resolution(r);
-        match out.iter_mut().find(|(k, _)| *k == res) {
-            Some((_, v)) => v.push(r),
-            None => out.push((res, vec![r])),
-        }
-    }
-    out
+    let rows = runs
+        .study(study)
+        .into_iter()
+        .filter(|r| r.ok() && !r.get("method").starts_with("floor_"));
+    Runs::group_by(rows, resolution)
 }
 
 /// The time of a row: GPU ms, or the CPU lighting ms of CPU paths.

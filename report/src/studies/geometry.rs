@@ -10,7 +10,7 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::charts::{Bars, Figure, Pt, Series, XY};
-use crate::data::{Rec, Runs};
+use crate::data::{resolution, Rec, Runs};
 
 /// The axes a row's `[[study]]` swept (from its point key).
 fn swept(r: &Rec) -> Vec<&str> {
@@ -99,19 +99,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         .filter(|r| r.ok() && r.get("method") == "geometry")
         .collect();
     let mut figs = Vec::new();
-    let mut resolutions: Vec<String> = Vec::new();
-    for r in &rows {
-        let res = format!("{}x{}", r.get("width"), r.get("height"));
-        if !resolutions.contains(&res) {
-            resolutions.push(res);
-        }
-    }
-    for res in resolutions {
-        let at: Vec<&Rec> = rows
-            .iter()
-            .copied()
-            .filter(|r| format!("{}x{}", r.get("width"), r.get("height")) == res)
-            .collect();
+    for (res, at) in Runs::group_by(rows.iter().copied(), resolution) {
         throughput(&at, &res, dir, &mut figs)?;
         batching(&at, &res, dir, &mut figs)?;
         layout(&at, &res, dir, &mut figs)?;

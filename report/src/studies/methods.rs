@@ -7,7 +7,7 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::charts::{Bars, Figure, Pt, Series, XY};
-use crate::data::{Rec, Runs};
+use crate::data::{resolution, Rec, Runs};
 
 /// Axes that distinguish configurations of one method.
 pub const CONFIG_AXES: &[&str] = &[
@@ -46,23 +46,9 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         .copied()
         .filter(|r| !r.get("method").starts_with("floor_"))
         .collect();
-    for res in Runs::distinct(methods.iter().copied(), "width")
-        .iter()
-        .zip(Runs::distinct(methods.iter().copied(), "height"))
-        .map(|(w, h)| format!("{w}x{h}"))
-    {
-        let at_res: Vec<&Rec> = methods
-            .iter()
-            .copied()
-            .filter(|r| format!("{}x{}", r.get("width"), r.get("height")) == res)
-            .collect();
+    for (res, at_res) in Runs::group_by(methods.iter().copied(), resolution) {
         // Time vs layers: x = true max depth complexity of the scene, per generator.
-        for generator in Runs::distinct(at_res.iter().copied(), "scene") {
-            let g: Vec<&Rec> = at_res
-                .iter()
-                .copied()
-                .filter(|r| r.get("scene") == generator)
-                .collect();
+        for (generator, g) in Runs::group_by(at_res.iter().copied(), |r| r.get("scene").into()) {
             let series = series_by_config(
                 &g,
                 |r| Some((r.f("depth_complexity_max")?, r.f("gpu_ms_median")?)),
@@ -82,12 +68,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             }
         }
         // Error vs time, per scene: the Pareto view.
-        for label in Runs::distinct(at_res.iter().copied(), "scene_label") {
-            let g: Vec<&Rec> = at_res
-                .iter()
-                .copied()
-                .filter(|r| r.get("scene_label") == label)
-                .collect();
+        for (label, g) in Runs::group_by(at_res.iter().copied(), |r| r.get("scene_label").into()) {
             let series = series_by_config(
                 &g,
                 |r| Some((r.f("gpu_ms_median")?, r.f("rmse")?.max(EXACT_FLOOR))),
