@@ -309,3 +309,19 @@ impl Gpu {
         Ok(bytes)
     }
 }
+
+/// A colour attachment cleared to `color` at the start of the pass and stored at its end.
+pub fn cleared(
+    view: &wgpu::TextureView,
+    color: wgpu::Color,
+) -> Option<wgpu::RenderPassColorAttachment<'_>> {
+    Some(wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            load: wgpu::LoadOp::Clear(color),
+            store: wgpu::StoreOp::Store,
+        },
+    })
+}

@@ -534,20 +534,15 @@ impl PrePass {
         timer: &mut GpuTimer,
     ) {
         let hv = self.hdr.create_view(&Default::default());
-        let att = [Some(wgpu::RenderPassColorAttachment {
-            view: &hv,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color {
-                    r: SKY[0] as f64,
-                    g: SKY[1] as f64,
-                    b: SKY[2] as f64,
-                    a: 1.0,
-                }),
-                store: wgpu::StoreOp::Store,
+        let att = [crate::gpu::cleared(
+            &hv,
+            wgpu::Color {
+                r: SKY[0] as f64,
+                g: SKY[1] as f64,
+                b: SKY[2] as f64,
+                a: 1.0,
             },
-        })];
+        )];
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("material"),
             color_attachments: &att,

@@ -919,21 +919,18 @@ impl super::Prepared for PreparedBucket {
         {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("depth range"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.range_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        // Below every (−d, d) with d in [0, 1]: an untouched pixel reads zmax < zmin.
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                color_attachments: &[
+                    // Below every (−d, d) with d in [0, 1]: an untouched pixel reads zmax < zmin.
+                    crate::gpu::cleared(
+                        &self.range_view,
+                        wgpu::Color {
                             r: -2.0,
                             g: -2.0,
                             b: 0.0,
                             a: 0.0,
-                        }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
+                        },
+                    ),
+                ],
                 depth_stencil_attachment: None,
                 timestamp_writes: timer.render_pass("depth range"),
                 occlusion_query_set: None,

@@ -280,20 +280,15 @@ impl PreparedDual {
         view: &wgpu::TextureView,
         clear: f64,
     ) -> Option<wgpu::RenderPassColorAttachment<'_>> {
-        Some(wgpu::RenderPassColorAttachment {
+        crate::gpu::cleared(
             view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color {
-                    r: clear,
-                    g: clear,
-                    b: clear,
-                    a: clear,
-                }),
-                store: wgpu::StoreOp::Store,
+            wgpu::Color {
+                r: clear,
+                g: clear,
+                b: clear,
+                a: clear,
             },
-        })
+        )
     }
 
     fn compute(

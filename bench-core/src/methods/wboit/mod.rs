@@ -201,20 +201,15 @@ impl Prepared for PreparedWboit {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         {
             let att = |view, clear: f64| {
-                Some(wgpu::RenderPassColorAttachment {
+                crate::gpu::cleared(
                     view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: clear,
-                            g: clear,
-                            b: clear,
-                            a: clear,
-                        }),
-                        store: wgpu::StoreOp::Store,
+                    wgpu::Color {
+                        r: clear,
+                        g: clear,
+                        b: clear,
+                        a: clear,
                     },
-                })
+                )
             };
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("accumulate"),

@@ -612,21 +612,18 @@ impl FeedGpu {
         {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("geometry feed"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &target.color_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        // Check mode: alpha −1 marks "no fragment" (depth is in [0, 1]).
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                color_attachments: &[
+                    // Check mode: alpha −1 marks "no fragment" (depth is in [0, 1]).
+                    crate::gpu::cleared(
+                        &target.color_view,
+                        wgpu::Color {
                             r: 0.0,
                             g: 0.0,
                             b: 0.0,
                             a: -1.0,
-                        }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
+                        },
+                    ),
+                ],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &target.depth_view,
                     depth_ops: Some(wgpu::Operations {

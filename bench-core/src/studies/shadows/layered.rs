@@ -771,20 +771,15 @@ impl Prepared for PreparedSsm {
         for (j, view) in self.layer_views.iter().enumerate() {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("sm_peel"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                color_attachments: &[crate::gpu::cleared(
                     view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: FAR,
-                            g: 0.0,
-                            b: 0.0,
-                            a: 0.0,
-                        }),
-                        store: wgpu::StoreOp::Store,
+                    wgpu::Color {
+                        r: FAR,
+                        g: 0.0,
+                        b: 0.0,
+                        a: 0.0,
                     },
-                })],
+                )],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &self.sm_depth,
                     depth_ops: Some(wgpu::Operations {
