@@ -9,11 +9,12 @@ use wgpu::util::DeviceExt;
 
 use super::{GBuffer, SKY_MATERIAL};
 use crate::gpu::Gpu;
+pub use crate::gpu::{padded_row, read_rgba32f, read_texture};
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::methods::floor::{clear_depth, depth_state};
 use crate::methods::{camera_entry, shader, storage_entry};
 use crate::timing::GpuTimer;
-use crate::{CoreError, Result};
+use crate::Result;
 
 const WGSL: &str = include_str!("gbuffer.wgsl");
 
@@ -312,62 +313,4 @@ impl GBufferPass {
             material,
         })
     }
-}
-
-/// Bytes per row of a texture copy: padded to wgpu's 256-byte alignment.
-pub fn padded_row(width: u32, bpp: u32) -> u32 {
-    let unpadded = width * bpp;
-    unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
-}
-
-/// Copies a whole 2-D texture (one aspect) into a buffer and returns the tightly packed bytes.
-pub fn read_texture(
-    gpu: &Gpu,
-    tex: &wgpu::Texture,
-    bpp: u32,
-    aspect: wgpu::TextureAspect,
-) -> Result<Vec<u8>> {
-    let (w, h) = (tex.width(), tex.height());
-    let row = padded_row(w, bpp);
-    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("texture readback"),
-        size: row as u64 * h as u64,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut enc = gpu.device.create_command_encoder(&Default::default());
-    enc.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo {
-            texture: tex,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect,
-        },
-        wgpu::TexelCopyBufferInfo {
-            buffer: &staging,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: Some(h),
-            },
-        },
-        tex.size(),
-    );
-    gpu.queue.submit([enc.finish()]);
-    let bytes = gpu.map_read(&staging)?;
-    if bytes.len() < (row * h) as usize {
-        return Err(CoreError::Gpu("short texture read-back".into()));
-    }
-    let mut out = Vec::with_capacity((w * h * bpp) as usize);
-    for y in 0..h as usize {
-        let s = y * row as usize;
-        out.extend_from_slice(&bytes[s..s + (w * bpp) as usize]);
-    }
-    Ok(out)
-}
-
-/// Reads an Rgba32Float texture as RGBA pixels.
-pub fn read_rgba32f(gpu: &Gpu, tex: &wgpu::Texture) -> Result<Vec<[f32; 4]>> {
-    let b = read_texture(gpu, tex, 16, wgpu::TextureAspect::All)?;
-    Ok(bytemuck::cast_slice(&b).to_vec())
 }

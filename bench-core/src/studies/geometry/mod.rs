@@ -335,8 +335,6 @@ pub enum Mode {
 }
 
 struct Target {
-    width: u32,
-    height: u32,
     color: wgpu::Texture,
     color_view: wgpu::TextureView,
     depth_view: wgpu::TextureView,
@@ -560,8 +558,6 @@ impl FeedGpu {
                     wgpu::TextureUsages::RENDER_ATTACHMENT,
                 );
                 Target {
-                    width: w,
-                    height: h,
                     color_view: color.create_view(&Default::default()),
                     color,
                     depth_view: depth.create_view(&Default::default()),
@@ -687,40 +683,7 @@ impl FeedGpu {
 
     /// Reads target `t`'s colour (check mode: RGBA32F; bench mode is RGBA8 and not read).
     pub fn read_check(&self, gpu: &Gpu, t: usize) -> Result<Vec<[f32; 4]>> {
-        let target = &self.targets[t];
-        let row =
-            (target.width as u64 * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as u64);
-        let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("check read"),
-            size: row * target.height as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.copy_texture_to_buffer(
-            target.color.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buf,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row as u32),
-                    rows_per_image: None,
-                },
-            },
-            wgpu::Extent3d {
-                width: target.width,
-                height: target.height,
-                depth_or_array_layers: 1,
-            },
-        );
-        gpu.queue.submit([enc.finish()]);
-        let bytes = gpu.map_read(&buf)?;
-        let mut out = Vec::with_capacity((target.width * target.height) as usize);
-        for y in 0..target.height as usize {
-            let r = &bytes[y * row as usize..y * row as usize + target.width as usize * 16];
-            out.extend(bytemuck::cast_slice::<u8, [f32; 4]>(r).iter().copied());
-        }
-        Ok(out)
+        crate::gpu::read_rgba32f(gpu, &self.targets[t].color)
     }
 }
 

@@ -716,41 +716,9 @@ impl PreparedSsm {
 
     /// The shading inputs as the GPU holds them after a frame, for the CPU twin.
     pub fn read_maps(&self, gpu: &Gpu) -> Result<super::twin::Maps> {
-        let r = self.cfg.shadow_map_res;
-        let row = (r * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
         let mut out = Vec::new();
         for tex in &self.packed_tex {
-            let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("ssm map readback"),
-                size: (row * r) as u64,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let mut enc = gpu.device.create_command_encoder(&Default::default());
-            enc.copy_texture_to_buffer(
-                tex.as_image_copy(),
-                wgpu::TexelCopyBufferInfo {
-                    buffer: &buf,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(row),
-                        rows_per_image: None,
-                    },
-                },
-                wgpu::Extent3d {
-                    width: r,
-                    height: r,
-                    depth_or_array_layers: 1,
-                },
-            );
-            gpu.queue.submit([enc.finish()]);
-            let bytes = gpu.map_read(&buf)?;
-            let mut texels = Vec::with_capacity((r * r) as usize);
-            for y in 0..r as usize {
-                let line = &bytes[y * row as usize..y * row as usize + r as usize * 16];
-                texels.extend_from_slice(bytemuck::cast_slice::<u8, [f32; 4]>(line));
-            }
-            out.push(texels);
+            out.push(crate::gpu::read_rgba32f(gpu, tex)?);
         }
         let pyramid = read_vec::<f32>(gpu, &self.pyramid, (self.pyramid.size() / 4) as usize)?;
         let slope = out.pop().unwrap_or_default();
