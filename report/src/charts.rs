@@ -131,6 +131,54 @@ impl XY {
         })
     }
 
+    /// The plot corner the legend hides least data in: points and samples along the drawn lines
+    /// are counted in each corner's box (about the legend's size) and the emptiest corner wins.
+    /// Returns the corner and how many samples it would hide.
+    fn legend_corner(
+        &self,
+        (x0, x1): (f64, f64),
+        (y0, y1): (f64, f64),
+    ) -> (SeriesLabelPosition, usize) {
+        let norm = |p: &Pt| {
+            let (x, y) = (tr(p.x, self.log_x)?, tr(p.y, self.log_y)?);
+            Some(((x - x0) / (x1 - x0), (y - y0) / (y1 - y0)))
+        };
+        let mut samples = Vec::new();
+        for s in &self.series {
+            let p: Vec<(f64, f64)> = s.points.iter().filter_map(norm).collect();
+            samples.extend(p.iter().copied());
+            if self.lines {
+                for w in p.windows(2) {
+                    samples.extend((1..16).map(|i| {
+                        let t = i as f64 / 16.0;
+                        (
+                            w[0].0 + (w[1].0 - w[0].0) * t,
+                            w[0].1 + (w[1].1 - w[0].1) * t,
+                        )
+                    }));
+                }
+            }
+        }
+        let count = |left: bool, top: bool| {
+            samples
+                .iter()
+                .filter(|(x, y)| {
+                    (if left { *x < 0.45 } else { *x > 0.55 })
+                        && (if top { *y > 0.6 } else { *y < 0.4 })
+                })
+                .count()
+        };
+        [
+            (SeriesLabelPosition::UpperLeft, count(true, true)),
+            (SeriesLabelPosition::UpperRight, count(false, true)),
+            (SeriesLabelPosition::LowerRight, count(false, false)),
+            (SeriesLabelPosition::LowerLeft, count(true, false)),
+        ]
+        .into_iter()
+        .min_by_key(|(_, n)| *n)
+        .expect("four corners")
+    }
+
     fn render<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>
     where
         DB::ErrorType: 'static,
@@ -149,7 +197,15 @@ impl XY {
             .filter_map(|(x, y)| Some((tr(x, self.log_x)?, tr(y, self.log_y)?)))
             .collect();
         let (x0, x1) = range(pts.iter().map(|p| p.0));
-        let (y0, y1) = range(pts.iter().map(|p| p.1));
+        let (y0, mut y1) = range(pts.iter().map(|p| p.1));
+        // The legend goes in the emptiest corner; when every corner holds data, the y range
+        // grows upwards by about the legend's height so it sits above the data instead.
+        let (mut corner, hidden) = self.legend_corner((x0, x1), (y0, y1));
+        if hidden > 0 {
+            let f = (0.06 + 0.045 * self.series.len() as f64).min(0.6);
+            y1 += (y1 - y0) * f / (1.0 - f);
+            corner = SeriesLabelPosition::UpperRight;
+        }
         let mut chart = ChartBuilder::on(&root)
             .caption(&self.title, ("sans-serif", 22))
             .margin(12)
@@ -218,7 +274,7 @@ impl XY {
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .label_font(("sans-serif", 13))
-            .position(SeriesLabelPosition::UpperLeft)
+            .position(corner)
             .draw()
             .map_err(err)?;
         root.present().map_err(err)?;
@@ -270,12 +326,26 @@ impl Bars {
             .chain(self.reference)
             .filter_map(|v| tr(v, ly))
             .collect();
-        let (mut y0, y1) = range(vals.iter().copied());
+        let (mut y0, mut y1) = range(vals.iter().copied());
         if !ly {
             y0 = y0.min(0.0);
         }
         let n = self.categories.len().max(1);
         let ns = self.series.len().max(1);
+        // The legend sits top right; if a bar (or whisker) in the right part would be under it,
+        // the y range grows so the legend clears the tallest of them.
+        let f = (0.06 + 0.045 * ns as f64).min(0.6);
+        let under_legend = self
+            .series
+            .iter()
+            .flat_map(|(_, v)| v.iter().enumerate())
+            .filter(|(c, _)| (*c as f64 + 0.5) / n as f64 > 0.55)
+            .filter_map(|(_, p)| p.as_ref())
+            .filter_map(|p| tr(p.hi.unwrap_or(p.y).max(p.y), ly))
+            .fold(f64::NEG_INFINITY, f64::max);
+        if under_legend > y1 - (y1 - y0) * f {
+            y1 = y0 + (under_legend - y0) / (1.0 - f);
+        }
         let mut chart = ChartBuilder::on(&root)
             .caption(&self.title, ("sans-serif", 22))
             .margin(12)
