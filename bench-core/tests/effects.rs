@@ -40,10 +40,12 @@ fn err(method: &str, spec: &SceneSpec, params: &Params) -> (f64, f64) {
     (e.max_abs, e.rmse)
 }
 
-/// Depth peeling (specialised and uber) and the linked list (one pass, every effect but Fresnel).
+/// Depth peeling (specialised and uber), the compute A-buffer (attributes re-derived from the
+/// primitive: every effect) and the linked list (one pass, every effect but Fresnel, so last).
 const RUNS: &[(&str, Option<&str>)] = &[
     ("depth_peel", Some("specialised")),
     ("depth_peel", Some("uber")),
+    ("compute_abuffer", None),
     ("linked_list", None),
 ];
 
@@ -119,7 +121,7 @@ fn translucency_stable_and_naive_48px_match_reference_near_the_eye() {
 fn fresnel_48px_matches_reference() {
     // The linked list's nodes carry no normal: it reports fresnel as unsupported (below).
     check_runs(
-        &RUNS[..2],
+        &RUNS[..3],
         shells(),
         Params::new()
             .with("effect", s("fresnel"))

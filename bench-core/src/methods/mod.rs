@@ -9,6 +9,7 @@
 //! | `kbuffer_rmw`  | Bavoil 2007 ch. 4, k-buffer by non-atomic read-modify-write insertion | k nearest, but RMW hazards (measured: `hazard_rate`) | 1 (+ resolve) | k × (4 B key + 32 B entry) + 16 B image |
 //! | `kbuffer_atomic` | hazard-free k-buffer: 32-bit atomicMax bubbling of depth keys, then a payload pass | exact k nearest (ties get their own slots) | 2 (+ resolve) | k × (4 B key + 4 B claim + 32 B entry) + 16 B image |
 //! | `linked_list`  | Yang et al. 2010, per-pixel linked lists (atomic heads, one node pool), sorted in the resolve | exact within the pool (`layers` nodes per pixel on average); overflow counted | 1 (+ resolve) | 28 B (head, lost, count, image) + layers × 32 B node |
+//! | `compute_abuffer` | Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no render pass; Laine & Karras 2011 in spirit), attributes re-derived per primitive (visibility buffer) | exact: coverage rule for rule as the reference, sized by a prepare-time count; lists over 128 counted | 2 (count, fill) + scan + resolve | 4 B offset + 16 B image + exactly 8 B per fragment |
 //! | `wboit`        | McGuire & Bavoil 2013, weighted blended OIT | approximate (exact for one layer or one colour/alpha) | 1 (+ resolve) | 8 B RGBA16F + 2 B R16F + 16 B result |
 //! | `bdp`          | Liu et al., GPU Pro ch. 1, uniform bucket depth peeling | approximate: exact iff ≤1 fragment per bucket (2 if paired); collisions counted | 2 | 8 B range + 4 B × channels (≤32) + 68 B resolve |
 //! | `bdp2`         | Liu et al., GPU Pro ch. 1, two-pass BDP | approximate: 2 fragments per bucket; collisions counted | 3 | 8 B range + 2 × 4 B × K + 68 B resolve |
@@ -25,6 +26,7 @@ pub mod adp;
 pub mod bdp;
 pub mod bdp2;
 pub mod bucket;
+pub mod compute_abuffer;
 pub mod depth_peel;
 pub mod dual_peel;
 pub mod floor;
@@ -160,6 +162,7 @@ pub fn all() -> Vec<Box<dyn Method>> {
         Box::new(kbuffer_rmw::KBufferRmw),
         Box::new(kbuffer_atomic::KBufferAtomic),
         Box::new(linked_list::LinkedList),
+        Box::new(compute_abuffer::ComputeAbuffer),
         Box::new(wboit::Wboit),
         Box::new(bdp::Bdp),
         Box::new(bdp2::Bdp2),

@@ -1,0 +1,442 @@
+//! Exact A-buffer by software rasterisation in compute (no render pass): count every pixel's
+//! fragments, prefix-sum the counts into per-pixel offsets, rasterise again to fill a fragment
+//! array sized exactly (8 B per fragment: depth + primitive id), then sort and fold each pixel,
+//! re-deriving its fragments' attributes from their primitives (every effect, Fresnel included).
+//!
+//! Sources: the count → scan → fill layout is the "dynamic fragment buffer" (Maule, Comba,
+//! Torchelsen & Bastos 2012); rasterising in compute follows Laine & Karras 2011 (cudaraster) in
+//! spirit only — one thread per small triangle, a shared list for large ones; storing primitive
+//! ids instead of attributes is the visibility buffer (Burns & Hunt 2013). It exists because the
+//! mission's GPU (an H100) has few raster units: the same capture in compute may beat the
+//! fragment pipeline there, which the rows measure rather than assume.
+//!
+//! The fragment array is sized by one count at prepare time (the scene is static); every frame
+//! counts again and a fragment beyond the allocation is counted as lost (flag `overflow`), never
+//! silent — a dynamic scene would grow the array from that count, as engines do.
+
+use scenarios::Params;
+
+use super::store::{bind_buffers, check_storage_size, compute_pipeline, STORAGE_RW};
+use super::{camera_entry, read_vec, shader, storage_entry, Capture, Expected, FrameStats};
+use super::{Method, Prepared, EFFECTS_WGSL};
+use crate::effects::{self, EffectConfig};
+use crate::gpu::Gpu;
+use crate::gpu_scene::{AllocCounter, GpuScene};
+use crate::timing::GpuTimer;
+use crate::{CoreError, Result};
+
+const WGSL: &str = include_str!("compute_abuffer.wgsl");
+/// The resolve's per-pixel sort capacity (`SORT_MAX` in the WGSL).
+pub const SORT_MAX: u32 = 128;
+/// Bytes per stored fragment: f32 window depth + u32 primitive id (bit 31: front facing).
+pub const FRAG_BYTES: u64 = 8;
+/// Words of counters at the head of the `work` buffer (`W_BLOCKS` in the WGSL).
+const COUNTERS: u64 = 16;
+/// Pixels per scan block (256 threads × 4).
+const SCAN_BLOCK: u64 = 1024;
+/// Largest dispatch dimension wgpu guarantees.
+const MAX_GROUPS: u32 = 65_535;
+/// Storage buffers the kernels bind.
+const STORAGE_BUFFERS: u32 = 9;
+
+pub struct ComputeAbuffer;
+
+impl Method for ComputeAbuffer {
+    fn name(&self) -> &'static str {
+        "compute_abuffer"
+    }
+    fn describe(&self) -> &'static str {
+        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment"
+    }
+    fn exact(&self) -> bool {
+        true
+    }
+    fn axes(&self) -> &'static [&'static str] {
+        &[
+            "small_max",
+            "effect",
+            "sigma",
+            "csg_a",
+            "csg_b",
+            "dof_near",
+            "dof_far",
+            "variant",
+        ]
+    }
+    fn supports(&self, gpu: &Gpu, params: &Params) -> std::result::Result<(), String> {
+        let have = gpu.limits.max_storage_buffers_per_shader_stage;
+        if have < STORAGE_BUFFERS {
+            return Err(format!(
+                "needs {STORAGE_BUFFERS} storage buffers per shader stage, the adapter allows {have}"
+            ));
+        }
+        small_max(params)?;
+        effect_config(params)?;
+        Ok(())
+    }
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
+        let small = small_max(params).map_err(CoreError::Param)?;
+        let effect = effect_config(params).map_err(CoreError::Param)?;
+        Ok(Box::new(PreparedAbuffer::new(gpu, scene, small, &effect)?))
+    }
+}
+
+/// Largest bounding box (pixels) one thread rasterises; larger triangles are shared.
+fn small_max(params: &Params) -> std::result::Result<u32, String> {
+    Ok(super::int_param(params, "small_max", 128, 1, 1 << 20)? as u32)
+}
+
+fn effect_config(params: &Params) -> std::result::Result<EffectConfig, String> {
+    effects::check_variant(params, &["naive", "stable"])?;
+    EffectConfig::from_params(params)
+}
+
+/// `struct Sizes` of the WGSL: what varies with the scene, read at run time.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Sizes {
+    ntri: u32,
+    npix: u32,
+    nblocks: u32,
+    capacity: u32,
+    big_cap: u32,
+    small_max: u32,
+    pad: [u32; 2],
+}
+
+/// Pipelines of one configuration (count or fill, and the capacities they were built for).
+struct Kernels {
+    small: wgpu::ComputePipeline,
+    big: wgpu::ComputePipeline,
+}
+
+struct PreparedAbuffer {
+    count: Kernels,
+    fill: Kernels,
+    scan: [wgpu::ComputePipeline; 3],
+    resolve: wgpu::ComputePipeline,
+    bind: wgpu::BindGroup,
+    offs: wgpu::Buffer,
+    work: wgpu::Buffer,
+    image: wgpu::Buffer,
+    capacity: u64,
+    /// Big triangles and the workgroups per triangle at prepare time (the dispatch shape).
+    big_groups: (u32, u32),
+    nblocks: u32,
+    ntri: u32,
+    images: usize,
+    prep_note: String,
+    _sizes: wgpu::Buffer,
+    alloc: AllocCounter,
+}
+
+struct Layout {
+    module: wgpu::ShaderModule,
+    bgl: wgpu::BindGroupLayout,
+    pipeline: wgpu::PipelineLayout,
+}
+
+fn kernels(gpu: &Gpu, l: &Layout, fill: bool) -> Kernels {
+    let c = [("FILL", if fill { 1.0 } else { 0.0 })];
+    let mk = |entry: &str| compute_pipeline(gpu, entry, &l.pipeline, &l.module, entry, &c);
+    Kernels {
+        small: mk("raster_small"),
+        big: mk("raster_big"),
+    }
+}
+
+fn dispatch(
+    enc: &mut wgpu::CommandEncoder,
+    timer: Option<&mut GpuTimer>,
+    label: &str,
+    bind: &wgpu::BindGroup,
+    jobs: &[(&wgpu::ComputePipeline, (u32, u32))],
+) {
+    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: timer.and_then(|t| t.compute_pass(label)),
+    });
+    pass.set_bind_group(0, bind, &[]);
+    for (p, (x, y)) in jobs {
+        if *x > 0 && *y > 0 {
+            pass.set_pipeline(p);
+            pass.dispatch_workgroups(*x, *y, 1);
+        }
+    }
+}
+
+impl PreparedAbuffer {
+    fn new(gpu: &Gpu, scene: &GpuScene, small_max: u32, effect: &EffectConfig) -> Result<Self> {
+        let d = &gpu.device;
+        let px = scene.pixels() as u64;
+        let nblocks = px.div_ceil(SCAN_BLOCK);
+        if nblocks > MAX_GROUPS as u64 {
+            return Err(CoreError::Param(format!(
+                "compute_abuffer scans at most {} pixels, not {px}",
+                MAX_GROUPS as u64 * SCAN_BLOCK
+            )));
+        }
+        let ntri = scene.index_count / 3;
+        let src = format!("{WGSL}\n{EFFECTS_WGSL}");
+        let module = shader(gpu, "compute_abuffer", &src);
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let mut entries = vec![camera_entry(0)];
+        entries.extend((1..6).map(|b| storage_entry(b, true, cs)));
+        entries.extend((6..10).map(|b| storage_entry(b, false, cs)));
+        let mut uniform = camera_entry(10);
+        uniform.visibility = cs;
+        entries.push(uniform);
+        let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("compute_abuffer"),
+            entries: &entries,
+        });
+        let pipeline = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("compute_abuffer"),
+            bind_group_layouts: &[Some(&bgl)],
+            immediate_size: 0,
+        });
+        let l = Layout {
+            module,
+            bgl,
+            pipeline,
+        };
+        let sizes = |capacity: u64, big_cap: u64| Sizes {
+            ntri,
+            npix: px as u32,
+            nblocks: nblocks as u32,
+            capacity: capacity as u32,
+            big_cap: big_cap as u32,
+            small_max,
+            pad: [0; 2],
+        };
+        let sizes_buf = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("abuffer sizes"),
+            size: std::mem::size_of::<Sizes>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        gpu.queue
+            .write_buffer(&sizes_buf, 0, bytemuck::bytes_of(&sizes(0, ntri as u64)));
+        let scan_groups = [(nblocks as u32, 1), (1, 1), (nblocks as u32, 1)];
+        let scan = ["scan_blocks", "scan_sums", "scan_add"]
+            .map(|e| compute_pipeline(gpu, e, &l.pipeline, &l.module, e, &[]));
+        let count = kernels(gpu, &l, false);
+        let small_groups = ntri.div_ceil(64).clamp(1, MAX_GROUPS);
+
+        // Sizing: one count with a big-triangle list as long as the scene, read back.
+        let mut scratch = AllocCounter::default();
+        let offs = scratch.buffer(gpu, "abuffer offsets", px * 4, STORAGE_RW);
+        let work_words = |big: u64| COUNTERS + nblocks + big.max(1);
+        check_storage_size(gpu, "compute_abuffer work", work_words(ntri as u64) * 4)?;
+        let work = scratch.buffer(
+            gpu,
+            "abuffer work (sizing)",
+            work_words(ntri as u64) * 4,
+            STORAGE_RW,
+        );
+        let dummy = scratch.buffer(gpu, "abuffer fragments (sizing)", 8, STORAGE_RW);
+        let images = effect.effect.image_count();
+        let image_bytes = px * 16 * images as u64;
+        let dummy_image = scratch.buffer(gpu, "abuffer image (sizing)", 16, STORAGE_RW);
+        let bind_with = |frags: &wgpu::Buffer, work: &wgpu::Buffer, image: &wgpu::Buffer| {
+            bind_buffers(
+                gpu,
+                "compute_abuffer",
+                &l.bgl,
+                &[
+                    &scene.camera,
+                    &scene.positions,
+                    &scene.normals,
+                    &scene.colors,
+                    &scene.object_ids,
+                    &scene.indices,
+                    &offs,
+                    frags,
+                    work,
+                    image,
+                    &sizes_buf,
+                ],
+            )
+        };
+        let sizing_bind = bind_with(&dummy, &work, &dummy_image);
+        let mut enc = d.create_command_encoder(&Default::default());
+        enc.clear_buffer(&offs, 0, None);
+        enc.clear_buffer(&work, 0, None);
+        let big_probe = ntri.clamp(1, 4096);
+        dispatch(
+            &mut enc,
+            None,
+            "sizing count",
+            &sizing_bind,
+            &[
+                (&count.small, (small_groups, 1)),
+                (&count.big, (big_probe, 16)),
+            ],
+        );
+        let scan_jobs: Vec<_> = scan.iter().zip(scan_groups).collect();
+        dispatch(&mut enc, None, "sizing scan", &sizing_bind, &scan_jobs);
+        gpu.queue.submit([enc.finish()]);
+        let c = read_vec::<u32>(gpu, &work, COUNTERS as usize)?;
+        let (nbig, big_px, total) = (c[0] as u64, c[6] as u64, c[4] as u64);
+        drop(sizing_bind);
+        drop((work, dummy, dummy_image));
+
+        let capacity = total.max(1);
+        if capacity >= u32::MAX as u64 {
+            return Err(CoreError::OutOfMemory(format!(
+                "compute_abuffer: {total} fragments do not fit 32-bit slot indices"
+            )));
+        }
+        check_storage_size(gpu, "compute_abuffer fragments", capacity * FRAG_BYTES)?;
+        let mut alloc = AllocCounter::default();
+        alloc.bytes += px * 4; // the offsets (allocated above, kept)
+        let frags = alloc.buffer(
+            gpu,
+            "abuffer fragments",
+            capacity * FRAG_BYTES,
+            wgpu::BufferUsages::STORAGE,
+        );
+        let work = alloc.buffer(gpu, "abuffer work", work_words(nbig) * 4, STORAGE_RW);
+        let image = alloc.buffer(gpu, "abuffer image", image_bytes, STORAGE_RW);
+        let bind = bind_with(&frags, &work, &image);
+        gpu.queue.write_buffer(
+            &sizes_buf,
+            0,
+            bytemuck::bytes_of(&sizes(capacity, nbig.max(1))),
+        );
+        let fill = kernels(gpu, &l, true);
+        let rc = effect.constants();
+        let resolve = compute_pipeline(gpu, "resolve", &l.pipeline, &l.module, "resolve", &rc);
+        // Workgroups per big triangle: about 8 pixels per thread on average, at most 256.
+        let parts = if nbig == 0 {
+            0
+        } else {
+            (big_px.div_ceil(nbig * 64 * 8)).clamp(1, 256) as u32
+        };
+        let big_groups = ((nbig as u32).min(MAX_GROUPS), parts);
+        let prep_note = format!(
+            "sized by a prepare-time count: {total} fragments, {nbig} shared (big or clipped) triangles × {parts} workgroups, {} B of sizing scratch freed",
+            scratch.bytes - px * 4
+        );
+        Ok(PreparedAbuffer {
+            count,
+            fill,
+            scan,
+            resolve,
+            bind,
+            offs,
+            work,
+            image,
+            capacity,
+            big_groups,
+            nblocks: nblocks as u32,
+            ntri,
+            images,
+            prep_note,
+            _sizes: sizes_buf,
+            alloc,
+        })
+    }
+}
+
+impl Prepared for PreparedAbuffer {
+    fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
+        let small_groups = self.ntri.div_ceil(64).clamp(1, MAX_GROUPS);
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.clear_buffer(&self.offs, 0, None);
+        enc.clear_buffer(&self.work, 0, Some(COUNTERS * 4));
+        dispatch(
+            &mut enc,
+            Some(timer),
+            "count",
+            &self.bind,
+            &[
+                (&self.count.small, (small_groups, 1)),
+                (&self.count.big, self.big_groups),
+            ],
+        );
+        let n = self.nblocks;
+        let jobs: Vec<_> = self.scan.iter().zip([(n, 1), (1, 1), (n, 1)]).collect();
+        dispatch(&mut enc, Some(timer), "scan", &self.bind, &jobs);
+        dispatch(
+            &mut enc,
+            Some(timer),
+            "fill",
+            &self.bind,
+            &[
+                (&self.fill.small, (small_groups, 1)),
+                (&self.fill.big, self.big_groups),
+            ],
+        );
+        dispatch(
+            &mut enc,
+            Some(timer),
+            "resolve",
+            &self.bind,
+            &[(
+                &self.resolve,
+                (scene.width.div_ceil(8), scene.height.div_ceil(8)),
+            )],
+        );
+        gpu.queue.submit([enc.finish()]);
+        Ok(FrameStats {
+            geometry_passes: 2,
+            layers: 0,
+        })
+    }
+
+    fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
+        let n = scene.pixels();
+        let mut cap = Capture::empty();
+        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n * self.images)?);
+        // After the fill, offs[p] is one past pixel p's last slot: counts are the differences,
+        // cut to the slots that exist and to what the resolve could sort.
+        let ends = read_vec::<u32>(gpu, &self.offs, n)?;
+        let cap_slots = self.capacity.min(u32::MAX as u64) as u32;
+        let mut prev = 0u32;
+        cap.counts = Some(
+            ends.iter()
+                .map(|&e| {
+                    let e = e.min(cap_slots);
+                    let c = (e - prev.min(e)).min(SORT_MAX);
+                    prev = e;
+                    c
+                })
+                .collect(),
+        );
+        cap.expected = Expected::All;
+        let c = read_vec::<u32>(gpu, &self.work, COUNTERS as usize)?;
+        let (lost, ovf_px, dropped, total, big_lost) = (
+            c[1] as u64,
+            c[2] as u64,
+            c[3] as u64,
+            c[4] as u64,
+            c[5] as u64,
+        );
+        let short = ends
+            .iter()
+            .scan(0u32, |prev, &e| {
+                let over = e > cap_slots && *prev < e;
+                *prev = e;
+                Some(over)
+            })
+            .filter(|&o| o)
+            .count() as u64;
+        cap.overflow_pixels = Some(ovf_px + short);
+        if lost + dropped + big_lost > 0 {
+            cap.flag = Some("overflow".into());
+        }
+        cap.notes = format!(
+            "{}; this frame {total} fragments, {lost} beyond the allocation, {dropped} beyond the sort capacity ({SORT_MAX}) in {ovf_px} pixels, {big_lost} big triangles unlisted",
+            self.prep_note
+        );
+        Ok(cap)
+    }
+
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+#[cfg(test)]
+mod tests;
