@@ -105,6 +105,10 @@ pub const AXES: &[Column] = &[
         "hist_bins",
         "adaptive bucket peeling: bins of the per-pixel depth-occupancy histogram (256/1024/2048)",
     ),
+    c(
+        "small_max",
+        "compute_abuffer: largest triangle bounding box (pixels) one thread rasterises; larger ones are shared by workgroups",
+    ),
 ];
 
 /// Measurements.
