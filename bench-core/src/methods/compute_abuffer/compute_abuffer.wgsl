@@ -12,8 +12,9 @@
 // 1/256 px, sample pixel centres, top-left fill rule. Edge functions are evaluated exactly (64-bit
 // products emulated with 32-bit integers), so shared edges are watertight and ties are decided as
 // the reference decides them. Triangles whose bounding box holds at most `small_max` pixels are
-// rasterised by one thread each; larger (and clipped) ones go to a list that whole workgroups
-// share (`raster_big`), so a full-screen triangle does not stall one thread.
+// rasterised by one thread each; larger (and clipped) ones are cut into chunks of CHUNK
+// bounding-box pixels, one workgroup per chunk (`raster_big`), so neither a full-screen
+// triangle stalls one thread nor a 200-pixel one idles a workgroup.
 
 override FILL: bool = false;
 // Sizes read at run time, so that one compiled kernel serves every scene and resolution (a
@@ -24,8 +25,10 @@ struct Sizes {
     nblocks: u32,
     // Fragment slots allocated (the prepare-time count); a fragment beyond it is counted as lost.
     capacity: u32,
-    // Capacity of the big-triangle list.
+    // Capacity of the big-triangle list (2 words each: primitive, first chunk).
     big_cap: u32,
+    // Capacity of the chunk → big-triangle table.
+    chunk_cap: u32,
     // Largest bounding box (pixels) one thread rasterises.
     small_max: u32,
 };
@@ -36,15 +39,25 @@ const GUARD: f32 = 1024.0;
 const MAXV: u32 = 9u;
 const SUB: f32 = 256.0;
 
-// `work` layout (u32 words): counters, then the scan's block sums, then the big-triangle list.
+// `work` layout (u32 words): counters, the scan's block sums, the big-triangle list, the chunks.
 const W_BIG: u32 = 0u;         // big triangles listed this frame
 const W_LOST: u32 = 1u;        // fragments beyond `capacity`
 const W_OVF_PIXELS: u32 = 2u;  // pixels with more than SORT_MAX fragments
 const W_DROPPED: u32 = 3u;     // fragments dropped by the resolve's sort capacity
 const W_TOTAL: u32 = 4u;       // fragments counted (the scan's total)
 const W_BIG_LOST: u32 = 5u;    // big triangles beyond `big_cap` (their fragments are missing)
-const W_BIG_PX: u32 = 6u;      // bounding-box pixels of the listed big triangles
+const W_CHUNKS: u32 = 6u;      // chunks of the listed big triangles
 const W_BLOCKS: u32 = 16u;
+// Bounding-box pixels per chunk: 64 threads × 4.
+const CHUNK: u32 = 256u;
+
+fn list_at(k: u32) -> u32 {
+    return W_BLOCKS + sizes.nblocks + 2u * k;
+}
+
+fn owner_at(c: u32) -> u32 {
+    return W_BLOCKS + sizes.nblocks + 2u * sizes.big_cap + c;
+}
 
 @group(0) @binding(1) var<storage, read> positions: array<f32>;
 @group(0) @binding(2) var<storage, read> normals: array<f32>;
@@ -312,9 +325,14 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         if p.n != 3u || px > sizes.small_max {
             if !FILL {
                 let k = atomicAdd(&work[W_BIG], 1u);
-                if k < sizes.big_cap {
-                    atomicStore(&work[W_BLOCKS + sizes.nblocks + k], prim);
-                    atomicAdd(&work[W_BIG_PX], px);
+                let nch = (px + CHUNK - 1u) / CHUNK;
+                let first = atomicAdd(&work[W_CHUNKS], nch);
+                if k < sizes.big_cap && first + nch <= sizes.chunk_cap {
+                    atomicStore(&work[list_at(k)], prim);
+                    atomicStore(&work[list_at(k) + 1u], first);
+                    for (var c = 0u; c < nch; c = c + 1u) {
+                        atomicStore(&work[owner_at(first + c)], k);
+                    }
                 } else {
                     atomicAdd(&work[W_BIG_LOST], 1u);
                 }
@@ -336,30 +354,43 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
 }
 
-// Big triangles: workgroup (i, j) takes listed triangles i, i + nw.x, …; its 64 threads and the
-// nw.y workgroups of its column share each triangle's bounding-box pixels.
+// Big triangles: one workgroup per chunk (of CHUNK bounding-box pixels) of a listed triangle.
 @compute @workgroup_size(64)
 fn raster_big(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(local_invocation_index) li: u32,
     @builtin(num_workgroups) nw: vec3<u32>,
 ) {
-    let nbig = min(atomicLoad(&work[W_BIG]), sizes.big_cap);
-    for (var b = wg.x; b < nbig; b = b + nw.x) {
-        let prim = atomicLoad(&work[W_BLOCKS + sizes.nblocks + b]);
-        let p = setup(prim);
-        let bb = bounds(p);
-        if bb.x > bb.z || bb.y > bb.w {
+    let c = wg.x + wg.y * nw.x;
+    if c >= min(atomicLoad(&work[W_CHUNKS]), sizes.chunk_cap) {
+        return;
+    }
+    let k = atomicLoad(&work[owner_at(c)]);
+    if k >= min(atomicLoad(&work[W_BIG]), sizes.big_cap) {
+        return;
+    }
+    let prim = atomicLoad(&work[list_at(k)]);
+    let first = atomicLoad(&work[list_at(k) + 1u]);
+    let p = setup(prim);
+    let bb = bounds(p);
+    if bb.x > bb.z || bb.y > bb.w {
+        return;
+    }
+    let bw = u32(bb.z - bb.x + 1);
+    let px = bw * u32(bb.w - bb.y + 1);
+    // A stale table entry (only after a listing overflow, which is flagged) is not ours.
+    if c < first || (c - first) * CHUNK >= px {
+        return;
+    }
+    let base = (c - first) * CHUNK + li;
+    for (var t_i = 1u; t_i + 1u < p.n; t_i = t_i + 1u) {
+        let t = make_tri(p, t_i);
+        if !t.ok {
             continue;
         }
-        let bw = u32(bb.z - bb.x + 1);
-        let px = bw * u32(bb.w - bb.y + 1);
-        for (var k = 1u; k + 1u < p.n; k = k + 1u) {
-            let t = make_tri(p, k);
-            if !t.ok {
-                continue;
-            }
-            for (var i = wg.y * 64u + li; i < px; i = i + nw.y * 64u) {
+        for (var j = 0u; j < CHUNK; j = j + 64u) {
+            let i = base + j;
+            if i < px {
                 let x = bb.x + i32(i % bw);
                 let y = bb.y + i32(i / bw);
                 let z = cover(t, x, y);

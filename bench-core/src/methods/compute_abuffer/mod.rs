@@ -83,7 +83,7 @@ impl Method for ComputeAbuffer {
 
 /// Largest bounding box (pixels) one thread rasterises; larger triangles are shared.
 fn small_max(params: &Params) -> std::result::Result<u32, String> {
-    Ok(super::int_param(params, "small_max", 128, 1, 1 << 20)? as u32)
+    Ok(super::int_param(params, "small_max", 256, 1, 1 << 20)? as u32)
 }
 
 fn effect_config(params: &Params) -> std::result::Result<EffectConfig, String> {
@@ -100,8 +100,9 @@ struct Sizes {
     nblocks: u32,
     capacity: u32,
     big_cap: u32,
+    chunk_cap: u32,
     small_max: u32,
-    pad: [u32; 2],
+    pad: u32,
 }
 
 /// Pipelines of one configuration (count or fill, and the capacities they were built for).
@@ -120,7 +121,7 @@ struct PreparedAbuffer {
     work: wgpu::Buffer,
     image: wgpu::Buffer,
     capacity: u64,
-    /// Big triangles and the workgroups per triangle at prepare time (the dispatch shape).
+    /// Workgroups of `raster_big`: one per chunk of the prepare-time big triangles.
     big_groups: (u32, u32),
     nblocks: u32,
     ntri: u32,
@@ -200,14 +201,15 @@ impl PreparedAbuffer {
             bgl,
             pipeline,
         };
-        let sizes = |capacity: u64, big_cap: u64| Sizes {
+        let sizes = |capacity: u64, big_cap: u64, chunk_cap: u64| Sizes {
             ntri,
             npix: px as u32,
             nblocks: nblocks as u32,
             capacity: capacity as u32,
             big_cap: big_cap as u32,
+            chunk_cap: chunk_cap as u32,
             small_max,
-            pad: [0; 2],
+            pad: 0,
         };
         let sizes_buf = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("abuffer sizes"),
@@ -215,23 +217,29 @@ impl PreparedAbuffer {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        gpu.queue
-            .write_buffer(&sizes_buf, 0, bytemuck::bytes_of(&sizes(0, ntri as u64)));
+        let set_sizes = |s: Sizes| {
+            gpu.queue
+                .write_buffer(&sizes_buf, 0, bytemuck::bytes_of(&s))
+        };
         let scan_groups = [(nblocks as u32, 1), (1, 1), (nblocks as u32, 1)];
         let scan = ["scan_blocks", "scan_sums", "scan_add"]
             .map(|e| compute_pipeline(gpu, e, &l.pipeline, &l.module, e, &[]));
         let count = kernels(gpu, &l, false);
         let small_groups = ntri.div_ceil(64).clamp(1, MAX_GROUPS);
 
-        // Sizing: one count with a big-triangle list as long as the scene, read back.
+        // Sizing, in two counts read back: (1) list the big triangles (a list as long as the
+        // scene, no chunk table) for their number and chunks; (2) with the exact list and table,
+        // count every fragment. Each frame then runs (2) again before filling.
         let mut scratch = AllocCounter::default();
         let offs = scratch.buffer(gpu, "abuffer offsets", px * 4, STORAGE_RW);
-        let work_words = |big: u64| COUNTERS + nblocks + big.max(1);
-        check_storage_size(gpu, "compute_abuffer work", work_words(ntri as u64) * 4)?;
-        let work = scratch.buffer(
+        let work_words =
+            |big: u64, chunks: u64| COUNTERS + nblocks + 2 * big.max(1) + chunks.max(1);
+        let listing_bytes = work_words(ntri as u64, 0) * 4;
+        check_storage_size(gpu, "compute_abuffer work", listing_bytes)?;
+        let listing = scratch.buffer(
             gpu,
-            "abuffer work (sizing)",
-            work_words(ntri as u64) * 4,
+            "abuffer big-triangle listing (sizing)",
+            listing_bytes,
             STORAGE_RW,
         );
         let dummy = scratch.buffer(gpu, "abuffer fragments (sizing)", 8, STORAGE_RW);
@@ -258,28 +266,55 @@ impl PreparedAbuffer {
                 ],
             )
         };
+        set_sizes(sizes(0, ntri as u64, 0));
+        let listing_bind = bind_with(&dummy, &listing, &dummy_image);
+        let mut enc = d.create_command_encoder(&Default::default());
+        enc.clear_buffer(&offs, 0, None);
+        enc.clear_buffer(&listing, 0, None);
+        dispatch(
+            &mut enc,
+            None,
+            "sizing: list",
+            &listing_bind,
+            &[(&count.small, (small_groups, 1))],
+        );
+        gpu.queue.submit([enc.finish()]);
+        let c = read_vec::<u32>(gpu, &listing, COUNTERS as usize)?;
+        let (nbig, nchunks) = (c[0] as u64, c[6] as u64);
+        drop(listing_bind);
+        drop(listing);
+
+        let mut alloc = AllocCounter::default();
+        alloc.bytes += px * 4; // the offsets (allocated above, kept)
+        let work_bytes = work_words(nbig, nchunks) * 4;
+        check_storage_size(gpu, "compute_abuffer work", work_bytes)?;
+        let work = alloc.buffer(gpu, "abuffer work", work_bytes, STORAGE_RW);
+        let (big_cap, chunk_cap) = (nbig.max(1), nchunks.max(1));
+        set_sizes(sizes(0, big_cap, chunk_cap));
+        let x = (nchunks as u32).min(MAX_GROUPS);
+        let big_groups = if x == 0 {
+            (0, 0)
+        } else {
+            (x, (nchunks as u32).div_ceil(x))
+        };
         let sizing_bind = bind_with(&dummy, &work, &dummy_image);
         let mut enc = d.create_command_encoder(&Default::default());
         enc.clear_buffer(&offs, 0, None);
         enc.clear_buffer(&work, 0, None);
-        let big_probe = ntri.clamp(1, 4096);
         dispatch(
             &mut enc,
             None,
-            "sizing count",
+            "sizing: count",
             &sizing_bind,
-            &[
-                (&count.small, (small_groups, 1)),
-                (&count.big, (big_probe, 16)),
-            ],
+            &[(&count.small, (small_groups, 1)), (&count.big, big_groups)],
         );
         let scan_jobs: Vec<_> = scan.iter().zip(scan_groups).collect();
-        dispatch(&mut enc, None, "sizing scan", &sizing_bind, &scan_jobs);
+        dispatch(&mut enc, None, "sizing: scan", &sizing_bind, &scan_jobs);
         gpu.queue.submit([enc.finish()]);
         let c = read_vec::<u32>(gpu, &work, COUNTERS as usize)?;
-        let (nbig, big_px, total) = (c[0] as u64, c[6] as u64, c[4] as u64);
+        let total = c[4] as u64;
         drop(sizing_bind);
-        drop((work, dummy, dummy_image));
+        drop((dummy, dummy_image));
 
         let capacity = total.max(1);
         if capacity >= u32::MAX as u64 {
@@ -288,34 +323,20 @@ impl PreparedAbuffer {
             )));
         }
         check_storage_size(gpu, "compute_abuffer fragments", capacity * FRAG_BYTES)?;
-        let mut alloc = AllocCounter::default();
-        alloc.bytes += px * 4; // the offsets (allocated above, kept)
         let frags = alloc.buffer(
             gpu,
             "abuffer fragments",
             capacity * FRAG_BYTES,
             wgpu::BufferUsages::STORAGE,
         );
-        let work = alloc.buffer(gpu, "abuffer work", work_words(nbig) * 4, STORAGE_RW);
         let image = alloc.buffer(gpu, "abuffer image", image_bytes, STORAGE_RW);
         let bind = bind_with(&frags, &work, &image);
-        gpu.queue.write_buffer(
-            &sizes_buf,
-            0,
-            bytemuck::bytes_of(&sizes(capacity, nbig.max(1))),
-        );
+        set_sizes(sizes(capacity, big_cap, chunk_cap));
         let fill = kernels(gpu, &l, true);
         let rc = effect.constants();
         let resolve = compute_pipeline(gpu, "resolve", &l.pipeline, &l.module, "resolve", &rc);
-        // Workgroups per big triangle: about 8 pixels per thread on average, at most 256.
-        let parts = if nbig == 0 {
-            0
-        } else {
-            (big_px.div_ceil(nbig * 64 * 8)).clamp(1, 256) as u32
-        };
-        let big_groups = ((nbig as u32).min(MAX_GROUPS), parts);
         let prep_note = format!(
-            "sized by a prepare-time count: {total} fragments, {nbig} shared (big or clipped) triangles × {parts} workgroups, {} B of sizing scratch freed",
+            "sized by prepare-time counts: {total} fragments, {nbig} shared (big or clipped) triangles in {nchunks} chunks of 256 px, {} B of sizing scratch freed",
             scratch.bytes - px * 4
         );
         Ok(PreparedAbuffer {
