@@ -48,8 +48,8 @@ const W_TOTAL: u32 = 4u;       // fragments counted (the scan's total)
 const W_BIG_LOST: u32 = 5u;    // big triangles beyond `big_cap` (their fragments are missing)
 const W_CHUNKS: u32 = 6u;      // chunks of the listed big triangles
 const W_BLOCKS: u32 = 16u;
-// Bounding-box pixels per chunk: 64 threads × 4.
-const CHUNK: u32 = 256u;
+// Bounding-box pixels per chunk: 64 threads × 16.
+const CHUNK: u32 = 1024u;
 
 fn list_at(k: u32) -> u32 {
     return W_BLOCKS + sizes.nblocks + 2u * k;
@@ -355,41 +355,56 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
 }
 
 // Big triangles: one workgroup per chunk (of CHUNK bounding-box pixels) of a listed triangle.
+// Thread 0 sets the triangle up once and shares it (per-thread setup dominated: 64 setups per
+// medium triangle cost as much as the rest of the pass).
+var<workgroup> wg_poly: Poly;
+var<workgroup> wg_prim: u32;
+// First bounding-box pixel of this chunk, or 0xffffffff when the workgroup has nothing to do.
+var<workgroup> wg_start: u32;
+
 @compute @workgroup_size(64)
 fn raster_big(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(local_invocation_index) li: u32,
     @builtin(num_workgroups) nw: vec3<u32>,
 ) {
-    let c = wg.x + wg.y * nw.x;
-    if c >= min(atomicLoad(&work[W_CHUNKS]), sizes.chunk_cap) {
+    if li == 0u {
+        wg_start = 0xffffffffu;
+        let c = wg.x + wg.y * nw.x;
+        if c < min(atomicLoad(&work[W_CHUNKS]), sizes.chunk_cap) {
+            let k = atomicLoad(&work[owner_at(c)]);
+            if k < min(atomicLoad(&work[W_BIG]), sizes.big_cap) {
+                let prim = atomicLoad(&work[list_at(k)]);
+                let first = atomicLoad(&work[list_at(k) + 1u]);
+                let p = setup(prim);
+                let bb = bounds(p);
+                let px = u32(bb.z - bb.x + 1) * u32(bb.w - bb.y + 1);
+                // A stale table entry (only after a listing overflow, which is flagged) is
+                // not this triangle's.
+                if bb.x <= bb.z && bb.y <= bb.w && c >= first && (c - first) * CHUNK < px {
+                    wg_poly = p;
+                    wg_prim = prim;
+                    wg_start = (c - first) * CHUNK;
+                }
+            }
+        }
+    }
+    let start = workgroupUniformLoad(&wg_start);
+    if start == 0xffffffffu {
         return;
     }
-    let k = atomicLoad(&work[owner_at(c)]);
-    if k >= min(atomicLoad(&work[W_BIG]), sizes.big_cap) {
-        return;
-    }
-    let prim = atomicLoad(&work[list_at(k)]);
-    let first = atomicLoad(&work[list_at(k) + 1u]);
-    let p = setup(prim);
+    let p = wg_poly;
+    let prim = wg_prim;
     let bb = bounds(p);
-    if bb.x > bb.z || bb.y > bb.w {
-        return;
-    }
     let bw = u32(bb.z - bb.x + 1);
     let px = bw * u32(bb.w - bb.y + 1);
-    // A stale table entry (only after a listing overflow, which is flagged) is not ours.
-    if c < first || (c - first) * CHUNK >= px {
-        return;
-    }
-    let base = (c - first) * CHUNK + li;
     for (var t_i = 1u; t_i + 1u < p.n; t_i = t_i + 1u) {
         let t = make_tri(p, t_i);
         if !t.ok {
             continue;
         }
-        for (var j = 0u; j < CHUNK; j = j + 64u) {
-            let i = base + j;
+        for (var j = li; j < CHUNK; j = j + 64u) {
+            let i = start + j;
             if i < px {
                 let x = bb.x + i32(i % bw);
                 let y = bb.y + i32(i / bw);

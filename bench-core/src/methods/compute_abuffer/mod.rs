@@ -36,6 +36,8 @@ const COUNTERS: u64 = 16;
 const SCAN_BLOCK: u64 = 1024;
 /// Largest dispatch dimension wgpu guarantees.
 const MAX_GROUPS: u32 = 65_535;
+/// Bounding-box pixels per chunk of a shared triangle (`CHUNK` in the WGSL).
+const CHUNK: u32 = 1024;
 /// Storage buffers the kernels bind.
 const STORAGE_BUFFERS: u32 = 9;
 
@@ -336,7 +338,7 @@ impl PreparedAbuffer {
         let rc = effect.constants();
         let resolve = compute_pipeline(gpu, "resolve", &l.pipeline, &l.module, "resolve", &rc);
         let prep_note = format!(
-            "sized by prepare-time counts: {total} fragments, {nbig} shared (big or clipped) triangles in {nchunks} chunks of 256 px, {} B of sizing scratch freed",
+            "sized by prepare-time counts: {total} fragments, {nbig} shared (big or clipped) triangles in {nchunks} chunks of {CHUNK} px, {} B of sizing scratch freed",
             scratch.bytes - px * 4
         );
         Ok(PreparedAbuffer {

@@ -95,9 +95,9 @@ fn allocates_exactly_eight_bytes_per_true_fragment() {
     let px = (w * h) as u64;
     let blocks = px.div_ceil(SCAN_BLOCK);
     let fixed = px * 4 + px * 16;
-    // The big-triangle list (2 words) and chunk table (≤ px / 256 + 1 words) per triangle.
+    // The big-triangle list (2 words) and chunk table (≤ px / CHUNK + 1 words) per triangle.
     let ntri = s.mesh.indices.len() as u64 / 3;
-    let work_max = (COUNTERS + blocks + ntri * (3 + px / 256)) * 4;
+    let work_max = (COUNTERS + blocks + ntri * (3 + px / CHUNK as u64)) * 4;
     let bytes = m.prepared.bytes_allocated();
     assert!(
         bytes >= fixed + total * FRAG_BYTES && bytes <= fixed + total * FRAG_BYTES + work_max,
