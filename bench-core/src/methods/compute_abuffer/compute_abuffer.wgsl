@@ -295,7 +295,9 @@ fn cover(t: Tri, x: i32, y: i32) -> f32 {
         return -1.0;
     }
     let cf = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
-    let b = vec3<f32>(edge_f(t.f1.xy, t.f2.xy, cf), edge_f(t.f2.xy, t.f0.xy, cf), edge_f(t.f0.xy, t.f1.xy, cf)) / t.area;
+    // The exact area is not 0 (`ok`), but its f32 value can round to 0 on a huge sliver.
+    let area = select(t.area, 1.0, t.area == 0.0);
+    let b = vec3<f32>(edge_f(t.f1.xy, t.f2.xy, cf), edge_f(t.f2.xy, t.f0.xy, cf), edge_f(t.f0.xy, t.f1.xy, cf)) / area;
     return clamp(b.x * t.f0.z + b.y * t.f1.z + b.z * t.f2.z, 0.0, 1.0);
 }
 
@@ -500,19 +502,31 @@ fn scan_add(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_inde
 // Perspective-correct weights of a triangle's three vertices at NDC point `ndc` (2D homogeneous
 // rasterisation, Olano & Greer 1997): solve [v0 v1 v2]·λ ∝ (x, y, 1) over the clip-space
 // (x, y, w) columns, each scaled to unit size first so vertices at 1e20 neither overflow nor
-// cancel; valid for vertices behind the eye too.
+// cancel; valid for vertices behind the eye too. A covered point lies inside the triangle, so
+// its weights are in [0, 1]: they are clamped there (rounding), and a triangle degenerate in clip
+// space (collinear vertices that snapping turned into a covering sliver: λ ≈ 0/0) gets equal
+// weights instead of NaN.
 fn persp_weights(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, ndc: vec2<f32>) -> vec3<f32> {
-    let s = vec3<f32>(
-        1.0 / max(max(abs(c0.x), abs(c0.y)), abs(c0.w)),
-        1.0 / max(max(abs(c1.x), abs(c1.y)), abs(c1.w)),
-        1.0 / max(max(abs(c2.x), abs(c2.y)), abs(c2.w)),
-    );
+    let s = 1.0 / max(vec3<f32>(
+        max(max(abs(c0.x), abs(c0.y)), abs(c0.w)),
+        max(max(abs(c1.x), abs(c1.y)), abs(c1.w)),
+        max(max(abs(c2.x), abs(c2.y)), abs(c2.w)),
+    ), vec3<f32>(1e-30));
     let a = c0.xyw * s.x;
     let b = c1.xyw * s.y;
     let c = c2.xyw * s.z;
     let q = vec3<f32>(ndc, 1.0);
     let l = vec3<f32>(dot(cross(b, c), q), dot(cross(c, a), q), dot(cross(a, b), q)) * s;
-    return l / (l.x + l.y + l.z);
+    let sum = l.x + l.y + l.z;
+    if !(abs(sum) > 1e-6 * (abs(l.x) + abs(l.y) + abs(l.z))) {
+        return vec3<f32>(1.0 / 3.0);
+    }
+    let w = clamp(l / sum, vec3<f32>(0.0), vec3<f32>(1.0));
+    let t = w.x + w.y + w.z;
+    if !(t > 0.0) {
+        return vec3<f32>(1.0 / 3.0);
+    }
+    return w / t;
 }
 
 fn fragment(depth: f32, tag: u32, ndc: vec2<f32>) -> Frag {

@@ -176,3 +176,21 @@ fn a_fragment_beyond_the_allocation_is_counted_not_written() {
         assert!(cap.notes.contains(&beyond), "{}", cap.notes);
     }
 }
+
+#[test]
+fn slivers_of_snapped_degenerate_triangles_stay_finite() {
+    // The extreme scene's "collinear" triangles are not collinear after f32 rounding: snapped,
+    // some cover pixels while their clip-space vertices are (nearly) collinear, where the
+    // perspective-correct weights are 0/0.
+    let s = scene(
+        "extreme",
+        &[
+            ("coord", scenarios::ParamValue::Float(1e3)),
+            ("degenerate", Int(3000)),
+        ],
+    );
+    let (cap, _) = run(&ComputeAbuffer, &s, 96, 96, &Params::new());
+    let img = cap.image.unwrap();
+    let bad = img.iter().flatten().filter(|v| !v.is_finite()).count();
+    assert_eq!(bad, 0, "{bad} non-finite channels; {}", cap.notes);
+}
