@@ -20,6 +20,7 @@ pub const CONFIG_AXES: &[&str] = &[
     "bucket_count",
     "bucket_pairing",
     "hist_bins",
+    "small_max",
 ];
 
 /// Errors of exact results are 0; drawn at this floor on log axes.
