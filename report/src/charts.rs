@@ -113,6 +113,12 @@ fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// Fraction of a 640-px-high chart's plot area (≈ 510 px) that a legend of `rows` entries
+/// (≈ 16 px each plus its frame) covers; capped so some data always stays visible.
+fn legend_fraction(rows: usize) -> f64 {
+    ((20.0 + 16.0 * rows as f64) / 510.0).min(0.85)
+}
+
 fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow!("plotting: {e:?}")
 }
@@ -202,7 +208,7 @@ impl XY {
         // grows upwards by about the legend's height so it sits above the data instead.
         let (mut corner, hidden) = self.legend_corner((x0, x1), (y0, y1));
         if hidden > 0 {
-            let f = (0.06 + 0.045 * self.series.len() as f64).min(0.6);
+            let f = legend_fraction(self.series.len());
             y1 += (y1 - y0) * f / (1.0 - f);
             corner = SeriesLabelPosition::UpperRight;
         }
@@ -334,7 +340,7 @@ impl Bars {
         let ns = self.series.len().max(1);
         // The legend sits top right; if a bar (or whisker) in the right part would be under it,
         // the y range grows so the legend clears the tallest of them.
-        let f = (0.06 + 0.045 * ns as f64).min(0.6);
+        let f = legend_fraction(ns);
         let under_legend = self
             .series
             .iter()
