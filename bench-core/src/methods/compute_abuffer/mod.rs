@@ -107,7 +107,7 @@ struct Sizes {
     pad: u32,
 }
 
-/// Pipelines of one configuration (count or fill, and the capacities they were built for).
+/// The two raster kernels of one mode (count or fill).
 struct Kernels {
     small: wgpu::ComputePipeline,
     big: wgpu::ComputePipeline,
@@ -123,10 +123,12 @@ struct PreparedAbuffer {
     work: wgpu::Buffer,
     image: wgpu::Buffer,
     capacity: u64,
+    /// Workgroups of `raster_small` (one thread per triangle).
+    small_groups: (u32, u32),
     /// Workgroups of `raster_big`: one per chunk of the prepare-time big triangles.
     big_groups: (u32, u32),
-    nblocks: u32,
-    ntri: u32,
+    /// Workgroups of the three scan kernels.
+    scan_groups: [(u32, u32); 3],
     images: usize,
     prep_note: String,
     _sizes: wgpu::Buffer,
@@ -227,7 +229,7 @@ impl PreparedAbuffer {
         let scan = ["scan_blocks", "scan_sums", "scan_add"]
             .map(|e| compute_pipeline(gpu, e, &l.pipeline, &l.module, e, &[]));
         let count = kernels(gpu, &l, false);
-        let small_groups = ntri.div_ceil(64).clamp(1, MAX_GROUPS);
+        let small_groups = (ntri.div_ceil(64).clamp(1, MAX_GROUPS), 1);
 
         // Sizing, in two counts read back: (1) list the big triangles (a list as long as the
         // scene, no chunk table) for their number and chunks; (2) with the exact list and table,
@@ -278,7 +280,7 @@ impl PreparedAbuffer {
             None,
             "sizing: list",
             &listing_bind,
-            &[(&count.small, (small_groups, 1))],
+            &[(&count.small, small_groups)],
         );
         gpu.queue.submit([enc.finish()]);
         let c = read_vec::<u32>(gpu, &listing, COUNTERS as usize)?;
@@ -308,7 +310,7 @@ impl PreparedAbuffer {
             None,
             "sizing: count",
             &sizing_bind,
-            &[(&count.small, (small_groups, 1)), (&count.big, big_groups)],
+            &[(&count.small, small_groups), (&count.big, big_groups)],
         );
         let scan_jobs: Vec<_> = scan.iter().zip(scan_groups).collect();
         dispatch(&mut enc, None, "sizing: scan", &sizing_bind, &scan_jobs);
@@ -351,9 +353,9 @@ impl PreparedAbuffer {
             work,
             image,
             capacity,
+            small_groups,
             big_groups,
-            nblocks: nblocks as u32,
-            ntri,
+            scan_groups,
             images,
             prep_note,
             _sizes: sizes_buf,
@@ -364,7 +366,6 @@ impl PreparedAbuffer {
 
 impl Prepared for PreparedAbuffer {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
-        let small_groups = self.ntri.div_ceil(64).clamp(1, MAX_GROUPS);
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.offs, 0, None);
         enc.clear_buffer(&self.work, 0, Some(COUNTERS * 4));
@@ -374,12 +375,11 @@ impl Prepared for PreparedAbuffer {
             "count",
             &self.bind,
             &[
-                (&self.count.small, (small_groups, 1)),
+                (&self.count.small, self.small_groups),
                 (&self.count.big, self.big_groups),
             ],
         );
-        let n = self.nblocks;
-        let jobs: Vec<_> = self.scan.iter().zip([(n, 1), (1, 1), (n, 1)]).collect();
+        let jobs: Vec<_> = self.scan.iter().zip(self.scan_groups).collect();
         dispatch(&mut enc, Some(timer), "scan", &self.bind, &jobs);
         dispatch(
             &mut enc,
@@ -387,7 +387,7 @@ impl Prepared for PreparedAbuffer {
             "fill",
             &self.bind,
             &[
-                (&self.fill.small, (small_groups, 1)),
+                (&self.fill.small, self.small_groups),
                 (&self.fill.big, self.big_groups),
             ],
         );
@@ -416,17 +416,16 @@ impl Prepared for PreparedAbuffer {
         // cut to the slots that exist and to what the resolve could sort.
         let ends = read_vec::<u32>(gpu, &self.offs, n)?;
         let cap_slots = self.capacity.min(u32::MAX as u64) as u32;
-        let mut prev = 0u32;
-        cap.counts = Some(
-            ends.iter()
-                .map(|&e| {
-                    let e = e.min(cap_slots);
-                    let c = (e - prev.min(e)).min(SORT_MAX);
-                    prev = e;
-                    c
-                })
-                .collect(),
-        );
+        let (mut prev, mut short) = (0u32, 0u64);
+        let mut counts = Vec::with_capacity(n);
+        for &end in &ends {
+            // A pixel whose slots run past the allocation lost fragments.
+            short += u64::from(end > cap_slots && prev < end);
+            let e = end.min(cap_slots);
+            counts.push((e - prev.min(e)).min(SORT_MAX));
+            prev = end;
+        }
+        cap.counts = Some(counts);
         cap.expected = Expected::All;
         let c = read_vec::<u32>(gpu, &self.work, COUNTERS as usize)?;
         let (lost, ovf_px, dropped, total, big_lost) = (
@@ -436,15 +435,6 @@ impl Prepared for PreparedAbuffer {
             c[4] as u64,
             c[5] as u64,
         );
-        let short = ends
-            .iter()
-            .scan(0u32, |prev, &e| {
-                let over = e > cap_slots && *prev < e;
-                *prev = e;
-                Some(over)
-            })
-            .filter(|&o| o)
-            .count() as u64;
         cap.overflow_pixels = Some(ovf_px + short);
         if lost + dropped + big_lost > 0 {
             cap.flag = Some("overflow".into());
