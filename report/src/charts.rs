@@ -8,6 +8,7 @@ use std::sync::Once;
 use anyhow::{anyhow, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 static FONT: Once = Once::new();
 
@@ -113,7 +114,7 @@ fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// Fraction of a 640-px-high chart's plot area (≈ 510 px) that a legend of `rows` entries
+/// Fraction of the plot area (≈ 510 px high in both chart kinds) that a legend of `rows` entries
 /// (≈ 16 px each plus its frame) covers; capped so some data always stays visible.
 fn legend_fraction(rows: usize) -> f64 {
     ((20.0 + 16.0 * rows as f64) / 510.0).min(0.85)
@@ -308,8 +309,8 @@ impl Bars {
         let svg = dir.join(format!("{stem}.svg"));
         let w =
             (300 + 40 * self.categories.len() * self.series.len().max(1)).clamp(960, 2400) as u32;
-        self.render(BitMapBackend::new(&png, (w, 640)).into_drawing_area())?;
-        self.render(SVGBackend::new(&svg, (w, 640)).into_drawing_area())?;
+        self.render(BitMapBackend::new(&png, (w, 760)).into_drawing_area())?;
+        self.render(SVGBackend::new(&svg, (w, 760)).into_drawing_area())?;
         Ok(Figure {
             title: self.title.clone(),
             stem: stem.into(),
@@ -352,36 +353,38 @@ impl Bars {
         if under_legend > y1 - (y1 - y0) * f {
             y1 = y0 + (under_legend - y0) / (1.0 - f);
         }
+        // Names that fit their category's width (≈ 7 px a character) are written across;
+        // otherwise all are rotated and anchored at their start, hanging below their category.
+        // (Axis labels in plotters are centred on their tick: a long rotated one would run up
+        // into the bars, hence drawn by hand below.)
+        let name = |c: &String| {
+            if c.chars().count() > 28 {
+                format!("{}…", c.chars().take(27).collect::<String>())
+            } else {
+                c.clone()
+            }
+        };
+        let longest = self
+            .categories
+            .iter()
+            .map(|c| name(c).chars().count())
+            .max();
+        let plot_w = root.dim_in_pixel().0 as i64 - 110;
+        let across = (longest.unwrap_or(0) * 7) as i64 <= plot_w / n as i64 - 8;
         let mut chart = ChartBuilder::on(&root)
             .caption(&self.title, ("sans-serif", 22))
             .margin(12)
-            .x_label_area_size(70)
+            // Room for the category names: one line, or up to 28 characters rotated.
+            .x_label_area_size(if across { 48 } else { 190 })
             .y_label_area_size(72)
             .build_cartesian_2d(0f64..n as f64, y0..y1)
             .map_err(err)?;
-        let cats = self.categories.clone();
+        // Category names are drawn below; the mesh only marks the category bounds.
         chart
             .configure_mesh()
             .disable_x_mesh()
-            .x_labels(n * 2 + 1)
-            .x_label_formatter(&|v| {
-                let i = v.floor() as usize;
-                if (v - v.floor() - 0.5).abs() < 0.26 && i < cats.len() {
-                    let c = &cats[i];
-                    if c.len() > 28 {
-                        format!("{}…", &c[..27])
-                    } else {
-                        c.clone()
-                    }
-                } else {
-                    String::new()
-                }
-            })
-            .x_label_style(
-                ("sans-serif", 12)
-                    .into_font()
-                    .transform(FontTransform::Rotate90),
-            )
+            .x_labels(n + 1)
+            .x_label_formatter(&|_| String::new())
             .y_desc(if ly {
                 format!("{} (log)", self.y_label)
             } else {
@@ -447,6 +450,21 @@ impl Bars {
             .position(SeriesLabelPosition::UpperRight)
             .draw()
             .map_err(err)?;
+        let style = if across {
+            TextStyle::from(("sans-serif", 13).into_font()).pos(Pos::new(HPos::Center, VPos::Top))
+        } else {
+            TextStyle::from(
+                ("sans-serif", 12)
+                    .into_font()
+                    .transform(FontTransform::Rotate90),
+            )
+            .pos(Pos::new(HPos::Left, VPos::Center))
+        };
+        for (i, c) in self.categories.iter().enumerate() {
+            let (px, py) = chart.backend_coord(&(i as f64 + 0.5, y0));
+            root.draw(&Text::new(name(c), (px, py + 8), style.clone()))
+                .map_err(err)?;
+        }
         root.present().map_err(err)?;
         Ok(())
     }
