@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# Regenerates the column table in results/README.md from bench-core/src/record.rs (and the
-# studies' COLUMNS). Run after adding or changing a column; a test fails until you do.
+# Regenerates the column table in results/README.md from the schema crate (schema/src/lib.rs).
+# Run after adding or changing a column; a test fails until you do.
 set -euo pipefail
 cd "$(git rev-parse --show-toplevel)"
-table=$(MFX_COLUMNS_MARKDOWN=1 cargo run -q --bin mfx -- list columns)
+table=$(cargo run -q -p schema --example markdown)
 python3 - "$table" <<'PY'
 import sys, re
 table = sys.argv[1]

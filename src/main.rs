@@ -9,6 +9,7 @@ use bench_core::runner::{self, RunOptions};
 use bench_core::{BackendChoice, Gpu, GpuOptions};
 use clap::{Args, Parser, Subcommand};
 use scenarios::{ParamValue, Params, SceneSpec, Suite};
+use schema::cols;
 
 #[derive(Parser)]
 #[command(
@@ -367,7 +368,7 @@ fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
         }
     }
     if what == Some("columns") && std::env::var_os("MFX_COLUMNS_MARKDOWN").is_some() {
-        print!("{}", bench_core::record::columns_markdown());
+        print!("{}", schema::markdown());
         return Ok(());
     }
     if is("columns") {
@@ -375,7 +376,7 @@ fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
             "CSV columns (schema {}):",
             bench_core::record::SCHEMA_VERSION
         );
-        for c in bench_core::record::columns() {
+        for c in schema::all() {
             println!("  {:<24} {}", c.name, c.doc);
         }
     }
@@ -425,13 +426,13 @@ struct Progress<'a> {
 impl Sink for Progress<'_> {
     fn point_done(&mut self, row: &Row) -> bench_core::Result<()> {
         self.csv.point_done(row)?;
-        match row.get("status") {
+        match row.get(cols::STATUS) {
             Some("failed") => {
                 self.failed += 1;
                 self.bar.println(format!(
                     "failed: {} — {}",
-                    row.get("point_key").unwrap_or(""),
-                    row.get("reason").unwrap_or("")
+                    row.get(cols::POINT_KEY).unwrap_or(""),
+                    row.get(cols::REASON).unwrap_or("")
                 ));
             }
             Some("skipped") => self.skipped += 1,
@@ -439,8 +440,8 @@ impl Sink for Progress<'_> {
         }
         self.bar.set_message(format!(
             "{} {}",
-            row.get("scene_label").unwrap_or(""),
-            row.get("method").unwrap_or("")
+            row.get(cols::SCENE_LABEL).unwrap_or(""),
+            row.get(cols::METHOD).unwrap_or("")
         ));
         self.bar.inc(1);
         Ok(())

@@ -22,7 +22,6 @@ use glam::{DMat4, DVec3};
 use scenarios::{ParamValue, Params, Scene};
 
 use crate::methods::Expected;
-use crate::record::Column;
 use crate::reference::{FragmentLists, RefFragment};
 
 /// Known effect names (the `effect` CSV column).
@@ -35,32 +34,6 @@ pub const EFFECTS: &[&str] = &[
     "csg_sub",
     "dof",
 ];
-
-/// Effect parameters, as sweep axes (documented in results/README.md).
-pub const COLUMNS: &[Column] = &[
-    Column {
-        name: "sigma",
-        doc:
-            "translucency/fresnel: extinction coefficient σ per world unit (Beer–Lambert exp(−σ·l))",
-    },
-    Column {
-        name: "csg_a",
-        doc: "csg_*: object id of operand A",
-    },
-    Column {
-        name: "csg_b",
-        doc: "csg_*: object id of operand B",
-    },
-    Column {
-        name: "dof_near",
-        doc: "dof: linear view depth (world units) between the foreground and midground partitions",
-    },
-    Column {
-        name: "dof_far",
-        doc: "dof: linear view depth (world units) between the midground and background partitions",
-    },
-];
-
 /// The effect a point computes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Effect {

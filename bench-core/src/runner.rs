@@ -9,7 +9,8 @@ use scenarios::{Params, Scene, Suite};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
 use crate::methods::{self, FrameStats, Method, Prepared};
-use crate::record::{self, columns, Row, Sink, SCHEMA_VERSION};
+use crate::record::{cols, Row, Sink, SCHEMA_VERSION};
+pub use crate::record::{failed_row, one_line, set_params, skipped_row};
 use crate::studies::{self, Group, GroupCtx, PointSpec};
 use crate::timing::{GpuTimer, Stats};
 use crate::{CoreError, Result};
@@ -102,56 +103,34 @@ pub fn measure(
     })
 }
 
-/// Writes a point's axis values into their columns (each must be a declared column).
-pub fn set_params(row: &mut Row, params: &Params) -> Result<()> {
-    for (k, v) in &params.0 {
-        let col = record::column_name(k)
-            .ok_or_else(|| CoreError::Schema(format!("axis '{k}' has no CSV column")))?;
-        row.set(col, v);
-    }
-    Ok(())
-}
-
 /// Timing, pass and memory columns of a measured point.
 pub fn set_timing(row: &mut Row, m: &Measured, ctx: &GroupCtx<'_>) {
     if let Some(g) = m.gpu_ms {
-        row.set_f("gpu_ms_median", g.median)
-            .set_f("gpu_ms_min", g.min)
-            .set_f("gpu_ms_max", g.max)
-            .set_f("gpu_ms_rel_noise", g.rel_noise);
+        row.set_f(cols::GPU_MS_MEDIAN, g.median)
+            .set_f(cols::GPU_MS_MIN, g.min)
+            .set_f(cols::GPU_MS_MAX, g.max)
+            .set_f(cols::GPU_MS_REL_NOISE, g.rel_noise);
         if g.median > 0.0 {
             let secs = g.median * 1e-3 / m.frame.geometry_passes.max(1) as f64;
             row.set_f(
-                "triangles_per_s",
+                cols::TRIANGLES_PER_S,
                 ctx.scene.mesh.triangle_count() as f64 / secs,
             )
-            .set_f("vertices_per_s", ctx.scene.mesh.indices.len() as f64 / secs);
+            .set_f(
+                cols::VERTICES_PER_S,
+                ctx.scene.mesh.indices.len() as f64 / secs,
+            );
         }
     }
-    row.set_f("cpu_ms_median", m.cpu_ms.median)
-        .set_f("cpu_ms_min", m.cpu_ms.min)
-        .set_f("cpu_ms_max", m.cpu_ms.max);
+    row.set_f(cols::CPU_MS_MEDIAN, m.cpu_ms.median)
+        .set_f(cols::CPU_MS_MIN, m.cpu_ms.min)
+        .set_f(cols::CPU_MS_MAX, m.cpu_ms.max);
     row.set(
-        "pass_ms",
+        cols::PASS_MS,
         serde_json::to_string(&m.pass_ms).unwrap_or_default(),
     );
-    row.set("geometry_passes", m.frame.geometry_passes)
-        .set("bytes_allocated", m.bytes_allocated);
-}
-
-/// Reasons go in one CSV cell: one line, whitespace folded.
-pub fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
-}
-
-pub fn skipped_row(mut row: Row, why: &str) -> Row {
-    row.set("status", "skipped").set("reason", one_line(why));
-    row
-}
-
-pub fn failed_row(mut row: Row, why: &str) -> Row {
-    row.set("status", "failed").set("reason", one_line(why));
-    row
+    row.set(cols::GEOMETRY_PASSES, m.frame.geometry_passes)
+        .set(cols::BYTES_ALLOCATED, m.bytes_allocated);
 }
 
 /// Where a sweep runs and how it identifies itself.
@@ -248,35 +227,35 @@ pub fn run(
     for group in groups {
         let meta = |mut row: Row, method: &str, params: &Params| -> Row {
             let f = &gpu.facts;
-            row.set("schema", SCHEMA_VERSION)
-                .set("run_id", &opts.run_id)
-                .set("git_rev", &opts.git_rev)
+            row.set(cols::SCHEMA, SCHEMA_VERSION)
+                .set(cols::RUN_ID, &opts.run_id)
+                .set(cols::GIT_REV, &opts.git_rev)
                 .set(
-                    "timestamp_utc",
+                    cols::TIMESTAMP_UTC,
                     chrono::Utc::now().to_rfc3339_opts(chrono::SecondsFormat::Secs, true),
                 )
-                .set("suite", &suite.name)
-                .set("study", &group.kind)
-                .set("shard", opts.shard.0)
-                .set("shards", opts.shard.1)
-                .set("point_key", group.point_key(method, params))
-                .set("adapter", &f.name)
-                .set("backend", &f.backend)
-                .set("device_type", &f.device_type)
-                .set("driver", &f.driver)
-                .set("driver_info", &f.driver_info)
-                .set("adapter_features", &f.features)
-                .set("width", group.width)
-                .set("height", group.height)
-                .set("reps", reps)
-                .set("warmup", suite.warmup)
-                .set("scene", &group.scene.generator)
-                .set("scene_label", group.scene.label());
-            if row.get("method").is_none() {
-                row.set("method", method);
+                .set(cols::SUITE, &suite.name)
+                .set(cols::STUDY, &group.kind)
+                .set(cols::SHARD, opts.shard.0)
+                .set(cols::SHARDS, opts.shard.1)
+                .set(cols::POINT_KEY, group.point_key(method, params))
+                .set(cols::ADAPTER, &f.name)
+                .set(cols::BACKEND, &f.backend)
+                .set(cols::DEVICE_TYPE, &f.device_type)
+                .set(cols::DRIVER, &f.driver)
+                .set(cols::DRIVER_INFO, &f.driver_info)
+                .set(cols::ADAPTER_FEATURES, &f.features)
+                .set(cols::WIDTH, group.width)
+                .set(cols::HEIGHT, group.height)
+                .set(cols::REPS, reps)
+                .set(cols::WARMUP, suite.warmup)
+                .set(cols::SCENE, &group.scene.generator)
+                .set(cols::SCENE_LABEL, group.scene.label());
+            if row.get(cols::METHOD).is_none() {
+                row.set(cols::METHOD, method);
             }
-            if row.get("status").is_none() {
-                row.set("status", "ok");
+            if row.get(cols::STATUS).is_none() {
+                row.set(cols::STATUS, "ok");
             }
             row
         };
@@ -329,14 +308,14 @@ pub fn run(
         let mut ctx = GroupCtx::new(gpu, suite, spec, group, &scene, &gscene, reps, suite.warmup);
         ctx.images_dir = opts.save_images.clone();
         let add_scene = |row: &mut Row| {
-            row.set("triangles", scene.mesh.triangle_count())
-                .set("vertices", scene.mesh.vertex_count());
+            row.set(cols::TRIANGLES, scene.mesh.triangle_count())
+                .set(cols::VERTICES, scene.mesh.vertex_count());
         };
         // Floors first: they are every other row's yardstick.
         for f in FLOORS {
             let method = methods::by_name(f).expect("floor methods exist");
             let mut row = Row::new();
-            row.set("method", *f).set("exact", false);
+            row.set(cols::METHOD, *f).set(cols::EXACT, false);
             add_scene(&mut row);
             let row = match measure(
                 gpu,
@@ -412,10 +391,11 @@ pub fn run(
 fn set_x_floor(row: &mut Row, floor_ms: Option<f64>) {
     if let (Some(f), Some(g)) = (
         floor_ms,
-        row.get("gpu_ms_median").and_then(|s| s.parse::<f64>().ok()),
+        row.get(cols::GPU_MS_MEDIAN)
+            .and_then(|s| s.parse::<f64>().ok()),
     ) {
-        if f > 0.0 && row.get("status") == Some("ok") {
-            row.set_f("x_floor", g / f);
+        if f > 0.0 && row.get(cols::STATUS) == Some("ok") {
+            row.set_f(cols::X_FLOOR, g / f);
         }
     }
 }
@@ -446,9 +426,4 @@ pub fn git_rev() -> String {
         }
         _ => "unknown".to_string(),
     }
-}
-
-/// Number of declared columns (for `mfx list columns`).
-pub fn column_count() -> usize {
-    columns().len()
 }

@@ -12,6 +12,7 @@ use bench_core::metrics::{image_error, BAD_PIXEL_TOL};
 use bench_core::reference::rasterize;
 use bench_core::testing;
 use scenarios::{ParamValue, Params, SceneSpec};
+use schema::cols;
 
 const W: u32 = 48;
 
@@ -244,30 +245,30 @@ fn effect_axis_rows_are_judged_per_effect_and_a_method_without_a_fold_is_skipped
     let get = |m: &str, e: &str, sp: Option<&str>| {
         rows.iter()
             .find(|r| {
-                r.get("method") == Some(m)
-                    && r.get("effect") == Some(e)
-                    && sp.is_none_or(|sp| r.get("specialisation") == Some(sp))
+                r.get(cols::METHOD) == Some(m)
+                    && r.get(cols::EFFECT) == Some(e)
+                    && sp.is_none_or(|sp| r.get(cols::SPECIALISATION) == Some(sp))
             })
             .unwrap_or_else(|| panic!("no row {m} {e} {sp:?}"))
     };
     let csg = get("depth_peel", "csg_and", Some("specialised"));
-    assert_eq!(csg.get("status"), Some("ok"));
-    assert_eq!(csg.get("payload"), Some("depth_id"));
+    assert_eq!(csg.get(cols::STATUS), Some("ok"));
+    assert_eq!(csg.get(cols::PAYLOAD), Some("depth_id"));
     assert_eq!(
-        csg.get("max_abs_err")
+        csg.get(cols::MAX_ABS_ERR)
             .map(|v| v.parse::<f64>().unwrap() <= 1e-4),
         Some(true)
     );
     assert_eq!(
-        get("depth_peel", "csg_and", Some("uber")).get("payload"),
+        get("depth_peel", "csg_and", Some("uber")).get(cols::PAYLOAD),
         Some("all")
     );
     let floor = get("floor_opaque", "csg_and", None);
-    assert_eq!(floor.get("status"), Some("skipped"));
+    assert_eq!(floor.get(cols::STATUS), Some("skipped"));
     assert!(
-        floor.get("reason").unwrap().contains("csg_and"),
+        floor.get(cols::REASON).unwrap().contains("csg_and"),
         "{:?}",
-        floor.get("reason")
+        floor.get(cols::REASON)
     );
 }
 

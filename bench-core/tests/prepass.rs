@@ -2,6 +2,7 @@
 //! rows carry error, render-target bytes and the packing loss; impossible points are skipped
 //! with their reason; an unknown method is an error naming it.
 
+use bench_core::record::{cols, Col};
 use bench_core::record::{Row, Sink};
 use bench_core::runner::{self, RunOptions};
 use bench_core::testing;
@@ -50,34 +51,43 @@ const SUITE: &str = r#"
 #[test]
 fn prepass_rows_are_complete_and_impossible_points_are_skipped() {
     let rows = run(SUITE).unwrap();
-    let get = |r: &Row, c: &str| r.get(c).unwrap_or("").to_string();
+    let get = |r: &Row, c: Col| r.get(c).unwrap_or("").to_string();
     let mut ok = 0;
-    for r in rows.iter().filter(|r| get(r, "study") == "prepass") {
-        let (m, f) = (get(r, "method"), get(r, "light_buffer_format"));
+    for r in rows.iter().filter(|r| get(r, cols::STUDY) == "prepass") {
+        let (m, f) = (get(r, cols::METHOD), get(r, cols::LIGHT_BUFFER_FORMAT));
         if m.starts_with("floor_") {
             continue;
         }
-        let status = get(r, "status");
+        let status = get(r, cols::STATUS);
         if f == "rgb9" {
             assert_eq!(status, "skipped");
-            assert!(get(r, "reason").contains("rgb9"), "{:?}", get(r, "reason"));
+            assert!(
+                get(r, cols::REASON).contains("rgb9"),
+                "{:?}",
+                get(r, cols::REASON)
+            );
         } else if f == "rg11b10" && m == "prepass" {
             assert_eq!(status, "skipped", "tiled cannot write rg11b10");
-            assert!(get(r, "reason").contains("RG11B10"));
+            assert!(get(r, cols::REASON).contains("RG11B10"));
         } else {
-            assert_eq!(status, "ok", "{m} {f}: {}", get(r, "reason"));
-            for c in ["rmse", "bytes_rt_written", "bytes_rt_read", "frame_ms"] {
+            assert_eq!(status, "ok", "{m} {f}: {}", get(r, cols::REASON));
+            for c in [
+                cols::RMSE,
+                cols::BYTES_RT_WRITTEN,
+                cols::BYTES_RT_READ,
+                cols::FRAME_MS,
+            ] {
                 assert!(!get(r, c).is_empty(), "{m} {f}: no {c}");
             }
             if m != "deferred" {
-                let loss: f64 = get(r, "spec_color_loss_rmse").parse().unwrap();
-                let rmse: f64 = get(r, "rmse").parse().unwrap();
+                let loss: f64 = get(r, cols::SPEC_COLOR_LOSS_RMSE).parse().unwrap();
+                let rmse: f64 = get(r, cols::RMSE).parse().unwrap();
                 // The error vs the full reference is the packing loss plus format rounding.
                 assert!(loss > 0.0 && (rmse - loss).abs() < 0.05 * loss + 1e-3);
-                assert!(!get(r, "latency_ms").is_empty());
+                assert!(!get(r, cols::LATENCY_MS).is_empty());
             }
             if m == "prepass_cpu" {
-                assert!(!get(r, "cpu_light_ms").is_empty());
+                assert!(!get(r, cols::CPU_LIGHT_MS).is_empty());
             }
             ok += 1;
         }

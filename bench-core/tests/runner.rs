@@ -4,6 +4,7 @@ use bench_core::record::{Row, Sink};
 use bench_core::runner::{self, RunOptions};
 use bench_core::testing;
 use scenarios::Suite;
+use schema::cols;
 
 struct Collect(Vec<Row>);
 impl Sink for Collect {
@@ -47,26 +48,26 @@ fn out_of_range_axis_is_a_skipped_row_with_reason() {
     "#);
     let peel: Vec<&Row> = rows
         .iter()
-        .filter(|r| r.get("method") == Some("depth_peel"))
+        .filter(|r| r.get(cols::METHOD) == Some("depth_peel"))
         .collect();
     assert_eq!(peel.len(), 2);
     let bad = peel
         .iter()
-        .find(|r| r.get("max_layers") == Some("0"))
+        .find(|r| r.get(cols::MAX_LAYERS) == Some("0"))
         .unwrap();
-    assert_eq!(bad.get("status"), Some("skipped"));
+    assert_eq!(bad.get(cols::STATUS), Some("skipped"));
     assert!(
-        bad.get("reason").unwrap().contains("max_layers"),
+        bad.get(cols::REASON).unwrap().contains("max_layers"),
         "reason names the axis: {:?}",
-        bad.get("reason")
+        bad.get(cols::REASON)
     );
     let good = peel
         .iter()
-        .find(|r| r.get("max_layers") == Some("4"))
+        .find(|r| r.get(cols::MAX_LAYERS) == Some("4"))
         .unwrap();
-    assert_eq!(good.get("status"), Some("ok"));
+    assert_eq!(good.get(cols::STATUS), Some("ok"));
     assert!(
-        good.get("x_floor").is_some(),
+        good.get(cols::X_FLOOR).is_some(),
         "x_floor is filled from the floor rows"
     );
 }
@@ -86,11 +87,13 @@ fn a_scene_that_cannot_be_built_fails_every_row_of_its_group_with_the_reason() {
     "#);
     assert_eq!(rows.len(), 3);
     for r in &rows {
-        assert_eq!(r.get("status"), Some("failed"));
+        assert_eq!(r.get(cols::STATUS), Some("failed"));
         assert!(
-            r.get("reason").unwrap().contains("/nonexistent/mesh.obj"),
+            r.get(cols::REASON)
+                .unwrap()
+                .contains("/nonexistent/mesh.obj"),
             "{:?}",
-            r.get("reason")
+            r.get(cols::REASON)
         );
     }
 }

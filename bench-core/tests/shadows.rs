@@ -5,6 +5,7 @@ use bench_core::record::{Row, Sink};
 use bench_core::runner::{self, RunOptions};
 use bench_core::testing;
 use scenarios::Suite;
+use schema::cols;
 
 struct Collect(Vec<Row>);
 impl Sink for Collect {
@@ -54,26 +55,28 @@ fn shadows_32px_rows_ok_with_errors_and_no_light_scene_skipped() {
     ));
     let ssm: Vec<&Row> = rows
         .iter()
-        .filter(|r| r.get("method") == Some("layered_ssm"))
+        .filter(|r| r.get(cols::METHOD) == Some("layered_ssm"))
         .collect();
     assert_eq!(ssm.len(), 8, "2 scenes × 2 layers × 2 bias modes");
     for r in &ssm {
-        let scene = r.get("scene").unwrap();
-        let mode = r.get("bias_mode").unwrap();
+        let scene = r.get(cols::SCENE).unwrap();
+        let mode = r.get(cols::BIAS_MODE).unwrap();
         match (scene, mode) {
             ("soft_shadow", "slope") => {
-                assert_eq!(r.get("status"), Some("ok"), "{:?}", r.cells);
-                let rmse: f64 = r.get("vis_rmse").unwrap().parse().unwrap();
+                assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells);
+                let rmse: f64 = r.get(cols::VIS_RMSE).unwrap().parse().unwrap();
                 assert!(rmse.is_finite() && rmse < 0.2, "{:?}", r.cells);
-                assert!(r.get("gpu_ms_median").is_some() || r.get("cpu_ms_median").is_some());
+                assert!(
+                    r.get(cols::GPU_MS_MEDIAN).is_some() || r.get(cols::CPU_MS_MEDIAN).is_some()
+                );
             }
             ("soft_shadow", _) => {
-                assert_eq!(r.get("status"), Some("skipped"), "{:?}", r.cells);
-                assert!(r.get("reason").unwrap().contains("bias_mode"));
+                assert_eq!(r.get(cols::STATUS), Some("skipped"), "{:?}", r.cells);
+                assert!(r.get(cols::REASON).unwrap().contains("bias_mode"));
             }
             _ => {
-                assert_eq!(r.get("status"), Some("skipped"), "{:?}", r.cells);
-                assert!(r.get("reason").unwrap().contains("area light"));
+                assert_eq!(r.get(cols::STATUS), Some("skipped"), "{:?}", r.cells);
+                assert!(r.get(cols::REASON).unwrap().contains("area light"));
             }
         }
     }

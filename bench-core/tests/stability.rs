@@ -12,6 +12,7 @@ use bench_core::reference::{rasterize, FragmentLists};
 use bench_core::runner::{self, RunOptions};
 use bench_core::testing;
 use scenarios::{ParamValue, Params, SceneSpec, Suite};
+use schema::cols;
 
 fn s(v: &str) -> ParamValue {
     ParamValue::Str(v.into())
@@ -364,31 +365,34 @@ fn stability_suite_software_profile_flags_every_known_failure() {
     let rows: Vec<&Row> = sink
         .0
         .iter()
-        .filter(|r| !r.get("method").unwrap_or("").starts_with("floor_"))
+        .filter(|r| !r.get(cols::METHOD).unwrap_or("").starts_with("floor_"))
         .collect();
     for r in &rows {
-        let key = r.get("point_key").unwrap_or("?");
+        let key = r.get(cols::POINT_KEY).unwrap_or("?");
         assert_ne!(
-            r.get("status"),
+            r.get(cols::STATUS),
             Some("failed"),
             "{key}: {:?}",
-            r.get("reason")
+            r.get(cols::REASON)
         );
-        if r.get("status") == Some("ok") {
-            let nf: u64 = r.get("non_finite").map(|v| v.parse().unwrap()).unwrap_or(0);
+        if r.get(cols::STATUS) == Some("ok") {
+            let nf: u64 = r
+                .get(cols::NON_FINITE)
+                .map(|v| v.parse().unwrap())
+                .unwrap_or(0);
             assert!(
-                nf == 0 || r.get("flag").is_some(),
+                nf == 0 || r.get(cols::FLAG).is_some(),
                 "{key}: NaN/Inf without a flag"
             );
             assert!(
-                r.get("stiffness_value").is_some(),
+                r.get(cols::STIFFNESS_VALUE).is_some(),
                 "{key}: no stiffness value"
             );
         }
     }
     let flagged = |case: &str, flag: &str| {
         rows.iter()
-            .any(|r| r.get("stability_case") == Some(case) && r.get("flag") == Some(flag))
+            .any(|r| r.get(cols::STABILITY_CASE) == Some(case) && r.get(cols::FLAG) == Some(flag))
     };
     assert!(
         flagged("coplanar", "lost_coplanar"),

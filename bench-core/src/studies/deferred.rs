@@ -24,7 +24,8 @@ use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::methods::{bool_param, int_param, Capture, Method, Prepared};
 use crate::metrics::{image_error, BAD_PIXEL_TOL};
-use crate::record::{Column, Row};
+use crate::record::cols;
+use crate::record::Row;
 use crate::runner::{failed_row, measure, set_params, set_timing, skipped_row};
 use crate::shading::cpu_tiled::{self, CpuOptions};
 use crate::shading::gbuffer::GBufferPass;
@@ -32,32 +33,6 @@ use crate::shading::gpu_paths::{self, Deferred, Path};
 use crate::shading::{reference, GBuffer, ShadeSetup};
 use crate::timing::{GpuTimer, Stats};
 use crate::{CoreError, Result};
-
-/// CSV columns this study owns (documented in results/README.md).
-pub const COLUMNS: &[Column] = &[
-    Column { name: "light_count", doc: "lights in the scene (point, spot and line lights, each with a finite range)" },
-    Column { name: "tile_size", doc: "screen tile side in pixels for light culling (8, 16, 32, 64)" },
-    Column { name: "cull_levels", doc: "light culling levels: 1 = per tile; 2 = 64×64 tile then 32×16 sub-tiles (BF3)" },
-    Column { name: "attenuation_threshold", doc: "τ: a light is culled from a tile where peak intensity × attenuation ≤ τ at every point of it (0: only beyond its range)" },
-    Column { name: "thread_count", doc: "CPU worker threads taking tiles from an atomic counter (CPU lighting paths)" },
-    Column { name: "quad_skip", doc: "CPU tile path: skip a light for a 4×4 quad when all 16 attenuations are 0 (BF3's per-quad cull); false = evaluate every kept light" },
-    Column { name: "spec_skip", doc: "CPU tile path: BF3's no-specular fast path per 4×4 quad (no pixel with a specular colour: the specular term is not evaluated); exact" },
-    Column { name: "spec_skip_frac", doc: "CPU tile path: fraction of non-sky 4×4 quads shaded without the specular term" },
-    Column { name: "cone_cull", doc: "CPU tile path: BF3's normal-cone cull per 32×16 sub-tile (drop a light no pixel of the sub-tile can face: N·L ≤ 0 for the normal cone × position box); exact" },
-    Column { name: "cone_cull_frac", doc: "CPU tile path: fraction of (light, sub-tile) pairs that survived the frustum culls and were dropped by the normal-cone cull" },
-    Column { name: "diffuse_only_frac", doc: "fraction of the scene's lights flagged diffuse-only (no specular term, in every path and the reference)" },
-    Column { name: "diffuse_skip", doc: "CPU tile path: skip the specular evaluation of diffuse-only lights (false: evaluate it and discard it); exact" },
-    Column { name: "diffuse_skip_frac", doc: "CPU tile path: fraction of (light, 4×4 quad) evaluations done without the specular term because the light is diffuse-only" },
-    Column { name: "lights_per_tile_mean", doc: "mean lights kept per culling tile (level 1)" },
-    Column { name: "lights_per_tile_max", doc: "most lights kept in any culling tile (level 1)" },
-    Column { name: "class_ids_present", doc: "classified: classification ids with at least one 4×4 tile this frame" },
-    Column { name: "permutations", doc: "shader permutations compiled and drawn (classified: one per id the scene can produce; uber: 1)" },
-    Column { name: "cpu_light_ms", doc: "median wall-clock ms of the CPU lighting of one frame (threads start to last tile done)" },
-    Column { name: "quad_skip_frac", doc: "CPU path: fraction of (light, 4×4 quad) pairs skipped because all 16 attenuations were 0" },
-    Column { name: "speedup_vs_naive", doc: "naive gpu_ms_median over this row's (GPU paths) or over cpu_light_ms (CPU paths), same scene, resolution and run" },
-    Column { name: "rel_err_max", doc: "largest per-channel error vs the f64 reference, relative to max(1, |reference|)" },
-];
-
 pub const PATHS: &[&str] = &[
     "naive",
     "volumes",
@@ -186,15 +161,15 @@ pub fn rel_err_max(r: &[[f64; 4]], g: &[[f32; 4]]) -> f64 {
 
 fn set_error(row: &mut Row, reference: &[[f64; 4]], img: &[[f32; 4]]) {
     let e = image_error(reference, img, BAD_PIXEL_TOL);
-    row.set_f("rmse", e.rmse)
-        .set_f("psnr_db", e.psnr_db)
-        .set_f("max_abs_err", e.max_abs)
-        .set_f("bad_pixel_frac", e.bad_pixel_frac)
-        .set_f("bad_pixel_tol", BAD_PIXEL_TOL)
-        .set("non_finite", e.non_finite)
-        .set_f("rel_err_max", rel_err_max(reference, img));
+    row.set_f(cols::RMSE, e.rmse)
+        .set_f(cols::PSNR_DB, e.psnr_db)
+        .set_f(cols::MAX_ABS_ERR, e.max_abs)
+        .set_f(cols::BAD_PIXEL_FRAC, e.bad_pixel_frac)
+        .set_f(cols::BAD_PIXEL_TOL, BAD_PIXEL_TOL)
+        .set(cols::NON_FINITE, e.non_finite)
+        .set_f(cols::REL_ERR_MAX, rel_err_max(reference, img));
     if e.non_finite > 0 {
-        row.set("flag", "precision");
+        row.set(cols::FLAG, "precision");
     }
 }
 
@@ -254,13 +229,13 @@ impl Study for DeferredStudy {
         for i in order {
             let pt = &ctx.group.points[i];
             let mut row = Row::new();
-            row.set("method", &pt.method)
-                .set("light_count", scene.lights.len());
+            row.set(cols::METHOD, &pt.method)
+                .set(cols::LIGHT_COUNT, scene.lights.len());
             set_params(&mut row, &pt.params)?;
             let tau = threshold(&pt.params).map_err(CoreError::Param)?;
-            row.set("exact", tau == 0.0);
+            row.set(cols::EXACT, tau == 0.0);
             let frac = diffuse_only_frac(&pt.params).map_err(CoreError::Param)?;
-            row.set_f("diffuse_only_frac", frac);
+            row.set_f(cols::DIFFUSE_ONLY_FRAC, frac);
             let (setup, reference) = &*references.entry(frac.to_bits()).or_insert_with(|| {
                 let s = setup0.clone().with_diffuse_only(frac);
                 let r = reference::shade(&s, &gb);
@@ -308,11 +283,11 @@ impl Study for DeferredStudy {
                         continue;
                     }
                 };
-                row.set("tile_size", 64)
-                    .set("quad_skip", quad_skip)
-                    .set("spec_skip", spec_skip)
-                    .set("cone_cull", cone_cull)
-                    .set("diffuse_skip", diffuse_skip);
+                row.set(cols::TILE_SIZE, 64)
+                    .set(cols::QUAD_SKIP, quad_skip)
+                    .set(cols::SPEC_SKIP, spec_skip)
+                    .set(cols::CONE_CULL, cone_cull)
+                    .set(cols::DIFFUSE_SKIP, diffuse_skip);
                 let lights = setup.gpu_lights(tau);
                 let o = CpuOptions {
                     tile: 64,
@@ -337,30 +312,30 @@ impl Study for DeferredStudy {
                 }
                 let r = last.expect("at least one frame");
                 let st = Stats::of(&samples).unwrap_or_default();
-                row.set_f("cpu_light_ms", st.median);
+                row.set_f(cols::CPU_LIGHT_MS, st.median);
                 let pairs = (r.quad_skips + r.quad_evals).max(1);
-                row.set_f("quad_skip_frac", r.quad_skips as f64 / pairs as f64)
+                row.set_f(cols::QUAD_SKIP_FRAC, r.quad_skips as f64 / pairs as f64)
                     .set_f(
-                        "spec_skip_frac",
+                        cols::SPEC_SKIP_FRAC,
                         r.spec_skipped_quads as f64 / r.quads.max(1) as f64,
                     )
                     .set_f(
-                        "cone_cull_frac",
+                        cols::CONE_CULL_FRAC,
                         r.cone_culls as f64 / r.cone_tests.max(1) as f64,
                     )
                     .set_f(
-                        "diffuse_skip_frac",
+                        cols::DIFFUSE_SKIP_FRAC,
                         r.diffuse_skips as f64 / r.quad_evals.max(1) as f64,
                     );
                 set_tile_stats(&mut row, &r.tile_counts);
                 if let Some(n) = naive_ms {
                     if st.median > 0.0 {
-                        row.set_f("speedup_vs_naive", n / st.median);
+                        row.set_f(cols::SPEEDUP_VS_NAIVE, n / st.median);
                     }
                 }
                 set_error(&mut row, reference, &r.image);
                 row.set(
-                    "notes",
+                    cols::NOTES,
                     format!("cpu_reps={cpu_reps}; G-buffer read back once, untimed"),
                 );
                 emit(i, row)?;
@@ -374,7 +349,8 @@ impl Study for DeferredStudy {
                 }
             };
             if let Path::Tiled { tile, levels } = path {
-                row.set("tile_size", tile).set("cull_levels", levels);
+                row.set(cols::TILE_SIZE, tile)
+                    .set(cols::CULL_LEVELS, levels);
             }
             if let Err(why) = gpu_paths::supports(gpu, path) {
                 emit(i, skipped_row(row, &why))?;
@@ -403,7 +379,7 @@ impl Study for DeferredStudy {
             let naive_ms = naive_by_frac.get(&frac.to_bits()).copied();
             if let (Some(n), Some(g)) = (naive_ms, g) {
                 if g > 0.0 {
-                    row.set_f("speedup_vs_naive", n / g);
+                    row.set_f(cols::SPEEDUP_VS_NAIVE, n / g);
                 }
             }
             let cap: Capture = match meas.prepared.readback(gpu, gscene) {
@@ -423,13 +399,13 @@ impl Study for DeferredStudy {
             let mut dd = d;
             dd.frame(gpu, gscene, &mut timer)?;
             gpu.wait()?;
-            row.set("permutations", dd.permutations);
+            row.set(cols::PERMUTATIONS, dd.permutations);
             if let Some(c) = dd.tile_counts(gpu)? {
                 set_tile_stats(&mut row, &c);
             }
             if let Some((_, counts, _, _)) = dd.classification(gpu)? {
                 row.set(
-                    "class_ids_present",
+                    cols::CLASS_IDS_PRESENT,
                     counts.iter().filter(|&&c| c > 0).count(),
                 );
             }
@@ -442,11 +418,11 @@ impl Study for DeferredStudy {
 fn set_tile_stats(row: &mut Row, counts: &[u32]) {
     let n = counts.len().max(1) as f64;
     row.set_f(
-        "lights_per_tile_mean",
+        cols::LIGHTS_PER_TILE_MEAN,
         counts.iter().map(|&c| c as f64).sum::<f64>() / n,
     )
     .set(
-        "lights_per_tile_max",
+        cols::LIGHTS_PER_TILE_MAX,
         counts.iter().max().copied().unwrap_or(0),
     );
 }

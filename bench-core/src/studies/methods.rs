@@ -8,6 +8,7 @@ use super::{Emit, GroupCtx, PointSpec, Study};
 use crate::effects;
 use crate::methods::{self, Expected};
 use crate::metrics::{image_error, layer_count_accuracy, BAD_PIXEL_TOL};
+use crate::record::cols;
 use crate::record::Row;
 use crate::runner::{failed_row, measure, set_params, set_timing, skipped_row};
 use crate::{CoreError, Result};
@@ -78,7 +79,8 @@ pub fn run_methods_group(
             let pt = &ctx.group.points[i];
             let method = methods::by_name(&pt.method).expect("checked in points()");
             let mut row = Row::new();
-            row.set("method", &pt.method).set("exact", method.exact());
+            row.set(cols::METHOD, &pt.method)
+                .set(cols::EXACT, method.exact());
             set_params(&mut row, &pt.params)?;
             extra(&mut row, pt);
             let effect = match effects::EffectConfig::from_params(&pt.params) {
@@ -88,9 +90,9 @@ pub fn run_methods_group(
                     continue;
                 }
             };
-            row.set("effect", effect.effect.name());
+            row.set(cols::EFFECT, effect.effect.name());
             if let Some(p) = payload_of(method.as_ref(), &pt.params, &effect) {
-                row.set("payload", p);
+                row.set(cols::PAYLOAD, p);
             }
             if effect.effect != effects::Effect::Transparency && !method.axes().contains(&"effect")
             {
@@ -142,7 +144,10 @@ pub fn run_methods_group(
                 .filter(|&&d| d > k)
                 .count()
                 .max(cap.overflow_pixels.unwrap_or(0) as usize);
-            row.set_f("overflow_rate", overflow as f64 / dc.len().max(1) as f64);
+            row.set_f(
+                cols::OVERFLOW_RATE,
+                overflow as f64 / dc.len().max(1) as f64,
+            );
             let mut flag = cap.flag.clone();
             if overflow > 0 && flag.is_none() {
                 flag = Some("overflow".into());
@@ -164,7 +169,7 @@ pub fn run_methods_group(
                         }
                     }
                 }
-                row.set("lost_fragments", coplanar + precision);
+                row.set(cols::LOST_FRAGMENTS, coplanar + precision);
                 if coplanar > 0 {
                     flag.get_or_insert_with(|| "lost_coplanar".into());
                 } else if precision > 0 {
@@ -184,12 +189,12 @@ pub fn run_methods_group(
                     continue;
                 }
                 let e = image_error(&reference, img, BAD_PIXEL_TOL);
-                row.set_f("rmse", e.rmse)
-                    .set_f("psnr_db", e.psnr_db)
-                    .set_f("max_abs_err", e.max_abs)
-                    .set_f("bad_pixel_frac", e.bad_pixel_frac)
-                    .set_f("bad_pixel_tol", BAD_PIXEL_TOL)
-                    .set("non_finite", e.non_finite);
+                row.set_f(cols::RMSE, e.rmse)
+                    .set_f(cols::PSNR_DB, e.psnr_db)
+                    .set_f(cols::MAX_ABS_ERR, e.max_abs)
+                    .set_f(cols::BAD_PIXEL_FRAC, e.bad_pixel_frac)
+                    .set_f(cols::BAD_PIXEL_TOL, BAD_PIXEL_TOL)
+                    .set(cols::NON_FINITE, e.non_finite);
                 if e.non_finite > 0 {
                     flag.get_or_insert_with(|| "precision".into());
                 }
@@ -198,40 +203,34 @@ pub fn run_methods_group(
             if let Some(counts) = &cap.counts {
                 let expected: Vec<u32> = dc.iter().map(|&d| d.min(k)).collect();
                 row.set_f(
-                    "layer_count_accuracy",
+                    cols::LAYER_COUNT_ACCURACY,
                     layer_count_accuracy(&expected, counts),
                 );
                 row.set(
-                    "layers_captured_max",
+                    cols::LAYERS_CAPTURED_MAX,
                     counts.iter().max().copied().unwrap_or(0),
                 );
             }
             if let Some(c) = cap.collision_fragments {
                 row.set_f(
-                    "collision_rate",
+                    cols::COLLISION_RATE,
                     c as f64 / lists.total_fragments().max(1) as f64,
                 );
             }
             if let Some(h) = cap.hazard_pixels {
-                row.set_f("hazard_rate", h as f64 / dc.len().max(1) as f64);
+                row.set_f(cols::HAZARD_RATE, h as f64 / dc.len().max(1) as f64);
             }
             if let Some(f) = flag {
-                row.set("flag", f);
+                row.set(cols::FLAG, f);
             }
-            if !cap.notes.is_empty() {
-                let prev = row
-                    .get("notes")
-                    .map(|n| format!("{n}; "))
-                    .unwrap_or_default();
-                row.set("notes", format!("{prev}{}", cap.notes));
-            }
+            row.add_note(&cap.notes);
             if let Some(g) = m.gpu_ms.map(|s| s.median) {
                 if pt.method == "depth_peel" && peel_ms.is_none() {
                     peel_ms = Some(g);
                 }
                 if let Some(p) = peel_ms {
                     if g > 0.0 {
-                        row.set_f("speedup_vs_depth_peel", p / g);
+                        row.set_f(cols::SPEEDUP_VS_DEPTH_PEEL, p / g);
                     }
                 }
             }
@@ -268,11 +267,11 @@ pub fn has_depth_ties(lists: &crate::reference::FragmentLists) -> bool {
 pub fn set_reference_columns(row: &mut Row, lists: &crate::reference::FragmentLists) {
     let dc = lists.depth_complexity();
     let covered = dc.iter().filter(|&&d| d > 0).count();
-    row.set("depth_complexity_max", lists.max_depth_complexity())
+    row.set(cols::DEPTH_COMPLEXITY_MAX, lists.max_depth_complexity())
         .set_f(
-            "depth_complexity_mean",
+            cols::DEPTH_COMPLEXITY_MEAN,
             lists.total_fragments() as f64 / covered.max(1) as f64,
         )
-        .set("true_fragments", lists.total_fragments())
-        .set("bytes_true_fragments", lists.total_fragments() * 8);
+        .set(cols::TRUE_FRAGMENTS, lists.total_fragments())
+        .set(cols::BYTES_TRUE_FRAGMENTS, lists.total_fragments() * 8);
 }

@@ -25,19 +25,10 @@ use scenarios::{Params, Scene, SceneSpec, StudySpec, Suite};
 
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
-use crate::record::{Column, Row};
+use crate::record::cols;
+use crate::record::Row;
 use crate::reference::{rasterize, FragmentLists};
 use crate::Result;
-
-/// Columns owned by individual studies (appended after the shared axes, in this order).
-pub const STUDY_COLUMNS: &[&[Column]] = &[
-    crate::effects::COLUMNS,
-    geometry::COLUMNS,
-    stability::COLUMNS,
-    deferred::COLUMNS,
-    prepass::COLUMNS,
-    shadows::COLUMNS,
-];
 
 /// One point of a group: a method (or path/variant) name and its axis values.
 #[derive(Clone, Debug)]
@@ -153,7 +144,7 @@ impl<'a> GroupCtx<'a> {
             self.group.height,
             img,
         )?;
-        row.set("image_file", name);
+        row.set(cols::IMAGE_FILE, name);
         Ok(())
     }
 }

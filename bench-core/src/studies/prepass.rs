@@ -18,7 +18,8 @@ use super::deferred::{gbuffer_of, rel_err_max};
 use super::{Emit, GroupCtx, PointSpec, Study};
 use crate::methods::{bool_param, int_param, str_param, Prepared};
 use crate::metrics::{image_error, BAD_PIXEL_TOL};
-use crate::record::{Column, Row};
+use crate::record::cols;
+use crate::record::Row;
 use crate::runner::{failed_row, set_params, skipped_row};
 use crate::shading::gbuffer::FULL_BYTES_PER_PIXEL;
 use crate::shading::gpu_paths::{Deferred, Path};
@@ -26,25 +27,6 @@ use crate::shading::prepass::{self, Accum, LbFormat, PrePass};
 use crate::shading::{reference, ShadeSetup};
 use crate::timing::{GpuTimer, Stats};
 use crate::{CoreError, Result};
-
-/// CSV columns this study owns (documented in results/README.md).
-pub const COLUMNS: &[Column] = &[
-    Column { name: "light_accum", doc: "how the lighting is accumulated: naive (every light, fullscreen) | tiled (GPU tile culling) | cpu (CPU tiles)" },
-    Column { name: "light_buffer_format", doc: "light pre-pass light buffer: rgba8 (light ÷ 8, clamped) | rgba16f | rg11b10 (+ r16f for the specular term)" },
-    Column { name: "second_view", doc: "true: an independent second-camera view (full deferred, tiled) is rendered in the same frame" },
-    Column { name: "overlap", doc: "CPU lighting: true = the second view is submitted before the CPU lights, so the GPU renders it meanwhile; false = after" },
-    Column { name: "bytes_rt_written", doc: "render-target bytes written per frame by the main view, one touch per pixel (overdraw not counted)" },
-    Column { name: "bytes_rt_read", doc: "render-target bytes read per frame by the main view, one touch per pixel (overdraw not counted)" },
-    Column { name: "spec_color_loss_rmse", doc: "RMSE of the f64 light pre-pass image (diffuse RGB + specular luminance packing) vs the f64 full reference: colour lost by the packing alone" },
-    Column { name: "format_rmse", doc: "RMSE vs the f64 light pre-pass image: what the light-buffer format and f32 arithmetic add" },
-    Column { name: "frame_ms", doc: "median wall-clock ms per frame, first submit to all GPU work done (both views when second_view)" },
-    Column { name: "gpu_idle_ms", doc: "median frame_ms minus the frame's summed GPU pass times: time the GPU had no timed work" },
-    Column { name: "latency_ms", doc: "median ms from submitting the pre-pass to the main view's final image being complete" },
-    Column { name: "gpu_gap_ms", doc: "median GPU-clock ms from the end of the pre-pass to the start of the material pass: the lights pass, or (CPU lighting) copy + map + CPU lighting + upload" },
-    Column { name: "gpu_busy_in_gap_ms", doc: "median timed GPU pass ms inside gpu_gap_ms: the lights pass, or (CPU lighting) the independent view that ran while the CPU lit — the measured overlap" },
-    Column { name: "map_wait_ms", doc: "CPU lighting: median ms from submitting the pre-pass to the depth/normal read-back being mapped (blocking wait)" },
-];
-
 const METHODS: &[&str] = &["deferred", "prepass", "prepass_cpu"];
 
 fn axes_of(m: &str) -> &'static [&'static str] {
@@ -130,22 +112,22 @@ fn time_frames(
 
 fn set_times(row: &mut Row, t: &Timed) {
     if let Some(g) = t.gpu {
-        row.set_f("gpu_ms_median", g.median)
-            .set_f("gpu_ms_min", g.min)
-            .set_f("gpu_ms_max", g.max)
-            .set_f("gpu_ms_rel_noise", g.rel_noise)
-            .set_f("gpu_idle_ms", t.idle.median);
+        row.set_f(cols::GPU_MS_MEDIAN, g.median)
+            .set_f(cols::GPU_MS_MIN, g.min)
+            .set_f(cols::GPU_MS_MAX, g.max)
+            .set_f(cols::GPU_MS_REL_NOISE, g.rel_noise)
+            .set_f(cols::GPU_IDLE_MS, t.idle.median);
     }
     if let Some((gap, busy)) = t.gap {
-        row.set_f("gpu_gap_ms", gap)
-            .set_f("gpu_busy_in_gap_ms", busy);
+        row.set_f(cols::GPU_GAP_MS, gap)
+            .set_f(cols::GPU_BUSY_IN_GAP_MS, busy);
     }
-    row.set_f("cpu_ms_median", t.wall.median)
-        .set_f("cpu_ms_min", t.wall.min)
-        .set_f("cpu_ms_max", t.wall.max)
-        .set_f("frame_ms", t.wall.median)
+    row.set_f(cols::CPU_MS_MEDIAN, t.wall.median)
+        .set_f(cols::CPU_MS_MIN, t.wall.min)
+        .set_f(cols::CPU_MS_MAX, t.wall.max)
+        .set_f(cols::FRAME_MS, t.wall.median)
         .set(
-            "pass_ms",
+            cols::PASS_MS,
             serde_json::to_string(&t.pass).unwrap_or_default(),
         );
 }
@@ -200,28 +182,28 @@ impl Study for PrepassStudy {
         let px = gscene.pixels() as u64;
         for (i, pt) in ctx.group.points.iter().enumerate() {
             let mut row = Row::new();
-            row.set("method", &pt.method)
-                .set("light_count", scene.lights.len())
-                .set("exact", false);
+            row.set(cols::METHOD, &pt.method)
+                .set(cols::LIGHT_COUNT, scene.lights.len())
+                .set(cols::EXACT, false);
             set_params(&mut row, &pt.params)?;
             match self.run_point(ctx, &pt.method, &pt.params, &mut row) {
                 Ok(Some((img, is_prepass))) => {
                     let e = image_error(&exact, &img, BAD_PIXEL_TOL);
-                    row.set_f("rmse", e.rmse)
-                        .set_f("psnr_db", e.psnr_db)
-                        .set_f("max_abs_err", e.max_abs)
-                        .set_f("bad_pixel_frac", e.bad_pixel_frac)
-                        .set_f("bad_pixel_tol", BAD_PIXEL_TOL)
-                        .set("non_finite", e.non_finite)
-                        .set_f("rel_err_max", rel_err_max(&exact, &img));
+                    row.set_f(cols::RMSE, e.rmse)
+                        .set_f(cols::PSNR_DB, e.psnr_db)
+                        .set_f(cols::MAX_ABS_ERR, e.max_abs)
+                        .set_f(cols::BAD_PIXEL_FRAC, e.bad_pixel_frac)
+                        .set_f(cols::BAD_PIXEL_TOL, BAD_PIXEL_TOL)
+                        .set(cols::NON_FINITE, e.non_finite)
+                        .set_f(cols::REL_ERR_MAX, rel_err_max(&exact, &img));
                     if is_prepass {
-                        row.set_f("spec_color_loss_rmse", loss).set_f(
-                            "format_rmse",
+                        row.set_f(cols::SPEC_COLOR_LOSS_RMSE, loss).set_f(
+                            cols::FORMAT_RMSE,
                             image_error(&packed, &img, BAD_PIXEL_TOL).rmse,
                         );
                     } else {
-                        row.set("bytes_rt_written", px * (FULL_BYTES_PER_PIXEL + 16))
-                            .set("bytes_rt_read", px * FULL_BYTES_PER_PIXEL);
+                        row.set(cols::BYTES_RT_WRITTEN, px * (FULL_BYTES_PER_PIXEL + 16))
+                            .set(cols::BYTES_RT_READ, px * FULL_BYTES_PER_PIXEL);
                     }
                     emit(i, row)?;
                 }
@@ -262,9 +244,9 @@ impl PrepassStudy {
         let accum_name = str_param(p, "light_accum", "tiled", &["naive", "tiled"]).map_err(Skip)?;
         let tiled = accum_name == "tiled";
         if method == "deferred" {
-            row.set("light_accum", &accum_name);
+            row.set(cols::LIGHT_ACCUM, &accum_name);
             let path = if tiled {
-                row.set("tile_size", 16).set("cull_levels", 1);
+                row.set(cols::TILE_SIZE, 16).set(cols::CULL_LEVELS, 1);
                 Path::Tiled {
                     tile: 16,
                     levels: 1,
@@ -275,24 +257,25 @@ impl PrepassStudy {
             let mut d = Deferred::new(gpu, scene, gscene, path, 0.0, false)?;
             let t = time_frames(ctx, |timer| d.frame(gpu, gscene, timer).map(|_| ()))?;
             set_times(row, &t);
-            row.set("bytes_allocated", d.bytes_allocated())
-                .set("geometry_passes", 1);
+            row.set(cols::BYTES_ALLOCATED, d.bytes_allocated())
+                .set(cols::GEOMETRY_PASSES, 1);
             return Ok(Some((d.read_image(gpu)?, false)));
         }
         let fmt =
             LbFormat::parse(&str_param(p, "light_buffer_format", "rgba16f", &[]).map_err(Skip)?)
                 .map_err(Skip)?;
-        row.set("light_buffer_format", fmt.name());
+        row.set(cols::LIGHT_BUFFER_FORMAT, fmt.name());
         let (accum, view2) = if method == "prepass_cpu" {
             let threads = int_param(p, "thread_count", 1, 1, 1024).map_err(Skip)? as usize;
             let overlap = bool_param(p, "overlap", true).map_err(Skip)?;
-            row.set("light_accum", "cpu").set("second_view", true);
+            row.set(cols::LIGHT_ACCUM, "cpu")
+                .set(cols::SECOND_VIEW, true);
             (Accum::Cpu { threads, overlap }, true)
         } else {
             let v2 = bool_param(p, "second_view", false).map_err(Skip)?;
-            row.set("light_accum", &accum_name);
+            row.set(cols::LIGHT_ACCUM, &accum_name);
             if tiled {
-                row.set("tile_size", 16);
+                row.set(cols::TILE_SIZE, 16);
             }
             (
                 if tiled {
@@ -308,18 +291,17 @@ impl PrepassStudy {
         let t = time_frames(ctx, |timer| pp.frame(gpu, gscene, timer))?;
         set_times(row, &t);
         let (wr, rd) = pp.rt_bytes(gscene.pixels() as u64);
-        row.set("bytes_rt_written", wr)
-            .set("bytes_rt_read", rd)
-            .set("bytes_allocated", pp.bytes_allocated())
-            .set("geometry_passes", if view2 { 3 } else { 2 });
+        row.set(cols::BYTES_RT_WRITTEN, wr)
+            .set(cols::BYTES_RT_READ, rd)
+            .set(cols::BYTES_ALLOCATED, pp.bytes_allocated())
+            .set(cols::GEOMETRY_PASSES, if view2 { 3 } else { 2 });
         let s = &pp.samples[(ctx.warmup as usize).min(pp.samples.len())..];
         if !s.is_empty() {
-            row.set_f("latency_ms", median(s.iter().map(|f| f.latency_ms)));
+            row.set_f(cols::LATENCY_MS, median(s.iter().map(|f| f.latency_ms)));
             if matches!(accum, Accum::Cpu { .. }) {
-                row.set_f("cpu_light_ms", median(s.iter().map(|f| f.cpu_light_ms)))
-                    .set_f("map_wait_ms", median(s.iter().map(|f| f.map_wait_ms)))
-                    .set(
-                        "notes",
+                row.set_f(cols::CPU_LIGHT_MS, median(s.iter().map(|f| f.cpu_light_ms)))
+                    .set_f(cols::MAP_WAIT_MS, median(s.iter().map(|f| f.map_wait_ms)))
+                    .set(cols::NOTES,
                         format!(
                             "measured: frame_ms = wall clock from the pre-pass submit to both views done; cpu_light_ms = lighting only, decode+light+pack+upload median {:.3} ms; gpu_gap_ms/gpu_busy_in_gap_ms on the GPU clock (busy > 0 = the second view ran while the CPU lit); readiness = map_async callback + blocking poll(Wait) on the pre-pass submission (no spin); one frame in flight, nothing pipelined across frames",
                             median(s.iter().map(|f| f.cpu_total_ms))

@@ -20,29 +20,9 @@ use scenarios::{ParamValue, StudySpec};
 use super::methods::{run_methods_group, MethodsStudy};
 use super::{Emit, GroupCtx, PointSpec, Study};
 use crate::effects::EffectConfig;
-use crate::record::{Column, Row};
+use crate::record::cols;
+use crate::record::Row;
 use crate::{CoreError, Result};
-
-/// CSV columns this study owns (documented in results/README.md).
-pub const COLUMNS: &[Column] = &[
-    Column {
-        name: "stability_case",
-        doc: "stability: the stiff case (near_far, coplanar, close_layers, high_complexity, thickness, alpha, packing, extreme_geometry)",
-    },
-    Column {
-        name: "stiffness",
-        doc: "stability: what stiffness_value measures (far_over_near, sigma_l, distance_over_wall, depth_gap_min, depth_complexity, or a scene/axis parameter name)",
-    },
-    Column {
-        name: "stiffness_value",
-        doc: "stability: the case's stiffness parameter (e.g. far/near ratio, σ·l, layer separation in window depth)",
-    },
-    Column {
-        name: "lost_fragments",
-        doc: "fragments within the method's capacity that it did not capture (sum over pixels; coplanar loss when the reference has depth ties)",
-    },
-];
-
 /// Computed stiffness measures; any other name is read from the scene's or the point's params.
 pub const STIFFNESS: &[&str] = &[
     "far_over_near",
@@ -147,10 +127,10 @@ impl Study for StabilityStudy {
         let case = extra_str(ctx.study, "case")?.to_string();
         let stiffness = extra_str(ctx.study, "stiffness")?.to_string();
         let add = |row: &mut Row, pt: &PointSpec| {
-            row.set("stability_case", &case)
-                .set("stiffness", &stiffness);
+            row.set(cols::STABILITY_CASE, &case)
+                .set(cols::STIFFNESS, &stiffness);
             if let Some(v) = stiffness_value(ctx, pt, &stiffness) {
-                row.set_f("stiffness_value", v);
+                row.set_f(cols::STIFFNESS_VALUE, v);
             }
         };
         run_methods_group(ctx, emit, &add)

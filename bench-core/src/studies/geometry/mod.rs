@@ -44,46 +44,13 @@ use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::methods::floor::{clear_depth, depth_state};
 use crate::methods::{bool_param, camera_entry, int_param, shader, str_param};
-use crate::record::{Column, Row};
+use crate::record::cols;
+use crate::record::Row;
 use crate::runner::{failed_row, one_line, set_params, skipped_row};
 use crate::timing::{GpuTimer, Stats};
 use crate::{CoreError, Result};
 
 const WGSL: &str = include_str!("geometry.wgsl");
-
-const fn c(name: &'static str, doc: &'static str) -> Column {
-    Column { name, doc }
-}
-
-/// CSV columns this study owns (documented in results/README.md).
-pub const COLUMNS: &[Column] = &[
-    c("batch_size", "geometry: triangles per draw call asked for (0 = the whole mesh; 16-bit indices may split further, see batches)"),
-    c("draw_triangles", "geometry: triangles drawn per frame, a prefix of the ordered mesh (0 = all of it)"),
-    c("vertex_format", "geometry: position format: float32x3, float16x4 or snorm16x4 (both quantised to the batch's bounding box, decoded in the vertex shader)"),
-    c("normal_format", "geometry: normal format (wgpu name) or none; unorm formats store n·½+½"),
-    c("color_format", "geometry: colour format (wgpu name) or none"),
-    c("texcoord_format", "geometry: texture-coordinate format (wgpu name) or none"),
-    c("layout", "geometry: interleaved (one vertex buffer) or separate (one buffer per attribute)"),
-    c("extra_attributes", "geometry: extra float32x4 attributes per vertex (0..8; the thesis's Fig. 3.3)"),
-    c("index_format", "geometry: uint16 or uint32 indices"),
-    c("mesh_order", "geometry: triangle order: original, shuffled, vcache (meshopt), vcache_vfetch (meshopt cache + fetch)"),
-    c("indexed", "geometry: true for indexed draws, false for one vertex per triangle corner"),
-    c("primitive", "geometry: list, or strip (meshopt stripify, primitive restart)"),
-    c("batches", "geometry: draw calls per frame"),
-    c("batch_vertices", "geometry: vertices in the vertex buffers after batching (shared vertices are duplicated across batches)"),
-    c("index_count", "geometry: indices submitted per frame (restart indices included; 0 for non-indexed)"),
-    c("vertex_stride_bytes", "geometry: bytes per vertex, summed over the vertex buffers"),
-    c("vertex_bytes", "geometry: bytes of vertex buffers"),
-    c("index_bytes", "geometry: bytes of the index buffer"),
-    c("acmr", "geometry: meshopt ACMR (vertices transformed per triangle, FIFO cache of 16) of the batched triangle list (for strips: the list they were made from); best ≈ 0.5, worst 3"),
-    c("atvr", "geometry: meshopt ATVR (vertices transformed per vertex, FIFO 16); best 1"),
-    c("vs_acmr", "geometry: measured vertex-shader invocations per triangle (pipeline statistics)"),
-    c("post_transform_hit_rate", "geometry: measured 1 − vs_invocations / (3 × triangles): the share of triangle corners served without a vertex-shader run"),
-    c("small_viewport", "geometry: WxH of the raster-bound check's small viewport"),
-    c("gpu_ms_small_viewport", "geometry: median GPU ms of the same point at the small viewport"),
-    c("raster_bound_ratio", "geometry: gpu_ms_median / gpu_ms_small_viewport; ≈ 1 when the raster stage is not the bottleneck"),
-    c("prep_ms", "geometry: CPU ms to order, batch, stripify and encode this point's buffers (untimed on the GPU)"),
-];
 
 const AXES: &[&str] = &[
     "batch_size",
@@ -177,29 +144,29 @@ impl FeedSpec {
     pub fn set_columns(&self, row: &mut Row) {
         let f = &self.formats;
         let name = |o: Option<AttrFormat>| o.map_or("none", |f| f.name);
-        row.set("batch_size", self.batch.batch_size)
-            .set("draw_triangles", self.batch.draw_triangles)
-            .set("vertex_format", f.position.name)
-            .set("normal_format", name(f.normal))
-            .set("color_format", name(f.color))
-            .set("texcoord_format", name(f.texcoord))
+        row.set(cols::BATCH_SIZE, self.batch.batch_size)
+            .set(cols::DRAW_TRIANGLES, self.batch.draw_triangles)
+            .set(cols::VERTEX_FORMAT, f.position.name)
+            .set(cols::NORMAL_FORMAT, name(f.normal))
+            .set(cols::COLOR_FORMAT, name(f.color))
+            .set(cols::TEXCOORD_FORMAT, name(f.texcoord))
             .set(
-                "layout",
+                cols::LAYOUT,
                 match f.layout {
                     Layout::Interleaved => "interleaved",
                     Layout::Separate => "separate",
                 },
             )
-            .set("extra_attributes", f.extra_attributes)
+            .set(cols::EXTRA_ATTRIBUTES, f.extra_attributes)
             .set(
-                "index_format",
+                cols::INDEX_FORMAT,
                 match self.batch.index_format {
                     IndexFormat::Uint16 => "uint16",
                     IndexFormat::Uint32 => "uint32",
                 },
             )
             .set(
-                "mesh_order",
+                cols::MESH_ORDER,
                 prep::MESH_ORDERS[[
                     MeshOrder::Original,
                     MeshOrder::Shuffled,
@@ -210,9 +177,9 @@ impl FeedSpec {
                 .position(|o| *o == self.order)
                 .expect("every order is listed")],
             )
-            .set("indexed", self.batch.indexed)
+            .set(cols::INDEXED, self.batch.indexed)
             .set(
-                "primitive",
+                cols::PRIMITIVE,
                 match self.batch.primitive {
                     Primitive::List => "list",
                     Primitive::Strip => "strip",
@@ -823,7 +790,7 @@ impl Study for GeometryStudy {
         let mut orders: HashMap<MeshOrder, Ordered> = HashMap::new();
         for (i, pt) in ctx.group.points.iter().enumerate() {
             let mut row = Row::new();
-            row.set("method", "geometry");
+            row.set(cols::METHOD, "geometry");
             set_params(&mut row, &pt.params)?;
             let spec = FeedSpec::from_params(&pt.params).map_err(CoreError::Param)?;
             spec.set_columns(&mut row);
@@ -923,55 +890,58 @@ fn fill_row(
         (true, IndexFormat::Uint16) => 2 * index_count,
         (true, IndexFormat::Uint32) => 4 * index_count,
     };
-    row.set("effect", "none")
-        .set("exact", false)
-        .set("batches", b.batches.len())
-        .set("batch_vertices", b.verts.len())
-        .set("index_count", index_count)
+    row.set(cols::EFFECT, "none")
+        .set(cols::EXACT, false)
+        .set(cols::BATCHES, b.batches.len())
+        .set(cols::BATCH_VERTICES, b.verts.len())
+        .set(cols::INDEX_COUNT, index_count)
         .set(
-            "vertex_stride_bytes",
+            cols::VERTEX_STRIDE_BYTES,
             feed.streams.strides.iter().sum::<u64>(),
         )
-        .set("vertex_bytes", feed.streams.bytes())
-        .set("index_bytes", index_bytes)
-        .set_f("prep_ms", prep_ms)
-        .set("geometry_passes", 1)
-        .set("bytes_allocated", m.bytes_allocated)
-        .set_f("cpu_ms_median", m.cpu_ms.median)
-        .set_f("cpu_ms_min", m.cpu_ms.min)
-        .set_f("cpu_ms_max", m.cpu_ms.max);
+        .set(cols::VERTEX_BYTES, feed.streams.bytes())
+        .set(cols::INDEX_BYTES, index_bytes)
+        .set_f(cols::PREP_MS, prep_ms)
+        .set(cols::GEOMETRY_PASSES, 1)
+        .set(cols::BYTES_ALLOCATED, m.bytes_allocated)
+        .set_f(cols::CPU_MS_MEDIAN, m.cpu_ms.median)
+        .set_f(cols::CPU_MS_MIN, m.cpu_ms.min)
+        .set_f(cols::CPU_MS_MAX, m.cpu_ms.max);
     if let Some(s) = &b.cache {
-        row.set_f("acmr", s.acmr as f64)
-            .set_f("atvr", s.atvr as f64);
+        row.set_f(cols::ACMR, s.acmr as f64)
+            .set_f(cols::ATVR, s.atvr as f64);
     }
     if let Some(g) = m.gpu_ms {
-        row.set_f("gpu_ms_median", g.median)
-            .set_f("gpu_ms_min", g.min)
-            .set_f("gpu_ms_max", g.max)
-            .set_f("gpu_ms_rel_noise", g.rel_noise)
+        row.set_f(cols::GPU_MS_MEDIAN, g.median)
+            .set_f(cols::GPU_MS_MIN, g.min)
+            .set_f(cols::GPU_MS_MAX, g.max)
+            .set_f(cols::GPU_MS_REL_NOISE, g.rel_noise)
             .set(
-                "pass_ms",
+                cols::PASS_MS,
                 serde_json::to_string(&BTreeMap::from([("feed", g.median)])).unwrap_or_default(),
             );
         if g.median > 0.0 {
             let secs = g.median * 1e-3;
-            row.set_f("triangles_per_s", tris / secs)
-                .set_f("vertices_per_s", submitted / secs);
+            row.set_f(cols::TRIANGLES_PER_S, tris / secs)
+                .set_f(cols::VERTICES_PER_S, submitted / secs);
         }
         if let Some(s) = m.gpu_ms_small {
-            row.set("small_viewport", format!("{}x{}", small.0, small.1))
-                .set_f("gpu_ms_small_viewport", s.median);
+            row.set(cols::SMALL_VIEWPORT, format!("{}x{}", small.0, small.1))
+                .set_f(cols::GPU_MS_SMALL_VIEWPORT, s.median);
             if s.median > 0.0 {
-                row.set_f("raster_bound_ratio", g.median / s.median);
+                row.set_f(cols::RASTER_BOUND_RATIO, g.median / s.median);
             }
         }
         let _ = floor_ms; // x_floor is added by the runner
     }
     if let Some((vs, fs)) = m.invocations {
-        row.set("vs_invocations", vs).set("ps_invocations", fs);
+        row.set(cols::VS_INVOCATIONS, vs)
+            .set(cols::PS_INVOCATIONS, fs);
         if tris > 0.0 {
-            row.set_f("vs_acmr", vs as f64 / tris)
-                .set_f("post_transform_hit_rate", 1.0 - vs as f64 / (3.0 * tris));
+            row.set_f(cols::VS_ACMR, vs as f64 / tris).set_f(
+                cols::POST_TRANSFORM_HIT_RATE,
+                1.0 - vs as f64 / (3.0 * tris),
+            );
         }
     }
     let mut notes = Vec::new();
@@ -994,6 +964,6 @@ fn fill_row(
         }
     }
     if !notes.is_empty() {
-        row.set("notes", one_line(&notes.join("; ")));
+        row.set(cols::NOTES, one_line(&notes.join("; ")));
     }
 }

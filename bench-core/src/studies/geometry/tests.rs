@@ -9,6 +9,7 @@ use scenarios::{ParamValue, Params, Scene, SceneSpec, Suite};
 use super::prep::*;
 use super::*;
 use crate::gpu::GpuOptions;
+use crate::record::{cols, Col, VecSink};
 use crate::reference::rasterize;
 
 fn mesh_scene(triangles: i64, shape: &str) -> Scene {
@@ -650,16 +651,6 @@ fn a_wrong_decode_fails_the_comparison_mesh_1200_at_64px() {
     eprintln!("wrong normal decode: {wrong:?}");
 }
 
-struct VecSink(Vec<Row>);
-impl crate::record::Sink for VecSink {
-    fn point_done(&mut self, row: &Row) -> Result<()> {
-        let header: Vec<&'static str> = crate::record::columns().iter().map(|c| c.name).collect();
-        crate::record::row_record(&header, row)?;
-        self.0.push(row.clone());
-        Ok(())
-    }
-}
-
 /// A tiny geometry suite through the real runner on lavapipe: one row per point, declared
 /// columns only, impossible points skipped with a reason, and the measured vertex-shader
 /// invocations consistent with the draw (≤ 3 per triangle, exactly 3 when non-indexed).
@@ -693,22 +684,24 @@ triangles = 800
     let rows: Vec<&Row> = sink
         .0
         .iter()
-        .filter(|r| r.get("study") == Some("geometry") && r.get("method") == Some("geometry"))
+        .filter(|r| {
+            r.get(cols::STUDY) == Some("geometry") && r.get(cols::METHOD) == Some("geometry")
+        })
         .collect();
     assert_eq!(rows.len(), 8);
     for r in &rows {
-        let indexed = r.get("indexed") == Some("true");
-        let strip = r.get("primitive") == Some("strip");
+        let indexed = r.get(cols::INDEXED) == Some("true");
+        let strip = r.get(cols::PRIMITIVE) == Some("strip");
         if !indexed && strip {
-            assert_eq!(r.get("status"), Some("skipped"));
-            assert!(r.get("reason").unwrap().contains("indexed"));
+            assert_eq!(r.get(cols::STATUS), Some("skipped"));
+            assert!(r.get(cols::REASON).unwrap().contains("indexed"));
             continue;
         }
-        assert_eq!(r.get("status"), Some("ok"), "{:?}", r.cells);
-        let tris: f64 = r.get("triangles").unwrap().parse().unwrap();
-        assert!(r.get("acmr").is_some());
+        assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells);
+        let tris: f64 = r.get(cols::TRIANGLES).unwrap().parse().unwrap();
+        assert!(r.get(cols::ACMR).is_some());
         if gpu.has(wgpu::Features::PIPELINE_STATISTICS_QUERY) {
-            let vs: f64 = r.get("vs_invocations").unwrap().parse().unwrap();
+            let vs: f64 = r.get(cols::VS_INVOCATIONS).unwrap().parse().unwrap();
             if indexed {
                 assert!(
                     vs <= 3.0 * tris && vs > 0.0,
@@ -723,7 +716,9 @@ triangles = 800
             }
         }
         if gpu.has(wgpu::Features::TIMESTAMP_QUERY) {
-            assert!(r.get("triangles_per_s").is_some() && r.get("raster_bound_ratio").is_some());
+            assert!(
+                r.get(cols::TRIANGLES_PER_S).is_some() && r.get(cols::RASTER_BOUND_RATIO).is_some()
+            );
         }
     }
 }
@@ -781,24 +776,25 @@ fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
     let rows: Vec<&Row> = sink
         .0
         .iter()
-        .filter(|r| r.get("method") == Some("geometry"))
+        .filter(|r| r.get(cols::METHOD) == Some("geometry"))
         .collect();
     assert!(rows.len() >= 90, "only {} geometry rows", rows.len());
-    let num = |r: &Row, c: &str| -> f64 {
+    let num = |r: &Row, c: Col| -> f64 {
         r.get(c)
             .unwrap_or_else(|| panic!("{c} missing: {:?}", r.cells))
             .parse()
             .unwrap()
     };
     for r in &rows {
-        assert_eq!(r.get("status"), Some("ok"), "{:?}", r.cells);
-        let drawn = match num(r, "draw_triangles") {
-            0.0 => num(r, "triangles"),
+        assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells);
+        let drawn = match num(r, cols::DRAW_TRIANGLES) {
+            0.0 => num(r, cols::TRIANGLES),
             d => d,
         };
-        let batches = num(r, "batches");
-        let batch_size = num(r, "batch_size");
-        let list32 = r.get("index_format") == Some("uint32") && r.get("primitive") == Some("list");
+        let batches = num(r, cols::BATCHES);
+        let batch_size = num(r, cols::BATCH_SIZE);
+        let list32 =
+            r.get(cols::INDEX_FORMAT) == Some("uint32") && r.get(cols::PRIMITIVE) == Some("list");
         if list32 {
             let want = if batch_size == 0.0 {
                 1.0
@@ -807,20 +803,20 @@ fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
             };
             assert_eq!(batches, want, "{:?}", r.cells);
         }
-        if r.get("index_format") == Some("uint16") {
-            assert!(num(r, "batch_vertices") / batches <= 65_536.0);
+        if r.get(cols::INDEX_FORMAT) == Some("uint16") {
+            assert!(num(r, cols::BATCH_VERTICES) / batches <= 65_536.0);
         }
-        assert!(num(r, "vertex_stride_bytes") >= 6.0);
+        assert!(num(r, cols::VERTEX_STRIDE_BYTES) >= 6.0);
         if gpu.has(wgpu::Features::PIPELINE_STATISTICS_QUERY) {
-            let vs = num(r, "vs_invocations");
-            if r.get("indexed") == Some("false") {
+            let vs = num(r, cols::VS_INVOCATIONS);
+            if r.get(cols::INDEXED) == Some("false") {
                 assert_eq!(vs, 3.0 * drawn, "{:?}", r.cells);
             } else {
                 assert!(vs > 0.0 && vs <= 3.0 * drawn, "{:?}", r.cells);
             }
         }
         if gpu.has(wgpu::Features::TIMESTAMP_QUERY) {
-            assert!(num(r, "triangles_per_s") > 0.0);
+            assert!(num(r, cols::TRIANGLES_PER_S) > 0.0);
         }
     }
     // Every axis value of the full suite's sub-studies appears in some row.
@@ -836,7 +832,8 @@ fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
         ("texcoord_format", "unorm16x2"),
     ] {
         assert!(
-            rows.iter().any(|r| r.get(axis) == Some(value)),
+            rows.iter()
+                .any(|r| r.get(schema::by_name(axis).unwrap()) == Some(value)),
             "no row with {axis} = {value}"
         );
     }
@@ -883,8 +880,8 @@ fn geometry_models_without_the_meshes_fails_rows_naming_the_file() {
     assert_eq!(n, crate::runner::rows_in(&groups));
     assert_eq!(sink.0.len(), n);
     for r in &sink.0 {
-        assert_eq!(r.get("status"), Some("failed"), "{:?}", r.cells);
-        let why = r.get("reason").unwrap();
+        assert_eq!(r.get(cols::STATUS), Some("failed"), "{:?}", r.cells);
+        let why = r.get(cols::REASON).unwrap();
         assert!(
             why.contains("file not found") && why.contains("models/"),
             "{why}"

@@ -24,34 +24,13 @@ use scenarios::{ParamValue, Params, StudySpec};
 
 use super::{Emit, GroupCtx, PointSpec, Study};
 use crate::methods::{Method, Prepared};
-use crate::record::{Column, Row};
+use crate::record::cols;
+use crate::record::Row;
 use crate::runner::{failed_row, measure, set_params, set_timing, skipped_row};
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 use layered::{Config, LayeredSsm};
 use raytrace::{Bvh, LightFrame};
-
-const fn c(name: &'static str, doc: &'static str) -> Column {
-    Column { name, doc }
-}
-
-/// CSV columns this study owns (documented in results/README.md).
-pub const COLUMNS: &[Column] = &[
-    c("shadow_map_res", "shadows: shadow-map side in texels (square; one texture per light layer)"),
-    c("max_nspp", "shadows: most shadow-map samples per pixel in the search region; above it the stride grows (floor(sqrt) per axis)"),
-    c("bias_mode", "shadows: depth bias: midpoint (half-way to the next layer; the last layer falls back to gmax) | slope (gscale·max(|ddx|,|ddy|) clamped by gmax) | hybrid (the larger)"),
-    c("gscale", "shadows: slope-bias scale, times the layer's depth change per texel"),
-    c("gmax", "shadows: clamp of the slope bias and the midpoint fallback, world units"),
-    c("hsm", "shadows: true if the search region is refined by two iterations over the min-depth pyramid"),
-    c("shadow_rays", "shadows: reference rays per pixel (m×m jittered strata on the light square)"),
-    c("shadow_pixels", "shadows: pixels evaluated (a visible surface inside the light's frustum)"),
-    c("vis_rmse", "shadows: RMSE of light visibility (0..1) vs the ray-traced reference, over evaluated pixels"),
-    c("vis_bias", "shadows: mean signed visibility error (GPU − reference): > 0 light bleeding, < 0 overshadowing"),
-    c("vis_max_abs_err", "shadows: largest absolute visibility error of any evaluated pixel"),
-    c("vis_bleed_mean", "shadows: mean of max(GPU − reference, 0): light bleeding alone"),
-    c("vis_overshadow_mean", "shadows: mean of max(reference − GPU, 0): overshadowing alone"),
-    c("reference_ms", "shadows: CPU wall time of the ray-traced reference of this scene and resolution, ms (computed once, cached)"),
-];
 
 const METHOD: &str = "layered_ssm";
 const STUDY_KEYS: &[&str] = &["shadow_rays", "images"];
@@ -137,9 +116,9 @@ impl Study for ShadowsStudy {
         let set = settings(ctx.study)?;
         let base_row = |params: &Params| -> Result<Row> {
             let mut row = Row::new();
-            row.set("method", METHOD).set("exact", false);
+            row.set(cols::METHOD, METHOD).set(cols::EXACT, false);
             set_params(&mut row, params)?;
-            row.set("shadow_rays", set.rays_per_axis * set.rays_per_axis);
+            row.set(cols::SHADOW_RAYS, set.rays_per_axis * set.rays_per_axis);
             Ok(row)
         };
         let Some(light) = ctx.scene.area_light.clone() else {
@@ -196,7 +175,7 @@ impl Study for ShadowsStudy {
             .collect();
         for (i, pt) in ctx.group.points.iter().enumerate() {
             let mut row = base_row(&pt.params)?;
-            row.set_f("reference_ms", reference.ms);
+            row.set_f(cols::REFERENCE_MS, reference.ms);
             if let Err(why) = method.supports(ctx.gpu, &pt.params) {
                 emit(i, skipped_row(row, &why))?;
                 continue;
@@ -220,15 +199,14 @@ impl Study for ShadowsStudy {
             };
             let got: Vec<f32> = got.iter().map(|p| p[0]).collect();
             let e = compare(&reference.vis, &got);
-            row.set("shadow_pixels", e.evaluated)
-                .set_f("vis_rmse", e.rmse)
-                .set_f("vis_bias", e.bias)
-                .set_f("vis_max_abs_err", e.max_abs)
-                .set_f("vis_bleed_mean", e.bleed)
-                .set_f("vis_overshadow_mean", e.overshadow);
+            row.set(cols::SHADOW_PIXELS, e.evaluated)
+                .set_f(cols::VIS_RMSE, e.rmse)
+                .set_f(cols::VIS_BIAS, e.bias)
+                .set_f(cols::VIS_MAX_ABS_ERR, e.max_abs)
+                .set_f(cols::VIS_BLEED_MEAN, e.bleed)
+                .set_f(cols::VIS_OVERSHADOW_MEAN, e.overshadow);
             if e.unevaluated > 0 || e.non_finite > 0 {
-                row.set("flag", "precision").set(
-                    "notes",
+                row.set(cols::FLAG, "precision").set(cols::NOTES,
                     format!(
                         "{} reference pixels the GPU did not evaluate, {} non-finite (counted as error 1)",
                         e.unevaluated, e.non_finite

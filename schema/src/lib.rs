@@ -1,0 +1,922 @@
+//! The CSV contract between measuring (`bench-core`) and reporting (`report`): every column of
+//! `runs.csv` is declared here once, as a typed constant both crates use, so a misspelt column
+//! does not compile and a renamed one is renamed everywhere. This crate is a leaf: it depends on
+//! nothing and nothing here knows about GPUs, methods or studies.
+//!
+//! `results/README.md` documents the same list (generated from [`markdown`] by
+//! `scripts/update-columns.sh`; a test checks the two agree).
+
+use std::fmt;
+
+/// Bumped when a column is renamed or changes meaning; `mfx merge` and `mfx compare` refuse to
+/// mix versions (see `results/README.md` for what changed between versions).
+///
+/// - 1: the first schema.
+/// - 2: `variant` split into named axes (`heuristics`, `tiebreak`, `thickness`); every axis a
+///   method reads is written to its row, defaults included.
+pub const SCHEMA_VERSION: u32 = 2;
+
+/// One declared column: its name in the CSV header and what it means (units in the name).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Col {
+    pub name: &'static str,
+    pub doc: &'static str,
+}
+
+impl Col {
+    pub const fn new(name: &'static str, doc: &'static str) -> Col {
+        Col { name, doc }
+    }
+}
+
+impl fmt::Display for Col {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name)
+    }
+}
+
+impl AsRef<str> for Col {
+    fn as_ref(&self) -> &str {
+        self.name
+    }
+}
+
+/// A set of columns that belong together, in file order.
+#[derive(Clone, Copy, Debug)]
+pub struct Group {
+    pub name: &'static str,
+    pub title: &'static str,
+    pub cols: &'static [Col],
+}
+
+/// Every column, by group, in file order.
+pub mod cols {
+    use super::Col;
+
+    // ---- Run and machine metadata, identical on every row of one run ----
+    pub const SCHEMA: Col = Col::new(
+        "schema",
+        "CSV schema version (integer); `mfx merge` refuses to mix versions",
+    );
+    pub const RUN_ID: Col = Col::new(
+        "run_id",
+        "identifier of the sweep run (UTC time + suite + shard)",
+    );
+    pub const GIT_REV: Col = Col::new(
+        "git_rev",
+        "git commit of the mfx build (`unknown` outside a checkout); `+dirty` if modified",
+    );
+    pub const TIMESTAMP_UTC: Col =
+        Col::new("timestamp_utc", "when the row was produced, RFC 3339 UTC");
+    pub const SUITE: Col = Col::new("suite", "suite name");
+    pub const STUDY: Col = Col::new(
+        "study",
+        "study kind that produced the row (methods, geometry, deferred, prepass, shadows, stability)",
+    );
+    pub const SHARD: Col = Col::new("shard", "shard index I of `--shard I/N` (0 when unsharded)");
+    pub const SHARDS: Col = Col::new("shards", "shard count N (1 when unsharded)");
+    pub const POINT_KEY: Col = Col::new(
+        "point_key",
+        "stable identity of the sweep point (study|scene|resolution|method|axes); duplicates are reported by merge",
+    );
+    pub const ADAPTER: Col = Col::new("adapter", "adapter name as the driver reports it");
+    pub const BACKEND: Col = Col::new("backend", "wgpu backend (vulkan, gl)");
+    pub const DEVICE_TYPE: Col = Col::new(
+        "device_type",
+        "discretegpu, integratedgpu, virtualgpu, cpu, other",
+    );
+    pub const DRIVER: Col = Col::new("driver", "driver name");
+    pub const DRIVER_INFO: Col = Col::new("driver_info", "driver version string");
+    pub const ADAPTER_FEATURES: Col = Col::new(
+        "adapter_features",
+        "optional wgpu features granted, `|`-separated",
+    );
+    pub const WIDTH: Col = Col::new("width", "render target width in pixels");
+    pub const HEIGHT: Col = Col::new("height", "render target height in pixels");
+    pub const REPS: Col = Col::new("reps", "timed repetitions per point");
+    pub const WARMUP: Col = Col::new("warmup", "untimed warm-up frames before the timed ones");
+
+    // ---- What was measured: scene, method, outcome ----
+    pub const SCENE: Col = Col::new("scene", "scene generator name");
+    pub const SCENE_LABEL: Col = Col::new(
+        "scene_label",
+        "generator with all its parameters, e.g. quads(depth_complexity=8,seed=1)",
+    );
+    pub const TRIANGLES: Col = Col::new("triangles", "triangles submitted per geometry pass");
+    pub const VERTICES: Col = Col::new("vertices", "vertices in the vertex buffers");
+    pub const DEPTH_COMPLEXITY_MAX: Col = Col::new(
+        "depth_complexity_max",
+        "true maximum fragments per pixel (CPU reference)",
+    );
+    pub const DEPTH_COMPLEXITY_MEAN: Col = Col::new(
+        "depth_complexity_mean",
+        "true mean fragments per covered pixel (CPU reference)",
+    );
+    pub const TRUE_FRAGMENTS: Col = Col::new(
+        "true_fragments",
+        "true total fragments of the frame (CPU reference)",
+    );
+    pub const METHOD: Col = Col::new(
+        "method",
+        "method or path name (see `mfx list methods`); floor_depth / floor_opaque are the floors",
+    );
+    pub const EXACT: Col = Col::new(
+        "exact",
+        "true if the method captures every fragment exactly when within capacity",
+    );
+    pub const EFFECT: Col = Col::new(
+        "effect",
+        "effect computed on the captured fragments (transparency, translucency, fresnel, csg_*, dof)",
+    );
+    pub const STATUS: Col = Col::new("status", "ok | skipped | failed");
+    pub const REASON: Col = Col::new(
+        "reason",
+        "why a point was skipped or failed (empty when ok)",
+    );
+    pub const FLAG: Col = Col::new(
+        "flag",
+        "a known, reported failure mode: overflow, collision, lost_coplanar, precision, hazard (empty if none)",
+    );
+
+    // ---- Sweep axes shared by several methods (empty where an axis does not apply) ----
+    pub const LAYERS: Col = Col::new(
+        "layers",
+        "k: fragments kept per pixel (k-buffer, buckets, linked-list capacity per pixel)",
+    );
+    pub const MAX_LAYERS: Col = Col::new(
+        "max_layers",
+        "upper bound on peeling passes (classic/dual depth peeling)",
+    );
+    pub const PAYLOAD: Col = Col::new(
+        "payload",
+        "what is stored per fragment: depth (signed linear depth) | rgba_depth | depth_normal | depth_id | rgba_viewz | all (uber)",
+    );
+    pub const OCCLUSION_STOP: Col = Col::new(
+        "occlusion_stop",
+        "true if peeling stops when an occlusion query counts no fragment",
+    );
+    pub const SPECIALISATION: Col = Col::new(
+        "specialisation",
+        "uber (everything stored and computed) | specialised (only what the effect reads)",
+    );
+    pub const VARIANT: Col = Col::new(
+        "variant",
+        "method-specific variant (e.g. heuristics on/off, naive vs stable thickness)",
+    );
+    pub const BUCKET_COUNT: Col = Col::new(
+        "bucket_count",
+        "bucket methods: buckets per pixel per pass (8/16/32; 8 attachments × 4 channels, paired uses 2 channels per bucket)",
+    );
+    pub const BUCKET_MODE: Col = Col::new(
+        "bucket_mode",
+        "bucket methods: uniform (depth range split evenly: bdp, bdp2) | adaptive (histogram-equalised: adp)",
+    );
+    pub const BUCKET_PAIRING: Col = Col::new(
+        "bucket_pairing",
+        "bucket methods: single (one fragment per bucket) | paired (nearest and farthest of each bucket)",
+    );
+    pub const HIST_BINS: Col = Col::new(
+        "hist_bins",
+        "adaptive bucket peeling: bins of the per-pixel depth-occupancy histogram (256/1024/2048)",
+    );
+    pub const SMALL_MAX: Col = Col::new(
+        "small_max",
+        "compute_abuffer: largest triangle bounding box (pixels) one thread rasterises; larger ones are shared by workgroups",
+    );
+
+    // ---- Effect parameters (axes of the effects fold) ----
+    pub const SIGMA: Col = Col::new(
+        "sigma",
+        "translucency/fresnel: extinction coefficient σ per world unit (Beer–Lambert exp(−σ·l))",
+    );
+    pub const CSG_A: Col = Col::new("csg_a", "csg_*: object id of operand A");
+    pub const CSG_B: Col = Col::new("csg_b", "csg_*: object id of operand B");
+    pub const DOF_NEAR: Col = Col::new(
+        "dof_near",
+        "dof: linear view depth (world units) between the foreground and midground partitions",
+    );
+    pub const DOF_FAR: Col = Col::new(
+        "dof_far",
+        "dof: linear view depth (world units) between the midground and background partitions",
+    );
+
+    // ---- The geometry study ----
+    pub const BATCH_SIZE: Col = Col::new(
+        "batch_size",
+        "geometry: triangles per draw call asked for (0 = the whole mesh; 16-bit indices may split further, see batches)",
+    );
+    pub const DRAW_TRIANGLES: Col = Col::new(
+        "draw_triangles",
+        "geometry: triangles drawn per frame, a prefix of the ordered mesh (0 = all of it)",
+    );
+    pub const VERTEX_FORMAT: Col = Col::new(
+        "vertex_format",
+        "geometry: position format: float32x3, float16x4 or snorm16x4 (both quantised to the batch's bounding box, decoded in the vertex shader)",
+    );
+    pub const NORMAL_FORMAT: Col = Col::new(
+        "normal_format",
+        "geometry: normal format (wgpu name) or none; unorm formats store n·½+½",
+    );
+    pub const COLOR_FORMAT: Col = Col::new(
+        "color_format",
+        "geometry: colour format (wgpu name) or none",
+    );
+    pub const TEXCOORD_FORMAT: Col = Col::new(
+        "texcoord_format",
+        "geometry: texture-coordinate format (wgpu name) or none",
+    );
+    pub const LAYOUT: Col = Col::new(
+        "layout",
+        "geometry: interleaved (one vertex buffer) or separate (one buffer per attribute)",
+    );
+    pub const EXTRA_ATTRIBUTES: Col = Col::new(
+        "extra_attributes",
+        "geometry: extra float32x4 attributes per vertex (0..8; the thesis's Fig. 3.3)",
+    );
+    pub const INDEX_FORMAT: Col = Col::new("index_format", "geometry: uint16 or uint32 indices");
+    pub const MESH_ORDER: Col = Col::new(
+        "mesh_order",
+        "geometry: triangle order: original, shuffled, vcache (meshopt), vcache_vfetch (meshopt cache + fetch)",
+    );
+    pub const INDEXED: Col = Col::new(
+        "indexed",
+        "geometry: true for indexed draws, false for one vertex per triangle corner",
+    );
+    pub const PRIMITIVE: Col = Col::new(
+        "primitive",
+        "geometry: list, or strip (meshopt stripify, primitive restart)",
+    );
+    pub const BATCHES: Col = Col::new("batches", "geometry: draw calls per frame");
+    pub const BATCH_VERTICES: Col = Col::new(
+        "batch_vertices",
+        "geometry: vertices in the vertex buffers after batching (shared vertices are duplicated across batches)",
+    );
+    pub const INDEX_COUNT: Col = Col::new(
+        "index_count",
+        "geometry: indices submitted per frame (restart indices included; 0 for non-indexed)",
+    );
+    pub const VERTEX_STRIDE_BYTES: Col = Col::new(
+        "vertex_stride_bytes",
+        "geometry: bytes per vertex, summed over the vertex buffers",
+    );
+    pub const VERTEX_BYTES: Col = Col::new("vertex_bytes", "geometry: bytes of vertex buffers");
+    pub const INDEX_BYTES: Col = Col::new("index_bytes", "geometry: bytes of the index buffer");
+    pub const ACMR: Col = Col::new(
+        "acmr",
+        "geometry: meshopt ACMR (vertices transformed per triangle, FIFO cache of 16) of the batched triangle list (for strips: the list they were made from); best ≈ 0.5, worst 3",
+    );
+    pub const ATVR: Col = Col::new(
+        "atvr",
+        "geometry: meshopt ATVR (vertices transformed per vertex, FIFO 16); best 1",
+    );
+    pub const VS_ACMR: Col = Col::new(
+        "vs_acmr",
+        "geometry: measured vertex-shader invocations per triangle (pipeline statistics)",
+    );
+    pub const POST_TRANSFORM_HIT_RATE: Col = Col::new(
+        "post_transform_hit_rate",
+        "geometry: measured 1 − vs_invocations / (3 × triangles): the share of triangle corners served without a vertex-shader run",
+    );
+    pub const SMALL_VIEWPORT: Col = Col::new(
+        "small_viewport",
+        "geometry: WxH of the raster-bound check's small viewport",
+    );
+    pub const GPU_MS_SMALL_VIEWPORT: Col = Col::new(
+        "gpu_ms_small_viewport",
+        "geometry: median GPU ms of the same point at the small viewport",
+    );
+    pub const RASTER_BOUND_RATIO: Col = Col::new(
+        "raster_bound_ratio",
+        "geometry: gpu_ms_median / gpu_ms_small_viewport; ≈ 1 when the raster stage is not the bottleneck",
+    );
+    pub const PREP_MS: Col = Col::new(
+        "prep_ms",
+        "geometry: CPU ms to order, batch, stripify and encode this point's buffers (untimed on the GPU)",
+    );
+
+    // ---- The stability study ----
+    pub const STABILITY_CASE: Col = Col::new(
+        "stability_case",
+        "stability: the stiff case (near_far, coplanar, close_layers, high_complexity, thickness, alpha, packing, extreme_geometry)",
+    );
+    pub const STIFFNESS: Col = Col::new(
+        "stiffness",
+        "stability: what stiffness_value measures (far_over_near, sigma_l, distance_over_wall, depth_gap_min, depth_complexity, or a scene/axis parameter name)",
+    );
+    pub const STIFFNESS_VALUE: Col = Col::new(
+        "stiffness_value",
+        "stability: the case's stiffness parameter (e.g. far/near ratio, σ·l, layer separation in window depth)",
+    );
+    pub const LOST_FRAGMENTS: Col = Col::new(
+        "lost_fragments",
+        "fragments within the method's capacity that it did not capture (sum over pixels; coplanar loss when the reference has depth ties)",
+    );
+
+    // ---- The deferred-shading study ----
+    pub const LIGHT_COUNT: Col = Col::new(
+        "light_count",
+        "lights in the scene (point, spot and line lights, each with a finite range)",
+    );
+    pub const TILE_SIZE: Col = Col::new(
+        "tile_size",
+        "screen tile side in pixels for light culling (8, 16, 32, 64)",
+    );
+    pub const CULL_LEVELS: Col = Col::new(
+        "cull_levels",
+        "light culling levels: 1 = per tile; 2 = 64×64 tile then 32×16 sub-tiles (BF3)",
+    );
+    pub const ATTENUATION_THRESHOLD: Col = Col::new(
+        "attenuation_threshold",
+        "τ: a light is culled from a tile where peak intensity × attenuation ≤ τ at every point of it (0: only beyond its range)",
+    );
+    pub const THREAD_COUNT: Col = Col::new(
+        "thread_count",
+        "CPU worker threads taking tiles from an atomic counter (CPU lighting paths)",
+    );
+    pub const QUAD_SKIP: Col = Col::new(
+        "quad_skip",
+        "CPU tile path: skip a light for a 4×4 quad when all 16 attenuations are 0 (BF3's per-quad cull); false = evaluate every kept light",
+    );
+    pub const SPEC_SKIP: Col = Col::new(
+        "spec_skip",
+        "CPU tile path: BF3's no-specular fast path per 4×4 quad (no pixel with a specular colour: the specular term is not evaluated); exact",
+    );
+    pub const SPEC_SKIP_FRAC: Col = Col::new(
+        "spec_skip_frac",
+        "CPU tile path: fraction of non-sky 4×4 quads shaded without the specular term",
+    );
+    pub const CONE_CULL: Col = Col::new(
+        "cone_cull",
+        "CPU tile path: BF3's normal-cone cull per 32×16 sub-tile (drop a light no pixel of the sub-tile can face: N·L ≤ 0 for the normal cone × position box); exact",
+    );
+    pub const CONE_CULL_FRAC: Col = Col::new(
+        "cone_cull_frac",
+        "CPU tile path: fraction of (light, sub-tile) pairs that survived the frustum culls and were dropped by the normal-cone cull",
+    );
+    pub const DIFFUSE_ONLY_FRAC: Col = Col::new(
+        "diffuse_only_frac",
+        "fraction of the scene's lights flagged diffuse-only (no specular term, in every path and the reference)",
+    );
+    pub const DIFFUSE_SKIP: Col = Col::new(
+        "diffuse_skip",
+        "CPU tile path: skip the specular evaluation of diffuse-only lights (false: evaluate it and discard it); exact",
+    );
+    pub const DIFFUSE_SKIP_FRAC: Col = Col::new(
+        "diffuse_skip_frac",
+        "CPU tile path: fraction of (light, 4×4 quad) evaluations done without the specular term because the light is diffuse-only",
+    );
+    pub const LIGHTS_PER_TILE_MEAN: Col = Col::new(
+        "lights_per_tile_mean",
+        "mean lights kept per culling tile (level 1)",
+    );
+    pub const LIGHTS_PER_TILE_MAX: Col = Col::new(
+        "lights_per_tile_max",
+        "most lights kept in any culling tile (level 1)",
+    );
+    pub const CLASS_IDS_PRESENT: Col = Col::new(
+        "class_ids_present",
+        "classified: classification ids with at least one 4×4 tile this frame",
+    );
+    pub const PERMUTATIONS: Col = Col::new(
+        "permutations",
+        "shader permutations compiled and drawn (classified: one per id the scene can produce; uber: 1)",
+    );
+    pub const CPU_LIGHT_MS: Col = Col::new(
+        "cpu_light_ms",
+        "median wall-clock ms of the CPU lighting of one frame (threads start to last tile done)",
+    );
+    pub const QUAD_SKIP_FRAC: Col = Col::new(
+        "quad_skip_frac",
+        "CPU path: fraction of (light, 4×4 quad) pairs skipped because all 16 attenuations were 0",
+    );
+    pub const SPEEDUP_VS_NAIVE: Col = Col::new(
+        "speedup_vs_naive",
+        "naive gpu_ms_median over this row's (GPU paths) or over cpu_light_ms (CPU paths), same scene, resolution and run",
+    );
+    pub const REL_ERR_MAX: Col = Col::new(
+        "rel_err_max",
+        "largest per-channel error vs the f64 reference, relative to max(1, |reference|)",
+    );
+
+    // ---- The light pre-pass study ----
+    pub const LIGHT_ACCUM: Col = Col::new(
+        "light_accum",
+        "how the lighting is accumulated: naive (every light, fullscreen) | tiled (GPU tile culling) | cpu (CPU tiles)",
+    );
+    pub const LIGHT_BUFFER_FORMAT: Col = Col::new(
+        "light_buffer_format",
+        "light pre-pass light buffer: rgba8 (light ÷ 8, clamped) | rgba16f | rg11b10 (+ r16f for the specular term)",
+    );
+    pub const SECOND_VIEW: Col = Col::new(
+        "second_view",
+        "true: an independent second-camera view (full deferred, tiled) is rendered in the same frame",
+    );
+    pub const OVERLAP: Col = Col::new(
+        "overlap",
+        "CPU lighting: true = the second view is submitted before the CPU lights, so the GPU renders it meanwhile; false = after",
+    );
+    pub const BYTES_RT_WRITTEN: Col = Col::new(
+        "bytes_rt_written",
+        "render-target bytes written per frame by the main view, one touch per pixel (overdraw not counted)",
+    );
+    pub const BYTES_RT_READ: Col = Col::new(
+        "bytes_rt_read",
+        "render-target bytes read per frame by the main view, one touch per pixel (overdraw not counted)",
+    );
+    pub const SPEC_COLOR_LOSS_RMSE: Col = Col::new(
+        "spec_color_loss_rmse",
+        "RMSE of the f64 light pre-pass image (diffuse RGB + specular luminance packing) vs the f64 full reference: colour lost by the packing alone",
+    );
+    pub const FORMAT_RMSE: Col = Col::new(
+        "format_rmse",
+        "RMSE vs the f64 light pre-pass image: what the light-buffer format and f32 arithmetic add",
+    );
+    pub const FRAME_MS: Col = Col::new(
+        "frame_ms",
+        "median wall-clock ms per frame, first submit to all GPU work done (both views when second_view)",
+    );
+    pub const GPU_IDLE_MS: Col = Col::new(
+        "gpu_idle_ms",
+        "median frame_ms minus the frame's summed GPU pass times: time the GPU had no timed work",
+    );
+    pub const LATENCY_MS: Col = Col::new(
+        "latency_ms",
+        "median ms from submitting the pre-pass to the main view's final image being complete",
+    );
+    pub const GPU_GAP_MS: Col = Col::new(
+        "gpu_gap_ms",
+        "median GPU-clock ms from the end of the pre-pass to the start of the material pass: the lights pass, or (CPU lighting) copy + map + CPU lighting + upload",
+    );
+    pub const GPU_BUSY_IN_GAP_MS: Col = Col::new(
+        "gpu_busy_in_gap_ms",
+        "median timed GPU pass ms inside gpu_gap_ms: the lights pass, or (CPU lighting) the independent view that ran while the CPU lit — the measured overlap",
+    );
+    pub const MAP_WAIT_MS: Col = Col::new(
+        "map_wait_ms",
+        "CPU lighting: median ms from submitting the pre-pass to the depth/normal read-back being mapped (blocking wait)",
+    );
+
+    // ---- The layered soft-shadows study ----
+    pub const SHADOW_MAP_RES: Col = Col::new(
+        "shadow_map_res",
+        "shadows: shadow-map side in texels (square; one texture per light layer)",
+    );
+    pub const MAX_NSPP: Col = Col::new(
+        "max_nspp",
+        "shadows: most shadow-map samples per pixel in the search region; above it the stride grows (floor(sqrt) per axis)",
+    );
+    pub const BIAS_MODE: Col = Col::new(
+        "bias_mode",
+        "shadows: depth bias: midpoint (half-way to the next layer; the last layer falls back to gmax) | slope (gscale·max(|ddx|,|ddy|) clamped by gmax) | hybrid (the larger)",
+    );
+    pub const GSCALE: Col = Col::new(
+        "gscale",
+        "shadows: slope-bias scale, times the layer's depth change per texel",
+    );
+    pub const GMAX: Col = Col::new(
+        "gmax",
+        "shadows: clamp of the slope bias and the midpoint fallback, world units",
+    );
+    pub const HSM: Col = Col::new(
+        "hsm",
+        "shadows: true if the search region is refined by two iterations over the min-depth pyramid",
+    );
+    pub const SHADOW_RAYS: Col = Col::new(
+        "shadow_rays",
+        "shadows: reference rays per pixel (m×m jittered strata on the light square)",
+    );
+    pub const SHADOW_PIXELS: Col = Col::new(
+        "shadow_pixels",
+        "shadows: pixels evaluated (a visible surface inside the light's frustum)",
+    );
+    pub const VIS_RMSE: Col = Col::new(
+        "vis_rmse",
+        "shadows: RMSE of light visibility (0..1) vs the ray-traced reference, over evaluated pixels",
+    );
+    pub const VIS_BIAS: Col = Col::new(
+        "vis_bias",
+        "shadows: mean signed visibility error (GPU − reference): > 0 light bleeding, < 0 overshadowing",
+    );
+    pub const VIS_MAX_ABS_ERR: Col = Col::new(
+        "vis_max_abs_err",
+        "shadows: largest absolute visibility error of any evaluated pixel",
+    );
+    pub const VIS_BLEED_MEAN: Col = Col::new(
+        "vis_bleed_mean",
+        "shadows: mean of max(GPU − reference, 0): light bleeding alone",
+    );
+    pub const VIS_OVERSHADOW_MEAN: Col = Col::new(
+        "vis_overshadow_mean",
+        "shadows: mean of max(reference − GPU, 0): overshadowing alone",
+    );
+    pub const REFERENCE_MS: Col = Col::new(
+        "reference_ms",
+        "shadows: CPU wall time of the ray-traced reference of this scene and resolution, ms (computed once, cached)",
+    );
+
+    // ---- Measurements ----
+    pub const GPU_MS_MEDIAN: Col = Col::new(
+        "gpu_ms_median",
+        "median GPU time per frame in ms: sum of the frame's timestamped passes",
+    );
+    pub const GPU_MS_MIN: Col = Col::new("gpu_ms_min", "minimum GPU time per frame, ms");
+    pub const GPU_MS_MAX: Col = Col::new("gpu_ms_max", "maximum GPU time per frame, ms");
+    pub const GPU_MS_REL_NOISE: Col = Col::new(
+        "gpu_ms_rel_noise",
+        "relative spread of GPU time: (p90 − p10) / median",
+    );
+    pub const CPU_MS_MEDIAN: Col = Col::new(
+        "cpu_ms_median",
+        "median wall-clock time per frame in ms, from first encode to GPU idle (includes CPU waits)",
+    );
+    pub const CPU_MS_MIN: Col = Col::new("cpu_ms_min", "minimum wall-clock time per frame, ms");
+    pub const CPU_MS_MAX: Col = Col::new("cpu_ms_max", "maximum wall-clock time per frame, ms");
+    pub const PASS_MS: Col = Col::new(
+        "pass_ms",
+        "median GPU ms per pass label, JSON object (e.g. {\"peel\":1.2,\"composite\":0.1})",
+    );
+    pub const GEOMETRY_PASSES: Col = Col::new(
+        "geometry_passes",
+        "geometry passes per frame (times the scene was rasterized)",
+    );
+    pub const LAYERS_CAPTURED_MAX: Col = Col::new(
+        "layers_captured_max",
+        "most fragments captured in any pixel",
+    );
+    pub const BYTES_ALLOCATED: Col = Col::new(
+        "bytes_allocated",
+        "bytes of buffers and textures the method allocated (scene buffers excluded)",
+    );
+    pub const BYTES_TRUE_FRAGMENTS: Col = Col::new(
+        "bytes_true_fragments",
+        "bytes the scene's true fragments need: true_fragments × 8 (RGBA8 + f32 depth)",
+    );
+    pub const X_FLOOR: Col = Col::new(
+        "x_floor",
+        "gpu_ms_median over the floor_depth gpu_ms_median of the same scene, resolution and run",
+    );
+    pub const SPEEDUP_VS_DEPTH_PEEL: Col = Col::new(
+        "speedup_vs_depth_peel",
+        "depth_peel gpu_ms_median over this row's, same scene, resolution and run",
+    );
+    pub const RMSE: Col = Col::new(
+        "rmse",
+        "root-mean-square error of the premultiplied RGBA image vs the CPU reference",
+    );
+    pub const PSNR_DB: Col = Col::new(
+        "psnr_db",
+        "peak signal-to-noise ratio (peak 1) vs the CPU reference, dB (inf when identical)",
+    );
+    pub const MAX_ABS_ERR: Col = Col::new(
+        "max_abs_err",
+        "largest absolute channel error vs the CPU reference",
+    );
+    pub const BAD_PIXEL_FRAC: Col = Col::new(
+        "bad_pixel_frac",
+        "fraction of pixels with any channel error above bad_pixel_tol",
+    );
+    pub const BAD_PIXEL_TOL: Col = Col::new(
+        "bad_pixel_tol",
+        "the per-channel tolerance used for bad_pixel_frac",
+    );
+    pub const NON_FINITE: Col = Col::new(
+        "non_finite",
+        "NaN/Inf channels in the output (never hidden: they also make the pixel bad)",
+    );
+    pub const LAYER_COUNT_ACCURACY: Col = Col::new(
+        "layer_count_accuracy",
+        "fraction of pixels whose captured fragment count equals the expected count",
+    );
+    pub const HAZARD_RATE: Col = Col::new(
+        "hazard_rate",
+        "k-buffer: fraction of pixels whose captured set differs from the true k nearest, excluding pixels with an f32 depth tie among their k + 1 nearest (those are flagged lost_coplanar and counted in notes)",
+    );
+    pub const COLLISION_RATE: Col = Col::new(
+        "collision_rate",
+        "buckets: fraction of true fragments merged or lost by bucket collisions",
+    );
+    pub const OVERFLOW_RATE: Col = Col::new(
+        "overflow_rate",
+        "fraction of pixels whose fragments exceeded the method's capacity",
+    );
+    pub const TRIANGLES_PER_S: Col = Col::new(
+        "triangles_per_s",
+        "triangles submitted per second of GPU time",
+    );
+    pub const VERTICES_PER_S: Col = Col::new(
+        "vertices_per_s",
+        "vertices (index count for indexed draws) per second of GPU time",
+    );
+    pub const VS_INVOCATIONS: Col = Col::new(
+        "vs_invocations",
+        "vertex shader invocations per frame (pipeline statistics query)",
+    );
+    pub const PS_INVOCATIONS: Col = Col::new(
+        "ps_invocations",
+        "fragment shader invocations per frame (pipeline statistics query)",
+    );
+    pub const IMAGE_FILE: Col = Col::new(
+        "image_file",
+        "the point's image saved by `mfx sweep --save-images`: images/<hash>.npy, float32 H×W×4 premultiplied RGBA (empty otherwise)",
+    );
+    pub const NOTES: Col = Col::new(
+        "notes",
+        "free text: anything a reader must know about this row",
+    );
+}
+
+/// The column groups in file order: metadata, point, shared axes, each study's own, metrics.
+pub const GROUPS: &[Group] = &[
+    Group {
+        name: "meta",
+        title: "Run and machine metadata, identical on every row of one run",
+        cols: &[
+            cols::SCHEMA,
+            cols::RUN_ID,
+            cols::GIT_REV,
+            cols::TIMESTAMP_UTC,
+            cols::SUITE,
+            cols::STUDY,
+            cols::SHARD,
+            cols::SHARDS,
+            cols::POINT_KEY,
+            cols::ADAPTER,
+            cols::BACKEND,
+            cols::DEVICE_TYPE,
+            cols::DRIVER,
+            cols::DRIVER_INFO,
+            cols::ADAPTER_FEATURES,
+            cols::WIDTH,
+            cols::HEIGHT,
+            cols::REPS,
+            cols::WARMUP,
+        ],
+    },
+    Group {
+        name: "point",
+        title: "What was measured: scene, method, outcome",
+        cols: &[
+            cols::SCENE,
+            cols::SCENE_LABEL,
+            cols::TRIANGLES,
+            cols::VERTICES,
+            cols::DEPTH_COMPLEXITY_MAX,
+            cols::DEPTH_COMPLEXITY_MEAN,
+            cols::TRUE_FRAGMENTS,
+            cols::METHOD,
+            cols::EXACT,
+            cols::EFFECT,
+            cols::STATUS,
+            cols::REASON,
+            cols::FLAG,
+        ],
+    },
+    Group {
+        name: "axes",
+        title: "Sweep axes shared by several methods (empty where an axis does not apply)",
+        cols: &[
+            cols::LAYERS,
+            cols::MAX_LAYERS,
+            cols::PAYLOAD,
+            cols::OCCLUSION_STOP,
+            cols::SPECIALISATION,
+            cols::VARIANT,
+            cols::BUCKET_COUNT,
+            cols::BUCKET_MODE,
+            cols::BUCKET_PAIRING,
+            cols::HIST_BINS,
+            cols::SMALL_MAX,
+        ],
+    },
+    Group {
+        name: "effects",
+        title: "Effect parameters (axes of the effects fold)",
+        cols: &[
+            cols::SIGMA,
+            cols::CSG_A,
+            cols::CSG_B,
+            cols::DOF_NEAR,
+            cols::DOF_FAR,
+        ],
+    },
+    Group {
+        name: "geometry",
+        title: "The geometry study",
+        cols: &[
+            cols::BATCH_SIZE,
+            cols::DRAW_TRIANGLES,
+            cols::VERTEX_FORMAT,
+            cols::NORMAL_FORMAT,
+            cols::COLOR_FORMAT,
+            cols::TEXCOORD_FORMAT,
+            cols::LAYOUT,
+            cols::EXTRA_ATTRIBUTES,
+            cols::INDEX_FORMAT,
+            cols::MESH_ORDER,
+            cols::INDEXED,
+            cols::PRIMITIVE,
+            cols::BATCHES,
+            cols::BATCH_VERTICES,
+            cols::INDEX_COUNT,
+            cols::VERTEX_STRIDE_BYTES,
+            cols::VERTEX_BYTES,
+            cols::INDEX_BYTES,
+            cols::ACMR,
+            cols::ATVR,
+            cols::VS_ACMR,
+            cols::POST_TRANSFORM_HIT_RATE,
+            cols::SMALL_VIEWPORT,
+            cols::GPU_MS_SMALL_VIEWPORT,
+            cols::RASTER_BOUND_RATIO,
+            cols::PREP_MS,
+        ],
+    },
+    Group {
+        name: "stability",
+        title: "The stability study",
+        cols: &[
+            cols::STABILITY_CASE,
+            cols::STIFFNESS,
+            cols::STIFFNESS_VALUE,
+            cols::LOST_FRAGMENTS,
+        ],
+    },
+    Group {
+        name: "deferred",
+        title: "The deferred-shading study",
+        cols: &[
+            cols::LIGHT_COUNT,
+            cols::TILE_SIZE,
+            cols::CULL_LEVELS,
+            cols::ATTENUATION_THRESHOLD,
+            cols::THREAD_COUNT,
+            cols::QUAD_SKIP,
+            cols::SPEC_SKIP,
+            cols::SPEC_SKIP_FRAC,
+            cols::CONE_CULL,
+            cols::CONE_CULL_FRAC,
+            cols::DIFFUSE_ONLY_FRAC,
+            cols::DIFFUSE_SKIP,
+            cols::DIFFUSE_SKIP_FRAC,
+            cols::LIGHTS_PER_TILE_MEAN,
+            cols::LIGHTS_PER_TILE_MAX,
+            cols::CLASS_IDS_PRESENT,
+            cols::PERMUTATIONS,
+            cols::CPU_LIGHT_MS,
+            cols::QUAD_SKIP_FRAC,
+            cols::SPEEDUP_VS_NAIVE,
+            cols::REL_ERR_MAX,
+        ],
+    },
+    Group {
+        name: "prepass",
+        title: "The light pre-pass study",
+        cols: &[
+            cols::LIGHT_ACCUM,
+            cols::LIGHT_BUFFER_FORMAT,
+            cols::SECOND_VIEW,
+            cols::OVERLAP,
+            cols::BYTES_RT_WRITTEN,
+            cols::BYTES_RT_READ,
+            cols::SPEC_COLOR_LOSS_RMSE,
+            cols::FORMAT_RMSE,
+            cols::FRAME_MS,
+            cols::GPU_IDLE_MS,
+            cols::LATENCY_MS,
+            cols::GPU_GAP_MS,
+            cols::GPU_BUSY_IN_GAP_MS,
+            cols::MAP_WAIT_MS,
+        ],
+    },
+    Group {
+        name: "shadows",
+        title: "The layered soft-shadows study",
+        cols: &[
+            cols::SHADOW_MAP_RES,
+            cols::MAX_NSPP,
+            cols::BIAS_MODE,
+            cols::GSCALE,
+            cols::GMAX,
+            cols::HSM,
+            cols::SHADOW_RAYS,
+            cols::SHADOW_PIXELS,
+            cols::VIS_RMSE,
+            cols::VIS_BIAS,
+            cols::VIS_MAX_ABS_ERR,
+            cols::VIS_BLEED_MEAN,
+            cols::VIS_OVERSHADOW_MEAN,
+            cols::REFERENCE_MS,
+        ],
+    },
+    Group {
+        name: "metrics",
+        title: "Measurements",
+        cols: &[
+            cols::GPU_MS_MEDIAN,
+            cols::GPU_MS_MIN,
+            cols::GPU_MS_MAX,
+            cols::GPU_MS_REL_NOISE,
+            cols::CPU_MS_MEDIAN,
+            cols::CPU_MS_MIN,
+            cols::CPU_MS_MAX,
+            cols::PASS_MS,
+            cols::GEOMETRY_PASSES,
+            cols::LAYERS_CAPTURED_MAX,
+            cols::BYTES_ALLOCATED,
+            cols::BYTES_TRUE_FRAGMENTS,
+            cols::X_FLOOR,
+            cols::SPEEDUP_VS_DEPTH_PEEL,
+            cols::RMSE,
+            cols::PSNR_DB,
+            cols::MAX_ABS_ERR,
+            cols::BAD_PIXEL_FRAC,
+            cols::BAD_PIXEL_TOL,
+            cols::NON_FINITE,
+            cols::LAYER_COUNT_ACCURACY,
+            cols::HAZARD_RATE,
+            cols::COLLISION_RATE,
+            cols::OVERFLOW_RATE,
+            cols::TRIANGLES_PER_S,
+            cols::VERTICES_PER_S,
+            cols::VS_INVOCATIONS,
+            cols::PS_INVOCATIONS,
+            cols::IMAGE_FILE,
+            cols::NOTES,
+        ],
+    },
+];
+
+/// Every column in file order.
+pub fn all() -> impl Iterator<Item = Col> {
+    GROUPS.iter().flat_map(|g| g.cols.iter().copied())
+}
+
+/// The header of `runs.csv`.
+pub fn header() -> Vec<&'static str> {
+    all().map(|c| c.name).collect()
+}
+
+/// The declared column called `name` (for names that come from data, e.g. an axis of a suite).
+pub fn by_name(name: &str) -> Option<Col> {
+    all().find(|c| c.name == name)
+}
+
+pub const COLUMNS_BEGIN: &str =
+    "<!-- columns:begin (generated by scripts/update-columns.sh; do not edit) -->";
+pub const COLUMNS_END: &str = "<!-- columns:end -->";
+
+/// The column table of `results/README.md`, generated from the declarations.
+pub fn markdown() -> String {
+    let mut s = String::new();
+    for g in GROUPS {
+        s.push_str(&format!(
+            "\n**{}**\n\n| column | meaning |\n|---|---|\n",
+            g.title
+        ));
+        for c in g.cols {
+            s.push_str(&format!(
+                "| `{}` | {} |\n",
+                c.name,
+                c.doc.replace('|', "\\|")
+            ));
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn column_names_are_unique_documented_snake_case() {
+        let mut seen = std::collections::HashSet::new();
+        for c in all() {
+            assert!(seen.insert(c.name), "duplicate column {}", c.name);
+            assert!(
+                c.name
+                    .chars()
+                    .all(|ch| ch.is_ascii_lowercase() || ch.is_ascii_digit() || ch == '_'),
+                "{} is not snake_case",
+                c.name
+            );
+            assert!(!c.doc.is_empty(), "column {} has no doc", c.name);
+        }
+    }
+
+    #[test]
+    fn results_readme_is_generated_from_the_declarations() {
+        let readme =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../results/README.md"))
+                .expect("results/README.md must exist");
+        let (Some(b), Some(e)) = (readme.find(COLUMNS_BEGIN), readme.find(COLUMNS_END)) else {
+            panic!("results/README.md lacks the columns:begin/end markers");
+        };
+        let table = &readme[b + COLUMNS_BEGIN.len()..e];
+        assert_eq!(
+            table.trim(),
+            markdown().trim(),
+            "results/README.md's column table is stale: run scripts/update-columns.sh"
+        );
+    }
+}
