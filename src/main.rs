@@ -72,6 +72,11 @@ enum Cmd {
         #[command(flatten)]
         gpu: GpuArgs,
     },
+    /// Check suites (names or TOML paths) without a GPU: every problem at once; exit 2 if any.
+    Check {
+        #[arg(required = true)]
+        suites: Vec<String>,
+    },
     /// Merge run folders (shards, machines) into one runs.csv; duplicates are reported.
     Merge {
         /// Run folders, folders of run folders (one level down), or runs.csv files.
@@ -185,12 +190,46 @@ fn parse_kv(s: &str) -> Result<(String, ParamValue)> {
     Ok((k.to_string(), val))
 }
 
+/// A bad suite or bad arguments, found before any GPU work: exit code 2, so a script can tell
+/// it from a run that failed (1).
+#[derive(Debug)]
+struct Usage(String);
+
+impl std::fmt::Display for Usage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Usage {}
+
+fn usage(msg: impl Into<String>) -> anyhow::Error {
+    anyhow::Error::new(Usage(msg.into()))
+}
+
+/// Loads and checks a suite; every problem at once as a usage error.
+fn checked_suite(name: &str) -> Result<Suite> {
+    bench_core::check::load(name).map_err(|p| {
+        usage(format!(
+            "suite '{name}': {} problem{}:\n{}",
+            p.len(),
+            if p.len() == 1 { "" } else { "s" },
+            scenarios::problem::report(&p)
+        ))
+    })
+}
+
 fn main() {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     if let Err(e) = run(cli) {
         eprintln!("mfx: error: {e:#}");
-        std::process::exit(1);
+        let code = if e.downcast_ref::<Usage>().is_some() {
+            2
+        } else {
+            1
+        };
+        std::process::exit(code);
     }
 }
 
@@ -205,6 +244,32 @@ fn run(cli: Cli) -> Result<()> {
             save_images,
             gpu,
         } => sweep(&suite, out, shard, no_report, save_images, &gpu),
+        Cmd::Check { suites } => {
+            let mut bad = 0;
+            for name in &suites {
+                match bench_core::check::load(name) {
+                    Ok(suite) => println!(
+                        "ok: {name} ({}): {} studies, {} rows on a GPU, {} on a software adapter{}",
+                        suite.source,
+                        suite.studies.len(),
+                        bench_core::runner::rows_of(&suite, false),
+                        bench_core::runner::rows_of(&suite, true),
+                        models_line(&suite)
+                    ),
+                    Err(p) => {
+                        bad += 1;
+                        println!("{}", scenarios::problem::report(&p));
+                    }
+                }
+            }
+            if bad > 0 {
+                return Err(usage(format!(
+                    "{bad} of {} suites have problems",
+                    suites.len()
+                )));
+            }
+            Ok(())
+        }
         Cmd::Merge {
             inputs,
             out,
@@ -331,14 +396,16 @@ fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
         }
     }
     if is("methods") {
-        println!("methods:");
+        println!("methods (exact: captures every fragment within capacity):");
+        println!(
+            "  {:<16} {:<6} what it is (source, passes, bytes per pixel)",
+            "method", "exact"
+        );
         for m in methods::all() {
-            println!(
-                "  {:<14} {} [axes: {}]",
-                m.name(),
-                m.describe(),
-                m.axes().join(", ")
-            );
+            println!("  {:<16} {:<6} {}", m.name(), m.exact(), m.describe());
+            for a in m.axes() {
+                println!("  {:<16} {:<6}   axis {}: {}", "", "", a.summary(), a.doc);
+            }
         }
     }
     if is("studies") {
@@ -348,22 +415,18 @@ fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
         }
     }
     if is("suites") {
-        println!(
-            "suites (scenarios/suites/*.toml, built in: {}):",
-            scenarios::suite::BUILTIN
-                .iter()
-                .map(|(n, _)| *n)
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-        if let Ok(rd) = std::fs::read_dir("scenarios/suites") {
-            let mut names: Vec<String> = rd
-                .filter_map(|e| e.ok())
-                .map(|e| e.path().display().to_string())
-                .collect();
-            names.sort();
-            for n in names {
-                println!("  {n}");
+        println!("suites (built in; a file scenarios/suites/NAME.toml or any path wins):");
+        for (name, _) in scenarios::suite::BUILTIN {
+            match Suite::load(name) {
+                Ok(suite) => println!(
+                    "  {name:<16} {} rows on a GPU, {} on a software adapter{}\n  {:<16} {}",
+                    bench_core::runner::rows_of(&suite, false),
+                    bench_core::runner::rows_of(&suite, true),
+                    models_line(&suite),
+                    "",
+                    suite.description
+                ),
+                Err(e) => println!("  {name:<16} PROBLEMS: {e}"),
             }
         }
     }
@@ -415,6 +478,25 @@ fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
     Ok(())
 }
 
+/// ", needs models/a.obj, …" for a suite whose scenes read files.
+fn models_line(suite: &Suite) -> String {
+    let m: Vec<String> = bench_core::check::models_needed(suite)
+        .into_iter()
+        .map(|p| {
+            if std::path::Path::new(&p).is_file() {
+                p
+            } else {
+                format!("{p} (missing here: copy it from ../shared/models)")
+            }
+        })
+        .collect();
+    if m.is_empty() {
+        String::new()
+    } else {
+        format!("; needs {}", m.join(", "))
+    }
+}
+
 /// Progress bar + CSV as one sink.
 struct Progress<'a> {
     csv: CsvSink,
@@ -456,7 +538,7 @@ fn sweep(
     save_images: bool,
     gpu_args: &GpuArgs,
 ) -> Result<()> {
-    let suite = Suite::load(suite_name)?;
+    let suite = checked_suite(suite_name)?;
     let gpu = Gpu::new(&gpu_args.options())?;
     let shard = shard.unwrap_or((0, 1));
     let groups = runner::expand(&suite, gpu.facts.is_software)?;
@@ -568,6 +650,35 @@ struct RenderJob {
 fn render(job: &RenderJob) -> Result<()> {
     use bench_core::image_io;
     use scenarios::camera::CameraFile;
+    // Everything that can be checked without a GPU is, first: the scene's parameters and file,
+    // the methods, and each method's axes (a misspelt axis is an error, not a silent default).
+    let scene_problems = job.spec.check();
+    if !scene_problems.is_empty() {
+        let lines: Vec<String> = scene_problems.iter().map(|e| e.to_string()).collect();
+        return Err(usage(format!(
+            "scene {}: {}",
+            job.spec.label(),
+            lines.join("; ")
+        )));
+    }
+    let mut points = Vec::new();
+    for method in &job.methods {
+        let m = methods::by_name(method).ok_or_else(|| {
+            usage(format!(
+                "unknown method '{method}' (known: {})",
+                methods::all()
+                    .iter()
+                    .map(|m| m.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+        })?;
+        let point = bench_core::axes::Point::resolve(&m.axes(), &job.axes)
+            .map_err(|e| usage(format!("{method}: {}", e.join("; "))))?;
+        m.validate(&point)
+            .map_err(|e| usage(format!("{method}: {e}")))?;
+        points.push(point);
+    }
     let mut scene = job.spec.build()?;
     let (mut w, mut h) = (job.width.unwrap_or(256), job.height.unwrap_or(256));
     if let Some(path) = &job.camera_in {
@@ -655,17 +766,16 @@ fn render(job: &RenderJob) -> Result<()> {
     }
     let gpu = Gpu::new(&job.gpu.options())?;
     let gscene = bench_core::gpu_scene::GpuScene::upload(&gpu, &scene, w, h);
-    for method in &job.methods {
-        let m = methods::by_name(method)
-            .with_context(|| format!("unknown method '{method}' (see `mfx list methods`)"))?;
-        if let Err(why) = m.supports(&gpu, &job.axes) {
+    for (method, point) in job.methods.iter().zip(&points) {
+        let m = methods::get(method);
+        if let Err(why) = methods::supports(m.as_ref(), &gpu, point) {
             if job.methods.len() == 1 {
                 bail!("{method} cannot run here: {why}");
             }
             println!("{method}: skipped ({why})");
             continue;
         }
-        let mut measured = runner::measure(&gpu, &gscene, m.as_ref(), &job.axes, 0, 1)?;
+        let mut measured = bench_core::measure::measure(&gpu, &gscene, m.as_ref(), point, 0, 1)?;
         let cap = measured.prepared.readback(&gpu, &gscene)?;
         let img = cap
             .image

@@ -3,11 +3,16 @@
 //! `methods/mod.rs` (what is measured), `reference/mod.rs` (what it is judged against),
 //! `record.rs` (what is written), `runner.rs` (how a suite becomes rows).
 
+pub mod axes;
+pub mod check;
 pub mod effects;
 pub mod gpu;
 pub mod gpu_scene;
+pub mod gpu_util;
 pub mod image_io;
+pub mod measure;
 pub mod merge;
+pub mod method;
 pub mod methods;
 pub mod metrics;
 pub mod record;

@@ -2,136 +2,17 @@
 //! build and upload each scene once, measure the floors, run the study, and hand every row —
 //! ok, skipped or failed, never missing — to the sinks.
 
-use std::collections::BTreeMap;
-
 use scenarios::{Params, Scene, Suite};
 
+use crate::axes::Point;
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
-use crate::methods::{self, FrameStats, Method, Prepared};
+use crate::measure::{measure, set_timing};
+use crate::methods;
 use crate::record::{cols, Row, Sink, SCHEMA_VERSION};
 pub use crate::record::{failed_row, one_line, set_params, skipped_row};
 use crate::studies::{self, Group, GroupCtx, PointSpec};
-use crate::timing::{GpuTimer, Stats};
 use crate::{CoreError, Result};
-
-/// The result of timing one method on one scene.
-pub struct Measured {
-    pub gpu_ms: Option<Stats>,
-    pub cpu_ms: Stats,
-    /// Median ms per pass label (passes with the same label in one frame are summed).
-    pub pass_ms: BTreeMap<String, f64>,
-    pub frame: FrameStats,
-    pub bytes_allocated: u64,
-    pub prepared: Box<dyn Prepared>,
-}
-
-fn scope_error(e: Option<wgpu::Error>, what: &str) -> Result<()> {
-    match e {
-        None => Ok(()),
-        Some(wgpu::Error::OutOfMemory { .. }) => Err(CoreError::OutOfMemory(format!(
-            "{what}: the GPU ran out of memory"
-        ))),
-        Some(e) => Err(CoreError::Gpu(format!("{what}: {e}"))),
-    }
-}
-
-/// Prepares `method` (untimed), runs `warmup` frames, then `reps` timed frames.
-pub fn measure(
-    gpu: &Gpu,
-    scene: &GpuScene,
-    method: &dyn Method,
-    params: &Params,
-    warmup: u32,
-    reps: u32,
-) -> Result<Measured> {
-    gpu.check_lost()?;
-    let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let prepared = method.prepare(gpu, scene, params);
-    scope_error(pollster::block_on(oom.pop()), "prepare")?;
-    scope_error(pollster::block_on(validation.pop()), "prepare")?;
-    let mut prepared = prepared?;
-    let bytes_allocated = prepared.bytes_allocated();
-
-    let mut timer = GpuTimer::new(gpu);
-    let mut gpu_samples = Vec::new();
-    let mut cpu_samples = Vec::new();
-    let mut per_label: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-    let mut frame = FrameStats::default();
-    let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let mut run = || -> Result<()> {
-        for rep in 0..warmup + reps {
-            timer.begin_frame();
-            let t0 = std::time::Instant::now();
-            frame = prepared.frame(gpu, scene, &mut timer)?;
-            gpu.wait()?;
-            let cpu = t0.elapsed().as_secs_f64() * 1e3;
-            let passes = timer.read(gpu)?;
-            gpu.check_lost()?;
-            if rep >= warmup {
-                cpu_samples.push(cpu);
-                if timer.enabled() {
-                    gpu_samples.push(passes.iter().map(|(_, ms)| ms).sum());
-                    let mut frame_labels: BTreeMap<String, f64> = BTreeMap::new();
-                    for (l, ms) in passes {
-                        *frame_labels.entry(l).or_default() += ms;
-                    }
-                    for (l, ms) in frame_labels {
-                        per_label.entry(l).or_default().push(ms);
-                    }
-                }
-            }
-        }
-        Ok(())
-    };
-    let res = run();
-    scope_error(pollster::block_on(oom.pop()), "frame")?;
-    scope_error(pollster::block_on(validation.pop()), "frame")?;
-    res?;
-    Ok(Measured {
-        gpu_ms: Stats::of(&gpu_samples),
-        cpu_ms: Stats::of(&cpu_samples).unwrap_or_default(),
-        pass_ms: per_label
-            .into_iter()
-            .map(|(l, v)| (l, Stats::of(&v).map(|s| s.median).unwrap_or(0.0)))
-            .collect(),
-        frame,
-        bytes_allocated,
-        prepared,
-    })
-}
-
-/// Timing, pass and memory columns of a measured point.
-pub fn set_timing(row: &mut Row, m: &Measured, ctx: &GroupCtx<'_>) {
-    if let Some(g) = m.gpu_ms {
-        row.set_f(cols::GPU_MS_MEDIAN, g.median)
-            .set_f(cols::GPU_MS_MIN, g.min)
-            .set_f(cols::GPU_MS_MAX, g.max)
-            .set_f(cols::GPU_MS_REL_NOISE, g.rel_noise);
-        if g.median > 0.0 {
-            let secs = g.median * 1e-3 / m.frame.geometry_passes.max(1) as f64;
-            row.set_f(
-                cols::TRIANGLES_PER_S,
-                ctx.scene.mesh.triangle_count() as f64 / secs,
-            )
-            .set_f(
-                cols::VERTICES_PER_S,
-                ctx.scene.mesh.indices.len() as f64 / secs,
-            );
-        }
-    }
-    row.set_f(cols::CPU_MS_MEDIAN, m.cpu_ms.median)
-        .set_f(cols::CPU_MS_MIN, m.cpu_ms.min)
-        .set_f(cols::CPU_MS_MAX, m.cpu_ms.max);
-    row.set(
-        cols::PASS_MS,
-        serde_json::to_string(&m.pass_ms).unwrap_or_default(),
-    );
-    row.set(cols::GEOMETRY_PASSES, m.frame.geometry_passes)
-        .set(cols::BYTES_ALLOCATED, m.bytes_allocated);
-}
 
 /// Where a sweep runs and how it identifies itself.
 pub struct RunOptions {
@@ -160,10 +41,12 @@ pub fn expand(suite: &Suite, software: bool) -> Result<Vec<Group>> {
                     .join(", ")
             ))
         })?;
-        let points = study.points(spec).map_err(|e| {
+        let points = studies::points(study.as_ref(), spec).map_err(|e| {
             CoreError::Param(format!(
-                "suite '{}' study {si} ({}): {e}",
-                suite.name, spec.kind
+                "suite '{}' study {si} ({}): {}",
+                suite.name,
+                spec.kind,
+                e.join("; ")
             ))
         })?;
         if spec.scenes.is_empty() {
@@ -223,6 +106,15 @@ pub fn run(
     } else {
         suite.reps
     };
+    let warmup = if software {
+        suite
+            .software
+            .as_ref()
+            .and_then(|s| s.warmup)
+            .unwrap_or(suite.warmup)
+    } else {
+        suite.warmup
+    };
     let mut written = 0;
     for group in groups {
         let meta = |mut row: Row, method: &str, params: &Params| -> Row {
@@ -248,7 +140,7 @@ pub fn run(
                 .set(cols::WIDTH, group.width)
                 .set(cols::HEIGHT, group.height)
                 .set(cols::REPS, reps)
-                .set(cols::WARMUP, suite.warmup)
+                .set(cols::WARMUP, warmup)
                 .set(cols::SCENE, &group.scene.generator)
                 .set(cols::SCENE_LABEL, group.scene.label());
             if row.get(cols::METHOD).is_none() {
@@ -263,20 +155,20 @@ pub fn run(
             .iter()
             .map(|f| PointSpec {
                 method: f.to_string(),
-                params: Params::new(),
+                point: Point::empty(),
             })
             .chain(group.points.iter().cloned())
             .collect();
         let fail_all = |sink: &mut dyn Sink, why: &str, skipped: bool| -> Result<usize> {
             for p in &all_points {
                 let mut row = Row::new();
-                set_params(&mut row, &p.params)?;
+                set_params(&mut row, p.point.values())?;
                 let row = if skipped {
                     skipped_row(row, why)
                 } else {
                     failed_row(row, why)
                 };
-                sink.point_done(&meta(row, &p.method, &p.params))?;
+                sink.point_done(&meta(row, &p.method, p.given()))?;
             }
             Ok(all_points.len())
         };
@@ -305,7 +197,7 @@ pub fn run(
         }
         let gscene = GpuScene::upload(gpu, &scene, group.width, group.height);
         let spec = &suite.studies[group.study_index];
-        let mut ctx = GroupCtx::new(gpu, suite, spec, group, &scene, &gscene, reps, suite.warmup);
+        let mut ctx = GroupCtx::new(gpu, suite, spec, group, &scene, &gscene, reps, warmup);
         ctx.images_dir = opts.save_images.clone();
         let add_scene = |row: &mut Row| {
             row.set(cols::TRIANGLES, scene.mesh.triangle_count())
@@ -317,16 +209,9 @@ pub fn run(
             let mut row = Row::new();
             row.set(cols::METHOD, *f).set(cols::EXACT, false);
             add_scene(&mut row);
-            let row = match measure(
-                gpu,
-                &gscene,
-                method.as_ref(),
-                &Params::new(),
-                suite.warmup,
-                reps,
-            ) {
+            let row = match measure(gpu, &gscene, method.as_ref(), &Point::empty(), warmup, reps) {
                 Ok(m) => {
-                    set_timing(&mut row, &m, &ctx);
+                    set_timing(&mut row, &m, &scene.mesh);
                     if *f == "floor_depth" {
                         ctx.floor_ms = m.gpu_ms.map(|s| s.median);
                     }
@@ -347,12 +232,12 @@ pub fn run(
             let mut emit = |i: usize, mut row: Row| -> Result<()> {
                 let p = &group.points[i];
                 add_scene(&mut row);
-                let mut row = meta(row, &p.method, &p.params);
+                let mut row = meta(row, &p.method, p.given());
                 set_x_floor(&mut row, floor_ms);
                 if done[i] {
                     return Err(CoreError::Schema(format!(
                         "point {} emitted twice",
-                        group.point_key(&p.method, &p.params)
+                        group.point_key(&p.method, p.given())
                     )));
                 }
                 done[i] = true;
@@ -378,9 +263,9 @@ pub fn run(
         for (i, p) in group.points.iter().enumerate() {
             if !done[i] {
                 let mut row = Row::new();
-                set_params(&mut row, &p.params)?;
+                set_params(&mut row, p.point.values())?;
                 add_scene(&mut row);
-                sink.point_done(&meta(failed_row(row, &why), &p.method, &p.params))?;
+                sink.point_done(&meta(failed_row(row, &why), &p.method, p.given()))?;
                 written += 1;
             }
         }
@@ -426,4 +311,41 @@ pub fn git_rev() -> String {
         }
         _ => "unknown".to_string(),
     }
+}
+
+/// Parses, checks and runs a suite's text on `gpu`, unsharded, and returns every row (tests and
+/// tools). A suite with problems is an error listing them all; the row count is checked.
+pub fn run_suite(gpu: &Gpu, text: &str, source: &str) -> Result<Vec<Row>> {
+    let suite = Suite::parse(text, source)?;
+    let problems = crate::check::check_suite(&suite);
+    if !problems.is_empty() {
+        return Err(CoreError::Param(scenarios::problem::report(&problems)));
+    }
+    run_checked(gpu, &suite)
+}
+
+/// Runs a checked suite on `gpu`, unsharded, into memory.
+pub fn run_checked(gpu: &Gpu, suite: &Suite) -> Result<Vec<Row>> {
+    let groups = expand(suite, gpu.facts.is_software)?;
+    let mut sink = crate::record::VecSink::default();
+    let opts = RunOptions {
+        run_id: "test".into(),
+        git_rev: "test".into(),
+        shard: (0, 1),
+        save_images: None,
+    };
+    let written = run(gpu, suite, &groups, &opts, &mut sink)?;
+    if written != rows_in(&groups) || sink.0.len() != written {
+        return Err(CoreError::Schema(format!(
+            "{} rows written for {} points",
+            sink.0.len(),
+            rows_in(&groups)
+        )));
+    }
+    Ok(sink.0)
+}
+
+/// Rows a suite sweeps on a GPU (`software = false`) or a software adapter (for `mfx list`).
+pub fn rows_of(suite: &Suite, software: bool) -> usize {
+    expand(suite, software).map(|g| rows_in(&g)).unwrap_or(0)
 }

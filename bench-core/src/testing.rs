@@ -1,39 +1,196 @@
-//! Helpers for GPU tests: open the adapter tests run on, and render one method on one scene.
+//! The one harness for GPU tests: one cached adapter per test binary (lavapipe on CI), a method
+//! rendered on a scene, judged against the f64 reference, and the comparisons every method's
+//! tests make. Suites are run through `runner::run_suite`. A machine with no adapter fails the
+//! test with a message saying how to install one: a GPU test must not pass by not running.
 
-use scenarios::{Params, Scene};
+use std::sync::OnceLock;
 
+use scenarios::{ParamValue, Params, Scene, SceneSpec};
+
+use crate::axes::Point;
 use crate::gpu::{Gpu, GpuOptions};
 use crate::gpu_scene::GpuScene;
-use crate::methods::{self, Capture, FrameStats};
-use crate::runner::measure;
+use crate::measure::measure;
+use crate::method::{supports, Capture, Expected, FrameStats, Method};
+use crate::reference::{rasterize, FragmentLists};
 
-/// The adapter for tests (lavapipe on CI). A machine with no adapter fails the test with a
-/// message saying how to install one: a GPU test must not pass by not running.
-pub fn gpu() -> Gpu {
-    Gpu::new(&GpuOptions::default()).unwrap_or_else(|e| {
-        panic!("GPU tests need a Vulkan adapter (run scripts/setup.sh for lavapipe): {e}")
+/// The adapter tests run on, opened once per test binary.
+pub fn gpu() -> &'static Gpu {
+    static GPU: OnceLock<Gpu> = OnceLock::new();
+    GPU.get_or_init(|| {
+        if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+            std::env::set_var("XDG_RUNTIME_DIR", "/tmp");
+        }
+        Gpu::new(&GpuOptions::default()).unwrap_or_else(|e| {
+            panic!("GPU tests need a Vulkan adapter (run scripts/setup.sh for lavapipe): {e}")
+        })
     })
 }
 
-/// Prepares `method` on `scene` at w×h, runs one frame and reads it back.
+/// Parameters from `(name, value)` pairs.
+pub fn params(kv: &[(&str, ParamValue)]) -> Params {
+    let mut p = Params::new();
+    for (k, v) in kv {
+        p.set(k, v.clone());
+    }
+    p
+}
+
+/// A generator's scene from `(name, value)` pairs.
+pub fn scene(generator: &str, kv: &[(&str, ParamValue)]) -> Scene {
+    SceneSpec::new(generator, params(kv))
+        .build()
+        .unwrap_or_else(|e| panic!("scene {generator}: {e}"))
+}
+
+/// `params` resolved against `method`'s declared axes (a test naming an undeclared axis fails).
+pub fn point(method: &dyn Method, params: &Params) -> Point {
+    let p = Point::resolve(&method.axes(), params)
+        .unwrap_or_else(|e| panic!("{}: {}", method.name(), e.join("; ")));
+    method
+        .validate(&p)
+        .unwrap_or_else(|e| panic!("{}: {e}", method.name()));
+    p
+}
+
+/// The entries of `params` that `method` declares (a suite's product does the same when one
+/// table sweeps several methods).
+pub fn declared(method: &dyn Method, params: &Params) -> Params {
+    let axes = method.axes();
+    Params(
+        params
+            .0
+            .iter()
+            .filter(|(k, _)| axes.iter().any(|a| a.name() == k.as_str()))
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect(),
+    )
+}
+
+/// Prepares `method` on `scene` at w×h, runs one frame and reads it back (not judged).
 pub fn render(
     gpu: &Gpu,
     scene: &Scene,
-    method: &str,
+    method: &dyn Method,
     params: &Params,
     w: u32,
     h: u32,
 ) -> (Capture, FrameStats) {
-    let m = methods::by_name(method).unwrap_or_else(|| panic!("unknown method {method}"));
-    if let Err(why) = m.supports(gpu, params) {
-        panic!("{method} cannot run on {}: {why}", gpu.facts.name);
+    let name = method.name();
+    let p = point(method, params);
+    if let Err(why) = supports(method, gpu, &p) {
+        panic!("{name} cannot run on {}: {why}", gpu.facts.name);
     }
     let gs = GpuScene::upload(gpu, scene, w, h);
     let mut measured =
-        measure(gpu, &gs, m.as_ref(), params, 0, 1).unwrap_or_else(|e| panic!("{method}: {e}"));
+        measure(gpu, &gs, method, &p, 0, 1).unwrap_or_else(|e| panic!("{name}: {e}"));
     let cap = measured
         .prepared
         .readback(gpu, &gs)
-        .unwrap_or_else(|e| panic!("{method} readback: {e}"));
+        .unwrap_or_else(|e| panic!("{name} readback: {e}"));
     (cap, measured.frame)
+}
+
+/// One frame of `method` on `scene` at w×h on the test adapter, judged by the method against
+/// the reference: the capture and the reference lists.
+pub fn run(
+    method: &dyn Method,
+    scene: &Scene,
+    w: u32,
+    h: u32,
+    params: &Params,
+) -> (Capture, FragmentLists) {
+    let gpu = gpu();
+    let name = method.name();
+    let p = point(method, params);
+    if let Err(why) = supports(method, gpu, &p) {
+        panic!("{name} cannot run on {}: {why}", gpu.facts.name);
+    }
+    let gs = GpuScene::upload(gpu, scene, w, h);
+    let mut m = measure(gpu, &gs, method, &p, 0, 1).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let mut cap = m
+        .prepared
+        .readback(gpu, &gs)
+        .unwrap_or_else(|e| panic!("{name} readback: {e}"));
+    let lists = rasterize(scene, w, h);
+    m.prepared.judge(&mut cap, &lists);
+    (cap, lists)
+}
+
+/// The transparency reference of the set a capture is judged against (all or k nearest).
+pub fn reference_of(cap: &Capture, lists: &FragmentLists) -> Vec<[f64; 4]> {
+    match cap.expected {
+        Expected::All => lists.composite(),
+        Expected::FirstK(k) => lists.composite_first(k as usize),
+    }
+}
+
+/// Largest per-channel error of `cap`'s image against the transparency reference of its
+/// `expected` set, and the pixel where it is (NaN counts as the worst).
+pub fn max_err(cap: &Capture, lists: &FragmentLists) -> (f64, usize) {
+    let reference = reference_of(cap, lists);
+    let img = cap.image.as_ref().expect("an image");
+    let mut worst = (0.0f64, 0usize);
+    for (p, (r, g)) in reference.iter().zip(img).enumerate() {
+        for c in 0..4 {
+            let e = (r[c] - g[c] as f64).abs();
+            if e.is_nan() || e > worst.0 {
+                worst = (if e.is_nan() { f64::INFINITY } else { e }, p);
+            }
+        }
+    }
+    worst
+}
+
+/// Pixels whose captured count differs from min(true depth complexity, k), and the first one.
+pub fn count_mismatch(cap: &Capture, lists: &FragmentLists, k: u32) -> (usize, Option<usize>) {
+    let counts = cap.counts.as_ref().expect("counts");
+    let dc = lists.depth_complexity();
+    let bad: Vec<usize> = (0..dc.len())
+        .filter(|&p| counts[p] != dc[p].min(k))
+        .collect();
+    (bad.len(), bad.first().copied())
+}
+
+/// Runs `method` on every scene for every `k` (the `layers` axis; `None` = the method's default)
+/// at w×h and asserts its image matches the reference of its expected set within `tol` and its
+/// counts match min(depth complexity, k). `why` is the tolerance's reason (in the message).
+pub fn assert_matches_reference(
+    method: &dyn Method,
+    scenes: &[Scene],
+    ks: &[Option<u32>],
+    (w, h): (u32, u32),
+    tol: f64,
+    why: &str,
+) {
+    for scene in scenes {
+        for &k in ks {
+            let p = match k {
+                Some(k) => params(&[("layers", ParamValue::Int(k as i64))]),
+                None => Params::new(),
+            };
+            let (cap, lists) = run(method, scene, w, h, &p);
+            let (err, px) = max_err(&cap, &lists);
+            assert!(
+                err <= tol,
+                "{} on {} at {w}x{h}, k = {k:?}: max error {err:.3e} at pixel {px} (tolerance {tol:e}: {why})",
+                method.name(),
+                scene.label()
+            );
+            if cap.counts.is_some() {
+                let cap_k = match cap.expected {
+                    Expected::All => u32::MAX,
+                    Expected::FirstK(k) => k,
+                };
+                let (bad, first) = count_mismatch(&cap, &lists, cap_k);
+                assert_eq!(
+                    bad,
+                    0,
+                    "{} on {} at {w}x{h}, k = {k:?}: {bad} pixels with the wrong fragment count (first: {first:?})",
+                    method.name(),
+                    scene.label()
+                );
+            }
+        }
+    }
 }

@@ -4,6 +4,7 @@
 //! coverage disagreement (one pixel ≈ 4e-3 RMSE at 64²) fails.
 
 use bench_core::effects::reference_image;
+use bench_core::methods;
 use bench_core::metrics::{image_error, BAD_PIXEL_TOL};
 use bench_core::reference::rasterize;
 use bench_core::testing;
@@ -14,7 +15,7 @@ fn check(spec: SceneSpec, max_layers: i64) {
     let scene = spec.build().unwrap();
     let (w, h) = (64, 64);
     let params = Params::new().with("max_layers", ParamValue::Int(max_layers));
-    let (cap, frame) = testing::render(&gpu, &scene, "depth_peel", &params, w, h);
+    let (cap, frame) = testing::render(gpu, &scene, &*methods::get("depth_peel"), &params, w, h);
     let lists = rasterize(&scene, w, h);
     let reference = reference_image("transparency", &lists, cap.expected).unwrap();
     let e = image_error(&reference, cap.image.as_ref().unwrap(), BAD_PIXEL_TOL);
@@ -112,7 +113,7 @@ fn depth_peel_max_layers_bound_composites_the_nearest_layers_only() {
     let params = Params::new()
         .with("max_layers", ParamValue::Int(3))
         .with("occlusion_stop", ParamValue::Bool(false));
-    let (cap, frame) = testing::render(&gpu, &scene, "depth_peel", &params, 48, 48);
+    let (cap, frame) = testing::render(gpu, &scene, &*methods::get("depth_peel"), &params, 48, 48);
     assert_eq!(frame.geometry_passes, 3);
     let lists = rasterize(&scene, 48, 48);
     let reference = reference_image("transparency", &lists, cap.expected).unwrap();

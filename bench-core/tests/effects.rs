@@ -8,6 +8,7 @@
 //! by up to 0.5/512 ≈ 1e-3, and σ·Δl ≤ 1e-3 with σ ≤ 1.
 
 use bench_core::effects::EffectConfig;
+use bench_core::methods;
 use bench_core::metrics::{image_error, BAD_PIXEL_TOL};
 use bench_core::reference::rasterize;
 use bench_core::testing;
@@ -24,9 +25,11 @@ fn s(v: &str) -> ParamValue {
 fn err(method: &str, spec: &SceneSpec, params: &Params) -> (f64, f64) {
     let gpu = testing::gpu();
     let scene = spec.build().unwrap();
-    let (cap, _) = testing::render(&gpu, &scene, method, params, W, W);
+    let m = methods::get(method);
+    let params = &testing::declared(&*m, params);
+    let (cap, _) = testing::render(gpu, &scene, &*m, params, W, W);
     let lists = rasterize(&scene, W, W);
-    let cfg = EffectConfig::from_params(params).unwrap();
+    let cfg = EffectConfig::from_point(&testing::point(&*m, params)).unwrap();
     let reference = cfg.reference(&scene, &lists, cap.expected);
     let img = cap.image.unwrap();
     assert_eq!(img.len(), reference.len(), "{}: image size", spec.label());
@@ -113,7 +116,7 @@ fn translucency_stable_and_naive_48px_match_reference_near_the_eye() {
             Params::new()
                 .with("effect", s("translucency"))
                 .with("sigma", ParamValue::Float(0.8))
-                .with("variant", s(v)),
+                .with("thickness", s(v)),
         );
     }
 }
@@ -131,9 +134,12 @@ fn fresnel_48px_matches_reference() {
         2e-4,
     );
     let gpu = testing::gpu();
-    let why = bench_core::methods::by_name("linked_list")
-        .unwrap()
-        .supports(&gpu, &Params::new().with("effect", s("fresnel")))
+    let ll = methods::get("linked_list");
+    let why = ll
+        .supports(
+            gpu,
+            &testing::point(&*ll, &Params::new().with("effect", s("fresnel"))),
+        )
         .unwrap_err();
     assert!(why.contains("normal"), "{why}");
 }
@@ -180,18 +186,18 @@ fn effects_differ_from_each_other() {
     let gpu = testing::gpu();
     let scene = shells().build().unwrap();
     let a = testing::render(
-        &gpu,
+        gpu,
         &scene,
-        "depth_peel",
+        &*methods::get("depth_peel"),
         &Params::new().with("effect", s("transparency")),
         W,
         W,
     )
     .0;
     let b = testing::render(
-        &gpu,
+        gpu,
         &scene,
-        "depth_peel",
+        &*methods::get("depth_peel"),
         &Params::new().with("effect", s("translucency")),
         W,
         W,
@@ -202,27 +208,8 @@ fn effects_differ_from_each_other() {
 
 // ---- the effect axis in the methods study ----
 
-struct Collect(Vec<bench_core::record::Row>);
-impl bench_core::record::Sink for Collect {
-    fn point_done(&mut self, row: &bench_core::record::Row) -> bench_core::Result<()> {
-        self.0.push(row.clone());
-        Ok(())
-    }
-}
-
 fn sweep(text: &str) -> bench_core::Result<Vec<bench_core::record::Row>> {
-    let gpu = testing::gpu();
-    let suite = scenarios::Suite::parse(text, "test").unwrap();
-    let groups = bench_core::runner::expand(&suite, true)?;
-    let mut sink = Collect(Vec::new());
-    let opts = bench_core::runner::RunOptions {
-        run_id: "t".into(),
-        git_rev: "t".into(),
-        shard: (0, 1),
-        save_images: None,
-    };
-    bench_core::runner::run(&gpu, &suite, &groups, &opts, &mut sink)?;
-    Ok(sink.0)
+    bench_core::runner::run_suite(testing::gpu(), text, "test")
 }
 
 #[test]

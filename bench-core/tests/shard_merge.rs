@@ -42,16 +42,10 @@ fn merged_shards_of_smoke_equal_the_unsharded_point_set() {
     let gpu = testing::gpu();
     let suite = Suite::load("smoke").unwrap();
     let t = tmp();
-    sweep(&gpu, &suite, (0, 1), &t.join("full"), false);
+    sweep(gpu, &suite, (0, 1), &t.join("full"), false);
     // Three shards of four groups: uneven on purpose (one shard gets two groups).
     for i in 0..3 {
-        sweep(
-            &gpu,
-            &suite,
-            (i, 3),
-            &t.join(format!("job/shard-{i}")),
-            true,
-        );
+        sweep(gpu, &suite, (i, 3), &t.join(format!("job/shard-{i}")), true);
     }
     let m = merge::merge(&[t.join("job")], &t.join("merged")).unwrap();
     assert_eq!(m.files.len(), 3);

@@ -5,11 +5,11 @@
 //! running the stability suite's own tables through the runner at the end.
 
 use bench_core::effects::{signed_view_z, EffectConfig};
-use bench_core::methods::Capture;
+use bench_core::methods::{self, Capture};
 use bench_core::metrics::{image_error, ImageError, BAD_PIXEL_TOL};
-use bench_core::record::{Row, Sink};
+use bench_core::record::Row;
 use bench_core::reference::{rasterize, FragmentLists};
-use bench_core::runner::{self, RunOptions};
+use bench_core::runner::{self};
 use bench_core::testing;
 use scenarios::{ParamValue, Params, SceneSpec, Suite};
 use schema::cols;
@@ -49,12 +49,11 @@ impl Run {
 fn run(spec: &SceneSpec, params: &Params, w: u32) -> Run {
     let gpu = testing::gpu();
     let scene = spec.build().unwrap();
-    let (cap, _) = testing::render(&gpu, &scene, "depth_peel", params, w, w);
+    let (cap, _) = testing::render(gpu, &scene, &*methods::get("depth_peel"), params, w, w);
     let lists = rasterize(&scene, w, w);
-    let reference =
-        EffectConfig::from_params(params)
-            .unwrap()
-            .reference(&scene, &lists, cap.expected);
+    let reference = EffectConfig::from_point(&testing::point(&*methods::get("depth_peel"), params))
+        .unwrap()
+        .reference(&scene, &lists, cap.expected);
     let e = image_error(&reference, cap.image.as_ref().unwrap(), BAD_PIXEL_TOL);
     assert_eq!(
         e.non_finite,
@@ -121,7 +120,11 @@ fn coplanar_duplicates_classic_loses_them_tiebreak_keeps_them_32px() {
         bench_core::studies::methods::has_depth_ties(&classic.lists),
         "the reference has exact ties"
     );
-    let tb = run(&spec, &Params::new().with("variant", s("tiebreak")), 32);
+    let tb = run(
+        &spec,
+        &Params::new().with("tiebreak", ParamValue::Bool(true)),
+        32,
+    );
     assert_eq!(tb.lost(), 0, "tiebreak peels every copy");
     assert_eq!(
         tb.cap.counts.as_ref().unwrap(),
@@ -140,7 +143,11 @@ fn coplanar_duplicates_classic_loses_them_tiebreak_keeps_them_32px() {
             .with("copies", i(4))
             .with("reversed_z", ParamValue::Bool(true)),
     );
-    let tb = run(&spec, &Params::new().with("variant", s("tiebreak")), 32);
+    let tb = run(
+        &spec,
+        &Params::new().with("tiebreak", ParamValue::Bool(true)),
+        32,
+    );
     assert_eq!(tb.lost(), 0, "{}: tiebreak with reversed-Z", spec.label());
 }
 
@@ -224,10 +231,9 @@ fn translucency_sigma_l_tiny_keeps_the_thickness_32px() {
     let r = run(&shells(), &p, 32);
     let img = r.cap.image.unwrap();
     let scene = shells().build().unwrap();
-    let reference =
-        EffectConfig::from_params(&p)
-            .unwrap()
-            .reference(&scene, &r.lists, r.cap.expected);
+    let reference = EffectConfig::from_point(&testing::point(&*methods::get("depth_peel"), &p))
+        .unwrap()
+        .reference(&scene, &r.lists, r.cap.expected);
     let mut checked = 0;
     for (px, (g, want)) in img.iter().zip(&reference).enumerate() {
         if want[3] > 1e-8 {
@@ -271,7 +277,7 @@ fn thin_shells_far_away_stable_thickness_within_bound_naive_not_32px() {
     let rmse = |variant: &str| {
         let p = Params::new()
             .with("effect", s("translucency"))
-            .with("variant", s(variant))
+            .with("thickness", s(variant))
             .with("sigma", f(sigma))
             .with("max_layers", i(4096));
         let r = run(&spec, &p, 32);
@@ -339,31 +345,13 @@ fn degenerate_and_huge_triangles_render_finite_and_match_32px() {
 
 // ---- the suite's own tables through the runner: flags are set, nothing is silent ----
 
-struct Collect(Vec<Row>);
-impl Sink for Collect {
-    fn point_done(&mut self, row: &Row) -> bench_core::Result<()> {
-        self.0.push(row.clone());
-        Ok(())
-    }
-}
-
 #[test]
 fn stability_suite_software_profile_flags_every_known_failure() {
     let gpu = testing::gpu();
     // stability_ci: the stability suite's cases with fewer passes (lavapipe pays per pass).
     let suite = Suite::load("stability_ci").unwrap();
-    let groups = runner::expand(&suite, true).unwrap();
-    let mut sink = Collect(Vec::new());
-    let opts = RunOptions {
-        run_id: "t".into(),
-        git_rev: "t".into(),
-        shard: (0, 1),
-        save_images: None,
-    };
-    let written = runner::run(&gpu, &suite, &groups, &opts, &mut sink).unwrap();
-    assert_eq!(written, runner::rows_in(&groups));
-    let rows: Vec<&Row> = sink
-        .0
+    let all = runner::run_checked(gpu, &suite).unwrap();
+    let rows: Vec<&Row> = all
         .iter()
         .filter(|r| !r.get(cols::METHOD).unwrap_or("").starts_with("floor_"))
         .collect();

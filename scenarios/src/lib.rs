@@ -6,11 +6,13 @@
 pub mod camera;
 pub mod obj;
 pub mod params;
+pub mod problem;
 pub mod scenes;
 pub mod suite;
 
 pub use camera::Camera;
-pub use params::{ParamValue, Params};
+pub use params::{ParamValue, Params, ValueKind};
+pub use problem::Problem;
 pub use scenes::{AreaLight, Light, LightKind, Material, Mesh, ObjectInfo, Scene, SceneSpec, Sun};
 pub use suite::{StudySpec, Suite};
 
@@ -42,6 +44,15 @@ pub enum SceneError {
     Obj { path: String, why: String },
     #[error("suite file '{path}': {why}")]
     Suite { path: String, why: String },
+    /// Every problem found in a suite, one per line.
+    #[error("{}", crate::problem::report(.0))]
+    Problems(Vec<Problem>),
+    /// Check mode: the parameters were read and are valid; nothing was built.
+    #[error("parameters checked (nothing built)")]
+    Checked,
+    /// Check mode: every problem found in one scene's parameters.
+    #[error("{}", .0.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("; "))]
+    Many(Vec<SceneError>),
 }
 
 pub type Result<T, E = SceneError> = std::result::Result<T, E>;

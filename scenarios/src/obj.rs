@@ -17,6 +17,10 @@ pub fn load(path: &Path) -> Result<Mesh> {
     if !path.exists() {
         return Err(err("file not found".into()));
     }
+    if path.is_dir() {
+        return Err(err("is a directory, not an OBJ file".into()));
+    }
+    scan_faces(path).map_err(err)?;
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -72,6 +76,39 @@ pub fn load(path: &Path) -> Result<Mesh> {
         return Err(err("no triangles (no faces found)".into()));
     }
     Ok(mesh)
+}
+
+/// Reads the file's `f`, `l` and `p` statements before tobj does: a face of fewer than three
+/// vertices is malformed (tobj would drop or mis-triangulate it), and a file with lines or points
+/// but no faces has no triangle to render. Names the line.
+fn scan_faces(path: &Path) -> std::result::Result<(), String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+    let (mut faces, mut lines, mut points) = (0usize, 0usize, 0usize);
+    for (n, line) in text.lines().enumerate() {
+        let mut it = line.split_whitespace();
+        match it.next() {
+            Some("f") => {
+                let verts = it.take_while(|t| !t.starts_with('#')).count();
+                if verts < 3 {
+                    return Err(format!(
+                        "line {}: face with {verts} vertices (a face needs at least 3): '{}'",
+                        n + 1,
+                        line.trim()
+                    ));
+                }
+                faces += 1;
+            }
+            Some("l") => lines += 1,
+            Some("p") => points += 1,
+            _ => {}
+        }
+    }
+    if faces == 0 {
+        return Err(format!(
+            "no triangles: no faces ('f' lines) found ({lines} line and {points} point elements, which have no area)"
+        ));
+    }
+    Ok(())
 }
 
 /// Area-weighted vertex normals.
@@ -176,17 +213,19 @@ fn instance_grid_raw(mesh: &Mesh, n: u32) -> Mesh {
 pub fn build(spec: &SceneSpec) -> Result<Scene> {
     let label = spec.label();
     let mut r = spec.params.reader(&label);
-    let path = r
-        .opt_string("path")?
-        .ok_or_else(|| SceneError::OutOfRange {
+    let path = r.opt_string("path")?;
+    if path.is_none() {
+        r.problem(SceneError::OutOfRange {
             scene: label.clone(),
             param: "path".into(),
             value: String::new(),
             why: "the obj generator needs path = \"file.obj\"".into(),
         })?;
+    }
     let instances = r.int("instances", 1, 1, 4096)? as u32;
     let alpha = r.float("alpha", 0.4, 0.0, 1.0)? as f32;
     r.finish()?;
+    let path = path.unwrap_or_default();
     let mut mesh = load(Path::new(&path))?;
     normalise(&mut mesh);
     let mut mesh = instance_grid(&mesh, instances);

@@ -21,7 +21,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use crate::{ParamValue, Params, Result, SceneError, SceneSpec};
+use crate::{ParamValue, Params, Problem, Result, SceneError, SceneSpec};
 
 /// Built-in suites, embedded so the binary works from any directory (a file on disk wins).
 pub const BUILTIN: &[(&str, &str)] = &[
@@ -41,6 +41,14 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("shadows", include_str!("../suites/shadows.toml")),
     ("shadows-ci", include_str!("../suites/shadows-ci.toml")),
     ("backends", include_str!("../suites/backends.toml")),
+    (
+        "geometry-models",
+        include_str!("../suites/geometry-models.toml"),
+    ),
+    (
+        "shadows-bunny",
+        include_str!("../suites/shadows-bunny.toml"),
+    ),
 ];
 
 #[derive(Clone, Debug)]
@@ -63,18 +71,25 @@ pub struct SoftwareProfile {
     /// Scenes above this many triangles become skipped rows on a software adapter.
     pub max_triangles: Option<u64>,
     pub reps: Option<u32>,
+    pub warmup: Option<u32>,
 }
 
 #[derive(Clone, Debug)]
 pub struct StudySpec {
+    /// Position of the `[[study]]` table in the file (for messages).
+    pub index: usize,
     pub kind: String,
     pub methods: Vec<String>,
+    /// Whether the table had a `methods` key at all (`methods = []` is an error, not "none").
+    pub methods_given: bool,
     pub axes: BTreeMap<String, Vec<ParamValue>>,
     /// Per-method axis overrides (`[study.method_axes.<method>]`): for that method they replace
     /// the study's axes of the same name, so an axis one method reads with values another
     /// method rejects (e.g. the k-buffer's `variant = "heuristics"`) need not split the table.
     pub method_axes: BTreeMap<String, BTreeMap<String, Vec<ParamValue>>>,
     pub scenes: Vec<SceneSpec>,
+    /// For each of `scenes`, the index of the `[[study.scenes]]` table it was expanded from.
+    pub scene_tables: Vec<usize>,
     pub resolutions: Option<Vec<(u32, u32)>>,
     /// Everything else in the study table, for the study kind to read.
     pub extra: toml::Table,
@@ -82,6 +97,7 @@ pub struct StudySpec {
 
 impl Suite {
     /// Loads a suite by file path or by name (`scenarios/suites/<name>.toml`, then built-ins).
+    /// A path that exists but is not a readable file is named as such.
     pub fn load(name_or_path: &str) -> Result<Suite> {
         let p = Path::new(name_or_path);
         let candidates = [
@@ -89,6 +105,12 @@ impl Suite {
             PathBuf::from(format!("scenarios/suites/{name_or_path}.toml")),
         ];
         for c in &candidates {
+            if c.is_dir() {
+                return Err(SceneError::Suite {
+                    path: c.display().to_string(),
+                    why: "is a directory, not a suite file".into(),
+                });
+            }
             if c.is_file() {
                 let text = std::fs::read_to_string(c).map_err(|e| SceneError::Suite {
                     path: c.display().to_string(),
@@ -113,79 +135,16 @@ impl Suite {
         })
     }
 
+    /// Parses a suite, reporting every structural problem at once (unknown keys at any level,
+    /// wrong types, empty arrays) as `Err(SceneError::Problems)`. What depends on the study
+    /// kinds, methods and generators is checked by `bench_core::check`.
     pub fn parse(text: &str, source: &str) -> Result<Suite> {
-        let err = |why: String| SceneError::Suite {
-            path: source.into(),
-            why,
-        };
-        let table: toml::Table = text
-            .parse()
-            .map_err(|e| err(format!("not valid TOML: {e}")))?;
-        let mut suite = Suite {
-            name: get_str(&table, "name")
-                .map_err(&err)?
-                .unwrap_or_else(|| "unnamed".into()),
-            description: get_str(&table, "description")
-                .map_err(&err)?
-                .unwrap_or_default(),
-            reps: get_int(&table, "reps", 10, 1, 100_000).map_err(&err)? as u32,
-            warmup: get_int(&table, "warmup", 3, 0, 100_000).map_err(&err)? as u32,
-            resolutions: match table.get("resolutions") {
-                Some(v) => resolutions(v).map_err(&err)?,
-                None => vec![(256, 256)],
-            },
-            software: None,
-            studies: Vec::new(),
-            source: source.into(),
-        };
-        if let Some(sw) = table.get("software") {
-            let t = sw
-                .as_table()
-                .ok_or_else(|| err("[software] must be a table".into()))?;
-            suite.software = Some(SoftwareProfile {
-                resolutions: t
-                    .get("resolutions")
-                    .map(resolutions)
-                    .transpose()
-                    .map_err(&err)?,
-                max_triangles: t
-                    .get("max_triangles")
-                    .and_then(|v| v.as_integer().map(|i| i as u64)),
-                reps: t.get("reps").and_then(|v| v.as_integer()).map(|i| i as u32),
-            });
+        let mut problems = Vec::new();
+        let suite = parse_into(text, source, &mut problems);
+        match suite {
+            Some(s) if problems.is_empty() => Ok(s),
+            _ => Err(SceneError::Problems(problems)),
         }
-        let studies = match table.get("study") {
-            Some(toml::Value::Array(a)) => a.clone(),
-            Some(_) => return Err(err("[[study]] must be an array of tables".into())),
-            None => {
-                return Err(err(
-                    "no [[study]] tables: a suite must declare at least one study".into(),
-                ))
-            }
-        };
-        for (i, s) in studies.iter().enumerate() {
-            let t = s
-                .as_table()
-                .ok_or_else(|| err(format!("study {i} is not a table")))?;
-            suite
-                .studies
-                .push(parse_study(t).map_err(|why| err(format!("study {i}: {why}")))?);
-        }
-        if let Some(k) = table.keys().find(|k| {
-            ![
-                "name",
-                "description",
-                "reps",
-                "warmup",
-                "resolutions",
-                "software",
-                "study",
-            ]
-            .contains(&k.as_str())
-        }) {
-            return Err(err(format!("unknown top-level key '{k}'")));
-        }
-        Ok(suite)
     }
 
     /// Resolutions a study runs at (its own, else the suite's, else the software override).
@@ -202,36 +161,168 @@ impl Suite {
     }
 }
 
-fn get_str(t: &toml::Table, k: &str) -> std::result::Result<Option<String>, String> {
-    match t.get(k) {
-        None => Ok(None),
-        Some(toml::Value::String(s)) => Ok(Some(s.clone())),
-        Some(_) => Err(format!("'{k}' must be a string")),
+/// Keys a suite may have at the top level.
+pub const TOP_KEYS: &[&str] = &[
+    "name",
+    "description",
+    "reps",
+    "warmup",
+    "resolutions",
+    "software",
+    "study",
+];
+/// Keys of the `[software]` table.
+pub const SOFTWARE_KEYS: &[&str] = &["resolutions", "max_triangles", "reps", "warmup"];
+/// Keys every `[[study]]` table may have; a study kind declares its own options besides these.
+pub const STUDY_KEYS: &[&str] = &[
+    "kind",
+    "methods",
+    "axes",
+    "method_axes",
+    "scenes",
+    "resolutions",
+];
+
+/// Collects the problems of one table as it is read.
+struct Ctx<'a> {
+    file: &'a str,
+    problems: &'a mut Vec<Problem>,
+}
+
+impl Ctx<'_> {
+    fn push(&mut self, table: &str, key: &str, msg: impl Into<String>) -> &mut Problem {
+        self.problems.push(Problem::new(self.file, table, key, msg));
+        self.problems.last_mut().expect("just pushed")
+    }
+
+    fn unknown_keys(&mut self, t: &toml::Table, table: &str, known: &[&str]) {
+        for (k, v) in t.iter().filter(|(k, _)| !known.contains(&k.as_str())) {
+            let v = v.to_string();
+            let p = self.push(table, k, "unknown key");
+            p.known = known.iter().map(|s| s.to_string()).collect();
+            p.value = Some(v);
+        }
+    }
+
+    fn string(&mut self, t: &toml::Table, table: &str, k: &str) -> Option<String> {
+        match t.get(k) {
+            None => None,
+            Some(toml::Value::String(s)) => Some(s.clone()),
+            Some(v) => {
+                let v = v.to_string();
+                self.push(table, k, "must be a string").value = Some(v);
+                None
+            }
+        }
+    }
+
+    fn int(&mut self, t: &toml::Table, table: &str, k: &str, min: i64, max: i64) -> Option<i64> {
+        match t.get(k) {
+            None => None,
+            Some(toml::Value::Integer(i)) if (min..=max).contains(i) => Some(*i),
+            Some(v) => {
+                let v = v.to_string();
+                self.push(table, k, format!("must be an integer in {min}..={max}"))
+                    .value = Some(v);
+                None
+            }
+        }
+    }
+
+    fn resolutions(&mut self, t: &toml::Table, table: &str) -> Option<Vec<(u32, u32)>> {
+        let v = t.get("resolutions")?;
+        match resolutions(v) {
+            Ok(r) if !r.is_empty() => Some(r),
+            Ok(_) => {
+                self.push(table, "resolutions", "is empty: nothing would run");
+                None
+            }
+            Err(why) => {
+                self.push(table, "resolutions", why).value = Some(v.to_string());
+                None
+            }
+        }
     }
 }
 
-fn get_int(
-    t: &toml::Table,
-    k: &str,
-    default: i64,
-    min: i64,
-    max: i64,
-) -> std::result::Result<i64, String> {
-    let v = match t.get(k) {
-        None => default,
-        Some(toml::Value::Integer(i)) => *i,
-        Some(_) => return Err(format!("'{k}' must be an integer")),
+fn parse_into(text: &str, source: &str, problems: &mut Vec<Problem>) -> Option<Suite> {
+    let mut cx = Ctx {
+        file: source,
+        problems,
     };
-    if v < min || v > max {
-        return Err(format!("'{k}' = {v} is out of range {min}..={max}"));
+    let table: toml::Table = match text.parse() {
+        Ok(t) => t,
+        Err(e) => {
+            cx.push("top level", "", format!("not valid TOML: {e}"));
+            return None;
+        }
+    };
+    let top = "top level";
+    cx.unknown_keys(&table, top, TOP_KEYS);
+    let mut suite = Suite {
+        name: cx
+            .string(&table, top, "name")
+            .unwrap_or_else(|| "unnamed".into()),
+        description: cx.string(&table, top, "description").unwrap_or_default(),
+        reps: cx.int(&table, top, "reps", 1, 100_000).unwrap_or(10) as u32,
+        warmup: cx.int(&table, top, "warmup", 0, 100_000).unwrap_or(3) as u32,
+        resolutions: cx
+            .resolutions(&table, top)
+            .unwrap_or_else(|| vec![(256, 256)]),
+        software: None,
+        studies: Vec::new(),
+        source: source.into(),
+    };
+    if let Some(sw) = table.get("software") {
+        match sw.as_table() {
+            None => {
+                cx.push(top, "software", "must be a table ([software])");
+            }
+            Some(t) => {
+                let tn = "[software]";
+                cx.unknown_keys(t, tn, SOFTWARE_KEYS);
+                suite.software = Some(SoftwareProfile {
+                    resolutions: cx.resolutions(t, tn),
+                    max_triangles: cx
+                        .int(t, tn, "max_triangles", 1, i64::MAX)
+                        .map(|i| i as u64),
+                    reps: cx.int(t, tn, "reps", 1, 100_000).map(|i| i as u32),
+                    warmup: cx.int(t, tn, "warmup", 0, 100_000).map(|i| i as u32),
+                });
+            }
+        }
     }
-    Ok(v)
+    match table.get("study") {
+        Some(toml::Value::Array(a)) if !a.is_empty() => {
+            for (i, s) in a.iter().enumerate() {
+                match s.as_table() {
+                    None => {
+                        cx.push(&format!("study {i}"), "", "is not a table ([[study]])");
+                    }
+                    Some(t) => {
+                        if let Some(spec) = parse_study(&mut cx, i, t) {
+                            suite.studies.push(spec);
+                        }
+                    }
+                }
+            }
+        }
+        Some(toml::Value::Array(_)) | None => {
+            cx.push(
+                top,
+                "study",
+                "no [[study]] tables: a suite must declare at least one study",
+            );
+        }
+        Some(_) => {
+            cx.push(top, "study", "must be an array of tables ([[study]])");
+        }
+    }
+    Some(suite)
 }
 
 fn resolutions(v: &toml::Value) -> std::result::Result<Vec<(u32, u32)>, String> {
-    let arr = v
-        .as_array()
-        .ok_or("resolutions must be an array of [width, height]")?;
+    let arr = v.as_array().ok_or("must be an array of [width, height]")?;
     arr.iter()
         .map(|r| {
             let wh = r
@@ -246,6 +337,202 @@ fn resolutions(v: &toml::Value) -> std::result::Result<Vec<(u32, u32)>, String> 
             Ok((w as u32, h as u32))
         })
         .collect()
+}
+
+/// A scalar or a non-empty array of scalars, as sweep values.
+fn values(v: &toml::Value) -> std::result::Result<Vec<ParamValue>, String> {
+    match v {
+        toml::Value::Array(a) if a.is_empty() => Err("is an empty array: nothing to sweep".into()),
+        toml::Value::Array(a) => a
+            .iter()
+            .map(|x| ParamValue::from_toml(x).ok_or_else(|| "arrays must hold scalars".to_string()))
+            .collect(),
+        other => Ok(vec![ParamValue::from_toml(other).ok_or_else(|| {
+            "must be a scalar or an array of scalars".to_string()
+        })?]),
+    }
+}
+
+/// The study's table name in problems: `study 2 (methods)`.
+pub fn study_table(index: usize, kind: &str) -> String {
+    format!("study {index} ({kind})")
+}
+
+fn parse_study(cx: &mut Ctx<'_>, index: usize, t: &toml::Table) -> Option<StudySpec> {
+    let here0 = format!("study {index}");
+    let kind = match cx.string(t, &here0, "kind") {
+        Some(k) => k,
+        None => {
+            if t.get("kind").is_none() {
+                cx.push(&here0, "kind", "missing: every study needs kind = \"...\"");
+            }
+            return None;
+        }
+    };
+    let here = study_table(index, &kind);
+    let methods = match t.get("methods") {
+        None => None,
+        Some(toml::Value::Array(a)) => {
+            let mut v = Vec::new();
+            for m in a {
+                match m.as_str() {
+                    Some(s) => v.push(s.to_string()),
+                    None => {
+                        cx.push(&here, "methods", "must hold strings (method names)")
+                            .value = Some(m.to_string());
+                    }
+                }
+            }
+            Some(v)
+        }
+        Some(v) => {
+            cx.push(&here, "methods", "must be an array of method names")
+                .value = Some(v.to_string());
+            None
+        }
+    };
+    let mut axes = BTreeMap::new();
+    if let Some(a) = t.get("axes") {
+        match a.as_table() {
+            Some(at) => axes = parse_axes(cx, &format!("{here} › axes"), at),
+            None => {
+                cx.push(&here, "axes", "must be a table: axes = { name = [values] }");
+            }
+        }
+    }
+    let mut method_axes = BTreeMap::new();
+    if let Some(m) = t.get("method_axes") {
+        match m.as_table() {
+            None => {
+                cx.push(
+                    &here,
+                    "method_axes",
+                    "must be a table of method = { axis = [values] }",
+                );
+            }
+            Some(mt) => {
+                for (name, v) in mt {
+                    let tn = format!("{here} › method_axes.{name}");
+                    if !methods.as_ref().is_some_and(|ms| ms.contains(name)) {
+                        cx.push(
+                            &here,
+                            &format!("method_axes.{name}"),
+                            "names a method that is not in this study's methods",
+                        )
+                        .known = methods.clone().unwrap_or_default();
+                    }
+                    match v.as_table() {
+                        Some(at) => {
+                            method_axes.insert(name.clone(), parse_axes(cx, &tn, at));
+                        }
+                        None => {
+                            cx.push(
+                                &here,
+                                &format!("method_axes.{name}"),
+                                "must be a table of axes",
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let mut scenes = Vec::new();
+    let mut scene_tables = Vec::new();
+    match t.get("scenes") {
+        None => {}
+        Some(toml::Value::Array(arr)) => {
+            for (j, sc) in arr.iter().enumerate() {
+                let Some(st) = sc.as_table() else {
+                    cx.push(
+                        &here,
+                        "scenes",
+                        format!("scene {j} is not a table ([[study.scenes]])"),
+                    );
+                    continue;
+                };
+                let mut st = st.clone();
+                let generator = match st.remove("generator") {
+                    Some(toml::Value::String(g)) => g,
+                    Some(v) => {
+                        cx.push(
+                            &format!("{here} › scene {j}"),
+                            "generator",
+                            "must be a string",
+                        )
+                        .value = Some(v.to_string());
+                        continue;
+                    }
+                    None => {
+                        cx.push(
+                            &format!("{here} › scene {j}"),
+                            "generator",
+                            "missing: each scene needs generator = \"name\"",
+                        );
+                        continue;
+                    }
+                };
+                let tn = format!("{here} › scene {j} ({generator})");
+                let mut ok = true;
+                for (k, v) in &st {
+                    if let Err(why) = values(v) {
+                        cx.push(&tn, k, why).value = Some(v.to_string());
+                        ok = false;
+                    }
+                }
+                if !ok {
+                    continue;
+                }
+                for params in expand_product(&st).unwrap_or_default() {
+                    scenes.push(SceneSpec::new(&generator, params));
+                    scene_tables.push(j);
+                }
+            }
+        }
+        Some(_) => {
+            cx.push(
+                &here,
+                "scenes",
+                "must be an array of tables ([[study.scenes]])",
+            );
+        }
+    }
+    let resolutions = cx.resolutions(t, &here);
+    let mut extra = t.clone();
+    for k in STUDY_KEYS {
+        extra.remove(*k);
+    }
+    Some(StudySpec {
+        index,
+        kind,
+        methods: methods.clone().unwrap_or_default(),
+        methods_given: methods.is_some(),
+        axes,
+        method_axes,
+        scenes,
+        scene_tables,
+        resolutions,
+        extra,
+    })
+}
+
+fn parse_axes(
+    cx: &mut Ctx<'_>,
+    table: &str,
+    at: &toml::Table,
+) -> BTreeMap<String, Vec<ParamValue>> {
+    let mut axes = BTreeMap::new();
+    for (k, v) in at {
+        match values(v) {
+            Ok(vals) => {
+                axes.insert(k.clone(), vals);
+            }
+            Err(why) => {
+                cx.push(table, k, why).value = Some(v.to_string());
+            }
+        }
+    }
+    axes
 }
 
 /// Expands a table whose values may be arrays into the cartesian product of scalar tables.
@@ -272,102 +559,6 @@ pub fn expand_product(t: &toml::Table) -> std::result::Result<Vec<Params>, Strin
             .collect();
     }
     Ok(out)
-}
-
-fn parse_study(t: &toml::Table) -> std::result::Result<StudySpec, String> {
-    let kind = get_str(t, "kind")?.ok_or("missing 'kind'")?;
-    let methods = match t.get("methods") {
-        None => Vec::new(),
-        Some(toml::Value::Array(a)) => a
-            .iter()
-            .map(|m| {
-                m.as_str()
-                    .map(str::to_string)
-                    .ok_or("methods must be strings")
-            })
-            .collect::<std::result::Result<_, _>>()?,
-        Some(_) => return Err("'methods' must be an array of strings".into()),
-    };
-    let axes = match t.get("axes") {
-        None => BTreeMap::new(),
-        Some(a) => parse_axes(a.as_table().ok_or("'axes' must be a table")?)?,
-    };
-    let mut method_axes = BTreeMap::new();
-    if let Some(m) = t.get("method_axes") {
-        let mt = m
-            .as_table()
-            .ok_or("'method_axes' must be a table of method = { axis = [...] }")?;
-        for (name, v) in mt {
-            if !methods.contains(name) {
-                return Err(format!(
-                    "method_axes.{name}: '{name}' is not in this study's methods ({})",
-                    methods.join(", ")
-                ));
-            }
-            let at = v
-                .as_table()
-                .ok_or_else(|| format!("method_axes.{name} must be a table of axes"))?;
-            method_axes.insert(name.clone(), parse_axes(at)?);
-        }
-    }
-    let mut scenes = Vec::new();
-    if let Some(s) = t.get("scenes") {
-        let arr = s
-            .as_array()
-            .ok_or("'scenes' must be an array of tables ([[study.scenes]])")?;
-        for sc in arr {
-            let mut st = sc.as_table().ok_or("each scene must be a table")?.clone();
-            let generator = match st.remove("generator") {
-                Some(toml::Value::String(g)) => g,
-                _ => return Err("each scene needs generator = \"name\"".into()),
-            };
-            for params in expand_product(&st)? {
-                scenes.push(SceneSpec::new(&generator, params));
-            }
-        }
-    }
-    let resolutions = t.get("resolutions").map(resolutions).transpose()?;
-    let mut extra = t.clone();
-    for k in [
-        "kind",
-        "methods",
-        "axes",
-        "method_axes",
-        "scenes",
-        "resolutions",
-    ] {
-        extra.remove(k);
-    }
-    Ok(StudySpec {
-        kind,
-        methods,
-        axes,
-        method_axes,
-        scenes,
-        resolutions,
-        extra,
-    })
-}
-
-fn parse_axes(at: &toml::Table) -> std::result::Result<BTreeMap<String, Vec<ParamValue>>, String> {
-    let mut axes = BTreeMap::new();
-    for (k, v) in at {
-        let vals = match v {
-            toml::Value::Array(arr) => arr
-                .iter()
-                .map(|x| {
-                    ParamValue::from_toml(x).ok_or_else(|| format!("axis '{k}' must hold scalars"))
-                })
-                .collect::<std::result::Result<Vec<_>, _>>()?,
-            other => vec![ParamValue::from_toml(other)
-                .ok_or_else(|| format!("axis '{k}' must be scalar or array"))?],
-        };
-        if vals.is_empty() {
-            return Err(format!("axis '{k}' is empty"));
-        }
-        axes.insert(k.clone(), vals);
-    }
-    Ok(axes)
 }
 
 /// The study's axes as `method` sees them: its `method_axes` entries replace the shared ones.

@@ -122,5 +122,5 @@ fn builtin_suites_parse_and_bad_suites_say_why() {
     let e = Suite::parse("bogus = 1\n[[study]]\nkind='methods'\n", "x.toml")
         .unwrap_err()
         .to_string();
-    assert!(e.contains("unknown top-level key 'bogus'"), "{e}");
+    assert!(e.contains("top level: 'bogus' = 1: unknown key"), "{e}");
 }

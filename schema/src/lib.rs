@@ -159,9 +159,17 @@ pub mod cols {
         "specialisation",
         "uber (everything stored and computed) | specialised (only what the effect reads)",
     );
-    pub const VARIANT: Col = Col::new(
-        "variant",
-        "method-specific variant (e.g. heuristics on/off, naive vs stable thickness)",
+    pub const HEURISTICS: Col = Col::new(
+        "heuristics",
+        "kbuffer_rmw: true to apply the thesis's heuristics (depth-sorted draw order, flushes between batches) against read-modify-write hazards",
+    );
+    pub const TIEBREAK: Col = Col::new(
+        "tiebreak",
+        "depth_peel: true to peel fragments at an equal depth one per pass by primitive id (keeps coplanar ties that strict peeling loses)",
+    );
+    pub const THICKNESS: Col = Col::new(
+        "thickness",
+        "translucency/fresnel: thickness arithmetic, naive (the seed's f32 running sum of ±z) or stable (per-pair differences, Kahan-summed)",
     );
     pub const BUCKET_COUNT: Col = Col::new(
         "bucket_count",
@@ -680,7 +688,9 @@ pub const GROUPS: &[Group] = &[
             cols::PAYLOAD,
             cols::OCCLUSION_STOP,
             cols::SPECIALISATION,
-            cols::VARIANT,
+            cols::HEURISTICS,
+            cols::TIEBREAK,
+            cols::THICKNESS,
             cols::BUCKET_COUNT,
             cols::BUCKET_MODE,
             cols::BUCKET_PAIRING,

@@ -193,7 +193,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
             pass.dispatch_workgroups(n.div_ceil(64), 1, 1);
         }
         gpu.queue.submit([enc.finish()]);
-        let out: Vec<[u32; 4]> = crate::methods::read_vec(&gpu, &output, n as usize).unwrap();
+        let out: Vec<[u32; 4]> = crate::gpu_util::read_vec(gpu, &output, n as usize).unwrap();
         let mut destroyed = 0;
         for (c, o) in colors.iter().zip(&out) {
             assert_eq!(

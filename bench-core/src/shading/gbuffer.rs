@@ -4,6 +4,7 @@
 //! light pre-pass variant writes only depth and normal + smoothness (12 bytes per pixel).
 //! Also the read-back helpers that decode it for the f64 reference and the CPU tile path.
 
+use crate::gpu_util::{camera_entry, clear_depth, depth_state, shader, storage_entry};
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
@@ -11,8 +12,7 @@ use super::{GBuffer, SKY_MATERIAL};
 use crate::gpu::Gpu;
 pub use crate::gpu::{padded_row, read_rgba32f, read_texture};
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
-use crate::methods::floor::{clear_depth, depth_state};
-use crate::methods::{camera_entry, shader, storage_entry};
+
 use crate::timing::GpuTimer;
 use crate::Result;
 

@@ -13,6 +13,7 @@
 //! The classified and uber paths loop over every light (no culling): the comparison isolates
 //! what classification saves.
 
+use crate::gpu_util::{compute_pipeline, read_vec, storage_entry, texture_entry};
 use scenarios::{ParamValue, Scene};
 use wgpu::util::DeviceExt;
 
@@ -20,7 +21,7 @@ use super::gbuffer::{read_rgba32f, GBufferPass};
 use super::{class, GBuffer, ShadeSetup, LIGHT_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
-use crate::methods::{read_vec, storage_entry, texture_entry, Capture, FrameStats, Prepared};
+use crate::methods::{Capture, FrameStats, Prepared};
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
@@ -337,17 +338,6 @@ pub fn render_pipeline(
         })
 }
 
-pub fn compute_pipeline(
-    gpu: &Gpu,
-    label: &str,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-    constants: &[(&str, f64)],
-) -> wgpu::ComputePipeline {
-    crate::methods::store::compute_pipeline_with(gpu, label, layout, module, entry, constants, true)
-}
-
 pub fn storage_buf(
     gpu: &Gpu,
     alloc: &mut AllocCounter,
@@ -519,7 +509,7 @@ impl Deferred {
                     ("LIST_CAP", LIST_CAP as f64),
                 ]);
                 let entry = if levels == 2 { "cs_tiled2" } else { "cs_tiled" };
-                let pipeline = compute_pipeline(gpu, "tiled", &layout, m, entry, &c);
+                let pipeline = compute_pipeline(gpu, "tiled", &layout, m, entry, &c, true);
                 let hdr_view = hdr.create_view(&Default::default());
                 let bind2 = d.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("tiled"),
@@ -599,9 +589,11 @@ impl Deferred {
                     layout: &bgl_ro,
                     entries: &[bge(10, &list), bge(11, &offsets_buf)],
                 });
-                let classify = compute_pipeline(gpu, "classify", &lc, m, "cs_classify", &[]);
-                let offsets = compute_pipeline(gpu, "class offsets", &lc, m, "cs_offsets", &[]);
-                let scatter = compute_pipeline(gpu, "class scatter", &lc, m, "cs_scatter", &[]);
+                let classify = compute_pipeline(gpu, "classify", &lc, m, "cs_classify", &[], true);
+                let offsets =
+                    compute_pipeline(gpu, "class offsets", &lc, m, "cs_offsets", &[], true);
+                let scatter =
+                    compute_pipeline(gpu, "class scatter", &lc, m, "cs_scatter", &[], true);
                 let possible = possible_features(scene);
                 let draws: Vec<(u32, wgpu::RenderPipeline)> = if uber {
                     vec![(

@@ -21,6 +21,9 @@
 //! pre-pass, so the GPU renders it while the CPU lights; without, it is submitted after the
 //! second pass. Both orders produce the same two images.
 
+use crate::gpu_util::{
+    camera_entry, compute_pipeline, depth_state, shader, storage_entry, texture_entry,
+};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -28,14 +31,11 @@ use scenarios::Scene;
 
 use super::cpu_tiled::{self, CpuOptions};
 use super::gbuffer::{padded_row, read_rgba32f, GBufferPass};
-use super::gpu_paths::{
-    bge, compute_pipeline, module, Deferred, Path, ShadeInputs, HDR_FORMAT, PATHS_WGSL,
-};
+use super::gpu_paths::{bge, module, Deferred, Path, ShadeInputs, HDR_FORMAT, PATHS_WGSL};
 use super::{GBuffer, ShadeSetup, SKY, SKY_MATERIAL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
-use crate::methods::floor::depth_state;
-use crate::methods::{camera_entry, shader, storage_entry, texture_entry};
+
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
@@ -291,7 +291,7 @@ impl PrePass {
                     ("LB_SCALE", format.scale() as f64),
                 ];
                 let pipeline =
-                    compute_pipeline(gpu, "tiled light buffer", &layout, &m, "cs_tiled", &c);
+                    compute_pipeline(gpu, "tiled light buffer", &layout, &m, "cs_tiled", &c, true);
                 let view = lb0.create_view(&Default::default());
                 let bind2 = d.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("tiled light buffer"),

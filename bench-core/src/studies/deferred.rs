@@ -16,23 +16,24 @@
 
 use std::collections::HashMap;
 
-use scenarios::suite::axis_product;
-use scenarios::{ParamValue, Params, Scene, StudySpec};
+use scenarios::Scene;
 
-use super::{Emit, GroupCtx, PointSpec, Study};
+use super::{Emit, GroupCtx, Methods, Opt, Study};
+use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
-use crate::methods::{bool_param, int_param, Capture, Method, Prepared};
+use crate::measure::{measure, set_timing};
+use crate::methods::{Capture, Method, Prepared};
 use crate::metrics::{image_error, BAD_PIXEL_TOL};
 use crate::record::cols;
 use crate::record::Row;
-use crate::runner::{failed_row, measure, set_params, set_timing, skipped_row};
+use crate::record::{failed_row, set_params, skipped_row};
 use crate::shading::cpu_tiled::{self, CpuOptions};
 use crate::shading::gbuffer::GBufferPass;
 use crate::shading::gpu_paths::{self, Deferred, Path};
 use crate::shading::{reference, GBuffer, ShadeSetup};
 use crate::timing::{GpuTimer, Stats};
-use crate::{CoreError, Result};
+use crate::Result;
 pub const PATHS: &[&str] = &[
     "naive",
     "volumes",
@@ -42,62 +43,100 @@ pub const PATHS: &[&str] = &[
     "cpu_tiled",
 ];
 
-fn axes_of(path: &str) -> &'static [&'static str] {
+const TILE_SIZE: Axis = Axis::int(
+    cols::TILE_SIZE,
+    "tiled: culling tile side in pixels",
+    16,
+    1,
+    4096,
+);
+const GPU_CULL_LEVELS: Axis = Axis::int(
+    cols::CULL_LEVELS,
+    "tiled: culling levels (1 = per tile; 2 = 64² tiles then 32×16 sub-tiles)",
+    1,
+    0,
+    16,
+);
+const CPU_CULL_LEVELS: Axis = Axis::int(
+    cols::CULL_LEVELS,
+    "cpu_tiled: 1 = 64² tiles; 2 = then 32×16 sub-tiles (BF3)",
+    2,
+    1,
+    2,
+);
+const THRESHOLD: Axis = Axis::float(
+    cols::ATTENUATION_THRESHOLD,
+    "τ: cull a light from a tile where its peak contribution is ≤ τ everywhere (0: only beyond its range)",
+    0.0,
+    0.0,
+    f64::MAX,
+);
+const DIFFUSE_ONLY_FRAC: Axis = Axis::float(
+    cols::DIFFUSE_ONLY_FRAC,
+    "fraction of the scene's lights flagged diffuse-only",
+    0.0,
+    0.0,
+    1.0,
+);
+const THREAD_COUNT: Axis = Axis::int(cols::THREAD_COUNT, "CPU worker threads", 1, 1, 1024);
+const QUAD_SKIP: Axis = Axis::bool(
+    cols::QUAD_SKIP,
+    "skip a light for a 4×4 quad when all 16 attenuations are 0",
+    true,
+);
+const SPEC_SKIP: Axis = Axis::bool(cols::SPEC_SKIP, "no-specular fast path per 4×4 quad", true);
+const CONE_CULL: Axis = Axis::bool(cols::CONE_CULL, "normal-cone cull per 32×16 sub-tile", true);
+const DIFFUSE_SKIP: Axis = Axis::bool(
+    cols::DIFFUSE_SKIP,
+    "skip the specular term of diffuse-only lights",
+    true,
+);
+const CPU_REPS: Opt = Opt {
+    name: "cpu_reps",
+    doc: "timed repetitions of the CPU lighting paths",
+    kind: scenarios::ValueKind::Int {
+        default: 3,
+        min: 1,
+        max: 100_000,
+    },
+};
+
+/// The axes a path reads.
+fn axes_of(path: &str) -> Vec<Axis> {
     match path {
-        "tiled" => &[
-            "tile_size",
-            "cull_levels",
-            "attenuation_threshold",
-            "diffuse_only_frac",
+        "tiled" => vec![TILE_SIZE, GPU_CULL_LEVELS, THRESHOLD, DIFFUSE_ONLY_FRAC],
+        "volumes" => vec![THRESHOLD, DIFFUSE_ONLY_FRAC],
+        "cpu_tiled" => vec![
+            THREAD_COUNT,
+            CPU_CULL_LEVELS,
+            THRESHOLD,
+            QUAD_SKIP,
+            SPEC_SKIP,
+            CONE_CULL,
+            DIFFUSE_SKIP,
+            DIFFUSE_ONLY_FRAC,
         ],
-        "volumes" => &["attenuation_threshold", "diffuse_only_frac"],
-        "cpu_tiled" => &[
-            "thread_count",
-            "cull_levels",
-            "attenuation_threshold",
-            "quad_skip",
-            "spec_skip",
-            "cone_cull",
-            "diffuse_skip",
-            "diffuse_only_frac",
-        ],
-        _ => &["diffuse_only_frac"],
+        _ => vec![DIFFUSE_ONLY_FRAC],
     }
 }
 
-/// The diffuse-only fraction axis (a number in 0..=1).
-pub fn diffuse_only_frac(params: &Params) -> std::result::Result<f64, String> {
-    match params.get("diffuse_only_frac") {
-        None => Ok(0.0),
-        Some(ParamValue::Float(x)) if (0.0..=1.0).contains(x) => Ok(*x),
-        Some(ParamValue::Int(i)) if (0..=1).contains(i) => Ok(*i as f64),
-        Some(v) => Err(format!(
-            "diffuse_only_frac must be a number in 0..=1, got {v}"
-        )),
+/// τ of a point (0 for the paths that do not read it).
+fn threshold(point: &Point) -> f64 {
+    match point.get(THRESHOLD.name()) {
+        Some(_) => point.float(&THRESHOLD),
+        None => 0.0,
     }
 }
 
-/// The attenuation threshold axis (a number ≥ 0).
-pub fn threshold(params: &Params) -> std::result::Result<f64, String> {
-    match params.get("attenuation_threshold") {
-        None => Ok(0.0),
-        Some(ParamValue::Float(x)) if *x >= 0.0 && x.is_finite() => Ok(*x),
-        Some(ParamValue::Int(i)) if *i >= 0 => Ok(*i as f64),
-        Some(v) => Err(format!(
-            "attenuation_threshold must be a number >= 0, got {v}"
-        )),
-    }
-}
-
-fn gpu_path(name: &str, params: &Params) -> std::result::Result<Path, String> {
+fn gpu_path(name: &str, point: &Point) -> std::result::Result<Path, String> {
     Ok(match name {
         "naive" => Path::Naive,
         "volumes" => Path::Volumes,
         "classified" => Path::Classified { uber: false },
         "uber" => Path::Classified { uber: true },
         "tiled" => Path::Tiled {
-            tile: int_param(params, "tile_size", 16, 1, 4096)? as u32,
-            levels: int_param(params, "cull_levels", 1, 0, 16)? as u32,
+            tile: point.int(&TILE_SIZE) as u32,
+            levels: point.int(&GPU_CULL_LEVELS) as u32,
         },
         other => return Err(format!("'{other}' is not a GPU shading path")),
     })
@@ -121,7 +160,7 @@ impl Method for PathMethod<'_> {
     fn exact(&self) -> bool {
         self.tau == 0.0
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Params) -> Result<Box<dyn Prepared>> {
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Point) -> Result<Box<dyn Prepared>> {
         Ok(Box::new(Deferred::new_with(
             gpu,
             self.scene,
@@ -182,32 +221,14 @@ impl Study for DeferredStudy {
     fn describe(&self) -> &'static str {
         "deferred shading paths (naive, light volumes, GPU tiled, classified, CPU tiled) vs the f64 reference"
     }
-    fn points(&self, spec: &StudySpec) -> Result<Vec<PointSpec>> {
-        if let Some(v) = spec.extra.get("cpu_reps") {
-            if v.as_integer().is_none_or(|r| r < 1) {
-                return Err(CoreError::Param(format!(
-                    "cpu_reps must be an integer >= 1, got {v}"
-                )));
-            }
-        }
-        let mut out = Vec::new();
-        for name in &spec.methods {
-            if !PATHS.contains(&name.as_str()) {
-                return Err(CoreError::Param(format!(
-                    "unknown deferred path '{name}' (known: {})",
-                    PATHS.join(", ")
-                )));
-            }
-            for params in axis_product(&spec.axes, axes_of(name)) {
-                threshold(&params).map_err(CoreError::Param)?;
-                diffuse_only_frac(&params).map_err(CoreError::Param)?;
-                out.push(PointSpec {
-                    method: name.clone(),
-                    params,
-                });
-            }
-        }
-        Ok(out)
+    fn methods(&self) -> Methods {
+        Methods::List(PATHS.to_vec())
+    }
+    fn axes(&self, path: &str) -> Vec<Axis> {
+        axes_of(path)
+    }
+    fn options(&self) -> Vec<Opt> {
+        vec![CPU_REPS]
     }
 
     fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
@@ -217,12 +238,7 @@ impl Study for DeferredStudy {
         // The diffuse-only fraction changes the image: a setup, a reference and a naive time
         // per fraction (keyed by its bits).
         let mut references: HashMap<u64, (ShadeSetup, Vec<[f64; 4]>)> = HashMap::new();
-        let cpu_reps = ctx
-            .study
-            .extra
-            .get("cpu_reps")
-            .and_then(|v| v.as_integer())
-            .unwrap_or(3) as u32;
+        let cpu_reps = CPU_REPS.int(ctx.study) as u32;
         let mut order: Vec<usize> = (0..ctx.group.points.len()).collect();
         order.sort_by_key(|&i| ctx.group.points[i].method != "naive");
         let mut naive_by_frac: HashMap<u64, f64> = HashMap::new();
@@ -231,10 +247,10 @@ impl Study for DeferredStudy {
             let mut row = Row::new();
             row.set(cols::METHOD, &pt.method)
                 .set(cols::LIGHT_COUNT, scene.lights.len());
-            set_params(&mut row, &pt.params)?;
-            let tau = threshold(&pt.params).map_err(CoreError::Param)?;
+            set_params(&mut row, pt.point.values())?;
+            let tau = threshold(&pt.point);
             row.set(cols::EXACT, tau == 0.0);
-            let frac = diffuse_only_frac(&pt.params).map_err(CoreError::Param)?;
+            let frac = pt.point.float(&DIFFUSE_ONLY_FRAC);
             row.set_f(cols::DIFFUSE_ONLY_FRAC, frac);
             let (setup, reference) = &*references.entry(frac.to_bits()).or_insert_with(|| {
                 let s = setup0.clone().with_diffuse_only(frac);
@@ -243,46 +259,12 @@ impl Study for DeferredStudy {
             });
             let naive_ms = naive_by_frac.get(&frac.to_bits()).copied();
             if pt.method == "cpu_tiled" {
-                let threads = match int_param(&pt.params, "thread_count", 1, 1, 1024) {
-                    Ok(t) => t as usize,
-                    Err(e) => {
-                        emit(i, skipped_row(row, &e))?;
-                        continue;
-                    }
-                };
-                let levels = int_param(&pt.params, "cull_levels", 2, 1, 2);
-                let Ok(levels) = levels else {
-                    emit(i, skipped_row(row, &levels.unwrap_err()))?;
-                    continue;
-                };
-                let quad_skip = match bool_param(&pt.params, "quad_skip", true) {
-                    Ok(q) => q,
-                    Err(e) => {
-                        emit(i, skipped_row(row, &e))?;
-                        continue;
-                    }
-                };
-                let spec_skip = match bool_param(&pt.params, "spec_skip", true) {
-                    Ok(q) => q,
-                    Err(e) => {
-                        emit(i, skipped_row(row, &e))?;
-                        continue;
-                    }
-                };
-                let cone_cull = match bool_param(&pt.params, "cone_cull", true) {
-                    Ok(q) => q,
-                    Err(e) => {
-                        emit(i, skipped_row(row, &e))?;
-                        continue;
-                    }
-                };
-                let diffuse_skip = match bool_param(&pt.params, "diffuse_skip", true) {
-                    Ok(q) => q,
-                    Err(e) => {
-                        emit(i, skipped_row(row, &e))?;
-                        continue;
-                    }
-                };
+                let threads = pt.point.int(&THREAD_COUNT) as usize;
+                let levels = pt.point.int(&CPU_CULL_LEVELS);
+                let quad_skip = pt.point.bool(&QUAD_SKIP);
+                let spec_skip = pt.point.bool(&SPEC_SKIP);
+                let cone_cull = pt.point.bool(&CONE_CULL);
+                let diffuse_skip = pt.point.bool(&DIFFUSE_SKIP);
                 row.set(cols::TILE_SIZE, 64)
                     .set(cols::QUAD_SKIP, quad_skip)
                     .set(cols::SPEC_SKIP, spec_skip)
@@ -341,7 +323,7 @@ impl Study for DeferredStudy {
                 emit(i, row)?;
                 continue;
             }
-            let path = match gpu_path(&pt.method, &pt.params) {
+            let path = match gpu_path(&pt.method, &pt.point) {
                 Ok(p) => p,
                 Err(e) => {
                     emit(i, skipped_row(row, &e))?;
@@ -362,14 +344,14 @@ impl Study for DeferredStudy {
                 tau,
                 diffuse_only: frac,
             };
-            let mut meas = match measure(gpu, gscene, &m, &pt.params, ctx.warmup, ctx.reps) {
+            let mut meas = match measure(gpu, gscene, &m, &pt.point, ctx.warmup, ctx.reps) {
                 Ok(m) => m,
                 Err(e) => {
                     emit(i, failed_row(row, &e.to_string()))?;
                     continue;
                 }
             };
-            set_timing(&mut row, &meas, ctx);
+            set_timing(&mut row, &meas, &ctx.scene.mesh);
             let g = meas.gpu_ms.map(|s| s.median);
             if pt.method == "naive" && naive_ms.is_none() {
                 if let Some(g) = g {

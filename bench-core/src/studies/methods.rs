@@ -1,19 +1,43 @@
 //! The `methods` study: every multi-fragment method on every scene, timed, and judged against
 //! the exact CPU reference; `speedup_vs_depth_peel` comes from depth_peel in the same group.
 
-use scenarios::suite::axis_product;
-use scenarios::StudySpec;
-
-use super::{Emit, GroupCtx, PointSpec, Study};
-use crate::effects;
+use super::{Emit, GroupCtx, Methods, PointSpec, Study};
+use crate::axes::{Axis, Point};
+use crate::effects::{self, EffectConfig};
+use crate::measure::{measure, set_timing};
+use crate::method::Method;
 use crate::methods::{self, Expected};
 use crate::metrics::{image_error, layer_count_accuracy, BAD_PIXEL_TOL};
 use crate::record::cols;
 use crate::record::Row;
-use crate::runner::{failed_row, measure, set_params, set_timing, skipped_row};
-use crate::{CoreError, Result};
+use crate::record::{failed_row, set_params, skipped_row};
+use crate::Result;
 
 pub struct MethodsStudy;
+
+/// The method every other row's `speedup_vs_depth_peel` is read against (run first).
+pub const BASELINE: &str = "depth_peel";
+
+/// Whether `m` folds every effect (declares the effects fold's axes).
+fn folds_effects(m: &dyn Method) -> bool {
+    let axes = m.axes();
+    effects::AXES
+        .iter()
+        .all(|e| axes.iter().any(|a| a.name() == e.name()))
+}
+
+/// The effect of a point: read through the fold's axes when the method folds effects; for one
+/// that does not, only the effect's name (its other axes are not the method's).
+fn effect_of(m: &dyn Method, point: &Point) -> std::result::Result<EffectConfig, String> {
+    if folds_effects(m) {
+        return EffectConfig::from_point(point);
+    }
+    let effect = effects::Effect::parse(&point.choice(&effects::EFFECT))?;
+    Ok(EffectConfig {
+        effect,
+        ..Default::default()
+    })
+}
 
 impl Study for MethodsStudy {
     fn kind(&self) -> &'static str {
@@ -22,40 +46,26 @@ impl Study for MethodsStudy {
     fn describe(&self) -> &'static str {
         "multi-fragment capture methods: time, memory, and error vs the exact CPU reference"
     }
-    fn points(&self, spec: &StudySpec) -> Result<Vec<PointSpec>> {
-        let mut out = Vec::new();
-        for name in &spec.methods {
-            let m = methods::by_name(name).ok_or_else(|| {
-                CoreError::Param(format!(
-                    "unknown method '{name}' (known: {})",
-                    methods::all()
-                        .iter()
-                        .map(|m| m.name())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ))
-            })?;
-            // The effect axis is expanded for every method: one that resolves no effects fold
-            // gets a `skipped` row for each effect but transparency, never a silent gap.
-            let mut names: Vec<&str> = m.axes().to_vec();
-            if !names.contains(&"effect") {
-                names.push("effect");
-            }
-            let axes = scenarios::suite::axes_for_method(spec, name);
-            if let Some(effs) = axes.get("effect") {
-                for e in effs {
-                    let s = e.to_string();
-                    effects::Effect::parse(&s).map_err(CoreError::Param)?;
-                }
-            }
-            for params in axis_product(&axes, &names) {
-                out.push(PointSpec {
-                    method: name.clone(),
-                    params,
-                });
-            }
+    fn methods(&self) -> Methods {
+        Methods::List(methods::all().iter().map(|m| m.name()).collect())
+    }
+    /// The method's axes; the effect axis is expanded for every method: one that folds no
+    /// effects gets a `skipped` row for each effect but transparency, never a silent gap.
+    fn axes(&self, method: &str) -> Vec<Axis> {
+        let Some(m) = methods::by_name(method) else {
+            return Vec::new();
+        };
+        let mut axes = m.axes();
+        if !axes.iter().any(|a| a.name() == effects::EFFECT.name()) {
+            axes.push(effects::EFFECT);
         }
-        Ok(out)
+        axes
+    }
+    fn validate(&self, method: &str, point: &Point) -> std::result::Result<(), String> {
+        match methods::by_name(method) {
+            Some(m) => m.validate(point),
+            None => Err(format!("unknown method '{method}'")),
+        }
     }
 
     fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
@@ -73,7 +83,7 @@ pub fn run_methods_group(
     {
         // depth_peel first so every other row can carry its speedup over it.
         let mut order: Vec<usize> = (0..ctx.group.points.len()).collect();
-        order.sort_by_key(|&i| ctx.group.points[i].method != "depth_peel");
+        order.sort_by_key(|&i| ctx.group.points[i].method != BASELINE);
         let mut peel_ms: Option<f64> = None;
         for i in order {
             let pt = &ctx.group.points[i];
@@ -81,9 +91,9 @@ pub fn run_methods_group(
             let mut row = Row::new();
             row.set(cols::METHOD, &pt.method)
                 .set(cols::EXACT, method.exact());
-            set_params(&mut row, &pt.params)?;
+            set_params(&mut row, pt.point.values())?;
             extra(&mut row, pt);
-            let effect = match effects::EffectConfig::from_params(&pt.params) {
+            let effect = match effect_of(method.as_ref(), &pt.point) {
                 Ok(e) => e,
                 Err(why) => {
                     emit(i, skipped_row(row, &why))?;
@@ -91,11 +101,10 @@ pub fn run_methods_group(
                 }
             };
             row.set(cols::EFFECT, effect.effect.name());
-            if let Some(p) = payload_of(method.as_ref(), &pt.params, &effect) {
+            if let Some(p) = method.payload(&pt.point) {
                 row.set(cols::PAYLOAD, p);
             }
-            if effect.effect != effects::Effect::Transparency && !method.axes().contains(&"effect")
-            {
+            if effect.effect != effects::Effect::Transparency && !folds_effects(method.as_ref()) {
                 let why = format!(
                     "{} resolves no effects fold (it stores colour only): it cannot supply {}",
                     pt.method,
@@ -104,7 +113,7 @@ pub fn run_methods_group(
                 emit(i, skipped_row(row, &why))?;
                 continue;
             }
-            if let Err(why) = method.supports(ctx.gpu, &pt.params) {
+            if let Err(why) = methods::supports(method.as_ref(), ctx.gpu, &pt.point) {
                 emit(i, skipped_row(row, &why))?;
                 continue;
             }
@@ -112,7 +121,7 @@ pub fn run_methods_group(
                 ctx.gpu,
                 ctx.gscene,
                 method.as_ref(),
-                &pt.params,
+                &pt.point,
                 ctx.warmup,
                 ctx.reps,
             ) {
@@ -122,7 +131,7 @@ pub fn run_methods_group(
                     continue;
                 }
             };
-            set_timing(&mut row, &m, ctx);
+            set_timing(&mut row, &m, &ctx.scene.mesh);
             let mut cap = match m.prepared.readback(ctx.gpu, ctx.gscene) {
                 Ok(c) => c,
                 Err(e) => {
@@ -198,7 +207,7 @@ pub fn run_methods_group(
                 if e.non_finite > 0 {
                     flag.get_or_insert_with(|| "precision".into());
                 }
-                ctx.save_image(&mut row, &pt.method, &pt.params, img)?;
+                ctx.save_image(&mut row, &pt.method, pt.given(), img)?;
             }
             if let Some(counts) = &cap.counts {
                 let expected: Vec<u32> = dc.iter().map(|&d| d.min(k)).collect();
@@ -225,7 +234,7 @@ pub fn run_methods_group(
             }
             row.add_note(&cap.notes);
             if let Some(g) = m.gpu_ms.map(|s| s.median) {
-                if pt.method == "depth_peel" && peel_ms.is_none() {
+                if pt.method == BASELINE && peel_ms.is_none() {
                     peel_ms = Some(g);
                 }
                 if let Some(p) = peel_ms {
@@ -237,24 +246,6 @@ pub fn run_methods_group(
             emit(i, row)?;
         }
         Ok(())
-    }
-}
-
-/// The `payload` column: what the point stores per fragment, for methods that specialise it.
-fn payload_of(
-    method: &dyn methods::Method,
-    params: &scenarios::Params,
-    effect: &effects::EffectConfig,
-) -> Option<&'static str> {
-    if method.name() == "depth_peel" {
-        return methods::depth_peel::payload_name(params);
-    }
-    if !method.axes().contains(&"specialisation") {
-        return None;
-    }
-    match params.get("specialisation") {
-        Some(scenarios::ParamValue::Str(s)) if s == "uber" => Some(effects::Payload::ALL.name()),
-        _ => Some(effect.effect.payload().name()),
     }
 }
 

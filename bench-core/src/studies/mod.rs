@@ -21,8 +21,10 @@ pub mod stability;
 
 use std::cell::OnceCell;
 
-use scenarios::{Params, Scene, SceneSpec, StudySpec, Suite};
+use scenarios::suite::{axes_for_method, axis_product};
+use scenarios::{ParamValue, Params, Scene, SceneSpec, StudySpec, Suite, ValueKind};
 
+use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
 use crate::record::cols;
@@ -30,11 +32,19 @@ use crate::record::Row;
 use crate::reference::{rasterize, FragmentLists};
 use crate::Result;
 
-/// One point of a group: a method (or path/variant) name and its axis values.
+/// One point of a group: a method (or path) name and its axis values, resolved against the
+/// axes that method declares in this study.
 #[derive(Clone, Debug)]
 pub struct PointSpec {
     pub method: String,
-    pub params: Params,
+    pub point: Point,
+}
+
+impl PointSpec {
+    /// The values the suite gave (the point's identity).
+    pub fn given(&self) -> &Params {
+        self.point.given()
+    }
 }
 
 /// A scene at a resolution with the points to run on it: the unit of sharding.
@@ -152,14 +162,116 @@ impl<'a> GroupCtx<'a> {
 /// Emits the row of point `index` of the group.
 pub type Emit<'e> = dyn FnMut(usize, Row) -> Result<()> + 'e;
 
+/// What a study's `methods` list may hold.
+pub enum Methods {
+    /// A list is required; these are the names it may hold.
+    List(Vec<&'static str>),
+    /// The study takes no list: every point runs this one (its `method` column).
+    Implicit(&'static str),
+}
+
+/// A declared key of a study table besides the common ones (`kind`, `methods`, `axes`, …):
+/// an option of the whole study, not a sweep axis.
+#[derive(Clone, Copy, Debug)]
+pub struct Opt {
+    pub name: &'static str,
+    pub doc: &'static str,
+    pub kind: ValueKind,
+}
+
+impl Opt {
+    /// The option's value in `spec` (checked by `check`), or its default.
+    pub fn value(&self, spec: &StudySpec) -> Option<ParamValue> {
+        match spec.extra.get(self.name).and_then(ParamValue::from_toml) {
+            Some(v) => self.kind.check(&v).ok(),
+            None => self.kind.default_value(),
+        }
+    }
+    pub fn int(&self, spec: &StudySpec) -> i64 {
+        match self.value(spec) {
+            Some(ParamValue::Int(i)) => i,
+            _ => 0,
+        }
+    }
+    pub fn bool(&self, spec: &StudySpec) -> bool {
+        matches!(self.value(spec), Some(ParamValue::Bool(true)))
+    }
+    pub fn text(&self, spec: &StudySpec) -> String {
+        match self.value(spec) {
+            Some(ParamValue::Str(s)) => s,
+            _ => String::new(),
+        }
+    }
+}
+
 pub trait Study: Sync {
     fn kind(&self) -> &'static str;
     fn describe(&self) -> &'static str;
-    /// The points to run on every scene × resolution of `spec`; unknown names are errors here,
-    /// before any GPU work.
-    fn points(&self, spec: &StudySpec) -> Result<Vec<PointSpec>>;
+    /// What `methods = [...]` may name, or the implicit method of a study that takes no list.
+    fn methods(&self) -> Methods;
+    /// The axes a point of `method` reads, declared (type, default, range): the suite's values
+    /// are checked against them and its product is taken over them.
+    fn axes(&self, method: &str) -> Vec<Axis>;
+    /// Rules across axes of one point that the declarations cannot say (before any GPU work).
+    fn validate(&self, method: &str, point: &Point) -> std::result::Result<(), String> {
+        let _ = (method, point);
+        Ok(())
+    }
+    /// The study table's own options, declared.
+    fn options(&self) -> Vec<Opt> {
+        Vec::new()
+    }
+    /// Problems of a study table that its declarations cannot say (one message each).
+    fn check_table(&self, spec: &StudySpec) -> Vec<String> {
+        let _ = spec;
+        Vec::new()
+    }
     /// Runs one group, emitting each point's row (ok, skipped or failed) with its index.
     fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()>;
+}
+
+/// The methods a study table runs: its list, or the study's implicit one.
+pub fn methods_of(study: &dyn Study, spec: &StudySpec) -> Vec<String> {
+    match study.methods() {
+        Methods::List(_) => spec.methods.clone(),
+        Methods::Implicit(m) => vec![m.to_string()],
+    }
+}
+
+/// The points of a study table: per method, the product of the table's axes that the method
+/// declares, each resolved (defaults filled) and validated. `Err` lists every problem; `check`
+/// reports them with their place in the file before this is called for a sweep.
+pub fn points(
+    study: &dyn Study,
+    spec: &StudySpec,
+) -> std::result::Result<Vec<PointSpec>, Vec<String>> {
+    let mut out = Vec::new();
+    let mut problems = Vec::new();
+    for method in methods_of(study, spec) {
+        let declared = study.axes(&method);
+        let names: Vec<&str> = declared.iter().map(|a| a.name()).collect();
+        let table = axes_for_method(spec, &method);
+        for given in axis_product(&table, &names) {
+            match Point::resolve(&declared, &given) {
+                Ok(point) => {
+                    if let Err(why) = study.validate(&method, &point) {
+                        problems.push(format!("{method} at {}: {why}", given.label()));
+                        continue;
+                    }
+                    out.push(PointSpec {
+                        method: method.clone(),
+                        point,
+                    });
+                }
+                Err(e) => problems.extend(e.into_iter().map(|m| format!("{method}: {m}"))),
+            }
+        }
+    }
+    if problems.is_empty() {
+        Ok(out)
+    } else {
+        Err(problems)
+    }
 }
 
 pub fn all() -> Vec<Box<dyn Study>> {

@@ -11,16 +11,14 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use scenarios::suite::axis_product;
-use scenarios::{Params, StudySpec};
-
 use super::deferred::{gbuffer_of, rel_err_max};
-use super::{Emit, GroupCtx, PointSpec, Study};
-use crate::methods::{bool_param, int_param, str_param, Prepared};
+use super::{Emit, GroupCtx, Methods, Study};
+use crate::axes::{Axis, Point};
+use crate::methods::Prepared;
 use crate::metrics::{image_error, BAD_PIXEL_TOL};
 use crate::record::cols;
 use crate::record::Row;
-use crate::runner::{failed_row, set_params, skipped_row};
+use crate::record::{failed_row, set_params, skipped_row};
 use crate::shading::gbuffer::FULL_BYTES_PER_PIXEL;
 use crate::shading::gpu_paths::{Deferred, Path};
 use crate::shading::prepass::{self, Accum, LbFormat, PrePass};
@@ -29,11 +27,41 @@ use crate::timing::{GpuTimer, Stats};
 use crate::{CoreError, Result};
 const METHODS: &[&str] = &["deferred", "prepass", "prepass_cpu"];
 
-fn axes_of(m: &str) -> &'static [&'static str] {
+const LIGHT_ACCUM: Axis = Axis::choice(
+    cols::LIGHT_ACCUM,
+    "how the lights are accumulated: naive (a pass per light) or tiled (compute, 16² tiles)",
+    "tiled",
+    &["naive", "tiled"],
+);
+const LIGHT_BUFFER_FORMAT: Axis = Axis::choice(
+    cols::LIGHT_BUFFER_FORMAT,
+    "the light buffer's format",
+    "rgba16f",
+    &["rgba8", "rgba16f", "rg11b10"],
+);
+const SECOND_VIEW: Axis = Axis::bool(
+    cols::SECOND_VIEW,
+    "render an independent second view in the pre-pass gap",
+    false,
+);
+const THREAD_COUNT: Axis = Axis::int(
+    cols::THREAD_COUNT,
+    "CPU threads lighting the light buffer",
+    1,
+    1,
+    1024,
+);
+const OVERLAP: Axis = Axis::bool(
+    cols::OVERLAP,
+    "light on the CPU while the GPU renders the second view",
+    true,
+);
+
+fn axes_of(m: &str) -> Vec<Axis> {
     match m {
-        "deferred" => &["light_accum"],
-        "prepass" => &["light_accum", "light_buffer_format", "second_view"],
-        _ => &["light_buffer_format", "thread_count", "overlap"],
+        "deferred" => vec![LIGHT_ACCUM],
+        "prepass" => vec![LIGHT_ACCUM, LIGHT_BUFFER_FORMAT, SECOND_VIEW],
+        _ => vec![LIGHT_BUFFER_FORMAT, THREAD_COUNT, OVERLAP],
     }
 }
 
@@ -144,23 +172,11 @@ impl Study for PrepassStudy {
     fn describe(&self) -> &'static str {
         "light pre-pass vs full deferred; light buffer formats; CPU lighting overlapped with a second GPU view"
     }
-    fn points(&self, spec: &StudySpec) -> Result<Vec<PointSpec>> {
-        let mut out = Vec::new();
-        for name in &spec.methods {
-            if !METHODS.contains(&name.as_str()) {
-                return Err(CoreError::Param(format!(
-                    "unknown prepass method '{name}' (known: {})",
-                    METHODS.join(", ")
-                )));
-            }
-            for params in axis_product(&spec.axes, axes_of(name)) {
-                out.push(PointSpec {
-                    method: name.clone(),
-                    params,
-                });
-            }
-        }
-        Ok(out)
+    fn methods(&self) -> Methods {
+        Methods::List(METHODS.to_vec())
+    }
+    fn axes(&self, method: &str) -> Vec<Axis> {
+        axes_of(method)
     }
 
     fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
@@ -185,8 +201,8 @@ impl Study for PrepassStudy {
             row.set(cols::METHOD, &pt.method)
                 .set(cols::LIGHT_COUNT, scene.lights.len())
                 .set(cols::EXACT, false);
-            set_params(&mut row, &pt.params)?;
-            match self.run_point(ctx, &pt.method, &pt.params, &mut row) {
+            set_params(&mut row, pt.point.values())?;
+            match self.run_point(ctx, &pt.method, &pt.point, &mut row) {
                 Ok(Some((img, is_prepass))) => {
                     let e = image_error(&exact, &img, BAD_PIXEL_TOL);
                     row.set_f(cols::RMSE, e.rmse)
@@ -233,15 +249,12 @@ impl From<CoreError> for PointErr {
 
 impl PrepassStudy {
     /// Runs one point: Some((image, is_prepass)) when it made an image.
-    fn run_point(
-        &self,
-        ctx: &GroupCtx<'_>,
-        method: &str,
-        p: &Params,
-        row: &mut Row,
-    ) -> PointResult {
+    fn run_point(&self, ctx: &GroupCtx<'_>, method: &str, p: &Point, row: &mut Row) -> PointResult {
         let (gpu, scene, gscene) = (ctx.gpu, ctx.scene, ctx.gscene);
-        let accum_name = str_param(p, "light_accum", "tiled", &["naive", "tiled"]).map_err(Skip)?;
+        let accum_name = match p.get(LIGHT_ACCUM.name()) {
+            Some(_) => p.choice(&LIGHT_ACCUM),
+            None => "tiled".to_string(),
+        };
         let tiled = accum_name == "tiled";
         if method == "deferred" {
             row.set(cols::LIGHT_ACCUM, &accum_name);
@@ -261,18 +274,16 @@ impl PrepassStudy {
                 .set(cols::GEOMETRY_PASSES, 1);
             return Ok(Some((d.read_image(gpu)?, false)));
         }
-        let fmt =
-            LbFormat::parse(&str_param(p, "light_buffer_format", "rgba16f", &[]).map_err(Skip)?)
-                .map_err(Skip)?;
+        let fmt = LbFormat::parse(&p.choice(&LIGHT_BUFFER_FORMAT)).map_err(Skip)?;
         row.set(cols::LIGHT_BUFFER_FORMAT, fmt.name());
         let (accum, view2) = if method == "prepass_cpu" {
-            let threads = int_param(p, "thread_count", 1, 1, 1024).map_err(Skip)? as usize;
-            let overlap = bool_param(p, "overlap", true).map_err(Skip)?;
+            let threads = p.int(&THREAD_COUNT) as usize;
+            let overlap = p.bool(&OVERLAP);
             row.set(cols::LIGHT_ACCUM, "cpu")
                 .set(cols::SECOND_VIEW, true);
             (Accum::Cpu { threads, overlap }, true)
         } else {
-            let v2 = bool_param(p, "second_view", false).map_err(Skip)?;
+            let v2 = p.bool(&SECOND_VIEW);
             row.set(cols::LIGHT_ACCUM, &accum_name);
             if tiled {
                 row.set(cols::TILE_SIZE, 16);

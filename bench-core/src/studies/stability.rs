@@ -18,11 +18,12 @@
 use scenarios::{ParamValue, StudySpec};
 
 use super::methods::{run_methods_group, MethodsStudy};
-use super::{Emit, GroupCtx, PointSpec, Study};
-use crate::effects::EffectConfig;
+use super::{Emit, GroupCtx, Methods, Opt, PointSpec, Study};
+use crate::axes::{Axis, Point};
+use crate::effects;
 use crate::record::cols;
 use crate::record::Row;
-use crate::{CoreError, Result};
+use crate::Result;
 /// Computed stiffness measures; any other name is read from the scene's or the point's params.
 pub const STIFFNESS: &[&str] = &[
     "far_over_near",
@@ -34,17 +35,16 @@ pub const STIFFNESS: &[&str] = &[
 
 pub struct StabilityStudy;
 
-fn extra_str<'a>(spec: &'a StudySpec, k: &str) -> Result<&'a str> {
-    match spec.extra.get(k) {
-        Some(v) if v.as_str().is_some() => Ok(v.as_str().unwrap_or_default()),
-        Some(other) => Err(CoreError::Param(format!(
-            "stability study: '{k}' must be a string, got {other}"
-        ))),
-        None => Err(CoreError::Param(format!(
-            "stability study: missing '{k}' (e.g. case = \"near_far\", stiffness = \"far_over_near\")"
-        ))),
-    }
-}
+const CASE: Opt = Opt {
+    name: "case",
+    doc: "the stiff case's name (→ stability_case)",
+    kind: scenarios::ValueKind::Text { default: None },
+};
+const STIFFNESS_OPT: Opt = Opt {
+    name: "stiffness",
+    doc: "how stiffness_value is computed: one of STIFFNESS, or a scene/axis parameter name",
+    kind: scenarios::ValueKind::Text { default: None },
+};
 
 fn as_f64(v: &ParamValue) -> Option<f64> {
     match v {
@@ -61,7 +61,7 @@ pub fn stiffness_value(ctx: &GroupCtx<'_>, pt: &PointSpec, name: &str) -> Option
     match name {
         "far_over_near" => Some(cam.far / cam.near),
         "sigma_l" => {
-            let sigma = EffectConfig::from_params(&pt.params).ok()?.sigma;
+            let sigma = pt.point.get(effects::SIGMA.name()).and_then(as_f64)?;
             let lists = ctx.reference();
             let lmax = (0..lists.pixels())
                 .map(|p| {
@@ -96,7 +96,7 @@ pub fn stiffness_value(ctx: &GroupCtx<'_>, pt: &PointSpec, name: &str) -> Option
             .scene
             .params
             .get(other)
-            .or_else(|| pt.params.get(other))
+            .or_else(|| pt.point.get(other))
             .and_then(as_f64),
     }
 }
@@ -108,24 +108,44 @@ impl Study for StabilityStudy {
     fn describe(&self) -> &'static str {
         "stiff and extreme inputs: finite output, error vs the f64 reference and a flag per method, against a stiffness parameter"
     }
-    fn points(&self, spec: &StudySpec) -> Result<Vec<PointSpec>> {
-        extra_str(spec, "case")?;
-        let s = extra_str(spec, "stiffness")?;
-        // A parameter name is accepted only if some scene or axis defines it: a typo is an error.
-        let defined = STIFFNESS.contains(&s)
-            || spec.axes.contains_key(s)
-            || spec.scenes.iter().any(|sc| sc.params.get(s).is_some());
-        if !defined {
-            return Err(CoreError::Param(format!(
-                "stability study: stiffness '{s}' is neither one of {} nor a scene or axis parameter",
-                STIFFNESS.join(", ")
-            )));
+    fn methods(&self) -> Methods {
+        MethodsStudy.methods()
+    }
+    fn axes(&self, method: &str) -> Vec<Axis> {
+        MethodsStudy.axes(method)
+    }
+    fn validate(&self, method: &str, point: &Point) -> std::result::Result<(), String> {
+        MethodsStudy.validate(method, point)
+    }
+    fn options(&self) -> Vec<Opt> {
+        vec![CASE, STIFFNESS_OPT]
+    }
+    fn check_table(&self, spec: &StudySpec) -> Vec<String> {
+        let mut out = Vec::new();
+        for o in [CASE, STIFFNESS_OPT] {
+            if !spec.extra.contains_key(o.name) {
+                out.push(format!(
+                    "missing '{}' (e.g. case = \"near_far\", stiffness = \"far_over_near\")",
+                    o.name
+                ));
+            }
         }
-        MethodsStudy.points(spec)
+        // A parameter name is accepted only if some scene or axis defines it: a typo is an error.
+        let s = STIFFNESS_OPT.text(spec);
+        let defined = STIFFNESS.contains(&s.as_str())
+            || spec.axes.contains_key(&s)
+            || spec.scenes.iter().any(|sc| sc.params.get(&s).is_some());
+        if !s.is_empty() && !defined {
+            out.push(format!(
+                "stiffness '{s}' is neither one of {} nor a scene or axis parameter",
+                STIFFNESS.join(", ")
+            ));
+        }
+        out
     }
     fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
-        let case = extra_str(ctx.study, "case")?.to_string();
-        let stiffness = extra_str(ctx.study, "stiffness")?.to_string();
+        let case = CASE.text(ctx.study);
+        let stiffness = STIFFNESS_OPT.text(ctx.study);
         let add = |row: &mut Row, pt: &PointSpec| {
             row.set(cols::STABILITY_CASE, &case)
                 .set(cols::STIFFNESS, &stiffness);

@@ -242,9 +242,41 @@ impl SceneSpec {
     pub fn label(&self) -> String {
         format!("{}({})", self.generator, self.params.label())
     }
+    /// Checks the generator and every parameter without building any geometry (every problem
+    /// at once); an OBJ file named by `path` is read and checked too.
+    pub fn check(&self) -> Vec<SceneError> {
+        if !GENERATORS.contains(&self.generator.as_str()) {
+            return vec![SceneError::UnknownGenerator(
+                self.generator.clone(),
+                GENERATORS.join(", "),
+            )];
+        }
+        let mut problems = crate::params::check_params(|| self.build_unchecked());
+        if let Some(crate::ParamValue::Str(path)) = self.params.get("path") {
+            if let Err(e) = obj::load(std::path::Path::new(path)) {
+                problems.push(e);
+            }
+        }
+        problems
+    }
+
     /// Builds the scene, or names the bad parameter / file.
     pub fn build(&self) -> Result<Scene> {
-        let scene = match self.generator.as_str() {
+        let scene = self.build_unchecked()?;
+        scene
+            .mesh
+            .validate(&self.label())
+            .map_err(|why| SceneError::OutOfRange {
+                scene: self.label(),
+                param: "mesh".into(),
+                value: String::new(),
+                why,
+            })?;
+        Ok(scene)
+    }
+
+    fn build_unchecked(&self) -> Result<Scene> {
+        Ok(match self.generator.as_str() {
             "grass" => grass::build(self)?,
             "shells" => shells::build(self)?,
             "quads" => quads::build(self)?,
@@ -262,17 +294,7 @@ impl SceneSpec {
                     GENERATORS.join(", "),
                 ))
             }
-        };
-        scene
-            .mesh
-            .validate(&self.label())
-            .map_err(|why| SceneError::OutOfRange {
-                scene: self.label(),
-                param: "mesh".into(),
-                value: String::new(),
-                why,
-            })?;
-        Ok(scene)
+        })
     }
 }
 

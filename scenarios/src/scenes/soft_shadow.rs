@@ -40,15 +40,16 @@ pub fn build(spec: &SceneSpec) -> Result<Scene> {
     let height = r.float("height", 1.5, 0.05, 2.4)? as f32;
     let seed = r.int("seed", 1, 0, i64::MAX)? as u64;
     let path = r.opt_string("path")?;
-    r.finish()?;
-    if path.is_some() && case != "obj" {
-        return Err(SceneError::OutOfRange {
+    if path.is_some() != (case == "obj") {
+        r.problem(SceneError::OutOfRange {
             scene: label.clone(),
             param: "path".into(),
             value: path.clone().unwrap_or_default(),
-            why: "only case = \"obj\" reads a path".into(),
-        });
+            why: "case = \"obj\" needs path = \"file.obj\", and only case = \"obj\" reads one"
+                .into(),
+        })?;
     }
+    r.finish()?;
 
     let mut mesh = Mesh::default();
     let mut objects = vec![ObjectInfo {

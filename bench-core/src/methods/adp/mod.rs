@@ -9,22 +9,34 @@
 //! Geometry passes: 2 + ⌈max occupied bins / bucket_count⌉; memory per pixel: hist_bins/8 B
 //! histogram + 4·K B bounds + K·4 B buckets.
 
-use scenarios::Params;
-
 use super::bucket::{self, Config, Kind, PreparedBucket};
-use super::{int_param, str_param, Method, Prepared};
+use super::{Method, Prepared};
+use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
+use crate::record::cols;
 use crate::{CoreError, Result};
 
 const WGSL: &str = include_str!("adp.wgsl");
 
 pub struct Adp;
 
-pub fn config(params: &Params) -> std::result::Result<Config, String> {
-    str_param(params, "bucket_mode", "adaptive", &["adaptive"])
-        .map_err(|e| format!("{e} (adp is adaptive; uniform buckets are `bdp` / `bdp2`)"))?;
-    let hist_bins = int_param(params, "hist_bins", 1024, 32, 8192)? as u32;
+const MODE: Axis = Axis::choice(
+    cols::BUCKET_MODE,
+    "adaptive: buckets equalised by a per-pixel depth histogram (uniform buckets are bdp, bdp2)",
+    "adaptive",
+    &["adaptive"],
+);
+const HIST_BINS: Axis = Axis::int(
+    cols::HIST_BINS,
+    "bins of the per-pixel depth-occupancy histogram (a multiple of 32)",
+    1024,
+    32,
+    8192,
+);
+
+pub fn config(point: &Point) -> std::result::Result<Config, String> {
+    let hist_bins = point.int(&HIST_BINS) as u32;
     if !hist_bins.is_multiple_of(32) {
         return Err(format!(
             "hist_bins = {hist_bins} must be a multiple of 32 (32-bit words)"
@@ -32,7 +44,7 @@ pub fn config(params: &Params) -> std::result::Result<Config, String> {
     }
     Ok(Config {
         kind: Kind::Adaptive { hist_bins },
-        buckets: bucket::buckets_param(params, false)?,
+        buckets: bucket::buckets(point, false)?,
     })
 }
 
@@ -46,17 +58,26 @@ impl Method for Adp {
     fn exact(&self) -> bool {
         false
     }
-    fn axes(&self) -> &'static [&'static str] {
-        &["bucket_count", "hist_bins", "bucket_mode"]
+    fn axes(&self) -> Vec<Axis> {
+        vec![bucket::BUCKET_COUNT, HIST_BINS, MODE]
+    }
+    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+        let bins = point.int(&HIST_BINS);
+        if bins % 32 != 0 {
+            return Err(format!(
+                "hist_bins = {bins} must be a multiple of 32 (32-bit words)"
+            ));
+        }
+        Ok(())
     }
     fn required_features(&self) -> wgpu::Features {
         wgpu::Features::FLOAT32_BLENDABLE
     }
-    fn supports(&self, gpu: &Gpu, params: &Params) -> std::result::Result<(), String> {
-        bucket::supports_targets(gpu, &config(params)?)
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        bucket::supports_targets(gpu, &config(point)?)
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
-        let cfg = config(params).map_err(CoreError::Param)?;
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let cfg = config(point).map_err(CoreError::Param)?;
         Ok(Box::new(PreparedBucket::new(gpu, scene, cfg, WGSL)?))
     }
 }

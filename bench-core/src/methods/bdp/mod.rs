@@ -7,24 +7,35 @@
 //! `bucket_pairing = paired` keeps the nearest and the farthest fragment of each bucket (two
 //! channels per bucket, so at most 16 buckets). Shared machinery and CPU twins: `methods::bucket`.
 
-use scenarios::Params;
-
 use super::bucket::{self, Config, Kind, PreparedBucket};
-use super::{str_param, Method, Prepared};
+use super::{Method, Prepared};
+use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
+use crate::record::cols;
 use crate::{CoreError, Result};
 
 const WGSL: &str = include_str!("bdp.wgsl");
 
 pub struct Bdp;
 
+const MODE: Axis = Axis::choice(
+    cols::BUCKET_MODE,
+    "uniform: the depth range split evenly (adaptive buckets are the adp method)",
+    "uniform",
+    &["uniform"],
+);
+const PAIRING: Axis = Axis::choice(
+    cols::BUCKET_PAIRING,
+    "single: one fragment per bucket; paired: its nearest and farthest (2 channels)",
+    "single",
+    &["single", "paired"],
+);
+
 /// The configuration a point asks for, or the reason it cannot run.
-pub fn config(params: &Params) -> std::result::Result<Config, String> {
-    str_param(params, "bucket_mode", "uniform", &["uniform"])
-        .map_err(|e| format!("{e} (bdp is uniform; adaptive buckets are the `adp` method)"))?;
-    let paired = str_param(params, "bucket_pairing", "single", &["single", "paired"])? == "paired";
-    let buckets = bucket::buckets_param(params, paired)?;
+pub fn config(point: &Point) -> std::result::Result<Config, String> {
+    let paired = point.choice(&PAIRING) == "paired";
+    let buckets = bucket::buckets(point, paired)?;
     Ok(Config {
         kind: Kind::Uniform { paired },
         buckets,
@@ -41,17 +52,17 @@ impl Method for Bdp {
     fn exact(&self) -> bool {
         false
     }
-    fn axes(&self) -> &'static [&'static str] {
-        &["bucket_count", "bucket_pairing", "bucket_mode"]
+    fn axes(&self) -> Vec<Axis> {
+        vec![bucket::BUCKET_COUNT, PAIRING, MODE]
     }
     fn required_features(&self) -> wgpu::Features {
         wgpu::Features::FLOAT32_BLENDABLE
     }
-    fn supports(&self, gpu: &Gpu, params: &Params) -> std::result::Result<(), String> {
-        bucket::supports_targets(gpu, &config(params)?)
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        bucket::supports_targets(gpu, &config(point)?)
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
-        let cfg = config(params).map_err(CoreError::Param)?;
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let cfg = config(point).map_err(CoreError::Param)?;
         Ok(Box::new(PreparedBucket::new(gpu, scene, cfg, WGSL)?))
     }
 }

@@ -4,24 +4,29 @@
 //! bucket holds two fragments and a collision needs three (or two within 1/127 of a bucket).
 //! 3 geometry passes (depth range + 2); two sets of `bucket_count` channels.
 
-use scenarios::Params;
-
 use super::bucket::{self, Config, Kind, PreparedBucket};
-use super::{str_param, Method, Prepared};
+use super::{Method, Prepared};
+use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
+use crate::record::cols;
 use crate::{CoreError, Result};
 
 const WGSL: &str = include_str!("bdp2.wgsl");
 
 pub struct Bdp2;
 
-pub fn config(params: &Params) -> std::result::Result<Config, String> {
-    str_param(params, "bucket_mode", "uniform", &["uniform"])
-        .map_err(|e| format!("{e} (bdp2 is uniform; adaptive buckets are the `adp` method)"))?;
+const MODE: Axis = Axis::choice(
+    cols::BUCKET_MODE,
+    "uniform: the depth range split evenly (adaptive buckets are the adp method)",
+    "uniform",
+    &["uniform"],
+);
+
+pub fn config(point: &Point) -> std::result::Result<Config, String> {
     Ok(Config {
         kind: Kind::TwoPass,
-        buckets: bucket::buckets_param(params, false)?,
+        buckets: bucket::buckets(point, false)?,
     })
 }
 
@@ -35,17 +40,17 @@ impl Method for Bdp2 {
     fn exact(&self) -> bool {
         false
     }
-    fn axes(&self) -> &'static [&'static str] {
-        &["bucket_count", "bucket_mode"]
+    fn axes(&self) -> Vec<Axis> {
+        vec![bucket::BUCKET_COUNT, MODE]
     }
     fn required_features(&self) -> wgpu::Features {
         wgpu::Features::FLOAT32_BLENDABLE
     }
-    fn supports(&self, gpu: &Gpu, params: &Params) -> std::result::Result<(), String> {
-        bucket::supports_targets(gpu, &config(params)?)
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        bucket::supports_targets(gpu, &config(point)?)
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
-        let cfg = config(params).map_err(CoreError::Param)?;
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let cfg = config(point).map_err(CoreError::Param)?;
         Ok(Box::new(PreparedBucket::new(gpu, scene, cfg, WGSL)?))
     }
 }

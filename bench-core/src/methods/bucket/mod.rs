@@ -12,12 +12,12 @@
 //! (one atomicAdd per fragment) run in `readback`, so the timed frame carries no counter. Tests
 //! check this GPU count against the CPU twin routing the reference fragment lists.
 
-use scenarios::Params;
+use crate::axes::{Axis, Point};
+use crate::effects::FOLD_STATE_BYTES;
+use crate::gpu_util::{camera_entry, read_vec, storage_entry, texture_entry};
+use crate::record::cols;
 
-use super::{
-    camera_entry, read_vec, storage_entry, texture_entry, Capture, Expected, FrameStats,
-    FOLD_STATE_BYTES,
-};
+use super::{Capture, Expected, FrameStats};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::reference::FragmentLists;
@@ -25,7 +25,7 @@ use crate::timing::GpuTimer;
 use crate::Result;
 
 const WGSL: &str = include_str!("bucket.wgsl");
-const EFFECTS_WGSL: &str = include_str!("../effects.wgsl");
+const FOLD_WGSL: &str = include_str!("../../effects/fold.wgsl");
 const SLOT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const RANGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 /// Float channels one routing pass can write: 8 attachments × 4 channels.
@@ -86,9 +86,18 @@ impl Config {
     }
 }
 
-/// Reads the shared axes: `bucket_count` (8/16/32 by default 16), checked against the channels.
-pub fn buckets_param(params: &Params, paired: bool) -> std::result::Result<u32, String> {
-    let k = super::int_param(params, "bucket_count", 16, 1, MAX_CHANNELS as i64)? as u32;
+/// Buckets per pixel per pass, shared by the bucket methods.
+pub const BUCKET_COUNT: Axis = Axis::int(
+    cols::BUCKET_COUNT,
+    "buckets per pixel per pass (one float channel each, two when paired)",
+    16,
+    1,
+    MAX_CHANNELS as i64,
+);
+
+/// `bucket_count`, checked against the channels one pass has.
+pub fn buckets(point: &Point, paired: bool) -> std::result::Result<u32, String> {
+    let k = point.int(&BUCKET_COUNT) as u32;
     let channels = if paired { 2 * k } else { k };
     if channels > MAX_CHANNELS {
         return Err(format!(
@@ -390,10 +399,10 @@ impl PreparedBucket {
         let (w, h) = (scene.width, scene.height);
         let px = w as u64 * h as u64;
         let body = format!(
-            "{EFFECTS_WGSL}\n{WGSL}\n{}\n{method_wgsl}",
+            "{FOLD_WGSL}\n{WGSL}\n{}\n{method_wgsl}",
             outputs_wgsl(cfg.attachments())
         );
-        let module = super::shader(gpu, "bucket", &body);
+        let module = crate::gpu_util::shader(gpu, "bucket", &body);
         let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
         let cam_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("bucket camera"),

@@ -1,28 +1,16 @@
 //! Test harness shared by the bucket methods' tests: a lavapipe device, scene builders, one
 //! frame under a validation scope, and the twin-vs-GPU comparisons that name the bad pixel.
 
-use std::sync::OnceLock;
-
 use glam::{DVec3, Vec3};
 use scenarios::{Camera, Mesh, ParamValue, Params, Scene, SceneSpec};
 
 use super::{captured_in_pixel, route_pixel, Config, PreparedBucket};
-use crate::gpu::{Gpu, GpuOptions};
 use crate::gpu_scene::GpuScene;
 use crate::methods::{Capture, Prepared};
 use crate::reference::{self, FragmentLists};
 use crate::timing::GpuTimer;
 
-pub fn gpu() -> &'static Gpu {
-    static GPU: OnceLock<Gpu> = OnceLock::new();
-    GPU.get_or_init(|| {
-        std::env::set_var(
-            "XDG_RUNTIME_DIR",
-            std::env::var("XDG_RUNTIME_DIR").unwrap_or("/tmp".into()),
-        );
-        Gpu::new(&GpuOptions::default()).expect("a Vulkan adapter (lavapipe: scripts/setup.sh)")
-    })
-}
+pub use crate::testing::gpu;
 
 /// `quads` with `d` screen-parallel layers (untilted: each layer has one window depth).
 pub fn quads(d: i64, seed: i64) -> Scene {

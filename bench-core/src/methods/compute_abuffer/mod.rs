@@ -14,14 +14,19 @@
 //! counts again and a fragment beyond the allocation is counted as lost (flag `overflow`), never
 //! silent — a dynamic scene would grow the array from that count, as engines do.
 
-use scenarios::Params;
+use crate::effects::FOLD_WGSL;
+use crate::gpu_util::{
+    bind_buffers, camera_entry, check_storage_size, compute_pipeline, read_vec, shader,
+    storage_entry, STORAGE_RW,
+};
 
-use super::store::{bind_buffers, check_storage_size, compute_pipeline, STORAGE_RW};
-use super::{camera_entry, read_vec, shader, storage_entry, Capture, Expected, FrameStats};
-use super::{Method, Prepared, EFFECTS_WGSL};
+use super::{Capture, Expected, FrameStats};
+use super::{Method, Prepared};
+use crate::axes::{Axis, Point};
 use crate::effects::{self, EffectConfig};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
+use crate::record::cols;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
@@ -43,6 +48,14 @@ const STORAGE_BUFFERS: u32 = 9;
 
 pub struct ComputeAbuffer;
 
+const SMALL_MAX: Axis = Axis::int(
+    cols::SMALL_MAX,
+    "largest triangle bounding box (pixels) one thread rasterises; larger ones are shared",
+    256,
+    1,
+    1 << 20,
+);
+
 impl Method for ComputeAbuffer {
     fn name(&self) -> &'static str {
         "compute_abuffer"
@@ -53,44 +66,28 @@ impl Method for ComputeAbuffer {
     fn exact(&self) -> bool {
         true
     }
-    fn axes(&self) -> &'static [&'static str] {
-        &[
-            "small_max",
-            "effect",
-            "sigma",
-            "csg_a",
-            "csg_b",
-            "dof_near",
-            "dof_far",
-            "variant",
-        ]
+    fn axes(&self) -> Vec<Axis> {
+        let mut v = vec![SMALL_MAX];
+        v.extend_from_slice(effects::AXES);
+        v
     }
-    fn supports(&self, gpu: &Gpu, params: &Params) -> std::result::Result<(), String> {
+    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+        EffectConfig::from_point(point).map(|_| ())
+    }
+    fn supports(&self, gpu: &Gpu, _: &Point) -> std::result::Result<(), String> {
         let have = gpu.limits.max_storage_buffers_per_shader_stage;
         if have < STORAGE_BUFFERS {
             return Err(format!(
                 "needs {STORAGE_BUFFERS} storage buffers per shader stage, the adapter allows {have}"
             ));
         }
-        small_max(params)?;
-        effect_config(params)?;
         Ok(())
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
-        let small = small_max(params).map_err(CoreError::Param)?;
-        let effect = effect_config(params).map_err(CoreError::Param)?;
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let small = point.int(&SMALL_MAX) as u32;
+        let effect = EffectConfig::from_point(point).map_err(CoreError::Param)?;
         Ok(Box::new(PreparedAbuffer::new(gpu, scene, small, &effect)?))
     }
-}
-
-/// Largest bounding box (pixels) one thread rasterises; larger triangles are shared.
-fn small_max(params: &Params) -> std::result::Result<u32, String> {
-    Ok(super::int_param(params, "small_max", 256, 1, 1 << 20)? as u32)
-}
-
-fn effect_config(params: &Params) -> std::result::Result<EffectConfig, String> {
-    effects::check_variant(params, &["naive", "stable"])?;
-    EffectConfig::from_params(params)
 }
 
 /// `struct Sizes` of the WGSL: what varies with the scene, read at run time.
@@ -143,7 +140,7 @@ struct Layout {
 
 fn kernels(gpu: &Gpu, l: &Layout, fill: bool) -> Kernels {
     let c = [("FILL", if fill { 1.0 } else { 0.0 })];
-    let mk = |entry: &str| compute_pipeline(gpu, entry, &l.pipeline, &l.module, entry, &c);
+    let mk = |entry: &str| compute_pipeline(gpu, entry, &l.pipeline, &l.module, entry, &c, false);
     Kernels {
         small: mk("raster_small"),
         big: mk("raster_big"),
@@ -182,7 +179,7 @@ impl PreparedAbuffer {
             )));
         }
         let ntri = scene.index_count / 3;
-        let src = format!("{WGSL}\n{EFFECTS_WGSL}");
+        let src = format!("{WGSL}\n{FOLD_WGSL}");
         let module = shader(gpu, "compute_abuffer", &src);
         let cs = wgpu::ShaderStages::COMPUTE;
         let mut entries = vec![camera_entry(0)];
@@ -227,7 +224,7 @@ impl PreparedAbuffer {
         };
         let scan_groups = [(nblocks as u32, 1), (1, 1), (nblocks as u32, 1)];
         let scan = ["scan_blocks", "scan_sums", "scan_add"]
-            .map(|e| compute_pipeline(gpu, e, &l.pipeline, &l.module, e, &[]));
+            .map(|e| compute_pipeline(gpu, e, &l.pipeline, &l.module, e, &[], false));
         let count = kernels(gpu, &l, false);
         let small_groups = (ntri.div_ceil(64).clamp(1, MAX_GROUPS), 1);
 
@@ -338,7 +335,15 @@ impl PreparedAbuffer {
         set_sizes(sizes(capacity, big_cap, chunk_cap));
         let fill = kernels(gpu, &l, true);
         let rc = effect.constants();
-        let resolve = compute_pipeline(gpu, "resolve", &l.pipeline, &l.module, "resolve", &rc);
+        let resolve = compute_pipeline(
+            gpu,
+            "resolve",
+            &l.pipeline,
+            &l.module,
+            "resolve",
+            &rc,
+            false,
+        );
         let prep_note = format!(
             "sized by prepare-time counts: {total} fragments, {nbig} shared (big or clipped) triangles in {nchunks} chunks of {CHUNK} px, {} B of sizing scratch freed",
             scratch.bytes - px * 4

@@ -3,8 +3,8 @@ use scenarios::ParamValue::Int;
 use scenarios::{Camera, Mesh, Params, Scene, SceneSpec};
 
 use super::*;
-use crate::methods::store::testing::{count_mismatch, gpu, max_err, params, run, scene};
 use crate::reference::rasterize;
+use crate::testing::{count_mismatch, gpu, max_err, params, run, scene};
 
 /// Composite of up to ~16 layers in f32 vs f64, attributes re-derived from the primitive in f32.
 const IMAGE_TOL: f64 = 5e-5;
@@ -89,7 +89,15 @@ fn allocates_exactly_eight_bytes_per_true_fragment() {
     let (w, h) = (40u32, 36u32);
     let g = gpu();
     let gs = GpuScene::upload(g, &s, w, h);
-    let m = crate::runner::measure(g, &gs, &ComputeAbuffer, &Params::new(), 0, 1).unwrap();
+    let m = crate::measure::measure(
+        g,
+        &gs,
+        &ComputeAbuffer,
+        &crate::testing::point(&ComputeAbuffer, &Params::new()),
+        0,
+        1,
+    )
+    .unwrap();
     let total = rasterize(&s, w, h).total_fragments();
     assert!(total > 0);
     let px = (w * h) as u64;
@@ -148,7 +156,9 @@ fn a_fragment_beyond_the_allocation_is_counted_not_written() {
         let gs_small = GpuScene::upload(g, &small, 32, 32);
         let gs_big = GpuScene::upload(g, &big, 32, 32);
         let p = params(&[("small_max", Int(small_max))]);
-        let mut prepared = ComputeAbuffer.prepare(g, &gs_small, &p).unwrap();
+        let mut prepared = ComputeAbuffer
+            .prepare(g, &gs_small, &crate::testing::point(&ComputeAbuffer, &p))
+            .unwrap();
         // The bind group holds the small scene's buffers: copy the moved positions over them.
         let mut enc = g.device.create_command_encoder(&Default::default());
         enc.copy_buffer_to_buffer(&gs_big.positions, 0, &gs_small.positions, 0, None);

@@ -6,23 +6,22 @@
 //! writes nothing (a CPU round trip per pass, as in the original); otherwise exactly
 //! `max_layers` passes run in one submission.
 //!
-//! Axes: `max_layers`, `occlusion_stop`, the effect axes (`effects::AXES`), `specialisation`
-//! (`specialised`, default: store, fetch and read only the effect's payload; `uber`: all
-//! attributes fetched and colour + normal + view depth + id stored every pass) and `variant`
-//! (`+`-separated: `tiebreak` peels on (depth, object id) pairs so coplanar fragments with
-//! distinct ids are not lost, at the cost of the full payload; `naive`/`stable` pick the
-//! thickness arithmetic).
+//! Axes: `max_layers`, `occlusion_stop`, the effect axes (`effects::AXES`, incl. `thickness`),
+//! `specialisation` (`specialised`, default: store, fetch and read only the effect's payload;
+//! `uber`: all attributes fetched and colour + normal + view depth + id stored every pass) and
+//! `tiebreak` (peel on (depth, object id) pairs so coplanar fragments with distinct ids are not
+//! lost, at the cost of the full payload).
 
-use scenarios::Params;
-
-use super::floor::{clear_depth, depth_state};
-use super::{
-    bool_param, camera_entry, int_param, read_vec, shader, storage_entry, str_param, texture_entry,
-    Capture, Expected, FrameStats, Method, Prepared, EFFECTS_WGSL, FOLD_STATE_BYTES,
-};
+use super::{Capture, Expected, FrameStats, Method, Prepared};
+use crate::axes::{Axis, Point};
 use crate::effects::{self, EffectConfig, Payload};
+use crate::effects::{FOLD_STATE_BYTES, FOLD_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::gpu_util::{
+    camera_entry, clear_depth, depth_state, read_vec, shader, storage_entry, texture_entry,
+};
+use crate::record::cols;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
@@ -32,6 +31,30 @@ const Z_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 pub struct DepthPeel;
+
+pub const MAX_LAYERS: Axis = Axis::int(
+    cols::MAX_LAYERS,
+    "peeling passes at most (occlusion_stop may end sooner)",
+    64,
+    1,
+    4096,
+);
+pub const OCCLUSION_STOP: Axis = Axis::bool(
+    cols::OCCLUSION_STOP,
+    "stop at the first pass an occlusion query finds empty (a CPU round trip per pass)",
+    true,
+);
+const SPECIALISATION: Axis = Axis::choice(
+    cols::SPECIALISATION,
+    "specialised: only the effect's payload is fetched, stored and read; uber: everything",
+    "specialised",
+    &["specialised", "uber"],
+);
+const TIEBREAK: Axis = Axis::bool(
+    cols::TIEBREAK,
+    "peel (depth, object id) pairs so coplanar fragments of distinct objects are kept",
+    false,
+);
 
 /// A point's configuration, read from its axes.
 #[derive(Clone, Copy, Debug)]
@@ -44,19 +67,13 @@ struct Config {
 }
 
 impl Config {
-    fn read(params: &Params) -> std::result::Result<Config, String> {
-        effects::check_variant(params, &["classic", "tiebreak", "naive", "stable"])?;
+    fn read(point: &Point) -> std::result::Result<Config, String> {
         Ok(Config {
-            max_layers: int_param(params, "max_layers", 64, 1, 4096)? as u32,
-            occlusion_stop: bool_param(params, "occlusion_stop", true)?,
-            uber: str_param(
-                params,
-                "specialisation",
-                "specialised",
-                &["specialised", "uber"],
-            )? == "uber",
-            tiebreak: effects::variant_has(params, "tiebreak")?,
-            effect: EffectConfig::from_params(params)?,
+            max_layers: point.int(&MAX_LAYERS) as u32,
+            occlusion_stop: point.bool(&OCCLUSION_STOP),
+            uber: point.choice(&SPECIALISATION) == "uber",
+            tiebreak: point.bool(&TIEBREAK),
+            effect: EffectConfig::from_point(point)?,
         })
     }
 
@@ -71,11 +88,6 @@ impl Config {
     }
 }
 
-/// The `payload` column value of a depth_peel point (also used by the studies).
-pub fn payload_name(params: &Params) -> Option<&'static str> {
-    Config::read(params).ok().map(|c| c.payload().name())
-}
-
 impl Method for DepthPeel {
     fn name(&self) -> &'static str {
         "depth_peel"
@@ -86,22 +98,19 @@ impl Method for DepthPeel {
     fn exact(&self) -> bool {
         true
     }
-    fn axes(&self) -> &'static [&'static str] {
-        &[
-            "max_layers",
-            "occlusion_stop",
-            "specialisation",
-            "variant",
-            "effect",
-            "sigma",
-            "csg_a",
-            "csg_b",
-            "dof_near",
-            "dof_far",
-        ]
+    fn axes(&self) -> Vec<Axis> {
+        let mut v = vec![MAX_LAYERS, OCCLUSION_STOP, SPECIALISATION, TIEBREAK];
+        v.extend_from_slice(effects::AXES);
+        v
     }
-    fn supports(&self, gpu: &Gpu, params: &Params) -> std::result::Result<(), String> {
-        let cfg = Config::read(params)?;
+    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+        Config::read(point).map(|_| ())
+    }
+    fn payload(&self, point: &Point) -> Option<&'static str> {
+        Config::read(point).ok().map(|c| c.payload().name())
+    }
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        let cfg = Config::read(point)?;
         let p = cfg.payload();
         for (need, f) in [
             (p.color || p.normal, COLOR_FORMAT),
@@ -114,8 +123,8 @@ impl Method for DepthPeel {
         }
         Ok(())
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
-        let cfg = Config::read(params).map_err(CoreError::Param)?;
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let cfg = Config::read(point).map_err(CoreError::Param)?;
         Ok(Box::new(PreparedPeel::new(gpu, scene, cfg)))
     }
 }
@@ -210,7 +219,7 @@ impl PreparedPeel {
     fn new(gpu: &Gpu, scene: &GpuScene, cfg: Config) -> Self {
         let d = &gpu.device;
         let (w, h) = (scene.width, scene.height);
-        let module = shader(gpu, "depth_peel", &format!("{EFFECTS_WGSL}\n{WGSL}"));
+        let module = shader(gpu, "depth_peel", &format!("{FOLD_WGSL}\n{WGSL}"));
         let var = variant(cfg.payload());
         let frag = wgpu::ShaderStages::FRAGMENT;
         let comp = wgpu::ShaderStages::COMPUTE;

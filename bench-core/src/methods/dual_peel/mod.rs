@@ -9,17 +9,16 @@
 //! exactly ⌈max_layers/2⌉ peel passes in one submission). Exact except coplanar ties. The
 //! resolve is front-to-back and back-to-front at once, so it does not use the effects fold.
 
-use scenarios::Params;
-
-use super::store::{compute_pipeline, STORAGE_RW};
-use super::{
-    bool_param, camera_entry, int_param, read_vec, shader, storage_entry, texture_entry, Capture,
-    Expected, FrameStats, Method, Prepared,
-};
+use super::depth_peel::{MAX_LAYERS, OCCLUSION_STOP};
+use super::{Capture, Expected, FrameStats, Method, Prepared};
+use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::gpu_util::{
+    camera_entry, compute_pipeline, read_vec, shader, storage_entry, texture_entry, STORAGE_RW,
+};
 use crate::timing::GpuTimer;
-use crate::{CoreError, Result};
+use crate::Result;
 
 const WGSL: &str = include_str!("dual_peel.wgsl");
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
@@ -39,18 +38,13 @@ impl Method for DualPeel {
     fn exact(&self) -> bool {
         true
     }
-    fn axes(&self) -> &'static [&'static str] {
-        &["max_layers", "occlusion_stop"]
+    fn axes(&self) -> Vec<Axis> {
+        vec![MAX_LAYERS, OCCLUSION_STOP]
     }
     fn required_features(&self) -> wgpu::Features {
         wgpu::Features::FLOAT32_BLENDABLE
     }
-    fn supports(&self, gpu: &Gpu, params: &Params) -> std::result::Result<(), String> {
-        int_param(params, "max_layers", 64, 1, 4096)?;
-        bool_param(params, "occlusion_stop", true)?;
-        if !gpu.has(wgpu::Features::FLOAT32_BLENDABLE) {
-            return Err("adapter lacks FLOAT32_BLENDABLE (MAX blending of RG32F)".into());
-        }
+    fn supports(&self, gpu: &Gpu, _: &Point) -> std::result::Result<(), String> {
         for f in [DEPTH_FORMAT, LAYER_FORMAT] {
             if !gpu.renderable(f) {
                 return Err(format!("{f:?} is not renderable on this adapter"));
@@ -58,11 +52,9 @@ impl Method for DualPeel {
         }
         Ok(())
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
-        let max_layers =
-            int_param(params, "max_layers", 64, 1, 4096).map_err(CoreError::Param)? as u32;
-        let occlusion_stop =
-            bool_param(params, "occlusion_stop", true).map_err(CoreError::Param)?;
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let max_layers = point.int(&MAX_LAYERS) as u32;
+        let occlusion_stop = point.bool(&OCCLUSION_STOP);
         Ok(Box::new(PreparedDual::new(
             gpu,
             scene,
@@ -181,8 +173,17 @@ impl PreparedDual {
             &module,
             "composite",
             &[],
+            false,
         );
-        let combine = compute_pipeline(gpu, "dual combine", &comp_layout, &module, "combine", &[]);
+        let combine = compute_pipeline(
+            gpu,
+            "dual combine",
+            &comp_layout,
+            &module,
+            "combine",
+            &[],
+            false,
+        );
 
         let mut alloc = AllocCounter::default();
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
@@ -410,7 +411,7 @@ mod tests {
     use scenarios::ParamValue::{Bool, Int};
 
     use super::*;
-    use crate::methods::store::testing::{count_mismatch, max_err, params, run, scene};
+    use crate::testing::{count_mismatch, max_err, params, run, scene};
 
     /// Front and back halves composited separately then combined: a few f32 ulps per layer.
     const IMAGE_TOL: f64 = 2e-5;
@@ -439,10 +440,18 @@ mod tests {
     #[test]
     fn passes_are_half_the_layers_plus_one_and_too_few_are_reported() {
         let s = scene("quads", &[("depth_complexity", Int(7))]);
-        let gpu = crate::methods::store::testing::gpu();
+        let gpu = crate::testing::gpu();
         let gs = GpuScene::upload(gpu, &s, 32, 32);
         let p = params(&[("max_layers", Int(64))]);
-        let m = crate::runner::measure(gpu, &gs, &DualPeel, &p, 0, 1).unwrap();
+        let m = crate::measure::measure(
+            gpu,
+            &gs,
+            &DualPeel,
+            &crate::testing::point(&DualPeel, &p),
+            0,
+            1,
+        )
+        .unwrap();
         let n = crate::reference::rasterize(&s, 32, 32).max_depth_complexity();
         assert_eq!(m.frame.geometry_passes, n.div_ceil(2) + 1, "{n} layers");
         // Four layers' worth of passes on seven layers: the middle is missing, and said so.

@@ -2,9 +2,10 @@
 //! (`floor_opaque`) over exactly the scene's geometry and resolution. Every method's `x_floor`
 //! is its time over `floor_depth` of the same scene in the same run.
 
-use scenarios::Params;
+use crate::axes::Point;
+use crate::gpu_util::{camera_entry, clear_depth, depth_state, shader};
 
-use super::{camera_entry, shader, Capture, FrameStats, Method, Prepared};
+use super::{Capture, FrameStats, Method, Prepared};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::timing::GpuTimer;
@@ -25,7 +26,7 @@ impl Method for FloorDepth {
     fn exact(&self) -> bool {
         false
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Params) -> Result<Box<dyn Prepared>> {
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Point) -> Result<Box<dyn Prepared>> {
         Ok(Box::new(PreparedFloor::new(gpu, scene, false)))
     }
 }
@@ -40,7 +41,7 @@ impl Method for FloorOpaque {
     fn exact(&self) -> bool {
         false
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Params) -> Result<Box<dyn Prepared>> {
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Point) -> Result<Box<dyn Prepared>> {
         Ok(Box::new(PreparedFloor::new(gpu, scene, true)))
     }
 }
@@ -133,30 +134,6 @@ impl PreparedFloor {
             alloc,
             reversed: scene.reversed_z,
         }
-    }
-}
-
-/// Depth test "nearer passes", with or without writes, for the scene's depth convention.
-pub fn depth_state(reversed: bool, write: bool) -> wgpu::DepthStencilState {
-    wgpu::DepthStencilState {
-        format: wgpu::TextureFormat::Depth32Float,
-        depth_write_enabled: Some(write),
-        depth_compare: Some(if reversed {
-            wgpu::CompareFunction::Greater
-        } else {
-            wgpu::CompareFunction::Less
-        }),
-        stencil: Default::default(),
-        bias: Default::default(),
-    }
-}
-
-/// Clear value of the depth buffer for the scene's depth convention.
-pub fn clear_depth(reversed: bool) -> f32 {
-    if reversed {
-        0.0
-    } else {
-        1.0
     }
 }
 

@@ -5,18 +5,17 @@
 //! pass of 64-bit atomicMin of (depth, payload): see the WGSL header (naga allows 64-bit min/max
 //! only without a return value, and the insertion needs it).
 
-use scenarios::Params;
-
-use super::kbuffer_rmw::{kslots_layout, KSlots, MAX_K};
-use super::store::{
-    bind_buffers, compute_pipeline, dummy_depth, storage_pass, storage_pipeline, STORAGE_RW,
-};
-use super::{int_param, shader, Capture, FrameStats, Method, Prepared, EFFECTS_WGSL};
+use super::kbuffer_rmw::{kslots_layout, KSlots, LAYERS};
+use super::store::{dummy_depth, storage_pass, storage_pipeline};
+use super::{Capture, FrameStats, Method, Prepared};
+use crate::axes::{Axis, Point};
+use crate::effects::FOLD_WGSL;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::gpu_util::{bind_buffers, compute_pipeline, shader, STORAGE_RW};
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
-use crate::{CoreError, Result};
+use crate::Result;
 
 const WGSL: &str = include_str!("kbuffer_atomic.wgsl");
 
@@ -32,15 +31,11 @@ impl Method for KBufferAtomic {
     fn exact(&self) -> bool {
         true
     }
-    fn axes(&self) -> &'static [&'static str] {
-        &["layers"]
+    fn axes(&self) -> Vec<Axis> {
+        vec![LAYERS]
     }
-    fn supports(&self, _: &Gpu, params: &Params) -> std::result::Result<(), String> {
-        int_param(params, "layers", 8, 1, MAX_K)?;
-        Ok(())
-    }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
-        let k = int_param(params, "layers", 8, 1, MAX_K).map_err(CoreError::Param)? as u32;
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let k = point.int(&LAYERS) as u32;
         Ok(Box::new(PreparedAtomic::new(gpu, scene, k)?))
     }
 }
@@ -59,7 +54,7 @@ struct PreparedAtomic {
 impl PreparedAtomic {
     fn new(gpu: &Gpu, scene: &GpuScene, k: u32) -> Result<Self> {
         let d = &gpu.device;
-        let src = format!("{WGSL}\n{EFFECTS_WGSL}");
+        let src = format!("{WGSL}\n{FOLD_WGSL}");
         let module = shader(gpu, "kbuffer_atomic", &src);
         let bgl = kslots_layout(gpu, 1);
         let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -86,6 +81,7 @@ impl PreparedAtomic {
             &module,
             "resolve",
             &rc,
+            false,
         );
         let mut alloc = AllocCounter::default();
         let depth = dummy_depth(gpu, &mut alloc, scene);
@@ -166,7 +162,7 @@ mod tests {
     use scenarios::ParamValue::Int;
 
     use super::*;
-    use crate::methods::store::testing::{count_mismatch, max_err, params, run, scene};
+    use crate::testing::{count_mismatch, max_err, params, run, scene};
 
     /// Composite of up to 16 layers in f32 vs f64: a few f32 ulps per step.
     const IMAGE_TOL: f64 = 2e-5;

@@ -14,21 +14,20 @@
 //! pixel with the reference's true k nearest (`hazard_pixels`, flag `hazard`). [`twin_insert`] is
 //! the insertion rule on the CPU, applied one fragment at a time (what a hazard-free run keeps).
 
-use scenarios::Params;
-
-use super::store::{
-    self, bind_buffers, check_storage_size, compute_pipeline, dummy_depth, storage_pass,
-    storage_pipeline, ENTRY_BYTES, STORAGE_RW,
-};
-use super::{
-    camera_entry, int_param, read_vec, shader, storage_entry, str_param, Capture, Expected,
-    FrameStats, Method, Prepared, EFFECTS_WGSL,
-};
+use super::store::{self, dummy_depth, storage_pass, storage_pipeline, ENTRY_BYTES};
+use super::{Capture, Expected, FrameStats, Method, Prepared};
+use crate::axes::{Axis, Point};
+use crate::effects::FOLD_WGSL;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
+use crate::gpu_util::{
+    bind_buffers, camera_entry, check_storage_size, compute_pipeline, read_vec, shader,
+    storage_entry, STORAGE_RW,
+};
+use crate::record::cols;
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
-use crate::{CoreError, Result};
+use crate::Result;
 
 const WGSL: &str = include_str!("kbuffer_rmw.wgsl");
 /// Triangles per draw in the `heuristics` variant (the thesis's batch size).
@@ -36,6 +35,14 @@ pub const BATCH_TRIANGLES: u32 = 32;
 pub const MAX_K: i64 = 64;
 
 pub struct KBufferRmw;
+
+/// k, the fragments a k-buffer keeps per pixel (both k-buffers).
+pub const LAYERS: Axis = Axis::int(cols::LAYERS, "k: fragments kept per pixel", 8, 1, MAX_K);
+const HEURISTICS: Axis = Axis::bool(
+    cols::HEURISTICS,
+    "the thesis's hazard heuristics: draws depth-sorted in batches of 32 triangles",
+    false,
+);
 
 impl Method for KBufferRmw {
     fn name(&self) -> &'static str {
@@ -47,23 +54,16 @@ impl Method for KBufferRmw {
     fn exact(&self) -> bool {
         false
     }
-    fn axes(&self) -> &'static [&'static str] {
-        &["layers", "variant"]
+    fn axes(&self) -> Vec<Axis> {
+        vec![LAYERS, HEURISTICS]
     }
-    fn supports(&self, _: &Gpu, params: &Params) -> std::result::Result<(), String> {
-        int_param(params, "layers", 8, 1, MAX_K)?;
-        str_param(params, "variant", "plain", &["plain", "heuristics"])?;
-        Ok(())
-    }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
-        let k = int_param(params, "layers", 8, 1, MAX_K).map_err(CoreError::Param)? as u32;
-        let variant = str_param(params, "variant", "plain", &["plain", "heuristics"])
-            .map_err(CoreError::Param)?;
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let k = point.int(&LAYERS) as u32;
         Ok(Box::new(PreparedRmw::new(
             gpu,
             scene,
             k,
-            variant == "heuristics",
+            point.bool(&HEURISTICS),
         )?))
     }
 }
@@ -197,7 +197,7 @@ pub fn kslots_layout(gpu: &Gpu, extra: u32) -> wgpu::BindGroupLayout {
 impl PreparedRmw {
     fn new(gpu: &Gpu, scene: &GpuScene, k: u32, heuristics: bool) -> Result<Self> {
         let d = &gpu.device;
-        let src = format!("{WGSL}\n{EFFECTS_WGSL}");
+        let src = format!("{WGSL}\n{FOLD_WGSL}");
         let module = shader(gpu, "kbuffer_rmw", &src);
         let bgl = kslots_layout(gpu, 0);
         let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -215,8 +215,15 @@ impl PreparedRmw {
             "fs_insert",
             &kc,
         );
-        let resolve =
-            compute_pipeline(gpu, "kbuffer_rmw resolve", &layout, &module, "resolve", &rc);
+        let resolve = compute_pipeline(
+            gpu,
+            "kbuffer_rmw resolve",
+            &layout,
+            &module,
+            "resolve",
+            &rc,
+            false,
+        );
         let mut alloc = AllocCounter::default();
         let depth = dummy_depth(gpu, &mut alloc, scene);
         let slots = KSlots::new(gpu, &mut alloc, scene, k)?;
@@ -340,10 +347,10 @@ impl Prepared for PreparedRmw {
 
 #[cfg(test)]
 mod tests {
-    use scenarios::ParamValue::{Int, Str};
+    use scenarios::ParamValue::{Bool, Int};
 
     use super::*;
-    use crate::methods::store::testing::{count_mismatch, max_err, params, run, scene};
+    use crate::testing::{count_mismatch, max_err, params, run, scene};
 
     /// Composite of 8 layers in f32 vs f64: a few f32 ulps per step.
     const IMAGE_TOL: f64 = 1e-5;
@@ -367,7 +374,10 @@ mod tests {
         // quads: 6 layers everywhere in the centre; k = 4 < 6 exercises the full-buffer drop.
         let s = scene("quads", &[("depth_complexity", Int(6))]);
         for variant in ["plain", "heuristics"] {
-            let p = params(&[("layers", Int(4)), ("variant", Str(variant.into()))]);
+            let p = params(&[
+                ("layers", Int(4)),
+                ("heuristics", Bool(variant == "heuristics")),
+            ]);
             let (cap, lists) = run(&KBufferRmw, &s, 48, 48, &p);
             // The twin, fed each pixel's fragments in submission order (plain variant).
             let mut prims: Vec<_> = Vec::new();
@@ -431,7 +441,7 @@ mod tests {
     }
 
     fn dummy() -> wgpu::Buffer {
-        crate::methods::store::testing::gpu()
+        crate::testing::gpu()
             .device
             .create_buffer(&wgpu::BufferDescriptor {
                 label: None,

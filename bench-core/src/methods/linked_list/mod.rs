@@ -6,19 +6,19 @@
 //! full, or lists longer than the resolve's sort capacity (128), are counted on the GPU and
 //! reported (`overflow_pixels`, flag `overflow`, lost fragments in notes), never silent.
 
-use scenarios::Params;
+use crate::effects::FOLD_WGSL;
+use crate::gpu_util::{
+    bind_buffers, camera_entry, check_storage_size, compute_pipeline, read_vec, shader,
+    storage_entry, STORAGE_RW,
+};
 
-use super::store::{
-    bind_buffers, check_storage_size, compute_pipeline, dummy_depth, storage_pass,
-    storage_pipeline, ENTRY_BYTES, STORAGE_RW,
-};
-use super::{
-    camera_entry, int_param, read_vec, shader, storage_entry, Capture, Expected, FrameStats,
-    Method, Prepared, EFFECTS_WGSL,
-};
+use super::store::{dummy_depth, storage_pass, storage_pipeline, ENTRY_BYTES};
+use super::{Capture, Expected, FrameStats, Method, Prepared};
+use crate::axes::{Axis, Point};
 use crate::effects::{self, Effect, EffectConfig};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::record::cols;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
@@ -27,6 +27,14 @@ const WGSL: &str = include_str!("linked_list.wgsl");
 pub const SORT_MAX: u32 = 128;
 
 pub struct LinkedList;
+
+const LAYERS: Axis = Axis::int(
+    cols::LAYERS,
+    "node pool size in nodes per pixel on average (pool = layers × pixels)",
+    8,
+    1,
+    1024,
+);
 
 impl Method for LinkedList {
     fn name(&self) -> &'static str {
@@ -38,28 +46,28 @@ impl Method for LinkedList {
     fn exact(&self) -> bool {
         true
     }
-    fn axes(&self) -> &'static [&'static str] {
-        &[
-            "layers", "effect", "sigma", "csg_a", "csg_b", "dof_near", "dof_far", "variant",
-        ]
+    fn axes(&self) -> Vec<Axis> {
+        let mut v = vec![LAYERS];
+        v.extend_from_slice(effects::AXES);
+        v
     }
-    fn supports(&self, _: &Gpu, params: &Params) -> std::result::Result<(), String> {
-        int_param(params, "layers", 8, 1, 1024)?;
-        effect_config(params)?;
-        Ok(())
+    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+        EffectConfig::from_point(point).map(|_| ())
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
-        let layers = int_param(params, "layers", 8, 1, 1024).map_err(CoreError::Param)? as u64;
-        let effect = effect_config(params).map_err(CoreError::Param)?;
+    fn supports(&self, _: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        effect_config(point).map(|_| ())
+    }
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let layers = point.int(&LAYERS) as u64;
+        let effect = effect_config(point).map_err(CoreError::Param)?;
         Ok(Box::new(PreparedList::new(gpu, scene, layers, &effect)?))
     }
 }
 
 /// The effect of a point: a node stores colour, window depth, view depth, object id and facing,
 /// so every effect but Fresnel (which needs the normal) folds from it.
-fn effect_config(params: &Params) -> std::result::Result<EffectConfig, String> {
-    effects::check_variant(params, &["naive", "stable"])?;
-    let e = EffectConfig::from_params(params)?;
+fn effect_config(point: &Point) -> std::result::Result<EffectConfig, String> {
+    let e = EffectConfig::from_point(point)?;
     if e.effect == Effect::Fresnel {
         return Err("linked_list nodes store no normal: fresnel needs one".into());
     }
@@ -92,7 +100,7 @@ impl PreparedList {
             )));
         }
         check_storage_size(gpu, "linked_list node pool", pool * ENTRY_BYTES)?;
-        let src = format!("{WGSL}\n{EFFECTS_WGSL}");
+        let src = format!("{WGSL}\n{FOLD_WGSL}");
         let module = shader(gpu, "linked_list", &src);
         let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
         let mut entries = vec![camera_entry(0)];
@@ -118,8 +126,15 @@ impl PreparedList {
             "fs_append",
             &pc,
         );
-        let resolve =
-            compute_pipeline(gpu, "linked_list resolve", &layout, &module, "resolve", &rc);
+        let resolve = compute_pipeline(
+            gpu,
+            "linked_list resolve",
+            &layout,
+            &module,
+            "resolve",
+            &rc,
+            false,
+        );
         let mut alloc = AllocCounter::default();
         let depth = dummy_depth(gpu, &mut alloc, scene);
         let heads = alloc.buffer(gpu, "list heads", px * 4, STORAGE_RW);
@@ -216,7 +231,7 @@ mod tests {
     use scenarios::ParamValue::Int;
 
     use super::*;
-    use crate::methods::store::testing::{count_mismatch, max_err, params, run, scene};
+    use crate::testing::{count_mismatch, max_err, params, run, scene};
 
     /// Composite of up to 16 layers in f32 vs f64: a few f32 ulps per step.
     const IMAGE_TOL: f64 = 2e-5;

@@ -3,13 +3,12 @@
 //! Approximate (`exact() = false`): its error vs the reference is what the rows report. It walks
 //! no fragment list, so the effects fold does not apply (transparency only).
 
-use scenarios::Params;
-
-use super::store::{compute_pipeline, STORAGE_RW};
-use super::{
-    camera_entry, read_vec, shader, storage_entry, texture_entry, Capture, Expected, FrameStats,
-    Method, Prepared,
+use crate::axes::Point;
+use crate::gpu_util::{
+    camera_entry, compute_pipeline, read_vec, shader, storage_entry, texture_entry, STORAGE_RW,
 };
+
+use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::timing::GpuTimer;
@@ -31,7 +30,7 @@ impl Method for Wboit {
     fn exact(&self) -> bool {
         false
     }
-    fn supports(&self, gpu: &Gpu, _: &Params) -> std::result::Result<(), String> {
+    fn supports(&self, gpu: &Gpu, _: &Point) -> std::result::Result<(), String> {
         for f in [ACCUM, REVEAL] {
             if !gpu.renderable(f) {
                 return Err(format!("{f:?} is not renderable on this adapter"));
@@ -39,7 +38,7 @@ impl Method for Wboit {
         }
         Ok(())
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Params) -> Result<Box<dyn Prepared>> {
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Point) -> Result<Box<dyn Prepared>> {
         Ok(Box::new(PreparedWboit::new(gpu, scene)))
     }
 }
@@ -142,6 +141,7 @@ impl PreparedWboit {
             &module,
             "resolve",
             &[],
+            false,
         );
         let mut alloc = AllocCounter::default();
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
@@ -257,7 +257,7 @@ mod tests {
     use scenarios::ParamValue::Int;
 
     use super::*;
-    use crate::methods::store::testing::{max_err, run, scene};
+    use crate::testing::{max_err, run, scene};
 
     /// f16 has an 11-bit significand: each stored sum or product is within 2^-11 relative, so a
     /// pixel of n layers (n rounded additions in each channel of the sum, n rounded products in

@@ -29,45 +29,160 @@ pub mod prep;
 #[cfg(test)]
 mod tests;
 
+use crate::gpu_util::{camera_entry, clear_depth, depth_state, shader};
 use std::collections::{BTreeMap, HashMap};
 
-use scenarios::suite::axis_product;
-use scenarios::{Mesh, Params, StudySpec};
+use scenarios::Mesh;
 use wgpu::util::DeviceExt;
 
 use self::prep::{
     AttrFormat, AttrKind, BatchSpec, Batched, FeedFormats, IndexFormat, Layout, MeshOrder, Ordered,
     Primitive, Streams,
 };
-use super::{Emit, GroupCtx, PointSpec, Study};
+use super::{Emit, GroupCtx, Methods, Opt, Study};
+use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
-use crate::methods::floor::{clear_depth, depth_state};
-use crate::methods::{bool_param, camera_entry, int_param, shader, str_param};
+
 use crate::record::cols;
 use crate::record::Row;
-use crate::runner::{failed_row, one_line, set_params, skipped_row};
+use crate::record::{failed_row, one_line, set_params, skipped_row};
 use crate::timing::{GpuTimer, Stats};
 use crate::{CoreError, Result};
 
 const WGSL: &str = include_str!("geometry.wgsl");
 
-const AXES: &[&str] = &[
-    "batch_size",
-    "draw_triangles",
-    "vertex_format",
-    "normal_format",
-    "color_format",
-    "texcoord_format",
-    "layout",
-    "extra_attributes",
-    "index_format",
-    "mesh_order",
-    "indexed",
-    "primitive",
+const BATCH_SIZE: Axis = Axis::int(
+    cols::BATCH_SIZE,
+    "triangles per draw call (0 = the whole mesh)",
+    0,
+    0,
+    i32::MAX as i64,
+);
+const DRAW_TRIANGLES: Axis = Axis::int(
+    cols::DRAW_TRIANGLES,
+    "triangles drawn, a prefix of the ordered mesh (0 = all)",
+    0,
+    0,
+    i32::MAX as i64,
+);
+const VERTEX_FORMAT: Axis = Axis::choice(
+    cols::VERTEX_FORMAT,
+    "position format",
+    "float32x3",
+    &["float32x3", "float16x4", "snorm16x4"],
+);
+const NORMAL_FORMAT: Axis = Axis::choice(
+    cols::NORMAL_FORMAT,
+    "normal format, or none",
+    "float32x3",
+    &[
+        "float32x3",
+        "float32x4",
+        "float16x4",
+        "snorm16x4",
+        "snorm8x4",
+        "unorm8x4",
+        "unorm10_10_10_2",
+        "none",
+    ],
+);
+const COLOR_FORMAT: Axis = Axis::choice(
+    cols::COLOR_FORMAT,
+    "colour format, or none",
+    "none",
+    &[
+        "float32x4",
+        "float32x3",
+        "float16x4",
+        "unorm16x4",
+        "snorm16x4",
+        "unorm8x4",
+        "snorm8x4",
+        "unorm10_10_10_2",
+        "none",
+    ],
+);
+const TEXCOORD_FORMAT: Axis = Axis::choice(
+    cols::TEXCOORD_FORMAT,
+    "texture-coordinate format, or none",
+    "none",
+    &[
+        "float32x2",
+        "float32x3",
+        "float16x2",
+        "snorm16x2",
+        "unorm16x2",
+        "none",
+    ],
+);
+const LAYOUT: Axis = Axis::choice(
+    cols::LAYOUT,
+    "one interleaved vertex buffer or one per attribute",
+    "separate",
+    &["interleaved", "separate"],
+);
+const EXTRA_ATTRIBUTES: Axis = Axis::int(
+    cols::EXTRA_ATTRIBUTES,
+    "extra float32x4 attributes per vertex",
+    0,
+    0,
+    8,
+);
+const INDEX_FORMAT: Axis = Axis::choice(
+    cols::INDEX_FORMAT,
+    "index precision",
+    "uint32",
+    &["uint16", "uint32"],
+);
+const MESH_ORDER: Axis = Axis::choice(
+    cols::MESH_ORDER,
+    "triangle order",
+    "original",
+    prep::MESH_ORDERS,
+);
+const INDEXED: Axis = Axis::bool(
+    cols::INDEXED,
+    "indexed draws (false: one vertex per triangle corner)",
+    true,
+);
+const PRIMITIVE: Axis = Axis::choice(
+    cols::PRIMITIVE,
+    "triangle list, or strips with primitive restart",
+    "list",
+    &["list", "strip"],
+);
+
+/// The axes of a geometry point, declared.
+pub const AXES: &[Axis] = &[
+    BATCH_SIZE,
+    DRAW_TRIANGLES,
+    VERTEX_FORMAT,
+    NORMAL_FORMAT,
+    COLOR_FORMAT,
+    TEXCOORD_FORMAT,
+    LAYOUT,
+    EXTRA_ATTRIBUTES,
+    INDEX_FORMAT,
+    MESH_ORDER,
+    INDEXED,
+    PRIMITIVE,
 ];
 
-const OPTIONS: &[&str] = &["raster_check", "small_viewport_divisor"];
+const RASTER_CHECK: Opt = Opt {
+    name: "raster_check",
+    doc: "also time each point at a small viewport (raster-bound check)",
+    kind: scenarios::ValueKind::Bool { default: true },
+};
+const SMALL_VIEWPORT_DIVISOR: Opt = Opt {
+    name: "small_viewport_divisor",
+    doc: "the small viewport is the suite's resolution divided by this",
+    kind: scenarios::ValueKind::Int {
+        default: 8,
+        min: 2,
+        max: 1024,
+    },
+};
 
 /// One point, parsed.
 #[derive(Clone, Debug)]
@@ -77,49 +192,35 @@ pub struct FeedSpec {
     pub order: MeshOrder,
 }
 
-fn opt_format(
-    params: &Params,
-    axis: &str,
-    kind: AttrKind,
-    default: &str,
-) -> Result<Option<AttrFormat>, String> {
-    let mut allowed: Vec<&str> = kind.allowed().to_vec();
-    if kind != AttrKind::Position {
-        allowed.push("none");
-    }
-    let name = str_param(params, axis, default, &allowed)?;
-    Ok(prep::format_by_name(&name))
+fn format(point: &Point, axis: &Axis) -> Option<AttrFormat> {
+    prep::format_by_name(&point.choice(axis))
 }
 
 impl FeedSpec {
-    /// Reads and checks a point's axes; a bad value is an error naming the axis.
-    pub fn from_params(p: &Params) -> Result<FeedSpec, String> {
-        let position = opt_format(p, "vertex_format", AttrKind::Position, "float32x3")?
-            .expect("positions always have a format");
-        let normal = opt_format(p, "normal_format", AttrKind::Normal, "float32x3")?;
-        let color = opt_format(p, "color_format", AttrKind::Color, "none")?;
-        let texcoord = opt_format(p, "texcoord_format", AttrKind::Texcoord, "none")?;
-        let layout =
-            match str_param(p, "layout", "separate", &["interleaved", "separate"])?.as_str() {
-                "interleaved" => Layout::Interleaved,
-                _ => Layout::Separate,
-            };
-        let extra_attributes = int_param(p, "extra_attributes", 0, 0, 8)? as u32;
-        let batch_size = int_param(p, "batch_size", 0, 0, i32::MAX as i64)? as usize;
-        let draw_triangles = int_param(p, "draw_triangles", 0, 0, i32::MAX as i64)? as usize;
-        let index_format =
-            match str_param(p, "index_format", "uint32", &["uint16", "uint32"])?.as_str() {
-                "uint16" => IndexFormat::Uint16,
-                _ => IndexFormat::Uint32,
-            };
-        let order = MeshOrder::parse(&str_param(p, "mesh_order", "original", prep::MESH_ORDERS)?)
-            .expect("checked");
-        let indexed = bool_param(p, "indexed", true)?;
-        let primitive = match str_param(p, "primitive", "list", &["list", "strip"])?.as_str() {
+    /// Reads a resolved point's axes through their declarations.
+    pub fn from_point(p: &Point) -> FeedSpec {
+        let position = format(p, &VERTEX_FORMAT).expect("positions always have a format");
+        let normal = format(p, &NORMAL_FORMAT);
+        let color = format(p, &COLOR_FORMAT);
+        let texcoord = format(p, &TEXCOORD_FORMAT);
+        let layout = match p.choice(&LAYOUT).as_str() {
+            "interleaved" => Layout::Interleaved,
+            _ => Layout::Separate,
+        };
+        let extra_attributes = p.int(&EXTRA_ATTRIBUTES) as u32;
+        let batch_size = p.int(&BATCH_SIZE) as usize;
+        let draw_triangles = p.int(&DRAW_TRIANGLES) as usize;
+        let index_format = match p.choice(&INDEX_FORMAT).as_str() {
+            "uint16" => IndexFormat::Uint16,
+            _ => IndexFormat::Uint32,
+        };
+        let order = MeshOrder::parse(&p.choice(&MESH_ORDER)).expect("a declared choice");
+        let indexed = p.bool(&INDEXED);
+        let primitive = match p.choice(&PRIMITIVE).as_str() {
             "strip" => Primitive::Strip,
             _ => Primitive::List,
         };
-        Ok(FeedSpec {
+        FeedSpec {
             formats: FeedFormats {
                 position,
                 normal,
@@ -136,7 +237,7 @@ impl FeedSpec {
                 indexed,
             },
             order,
-        })
+        }
     }
 
     /// Writes the effective value of every axis (defaults included), so each row says exactly
@@ -706,34 +807,6 @@ fn time_frames(
 
 pub struct GeometryStudy;
 
-fn study_options(spec: &StudySpec) -> Result<(bool, u32)> {
-    if let Some(k) = spec.extra.keys().find(|k| !OPTIONS.contains(&k.as_str())) {
-        return Err(CoreError::Param(format!(
-            "geometry study: unknown key '{k}' (options: {}; axes go in `axes`)",
-            OPTIONS.join(", ")
-        )));
-    }
-    let raster_check = match spec.extra.get("raster_check") {
-        None => true,
-        Some(toml::Value::Boolean(b)) => *b,
-        Some(v) => {
-            return Err(CoreError::Param(format!(
-                "geometry study: raster_check must be true or false, got {v}"
-            )))
-        }
-    };
-    let div = match spec.extra.get("small_viewport_divisor") {
-        None => 8,
-        Some(toml::Value::Integer(i)) if (2..=1024).contains(i) => *i as u32,
-        Some(v) => {
-            return Err(CoreError::Param(format!(
-                "geometry study: small_viewport_divisor must be an integer in 2..=1024, got {v}"
-            )))
-        }
-    };
-    Ok((raster_check, div))
-}
-
 /// The CPU-side product of one point.
 pub struct PreparedFeed {
     pub batched: Batched,
@@ -754,35 +827,19 @@ impl Study for GeometryStudy {
     fn describe(&self) -> &'static str {
         "geometry feeding (Bavoil ch. 3): batch size, vertex formats, layout, index precision, mesh order, strips; triangles/s and post-transform cache hits"
     }
-    fn points(&self, spec: &StudySpec) -> Result<Vec<PointSpec>> {
-        if !spec.methods.is_empty() {
-            return Err(CoreError::Param(
-                "the geometry study takes no `methods` (it sweeps `axes`)".into(),
-            ));
-        }
-        if let Some(k) = spec.axes.keys().find(|k| !AXES.contains(&k.as_str())) {
-            return Err(CoreError::Param(format!(
-                "geometry study: unknown axis '{k}' (known: {})",
-                AXES.join(", ")
-            )));
-        }
-        study_options(spec)?;
-        let points: Vec<PointSpec> = axis_product(&spec.axes, AXES)
-            .into_iter()
-            .map(|params| PointSpec {
-                method: "geometry".into(),
-                params,
-            })
-            .collect();
-        for p in &points {
-            FeedSpec::from_params(&p.params)
-                .map_err(|e| CoreError::Param(format!("geometry study: {e}")))?;
-        }
-        Ok(points)
+    fn methods(&self) -> Methods {
+        Methods::Implicit("geometry")
+    }
+    fn axes(&self, _: &str) -> Vec<Axis> {
+        AXES.to_vec()
+    }
+    fn options(&self) -> Vec<Opt> {
+        vec![RASTER_CHECK, SMALL_VIEWPORT_DIVISOR]
     }
 
     fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
-        let (raster_check, div) = study_options(ctx.study)?;
+        let raster_check = RASTER_CHECK.bool(ctx.study);
+        let div = SMALL_VIEWPORT_DIVISOR.int(ctx.study) as u32;
         let gpu = ctx.gpu;
         let mesh = &ctx.scene.mesh;
         let (w, h) = (ctx.group.width, ctx.group.height);
@@ -791,8 +848,8 @@ impl Study for GeometryStudy {
         for (i, pt) in ctx.group.points.iter().enumerate() {
             let mut row = Row::new();
             row.set(cols::METHOD, "geometry");
-            set_params(&mut row, &pt.params)?;
-            let spec = FeedSpec::from_params(&pt.params).map_err(CoreError::Param)?;
+            set_params(&mut row, pt.point.values())?;
+            let spec = FeedSpec::from_point(&pt.point);
             spec.set_columns(&mut row);
             if let Some(why) = spec.unsupported(gpu, mesh) {
                 emit(i, skipped_row(row, &why))?;

@@ -9,21 +9,23 @@
 //! max_nspp samples × k layers), needs no raster state or derivatives (slopes were taken at peel
 //! time), and writes its f32 visibility straight into a storage buffer that is read back exactly.
 
+use crate::gpu_util::{
+    camera_entry, clear_depth, depth_state, read_vec, shader, storage_entry, texture_entry,
+};
 use std::sync::{Arc, Mutex};
 
 use bytemuck::{Pod, Zeroable};
-use scenarios::{AreaLight, Params};
+use scenarios::AreaLight;
 use wgpu::util::DeviceExt;
 
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, CameraUniform, GpuScene};
-use crate::methods::floor::{clear_depth, depth_state};
-use crate::methods::{
-    bool_param, camera_entry, int_param, read_vec, shader, storage_entry, str_param, texture_entry,
-    Capture, Expected, FrameStats, Method, Prepared,
-};
+
+use crate::axes::{Axis, Point};
+use crate::methods::{Capture, Expected, FrameStats, Method, Prepared};
+use crate::record::cols;
 use crate::timing::GpuTimer;
-use crate::{CoreError, Result};
+use crate::Result;
 
 const WGSL: &str = include_str!("shadows.wgsl");
 const LAYER_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
@@ -48,49 +50,59 @@ pub struct Config {
     pub hsm: bool,
 }
 
-pub const AXES: &[&str] = &[
-    "shadow_map_res",
-    "layers",
-    "max_nspp",
-    "bias_mode",
-    "gscale",
-    "gmax",
-    "hsm",
+const SHADOW_MAP_RES: Axis = Axis::int(
+    cols::SHADOW_MAP_RES,
+    "shadow map side in texels",
+    512,
+    8,
+    16384,
+);
+// Four depths fill one RGBA32F texel: the single-fetch layout caps k at 4.
+const LAYERS: Axis = Axis::int(
+    cols::LAYERS,
+    "depth layers peeled into the shadow map (k ≤ 4)",
+    3,
+    1,
+    4,
+);
+const MAX_NSPP: Axis = Axis::int(
+    cols::MAX_NSPP,
+    "most shadow-map samples per pixel",
+    289,
+    1,
+    65536,
+);
+const BIAS_MODE: Axis = Axis::choice(cols::BIAS_MODE, "depth bias rule", "hybrid", BIAS_MODES);
+const GSCALE: Axis = Axis::float(cols::GSCALE, "gradient bias scale", 2.0, 0.0, 1e6);
+const GMAX: Axis = Axis::float(cols::GMAX, "gradient bias cap", 0.1, 0.0, 1e6);
+const HSM: Axis = Axis::bool(
+    cols::HSM,
+    "hierarchical min pyramid to shrink the search region",
+    true,
+);
+
+/// The axes of a layered soft shadow map point, declared.
+pub const AXES: &[Axis] = &[
+    SHADOW_MAP_RES,
+    LAYERS,
+    MAX_NSPP,
+    BIAS_MODE,
+    GSCALE,
+    GMAX,
+    HSM,
 ];
 
-fn float_param(
-    params: &Params,
-    name: &str,
-    default: f64,
-    min: f64,
-    max: f64,
-) -> std::result::Result<f64, String> {
-    let v = match params.get(name) {
-        None => default,
-        Some(scenarios::ParamValue::Float(x)) => *x,
-        Some(scenarios::ParamValue::Int(i)) => *i as f64,
-        Some(other) => return Err(format!("axis '{name}' must be a number, got {other}")),
-    };
-    if !v.is_finite() || v < min || v > max {
-        return Err(format!(
-            "axis '{name}' = {v} is out of range [{min}, {max}]"
-        ));
-    }
-    Ok(v)
-}
-
 impl Config {
-    pub fn from_params(p: &Params) -> std::result::Result<Config, String> {
-        Ok(Config {
-            shadow_map_res: int_param(p, "shadow_map_res", 512, 8, 16384)? as u32,
-            // Four depths fill one RGBA32F texel: the single-fetch layout caps k at 4.
-            layers: int_param(p, "layers", 3, 1, 4)? as u32,
-            max_nspp: int_param(p, "max_nspp", 289, 1, 65536)? as u32,
-            bias_mode: str_param(p, "bias_mode", "hybrid", BIAS_MODES)?,
-            gscale: float_param(p, "gscale", 2.0, 0.0, 1e6)?,
-            gmax: float_param(p, "gmax", 0.1, 0.0, 1e6)?,
-            hsm: bool_param(p, "hsm", true)?,
-        })
+    pub fn from_point(p: &Point) -> Config {
+        Config {
+            shadow_map_res: p.int(&SHADOW_MAP_RES) as u32,
+            layers: p.int(&LAYERS) as u32,
+            max_nspp: p.int(&MAX_NSPP) as u32,
+            bias_mode: p.choice(&BIAS_MODE),
+            gscale: p.float(&GSCALE),
+            gmax: p.float(&GMAX),
+            hsm: p.bool(&HSM),
+        }
     }
 
     /// Samples per axis of the search region: floor(sqrt(max_nspp)).
@@ -152,11 +164,11 @@ impl Method for LayeredSsm {
     fn exact(&self) -> bool {
         false
     }
-    fn axes(&self) -> &'static [&'static str] {
-        AXES
+    fn axes(&self) -> Vec<Axis> {
+        AXES.to_vec()
     }
-    fn supports(&self, gpu: &Gpu, params: &Params) -> std::result::Result<(), String> {
-        let c = Config::from_params(params)?;
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        let c = Config::from_point(point);
         let max = gpu.limits.max_texture_dimension_2d;
         if c.shadow_map_res > max {
             return Err(format!(
@@ -187,8 +199,8 @@ impl Method for LayeredSsm {
         }
         Ok(())
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<Box<dyn Prepared>> {
-        Ok(Box::new(self.prepare_ssm(gpu, scene, params)?))
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        Ok(Box::new(self.prepare_ssm(gpu, scene, point)?))
     }
 }
 
@@ -201,8 +213,8 @@ impl LayeredSsm {
     }
 
     /// `prepare`, keeping the concrete type (the study reads the G-buffer points from it).
-    pub fn prepare_ssm(&self, gpu: &Gpu, scene: &GpuScene, params: &Params) -> Result<PreparedSsm> {
-        let cfg = Config::from_params(params).map_err(CoreError::Param)?;
+    pub fn prepare_ssm(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<PreparedSsm> {
+        let cfg = Config::from_point(point);
         let pipes = {
             let mut cached = self.pipelines.lock().unwrap();
             match &*cached {

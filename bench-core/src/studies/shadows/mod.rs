@@ -19,21 +19,35 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use glam::{DVec3, Vec3};
-use scenarios::suite::axis_product;
 use scenarios::{ParamValue, Params, StudySpec};
 
-use super::{Emit, GroupCtx, PointSpec, Study};
+use super::{Emit, GroupCtx, Methods, Opt, PointSpec, Study};
+use crate::axes::{Axis, Point};
+use crate::measure::{measure, set_timing};
 use crate::methods::{Method, Prepared};
 use crate::record::cols;
 use crate::record::Row;
-use crate::runner::{failed_row, measure, set_params, set_timing, skipped_row};
+use crate::record::{failed_row, set_params, skipped_row};
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 use layered::{Config, LayeredSsm};
 use raytrace::{Bvh, LightFrame};
 
 const METHOD: &str = "layered_ssm";
-const STUDY_KEYS: &[&str] = &["shadow_rays", "images"];
+const SHADOW_RAYS: Opt = Opt {
+    name: "shadow_rays",
+    doc: "reference rays per pixel: a perfect square m² (the light square's m×m strata)",
+    kind: scenarios::ValueKind::Int {
+        default: 64,
+        min: 1,
+        max: 4096 * 4096,
+    },
+};
+const IMAGES: Opt = Opt {
+    name: "images",
+    doc: "write visibility images beside the CSV",
+    kind: scenarios::ValueKind::Bool { default: true },
+};
 
 pub struct ShadowsStudy;
 
@@ -44,38 +58,22 @@ struct Settings {
     images: bool,
 }
 
-fn settings(spec: &StudySpec) -> Result<Settings> {
-    if let Some(k) = spec
-        .extra
-        .keys()
-        .find(|k| !STUDY_KEYS.contains(&k.as_str()))
-    {
-        return Err(CoreError::Param(format!(
-            "unknown key '{k}' in the shadows study (known: {})",
-            STUDY_KEYS.join(", ")
-        )));
-    }
-    let rays = match spec.extra.get("shadow_rays") {
-        None => 64,
-        Some(v) => v
-            .as_integer()
-            .ok_or_else(|| CoreError::Param(format!("shadow_rays must be an integer, got {v}")))?,
-    };
+/// `shadow_rays` as rays per axis, or why it is not a perfect square.
+fn rays_per_axis(spec: &StudySpec) -> std::result::Result<u32, String> {
+    let rays = SHADOW_RAYS.int(spec);
     let m = (rays.max(0) as f64).sqrt().round() as i64;
     if !(1..=4096).contains(&m) || m * m != rays {
-        return Err(CoreError::Param(format!(
+        return Err(format!(
             "shadow_rays = {rays} must be a perfect square m² with 1 ≤ m ≤ 4096 (the strata are m×m)"
-        )));
+        ));
     }
-    let images = match spec.extra.get("images") {
-        None => true,
-        Some(v) => v
-            .as_bool()
-            .ok_or_else(|| CoreError::Param(format!("images must be true or false, got {v}")))?,
-    };
+    Ok(m as u32)
+}
+
+fn settings(spec: &StudySpec) -> Result<Settings> {
     Ok(Settings {
-        rays_per_axis: m as u32,
-        images,
+        rays_per_axis: rays_per_axis(spec).map_err(CoreError::Param)?,
+        images: IMAGES.bool(spec),
     })
 }
 
@@ -86,38 +84,25 @@ impl Study for ShadowsStudy {
     fn describe(&self) -> &'static str {
         "layered soft shadow maps (Bavoil ch. 5) from a square area light vs a ray-traced reference"
     }
-    fn points(&self, spec: &StudySpec) -> Result<Vec<PointSpec>> {
-        if let Some(m) = spec.methods.iter().find(|m| *m != METHOD) {
-            return Err(CoreError::Param(format!(
-                "the shadows study runs '{METHOD}' only, not '{m}' (leave `methods` out)"
-            )));
-        }
-        if let Some(a) = spec
-            .axes
-            .keys()
-            .find(|a| !layered::AXES.contains(&a.as_str()))
-        {
-            return Err(CoreError::Param(format!(
-                "unknown shadows axis '{a}' (known: {})",
-                layered::AXES.join(", ")
-            )));
-        }
-        settings(spec)?;
-        Ok(axis_product(&spec.axes, layered::AXES)
-            .into_iter()
-            .map(|params| PointSpec {
-                method: METHOD.into(),
-                params,
-            })
-            .collect())
+    fn methods(&self) -> Methods {
+        Methods::Implicit(METHOD)
+    }
+    fn axes(&self, _: &str) -> Vec<Axis> {
+        layered::AXES.to_vec()
+    }
+    fn options(&self) -> Vec<Opt> {
+        vec![SHADOW_RAYS, IMAGES]
+    }
+    fn check_table(&self, spec: &StudySpec) -> Vec<String> {
+        rays_per_axis(spec).err().into_iter().collect()
     }
 
     fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
         let set = settings(ctx.study)?;
-        let base_row = |params: &Params| -> Result<Row> {
+        let base_row = |point: &Point| -> Result<Row> {
             let mut row = Row::new();
             row.set(cols::METHOD, METHOD).set(cols::EXACT, false);
-            set_params(&mut row, params)?;
+            set_params(&mut row, point.values())?;
             row.set(cols::SHADOW_RAYS, set.rays_per_axis * set.rays_per_axis);
             Ok(row)
         };
@@ -127,7 +112,7 @@ impl Study for ShadowsStudy {
                     "scene {} has no area light (use the soft_shadow generator)",
                     ctx.scene.label()
                 );
-                emit(i, skipped_row(base_row(&p.params)?, &why))?;
+                emit(i, skipped_row(base_row(&p.point)?, &why))?;
             }
             return Ok(());
         };
@@ -138,7 +123,7 @@ impl Study for ShadowsStudy {
                 for (i, p) in ctx.group.points.iter().enumerate() {
                     emit(
                         i,
-                        failed_row(base_row(&p.params)?, &format!("reference: {e}")),
+                        failed_row(base_row(&p.point)?, &format!("reference: {e}")),
                     )?;
                 }
                 return Ok(());
@@ -166,7 +151,7 @@ impl Study for ShadowsStudy {
         }
         // Images of the last point of each layer count: with the suite's ascending axis values
         // that is its finest configuration (largest shadow map and max_nspp).
-        let layers_of = |p: &PointSpec| Config::from_params(&p.params).map(|c| c.layers).ok();
+        let layers_of = |p: &PointSpec| Some(Config::from_point(&p.point).layers);
         let imaged: Vec<usize> = (0..ctx.group.points.len())
             .filter(|&i| {
                 let k = layers_of(&ctx.group.points[i]);
@@ -174,14 +159,14 @@ impl Study for ShadowsStudy {
             })
             .collect();
         for (i, pt) in ctx.group.points.iter().enumerate() {
-            let mut row = base_row(&pt.params)?;
+            let mut row = base_row(&pt.point)?;
             row.set_f(cols::REFERENCE_MS, reference.ms);
-            if let Err(why) = method.supports(ctx.gpu, &pt.params) {
+            if let Err(why) = crate::methods::supports(&method, ctx.gpu, &pt.point) {
                 emit(i, skipped_row(row, &why))?;
                 continue;
             }
             let mut m = match measure(
-                ctx.gpu, ctx.gscene, &method, &pt.params, ctx.warmup, ctx.reps,
+                ctx.gpu, ctx.gscene, &method, &pt.point, ctx.warmup, ctx.reps,
             ) {
                 Ok(m) => m,
                 Err(e) => {
@@ -189,7 +174,7 @@ impl Study for ShadowsStudy {
                     continue;
                 }
             };
-            set_timing(&mut row, &m, ctx);
+            set_timing(&mut row, &m, &ctx.scene.mesh);
             let got = match m.prepared.readback(ctx.gpu, ctx.gscene) {
                 Ok(cap) => cap.image.unwrap_or_default(),
                 Err(e) => {
@@ -283,8 +268,10 @@ pub fn gbuffer_points(
         .with("shadow_map_res", ParamValue::Int(16))
         .with("layers", ParamValue::Int(1))
         .with("max_nspp", ParamValue::Int(1));
-    method.supports(gpu, &params).map_err(CoreError::Param)?;
-    let mut prep = method.prepare_ssm(gpu, gscene, &params)?;
+    let point =
+        Point::resolve(layered::AXES, &params).map_err(|e| CoreError::Param(e.join("; ")))?;
+    method.supports(gpu, &point).map_err(CoreError::Param)?;
+    let mut prep = method.prepare_ssm(gpu, gscene, &point)?;
     let mut timer = GpuTimer::new(gpu);
     timer.begin_frame();
     prep.frame(gpu, gscene, &mut timer)?;

@@ -6,7 +6,7 @@ use scenarios::{ParamValue, Params, SceneSpec};
 use super::layered::LayeredSsm;
 use super::{compare, gbuffer_points, reference, VisError};
 use crate::gpu_scene::GpuScene;
-use crate::runner::measure;
+use crate::measure::measure;
 use crate::testing;
 
 const W: u32 = 64;
@@ -37,9 +37,9 @@ fn errors_where(
 ) -> Vec<VisError> {
     let gpu = testing::gpu();
     let scene = scene(case);
-    let gs = GpuScene::upload(&gpu, &scene, W, W);
+    let gs = GpuScene::upload(gpu, &scene, W, W);
     let method = LayeredSsm::new(scene.area_light.clone().unwrap());
-    let points = gbuffer_points(&gpu, &gs, &method).unwrap();
+    let points = gbuffer_points(gpu, &gs, &method).unwrap();
     let mut r = reference(&scene, &method.light, &points, W, M);
     for (v, p) in r.vis.iter_mut().zip(&points) {
         if !p.is_some_and(&keep) {
@@ -49,10 +49,11 @@ fn errors_where(
     configs
         .iter()
         .map(|p| {
-            let mut m = measure(&gpu, &gs, &method, p, 0, 1).unwrap();
+            let mut m =
+                measure(gpu, &gs, &method, &crate::testing::point(&method, p), 0, 1).unwrap();
             let vis: Vec<f32> = m
                 .prepared
-                .readback(&gpu, &gs)
+                .readback(gpu, &gs)
                 .unwrap()
                 .image
                 .unwrap()
@@ -114,17 +115,19 @@ fn cpu_twin_matches_gpu_shading_on_every_case() {
     ];
     for case in ["quad", "spheres", "leaves", "slabs", "tangent"] {
         let scene = scene(case);
-        let gs = GpuScene::upload(&gpu, &scene, W, W);
+        let gs = GpuScene::upload(gpu, &scene, W, W);
         let method = LayeredSsm::new(scene.area_light.clone().unwrap());
         for p in &configs {
-            let mut prep = method.prepare_ssm(&gpu, &gs, p).unwrap();
-            let mut timer = crate::timing::GpuTimer::new(&gpu);
+            let mut prep = method
+                .prepare_ssm(gpu, &gs, &crate::testing::point(&method, p))
+                .unwrap();
+            let mut timer = crate::timing::GpuTimer::new(gpu);
             timer.begin_frame();
-            crate::methods::Prepared::frame(&mut prep, &gpu, &gs, &mut timer).unwrap();
+            crate::methods::Prepared::frame(&mut prep, gpu, &gs, &mut timer).unwrap();
             gpu.wait().unwrap();
-            let vis = prep.read_visibility(&gpu, &gs).unwrap();
-            let maps = prep.read_maps(&gpu).unwrap();
-            let pts = prep.read_points(&gpu, &gs).unwrap();
+            let vis = prep.read_visibility(gpu, &gs).unwrap();
+            let maps = prep.read_maps(gpu).unwrap();
+            let pts = prep.read_points(gpu, &gs).unwrap();
             let (mut shaded, mut off, mut sum) = (0usize, 0usize, 0.0f64);
             for (g, p) in vis.iter().zip(&pts) {
                 let q = p.map(|p| [p[0], p[1], p[2], 1.0]).unwrap_or([0.0; 4]);
@@ -200,14 +203,15 @@ fn hsm_never_drops_an_occluder_at_stride_one() {
     let gpu = testing::gpu();
     for case in ["spheres", "leaves", "tangent"] {
         let scene = scene(case);
-        let gs = GpuScene::upload(&gpu, &scene, W, W);
+        let gs = GpuScene::upload(gpu, &scene, W, W);
         let method = LayeredSsm::new(scene.area_light.clone().unwrap());
         let vis = |hsm: bool| {
             let p = cfg(64, 3)
                 .with("max_nspp", ParamValue::Int(65536))
                 .with("hsm", ParamValue::Bool(hsm));
-            let mut m = measure(&gpu, &gs, &method, &p, 0, 1).unwrap();
-            m.prepared.readback(&gpu, &gs).unwrap().image.unwrap()
+            let mut m =
+                measure(gpu, &gs, &method, &crate::testing::point(&method, &p), 0, 1).unwrap();
+            m.prepared.readback(gpu, &gs).unwrap().image.unwrap()
         };
         let (on, off) = (vis(true), vis(false));
         let worst = on

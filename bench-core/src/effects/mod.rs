@@ -18,10 +18,21 @@
 //! seed's f32 running sum of ±z) and `variant=stable` (per-pair differences of adjacent depths,
 //! Kahan-summed) compute the same quantity and differ only in arithmetic.
 
-use glam::{DMat4, DVec3};
-use scenarios::{ParamValue, Params, Scene};
+/// The effects fold (`fold_init_at` / `fold_step` / `fold_finish_image`, override `EFFECT`):
+/// prepend it to a method's WGSL and set `effects::EffectConfig::constants` on the pipelines
+/// that call the fold.
+pub const FOLD_WGSL: &str = include_str!("fold.wgsl");
 
-use crate::methods::Expected;
+/// Bytes of one `FoldState` in `effects.wgsl` (three vec4 + two u32, padded to 16): methods that
+/// keep fold states in a per-pixel buffer between passes size it with this.
+pub const FOLD_STATE_BYTES: u64 = 64;
+
+use glam::{DMat4, DVec3};
+use scenarios::Scene;
+
+use crate::axes::{Axis, Point};
+use crate::method::Expected;
+use crate::record::cols;
 use crate::reference::{FragmentLists, RefFragment};
 
 /// Known effect names (the `effect` CSV column).
@@ -201,85 +212,77 @@ impl Default for EffectConfig {
     }
 }
 
-/// Axes every effect-capable method reads (add them to its `axes()`).
-pub const AXES: &[&str] = &[
-    "effect", "sigma", "csg_a", "csg_b", "dof_near", "dof_far", "variant",
-];
+/// The effect axis alone: every method of the `methods` study sweeps it (a method that folds no
+/// effects gets a `skipped` row for each effect but transparency, never a silent gap).
+pub const EFFECT: Axis = Axis::choice(
+    cols::EFFECT,
+    "the effect computed on the captured fragments",
+    "transparency",
+    EFFECTS,
+);
+pub const SIGMA: Axis = Axis::float(
+    cols::SIGMA,
+    "translucency/fresnel: extinction coefficient per world unit",
+    1.0,
+    0.0,
+    f64::MAX,
+);
+pub const CSG_A: Axis = Axis::int(
+    cols::CSG_A,
+    "csg_*: object id of operand A",
+    0,
+    0,
+    u32::MAX as i64,
+);
+pub const CSG_B: Axis = Axis::int(
+    cols::CSG_B,
+    "csg_*: object id of operand B",
+    1,
+    0,
+    u32::MAX as i64,
+);
+pub const DOF_NEAR: Axis = Axis::float(
+    cols::DOF_NEAR,
+    "dof: view depth between foreground and midground (≤ dof_far)",
+    1.0,
+    0.0,
+    f64::MAX,
+);
+pub const DOF_FAR: Axis = Axis::float(
+    cols::DOF_FAR,
+    "dof: view depth between midground and background (≥ dof_near)",
+    10.0,
+    0.0,
+    f64::MAX,
+);
+pub const THICKNESS: Axis = Axis::choice(
+    cols::THICKNESS,
+    "translucency/fresnel thickness arithmetic: naive (running ±z sum) or stable (Kahan pair differences)",
+    "stable",
+    &["naive", "stable"],
+);
 
-fn float(params: &Params, k: &str, default: f64) -> Result<f64, String> {
-    match params.get(k) {
-        None => Ok(default),
-        Some(ParamValue::Float(x)) => Ok(*x),
-        Some(ParamValue::Int(i)) => Ok(*i as f64),
-        Some(other) => Err(format!("axis '{k}' must be a number, got {other}")),
-    }
-}
-
-/// The `variant` axis is a '+'-separated set of tokens; this returns whether `token` is in it.
-pub fn variant_has(params: &Params, token: &str) -> Result<bool, String> {
-    match params.get("variant") {
-        None => Ok(false),
-        Some(ParamValue::Str(s)) => Ok(s.split('+').any(|t| t == token)),
-        Some(other) => Err(format!("axis 'variant' must be a string, got {other}")),
-    }
-}
-
-/// Checks every token of `variant` against `allowed`.
-pub fn check_variant(params: &Params, allowed: &[&str]) -> Result<(), String> {
-    if let Some(ParamValue::Str(s)) = params.get("variant") {
-        for t in s.split('+') {
-            if !allowed.contains(&t) {
-                return Err(format!(
-                    "variant token '{t}' is not one of {}",
-                    allowed.join(", ")
-                ));
-            }
-        }
-    }
-    Ok(())
-}
+/// Axes every effect-capable method reads: list them in its `axes()`, validate with
+/// [`EffectConfig::from_point`].
+pub const AXES: &[Axis] = &[EFFECT, SIGMA, CSG_A, CSG_B, DOF_NEAR, DOF_FAR, THICKNESS];
 
 impl EffectConfig {
-    /// Reads `effect`, `sigma`, `csg_a`, `csg_b`, `dof_near`, `dof_far` and the `naive`/`stable`
-    /// token of `variant`; a bad value is an error naming it.
-    pub fn from_params(params: &Params) -> Result<EffectConfig, String> {
-        let effect = match params.get("effect") {
-            None => Effect::Transparency,
-            Some(ParamValue::Str(s)) => Effect::parse(s)?,
-            Some(other) => return Err(format!("axis 'effect' must be a string, got {other}")),
-        };
-        let d = EffectConfig::default();
-        let sigma = float(params, "sigma", d.sigma)?;
-        if !(sigma.is_finite() && sigma >= 0.0) {
-            return Err(format!("axis 'sigma' = {sigma} must be finite and ≥ 0"));
-        }
-        let id = |k: &str, default: u32| -> Result<u32, String> {
-            match params.get(k) {
-                None => Ok(default),
-                Some(ParamValue::Int(i)) if (0..=u32::MAX as i64).contains(i) => Ok(*i as u32),
-                Some(other) => Err(format!("axis '{k}' must be an object id ≥ 0, got {other}")),
-            }
-        };
-        let (dof_near, dof_far) = (
-            float(params, "dof_near", d.dof_near)?,
-            float(params, "dof_far", d.dof_far)?,
-        );
-        if !(dof_near.is_finite() && dof_far.is_finite() && 0.0 <= dof_near && dof_near <= dof_far)
-        {
+    /// Reads the effect axes of a resolved point; the one rule a range cannot say
+    /// (`dof_near ≤ dof_far`) is an error naming both values.
+    pub fn from_point(point: &Point) -> Result<EffectConfig, String> {
+        let effect = Effect::parse(&point.choice(&EFFECT))?;
+        let (dof_near, dof_far) = (point.float(&DOF_NEAR), point.float(&DOF_FAR));
+        if dof_near > dof_far {
             return Err(format!(
-                "dof bounds must satisfy 0 ≤ dof_near ≤ dof_far (finite), got {dof_near}, {dof_far}"
+                "dof bounds must satisfy dof_near ≤ dof_far, got {dof_near}, {dof_far}"
             ));
-        }
-        let naive = variant_has(params, "naive")?;
-        if naive && variant_has(params, "stable")? {
-            return Err("variant cannot be both 'naive' and 'stable'".into());
         }
         Ok(EffectConfig {
             effect,
-            sigma,
-            stable_thickness: !naive,
-            csg_a: id("csg_a", d.csg_a)?,
-            csg_b: id("csg_b", d.csg_b)?,
+            sigma: point.float(&SIGMA),
+            stable_thickness: point.choice(&THICKNESS) == "stable",
+            csg_a: point.int(&CSG_A) as u32,
+            csg_b: point.int(&CSG_B) as u32,
             dof_near,
             dof_far,
         })
@@ -490,6 +493,7 @@ pub fn reference_image(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use scenarios::{ParamValue, Params};
 
     fn frag(z: f64, front: bool, id: u32) -> RefFragment {
         RefFragment {
@@ -572,13 +576,17 @@ mod tests {
 
     #[test]
     fn bad_effect_parameters_are_named() {
-        let p = Params::new().with("effect", ParamValue::Str("glow".into()));
-        assert!(EffectConfig::from_params(&p).unwrap_err().contains("glow"));
-        let p = Params::new().with("sigma", ParamValue::Float(-1.0));
-        assert!(EffectConfig::from_params(&p).unwrap_err().contains("sigma"));
-        let p = Params::new()
-            .with("dof_near", ParamValue::Float(5.0))
-            .with("dof_far", ParamValue::Float(1.0));
-        assert!(EffectConfig::from_params(&p).unwrap_err().contains("dof"));
+        let resolve = |p: Params| Point::resolve(AXES, &p);
+        let e = resolve(Params::new().with("effect", ParamValue::Str("glow".into()))).unwrap_err();
+        assert!(e[0].contains("glow"), "{e:?}");
+        let e = resolve(Params::new().with("sigma", ParamValue::Float(-1.0))).unwrap_err();
+        assert!(e[0].contains("sigma"), "{e:?}");
+        let p = resolve(
+            Params::new()
+                .with("dof_near", ParamValue::Float(5.0))
+                .with("dof_far", ParamValue::Float(1.0)),
+        )
+        .unwrap();
+        assert!(EffectConfig::from_point(&p).unwrap_err().contains("dof"));
     }
 }

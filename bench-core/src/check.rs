@@ -1,0 +1,307 @@
+//! One validation pass over a suite before any GPU work: every problem at once, each naming the
+//! file, the table, the key, the value and the alternatives. What it checks beyond the suite's
+//! structure (`Suite::parse`): study kinds, study options, method lists, axes against the
+//! methods that declare them (unknown axis, wrong type, out of range, cross-axis rules), scene
+//! generators and their parameters, and the model files scenes read (missing, a directory,
+//! unreadable, no usable triangle, malformed faces). What depends on the adapter (features,
+//! limits, memory) is not a suite problem: it becomes a `skipped` row when the sweep runs.
+
+use std::collections::BTreeSet;
+
+use scenarios::suite::{study_table, STUDY_KEYS};
+use scenarios::{ParamValue, Problem, SceneError, StudySpec, Suite};
+
+use crate::axes::Axis;
+use crate::studies::{self, Methods, Study};
+
+/// Every problem of `suite` (empty when it can run).
+pub fn check_suite(suite: &Suite) -> Vec<Problem> {
+    let mut out = Vec::new();
+    for spec in &suite.studies {
+        check_study(suite, spec, &mut out);
+    }
+    out
+}
+
+/// Loads a suite and checks it: `Err` holds every problem (structure and meaning).
+pub fn load(name_or_path: &str) -> Result<Suite, Vec<Problem>> {
+    match Suite::load(name_or_path) {
+        Ok(s) => {
+            let p = check_suite(&s);
+            if p.is_empty() {
+                Ok(s)
+            } else {
+                Err(p)
+            }
+        }
+        Err(SceneError::Problems(p)) => Err(p),
+        Err(e) => Err(vec![Problem::new(name_or_path, "suite", "", e.to_string())]),
+    }
+}
+
+fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
+    let file = suite.source.as_str();
+    let table = study_table(spec.index, &spec.kind);
+    let before = out.len();
+    let Some(study) = studies::by_kind(&spec.kind) else {
+        out.push(
+            Problem::new(
+                file,
+                &format!("study {}", spec.index),
+                "kind",
+                "unknown study kind",
+            )
+            .value(&spec.kind)
+            .known(studies::all().iter().map(|s| s.kind())),
+        );
+        return;
+    };
+    let study = study.as_ref();
+
+    // The table's own options.
+    let options = study.options();
+    for (k, v) in &spec.extra {
+        let known = || {
+            STUDY_KEYS
+                .iter()
+                .copied()
+                .chain(options.iter().map(|o| o.name))
+                .collect::<Vec<_>>()
+        };
+        match options.iter().find(|o| o.name == k) {
+            None => out.push(
+                Problem::new(file, &table, k, "unknown key (axes go in `axes`)")
+                    .value(v)
+                    .known(known()),
+            ),
+            Some(o) => {
+                let checked = ParamValue::from_toml(v)
+                    .ok_or_else(|| format!("must be {}", o.kind.expected()))
+                    .and_then(|pv| o.kind.check(&pv));
+                if let Err(why) = checked {
+                    out.push(Problem::new(file, &table, k, why).value(v));
+                }
+            }
+        }
+    }
+    for why in study.check_table(spec) {
+        out.push(Problem::new(file, &table, "", why));
+    }
+
+    // The methods list.
+    let methods: Vec<String> = match study.methods() {
+        Methods::List(known) => {
+            if !spec.methods_given {
+                out.push(
+                    Problem::new(
+                        file,
+                        &table,
+                        "methods",
+                        "missing: this study needs methods = [...]",
+                    )
+                    .known(&known),
+                );
+            } else if spec.methods.is_empty() {
+                out.push(
+                    Problem::new(file, &table, "methods", "is empty: nothing would run")
+                        .known(&known),
+                );
+            }
+            for m in &spec.methods {
+                if !known.contains(&m.as_str()) {
+                    out.push(
+                        Problem::new(file, &table, "methods", "unknown method")
+                            .value(m)
+                            .known(&known),
+                    );
+                }
+            }
+            spec.methods
+                .iter()
+                .filter(|m| known.contains(&m.as_str()))
+                .cloned()
+                .collect()
+        }
+        Methods::Implicit(m) => {
+            if spec.methods_given {
+                out.push(Problem::new(
+                    file,
+                    &table,
+                    "methods",
+                    format!(
+                        "this study takes no methods list (every point runs '{m}'; sweep `axes`)"
+                    ),
+                ));
+            }
+            vec![m.to_string()]
+        }
+    };
+
+    // Axes: each must be declared by some method of the study, and each value must suit every
+    // method that declares it (a value only some of them accept belongs in method_axes).
+    let declared: Vec<(String, Vec<Axis>)> =
+        methods.iter().map(|m| (m.clone(), study.axes(m))).collect();
+    let all_names: BTreeSet<&str> = declared
+        .iter()
+        .flat_map(|(_, a)| a.iter().map(|x| x.name()))
+        .collect();
+    let axes_table = format!("{table} › axes");
+    for (k, values) in &spec.axes {
+        let declaring: Vec<(&str, &Axis)> = declared
+            .iter()
+            .filter(|(m, _)| !spec.method_axes.get(m).is_some_and(|o| o.contains_key(k)))
+            .filter_map(|(m, a)| a.iter().find(|x| x.name() == k).map(|x| (m.as_str(), x)))
+            .collect();
+        if !all_names.contains(k.as_str()) {
+            out.push(
+                Problem::new(
+                    file,
+                    &axes_table,
+                    k,
+                    "no method of this study declares this axis",
+                )
+                .known(&all_names),
+            );
+            continue;
+        }
+        for v in values {
+            let refused: Vec<(&str, String)> = declaring
+                .iter()
+                .filter_map(|(m, a)| a.kind.check(v).err().map(|why| (*m, why)))
+                .collect();
+            if refused.is_empty() {
+                continue;
+            }
+            if refused.len() == declaring.len() {
+                let who: Vec<&str> = refused.iter().map(|(m, _)| *m).collect();
+                out.push(
+                    Problem::new(
+                        file,
+                        &axes_table,
+                        k,
+                        format!("{} (for {})", refused[0].1, who.join(", ")),
+                    )
+                    .value(v),
+                );
+            } else {
+                for (m, why) in refused {
+                    out.push(
+                        Problem::new(file, &axes_table, k, format!("{why} (for {m}, which other methods here accept: give {m} its own values in method_axes.{m})"))
+                            .value(v),
+                    );
+                }
+            }
+        }
+    }
+    for (m, over) in &spec.method_axes {
+        let Some((_, axes)) = declared.iter().find(|(n, _)| n == m) else {
+            continue;
+        };
+        let tn = format!("{table} › method_axes.{m}");
+        for (k, values) in over {
+            match axes.iter().find(|a| a.name() == k) {
+                None => out.push(
+                    Problem::new(file, &tn, k, format!("{m} does not declare this axis"))
+                        .known(axes.iter().map(|a| a.name())),
+                ),
+                Some(a) => {
+                    for v in values {
+                        if let Err(why) = a.kind.check(v) {
+                            out.push(Problem::new(file, &tn, k, why).value(v));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    // Cross-axis rules of every point, once the values themselves are right.
+    if out.len() == before {
+        if let Err(msgs) = studies::points(study, spec) {
+            for m in msgs {
+                out.push(Problem::new(file, &table, "", m));
+            }
+        }
+    }
+
+    // Scenes: generators, parameters, model files.
+    if spec.scenes.is_empty()
+        && !out
+            .iter()
+            .any(|p| p.table.starts_with(&table) && p.key == "scenes")
+    {
+        out.push(Problem::new(
+            file,
+            &table,
+            "scenes",
+            "no scenes: add [[study.scenes]] tables",
+        ));
+    }
+    let mut seen = BTreeSet::new();
+    for (scene, &j) in spec.scenes.iter().zip(&spec.scene_tables) {
+        let tn = format!("{table} › scene {j} ({})", scene.generator);
+        for e in scene.check() {
+            for p in scene_problems(file, &tn, e) {
+                if seen.insert(p.to_string()) {
+                    out.push(p);
+                }
+            }
+        }
+    }
+}
+
+/// A scene error as problems at `table` (a check-mode `Many` holds several).
+fn scene_problems(file: &str, table: &str, e: SceneError) -> Vec<Problem> {
+    match e {
+        SceneError::Many(v) => v
+            .into_iter()
+            .flat_map(|e| scene_problems(file, table, e))
+            .collect(),
+        SceneError::UnknownGenerator(g, known) => {
+            vec![
+                Problem::new(file, table, "generator", "unknown scene generator")
+                    .value(g)
+                    .known(known.split(", ")),
+            ]
+        }
+        SceneError::OutOfRange {
+            param, value, why, ..
+        } => {
+            let p = Problem::new(file, table, &param, why);
+            vec![if value.is_empty() { p } else { p.value(value) }]
+        }
+        SceneError::WrongType {
+            param, expected, ..
+        } => vec![Problem::new(
+            file,
+            table,
+            &param,
+            format!("must be {expected}"),
+        )],
+        SceneError::UnknownParam { param, known, .. } => {
+            vec![Problem::new(file, table, &param, "unknown scene parameter")
+                .known(known.split(", ").filter(|s| !s.is_empty()))]
+        }
+        SceneError::Obj { path, why } => {
+            vec![Problem::new(file, table, "path", format!("OBJ file: {why}")).value(path)]
+        }
+        other => vec![Problem::new(file, table, "", other.to_string())],
+    }
+}
+
+/// The model files a suite's scenes read (`path` parameters), for `mfx list suites`.
+pub fn models_needed(suite: &Suite) -> Vec<String> {
+    let mut out = BTreeSet::new();
+    for spec in &suite.studies {
+        for s in &spec.scenes {
+            if let Some(ParamValue::Str(p)) = s.params.get("path") {
+                out.insert(p.clone());
+            }
+        }
+    }
+    out.into_iter().collect()
+}
+
+/// The study a table names, if known (for callers that already checked).
+pub fn study_of(spec: &StudySpec) -> Option<Box<dyn Study>> {
+    studies::by_kind(&spec.kind)
+}

@@ -1,0 +1,168 @@
+//! GPU plumbing shared by methods, studies and shading: bind-group layout entries, shader
+//! modules with the common vertex stage, pipelines, buffer read-back, the depth state. It knows
+//! nothing of methods or studies (it is below both in the module graph).
+
+use crate::gpu::Gpu;
+use crate::Result;
+
+/// WGSL shared by every raster pipeline: the camera uniform and the standard vertex stage.
+pub const COMMON_WGSL: &str = include_str!("common.wgsl");
+
+/// Bind group layout entry for the camera uniform at `binding`.
+pub fn camera_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::VERTEX
+            | wgpu::ShaderStages::FRAGMENT
+            | wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// Storage buffer entry (compute and fragment visible).
+pub fn storage_entry(
+    binding: u32,
+    read_only: bool,
+    stages: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: stages,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// Texture entry for `textureLoad` (no sampler).
+pub fn texture_entry(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+    stages: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: stages,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// Compiles `COMMON_WGSL` + `body` into one module.
+pub fn shader(gpu: &Gpu, label: &str, body: &str) -> wgpu::ShaderModule {
+    let src = format!("{COMMON_WGSL}\n{body}");
+    gpu.device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(src.into()),
+        })
+}
+
+/// Reads a storage buffer of `T` back to the CPU.
+pub fn read_vec<T: bytemuck::Pod>(gpu: &Gpu, buf: &wgpu::Buffer, count: usize) -> Result<Vec<T>> {
+    let bytes = gpu.read_buffer(buf, (count * std::mem::size_of::<T>()) as u64)?;
+    Ok(bytemuck::cast_slice(&bytes).to_vec())
+}
+
+/// A compute pipeline with override `constants`. `zero_initialize_workgroup_memory`: whether
+/// workgroup memory starts zeroed (the shading kernels rely on it; the methods' kernels
+/// initialise what they use and skip the cost).
+pub fn compute_pipeline(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    constants: &[(&str, f64)],
+    zero_initialize_workgroup_memory: bool,
+) -> wgpu::ComputePipeline {
+    gpu.device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            module,
+            entry_point: Some(entry),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                zero_initialize_workgroup_memory,
+            },
+            cache: None,
+        })
+}
+
+/// Storage usage for per-pixel buffers that are cleared per frame and read back.
+pub const STORAGE_RW: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::COPY_DST);
+
+/// A bind group over whole buffers at bindings 0, 1, 2, … in order.
+pub fn bind_buffers(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
+/// Whether a buffer of `bytes` can be bound as one storage buffer here; Err names the limit.
+pub fn check_storage_size(gpu: &Gpu, what: &str, bytes: u64) -> crate::Result<()> {
+    let lim = gpu
+        .limits
+        .max_storage_buffer_binding_size
+        .min(gpu.limits.max_buffer_size);
+    if bytes > lim {
+        return Err(crate::CoreError::OutOfMemory(format!(
+            "{what} needs {bytes} B, over the adapter's storage binding limit of {lim} B"
+        )));
+    }
+    Ok(())
+}
+
+/// Depth test "nearer passes", with or without writes, for the scene's depth convention.
+pub fn depth_state(reversed: bool, write: bool) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: wgpu::TextureFormat::Depth32Float,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(if reversed {
+            wgpu::CompareFunction::Greater
+        } else {
+            wgpu::CompareFunction::Less
+        }),
+        stencil: Default::default(),
+        bias: Default::default(),
+    }
+}
+
+/// Clear value of the depth buffer for the scene's depth convention.
+pub fn clear_depth(reversed: bool) -> f32 {
+    if reversed {
+        0.0
+    } else {
+        1.0
+    }
+}

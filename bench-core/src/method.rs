@@ -1,0 +1,130 @@
+//! What a method is and what it hands back: the [`Method`] and [`Prepared`] traits, the
+//! [`Capture`] a frame produces and the [`Expected`] set it is judged against. The methods
+//! themselves live in `methods/`; this module is below them (and below `measure`), so the
+//! harness can time and judge any method without knowing which ones exist.
+
+use crate::axes::{Axis, Point};
+use crate::gpu::Gpu;
+use crate::gpu_scene::GpuScene;
+use crate::timing::GpuTimer;
+use crate::Result;
+
+/// Which reference a capture is judged against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Expected {
+    /// Every fragment of every pixel.
+    All,
+    /// The `k` nearest fragments of every pixel.
+    FirstK(u32),
+}
+
+/// What a method hands back after a frame, read from the GPU.
+#[derive(Clone, Debug)]
+pub struct Capture {
+    /// Premultiplied RGBA per pixel (row-major, top-left first), A = 1 − transmittance;
+    /// `None` for methods that make no image (the floors).
+    pub image: Option<Vec<[f32; 4]>>,
+    /// Fragments captured per pixel.
+    pub counts: Option<Vec<u32>>,
+    pub expected: Expected,
+    /// Pixels whose fragments exceeded capacity (reported, never silent).
+    pub overflow_pixels: Option<u64>,
+    /// True fragments merged or lost by bucket collisions.
+    pub collision_fragments: Option<u64>,
+    /// Pixels whose captured set differs from the true k nearest (k-buffer RMW hazards).
+    pub hazard_pixels: Option<u64>,
+    /// A knowingly-failed mode (overflow, collision, lost_coplanar, precision, hazard).
+    pub flag: Option<String>,
+    pub notes: String,
+}
+
+impl Capture {
+    pub fn empty() -> Capture {
+        Capture {
+            image: None,
+            counts: None,
+            expected: Expected::All,
+            overflow_pixels: None,
+            collision_fragments: None,
+            hazard_pixels: None,
+            flag: None,
+            notes: String::new(),
+        }
+    }
+}
+
+/// What one frame did.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrameStats {
+    /// Times the scene's geometry was submitted.
+    pub geometry_passes: u32,
+    /// Layers (or passes of capture) that produced fragments.
+    pub layers: u32,
+}
+
+/// A multi-fragment method (or a floor): description, declared axes, requirements, preparation.
+pub trait Method: Send + Sync {
+    fn name(&self) -> &'static str;
+    /// One line: source, exact or approximate, passes, memory.
+    fn describe(&self) -> &'static str;
+    /// True when the method captures every fragment (within its capacity).
+    fn exact(&self) -> bool;
+    /// The axes this method reads, declared once (type, default, range): a suite's values are
+    /// checked against them before any GPU work, and its product is taken over these only.
+    fn axes(&self) -> Vec<Axis> {
+        Vec::new()
+    }
+    /// Optional adapter features it cannot run without (the runner checks them before
+    /// `supports`, so an override of `supports` cannot drop the check).
+    fn required_features(&self) -> wgpu::Features {
+        wgpu::Features::empty()
+    }
+    /// Rules across axes that one axis's range cannot say (e.g. `dof_near ≤ dof_far`); checked
+    /// before any GPU work, so a violation is a bad suite, not a skipped row.
+    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+        let _ = point;
+        Ok(())
+    }
+    /// Whether this point can run on this adapter (limits, memory) or with this method at all
+    /// (an effect it cannot supply); `Err(reason)` becomes a `skipped` row.
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        let _ = (gpu, point);
+        Ok(())
+    }
+    /// The `payload` column: what this point stores per fragment, for methods that specialise it.
+    fn payload(&self, point: &Point) -> Option<&'static str> {
+        let _ = point;
+        None
+    }
+    /// Creates every pipeline, buffer and texture the frames need (never inside a timed region).
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>>;
+}
+
+/// Whether `method` can run `point` on `gpu`: its required features first, then its own rule.
+pub fn supports(method: &dyn Method, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    let missing = method.required_features() - gpu.features;
+    if !missing.is_empty() {
+        return Err(format!("adapter lacks {missing:?}"));
+    }
+    method.supports(gpu, point)
+}
+
+/// A method ready to run on one scene at one resolution.
+pub trait Prepared {
+    /// One frame's work: encode, submit (as often as it needs), timestamp each pass with `timer`.
+    fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats>;
+    /// Reads the last frame's output.
+    fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture>;
+    /// Bytes of buffers and textures this method allocated.
+    fn bytes_allocated(&self) -> u64;
+    /// Of those, the per-pixel structures (heads, offsets, counters, output image), when the
+    /// method knows them; the rest holds fragments.
+    fn bytes_overhead(&self) -> Option<u64> {
+        None
+    }
+    /// Judges what only the method can judge against the exact reference (e.g. the k-buffer's
+    /// captured depths vs the true k nearest → `hazard_pixels`); called after `readback`.
+    fn judge(&mut self, cap: &mut Capture, reference: &crate::reference::FragmentLists) {
+        let _ = (cap, reference);
+    }
+}

@@ -1,0 +1,246 @@
+//! The validation pass: every typo class a new user makes is refused before any GPU work, with
+//! a message naming the file, the table, the key, the value and the alternatives; a valid suite
+//! passes. (The CLI's exit code 2 and "nothing written" are tested in the root `tests/cli.rs`.)
+
+use bench_core::check::check_suite;
+use scenarios::{problem, Problem, SceneError, Suite};
+
+/// A one-study methods suite around `study` lines and `scene` lines.
+fn suite(top: &str, study: &str, scene: &str) -> String {
+    format!(
+        "name = \"t\"\n{top}\n[[study]]\nkind = \"methods\"\n{study}\n[[study.scenes]]\n{scene}\n"
+    )
+}
+
+/// All problems of a suite text: the parse's, else the check's.
+fn problems(text: &str) -> Vec<Problem> {
+    match Suite::parse(text, "typo.toml") {
+        Ok(s) => check_suite(&s),
+        Err(SceneError::Problems(p)) => p,
+        Err(e) => panic!("not a problem list: {e}"),
+    }
+}
+
+/// Asserts exactly one problem mentions every word of `words`, and returns its text.
+fn one(text: &str, words: &[&str]) -> String {
+    let p = problems(text);
+    let all = problem::report(&p);
+    let hits: Vec<String> = p
+        .iter()
+        .map(|x| x.to_string())
+        .filter(|m| words.iter().all(|w| m.contains(w)))
+        .collect();
+    assert_eq!(
+        hits.len(),
+        1,
+        "want one problem with {words:?}, got:\n{all}"
+    );
+    assert!(
+        hits[0].starts_with("typo.toml: "),
+        "names the file: {}",
+        hits[0]
+    );
+    hits[0].clone()
+}
+
+const PEEL: &str = "methods = [\"depth_peel\"]";
+const QUADS: &str = "generator = \"quads\"";
+
+#[test]
+fn a_valid_suite_has_no_problem() {
+    assert!(problems(&suite("", PEEL, QUADS)).is_empty());
+    for (name, _) in scenarios::suite::BUILTIN {
+        let s = Suite::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let p: Vec<Problem> = check_suite(&s)
+            .into_iter()
+            // The model suites need meshes copied into models/ (README): named, not hidden.
+            .filter(|p| !(p.key == "path" && p.message.contains("file not found")))
+            .collect();
+        assert!(p.is_empty(), "{name}:\n{}", problem::report(&p));
+    }
+}
+
+#[test]
+fn a_misspelt_axis_is_named_with_the_axes_the_methods_declare() {
+    let m = one(
+        &suite("", &format!("{PEEL}\naxes = {{ max_layer = [4] }}"), QUADS),
+        &["study 0 (methods) › axes", "'max_layer'"],
+    );
+    assert!(
+        m.contains("no method of this study declares") && m.contains("max_layers"),
+        "{m}"
+    );
+}
+
+#[test]
+fn a_misspelt_methods_key_and_an_empty_methods_list_are_errors() {
+    let text = suite("", "method = [\"wboit\"]", QUADS);
+    one(&text, &["'method'", "unknown key", "methods"]);
+    one(&text, &["'methods'", "missing"]);
+    one(
+        &suite("", "methods = []", QUADS),
+        &["'methods'", "is empty"],
+    );
+    let m = one(
+        &suite("", "methods = [\"wboit\", \"dpeth_peel\"]", QUADS),
+        &["dpeth_peel"],
+    );
+    assert!(
+        m.contains("unknown method") && m.contains("depth_peel"),
+        "{m}"
+    );
+}
+
+#[test]
+fn software_profile_typos_are_errors() {
+    let top = "[software]\nmax_triangle = 10\nreps = \"three\"";
+    let text = suite(top, PEEL, QUADS);
+    one(
+        &text,
+        &[
+            "[software]",
+            "'max_triangle'",
+            "unknown key",
+            "max_triangles",
+        ],
+    );
+    one(&text, &["[software]", "'reps' = \"three\"", "integer"]);
+}
+
+#[test]
+fn unknown_generators_parameters_and_bad_values_are_named() {
+    one(
+        &suite("", PEEL, "generator = \"quadz\""),
+        &["'generator' = quadz", "quads"],
+    );
+    let m = one(
+        &suite("", PEEL, "generator = \"quads\"\ndepth_complexty = 4"),
+        &[
+            "scene 0 (quads)",
+            "'depth_complexty'",
+            "unknown scene parameter",
+        ],
+    );
+    assert!(m.contains("depth_complexity"), "lists the known ones: {m}");
+    one(
+        &suite("", PEEL, "generator = \"quads\"\ndepth_complexity = -3"),
+        &["'depth_complexity' = -3", "1..=4096"],
+    );
+    // Every problem of one scene at once, not the first only.
+    let p = problems(&suite(
+        "",
+        PEEL,
+        "generator = \"quads\"\ndepth_complexity = -3\nalpah = 0.5",
+    ));
+    assert_eq!(p.len(), 2, "{}", problem::report(&p));
+}
+
+#[test]
+fn an_axis_value_no_adapter_could_run_is_an_error_not_a_skipped_row() {
+    one(
+        &suite(
+            "",
+            &format!("{PEEL}\naxes = {{ max_layers = [0, 16] }}"),
+            QUADS,
+        ),
+        &["'max_layers' = 0", "1..=4096", "depth_peel"],
+    );
+    // A value one method of the table takes and another does not points at method_axes.
+    let m = one(
+        &suite(
+            "",
+            "methods = [\"kbuffer_rmw\", \"linked_list\"]\naxes = { layers = [512] }",
+            QUADS,
+        ),
+        &["'layers' = 512", "kbuffer_rmw"],
+    );
+    assert!(m.contains("method_axes.kbuffer_rmw"), "{m}");
+    // A rule across axes (dof_near ≤ dof_far) is checked per point.
+    one(
+        &suite(
+            "",
+            &format!("{PEEL}\naxes = {{ effect = [\"dof\"], dof_near = [5.0], dof_far = [1.0] }}"),
+            QUADS,
+        ),
+        &["dof_near ≤ dof_far"],
+    );
+}
+
+fn temp_dir(tag: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("mfx-check-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn model_files_are_checked_missing_directory_no_faces_short_faces() {
+    let d = temp_dir("obj");
+    let obj = |name: &str, text: &str| {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.display().to_string()
+    };
+    let scene = |path: &str| format!("generator = \"obj\"\npath = \"{path}\"");
+    one(
+        &suite("", PEEL, &scene("/no/such/model.obj")),
+        &["'path' = /no/such/model.obj", "file not found"],
+    );
+    one(
+        &suite("", PEEL, &scene(&d.display().to_string())),
+        &["'path'", "is a directory"],
+    );
+    let lines = obj(
+        "lines.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\np 1\n",
+    );
+    let m = one(
+        &suite("", PEEL, &scene(&lines)),
+        &["'path'", "no triangles"],
+    );
+    assert!(m.contains("2 line and 1 point"), "{m}");
+    let short = obj("short.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n");
+    one(
+        &suite("", PEEL, &scene(&short)),
+        &["'path'", "line 5", "face with 2 vertices"],
+    );
+    let ok = obj("ok.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    assert!(problems(&suite("", PEEL, &scene(&ok))).is_empty());
+    // And building such a scene fails the same way (a render or an unchecked sweep).
+    let e = scenarios::SceneSpec::new(
+        "obj",
+        scenarios::Params::new().with("path", scenarios::ParamValue::Str(short)),
+    )
+    .build()
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("face with 2 vertices"), "{e}");
+}
+
+#[test]
+fn unknown_study_kind_and_option_typos_are_named() {
+    let text =
+        "name = \"t\"\n[[study]]\nkind = \"method\"\n[[study.scenes]]\ngenerator = \"quads\"\n";
+    let m = one(text, &["'kind' = method", "unknown study kind"]);
+    assert!(m.contains("methods"), "{m}");
+    let text = "name = \"t\"\n[[study]]\nkind = \"geometry\"\nraster_chek = true\n[[study.scenes]]\ngenerator = \"mesh\"\n";
+    let m = one(text, &["'raster_chek'", "unknown key"]);
+    assert!(m.contains("raster_check"), "{m}");
+}
+
+#[test]
+fn every_problem_is_reported_at_once() {
+    let text = "name = \"t\"\nbogus = 1\n[software]\nmax_triangle = 1\n[[study]]\nkind = \"methods\"\nmethods = [\"nope\"]\naxes = { max_layer = [1] }\n[[study.scenes]]\ngenerator = \"quadz\"\n";
+    let p = problems(text);
+    // The parse reports the structural ones; the rest need a parsed suite.
+    assert!(p.len() >= 2, "{}", problem::report(&p));
+    let text = text
+        .replace("bogus = 1\n", "")
+        .replace("[software]\nmax_triangle = 1\n", "");
+    let p = problems(&text);
+    assert_eq!(
+        p.len(),
+        3,
+        "unknown method, unknown axis, unknown generator:\n{}",
+        problem::report(&p)
+    );
+}
