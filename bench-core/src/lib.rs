@@ -10,6 +10,7 @@ pub mod image_io;
 pub mod merge;
 pub mod methods;
 pub mod metrics;
+pub mod oit;
 pub mod record;
 pub mod reference;
 pub mod runner;
