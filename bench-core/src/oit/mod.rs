@@ -16,9 +16,14 @@
 //!
 //! Fragments: [`Frag`] holds a depth key `z` (view distance, increasing away from the eye in
 //! both depth conventions) and straight RGBA. [`frags`] converts a reference list, in arrival
-//! (primitive) order or depth order. Each twin is generic over [`Real`] so a GPU test can run it
-//! in f32 (the GPU's arithmetic) and compare at 1e-5; the `*_ref` style f64 conveniences take
-//! `&[RefFragment]` directly. [`image`] applies a twin to every pixel of a capture.
+//! (primitive) order or depth order. Each twin is generic over [`Real`] (`mlab::mlab_t::<f32>`,
+//! …) so a GPU test can run it in the GPU's f32 arithmetic and compare at 1e-5; the plain names
+//! (`mlab`, `adaptive`, `moments`, …) are f64 conveniences over `&[RefFragment]`. [`image`]
+//! applies one to every pixel of a [`FragmentLists`].
+//!
+//! Tail axes: a bounded capture's `tail = drop | blend` and `keep = nearest | first` are
+//! [`tail_blend`]. MLAB with its merge replaced by `tail = drop` or `blend` never merges, so it
+//! keeps the k nearest and equals `tail_blend(.., Keep::Nearest, ..)`.
 //!
 //! Arrival order: on a GPU, fragments of one draw reach a pixel in primitive order only under
 //! ordering hardware (rasterizer-ordered views); wgpu has none, so an unguarded GPU build of an

@@ -401,6 +401,28 @@ pub fn moments(frags: &[RefFragment], cfg: &MomentConfig) -> [f64; 4] {
     to_f64(moments_t(&f, cfg).rgba)
 }
 
+/// The warp range for `scene`: the view distances its vertices span, within the camera's
+/// near/far (the paper's code warps over the scene's depth bounds, not the camera's range, which
+/// can be far wider: e.g. `particles` fills 0.24–0.47 of [−1, 1] between its camera's planes).
+/// A GPU method passes the same two numbers as uniforms.
+pub fn depth_range(scene: &scenarios::Scene) -> (f64, f64) {
+    let view = scene.camera.view().as_mat4().as_dmat4();
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for p in &scene.mesh.positions {
+        let z = -(view * glam::Vec3::from(*p).as_dvec3().extend(1.0)).z;
+        lo = lo.min(z);
+        hi = hi.max(z);
+    }
+    let (near, far) = (scene.camera.near, scene.camera.far);
+    let lo = lo.clamp(near, far);
+    let hi = hi.clamp(near, far);
+    if hi > lo {
+        (lo, hi)
+    } else {
+        (near, far)
+    }
+}
+
 /// The paper's 16-bit quantisation of power moments (its `quantizeMoments` /
 /// `offsetAndDequantizeMoments`): an affine map of (odd, even) moment vectors of depths in
 /// [−1, 1] into [0, 1]. Layout here: odd moments b₁, b₃, … then even b₂, b₄, … (m each).
