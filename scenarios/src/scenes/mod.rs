@@ -358,3 +358,22 @@ pub(crate) fn all_in_view(scene: &Scene) -> bool {
         c.w > 0.0 && n.x.abs() <= 1.0 && n.y.abs() <= 1.0 && (0.0..=1.0).contains(&n.z)
     })
 }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn every_generator_is_described_and_built_by_name() {
+        for g in super::GENERATORS {
+            assert!(!super::describe(g).is_empty(), "{g} has no describe() line");
+            // Building by name reaches the generator (obj needs a path: that error names it).
+            let e = super::SceneSpec::new(
+                g,
+                crate::Params::new().with("bogus", crate::ParamValue::Int(1)),
+            )
+            .build()
+            .unwrap_err()
+            .to_string();
+            assert!(!e.contains("unknown scene generator"), "{g}: {e}");
+        }
+    }
+}
