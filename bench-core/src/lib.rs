@@ -15,6 +15,7 @@ pub mod merge;
 pub mod method;
 pub mod methods;
 pub mod metrics;
+pub mod oit;
 pub mod record;
 pub mod reference;
 pub mod runner;

@@ -9,6 +9,8 @@ use crate::scenes::{frame_sphere, Mesh, ObjectInfo, Scene, SceneSpec};
 use crate::{Result, SceneError};
 
 /// Loads one OBJ file into a single mesh (all models merged), computing normals where missing.
+/// Vertex alpha is the opacity of the face's MTL material ([`material_alpha`]), 1 where the OBJ
+/// names no material or its MTL file is absent.
 pub fn load(path: &Path) -> Result<Mesh> {
     let err = |why: String| SceneError::Obj {
         path: path.display().to_string(),
@@ -26,10 +28,26 @@ pub fn load(path: &Path) -> Result<Mesh> {
         single_index: true,
         ..Default::default()
     };
-    let (models, _materials) =
+    let (models, materials) =
         tobj::load_obj(path, &opts).map_err(|e| err(format!("malformed OBJ: {e}")))?;
+    let alphas = match materials {
+        Ok(materials) => materials
+            .iter()
+            .map(|m| material_alpha(m).map_err(|why| err(format!("material '{}': {why}", m.name))))
+            .collect::<Result<Vec<f32>>>()?,
+        // No MTL file next to the OBJ: every face is opaque (alpha 1), as without materials.
+        Err(tobj::LoadError::OpenFileFailed) => Vec::new(),
+        Err(e) => return Err(err(format!("malformed MTL: {e}"))),
+    };
     let mut mesh = Mesh::default();
     for model in &models {
+        // A model without a (known) material is opaque.
+        let alpha = model
+            .mesh
+            .material_id
+            .and_then(|i| alphas.get(i))
+            .copied()
+            .unwrap_or(1.0);
         let m = &model.mesh;
         if m.positions.len() % 3 != 0 {
             return Err(err(format!(
@@ -52,7 +70,7 @@ pub fn load(path: &Path) -> Result<Mesh> {
                 )));
             }
             mesh.positions.push(p);
-            mesh.colors.push([0.8, 0.8, 0.8, 1.0]);
+            mesh.colors.push([0.8, 0.8, 0.8, alpha]);
             mesh.object_ids.push(0);
         }
         for &i in &m.indices {
@@ -109,6 +127,27 @@ fn scan_faces(path: &Path) -> std::result::Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// Opacity of an MTL material: its dissolve `d` if given, else 1 − `Tr` (the MTL spec's
+/// transparency, which tobj leaves in `unknown_param`), else 1. `d` wins when both are present.
+pub fn material_alpha(m: &tobj::Material) -> std::result::Result<f32, String> {
+    let (what, alpha) = match (m.dissolve, m.unknown_param.get("Tr")) {
+        (Some(d), _) => ("d", d),
+        (None, Some(tr)) => {
+            let tr: f32 = tr
+                .split_whitespace()
+                .next()
+                .and_then(|v| v.parse().ok())
+                .ok_or_else(|| format!("Tr '{tr}' is not a number"))?;
+            ("Tr", 1.0 - tr)
+        }
+        (None, None) => return Ok(1.0),
+    };
+    if !(0.0..=1.0).contains(&alpha) {
+        return Err(format!("{what} gives opacity {alpha}, outside [0, 1]"));
+    }
+    Ok(alpha)
 }
 
 /// Area-weighted vertex normals.
@@ -209,7 +248,8 @@ fn instance_grid_raw(mesh: &Mesh, n: u32) -> Mesh {
     out
 }
 
-/// The `obj` generator: `path` (required), `instances` (grid), `alpha` (uniform opacity).
+/// The `obj` generator: `path` (required), `instances` (grid), `alpha` (opacity, multiplied by
+/// the MTL material's where the OBJ has one).
 pub fn build(spec: &SceneSpec) -> Result<Scene> {
     let label = spec.label();
     let mut r = spec.params.reader(&label);
@@ -229,13 +269,14 @@ pub fn build(spec: &SceneSpec) -> Result<Scene> {
     let mut mesh = load(Path::new(&path))?;
     normalise(&mut mesh);
     let mut mesh = instance_grid(&mesh, instances);
-    // Colour from the normal so layers are distinguishable in images.
+    // Colour from the normal so layers are distinguishable in images; opacity is `alpha` times
+    // the material's (1 without an MTL file).
     for (c, n) in mesh.colors.iter_mut().zip(&mesh.normals) {
         *c = [
             0.2 + 0.6 * (0.5 + 0.5 * n[0]),
             0.2 + 0.6 * (0.5 + 0.5 * n[1]),
             0.2 + 0.6 * (0.5 + 0.5 * n[2]),
-            alpha,
+            alpha * c[3],
         ];
     }
     let objects = (0..instances)

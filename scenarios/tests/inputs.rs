@@ -96,7 +96,7 @@ fn out_of_range_and_unknown_scene_params_are_errors() {
 
 #[test]
 fn generators_are_deterministic() {
-    for g in ["grass", "quads", "shells"] {
+    for g in ["grass", "quads", "shells", "particles", "hair"] {
         let a = SceneSpec::new(g, Params::new()).build().unwrap();
         let b = SceneSpec::new(g, Params::new()).build().unwrap();
         assert_eq!(a.mesh.positions, b.mesh.positions, "{g}");
