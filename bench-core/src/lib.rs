@@ -5,6 +5,7 @@
 
 pub mod axes;
 pub mod check;
+pub mod clocks;
 pub mod effects;
 pub mod gpu;
 pub mod gpu_scene;

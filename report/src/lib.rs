@@ -2,6 +2,7 @@
 //! machines, merged, or years old. `build(dir)` reads `dir/runs.csv` and writes
 //! `dir/report/index.html` with PNG and SVG figures beside it.
 
+pub mod ab;
 pub mod charts;
 pub mod compare;
 pub mod data;

@@ -1,0 +1,423 @@
+//! GPU clocks, temperature, power and throttle reasons during a point, read through NVML
+//! (`nvml-wrapper`, which loads `libnvidia-ml.so.1` at run time: a machine without the NVIDIA
+//! driver builds and runs the same binary and records `clock_source = none: <reason>`).
+//!
+//! Read-only: only NVML queries (`nvmlDeviceGet*`) are called, never a setter — mfx never locks,
+//! resets or otherwise changes clocks or any GPU setting.
+//!
+//! Use: [`GpuMonitor::open`] once per run with the wgpu adapter's `device_pci_bus_id`; after
+//! each timed sample, [`GpuMonitor::sample`]; feed kept samples to [`PointClocks::push`] and
+//! throttled ones (see `mfx_stats::throttle`, reference [`GpuMonitor::reference_sm_mhz`]) to
+//! [`PointClocks::push_discarded`]; write [`PointClocks::to_cells`] into the row.
+
+use std::collections::BTreeSet;
+
+use nvml_wrapper::bitmasks::device::ThrottleReasons;
+use nvml_wrapper::enum_wrappers::device::{Clock, TemperatureSensor};
+use nvml_wrapper::Nvml;
+
+/// NVML's throttle reasons by the names written in `throttle_reasons`.
+const REASONS: [(ThrottleReasons, &str); 9] = [
+    (ThrottleReasons::GPU_IDLE, "gpu_idle"),
+    (
+        ThrottleReasons::APPLICATIONS_CLOCKS_SETTING,
+        "applications_clocks_setting",
+    ),
+    (ThrottleReasons::SW_POWER_CAP, "sw_power_cap"),
+    (ThrottleReasons::HW_SLOWDOWN, "hw_slowdown"),
+    (ThrottleReasons::SYNC_BOOST, "sync_boost"),
+    (ThrottleReasons::SW_THERMAL_SLOWDOWN, "sw_thermal_slowdown"),
+    (ThrottleReasons::HW_THERMAL_SLOWDOWN, "hw_thermal_slowdown"),
+    (
+        ThrottleReasons::HW_POWER_BRAKE_SLOWDOWN,
+        "hw_power_brake_slowdown",
+    ),
+    (
+        ThrottleReasons::DISPLAY_CLOCK_SETTING,
+        "display_clock_setting",
+    ),
+];
+
+/// Reasons that mean the clock was held *below* what the workload asked for (power, thermal,
+/// hardware protection): a point that saw one is flagged `throttled`. The others are not
+/// slowdowns: `gpu_idle` (set whenever no work is queued — true right after each frame, which
+/// is when the monitor reads, so it is not recorded), `applications_clocks_setting` (running at
+/// the configured application clock), `sync_boost`, `display_clock_setting`.
+pub const SLOWDOWN_REASONS: [&str; 5] = [
+    "sw_power_cap",
+    "hw_slowdown",
+    "sw_thermal_slowdown",
+    "hw_thermal_slowdown",
+    "hw_power_brake_slowdown",
+];
+
+/// One reading, taken right after a timed sample. A query the device does not support gives
+/// `None`, never 0.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MonitorSample {
+    pub sm_mhz: Option<f64>,
+    pub mem_mhz: Option<f64>,
+    pub temp_c: Option<f64>,
+    pub power_w: Option<f64>,
+    pub throttle_reasons: Vec<&'static str>,
+}
+
+impl MonitorSample {
+    /// Whether any slowdown reason ([`SLOWDOWN_REASONS`]) was active.
+    pub fn slowdown(&self) -> bool {
+        self.throttle_reasons
+            .iter()
+            .any(|r| SLOWDOWN_REASONS.contains(r))
+    }
+}
+
+/// A PCI address as (domain, bus, device, function). wgpu writes `0000:00:06.0`, NVML
+/// `00000000:00:06.0`; both parse to the same tuple. Case-insensitive hex.
+pub fn parse_pci_bus_id(s: &str) -> Option<(u32, u32, u32, u32)> {
+    let s = s.trim();
+    let mut parts = s.split(':');
+    let (a, b, c) = (parts.next()?, parts.next()?, parts.next());
+    // "domain:bus:dev.fn", or "bus:dev.fn" with domain 0.
+    let (domain, bus, devfn) = match c {
+        Some(c) => (a, b, c),
+        None => ("0", a, b),
+    };
+    if parts.next().is_some() {
+        return None;
+    }
+    let (dev, func) = devfn.split_once('.')?;
+    let hex = |x: &str| u32::from_str_radix(x, 16).ok();
+    Some((hex(domain)?, hex(bus)?, hex(dev)?, hex(func)?))
+}
+
+/// An open NVML device.
+pub struct GpuMonitor {
+    nvml: Nvml,
+    index: u32,
+    name: String,
+    bus_id: String,
+    driver: String,
+    default_sm_mhz: Option<f64>,
+    max_sm_mhz: Option<f64>,
+}
+
+impl std::fmt::Debug for GpuMonitor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuMonitor")
+            .field("index", &self.index)
+            .field("name", &self.name)
+            .field("bus_id", &self.bus_id)
+            .finish()
+    }
+}
+
+impl GpuMonitor {
+    /// Opens the NVML device at `pci_bus_id` (the wgpu adapter's `device_pci_bus_id`; pass
+    /// `None` when it is empty). Without a bus id the single NVIDIA device is used; with
+    /// several, none is guessed. Every failure is a readable reason for `clock_source`.
+    pub fn open(pci_bus_id: Option<&str>) -> Result<GpuMonitor, String> {
+        let nvml = Nvml::init().map_err(|e| format!("NVML not available: {e}"))?;
+        let count = nvml
+            .device_count()
+            .map_err(|e| format!("NVML device count: {e}"))?;
+        let want = match pci_bus_id.filter(|s| !s.trim().is_empty()) {
+            Some(s) => Some(
+                parse_pci_bus_id(s)
+                    .ok_or_else(|| format!("adapter PCI bus id '{s}' is not domain:bus:dev.fn"))?,
+            ),
+            None => None,
+        };
+        let mut seen = Vec::new();
+        let mut found = None;
+        for i in 0..count {
+            let d = nvml
+                .device_by_index(i)
+                .map_err(|e| format!("NVML device {i}: {e}"))?;
+            let bus = d.pci_info().map(|p| p.bus_id).unwrap_or_default();
+            let hit = match want {
+                Some(w) => parse_pci_bus_id(&bus) == Some(w),
+                None => count == 1,
+            };
+            if hit {
+                found = Some((i, bus.clone()));
+            }
+            seen.push(bus);
+        }
+        let Some((index, bus_id)) = found else {
+            return Err(match pci_bus_id {
+                Some(s) if want.is_some() => format!(
+                    "no NVML device at PCI bus id {s} (NVML devices: {})",
+                    seen.join(", ")
+                ),
+                _ if count == 0 => "NVML lists no devices".to_string(),
+                _ => format!(
+                    "{count} NVML devices and no adapter PCI bus id to choose one ({})",
+                    seen.join(", ")
+                ),
+            });
+        };
+        let d = nvml
+            .device_by_index(index)
+            .map_err(|e| format!("NVML device {index}: {e}"))?;
+        let name = d.name().unwrap_or_default();
+        let default_sm_mhz = d.default_applications_clock(Clock::SM).ok().map(f64::from);
+        let max_sm_mhz = d.max_clock_info(Clock::SM).ok().map(f64::from);
+        let driver = nvml.sys_driver_version().unwrap_or_default();
+        Ok(GpuMonitor {
+            nvml,
+            index,
+            name,
+            bus_id,
+            driver,
+            default_sm_mhz,
+            max_sm_mhz,
+        })
+    }
+
+    /// Reads the current clocks, temperature, power and throttle reasons.
+    pub fn sample(&self) -> MonitorSample {
+        let Ok(d) = self.nvml.device_by_index(self.index) else {
+            return MonitorSample::default();
+        };
+        let reasons = d
+            .current_throttle_reasons()
+            .map(|r| {
+                REASONS
+                    .iter()
+                    .filter(|(f, _)| r.contains(*f))
+                    .map(|(_, n)| *n)
+                    .collect()
+            })
+            .unwrap_or_default();
+        MonitorSample {
+            sm_mhz: d.clock_info(Clock::SM).ok().map(f64::from),
+            mem_mhz: d.clock_info(Clock::Memory).ok().map(f64::from),
+            temp_c: d.temperature(TemperatureSensor::Gpu).ok().map(f64::from),
+            power_w: d.power_usage().ok().map(|mw| mw as f64 / 1000.0),
+            throttle_reasons: reasons,
+        }
+    }
+
+    /// The default SM clock (NVML's default application clock), the throttle rule's reference.
+    pub fn default_sm_mhz(&self) -> Option<f64> {
+        self.default_sm_mhz
+    }
+    pub fn max_sm_mhz(&self) -> Option<f64> {
+        self.max_sm_mhz
+    }
+    /// The throttle rule's reference: the default SM clock, else the maximum.
+    pub fn reference_sm_mhz(&self) -> Option<f64> {
+        self.default_sm_mhz.or(self.max_sm_mhz)
+    }
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    pub fn bus_id(&self) -> &str {
+        &self.bus_id
+    }
+    /// For the JSON context block: device name, bus id, driver and reference clocks.
+    pub fn context(&self) -> Vec<(&'static str, String)> {
+        let f = |v: Option<f64>| v.map(|x| format!("{x}")).unwrap_or_default();
+        vec![
+            ("nvml_device", self.name.clone()),
+            ("nvml_pci_bus_id", self.bus_id.clone()),
+            ("nvml_driver_version", self.driver.clone()),
+            ("sm_clock_mhz_default", f(self.default_sm_mhz)),
+            ("sm_clock_mhz_max", f(self.max_sm_mhz)),
+        ]
+    }
+}
+
+/// Accumulates the readings of one point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointClocks {
+    /// `Ok(())` for NVML, `Err(reason)` when there is no monitor.
+    source: Result<(), String>,
+    sm: Vec<f64>,
+    mem_sum: f64,
+    mem_n: usize,
+    temp_max: Option<f64>,
+    power_sum: f64,
+    power_n: usize,
+    reasons: BTreeSet<&'static str>,
+}
+
+impl PointClocks {
+    /// For a point measured with a monitor.
+    pub fn nvml() -> PointClocks {
+        PointClocks::with_source(Ok(()))
+    }
+    /// For a point measured without one (`clock_source = none: <reason>`).
+    pub fn unavailable(reason: impl Into<String>) -> PointClocks {
+        PointClocks::with_source(Err(reason.into()))
+    }
+    /// From `GpuMonitor::open`'s result.
+    pub fn for_monitor(m: &Result<GpuMonitor, String>) -> PointClocks {
+        match m {
+            Ok(_) => PointClocks::nvml(),
+            Err(e) => PointClocks::unavailable(e.clone()),
+        }
+    }
+    fn with_source(source: Result<(), String>) -> PointClocks {
+        PointClocks {
+            source,
+            sm: Vec::new(),
+            mem_sum: 0.0,
+            mem_n: 0,
+            temp_max: None,
+            power_sum: 0.0,
+            power_n: 0,
+            reasons: BTreeSet::new(),
+        }
+    }
+
+    /// A kept sample's reading: counts in every mean.
+    pub fn push(&mut self, s: &MonitorSample) {
+        if let Some(c) = s.sm_mhz {
+            self.sm.push(c);
+        }
+        if let Some(m) = s.mem_mhz {
+            self.mem_sum += m;
+            self.mem_n += 1;
+        }
+        if let Some(p) = s.power_w {
+            self.power_sum += p;
+            self.power_n += 1;
+        }
+        self.push_discarded(s);
+    }
+
+    /// A discarded (throttled) sample's reading: only its reasons and temperature count.
+    pub fn push_discarded(&mut self, s: &MonitorSample) {
+        if let Some(t) = s.temp_c {
+            self.temp_max = Some(self.temp_max.map_or(t, |m| m.max(t)));
+        }
+        self.reasons.extend(
+            s.throttle_reasons
+                .iter()
+                .copied()
+                .filter(|r| *r != "gpu_idle"),
+        );
+    }
+
+    pub fn sm_mean(&self) -> Option<f64> {
+        (!self.sm.is_empty()).then(|| self.sm.iter().sum::<f64>() / self.sm.len() as f64)
+    }
+    /// Whether any reading saw a slowdown reason (→ flag `throttled`).
+    pub fn slowdown(&self) -> bool {
+        self.reasons.iter().any(|r| SLOWDOWN_REASONS.contains(r))
+    }
+
+    /// The row's cells, by the column names of the CSV contract.
+    pub fn to_cells(&self) -> Vec<(&'static str, String)> {
+        let mhz = |v: Option<f64>| v.map(|x| format!("{x:.1}")).unwrap_or_default();
+        let sm_min = self.sm.iter().copied().reduce(f64::min);
+        let sm_max = self.sm.iter().copied().reduce(f64::max);
+        let mem = (self.mem_n > 0).then(|| self.mem_sum / self.mem_n as f64);
+        let power = (self.power_n > 0).then(|| self.power_sum / self.power_n as f64);
+        let source = match &self.source {
+            Ok(()) if self.sm.is_empty() => "none: NVML gave no SM clock reading".to_string(),
+            Ok(()) => "nvml".to_string(),
+            Err(e) => format!("none: {e}"),
+        };
+        vec![
+            ("sm_clock_mhz_mean", mhz(self.sm_mean())),
+            ("sm_clock_mhz_min", mhz(sm_min)),
+            ("sm_clock_mhz_max", mhz(sm_max)),
+            ("mem_clock_mhz_mean", mhz(mem)),
+            (
+                "gpu_temp_c_max",
+                self.temp_max.map(|t| format!("{t}")).unwrap_or_default(),
+            ),
+            (
+                "gpu_power_w_mean",
+                power.map(|p| format!("{p:.3}")).unwrap_or_default(),
+            ),
+            (
+                "throttle_reasons",
+                self.reasons.iter().copied().collect::<Vec<_>>().join("|"),
+            ),
+            ("clock_source", source),
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bus_ids_of_wgpu_and_nvml_agree() {
+        let w = parse_pci_bus_id("0000:00:06.0");
+        assert_eq!(w, Some((0, 0, 6, 0)));
+        assert_eq!(parse_pci_bus_id("00000000:00:06.0"), w);
+        assert_eq!(
+            parse_pci_bus_id("00000001:9A:1f.7"),
+            Some((1, 0x9a, 0x1f, 7))
+        );
+        assert_eq!(parse_pci_bus_id("0001:9a:1F.7"), Some((1, 0x9a, 0x1f, 7)));
+        assert_eq!(parse_pci_bus_id("9a:00.0"), Some((0, 0x9a, 0, 0)));
+        assert_eq!(parse_pci_bus_id(""), None);
+        assert_eq!(parse_pci_bus_id("0000:00:06"), None);
+        assert_eq!(parse_pci_bus_id("0:0:0:0.0"), None);
+        assert_eq!(parse_pci_bus_id("zz:00.0"), None);
+    }
+
+    #[test]
+    fn open_without_a_driver_is_a_readable_error_not_a_panic() {
+        // On a machine with the NVIDIA driver and one GPU this opens; elsewhere it must say why.
+        match GpuMonitor::open(None) {
+            Err(e) => assert!(e.contains("NVML"), "{e}"),
+            Ok(m) => {
+                let s = m.sample();
+                assert!(s.sm_mhz.is_some_and(|c| c > 0.0), "{s:?}");
+            }
+        }
+        // A bus id no machine has is never silently replaced by another device.
+        assert!(GpuMonitor::open(Some("ffff:ff:1f.7")).is_err());
+    }
+
+    #[test]
+    fn point_clocks_accumulate_and_name_the_contract_columns() {
+        let mut p = PointClocks::nvml();
+        let r = |sm: f64, t: f64, reasons: Vec<&'static str>| MonitorSample {
+            sm_mhz: Some(sm),
+            mem_mhz: Some(3201.0),
+            temp_c: Some(t),
+            power_w: Some(300.0),
+            throttle_reasons: reasons,
+        };
+        p.push(&r(1980.0, 40.0, vec!["gpu_idle"]));
+        p.push(&r(1950.0, 45.0, vec!["sw_power_cap"]));
+        p.push_discarded(&r(900.0, 52.0, vec!["hw_thermal_slowdown"]));
+        let cells: std::collections::BTreeMap<_, _> = p.to_cells().into_iter().collect();
+        assert_eq!(cells["sm_clock_mhz_mean"], "1965.0");
+        assert_eq!(cells["sm_clock_mhz_min"], "1950.0");
+        assert_eq!(cells["sm_clock_mhz_max"], "1980.0");
+        assert_eq!(cells["mem_clock_mhz_mean"], "3201.0");
+        assert_eq!(cells["gpu_temp_c_max"], "52");
+        assert_eq!(cells["gpu_power_w_mean"], "300.000");
+        assert_eq!(
+            cells["throttle_reasons"],
+            "hw_thermal_slowdown|sw_power_cap"
+        );
+        assert_eq!(cells["clock_source"], "nvml");
+        assert!(p.slowdown());
+        assert_eq!(cells.len(), 8);
+    }
+
+    #[test]
+    fn without_a_monitor_every_cell_is_empty_but_the_reason() {
+        let p = PointClocks::for_monitor(&Err("NVML not available: no driver".into()));
+        let cells = p.to_cells();
+        for (k, v) in &cells {
+            if *k == "clock_source" {
+                assert_eq!(v, "none: NVML not available: no driver");
+            } else {
+                assert!(v.is_empty(), "{k} = {v}");
+            }
+        }
+        assert!(!p.slowdown());
+        assert_eq!(p.sm_mean(), None);
+    }
+}

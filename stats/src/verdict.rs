@@ -1,0 +1,407 @@
+//! SAME / FASTER / SLOWER / UNSURE for one point measured in two runs (BASE and NEW).
+//!
+//! From samples ([`compare_samples`]):
+//! - `ratio` = median(NEW) / median(BASE) (> 1: NEW is slower);
+//! - `ratio_ci`: percentile-bootstrap 95 % CI of that ratio (each side resampled independently,
+//!   [`crate::BOOTSTRAP_RESAMPLES`] times, seeded);
+//! - `p`: two-sided Mann–Whitney U p-value of the two sample sets ([`crate::mwu`]).
+//!
+//! The rule, first match wins (criterion.rs calls a change only when it is significant *and*
+//! beyond a noise band; `nvbench_compare` classifies SAME/FAST/SLOW against the noise):
+//! 1. either side has fewer than `min_samples` samples → **Unsure** (too few to decide: with 4
+//!    against 4 the smallest possible exact p is 0.029, and a bootstrap of 4 values is coarse);
+//! 2. `|ratio − 1| ≤ noise_band` → **Same** — also when significant: a 0.5 % shift that the test
+//!    can resolve is still not a change worth reporting;
+//! 3. `ratio > 1 + noise_band`: **Slower** if `p < alpha` and `ratio_ci.lo > 1`, else **Unsure**;
+//! 4. `ratio < 1 − noise_band`: **Faster** if `p < alpha` and `ratio_ci.hi < 1`, else **Unsure**.
+//!
+//! From summary columns only ([`compare_intervals`], when the raw samples are missing): each
+//! side is a median with an interval (the median's CI where written, else min–max). Same rule
+//! with "significant" replaced by "the intervals do not overlap" (NEW's low above BASE's high
+//! for Slower), `p` = None, and `ratio_ci` the conservative `[new.lo/base.hi, new.hi/base.lo]`;
+//! without intervals only Same or Unsure can come out.
+//!
+//! Cycles: when both sides know their SM clock, compare `time × clock` ([`cycles_k`]) with the
+//! same rule — a change in time that vanishes in cycles was the clock, not the code.
+
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64;
+
+use crate::mwu::mann_whitney_u;
+use crate::summary::{median_unsorted, percentile_interval, BOOTSTRAP_RESAMPLES};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+pub enum Verdict {
+    Same,
+    Faster,
+    Slower,
+    Unsure,
+}
+
+impl Verdict {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Verdict::Same => "SAME",
+            Verdict::Faster => "FASTER",
+            Verdict::Slower => "SLOWER",
+            Verdict::Unsure => "UNSURE",
+        }
+    }
+    pub const ALL: [Verdict; 4] = [
+        Verdict::Same,
+        Verdict::Faster,
+        Verdict::Slower,
+        Verdict::Unsure,
+    ];
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct VerdictOptions {
+    /// Significance level of the Mann–Whitney U test (criterion's default 0.05).
+    pub alpha: f64,
+    /// Relative change below which a point is SAME (criterion's default noise threshold 2 %).
+    pub noise_band: f64,
+    /// Samples needed on each side to decide (see rule 1).
+    pub min_samples: usize,
+    pub resamples: usize,
+    pub seed: u64,
+}
+
+impl Default for VerdictOptions {
+    fn default() -> Self {
+        VerdictOptions {
+            alpha: 0.05,
+            noise_band: 0.02,
+            min_samples: 5,
+            resamples: BOOTSTRAP_RESAMPLES,
+            seed: 0x006d_6678, // "mfx"
+        }
+    }
+}
+
+/// What the verdict was computed from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum Basis {
+    /// Raw per-sample times (MWU p-value and a bootstrap CI of the ratio).
+    Samples,
+    /// Summary columns only (medians and their intervals).
+    Summary,
+}
+
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Comparison {
+    pub verdict: Verdict,
+    /// NEW / BASE of the medians (> 1: slower).
+    pub ratio: f64,
+    pub ratio_ci: (f64, f64),
+    /// Two-sided MWU p-value (None from summary columns).
+    pub p: Option<f64>,
+    pub n_base: usize,
+    pub n_new: usize,
+    pub basis: Basis,
+    /// One line saying why, for the report.
+    pub why: String,
+}
+
+fn median(v: &[f64]) -> f64 {
+    median_unsorted(&mut v.to_vec())
+}
+
+/// Rules 2–4 given the ratio, its CI and whether the difference is significant.
+fn classify(ratio: f64, ci: (f64, f64), significant: bool, band: f64) -> (Verdict, &'static str) {
+    if (ratio - 1.0).abs() <= band {
+        (Verdict::Same, "change within the noise band")
+    } else if ratio > 1.0 {
+        if significant && ci.0 > 1.0 {
+            (
+                Verdict::Slower,
+                "significantly slower, beyond the noise band",
+            )
+        } else {
+            (
+                Verdict::Unsure,
+                "slower beyond the band but not significant",
+            )
+        }
+    } else if significant && ci.1 < 1.0 {
+        (
+            Verdict::Faster,
+            "significantly faster, beyond the noise band",
+        )
+    } else {
+        (
+            Verdict::Unsure,
+            "faster beyond the band but not significant",
+        )
+    }
+}
+
+fn unsure(n_base: usize, n_new: usize, basis: Basis, why: String) -> Comparison {
+    Comparison {
+        verdict: Verdict::Unsure,
+        ratio: f64::NAN,
+        ratio_ci: (f64::NAN, f64::NAN),
+        p: None,
+        n_base,
+        n_new,
+        basis,
+        why,
+    }
+}
+
+/// The verdict from the two sides' raw samples (times in ms, or cycles).
+pub fn compare_samples(base: &[f64], new: &[f64], o: &VerdictOptions) -> Comparison {
+    let (nb, nn) = (base.len(), new.len());
+    if nb == 0 || nn == 0 {
+        return unsure(nb, nn, Basis::Samples, "no samples on one side".into());
+    }
+    let (mb, mn) = (median(base), median(new));
+    if mb.is_nan() || mb <= 0.0 {
+        return unsure(nb, nn, Basis::Samples, format!("BASE median is {mb}"));
+    }
+    let ratio = mn / mb;
+    let ci = bootstrap_ratio(base, new, o);
+    let p = mann_whitney_u(base, new).map(|t| t.p);
+    if nb < o.min_samples || nn < o.min_samples {
+        return Comparison {
+            ratio,
+            ratio_ci: ci,
+            p,
+            ..unsure(
+                nb,
+                nn,
+                Basis::Samples,
+                format!("too few samples ({nb} vs {nn}, need {})", o.min_samples),
+            )
+        };
+    }
+    let significant = p.is_some_and(|p| p < o.alpha);
+    let (verdict, why) = classify(ratio, ci, significant, o.noise_band);
+    Comparison {
+        verdict,
+        ratio,
+        ratio_ci: ci,
+        p,
+        n_base: nb,
+        n_new: nn,
+        basis: Basis::Samples,
+        why: why.into(),
+    }
+}
+
+fn bootstrap_ratio(base: &[f64], new: &[f64], o: &VerdictOptions) -> (f64, f64) {
+    let mut rng = Pcg64::seed_from_u64(o.seed);
+    let (mut bb, mut bn) = (vec![0.0; base.len()], vec![0.0; new.len()]);
+    let mut ratios = Vec::with_capacity(o.resamples);
+    for _ in 0..o.resamples.max(1) {
+        for x in bb.iter_mut() {
+            *x = base[rng.random_range(0..base.len())];
+        }
+        for x in bn.iter_mut() {
+            *x = new[rng.random_range(0..new.len())];
+        }
+        let d = median_unsorted(&mut bb);
+        if d > 0.0 {
+            ratios.push(median_unsorted(&mut bn) / d);
+        }
+    }
+    if ratios.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    percentile_interval(&mut ratios)
+}
+
+/// A side known only by its summary columns.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interval {
+    pub median: f64,
+    /// The median's CI, or min–max where no CI was written; None when neither is.
+    pub range: Option<(f64, f64)>,
+    /// Samples behind the summary (the `samples` or `reps` column), when known.
+    pub n: usize,
+}
+
+/// The verdict from summary columns only (see the module notes).
+pub fn compare_intervals(base: Interval, new: Interval, o: &VerdictOptions) -> Comparison {
+    let (nb, nn) = (base.n, new.n);
+    if base.median.is_nan() || base.median <= 0.0 {
+        return unsure(
+            nb,
+            nn,
+            Basis::Summary,
+            format!("BASE median is {}", base.median),
+        );
+    }
+    let ratio = new.median / base.median;
+    let (ci, separate) = match (base.range, new.range) {
+        (Some((bl, bh)), Some((nl, nh))) => {
+            let ci = (
+                if bh > 0.0 { nl / bh } else { f64::NAN },
+                if bl > 0.0 { nh / bl } else { f64::INFINITY },
+            );
+            (ci, nl > bh || nh < bl)
+        }
+        _ => ((f64::NAN, f64::NAN), false),
+    };
+    let (verdict, why) = classify(ratio, ci, separate, o.noise_band);
+    let why = match verdict {
+        Verdict::Unsure if base.range.is_none() || new.range.is_none() => {
+            "beyond the band, but no interval to judge it (summary columns only)"
+        }
+        Verdict::Unsure => "beyond the band, but the intervals overlap (summary columns only)",
+        _ => why,
+    };
+    Comparison {
+        verdict,
+        ratio,
+        ratio_ci: ci,
+        p: None,
+        n_base: nb,
+        n_new: nn,
+        basis: Basis::Summary,
+        why: why.into(),
+    }
+}
+
+/// Per-sample kilocycles: `ms × MHz = 10³ cycles`. `None` unless every sample has a clock.
+pub fn cycles_k(ms: &[f64], mhz: &[Option<f64>]) -> Option<Vec<f64>> {
+    if ms.len() != mhz.len() {
+        return None;
+    }
+    ms.iter()
+        .zip(mhz)
+        .map(|(t, c)| c.filter(|c| c.is_finite() && *c > 0.0).map(|c| t * c))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stop::tests::pseudo;
+
+    fn series(n: usize, scale: f64, noise: f64, offset: usize) -> Vec<f64> {
+        (0..n)
+            .map(|i| scale * (1.0 + noise * pseudo(i + offset)))
+            .collect()
+    }
+
+    #[test]
+    fn identical_samples_are_same() {
+        let a = series(20, 1.0, 0.05, 0);
+        let c = compare_samples(&a, &a, &VerdictOptions::default());
+        assert_eq!(c.verdict, Verdict::Same, "{c:?}");
+        assert_eq!(c.ratio, 1.0);
+        assert!(c.p.unwrap() > 0.9);
+        // Even very noisy identical samples: the estimate is exactly 1.
+        let a = series(20, 1.0, 0.5, 0);
+        assert_eq!(
+            compare_samples(&a, &a, &VerdictOptions::default()).verdict,
+            Verdict::Same
+        );
+    }
+
+    #[test]
+    fn one_and_a_half_times_slower_is_slower_from_five_samples() {
+        let a = series(5, 1.0, 0.02, 0);
+        let b: Vec<f64> = a.iter().map(|x| x * 1.5).collect();
+        let c = compare_samples(&a, &b, &VerdictOptions::default());
+        assert_eq!(c.verdict, Verdict::Slower, "{c:?}");
+        assert!((c.ratio - 1.5).abs() < 1e-12);
+        assert!(c.ratio_ci.0 > 1.0 && c.p.unwrap() < 0.05);
+        // And the other way round.
+        let c = compare_samples(&b, &a, &VerdictOptions::default());
+        assert_eq!(c.verdict, Verdict::Faster, "{c:?}");
+    }
+
+    #[test]
+    fn tiny_significant_change_within_the_band_is_same() {
+        // 0.5 % slower with 0.1 % noise over 30 samples: clearly significant, but inside 2 %.
+        let a = series(30, 1.0, 0.001, 0);
+        let b = series(30, 1.005, 0.001, 1000);
+        let c = compare_samples(&a, &b, &VerdictOptions::default());
+        assert!(c.p.unwrap() < 1e-6, "{c:?}");
+        assert_eq!(c.verdict, Verdict::Same, "{c:?}");
+    }
+
+    #[test]
+    fn too_few_samples_are_unsure() {
+        let a = series(4, 1.0, 0.01, 0);
+        let b: Vec<f64> = a.iter().map(|x| x * 2.0).collect();
+        let c = compare_samples(&a, &b, &VerdictOptions::default());
+        assert_eq!(c.verdict, Verdict::Unsure);
+        assert!(c.why.contains("too few"), "{}", c.why);
+        assert!((c.ratio - 2.0).abs() < 1e-12, "ratio still reported");
+    }
+
+    #[test]
+    fn a_noisy_shift_that_is_not_significant_is_unsure() {
+        // A 5 % slowdown hidden in ±50 % noise with 10 samples: beyond the band, but the ranks
+        // interleave, so the test cannot tell.
+        let a = series(10, 1.0, 0.5, 0);
+        let b: Vec<f64> = a.iter().map(|x| x * 1.05).collect();
+        let c = compare_samples(&a, &b, &VerdictOptions::default());
+        assert!(c.p.unwrap() > 0.05, "{c:?}");
+        assert_eq!(c.verdict, Verdict::Unsure, "{c:?}");
+    }
+
+    #[test]
+    fn summary_columns_decide_only_when_intervals_separate() {
+        let o = VerdictOptions::default();
+        let iv = |m: f64, w: f64| Interval {
+            median: m,
+            range: Some((m * (1.0 - w), m * (1.0 + w))),
+            n: 10,
+        };
+        assert_eq!(
+            compare_intervals(iv(1.0, 0.05), iv(1.0, 0.05), &o).verdict,
+            Verdict::Same
+        );
+        let c = compare_intervals(iv(1.0, 0.05), iv(1.5, 0.05), &o);
+        assert_eq!(c.verdict, Verdict::Slower, "{c:?}");
+        assert_eq!((c.basis, c.p), (Basis::Summary, None));
+        assert_eq!(
+            compare_intervals(iv(1.5, 0.05), iv(1.0, 0.05), &o).verdict,
+            Verdict::Faster
+        );
+        // Overlapping intervals: a 10 % shift cannot be called.
+        assert_eq!(
+            compare_intervals(iv(1.0, 0.2), iv(1.1, 0.2), &o).verdict,
+            Verdict::Unsure
+        );
+        // Medians only.
+        let bare = |m: f64| Interval {
+            median: m,
+            range: None,
+            n: 3,
+        };
+        assert_eq!(
+            compare_intervals(bare(1.0), bare(1.0), &o).verdict,
+            Verdict::Same
+        );
+        assert_eq!(
+            compare_intervals(bare(1.0), bare(1.5), &o).verdict,
+            Verdict::Unsure
+        );
+    }
+
+    #[test]
+    fn cycles_remove_a_clock_change() {
+        // NEW ran at 2/3 of the clock and took 1.5× as long: slower in time, same in cycles.
+        let t = series(20, 1.0, 0.01, 0);
+        let slow: Vec<f64> = t.iter().map(|x| x * 1.5).collect();
+        let o = VerdictOptions::default();
+        assert_eq!(compare_samples(&t, &slow, &o).verdict, Verdict::Slower);
+        let cb = cycles_k(&t, &vec![Some(1980.0); 20]).unwrap();
+        let cn = cycles_k(&slow, &vec![Some(1320.0); 20]).unwrap();
+        assert_eq!(compare_samples(&cb, &cn, &o).verdict, Verdict::Same);
+        assert!(cycles_k(&t, &vec![None; 20]).is_none());
+        assert!(cycles_k(&t, &[Some(1.0)]).is_none());
+    }
+}
