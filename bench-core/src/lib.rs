@@ -8,6 +8,8 @@ pub mod effects;
 pub mod gpu;
 pub mod gpu_scene;
 pub mod image_io;
+pub mod interrupt;
+pub mod manifest;
 pub mod merge;
 pub mod methods;
 pub mod metrics;
