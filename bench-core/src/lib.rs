@@ -4,6 +4,7 @@
 //! `record.rs` (what is written), `runner.rs` (how a suite becomes rows).
 
 pub mod axes;
+pub mod build_info;
 pub mod check;
 pub mod clocks;
 pub mod effects;
@@ -11,6 +12,8 @@ pub mod gpu;
 pub mod gpu_scene;
 pub mod gpu_util;
 pub mod image_io;
+pub mod interrupt;
+pub mod manifest;
 pub mod measure;
 pub mod merge;
 pub mod method;

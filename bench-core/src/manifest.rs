@@ -1,0 +1,452 @@
+//! The run folder's self-description: `run.json` (what ran, from which commit and suite text, on
+//! which device, how far it got) and `runs.json`, the JSON twin of `runs.csv` with a context block.
+//! Both are written atomically (a temporary file renamed over the old one), so a reader or a
+//! killed run never sees half a file.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+use serde_json::{Map, Value};
+use sha2::{Digest, Sha256};
+
+use crate::{CoreError, Result};
+
+/// File names inside a run folder.
+pub const MANIFEST_FILE: &str = "run.json";
+pub const RUNS_JSON_FILE: &str = "runs.json";
+pub const RUNS_CSV_FILE: &str = "runs.csv";
+
+/// The device, as the CSV's adapter columns spell it, plus its PCI bus id.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct AdapterInfo {
+    pub name: String,
+    /// Lower-case wgpu backend (`vulkan`, `gl`, …), as in the `backend` column.
+    pub backend: String,
+    /// Lower-case wgpu device type (`discretegpu`, `cpu`, …), as in `device_type`.
+    pub device_type: String,
+    pub driver: String,
+    pub driver_info: String,
+    /// Empty where the backend does not report it.
+    pub pci_bus_id: String,
+}
+
+impl AdapterInfo {
+    pub fn of(info: &wgpu::AdapterInfo) -> Self {
+        AdapterInfo {
+            name: info.name.clone(),
+            backend: format!("{:?}", info.backend).to_lowercase(),
+            device_type: format!("{:?}", info.device_type).to_lowercase(),
+            driver: info.driver.clone(),
+            driver_info: info.driver_info.clone(),
+            pci_bus_id: info.device_pci_bus_id.clone(),
+        }
+    }
+}
+
+/// `run.json`: written when the run starts (`finished: false`), rewritten as it ends or is
+/// interrupted. Counts are of this run folder's `runs.csv` rows.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct RunManifest {
+    pub mfx_version: String,
+    /// `build_info::git_rev()` of the binary that wrote the run.
+    pub git_rev: String,
+    /// `std::env::args()`, program first.
+    pub command_line: Vec<String>,
+    pub suite_name: String,
+    /// `built-in NAME` or the suite file's path as given.
+    pub suite_source: String,
+    /// The suite's TOML exactly as read, so the run can be repeated without the file.
+    pub suite_text: String,
+    /// Lower-case hex SHA-256 of `suite_text`'s UTF-8 bytes.
+    pub suite_sha256: String,
+    pub adapter: AdapterInfo,
+    /// (I, N) of `--shard I/N`; (0, 1) for a whole run.
+    pub shard: (usize, usize),
+    /// RFC 3339, UTC, seconds.
+    pub started_utc: String,
+    pub ended_utc: Option<String>,
+    /// Wall time from `new` to `finish` (monotonic clock); `None` until finished.
+    pub elapsed_s: Option<f64>,
+    pub rows_written: usize,
+    pub rows_ok: usize,
+    pub rows_failed: usize,
+    pub rows_skipped: usize,
+    /// Points this shard was to measure (resumed ones included).
+    pub points_total: usize,
+    /// Rows already in `runs.csv` when the run was resumed (kept, not measured again).
+    pub resumed_points: usize,
+    /// Every point of the shard has a row.
+    pub finished: bool,
+    /// The signal that stopped the run early (`SIGINT`, `SIGTERM`), if one did.
+    pub interrupted: Option<String>,
+    #[serde(skip)]
+    clock: Option<Instant>,
+}
+
+fn now_utc() -> String {
+    chrono::Utc::now().to_rfc3339_opts(chrono::SecondsFormat::Secs, true)
+}
+
+/// Lower-case hex SHA-256 of `text`.
+pub fn sha256_hex(text: &str) -> String {
+    Sha256::digest(text.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+fn io_err(path: &Path, e: impl std::fmt::Display) -> CoreError {
+    CoreError::Io(format!("{}: {e}", path.display()))
+}
+
+/// Writes `bytes` to `dir/name` through `dir/.name.tmp` and a rename: on one file system the
+/// rename replaces the old file at once, so a reader sees the old or the new file, never a part.
+fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<()> {
+    use std::io::Write;
+    let tmp = dir.join(format!(".{name}.tmp"));
+    let path = dir.join(name);
+    let mut f = std::fs::File::create(&tmp).map_err(|e| io_err(&tmp, e))?;
+    f.write_all(bytes).map_err(|e| io_err(&tmp, e))?;
+    f.sync_all().map_err(|e| io_err(&tmp, e))?;
+    drop(f);
+    std::fs::rename(&tmp, &path).map_err(|e| io_err(&path, e))
+}
+
+impl RunManifest {
+    /// A manifest for a run starting now, from this build (`mfx_version`, `git_rev`).
+    pub fn new(
+        command_line: Vec<String>,
+        suite_name: &str,
+        suite_source: &str,
+        suite_text: &str,
+        adapter: AdapterInfo,
+        shard: (usize, usize),
+    ) -> Self {
+        RunManifest {
+            mfx_version: crate::build_info::VERSION.to_string(),
+            git_rev: crate::build_info::git_rev(),
+            command_line,
+            suite_name: suite_name.to_string(),
+            suite_source: suite_source.to_string(),
+            suite_text: suite_text.to_string(),
+            suite_sha256: sha256_hex(suite_text),
+            adapter,
+            shard,
+            started_utc: now_utc(),
+            ended_utc: None,
+            elapsed_s: None,
+            rows_written: 0,
+            rows_ok: 0,
+            rows_failed: 0,
+            rows_skipped: 0,
+            points_total: 0,
+            resumed_points: 0,
+            finished: false,
+            interrupted: None,
+            clock: Some(Instant::now()),
+        }
+    }
+
+    /// Stamps the end: `ended_utc`, `elapsed_s`, and `interrupted` (the signal, if any).
+    /// `finished` is the caller's to set: whether every point has a row.
+    pub fn finish(&mut self, interrupted: Option<&str>) {
+        self.ended_utc = Some(now_utc());
+        self.elapsed_s = self.clock.map(|c| c.elapsed().as_secs_f64());
+        self.interrupted = interrupted.map(str::to_string);
+    }
+
+    /// Writes `dir/run.json` atomically.
+    pub fn write(&self, dir: &Path) -> Result<()> {
+        let json =
+            serde_json::to_vec_pretty(self).map_err(|e| CoreError::Io(format!("run.json: {e}")))?;
+        write_atomic(dir, MANIFEST_FILE, &json)
+    }
+
+    /// Reads `dir/run.json`.
+    pub fn read(dir: &Path) -> Result<Self> {
+        let path = dir.join(MANIFEST_FILE);
+        let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
+        serde_json::from_str(&text).map_err(|e| io_err(&path, e))
+    }
+}
+
+/// The context block of `runs.json`: what a reader needs to interpret every row without the
+/// rest of the run folder.
+pub fn context_block(manifest: &RunManifest, schema_version: u32, clocks: Option<Value>) -> Value {
+    let m = manifest;
+    let mut c = serde_json::json!({
+        "mfx_version": m.mfx_version,
+        "git_rev": m.git_rev,
+        "schema_version": schema_version,
+        "suite": {
+            "name": m.suite_name,
+            "source": m.suite_source,
+            "sha256": m.suite_sha256,
+        },
+        "adapter": m.adapter,
+        "shard": format!("{}/{}", m.shard.0, m.shard.1),
+        "started_utc": m.started_utc,
+        "ended_utc": m.ended_utc,
+        "finished": m.finished,
+        "interrupted": m.interrupted,
+    });
+    if let Some(clocks) = clocks {
+        c["clocks"] = clocks;
+    }
+    c
+}
+
+/// Cells of these columns stay strings whatever they look like: identities, where a
+/// digits-only git revision or run id read as a number would lose its leading zeros or digits.
+pub const TEXT_COLUMNS: &[&str] = &[
+    "git_rev",
+    "run_id",
+    "point_key",
+    "scene_label",
+    "adapter",
+    "driver",
+    "driver_info",
+];
+
+/// How one column's cells become JSON, decided over the whole column so a column never mixes
+/// types: all non-empty cells `true`/`false` → booleans; all numbers (or `inf`/`nan`) → numbers,
+/// the non-finite ones as strings; anything else → strings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Bool,
+    Number,
+    Text,
+}
+
+/// An integer with no leading zeros (so `007` stays text) as an exact JSON integer, a finite
+/// float as a JSON number; `None` if the cell is not a number, `Some(Err)` if non-finite.
+fn number(cell: &str) -> Option<std::result::Result<Value, ()>> {
+    let digits = cell.strip_prefix('-').unwrap_or(cell);
+    let is_int = !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit());
+    if is_int {
+        if digits.len() > 1 && digits.starts_with('0') {
+            return None;
+        }
+        if let Ok(i) = cell.parse::<i64>() {
+            return Some(Ok(Value::from(i)));
+        }
+        if let Ok(u) = cell.parse::<u64>() {
+            return Some(Ok(Value::from(u)));
+        }
+    }
+    let f = cell.parse::<f64>().ok()?;
+    Some(serde_json::Number::from_f64(f).map(Value::Number).ok_or(()))
+}
+
+fn cell_value(kind: Kind, cell: &str) -> Value {
+    match kind {
+        Kind::Bool => Value::Bool(cell == "true"),
+        Kind::Number => match number(cell) {
+            Some(Ok(v)) => v,
+            _ => Value::String(cell.to_string()),
+        },
+        Kind::Text => Value::String(cell.to_string()),
+    }
+}
+
+/// Reads `dir/runs.csv` and writes `dir/runs.json` = `{"context": context, "rows": [{column:
+/// value, …}, …]}` atomically, rows in CSV order. Empty cells are left out of their row; column
+/// types as in [`Kind`] (identity columns in [`TEXT_COLUMNS`] are always strings).
+pub fn write_runs_json(dir: &Path, context: &Value) -> Result<()> {
+    let path = dir.join(RUNS_CSV_FILE);
+    let mut rd = csv::Reader::from_path(&path).map_err(|e| io_err(&path, e))?;
+    let headers: Vec<String> = rd
+        .headers()
+        .map_err(|e| io_err(&path, e))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let records: Vec<csv::StringRecord> = rd
+        .records()
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|e| io_err(&path, e))?;
+    let kinds: Vec<Kind> = headers
+        .iter()
+        .enumerate()
+        .map(|(i, h)| {
+            let cells = || {
+                records
+                    .iter()
+                    .filter_map(|r| r.get(i))
+                    .filter(|c| !c.is_empty())
+            };
+            if TEXT_COLUMNS.contains(&h.as_str()) {
+                Kind::Text
+            } else if cells().all(|c| c == "true" || c == "false") {
+                Kind::Bool
+            } else if cells().all(|c| number(c).is_some()) {
+                Kind::Number
+            } else {
+                Kind::Text
+            }
+        })
+        .collect();
+    let rows: Vec<Value> = records
+        .iter()
+        .map(|r| {
+            let mut row = Map::new();
+            for (i, cell) in r.iter().enumerate() {
+                if cell.is_empty() {
+                    continue;
+                }
+                let key = headers
+                    .get(i)
+                    .cloned()
+                    .unwrap_or_else(|| format!("column_{i}"));
+                let kind = kinds.get(i).copied().unwrap_or(Kind::Text);
+                row.insert(key, cell_value(kind, cell));
+            }
+            Value::Object(row)
+        })
+        .collect();
+    let doc = serde_json::json!({ "context": context, "rows": rows });
+    let json = serde_json::to_vec_pretty(&doc)
+        .map_err(|e| CoreError::Io(format!("{RUNS_JSON_FILE}: {e}")))?;
+    write_atomic(dir, RUNS_JSON_FILE, &json)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("mfx-manifest-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn sample() -> RunManifest {
+        let mut m = RunManifest::new(
+            vec!["mfx".into(), "sweep".into(), "smoke".into()],
+            "smoke",
+            "built-in smoke",
+            "name = \"smoke\"\n",
+            AdapterInfo {
+                name: "llvmpipe".into(),
+                backend: "vulkan".into(),
+                device_type: "cpu".into(),
+                driver: "llvmpipe".into(),
+                driver_info: "Mesa 25".into(),
+                pci_bus_id: String::new(),
+            },
+            (1, 4),
+        );
+        m.rows_written = 7;
+        m.rows_ok = 5;
+        m.rows_failed = 1;
+        m.rows_skipped = 1;
+        m.points_total = 9;
+        m.resumed_points = 2;
+        m
+    }
+
+    #[test]
+    fn sha256_of_known_text() {
+        // FIPS 180-2 test vector.
+        assert_eq!(
+            sha256_hex("abc"),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+    }
+
+    #[test]
+    fn manifest_round_trips() {
+        let dir = temp("round-trip");
+        let mut m = sample();
+        m.finish(Some("SIGINT"));
+        m.write(&dir).unwrap();
+        let back = RunManifest::read(&dir).unwrap();
+        assert_eq!(
+            serde_json::to_value(&back).unwrap(),
+            serde_json::to_value(&m).unwrap()
+        );
+        assert_eq!(back.interrupted.as_deref(), Some("SIGINT"));
+        assert_eq!(back.shard, (1, 4));
+        assert_eq!(back.suite_sha256, sha256_hex("name = \"smoke\"\n"));
+        assert_eq!(back.git_rev, crate::build_info::git_rev());
+        assert!(back.elapsed_s.unwrap() >= 0.0);
+        assert!(back.ended_utc.unwrap().ends_with('Z'));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn manifest_replaced_atomically() {
+        let dir = temp("atomic");
+        let mut m = sample();
+        m.write(&dir).unwrap();
+        assert!(!RunManifest::read(&dir).unwrap().finished);
+        // A stale temporary from a run killed mid-write does not stop the next write.
+        std::fs::write(dir.join(".run.json.tmp"), b"{ half").unwrap();
+        m.finished = true;
+        m.finish(None);
+        m.write(&dir).unwrap();
+        let back = RunManifest::read(&dir).unwrap();
+        assert!(back.finished && back.interrupted.is_none());
+        let names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, vec!["run.json".to_string()], "no temporary left");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn runs_json_types_cells_by_column() {
+        let dir = temp("twin");
+        std::fs::write(
+            dir.join("runs.csv"),
+            "point_key,git_rev,status,gpu_ms_median,rmse,samples,order_seed,matches_truth,reason,code\n\
+             a|1,123456789012,ok,1.25,inf,30,18446744073709551615,true,,007\n\
+             b|2,123456789012,failed,,NaN,-3,0,false,\"out of memory, 2 GiB\",12\n",
+        )
+        .unwrap();
+        let m = sample();
+        let ctx = context_block(&m, 7, Some(serde_json::json!({"source": "none: no nvml"})));
+        write_runs_json(&dir, &ctx).unwrap();
+        let doc: Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("runs.json")).unwrap()).unwrap();
+        assert_eq!(doc["context"]["schema_version"], 7);
+        assert_eq!(doc["context"]["git_rev"], crate::build_info::git_rev());
+        assert_eq!(doc["context"]["adapter"]["driver"], "llvmpipe");
+        assert_eq!(doc["context"]["shard"], "1/4");
+        assert_eq!(doc["context"]["clocks"]["source"], "none: no nvml");
+        let rows = doc["rows"].as_array().unwrap();
+        assert_eq!(rows.len(), 2);
+        let a = &rows[0];
+        assert_eq!(a["point_key"], "a|1");
+        assert_eq!(a["git_rev"], "123456789012", "identity columns stay text");
+        assert_eq!(a["gpu_ms_median"], 1.25);
+        assert_eq!(a["rmse"], "inf", "non-finite as strings");
+        assert_eq!(a["samples"], 30);
+        assert_eq!(a["order_seed"], u64::MAX, "integers exact, not through f64");
+        assert_eq!(a["matches_truth"], true);
+        assert!(a.get("reason").is_none(), "empty cells left out");
+        assert_eq!(
+            a["code"], "007",
+            "a column with a leading-zero cell stays text"
+        );
+        let b = &rows[1];
+        assert!(b.get("gpu_ms_median").is_none());
+        assert_eq!(b["rmse"], "NaN");
+        assert_eq!(b["samples"], -3);
+        assert_eq!(b["matches_truth"], false);
+        assert_eq!(b["reason"], "out of memory, 2 GiB");
+        assert_eq!(b["code"], "12");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn context_without_clocks_has_no_clocks_key() {
+        let ctx = context_block(&sample(), 3, None);
+        assert!(ctx.get("clocks").is_none());
+        assert_eq!(ctx["suite"]["source"], "built-in smoke");
+        assert_eq!(ctx["finished"], false);
+    }
+}
