@@ -15,7 +15,7 @@ use anyhow::{bail, Context, Result};
 
 use crate::charts::{Bars, Figure, Pt};
 use crate::data::{resolution, Rec, Runs};
-use crate::studies::methods::CONFIG_AXES;
+use crate::labels::{file_safe, scene_name, ConfigLabels};
 
 /// What the comparison adds to the page.
 pub struct Comparison {
@@ -74,12 +74,6 @@ fn esc(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-fn safe(s: &str) -> String {
-    s.chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-        .take(60)
-        .collect()
-}
 
 fn num(v: f64) -> String {
     if v == 0.0 {
@@ -170,6 +164,7 @@ pub fn compare(
             .entry(platform(r))
             .or_insert(r);
     }
+    let labels = ConfigLabels::new(ok.iter().copied());
     let mut figures = Vec::new();
     let mut html = String::new();
     let _ = write!(
@@ -216,7 +211,7 @@ pub fn compare(
             .map(|k| {
                 let r = by_point[k].values().next().expect("non-empty");
                 let study = r.get("study");
-                let c = r.config_label(CONFIG_AXES);
+                let c = labels.get(r);
                 if study == "methods" || c.starts_with("floor_") {
                     c
                 } else {
@@ -230,21 +225,14 @@ pub fn compare(
                 let v = here
                     .iter()
                     .map(|k| {
-                        by_point[k].get(p).map(|r| {
-                            Pt::spread(
-                                0.0,
-                                r.f("gpu_ms_median").unwrap_or(0.0),
-                                r.f("gpu_ms_min"),
-                                r.f("gpu_ms_max"),
-                            )
-                        })
+                        by_point[k].get(p).and_then(|r| crate::studies::methods::time_pt(r, 0.0))
                     })
                     .collect();
                 (p.clone(), v)
             })
             .collect();
         let bars = Bars {
-            title: format!("GPU time per platform — {label}, {res}"),
+            title: format!("GPU time per platform — {}, {res}", scene_name(label)),
             y_label: "GPU time per frame [ms]".into(),
             log_y: true,
             categories,
@@ -253,10 +241,12 @@ pub fn compare(
         };
         figures.push(bars.draw(
             out,
-            &format!("compare_time_{}_{res}", safe(label)),
-            "Median GPU time per frame of each configuration on each platform (whiskers: min–max \
-             of the timed repetitions), log scale. floor_depth/floor_opaque are the rasterisation \
-             floors of the same scene.",
+            &format!("compare_time_{}_{res}", file_safe(label)),
+            &format!(
+                "Median GPU time per frame of each configuration on each platform. {} \
+                 floor_depth/floor_opaque are the rasterisation floors of the same scene.",
+                crate::studies::methods::ci_caption(runs)
+            ),
         )?);
     }
 
@@ -272,7 +262,7 @@ pub fn compare(
             continue;
         };
         let r0 = per.values().next().expect("non-empty");
-        let c = r0.config_label(CONFIG_AXES);
+        let c = labels.get(r0);
         for p in &others {
             if let Some(t) = per.get(*p).and_then(|r| r.f("gpu_ms_median")) {
                 if t > 0.0 && b > 0.0 {
@@ -521,7 +511,7 @@ mod tests {
         // GPU over lavapipe: 20 / 0.5 = 40× for depth_peel, 1.0 / 0.1 = 10× for the floor.
         assert!(
             c.html
-                .contains("<td>depth_peel (max_layers=8)</td><td>40.000×"),
+                .contains("<td>depth_peel</td><td>40.000×"),
             "{}",
             c.html
         );

@@ -25,6 +25,44 @@ impl Rec {
     pub fn ok(&self) -> bool {
         self.get("status") == "ok"
     }
+    /// The row's flags: `flag` is a `|`-joined list (older CSVs hold one value).
+    pub fn flags(&self) -> Vec<&str> {
+        self.get("flag").split('|').filter(|f| !f.is_empty()).collect()
+    }
+    pub fn flagged(&self) -> bool {
+        !self.flags().is_empty()
+    }
+    /// Whether the image equals the ground truth: `matches_truth` where the CSV has it; for older
+    /// CSVs, RMSE ≤ 1e-6 with no bad pixel and no flag (see `Runs::exactness_rule`). `None` for
+    /// rows without an image error (floors, other studies).
+    pub fn exact_result(&self) -> Option<bool> {
+        match self.get("matches_truth") {
+            "true" => Some(true),
+            "false" => Some(false),
+            _ => {
+                let rmse = self.f("rmse")?;
+                Some(
+                    rmse <= OLD_EXACT_RMSE
+                        && self.f("bad_pixel_frac").is_none_or(|b| b == 0.0)
+                        && !self.flagged(),
+                )
+            }
+        }
+    }
+    /// Bytes the method allocated per pixel: `bytes_per_pixel`, else bytes_allocated / pixels.
+    pub fn bytes_per_pixel(&self) -> Option<f64> {
+        self.f("bytes_per_pixel").or_else(|| {
+            let px = self.f("width")? * self.f("height")?;
+            (px > 0.0).then(|| self.f("bytes_allocated").map(|b| b / px))?
+        })
+    }
+    /// The 95 % confidence interval of the median GPU time, when the CSV has one.
+    pub fn gpu_ci(&self) -> Option<(f64, f64)> {
+        Some((self.f("gpu_ms_ci_lo")?, self.f("gpu_ms_ci_hi")?))
+    }
+    pub fn is_floor(&self) -> bool {
+        self.get("method").starts_with("floor_")
+    }
     /// Method plus its non-empty axis values: one series per configuration.
     pub fn config_label(&self, axes: &[&str]) -> String {
         let mut s = self.get("method").to_string();
@@ -39,6 +77,9 @@ impl Rec {
         s
     }
 }
+
+/// Older CSVs (no `matches_truth`): a row counts as exact at RMSE ≤ this, no bad pixel, no flag.
+pub const OLD_EXACT_RMSE: f64 = 1e-6;
 
 /// The rows of one or more runs.csv files (same header required).
 #[derive(Clone, Debug, Default)]
@@ -78,6 +119,22 @@ impl Runs {
             rows,
             sources: vec![path.to_path_buf()],
         })
+    }
+
+    /// Whether the CSV has a column (an older CSV lacks the newer ones: "not measured").
+    pub fn has(&self, col: &str) -> bool {
+        self.header.iter().any(|h| h == col)
+    }
+
+    /// How exactness is decided for this CSV, in one sentence.
+    pub fn exactness_rule(&self) -> String {
+        if self.has("matches_truth") {
+            "exact = matches_truth (the image equals the ground truth within bad_pixel_tol everywhere)".into()
+        } else {
+            format!(
+                "exact = RMSE ≤ {OLD_EXACT_RMSE:.0e}, no bad pixel and no flag (this CSV predates the matches_truth column)"
+            )
+        }
     }
 
     /// Rows of one study kind.

@@ -37,10 +37,7 @@ pub(crate) fn series(
         match out.iter_mut().find(|s| s.name == n) {
             Some(s) if s.points.iter().any(|p| p.x == x) => {}
             Some(s) => s.points.push(Pt::new(x, y)),
-            None => out.push(Series {
-                name: n,
-                points: vec![Pt::new(x, y)],
-            }),
+            None => out.push(Series::new(n, vec![Pt::new(x, y)])),
         }
     }
     for s in &mut out {
@@ -115,6 +112,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("deferred_time_vs_lights_{stem}"), "Shading only (the G-buffer pass is shared). Attenuation threshold 0: culling drops a light only beyond its range, so every path is exact up to f32 rounding.")?,
             );
@@ -195,6 +193,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("deferred_error_vs_time_{stem}"), "Each line walks the threshold τ (a light is culled from a tile where I·att ≤ τ everywhere in it); τ = 0 is the leftmost-error end.")?,
             );
@@ -356,6 +355,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("deferred_cpu_scaling_{stem}"), "Workers take 64×64 tiles from an atomic counter; SoA 4×4 quads. The G-buffer read-back is not timed.")?,
             );

@@ -11,6 +11,10 @@ use anyhow::Result;
 
 use crate::charts::{Bars, Figure, Pt, Series, XY};
 use crate::data::{resolution, Rec, Runs};
+use crate::labels::{file_safe, scene_name};
+
+/// What the whiskers of this study's charts show.
+const WHISKERS: &str = "Whiskers: 95 % CI of the median GPU time where the CSV has one (none otherwise: min–max is not a spread of the median).";
 
 /// The axes a row's `[[study]]` swept (from its point key).
 fn swept(r: &Rec) -> Vec<&str> {
@@ -25,12 +29,6 @@ fn sweeps(r: &Rec, axis: &str) -> bool {
     swept(r).contains(&axis)
 }
 
-fn safe(s: &str) -> String {
-    s.chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-        .take(60)
-        .collect()
-}
 
 /// Triangles drawn per frame: `draw_triangles` (a prefix) or the whole scene.
 fn drawn(r: &Rec) -> Option<f64> {
@@ -51,37 +49,28 @@ fn vertices_per_draw(r: &Rec) -> Option<f64> {
     Some(v / batches)
 }
 
-/// A rate `amount / gpu time` with whiskers from the min and max GPU times.
+/// A rate `amount / gpu time`, whiskers from the CI of the median time when measured.
 fn rate(r: &Rec, x: f64, amount: f64, scale: f64) -> Option<Pt> {
     let ms = r.f("gpu_ms_median")?;
     if ms <= 0.0 {
         return None;
     }
-    let per = |m: Option<f64>| m.filter(|m| *m > 0.0).map(|m| amount / (m * 1e-3) / scale);
-    Some(Pt::spread(
-        x,
-        amount / (ms * 1e-3) / scale,
-        per(r.f("gpu_ms_max")),
-        per(r.f("gpu_ms_min")),
-    ))
+    let per = |m: f64| (m > 0.0).then(|| amount / (m * 1e-3) / scale);
+    let (lo, hi) = match r.gpu_ci() {
+        Some((lo, hi)) => (per(hi), per(lo)),
+        None => (None, None),
+    };
+    Some(Pt::spread(x, amount / (ms * 1e-3) / scale, lo, hi).flagged(r.flagged()))
 }
 
 fn gpu_ms(r: &Rec, x: f64) -> Option<Pt> {
-    Some(Pt::spread(
-        x,
-        r.f("gpu_ms_median")?,
-        r.f("gpu_ms_min"),
-        r.f("gpu_ms_max"),
-    ))
+    super::methods::time_pt(r, x)
 }
 
 fn push(series: &mut Vec<Series>, name: String, p: Pt) {
     match series.iter_mut().find(|s| s.name == name) {
         Some(s) => s.points.push(p),
-        None => series.push(Series {
-            name,
-            points: vec![p],
-        }),
+        None => series.push(Series::new(name, vec![p])),
     }
 }
 
@@ -119,7 +108,7 @@ fn throughput(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Res
         };
         let name = format!(
             "{} — {}",
-            r.get("scene_label"),
+            scene_name(r.get("scene_label")),
             if r.get("indexed") == "false" {
                 "non-indexed"
             } else {
@@ -141,11 +130,12 @@ fn throughput(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Res
         log_y: false,
         lines: true,
         series: sorted(series),
+        ..Default::default()
     };
     figs.push(xy.draw(
         dir,
         &format!("geometry_throughput_vs_vertices_{res}"),
-        "Thesis Fig. 3.1: one draw of a growing prefix of the mesh; the thesis saw a cliff above ~1M vertices per indexed draw on GeForce 7 and none without indices. Whiskers: min–max GPU time.",
+        &format!("Thesis Fig. 3.1: one draw of a growing prefix of the mesh; the thesis saw a cliff above ~1M vertices per indexed draw on GeForce 7 and none without indices. {WHISKERS}"),
     )?);
     Ok(())
 }
@@ -160,14 +150,10 @@ fn batching(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Resul
         let Some(b) = r.f("batches") else { continue };
         let label = r.get("scene_label");
         if let Some(p) = gpu_ms(r, b) {
-            push(&mut series, format!("{label} — GPU"), p);
+            push(&mut series, format!("{} — GPU", scene_name(label)), p);
         }
         if let Some(c) = r.f("cpu_ms_median") {
-            push(
-                &mut series,
-                format!("{label} — wall clock"),
-                Pt::spread(b, c, r.f("cpu_ms_min"), r.f("cpu_ms_max")),
-            );
+            push(&mut series, format!("{} — wall clock", scene_name(label)), Pt::new(b, c));
         }
     }
     if series.iter().map(|s| s.points.len()).sum::<usize>() < 2 {
@@ -181,11 +167,12 @@ fn batching(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Resul
         log_y: true,
         lines: true,
         series: sorted(series),
+        ..Default::default()
     };
     figs.push(xy.draw(
         dir,
         &format!("geometry_time_vs_batches_{res}"),
-        "Thesis Fig. 3.2: the mesh cut into 1 … N draw calls. GPU = timestamped render pass; wall clock = encode + submit + wait, where per-draw CPU cost shows. Whiskers: min–max.",
+        &format!("Thesis Fig. 3.2: the mesh cut into 1 … N draw calls. GPU = timestamped render pass; wall clock = encode + submit + wait, where per-draw CPU cost shows. {WHISKERS}"),
     )?);
     Ok(())
 }
@@ -200,7 +187,7 @@ fn layout(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<
         if let Some(p) = gpu_ms(r, x) {
             push(
                 &mut series,
-                format!("{} — {}", r.get("scene_label"), r.get("layout")),
+                format!("{} — {}", scene_name(r.get("scene_label")), r.get("layout")),
                 p,
             );
         }
@@ -216,11 +203,12 @@ fn layout(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<
         log_y: false,
         lines: true,
         series: sorted(series),
+        ..Default::default()
     };
     figs.push(xy.draw(
         dir,
         &format!("geometry_layout_vs_attributes_{res}"),
-        "Thesis Fig. 3.3: one draw of the whole mesh, every attribute read by the vertex shader. Whiskers: min–max GPU time.",
+        &format!("Thesis Fig. 3.3: one draw of the whole mesh, every attribute read by the vertex shader. {WHISKERS}"),
     )?);
     Ok(())
 }
@@ -260,7 +248,7 @@ fn index_precision(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -
         if !series.is_empty() {
             figs.push(
                 Bars {
-                    title: format!("Index precision × mesh order — {label}, {res}"),
+                    title: format!("Index precision × mesh order — {}, {res}", scene_name(&label)),
                     y_label: "million triangles per second".into(),
                     log_y: false,
                     categories: categories.clone(),
@@ -269,8 +257,8 @@ fn index_precision(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -
                 }
                 .draw(
                     dir,
-                    &format!("geometry_index_precision_{}_{res}", safe(&label)),
-                    "Thesis Tables 3.2–3.3: 16- vs 32-bit indices for each triangle order (original, shuffled, meshopt vertex cache, cache + fetch) as lists and as strips with primitive restart. Whiskers: from the min–max GPU time.",
+                    &format!("geometry_index_precision_{}_{res}", file_safe(&label)),
+                    &format!("Thesis Tables 3.2–3.3: 16- vs 32-bit indices for each triangle order (original, shuffled, meshopt vertex cache, cache + fetch) as lists and as strips with primitive restart. {WHISKERS}"),
                 )?,
             );
         }
@@ -295,7 +283,7 @@ fn index_precision(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -
         if !series.is_empty() {
             figs.push(
                 Bars {
-                    title: format!("Vertex-shader runs per triangle — {label}, {res}"),
+                    title: format!("Vertex-shader runs per triangle — {}, {res}", scene_name(&label)),
                     y_label: "vertex-shader invocations per triangle".into(),
                     log_y: false,
                     categories,
@@ -304,7 +292,7 @@ fn index_precision(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -
                 }
                 .draw(
                     dir,
-                    &format!("geometry_acmr_{}_{res}", safe(&label)),
+                    &format!("geometry_acmr_{}_{res}", file_safe(&label)),
                     "Measured (pipeline statistics) against meshopt's FIFO-16 simulation of the same index stream, 32-bit indices; 3 = no reuse, the line at 0.5 is the ideal of a closed mesh.",
                 )?,
             );
@@ -383,13 +371,14 @@ fn formats(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result
             figs.push(
                 Bars {
                     title: format!(
-                        "Vertex formats ({}{}) — {label}, {res}",
+                        "Vertex formats ({}{}) — {}, {res}",
                         varying.iter().map(|(_, n)| *n).collect::<Vec<_>>().join(" × "),
                         if fixed.is_empty() {
                             String::new()
                         } else {
                             format!("; {}", fixed.join(", "))
-                        }
+                        },
+                        scene_name(&label)
                     ),
                     y_label: "GPU time per frame [ms]".into(),
                     log_y: false,
@@ -401,10 +390,10 @@ fn formats(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result
                     dir,
                     &format!(
                         "geometry_formats_{}_{}_{res}",
-                        safe(&study),
-                        safe(&label)
+                        file_safe(&study),
+                        file_safe(&label)
                     ),
-                    "Thesis Table 3.4: one draw of the whole mesh per attribute format; attributes not swept keep their defaults (position float32x3, normal float32x3, no colour, no texcoord). Whiskers: min–max GPU time.",
+                    &format!("Thesis Table 3.4: one draw of the whole mesh per attribute format; attributes not swept keep their defaults (position float32x3, normal float32x3, no colour, no texcoord). {WHISKERS}"),
                 )?,
             );
         }
@@ -420,8 +409,8 @@ fn raster_check(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> R
         if let (Some(ms), Some(ratio)) = (r.f("gpu_ms_median"), r.f("raster_bound_ratio")) {
             push(
                 &mut series,
-                r.get("scene_label").to_string(),
-                Pt::new(ms, ratio),
+                scene_name(r.get("scene_label")),
+                Pt::new(ms, ratio).flagged(r.flagged()),
             );
         }
     }
@@ -436,6 +425,7 @@ fn raster_check(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> R
         log_y: false,
         lines: false,
         series: sorted(series),
+        ..Default::default()
     };
     figs.push(xy.draw(
         dir,

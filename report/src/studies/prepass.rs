@@ -49,6 +49,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("prepass_time_vs_lights_{stem}"), "deferred: G-buffer + shading (one geometry pass). prepass: depth+normal pre-pass, light buffer, second geometry pass with the materials.")?,
             );
@@ -74,6 +75,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("prepass_error_vs_lights_{stem}"), "The light buffer keeps the specular sum's luminance only (A): coloured lights lose the colour of their highlights (dielectrics: grey specular; metals: chroma of the diffuse light). rgba8 stores light ÷ 8 and clamps above 8.")?,
             );
@@ -163,10 +165,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     r.get("light_buffer_format")
                 );
                 if !s.iter().any(|x| x.name == name) {
-                    s.push(Series {
-                        name,
-                        points: vec![Pt::new(tmin, f), Pt::new(tmax, f)],
-                    });
+                    s.push(Series::new(name, vec![Pt::new(tmin, f), Pt::new(tmax, f)]));
                 }
             }
         }
@@ -180,6 +179,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("prepass_cpu_frame_{stem}"), "Every frame renders the main view and an independent second view. overlap=true submits the second view before the CPU lights, so the GPU renders it meanwhile; GPU-lit lines are the same two views with the light buffer lit on the GPU (flat: no threads).")?,
             );
@@ -228,6 +228,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("prepass_cpu_gap_{stem}"), "gap: GPU clock from the end of the pre-pass to the start of the material pass (copy, map, CPU lighting, upload). busy: timed GPU passes inside it (the second view when overlapped; drawn at 1e-3 when none). A software rasteriser (lavapipe) shares the CPU cores, so there it cannot overlap for free.")?,
             );

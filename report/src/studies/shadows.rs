@@ -38,10 +38,7 @@ fn series(
         let n = name(r);
         match out.iter_mut().find(|s| s.name == n) {
             Some(s) => s.points.push(Pt::new(x, y)),
-            None => out.push(Series {
-                name: n,
-                points: vec![Pt::new(x, y)],
-            }),
+            None => out.push(Series::new(n, vec![Pt::new(x, y)])),
         }
     }
     for s in &mut out {
@@ -80,6 +77,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: false,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("shadows_error_vs_time_{stem}"), "One point per configuration (every sweep of the suite); the reference is m×m stratified shadow rays per pixel from the same G-buffer points.")?,
             );
@@ -101,6 +99,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: false,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(
                     dir,
@@ -137,6 +136,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: false,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("shadows_bleeding_vs_layers_{stem}"), "Light bleeding: GPU visibility above the reference; overshadowing: below. Hybrid bias, HSM on.")?,
             );
@@ -157,6 +157,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: false,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("shadows_error_vs_nspp_{stem}"), "Above max_nspp the search region is sampled with a stride; each sample stands for its block of texels.")?,
             );
@@ -182,6 +183,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: false,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("shadows_bias_{stem}"), "midpoint ignores gscale (flat lines); slope and hybrid clamp the slope bias at gmax.")?,
             );
@@ -207,6 +209,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("shadows_hsm_{stem}"), "The min-depth pyramid shrinks the search region before sampling; its error cost is in the error-vs-time chart.")?,
             );

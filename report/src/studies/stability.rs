@@ -6,23 +6,18 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use super::methods::{series_by_config, EXACT_FLOOR};
+use super::methods::{config_series, Styles};
 use crate::charts::{Bars, Figure, Pt, XY};
 use crate::data::{Rec, Runs};
-
-fn safe(s: &str) -> String {
-    s.chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-        .take(60)
-        .collect()
-}
+use crate::labels::{file_safe, scene_name, ConfigLabels};
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let rows: Vec<&Rec> = runs
         .study("stability")
         .into_iter()
-        .filter(|r| r.ok() && !r.get("method").starts_with("floor_"))
+        .filter(|r| r.ok() && !r.is_floor())
         .collect();
+    let styles = Styles::new(rows.iter().copied());
     let mut figs = Vec::new();
     for case in Runs::distinct(rows.iter().copied(), "stability_case") {
         let g: Vec<&Rec> = rows
@@ -34,44 +29,27 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             .first()
             .map(|r| r.get("stiffness").to_string())
             .unwrap_or_default();
+        let labels = ConfigLabels::new(g.iter().copied());
+        let pt = |r: &Rec| Some(Pt::new(r.f("stiffness_value")?, r.f("rmse")?).flagged(r.flagged()));
         // A series per method configuration and depth convention (reversed-Z is a scene
         // parameter, so it is folded into the name from the scene label).
-        let mut series = series_by_config(
-            &g,
-            |r| {
-                Some((
-                    r.f("stiffness_value")?.max(f64::MIN_POSITIVE),
-                    r.f("rmse")?.max(EXACT_FLOOR),
-                ))
-            },
-            false,
-        );
-        if g.iter()
-            .any(|r| r.get("scene_label").contains("reversed_z=true"))
-        {
-            series.clear();
+        let mut series = Vec::new();
+        if g.iter().any(|r| r.get("scene_label").contains("reversed_z=true")) {
             for rev in [false, true] {
                 let sub: Vec<&Rec> = g
                     .iter()
                     .copied()
                     .filter(|r| r.get("scene_label").contains("reversed_z=true") == rev)
                     .collect();
-                for mut s in series_by_config(
-                    &sub,
-                    |r| Some((r.f("stiffness_value")?, r.f("rmse")?.max(EXACT_FLOOR))),
-                    false,
-                ) {
-                    s.name = format!(
-                        "{} [{}]",
-                        s.name,
-                        if rev { "reversed-Z" } else { "standard Z" }
-                    );
+                for mut s in config_series(&sub, &labels, &styles, pt) {
+                    s.name = format!("{} [{}]", s.name, if rev { "reversed-Z" } else { "standard Z" });
+                    // Reversed-Z keeps the method's marker and takes the next colour.
+                    s.color = s.color.map(|c| c * 2 + rev as usize);
                     series.push(s);
                 }
             }
-        }
-        if series.iter().map(|s| s.points.len()).sum::<usize>() == 0 {
-            continue;
+        } else {
+            series = config_series(&g, &labels, &styles, pt);
         }
         let positive_x = g
             .iter()
@@ -79,26 +57,31 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         let xy = XY {
             title: format!("Error vs stiffness — {case}"),
             x_label: stiffness.clone(),
-            y_label: "RMSE vs f64 reference".into(),
+            y_label: "RMSE vs ground truth".into(),
             log_x: positive_x,
             log_y: true,
             lines: true,
             series,
+            zero_label: "exact (0)".into(),
+            ..Default::default()
         };
         let flagged: Vec<String> = g
             .iter()
-            .filter(|r| !r.get("flag").is_empty())
-            .map(|r| format!("{} ({})", r.get("flag"), r.get("stiffness_value")))
+            .filter(|r| r.flagged())
+            .map(|r| format!("{} {} ({} = {})", r.get("method"), r.flags().join("|"), stiffness, r.get("stiffness_value")))
             .collect();
+        let scenes = Runs::distinct(g.iter().copied(), "scene_label");
         let caption = format!(
-            "Exact results (RMSE 0) are drawn at {EXACT_FLOOR:.0e}. Flags: {}.",
+            "Zero error is drawn in the band under the log axis. Hollow: flagged ({}). Scenes: {}. {}",
             if flagged.is_empty() {
                 "none".to_string()
             } else {
                 flagged.join(", ")
-            }
+            },
+            scenes.iter().map(|s| scene_name(s)).collect::<Vec<_>>().join("; "),
+            labels.fixed_note()
         );
-        figs.push(xy.draw(dir, &format!("stability_{}", safe(&case)), &caption)?);
+        figs.push(xy.draw(dir, &format!("stability_{}", file_safe(&case)), &caption)?);
     }
     figs.extend(specialisation(runs, dir)?);
     Ok(figs)
@@ -113,12 +96,16 @@ fn specialisation(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         .collect();
     let key = |r: &Rec| {
         format!(
-            "{} {} {}x{} occlusion_stop={}",
+            "{} — {} {}x{}{}",
             r.get("method"),
-            r.get("scene_label"),
+            scene_name(r.get("scene_label")),
             r.get("width"),
             r.get("height"),
-            r.get("occlusion_stop")
+            if r.get("occlusion_stop").is_empty() {
+                String::new()
+            } else {
+                format!(", occlusion_stop={}", r.get("occlusion_stop"))
+            }
         )
     };
     let effects = Runs::distinct(rows.iter().copied(), "effect");

@@ -1,0 +1,338 @@
+//! What the run found, written from the rows: per scene the fastest exact configuration and its
+//! multiple of the floor, the fastest under each error budget, the flagged points, and what did
+//! not run. `summary_text` is the text both the report's summary section and the end of
+//! `mfx sweep` show.
+
+use std::collections::BTreeMap;
+use std::fmt::Write;
+
+use crate::compare::{platform, platforms};
+use crate::data::{resolution, Rec, Runs};
+use crate::html::short;
+use crate::labels::{scene_name, ConfigLabels};
+use crate::studies::methods::time_cell;
+
+/// RMSE budgets (vs the ground truth) the summary names the fastest configuration under.
+pub const BUDGETS: [f64; 2] = [1e-3, 1e-2];
+
+/// Columns the report reads that older CSVs lack; each missing one is named once.
+const NEWER: [(&str, &str); 5] = [
+    ("matches_truth", "exactness judged directly"),
+    ("flip_mean", "FLIP"),
+    ("gpu_ms_ci_lo", "confidence intervals of the median time"),
+    ("bytes_per_pixel", "bytes per pixel as a column (derived from bytes_allocated here)"),
+    ("samples", "kept sample counts"),
+];
+
+/// Studies whose rows carry an image error vs the ground truth (`rmse`).
+const IMAGE_STUDIES: [&str; 2] = ["methods", "stability"];
+
+/// The error column other studies are judged by, when they have one.
+fn error_col(study: &str) -> Option<&'static str> {
+    match study {
+        "shadows" => Some("vis_rmse"),
+        "deferred" | "prepass" => Some("rmse"),
+        _ => None,
+    }
+}
+
+fn count_by<'a>(items: impl IntoIterator<Item = &'a str>) -> String {
+    let mut m: BTreeMap<&str, usize> = BTreeMap::new();
+    for i in items {
+        *m.entry(i).or_default() += 1;
+    }
+    let mut v: Vec<(&str, usize)> = m.into_iter().collect();
+    v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
+    v.iter()
+        .map(|(k, n)| format!("{k} {n}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn named(labels: &ConfigLabels, r: &Rec) -> String {
+    labels.get(r)
+}
+
+fn timed(r: &Rec) -> bool {
+    r.f("gpu_ms_median").is_some() && !r.flags().contains(&"timestamps_incomplete")
+}
+
+fn fastest<'a>(rows: impl Iterator<Item = &'a Rec>) -> Option<&'a Rec> {
+    rows.filter(|r| timed(r)).min_by(|a, b| {
+        a.f("gpu_ms_median")
+            .unwrap()
+            .total_cmp(&b.f("gpu_ms_median").unwrap())
+    })
+}
+
+fn flag_note(r: &Rec) -> String {
+    if r.flagged() {
+        format!(" (flagged: {})", r.flags().join(", "))
+    } else {
+        String::new()
+    }
+}
+
+/// One scene of an image study: fastest exact, fastest under each budget, flags.
+fn image_scene(out: &mut String, rows: &[&Rec], floors: &[&Rec], labels: &ConfigLabels) {
+    let exact = fastest(rows.iter().copied().filter(|r| r.exact_result() == Some(true)));
+    let floor = floors.iter().find(|r| r.get("method") == "floor_depth");
+    match exact {
+        Some(r) => {
+            let _ = writeln!(
+                out,
+                "- Fastest exact: {} at {} ms, {}× floor_depth{}.",
+                named(labels, r),
+                time_cell(r),
+                short(r.f("x_floor")),
+                floor
+                    .and_then(|f| f.f("gpu_ms_median"))
+                    .map(|f| format!(" ({} ms)", short(Some(f))))
+                    .unwrap_or_default()
+            );
+        }
+        None => {
+            let best = rows
+                .iter()
+                .filter(|r| r.f("rmse").is_some())
+                .min_by(|a, b| a.f("rmse").unwrap().total_cmp(&b.f("rmse").unwrap()));
+            let _ = writeln!(
+                out,
+                "- No configuration was exact{}.",
+                best.map(|r| format!(
+                    "; the smallest error: {} (RMSE {}{})",
+                    named(labels, r),
+                    short(r.f("rmse")),
+                    flag_note(r)
+                ))
+                .unwrap_or_default()
+            );
+        }
+    }
+    let exact_ms = exact.and_then(|r| r.f("gpu_ms_median"));
+    for b in BUDGETS {
+        let within = fastest(rows.iter().copied().filter(|r| r.f("rmse").is_some_and(|e| e <= b)));
+        match within {
+            Some(r) => {
+                let ms = r.f("gpu_ms_median").unwrap();
+                let vs = match exact_ms {
+                    Some(e) if r.exact_result() == Some(true) && ms == e => {
+                        " (the fastest exact)".to_string()
+                    }
+                    Some(e) if ms < e => format!(", {}× faster than the fastest exact", short(Some(e / ms))),
+                    _ => String::new(),
+                };
+                let _ = writeln!(
+                    out,
+                    "- RMSE ≤ {b:.0e}: {} at {} ms, RMSE {}{vs}{}.",
+                    named(labels, r),
+                    time_cell(r),
+                    short(r.f("rmse")),
+                    flag_note(r)
+                );
+            }
+            None => {
+                let _ = writeln!(out, "- RMSE ≤ {b:.0e}: no configuration.");
+            }
+        }
+    }
+    let flagged: Vec<&&Rec> = rows.iter().filter(|r| r.flagged()).collect();
+    if !flagged.is_empty() {
+        let _ = writeln!(
+            out,
+            "- Flagged: {} of {} ({}).",
+            flagged.len(),
+            rows.len(),
+            count_by(flagged.iter().flat_map(|r| r.flags()))
+        );
+    }
+}
+
+/// One scene of another study: its fastest configuration and, with an error column, its most
+/// accurate one.
+fn other_scene(out: &mut String, study: &str, rows: &[&Rec], labels: &ConfigLabels) {
+    if let Some(r) = fastest(rows.iter().copied()) {
+        let _ = writeln!(out, "- Fastest: {} at {} ms.", named(labels, r), time_cell(r));
+    }
+    if let Some(col) = error_col(study) {
+        let best = rows
+            .iter()
+            .filter(|r| r.f(col).is_some())
+            .min_by(|a, b| a.f(col).unwrap().total_cmp(&b.f(col).unwrap()));
+        if let Some(r) = best {
+            let _ = writeln!(
+                out,
+                "- Lowest {col}: {} ({}) at {} ms.",
+                named(labels, r),
+                short(r.f(col)),
+                time_cell(r)
+            );
+        }
+    }
+    let flagged: Vec<&&Rec> = rows.iter().filter(|r| r.flagged()).collect();
+    if !flagged.is_empty() {
+        let _ = writeln!(
+            out,
+            "- Flagged: {} of {} ({}).",
+            flagged.len(),
+            rows.len(),
+            count_by(flagged.iter().flat_map(|r| r.flags()))
+        );
+    }
+}
+
+fn platform_summary(out: &mut String, runs: &Runs, rows: &[&Rec]) {
+    let mut studies: Vec<String> = Vec::new();
+    for r in rows {
+        let s = r.get("study").to_string();
+        if !studies.contains(&s) {
+            studies.push(s);
+        }
+    }
+    for study in studies {
+        let of: Vec<&Rec> = rows.iter().copied().filter(|r| r.get("study") == study).collect();
+        let ok: Vec<&Rec> = of.iter().copied().filter(|r| r.ok()).collect();
+        let methods: Vec<&Rec> = ok.iter().copied().filter(|r| !r.is_floor()).collect();
+        let labels = ConfigLabels::new(methods.iter().copied());
+        let _ = writeln!(out, "\n### {study}\n");
+        if methods.is_empty() {
+            let _ = writeln!(out, "No measured configuration (only floors, or nothing ran).");
+        }
+        for (key, g) in Runs::group_by(methods.iter().copied(), |r| {
+            format!("{}\u{0}{}", r.get("scene_label"), resolution(r))
+        }) {
+            let (label, res) = key.split_once('\u{0}').unwrap_or((&key, ""));
+            let _ = writeln!(out, "{}, {res}:", scene_name(label));
+            if IMAGE_STUDIES.contains(&study.as_str()) && g.iter().any(|r| r.f("rmse").is_some()) {
+                let floors: Vec<&Rec> = ok
+                    .iter()
+                    .copied()
+                    .filter(|r| r.is_floor() && r.get("scene_label") == label && resolution(r) == res)
+                    .collect();
+                image_scene(out, &g, &floors, &labels);
+            } else {
+                other_scene(out, &study, &g, &labels);
+            }
+        }
+        let fixed = labels.fixed_note();
+        if !fixed.is_empty() {
+            let _ = writeln!(out, "\n{fixed}");
+        }
+    }
+    let _ = runs;
+}
+
+/// The summary of a run (plain text, Markdown-flavoured): what it found, per platform, study and
+/// scene, then what did not run and which columns this CSV does not have.
+pub fn summary_text(runs: &Runs) -> String {
+    let mut out = String::new();
+    let count = |s: &str| runs.rows.iter().filter(|r| r.get("status") == s).count();
+    let mut ids: Vec<&str> = Vec::new();
+    for r in &runs.rows {
+        if !ids.contains(&r.get("run_id")) {
+            ids.push(r.get("run_id"));
+        }
+    }
+    let plats = platforms(runs);
+    let _ = writeln!(out, "## Summary\n");
+    let _ = writeln!(
+        out,
+        "{} rows from {} ({}): {} ok, {} skipped, {} failed.",
+        runs.rows.len(),
+        if ids.len() == 1 { format!("run {}", ids[0]) } else { format!("{} runs", ids.len()) },
+        plats.join("; "),
+        count("ok"),
+        count("skipped"),
+        count("failed")
+    );
+    if runs.rows.iter().any(|r| r.f("rmse").is_some()) {
+        let _ = writeln!(
+            out,
+            "Errors are RMSE vs the ground truth; {}. Times are median GPU ms per frame [95 % CI when measured]; × floor_depth divides by the depth-only pass of the same scene.",
+            runs.exactness_rule()
+        );
+    }
+    for p in &plats {
+        let rows: Vec<&Rec> = runs.rows.iter().filter(|r| platform(r) == *p).collect();
+        if plats.len() > 1 {
+            let _ = writeln!(out, "\n## {p}");
+        }
+        platform_summary(&mut out, runs, &rows);
+    }
+    let _ = writeln!(out, "\n### Not run\n");
+    let mut any = false;
+    for status in ["skipped", "failed"] {
+        let rows: Vec<&Rec> = runs.rows.iter().filter(|r| r.get("status") == status).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        any = true;
+        let _ = writeln!(out, "- {status}: {} point(s):", rows.len());
+        let mut reasons: Vec<(String, Vec<&Rec>)> = Vec::new();
+        for r in &rows {
+            let why = r.get("reason").to_string();
+            match reasons.iter_mut().find(|(w, _)| *w == why) {
+                Some((_, v)) => v.push(r),
+                None => reasons.push((why, vec![r])),
+            }
+        }
+        for (why, rs) in reasons {
+            let mut methods: Vec<&str> = rs.iter().map(|r| r.get("method")).collect();
+            methods.dedup();
+            let _ = writeln!(
+                out,
+                "  - {} × {} ({}): {}",
+                rs.len(),
+                methods.join(", "),
+                rs.first().map(|r| r.get("study")).unwrap_or(""),
+                if why.is_empty() { "no reason given" } else { &why }
+            );
+        }
+    }
+    if !any {
+        let _ = writeln!(out, "Every point ran.");
+    }
+    let missing: Vec<String> = NEWER
+        .iter()
+        .filter(|(c, _)| !runs.has(c))
+        .map(|(c, what)| format!("{c} ({what})"))
+        .collect();
+    if !missing.is_empty() {
+        let _ = writeln!(out, "\nNot measured in this CSV (an older schema): {}.", missing.join("; "));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn runs(rows: &[&str]) -> Runs {
+        let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,x_floor,rmse,bad_pixel_frac,flag";
+        let d = std::env::temp_dir().join(format!("mfx-summary-{}-{}", rows.len(), std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let p = d.join("runs.csv");
+        std::fs::write(&p, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
+        Runs::load(&p).unwrap()
+    }
+
+    #[test]
+    fn the_summary_names_the_fastest_exact_and_the_budgets() {
+        let r = runs(&[
+            "1,r,methods,q(d=8),64,64,floor_depth,methods|q(d=8)|64x64|floor_depth|,G,vulkan,ok,,0.1,,,,",
+            "1,r,methods,q(d=8),64,64,depth_peel,methods|q(d=8)|64x64|depth_peel|max_layers=64,G,vulkan,ok,,2.0,20,0,0,",
+            "1,r,methods,q(d=8),64,64,linked_list,methods|q(d=8)|64x64|linked_list|layers=8,G,vulkan,ok,,1.0,10,0,0,",
+            "1,r,methods,q(d=8),64,64,kbuffer,methods|q(d=8)|64x64|kbuffer|layers=4,G,vulkan,ok,,0.25,2.5,5e-4,0.01,hazard",
+            "1,r,methods,q(d=8),64,64,wboit,methods|q(d=8)|64x64|wboit|,G,vulkan,ok,,0.2,2,5e-3,0.5,",
+            "1,r,methods,q(d=8),64,64,bdp,methods|q(d=8)|64x64|bdp|,G,vulkan,skipped,needs 8 attachments,,,,,",
+        ]);
+        let s = summary_text(&r);
+        assert!(s.contains("Fastest exact: linked_list at 1 ms, 10× floor_depth (0.1 ms)"), "{s}");
+        assert!(s.contains("RMSE ≤ 1e-3: kbuffer at 0.25 ms, RMSE 5e-4, 4× faster than the fastest exact (flagged: hazard)"), "{s}");
+        assert!(s.contains("RMSE ≤ 1e-2: wboit at 0.2 ms"), "{s}");
+        assert!(s.contains("Flagged: 1 of 4 (hazard 1)"), "{s}");
+        assert!(s.contains("1 × bdp (methods): needs 8 attachments"), "{s}");
+        assert!(s.contains("predates the matches_truth column"), "{s}");
+        assert!(s.contains("Not measured in this CSV"), "{s}");
+    }
+}
