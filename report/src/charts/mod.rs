@@ -500,6 +500,8 @@ fn write_all(
 const PLOT_W: f64 = 640.0;
 const PLOT_H: f64 = 440.0;
 const ZERO_BAND: f64 = 30.0;
+/// A front with more members is numbered on the chart and named in the caption.
+const FRONT_NAMED_MAX: usize = 6;
 
 /// Everything an XY chart needs to draw, computed before any drawing.
 struct XyPlan {
@@ -697,6 +699,20 @@ impl XY {
             &|r| self.render(r, &plan),
         )?;
         let mut caption = caption.to_string();
+        let mut front: Vec<&Named> = self
+            .front
+            .iter()
+            .filter(|n| self.x_ok(n.x) && self.y_place(n.y).is_some())
+            .collect();
+        if front.len() > FRONT_NAMED_MAX {
+            front.sort_by(|a, b| a.x.total_cmp(&b.x));
+            let names: Vec<String> = front
+                .iter()
+                .enumerate()
+                .map(|(i, n)| format!("{} {}", i + 1, n.text))
+                .collect();
+            caption.push_str(&format!(" Front, left to right: {}.", names.join("; ")));
+        }
         if plan.dropped > 0 {
             caption.push_str(&format!(
                 " {} point{} not drawn (not finite, or ≤ 0 on a log axis).",
@@ -827,7 +843,7 @@ impl XY {
             .map_err(err)?;
             root.draw(&Text::new(
                 name.clone(),
-                (px(xp + 3.0), px(plot.y + 3.0)),
+                (px(xp + 14.0), px(plot.y + 4.0)),
                 TextStyle::from(font(11.0).transform(FontTransform::Rotate90).color(&MUTED))
                     .pos(Pos::new(HPos::Left, VPos::Top)),
             ))
@@ -842,12 +858,17 @@ impl XY {
             let mut line: Vec<(f64, (f64, f64))> =
                 s.points.iter().filter_map(|q| Some((q.x, place(q)?))).collect();
             line.sort_by(|a, b| a.0.total_cmp(&b.0));
-            if self.lines && line.len() > 1 {
-                root.draw(&PathElement::new(
-                    line.iter().map(|(_, (x, y))| (px(*x), px(*y))).collect::<Vec<_>>(),
-                    c.mix(0.8).stroke_width(2),
-                ))
-                .map_err(err)?;
+            if self.lines {
+                // Segment by segment: a 2 px polyline's miter join at a sharp turn draws a long
+                // spike out of the plot in the bitmap backend.
+                for w in line.windows(2) {
+                    let (a, b) = (w[0].1, w[1].1);
+                    root.draw(&PathElement::new(
+                        vec![(px(a.0), px(a.1)), (px(b.0), px(b.1))],
+                        c.mix(0.8).stroke_width(2),
+                    ))
+                    .map_err(err)?;
+                }
             }
             for q in &s.points {
                 let Some((x, y)) = place(q) else { continue };
@@ -905,9 +926,12 @@ impl XY {
             .map_err(err)?;
         }
         let mut placed: Vec<Rect> = Vec::new();
-        for (x, y, text) in &front {
+        let numbered = front.len() > FRONT_NAMED_MAX;
+        for (i, (x, y, text)) in front.iter().enumerate() {
             root.draw(&Circle::new((px(*x), px(*y)), 8, BLACK.stroke_width(1)))
                 .map_err(err)?;
+            let text = if numbered { (i + 1).to_string() } else { text.to_string() };
+            let text = text.as_str();
             let w = text_width(text, 12.0) + 4.0;
             let h = 15.0;
             let cands = [
@@ -938,7 +962,7 @@ impl XY {
             if let Some(r) = spot {
                 root.draw(&Rectangle::new(
                     [(px(r.x), px(r.y)), (px(r.right()), px(r.bottom()))],
-                    WHITE.mix(0.8).filled(),
+                    WHITE.mix(0.6).filled(),
                 ))
                 .map_err(err)?;
                 root.draw(&Text::new(
@@ -1120,9 +1144,38 @@ impl Bars {
         })
     }
 
-    /// Draws the chart, or returns a note when there is no value to draw.
+    /// Draws the chart, or returns a note when there is no value to draw. Categories without
+    /// any value are left out (and counted in the caption).
     pub fn draw(&self, dir: &Path, stem: &str, caption: &str) -> Result<Figure> {
         ensure_font();
+        let keep: Vec<bool> = (0..self.categories.len())
+            .map(|c| {
+                self.series
+                    .iter()
+                    .any(|(_, v)| v.get(c).is_some_and(|p| p.is_some_and(|p| p.y.is_finite())))
+            })
+            .collect();
+        let empty = keep.iter().filter(|k| !**k).count();
+        if empty > 0 {
+            let pick = |v: &[Option<Pt>]| -> Vec<Option<Pt>> {
+                v.iter().zip(&keep).filter(|(_, k)| **k).map(|(p, _)| *p).collect()
+            };
+            let mut b = self.clone();
+            b.categories = self
+                .categories
+                .iter()
+                .zip(&keep)
+                .filter(|(_, k)| **k)
+                .map(|(c, _)| c.clone())
+                .collect();
+            b.series = self.series.iter().map(|(n, v)| (n.clone(), pick(v))).collect();
+            let mut f = b.draw(dir, stem, caption)?;
+            f.caption.push_str(&format!(
+                " {empty} categor{} without a value left out.",
+                if empty == 1 { "y" } else { "ies" }
+            ));
+            return Ok(f);
+        }
         let Some(plan) = self.plan(stem) else {
             return Ok(Figure::note(&self.title, "not drawn: no value to show."));
         };
@@ -1222,13 +1275,7 @@ impl Bars {
                 }
                 let c = color(si);
                 let cy = y0 + (si as f64 + 0.5) * p.slot;
-                if p.dots {
-                    root.draw(&PathElement::new(
-                        vec![(px(plot.x), px(cy)), (px(plot.right()), px(cy))],
-                        RGBColor(210, 210, 210).stroke_width(1),
-                    ))
-                    .map_err(err)?;
-                } else {
+                if !p.dots {
                     let (a, b) = (fx(0.0), fx(q.y));
                     let (a, b) = (a.min(b), a.max(b));
                     let r = [

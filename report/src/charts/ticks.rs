@@ -13,7 +13,7 @@ pub fn axis_range(lo: f64, hi: f64, log: bool) -> (f64, f64) {
         let pad = if b - a < 1e-9 {
             1.5f64.log10()
         } else {
-            ((b - a) * PAD).max(0.03)
+            ((b - a) * PAD).clamp(0.03, 0.3)
         };
         (10f64.powf(a - pad), 10f64.powf(b + pad))
     } else {
@@ -76,21 +76,11 @@ pub fn linear_ticks(lo: f64, hi: f64, target: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Ticks of a log axis over `[lo, hi]` (> 0): decades when they give at least three ticks
-/// (every n-th decade beyond eight), else 1-2-5 ticks when those give at least three, else
-/// (a range narrower than about half a decade) round linear ticks.
+/// Ticks of a log axis over `[lo, hi]` (> 0): 1-2-5 ticks when that gives three to eight of
+/// them, else decades (every n-th beyond eight), else (a range narrower than about half a
+/// decade) round linear ticks.
 pub fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
     let (a, b) = (lo.log10(), hi.log10());
-    let decades: Vec<i32> = ((a - 1e-9).ceil() as i32..=(b + 1e-9).floor() as i32).collect();
-    if decades.len() >= 3 {
-        let every = decades.len().div_ceil(8);
-        // Keep the decades that are multiples of `every` so ticks stay aligned across charts.
-        return decades
-            .iter()
-            .filter(|d| d.rem_euclid(every as i32) == 0)
-            .map(|d| pow10(*d))
-            .collect();
-    }
     let mut v = Vec::new();
     for d in (a.floor() as i32 - 1)..=(b.ceil() as i32) {
         for m in [1.0, 2.0, 5.0] {
@@ -100,8 +90,18 @@ pub fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
             }
         }
     }
-    if v.len() >= 3 {
+    if (3..=8).contains(&v.len()) {
         return v;
+    }
+    let decades: Vec<i32> = ((a - 1e-9).ceil() as i32..=(b + 1e-9).floor() as i32).collect();
+    if decades.len() >= 3 {
+        let every = decades.len().div_ceil(8);
+        // Keep the decades that are multiples of `every` so ticks stay aligned across charts.
+        return decades
+            .iter()
+            .filter(|d| d.rem_euclid(every as i32) == 0)
+            .map(|d| pow10(*d))
+            .collect();
     }
     let mut best = Vec::new();
     for target in [4, 6, 10] {

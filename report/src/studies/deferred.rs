@@ -181,12 +181,13 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     r.get("light_count")
                 )
             },
-            |r| Some((time_ms(r)?, r.f("rmse")?.max(1e-7))),
+            |r| Some((time_ms(r)?, r.f("rmse")?)),
         );
         if s.iter().any(|s| s.points.len() > 1) {
             figs.push(
                 XY {
                     title: format!("Error vs time (attenuation threshold sweep) — {res}"),
+                    zero_label: "exact (0)".into(),
                     x_label: "time per frame [ms]".into(),
                     y_label: "RMSE vs f64 reference".into(),
                     log_x: true,

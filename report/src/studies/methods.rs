@@ -89,6 +89,15 @@ pub fn ci_caption(runs: &Runs) -> &'static str {
     }
 }
 
+/// `ci_caption` for a set of rows (whether any has a CI).
+pub fn ci_caption_rows(rows: &[&Rec]) -> &'static str {
+    if rows.iter().any(|r| r.gpu_ci().is_some()) {
+        "Whiskers: 95 % bootstrap CI of the median GPU time."
+    } else {
+        "No whiskers: these rows have no confidence interval of the median (gpu_ms_ci_lo/hi), and min–max is not one."
+    }
+}
+
 fn untimed(r: &Rec) -> bool {
     r.flags().iter().any(|f| UNTIMED.contains(f))
 }
@@ -170,8 +179,11 @@ fn scene_figures(
     let time_err = |r: &Rec| Some((r.f("gpu_ms_median")?, r.f("rmse")?));
     let mem_err = |r: &Rec| Some((r.bytes_per_pixel()?, r.f("rmse")?));
     let mem_time = |r: &Rec| Some((r.bytes_per_pixel()?, r.f("gpu_ms_median")?));
-    let f_time = front_of(&timed, time_err);
-    let f_mem = front_of(g, mem_err);
+    // On the fronts an exact configuration's error is 0: its RMSE is f32 rounding, and ranking
+    // exact methods by rounding noise would put a slower one on the front.
+    let judged = |r: &Rec, e: f64| if r.exact_result() == Some(true) { 0.0 } else { e };
+    let f_time = front_of(&timed, |r| time_err(r).map(|(t, e)| (t, judged(r, e))));
+    let f_mem = front_of(g, |r| mem_err(r).map(|(m, e)| (m, judged(r, e))));
     let fronts = Fronts {
         time: f_time.iter().map(|&i| config_key(timed[i])).collect(),
         memory: f_mem.iter().map(|&i| config_key(g[i])).collect(),
@@ -212,8 +224,9 @@ fn scene_figures(
         &format!("methods_pareto_time_{stem}"),
         &format!(
             "One point per configuration; the dashed line joins the configurations no other beats on both time and error (the Pareto front), each named. \
-             Zero error is drawn in the band under the log axis, not clamped. Hollow: flagged. Dashed verticals: the floors of the same scene. \
+             Exact configurations ({}) count as error 0 on the front. Zero error is drawn in the band under the log axis, not clamped. Hollow: flagged. Dashed verticals: the floors of the same scene. \
              Horizontal whiskers: {} {fixed}{untimed_note}",
+            runs.exactness_rule(),
             ci.trim_start_matches("Whiskers: ")
         ),
     )?);
@@ -259,7 +272,7 @@ fn scene_figures(
         figs.push(xy.draw(
             dir,
             &format!("methods_pareto_memory_{stem}"),
-            &format!("Memory = every buffer and texture the method allocates (scene buffers excluded), per pixel of the target. {fixed}"),
+            &format!("Memory = every buffer and texture the method allocates (scene buffers excluded), per pixel of the target. Exact configurations count as error 0 on the front. {fixed}"),
         )?);
         let f = front_of(&timed, mem_time);
         let xy = XY {
@@ -312,11 +325,10 @@ fn scene_table(
     let mut h = String::new();
     let _ = write!(
         h,
-        "<table class=\"scene\" id=\"scene-{}\"><caption>{} at {}: every configuration, fastest first. \
+        "<table class=\"scene\"><caption>{} at {}: every configuration, fastest first. \
          Front: on the Pareto front of RMSE vs time (T) and of RMSE vs memory (M). {}</caption>\
          <tr><th>method</th><th>configuration</th><th>GPU ms (95 % CI)</th><th>× floor_depth</th><th>bytes/px</th>\
          <th>RMSE</th>{}<th>exact</th><th>flag</th><th>front</th></tr>",
-        esc(&file_safe(&format!("{name}-{res}"))),
         esc(name),
         esc(res),
         esc(&runs.exactness_rule()),

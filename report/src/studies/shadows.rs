@@ -6,14 +6,92 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use crate::charts::{Figure, Pt, Series, XY};
+use crate::charts::{Figure, Named, Pt, Series, XY};
 use crate::data::{Rec, Runs};
+use crate::labels::{config_axes, file_safe, scene_name, ConfigLabels};
+use crate::pareto;
 
-fn safe(s: &str) -> String {
-    s.chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-        .take(60)
-        .collect()
+/// Which of the suite's sweeps a row belongs to, told by the axes its point key sets.
+fn sweep(r: &Rec) -> (usize, &'static str) {
+    let axes = config_axes(r);
+    let has = |n: &str| axes.iter().any(|(k, _)| k == n);
+    if has("bias_mode") || has("gscale") || has("gmax") {
+        (1, "bias sweep")
+    } else if has("hsm") {
+        (2, "HSM sweep")
+    } else {
+        (0, "layers × nspp sweep")
+    }
+}
+
+/// Error vs time of every configuration: colour by layers and shadow-map size, marker by sweep,
+/// the Pareto front named.
+fn error_vs_time(g: &[&Rec], name: &str, stem: &str, dir: &Path) -> Result<Figure> {
+    let labels = ConfigLabels::new(g.iter().copied());
+    let mut series: Vec<Series> = Vec::new();
+    let mut keys: Vec<String> = Vec::new();
+    for r in g {
+        let (Some(t), Some(e)) = (r.f("gpu_ms_median"), r.f("vis_rmse")) else {
+            continue;
+        };
+        let (family, what) = sweep(r);
+        let colour_key = format!("k = {}, {}²", r.get("layers"), r.get("shadow_map_res"));
+        if !keys.contains(&colour_key) {
+            keys.push(colour_key.clone());
+        }
+        let n = format!("{colour_key}, {what}");
+        let (lo, hi) = r.gpu_ci().unzip();
+        let p = Pt {
+            x: t,
+            y: e,
+            xlo: lo,
+            xhi: hi,
+            flagged: r.flagged(),
+            ..Default::default()
+        };
+        match series.iter_mut().find(|s| s.name == n) {
+            Some(s) => s.points.push(p),
+            None => series.push(Series {
+                name: n,
+                family,
+                color: keys.iter().position(|k| *k == colour_key),
+                points: vec![p],
+            }),
+        }
+    }
+    let pts: Vec<(f64, f64)> = g
+        .iter()
+        .map(|r| (r.f("gpu_ms_median").unwrap_or(f64::NAN), r.f("vis_rmse").unwrap_or(f64::NAN)))
+        .collect();
+    let front = pareto::front(&pts)
+        .into_iter()
+        .map(|i| Named {
+            x: pts[i].0,
+            y: pts[i].1,
+            text: labels.get(g[i]).trim_start_matches("layered_ssm").trim().to_string(),
+        })
+        .collect();
+    XY {
+        title: format!("Visibility error vs GPU time — {name}"),
+        x_label: "GPU time per frame [ms]".into(),
+        y_label: "visibility RMSE vs ray tracing".into(),
+        log_x: true,
+        log_y: true,
+        series,
+        front,
+        front_name: "Pareto front (visibility RMSE, time)".into(),
+        zero_label: "exact (0)".into(),
+        ..Default::default()
+    }
+    .draw(
+        dir,
+        &format!("shadows_error_vs_time_{stem}"),
+        &format!(
+            "One point per configuration of every sweep of the suite (colour: layers k and shadow-map size; marker: the sweep);              the dashed line joins the configurations no other beats on both, each named. The reference is m×m stratified shadow rays per pixel              from the same G-buffer points. {} {}",
+            super::methods::ci_caption_rows(g),
+            labels.fixed_note()
+        ),
+    )
 }
 
 /// Rows of the layers × max_nspp sweep: bias, gscale, gmax and hsm left at their defaults
@@ -60,28 +138,9 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             .copied()
             .filter(|r| r.get("scene_label") == label)
             .collect();
-        let stem = safe(&label);
-        // Error vs time, every configuration, coloured by layer count.
-        let s = series(
-            &g,
-            |r| format!("{} layer(s)", r.get("layers")),
-            |r| Some((r.f("gpu_ms_median")?, r.f("vis_rmse")?)),
-        );
-        if !s.is_empty() {
-            figs.push(
-                XY {
-                    title: format!("Visibility error vs GPU time — {label}"),
-                    x_label: "GPU time per frame [ms]".into(),
-                    y_label: "visibility RMSE vs ray tracing".into(),
-                    log_x: true,
-                    log_y: true,
-                    lines: false,
-                    series: s,
-                    ..Default::default()
-                }
-                .draw(dir, &format!("shadows_error_vs_time_{stem}"), "One point per configuration (every sweep of the suite); the reference is m×m stratified shadow rays per pixel from the same G-buffer points.")?,
-            );
-        }
+        let stem = file_safe(&label);
+        let name = scene_name(&label);
+        figs.push(error_vs_time(&g, &name, &stem, dir)?);
         let d: Vec<&Rec> = g.iter().copied().filter(|r| at_defaults(r)).collect();
         // Error vs layers: does a third layer remove most light bleeding (the thesis's claim)?
         let s = series(
@@ -92,7 +151,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         if s.iter().any(|s| s.points.len() > 1) {
             figs.push(
                 XY {
-                    title: format!("Visibility error vs layers — {label}"),
+                    title: format!("Visibility error vs layers — {name}"),
                     x_label: "shadow-map layers k".into(),
                     y_label: "visibility RMSE".into(),
                     log_x: false,
@@ -129,7 +188,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         if s.iter().any(|s| s.points.len() > 1) {
             figs.push(
                 XY {
-                    title: format!("Light bleeding and overshadowing vs layers — {label}"),
+                    title: format!("Light bleeding and overshadowing vs layers — {name}"),
                     x_label: "shadow-map layers k".into(),
                     y_label: "mean of max(±(GPU − reference), 0)".into(),
                     log_x: false,
@@ -150,7 +209,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         if s.iter().any(|s| s.points.len() > 1) {
             figs.push(
                 XY {
-                    title: format!("Visibility error vs max_nspp — {label}"),
+                    title: format!("Visibility error vs max_nspp — {name}"),
                     x_label: "max shadow-map samples per pixel".into(),
                     y_label: "visibility RMSE".into(),
                     log_x: true,
@@ -176,7 +235,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         if !s.is_empty() {
             figs.push(
                 XY {
-                    title: format!("Bias: error vs gscale — {label}"),
+                    title: format!("Bias: error vs gscale — {name}"),
                     x_label: "gscale (× depth change per texel)".into(),
                     y_label: "visibility RMSE".into(),
                     log_x: true,
@@ -202,7 +261,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         if s.iter().any(|s| s.name.starts_with("hsm false")) {
             figs.push(
                 XY {
-                    title: format!("HSM on/off: GPU time vs max_nspp — {label}"),
+                    title: format!("HSM on/off: GPU time vs max_nspp — {name}"),
                     x_label: "max shadow-map samples per pixel".into(),
                     y_label: "GPU time per frame [ms]".into(),
                     log_x: true,
