@@ -74,7 +74,6 @@ fn esc(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-
 fn num(v: f64) -> String {
     if v == 0.0 {
         "0".into()
@@ -225,7 +224,9 @@ pub fn compare(
                 let v = here
                     .iter()
                     .map(|k| {
-                        by_point[k].get(p).and_then(|r| crate::studies::methods::time_pt(r, 0.0))
+                        by_point[k]
+                            .get(p)
+                            .and_then(|r| crate::studies::methods::time_pt(r, 0.0))
                     })
                     .collect();
                 (p.clone(), v)
@@ -510,8 +511,7 @@ mod tests {
         }
         // GPU over lavapipe: 20 / 0.5 = 40× for depth_peel, 1.0 / 0.1 = 10× for the floor.
         assert!(
-            c.html
-                .contains("<td>depth_peel</td><td>40.000×"),
+            c.html.contains("<td>depth_peel</td><td>40.000×"),
             "{}",
             c.html
         );

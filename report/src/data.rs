@@ -27,7 +27,10 @@ impl Rec {
     }
     /// The row's flags: `flag` is a `|`-joined list (older CSVs hold one value).
     pub fn flags(&self) -> Vec<&str> {
-        self.get("flag").split('|').filter(|f| !f.is_empty()).collect()
+        self.get("flag")
+            .split('|')
+            .filter(|f| !f.is_empty())
+            .collect()
     }
     pub fn flagged(&self) -> bool {
         !self.flags().is_empty()

@@ -33,10 +33,15 @@ pub fn section(run_dir: &Path, report_dir: &Path) -> Result<String> {
         );
         return Ok(h);
     }
-    let mut rdr = csv::Reader::from_path(&csv).with_context(|| format!("reading {}", csv.display()))?;
+    let mut rdr =
+        csv::Reader::from_path(&csv).with_context(|| format!("reading {}", csv.display()))?;
     let header: Vec<String> = rdr.headers()?.iter().map(String::from).collect();
     let col = |name: &str| header.iter().position(|h| h == name);
-    let missing: Vec<&str> = WORST_COLUMNS.iter().copied().filter(|c| col(c).is_none()).collect();
+    let missing: Vec<&str> = WORST_COLUMNS
+        .iter()
+        .copied()
+        .filter(|c| col(c).is_none())
+        .collect();
     if !missing.is_empty() {
         let _ = write!(
             h,
@@ -61,7 +66,11 @@ pub fn section(run_dir: &Path, report_dir: &Path) -> Result<String> {
             if p.is_empty() {
                 "<td>(none)</td>".to_string()
             } else if run_dir.join(p).is_file() {
-                format!("<td><img src=\"{}\" alt=\"{}\"></td>", esc(&format!("{up}{p}")), esc(c))
+                format!(
+                    "<td><img src=\"{}\" alt=\"{}\"></td>",
+                    esc(&format!("{up}{p}")),
+                    esc(c)
+                )
             } else {
                 format!("<td class=\"failed\">missing: {}</td>", esc(p))
             }

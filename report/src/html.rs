@@ -54,7 +54,12 @@ img{max-width:100%;border:1px solid #ddd}figcaption{color:#555;font-size:13px;ma
 p.note{color:#555;font-size:14px;margin:.4em 0}pre.summary{white-space:pre-wrap;background:#f7f7f7;border:1px solid #ddd;padding:1em;font-size:13px}\
 .flip td{vertical-align:top}.flip img{width:256px;image-rendering:pixelated}";
 
-pub fn page(runs: &Runs, sections: &[(String, Vec<Figure>)], extra_html: &str, flip_html: &str) -> String {
+pub fn page(
+    runs: &Runs,
+    sections: &[(String, Vec<Figure>)],
+    extra_html: &str,
+    flip_html: &str,
+) -> String {
     let mut h = String::new();
     let _ = write!(
         h,
@@ -117,7 +122,12 @@ pub fn page(runs: &Runs, sections: &[(String, Vec<Figure>)], extra_html: &str, f
         let _ = write!(h, "<h2 id=\"s{i}\">{}</h2>", esc(title));
         for f in figs {
             if let Some(n) = &f.note {
-                let _ = write!(h, "<p class=\"note\"><b>{}</b>: {}</p>", esc(&f.title), esc(n));
+                let _ = write!(
+                    h,
+                    "<p class=\"note\"><b>{}</b>: {}</p>",
+                    esc(&f.title),
+                    esc(n)
+                );
             } else if let Some(block) = &f.html {
                 let _ = write!(h, "<h3>{}</h3>{block}", esc(&f.title));
             } else {
@@ -226,10 +236,24 @@ mod tests {
 
     #[test]
     fn numbers_keep_three_significant_digits() {
-        let v: Vec<String> = [0.0, 10.0, 1.0, 0.25, 12.345, 1234.6, 5e-4, 1.234e-6, 2.5e7, f64::INFINITY]
-            .iter()
-            .map(|x| short(Some(*x)))
-            .collect();
-        assert_eq!(v, ["0", "10", "1", "0.25", "12.3", "1235", "5e-4", "1.23e-6", "2.5e7", "inf"]);
+        let v: Vec<String> = [
+            0.0,
+            10.0,
+            1.0,
+            0.25,
+            12.345,
+            1234.6,
+            5e-4,
+            1.234e-6,
+            2.5e7,
+            f64::INFINITY,
+        ]
+        .iter()
+        .map(|x| short(Some(*x)))
+        .collect();
+        assert_eq!(
+            v,
+            ["0", "10", "1", "0.25", "12.3", "1235", "5e-4", "1.23e-6", "2.5e7", "inf"]
+        );
     }
 }

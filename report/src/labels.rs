@@ -42,7 +42,8 @@ pub struct ConfigLabels {
 impl ConfigLabels {
     pub fn new<'a>(rows: impl IntoIterator<Item = &'a Rec>) -> ConfigLabels {
         // method → configurations (axis maps), first-seen order.
-        let mut methods: Vec<(String, Vec<(String, BTreeMap<String, String>)>)> = Vec::new();
+        type Configs = Vec<(String, BTreeMap<String, String>)>;
+        let mut methods: Vec<(String, Configs)> = Vec::new();
         for r in rows {
             let m = r.get("method").to_string();
             let key = config_key(r);
@@ -203,7 +204,8 @@ pub fn scene_names(labels: &[String]) -> Vec<String> {
         })
         .collect();
     for i in 0..names.len() {
-        let clash = (0..names.len()).any(|j| j != i && names[j] == names[i] && labels[j] != labels[i]);
+        let clash =
+            (0..names.len()).any(|j| j != i && names[j] == names[i] && labels[j] != labels[i]);
         if clash {
             names[i] = labels[i].clone();
         }
@@ -216,7 +218,11 @@ pub fn scene_names(labels: &[String]) -> Vec<String> {
 pub fn file_safe(s: &str) -> String {
     let mut out = String::new();
     for c in s.chars() {
-        let c = if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' };
+        let c = if c.is_ascii_alphanumeric() || c == '-' {
+            c
+        } else {
+            '_'
+        };
         if !(c == '_' && out.ends_with('_')) {
             out.push(c);
         }
@@ -239,9 +245,12 @@ mod tests {
 
     fn rec(key: &str) -> Rec {
         let method = key.split('|').nth(3).unwrap().to_string();
-        Rec([("point_key".to_string(), key.to_string()), ("method".to_string(), method)]
-            .into_iter()
-            .collect())
+        Rec([
+            ("point_key".to_string(), key.to_string()),
+            ("method".to_string(), method),
+        ]
+        .into_iter()
+        .collect())
     }
 
     #[test]
@@ -318,7 +327,10 @@ mod tests {
         for (i, a) in n.iter().enumerate() {
             assert!(!n[..i].contains(a), "{n:?}");
         }
-        assert_eq!(scene_name("soft_shadow(case=obj,path=models/stanford-bunny.obj)"), "soft_shadow stanford-bunny (case=obj)");
+        assert_eq!(
+            scene_name("soft_shadow(case=obj,path=models/stanford-bunny.obj)"),
+            "soft_shadow stanford-bunny (case=obj)"
+        );
     }
 
     #[test]
@@ -327,6 +339,9 @@ mod tests {
         let b = file_safe(&format!("methods_error_vs_time_obj_{}_b", "x".repeat(80)));
         assert_ne!(a, b);
         assert!(a.len() <= 64);
-        assert_eq!(file_safe("quads(depth_complexity=8)"), "quads_depth_complexity_8");
+        assert_eq!(
+            file_safe("quads(depth_complexity=8)"),
+            "quads_depth_complexity_8"
+        );
     }
 }

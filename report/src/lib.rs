@@ -77,7 +77,10 @@ fn clear_charts(out: &Path) -> Result<()> {
         let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
         if p.is_dir() && name.starts_with("platform") {
             clear_charts(&p)?;
-        } else if [".png", ".svg", ".layout.json"].iter().any(|x| name.ends_with(x)) {
+        } else if [".png", ".svg", ".layout.json"]
+            .iter()
+            .any(|x| name.ends_with(x))
+        {
             std::fs::remove_file(&p).with_context(|| format!("removing {}", p.display()))?;
         }
     }

@@ -20,7 +20,10 @@ const NEWER: [(&str, &str); 5] = [
     ("matches_truth", "exactness judged directly"),
     ("flip_mean", "FLIP"),
     ("gpu_ms_ci_lo", "confidence intervals of the median time"),
-    ("bytes_per_pixel", "bytes per pixel as a column (derived from bytes_allocated here)"),
+    (
+        "bytes_per_pixel",
+        "bytes per pixel as a column (derived from bytes_allocated here)",
+    ),
     ("samples", "kept sample counts"),
 ];
 
@@ -75,7 +78,11 @@ fn flag_note(r: &Rec) -> String {
 
 /// One scene of an image study: fastest exact, fastest under each budget, flags.
 fn image_scene(out: &mut String, rows: &[&Rec], floors: &[&Rec], labels: &ConfigLabels) {
-    let exact = fastest(rows.iter().copied().filter(|r| r.exact_result() == Some(true)));
+    let exact = fastest(
+        rows.iter()
+            .copied()
+            .filter(|r| r.exact_result() == Some(true)),
+    );
     let floor = floors.iter().find(|r| r.get("method") == "floor_depth");
     match exact {
         Some(r) => {
@@ -100,7 +107,7 @@ fn image_scene(out: &mut String, rows: &[&Rec], floors: &[&Rec], labels: &Config
                 out,
                 "- No configuration was exact{}.",
                 best.map(|r| format!(
-                    "; the smallest error: {} (RMSE {}{})",
+                    "; the smallest error: {}, RMSE {}{}",
                     named(labels, r),
                     short(r.f("rmse")),
                     flag_note(r)
@@ -110,31 +117,44 @@ fn image_scene(out: &mut String, rows: &[&Rec], floors: &[&Rec], labels: &Config
         }
     }
     let exact_ms = exact.and_then(|r| r.f("gpu_ms_median"));
+    // Budgets whose fastest configuration is the same one share a line.
+    let mut lines: Vec<(Vec<f64>, String)> = Vec::new();
     for b in BUDGETS {
-        let within = fastest(rows.iter().copied().filter(|r| r.f("rmse").is_some_and(|e| e <= b)));
-        match within {
+        let within = fastest(
+            rows.iter()
+                .copied()
+                .filter(|r| r.f("rmse").is_some_and(|e| e <= b)),
+        );
+        let text = match within {
+            Some(r) if exact.is_some_and(|e| std::ptr::eq(e, r)) => {
+                "the fastest exact (nothing inexact within it is faster).".to_string()
+            }
             Some(r) => {
                 let ms = r.f("gpu_ms_median").unwrap();
                 let vs = match exact_ms {
-                    Some(e) if r.exact_result() == Some(true) && ms == e => {
-                        " (the fastest exact)".to_string()
+                    Some(e) if ms < e => {
+                        format!(", {}× faster than the fastest exact", short(Some(e / ms)))
                     }
-                    Some(e) if ms < e => format!(", {}× faster than the fastest exact", short(Some(e / ms))),
                     _ => String::new(),
                 };
-                let _ = writeln!(
-                    out,
-                    "- RMSE ≤ {b:.0e}: {} at {} ms, RMSE {}{vs}{}.",
+                format!(
+                    "{} at {} ms, RMSE {}{vs}{}.",
                     named(labels, r),
                     time_cell(r),
                     short(r.f("rmse")),
                     flag_note(r)
-                );
+                )
             }
-            None => {
-                let _ = writeln!(out, "- RMSE ≤ {b:.0e}: no configuration.");
-            }
+            None => "no configuration.".to_string(),
+        };
+        match lines.iter_mut().find(|(_, t)| *t == text) {
+            Some((bs, _)) => bs.push(b),
+            None => lines.push((vec![b], text)),
         }
+    }
+    for (bs, text) in lines {
+        let budgets: Vec<String> = bs.iter().map(|b| format!("≤ {b:.0e}")).collect();
+        let _ = writeln!(out, "- RMSE {}: {text}", budgets.join(" and "));
     }
     let flagged: Vec<&&Rec> = rows.iter().filter(|r| r.flagged()).collect();
     if !flagged.is_empty() {
@@ -148,11 +168,57 @@ fn image_scene(out: &mut String, rows: &[&Rec], floors: &[&Rec], labels: &Config
     }
 }
 
+/// Which configuration was the fastest exact one how often, over the study's scenes.
+fn overall(out: &mut String, methods: &[&Rec], labels: &ConfigLabels) {
+    let groups = Runs::group_by(methods.iter().copied(), |r| {
+        format!("{}\u{0}{}", r.get("scene_label"), resolution(r))
+    });
+    if groups.len() < 2 {
+        return;
+    }
+    let mut wins: Vec<String> = Vec::new();
+    let mut none = 0;
+    for (_, g) in &groups {
+        match fastest(g.iter().copied().filter(|r| r.exact_result() == Some(true))) {
+            Some(r) => wins.push(r.get("method").to_string()),
+            None => none += 1,
+        }
+    }
+    let _ = labels;
+    let mut line = format!(
+        "Over {} scene × resolution groups, the fastest exact method: ",
+        groups.len()
+    );
+    let tally = count_by(wins.iter().map(|s| s.as_str()));
+    line.push_str(&if wins.is_empty() {
+        "none".to_string()
+    } else {
+        // "compute_abuffer 6, linked_list 1" → "compute_abuffer in 6, linked_list in 1"
+        tally
+            .split(", ")
+            .map(|t| match t.rsplit_once(' ') {
+                Some((m, n)) => format!("{m} in {n}"),
+                None => t.to_string(),
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    });
+    if none > 0 {
+        line.push_str(&format!("; no exact configuration in {none}"));
+    }
+    let _ = writeln!(out, "{line}.\n");
+}
+
 /// One scene of another study: its fastest configuration and, with an error column, its most
 /// accurate one.
 fn other_scene(out: &mut String, study: &str, rows: &[&Rec], labels: &ConfigLabels) {
     if let Some(r) = fastest(rows.iter().copied()) {
-        let _ = writeln!(out, "- Fastest: {} at {} ms.", named(labels, r), time_cell(r));
+        let _ = writeln!(
+            out,
+            "- Fastest: {} at {} ms.",
+            named(labels, r),
+            time_cell(r)
+        );
     }
     if let Some(col) = error_col(study) {
         let best = rows
@@ -190,24 +256,48 @@ fn platform_summary(out: &mut String, runs: &Runs, rows: &[&Rec]) {
         }
     }
     for study in studies {
-        let of: Vec<&Rec> = rows.iter().copied().filter(|r| r.get("study") == study).collect();
+        let of: Vec<&Rec> = rows
+            .iter()
+            .copied()
+            .filter(|r| r.get("study") == study)
+            .collect();
         let ok: Vec<&Rec> = of.iter().copied().filter(|r| r.ok()).collect();
         let methods: Vec<&Rec> = ok.iter().copied().filter(|r| !r.is_floor()).collect();
         let labels = ConfigLabels::new(methods.iter().copied());
         let _ = writeln!(out, "\n### {study}\n");
         if methods.is_empty() {
-            let _ = writeln!(out, "No measured configuration (only floors, or nothing ran).");
+            let _ = writeln!(
+                out,
+                "No measured configuration (only floors, or nothing ran)."
+            );
         }
+        if IMAGE_STUDIES.contains(&study.as_str()) {
+            overall(out, &methods, &labels);
+        }
+        let effects = Runs::distinct(methods.iter().copied(), "effect").len() > 1;
         for (key, g) in Runs::group_by(methods.iter().copied(), |r| {
-            format!("{}\u{0}{}", r.get("scene_label"), resolution(r))
+            let e = if effects { r.get("effect") } else { "" };
+            format!("{}\u{0}{}\u{0}{e}", r.get("scene_label"), resolution(r))
         }) {
-            let (label, res) = key.split_once('\u{0}').unwrap_or((&key, ""));
-            let _ = writeln!(out, "{}, {res}:", scene_name(label));
+            let mut parts = key.split('\u{0}');
+            let (label, res, effect) = (
+                parts.next().unwrap_or(""),
+                parts.next().unwrap_or(""),
+                parts.next().unwrap_or(""),
+            );
+            let what = if effect.is_empty() {
+                String::new()
+            } else {
+                format!(", {effect}")
+            };
+            let _ = writeln!(out, "{}{what}, {res}:", scene_name(label));
             if IMAGE_STUDIES.contains(&study.as_str()) && g.iter().any(|r| r.f("rmse").is_some()) {
                 let floors: Vec<&Rec> = ok
                     .iter()
                     .copied()
-                    .filter(|r| r.is_floor() && r.get("scene_label") == label && resolution(r) == res)
+                    .filter(|r| {
+                        r.is_floor() && r.get("scene_label") == label && resolution(r) == res
+                    })
                     .collect();
                 image_scene(out, &g, &floors, &labels);
             } else {
@@ -239,7 +329,11 @@ pub fn summary_text(runs: &Runs) -> String {
         out,
         "{} rows from {} ({}): {} ok, {} skipped, {} failed.",
         runs.rows.len(),
-        if ids.len() == 1 { format!("run {}", ids[0]) } else { format!("{} runs", ids.len()) },
+        if ids.len() == 1 {
+            format!("run {}", ids[0])
+        } else {
+            format!("{} runs", ids.len())
+        },
         plats.join("; "),
         count("ok"),
         count("skipped"),
@@ -262,7 +356,11 @@ pub fn summary_text(runs: &Runs) -> String {
     let _ = writeln!(out, "\n### Not run\n");
     let mut any = false;
     for status in ["skipped", "failed"] {
-        let rows: Vec<&Rec> = runs.rows.iter().filter(|r| r.get("status") == status).collect();
+        let rows: Vec<&Rec> = runs
+            .rows
+            .iter()
+            .filter(|r| r.get("status") == status)
+            .collect();
         if rows.is_empty() {
             continue;
         }
@@ -285,7 +383,11 @@ pub fn summary_text(runs: &Runs) -> String {
                 rs.len(),
                 methods.join(", "),
                 rs.first().map(|r| r.get("study")).unwrap_or(""),
-                if why.is_empty() { "no reason given" } else { &why }
+                if why.is_empty() {
+                    "no reason given"
+                } else {
+                    &why
+                }
             );
         }
     }
@@ -298,7 +400,11 @@ pub fn summary_text(runs: &Runs) -> String {
         .map(|(c, what)| format!("{c} ({what})"))
         .collect();
     if !missing.is_empty() {
-        let _ = writeln!(out, "\nNot measured in this CSV (an older schema): {}.", missing.join("; "));
+        let _ = writeln!(
+            out,
+            "\nNot measured in this CSV (an older schema): {}.",
+            missing.join("; ")
+        );
     }
     out
 }
@@ -309,7 +415,8 @@ mod tests {
 
     fn runs(rows: &[&str]) -> Runs {
         let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,x_floor,rmse,bad_pixel_frac,flag";
-        let d = std::env::temp_dir().join(format!("mfx-summary-{}-{}", rows.len(), std::process::id()));
+        let d =
+            std::env::temp_dir().join(format!("mfx-summary-{}-{}", rows.len(), std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
         let p = d.join("runs.csv");
         std::fs::write(&p, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
@@ -327,7 +434,10 @@ mod tests {
             "1,r,methods,q(d=8),64,64,bdp,methods|q(d=8)|64x64|bdp|,G,vulkan,skipped,needs 8 attachments,,,,,",
         ]);
         let s = summary_text(&r);
-        assert!(s.contains("Fastest exact: linked_list at 1 ms, 10× floor_depth (0.1 ms)"), "{s}");
+        assert!(
+            s.contains("Fastest exact: linked_list at 1 ms, 10× floor_depth (0.1 ms)"),
+            "{s}"
+        );
         assert!(s.contains("RMSE ≤ 1e-3: kbuffer at 0.25 ms, RMSE 5e-4, 4× faster than the fastest exact (flagged: hazard)"), "{s}");
         assert!(s.contains("RMSE ≤ 1e-2: wboit at 0.2 ms"), "{s}");
         assert!(s.contains("Flagged: 1 of 4 (hazard 1)"), "{s}");

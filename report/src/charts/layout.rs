@@ -94,7 +94,7 @@ pub fn check(l: &Layout) -> Result<(), Vec<String>> {
             continue;
         }
         let [r0, r1] = a.range;
-        if !(r0 < r1) {
+        if r0.partial_cmp(&r1) != Some(std::cmp::Ordering::Less) {
             bad.push(format!("{}: {name} axis range {r0}..{r1} is empty", l.stem));
             continue;
         }
@@ -108,7 +108,10 @@ pub fn check(l: &Layout) -> Result<(), Vec<String>> {
         }
         if a.log {
             if d0 <= 0.0 || r0 <= 0.0 {
-                bad.push(format!("{}: {name} log axis reaches {r0} / data {d0}", l.stem));
+                bad.push(format!(
+                    "{}: {name} log axis reaches {r0} / data {d0}",
+                    l.stem
+                ));
             } else if d0 / r0 > 10.0 * (1.0 + 1e-9) || r1 / d1 > 10.0 * (1.0 + 1e-9) {
                 bad.push(format!(
                     "{}: {name} log axis {r0:e}..{r1:e} reaches more than a decade beyond its data {d0:e}..{d1:e}",

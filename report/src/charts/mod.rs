@@ -229,9 +229,18 @@ pub fn wrap(s: &str, px: f64, max: f64) -> Vec<String> {
 /// One legend entry: what its swatch shows and its (wrapped) text.
 #[derive(Clone, Debug)]
 enum Swatch {
-    Marker { family: usize, color: RGBColor, hollow: bool },
-    Line { color: RGBColor, dashed: bool },
-    Bar { color: RGBColor },
+    Marker {
+        family: usize,
+        color: RGBColor,
+        hollow: bool,
+    },
+    Line {
+        color: RGBColor,
+        dashed: bool,
+    },
+    Bar {
+        color: RGBColor,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -335,7 +344,7 @@ fn px(v: f64) -> i32 {
 }
 
 fn text_style(px_size: f64, h: HPos, v: VPos, c: RGBColor) -> TextStyle<'static> {
-    TextStyle::from(font(px_size).color(&c)).pos(Pos::new(h, v))
+    font(px_size).color(&c).pos(Pos::new(h, v))
 }
 
 const GRID: RGBColor = RGBColor(228, 228, 228);
@@ -566,7 +575,10 @@ impl XY {
             .filter(|y| on_axis(*y));
         let y_data = minmax(ys);
         let zero = self.log_y && drawn.iter().any(|p| p.y == 0.0);
-        let x = Axis::new(ticks::axis_range(x_data[0], x_data[1], self.log_x), self.log_x);
+        let x = Axis::new(
+            ticks::axis_range(x_data[0], x_data[1], self.log_x),
+            self.log_x,
+        );
         // Only zeros on a log axis: the axis around them is arbitrary; show one decade.
         let y = match y_data {
             Some(d) => Axis::new(ticks::axis_range(d[0], d[1], self.log_y), self.log_y),
@@ -623,7 +635,11 @@ impl XY {
             ));
         }
         let left = 16.0 + AXIS_PX + 12.0 + ytw + 10.0;
-        let last_x = x.labels.last().map(|l| text_width(l, TICK_PX)).unwrap_or(0.0);
+        let last_x = x
+            .labels
+            .last()
+            .map(|l| text_width(l, TICK_PX))
+            .unwrap_or(0.0);
         let (lw, lh) = legend_size(&entries);
         let legend_x = left + PLOT_W + (last_x / 2.0 + 12.0).max(24.0);
         let width = if entries.is_empty() {
@@ -633,11 +649,13 @@ impl XY {
         };
         let title = title_lines(&self.title, width - 24.0);
         let top = 12.0 + title.len() as f64 * 26.0 + 12.0;
-        let plot = Rect::new(left, top, PLOT_W, PLOT_H);
+        // A long legend gets a taller plot beside it rather than white space.
+        let plot_h = lh.clamp(PLOT_H, 1.5 * PLOT_H);
+        let plot = Rect::new(left, top, PLOT_W, plot_h);
         let legend = (!entries.is_empty()).then(|| Rect::new(legend_x, top, lw, lh));
-        let height = (top + PLOT_H + 60.0).max(top + lh + 14.0).ceil();
+        let height = (top + plot_h + 60.0).max(top + lh + 14.0).ceil();
         let main = if zero {
-            Rect::new(left, top, PLOT_W, PLOT_H - ZERO_BAND)
+            Rect::new(left, top, PLOT_W, plot_h - ZERO_BAND)
         } else {
             plot
         };
@@ -691,13 +709,9 @@ impl XY {
                 ),
             ));
         };
-        write_all(
-            dir,
-            stem,
-            &plan.layout,
-            &|r| self.render(r, &plan),
-            &|r| self.render(r, &plan),
-        )?;
+        write_all(dir, stem, &plan.layout, &|r| self.render(r, &plan), &|r| {
+            self.render(r, &plan)
+        })?;
         let mut caption = caption.to_string();
         let mut front: Vec<&Named> = self
             .front
@@ -786,7 +800,10 @@ impl XY {
         }
         if l.zero_band > 0.0 {
             root.draw(&DashedPathElement::new(
-                vec![(px(plot.x), px(main.bottom())), (px(plot.right()), px(main.bottom()))],
+                vec![
+                    (px(plot.x), px(main.bottom())),
+                    (px(plot.right()), px(main.bottom())),
+                ],
                 4,
                 3,
                 FRAME.stroke_width(1),
@@ -800,7 +817,10 @@ impl XY {
             .map_err(err)?;
         }
         root.draw(&Rectangle::new(
-            [(px(plot.x), px(plot.y)), (px(plot.right()), px(plot.bottom()))],
+            [
+                (px(plot.x), px(plot.y)),
+                (px(plot.right()), px(plot.bottom())),
+            ],
             FRAME.stroke_width(1),
         ))
         .map_err(err)?;
@@ -824,16 +844,23 @@ impl XY {
         root.draw(&Text::new(
             yt,
             (px(16.0), px(plot.y + plot.h / 2.0)),
-            TextStyle::from(font(AXIS_PX).transform(FontTransform::Rotate270).color(&BLACK))
+            font(AXIS_PX)
+                .transform(FontTransform::Rotate270)
+                .color(&BLACK)
                 .pos(Pos::new(HPos::Center, VPos::Top)),
         ))
         .map_err(err)?;
         // Reference lines.
-        for (x, name) in &self.vlines {
-            if !self.x_ok(*x) {
-                continue;
-            }
-            let xp = fx(*x);
+        // Lines closer than a label's height share one label.
+        let mut vl: Vec<(f64, String)> = self
+            .vlines
+            .iter()
+            .filter(|(x, _)| self.x_ok(*x))
+            .map(|(x, n)| (fx(*x), n.clone()))
+            .collect();
+        vl.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut merged: Vec<(f64, String)> = Vec::new();
+        for (xp, n) in vl {
             root.draw(&DashedPathElement::new(
                 vec![(px(xp), px(plot.y)), (px(xp), px(plot.bottom()))],
                 5,
@@ -841,10 +868,19 @@ impl XY {
                 MUTED.stroke_width(1),
             ))
             .map_err(err)?;
+            match merged.last_mut() {
+                Some((x0, names)) if xp - *x0 < 14.0 => *names = format!("{names} / {n}"),
+                _ => merged.push((xp, n)),
+            }
+        }
+        for (xp, name) in &merged {
+            let xp = *xp;
             root.draw(&Text::new(
                 name.clone(),
                 (px(xp + 14.0), px(plot.y + 4.0)),
-                TextStyle::from(font(11.0).transform(FontTransform::Rotate90).color(&MUTED))
+                font(11.0)
+                    .transform(FontTransform::Rotate90)
+                    .color(&MUTED)
                     .pos(Pos::new(HPos::Left, VPos::Top)),
             ))
             .map_err(err)?;
@@ -855,8 +891,11 @@ impl XY {
         // Lines, whiskers, then markers on top.
         for (i, s) in self.series.iter().enumerate() {
             let c = color(s.color.unwrap_or(i));
-            let mut line: Vec<(f64, (f64, f64))> =
-                s.points.iter().filter_map(|q| Some((q.x, place(q)?))).collect();
+            let mut line: Vec<(f64, (f64, f64))> = s
+                .points
+                .iter()
+                .filter_map(|q| Some((q.x, place(q)?)))
+                .collect();
             line.sort_by(|a, b| a.0.total_cmp(&b.0));
             if self.lines {
                 // Segment by segment: a 2 px polyline's miter join at a sharp turn draws a long
@@ -904,7 +943,14 @@ impl XY {
         for (i, s) in self.series.iter().enumerate() {
             for q in &s.points {
                 let Some(at) = place(q) else { continue };
-                draw_marker(root, at, s.family, color(s.color.unwrap_or(i)), q.flagged, 5.0)?;
+                draw_marker(
+                    root,
+                    at,
+                    s.family,
+                    color(s.color.unwrap_or(i)),
+                    q.flagged,
+                    5.0,
+                )?;
                 markers.push(Rect::new(at.0 - 6.0, at.1 - 6.0, 12.0, 12.0));
             }
         }
@@ -918,7 +964,10 @@ impl XY {
         front.sort_by(|a, b| a.0.total_cmp(&b.0));
         if front.len() > 1 {
             root.draw(&DashedPathElement::new(
-                front.iter().map(|(x, y, _)| (px(*x), px(*y))).collect::<Vec<_>>(),
+                front
+                    .iter()
+                    .map(|(x, y, _)| (px(*x), px(*y)))
+                    .collect::<Vec<_>>(),
                 6,
                 4,
                 BLACK.stroke_width(1),
@@ -930,7 +979,11 @@ impl XY {
         for (i, (x, y, text)) in front.iter().enumerate() {
             root.draw(&Circle::new((px(*x), px(*y)), 8, BLACK.stroke_width(1)))
                 .map_err(err)?;
-            let text = if numbered { (i + 1).to_string() } else { text.to_string() };
+            let text = if numbered {
+                (i + 1).to_string()
+            } else {
+                text.to_string()
+            };
             let text = text.as_str();
             let w = text_width(text, 12.0) + 4.0;
             let h = 15.0;
@@ -1033,7 +1086,10 @@ impl Bars {
         let dots = self.log_y && lo > 0.0 && hi / lo >= 10.0 && ref_ok.is_none_or(|r| r > 0.0);
         let all = minmax(vals.iter().copied().chain(ref_ok))?;
         let (v, data) = if dots {
-            (Axis::new(ticks::axis_range(all[0], all[1], true), true), all)
+            (
+                Axis::new(ticks::axis_range(all[0], all[1], true), true),
+                all,
+            )
         } else {
             let d = [all[0].min(0.0), all[1].max(0.0)];
             let mut a = Axis::new(ticks::zero_based_range(d[0], d[1]), false);
@@ -1084,7 +1140,11 @@ impl Bars {
         }
         let (lw, lh) = legend_size(&entries);
         let left = 16.0 + label_w + 12.0;
-        let last = v.labels.last().map(|l| text_width(l, TICK_PX)).unwrap_or(0.0);
+        let last = v
+            .labels
+            .last()
+            .map(|l| text_width(l, TICK_PX))
+            .unwrap_or(0.0);
         let legend_x = left + BAR_PLOT_W + (last / 2.0 + 12.0).max(24.0);
         let width = if entries.is_empty() {
             legend_x
@@ -1158,7 +1218,11 @@ impl Bars {
         let empty = keep.iter().filter(|k| !**k).count();
         if empty > 0 {
             let pick = |v: &[Option<Pt>]| -> Vec<Option<Pt>> {
-                v.iter().zip(&keep).filter(|(_, k)| **k).map(|(p, _)| *p).collect()
+                v.iter()
+                    .zip(&keep)
+                    .filter(|(_, k)| **k)
+                    .map(|(p, _)| *p)
+                    .collect()
             };
             let mut b = self.clone();
             b.categories = self
@@ -1168,7 +1232,11 @@ impl Bars {
                 .filter(|(_, k)| **k)
                 .map(|(c, _)| c.clone())
                 .collect();
-            b.series = self.series.iter().map(|(n, v)| (n.clone(), pick(v))).collect();
+            b.series = self
+                .series
+                .iter()
+                .map(|(n, v)| (n.clone(), pick(v)))
+                .collect();
             let mut f = b.draw(dir, stem, caption)?;
             f.caption.push_str(&format!(
                 " {empty} categor{} without a value left out.",
@@ -1179,13 +1247,9 @@ impl Bars {
         let Some(plan) = self.plan(stem) else {
             return Ok(Figure::note(&self.title, "not drawn: no value to show."));
         };
-        write_all(
-            dir,
-            stem,
-            &plan.layout,
-            &|r| self.render(r, &plan),
-            &|r| self.render(r, &plan),
-        )?;
+        write_all(dir, stem, &plan.layout, &|r| self.render(r, &plan), &|r| {
+            self.render(r, &plan)
+        })?;
         let how = if plan.dots {
             " Values span more than a decade: dots on a log axis."
         } else {
@@ -1241,7 +1305,10 @@ impl Bars {
             }
         }
         root.draw(&Rectangle::new(
-            [(px(plot.x), px(plot.y)), (px(plot.right()), px(plot.bottom()))],
+            [
+                (px(plot.x), px(plot.y)),
+                (px(plot.right()), px(plot.bottom())),
+            ],
             FRAME.stroke_width(1),
         ))
         .map_err(err)?;
@@ -1262,14 +1329,19 @@ impl Bars {
             for (k, line) in lines.iter().enumerate() {
                 root.draw(&Text::new(
                     line.clone(),
-                    (px(plot.x - 8.0), px(y + h / 2.0 - (n - 1.0) * 8.0 + k as f64 * 16.0)),
+                    (
+                        px(plot.x - 8.0),
+                        px(y + h / 2.0 - (n - 1.0) * 8.0 + k as f64 * 16.0),
+                    ),
                     text_style(TICK_PX, HPos::Right, VPos::Center, BLACK),
                 ))
                 .map_err(err)?;
             }
             let y0 = y + (h - ns as f64 * p.slot) / 2.0;
             for (si, (_, vals)) in self.series.iter().enumerate() {
-                let Some(Some(q)) = vals.get(ci) else { continue };
+                let Some(Some(q)) = vals.get(ci) else {
+                    continue;
+                };
                 if !q.y.is_finite() || (p.dots && q.y <= 0.0) {
                     continue;
                 }
@@ -1284,7 +1356,8 @@ impl Bars {
                     ];
                     if q.flagged {
                         root.draw(&Rectangle::new(r, WHITE.filled())).map_err(err)?;
-                        root.draw(&Rectangle::new(r, c.stroke_width(2))).map_err(err)?;
+                        root.draw(&Rectangle::new(r, c.stroke_width(2)))
+                            .map_err(err)?;
                     } else {
                         root.draw(&Rectangle::new(r, c.filled())).map_err(err)?;
                     }
@@ -1307,7 +1380,10 @@ impl Bars {
                 }
             }
         }
-        if let Some(r) = self.reference.filter(|r| r.is_finite() && (!p.dots || *r > 0.0)) {
+        if let Some(r) = self
+            .reference
+            .filter(|r| r.is_finite() && (!p.dots || *r > 0.0))
+        {
             let x = fx(r);
             root.draw(&PathElement::new(
                 vec![(px(x), px(plot.y)), (px(x), px(plot.bottom()))],
@@ -1346,19 +1422,24 @@ mod tests {
                 7.787 * t + 16.0 / 116.0
             }
         };
-        [116.0 * f(y) - 16.0, 500.0 * (f(x) - f(y)), 200.0 * (f(y) - f(z))]
+        [
+            116.0 * f(y) - 16.0,
+            500.0 * (f(x) - f(y)),
+            200.0 * (f(y) - f(z)),
+        ]
     }
 
     #[test]
     fn palette_colours_are_far_apart_and_read_on_white() {
         // 23 legend entries used to share near-identical colours (depth_peel and wboit both
         // crimson). ΔE76 ≥ 25 is clearly distinguishable side by side.
-        for i in 0..24 {
-            let a = lab(PALETTE[i]);
+        for (i, c) in PALETTE.iter().enumerate().take(24) {
+            let a = lab(*c);
             assert!(a[0] < 75.0, "colour {i} too light on white");
-            for j in 0..i {
-                let b = lab(PALETTE[j]);
-                let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+            for (j, c2) in PALETTE.iter().enumerate().take(i) {
+                let b = lab(*c2);
+                let d =
+                    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
                 assert!(d >= 25.0, "colours {j} and {i}: ΔE {d:.1}");
             }
         }
@@ -1372,8 +1453,10 @@ mod tests {
     }
 
     fn read_layout(d: &Path, stem: &str) -> Layout {
-        serde_json::from_str(&std::fs::read_to_string(d.join(format!("{stem}.layout.json"))).unwrap())
-            .unwrap()
+        serde_json::from_str(
+            &std::fs::read_to_string(d.join(format!("{stem}.layout.json"))).unwrap(),
+        )
+        .unwrap()
     }
 
     #[test]
@@ -1382,11 +1465,20 @@ mod tests {
         let d = tmp("crowded");
         let series: Vec<Series> = (0..23)
             .map(|i| Series {
-                name: format!("configuration number {i} with a long name, layers={}", 1 << (i % 6)),
+                name: format!(
+                    "configuration number {i} with a long name, layers={}",
+                    1 << (i % 6)
+                ),
                 family: i % 5,
                 color: None,
                 points: (0..4)
-                    .map(|k| Pt::new(1.0 + 100.0 * k as f64 + i as f64, 1.0 + 1200.0 * ((i + k) % 4) as f64 / 3.0).flagged(k == 2))
+                    .map(|k| {
+                        Pt::new(
+                            1.0 + 100.0 * k as f64 + i as f64,
+                            1.0 + 1200.0 * ((i + k) % 4) as f64 / 3.0,
+                        )
+                        .flagged(k == 2)
+                    })
                     .collect(),
             })
             .collect();
@@ -1415,7 +1507,10 @@ mod tests {
             log_x: true,
             log_y: true,
             zero_label: "exact (0)".into(),
-            series: vec![Series::new("a", vec![Pt::new(1.0, 0.0), Pt::new(2.0, 1e-3), Pt::new(3.0, 2e-2)])],
+            series: vec![Series::new(
+                "a",
+                vec![Pt::new(1.0, 0.0), Pt::new(2.0, 1e-3), Pt::new(3.0, 2e-2)],
+            )],
             ..Default::default()
         };
         assert!(xy.draw(&d, "z", "").unwrap().is_chart());
@@ -1437,23 +1532,35 @@ mod tests {
     #[test]
     fn bars_start_at_zero_and_decades_become_dots() {
         let d = tmp("bars");
-        let cats: Vec<String> = (0..3).map(|i| format!("obj(path=/a/very/long/folder/name/holes-{i}.obj,instances=4)")).collect();
+        let cats: Vec<String> = (0..3)
+            .map(|i| format!("obj(path=/a/very/long/folder/name/holes-{i}.obj,instances=4)"))
+            .collect();
         let b = Bars {
             title: "x floor".into(),
             y_label: "×".into(),
             log_y: true,
             categories: cats.clone(),
-            series: vec![("s".into(), vec![Some(Pt::new(0.0, 2.0)), Some(Pt::new(0.0, 3.0)), None])],
+            series: vec![(
+                "s".into(),
+                vec![Some(Pt::new(0.0, 2.0)), Some(Pt::new(0.0, 3.0)), None],
+            )],
             reference: Some(1.0),
         };
-        assert!(b.draw(&d, "b", "").unwrap().caption.contains("start at zero"));
+        assert!(b
+            .draw(&d, "b", "")
+            .unwrap()
+            .caption
+            .contains("start at zero"));
         let l = read_layout(&d, "b");
         assert_eq!((l.kind.as_str(), l.x.range[0]), ("bars", 0.0));
         // Full category names are kept (the check would catch two equal ones).
         assert_eq!(l.y.ticks, cats);
         assert_eq!(layout::check(&l), Ok(()));
         let dots = Bars {
-            series: vec![("s".into(), vec![Some(Pt::new(0.0, 0.5)), Some(Pt::new(0.0, 900.0)), None])],
+            series: vec![(
+                "s".into(),
+                vec![Some(Pt::new(0.0, 0.5)), Some(Pt::new(0.0, 900.0)), None],
+            )],
             ..b
         };
         assert!(dots.draw(&d, "d", "").unwrap().caption.contains("log axis"));

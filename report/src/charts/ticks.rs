@@ -56,7 +56,7 @@ fn nice_step(raw: f64) -> f64 {
 
 /// Ticks at multiples of a 1-2-5 step, about `target` of them, inside `[lo, hi]`.
 pub fn linear_ticks(lo: f64, hi: f64, target: usize) -> Vec<f64> {
-    if !(hi > lo) {
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return vec![lo];
     }
     let step = nice_step((hi - lo) / target.max(2) as f64);
@@ -196,11 +196,20 @@ mod tests {
         assert_eq!(labels(2.0, 40.0, true), ["2", "5", "10", "20"]);
         // Data at exactly 8 is labelled by round ticks around it, never "7.9".
         let l = labels(3.0, 8.0, true);
-        assert!(l.iter().all(|l| round(l)) && !l.contains(&"7.9".to_string()), "{l:?}");
+        assert!(
+            l.iter().all(|l| round(l)) && !l.contains(&"7.9".to_string()),
+            "{l:?}"
+        );
         // Twelve decades: every other decade, no more than eight ticks.
         let l = labels(1e-9, 1e3, true);
         assert!(l.len() <= 8 && l.contains(&"1e-8".to_string()), "{l:?}");
-        for (lo, hi) in [(1e-7, 0.03), (0.5, 3.0), (1e-3, 2.0), (40.0, 60.0), (6.45e-6, 6.55e-6)] {
+        for (lo, hi) in [
+            (1e-7, 0.03),
+            (0.5, 3.0),
+            (1e-3, 2.0),
+            (40.0, 60.0),
+            (6.45e-6, 6.55e-6),
+        ] {
             let l = labels(lo, hi, true);
             assert!(l.len() >= 2, "{lo}..{hi}: {l:?}");
             assert!(l.iter().all(|l| round(l)), "{lo}..{hi}: {l:?}");
@@ -227,10 +236,19 @@ mod tests {
 
     #[test]
     fn linear_ticks_are_1_2_5_steps_and_labels_exact() {
-        assert_eq!(tick_labels(&linear_ticks(0.0, 1.0, 5)), ["0", "0.2", "0.4", "0.6", "0.8", "1"]);
-        assert_eq!(tick_labels(&linear_ticks(-3.0, 3.0, 6)), ["-3", "-2", "-1", "0", "1", "2", "3"]);
+        assert_eq!(
+            tick_labels(&linear_ticks(0.0, 1.0, 5)),
+            ["0", "0.2", "0.4", "0.6", "0.8", "1"]
+        );
+        assert_eq!(
+            tick_labels(&linear_ticks(-3.0, 3.0, 6)),
+            ["-3", "-2", "-1", "0", "1", "2", "3"]
+        );
         assert_eq!(tick_labels(&[1e-6, 2e-6, 5e-6]), ["1e-6", "2e-6", "5e-6"]);
-        assert_eq!(tick_labels(&[0.001, 0.01, 0.1, 1.0]), ["0.001", "0.01", "0.1", "1"]);
+        assert_eq!(
+            tick_labels(&[0.001, 0.01, 0.1, 1.0]),
+            ["0.001", "0.01", "0.1", "1"]
+        );
     }
 
     #[test]

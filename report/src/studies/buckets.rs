@@ -43,7 +43,10 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                 log_x: true,
                 lines: true,
                 series: config_series(&g, &labels, &styles, |r| {
-                    Some(Pt::new(r.f("depth_complexity_max")?, r.f("collision_rate")?).flagged(r.flagged()))
+                    Some(
+                        Pt::new(r.f("depth_complexity_max")?, r.f("collision_rate")?)
+                            .flagged(r.flagged()),
+                    )
                 }),
                 ..Default::default()
             };

@@ -29,7 +29,6 @@ fn sweeps(r: &Rec, axis: &str) -> bool {
     swept(r).contains(&axis)
 }
 
-
 /// Triangles drawn per frame: `draw_triangles` (a prefix) or the whole scene.
 fn drawn(r: &Rec) -> Option<f64> {
     match r.f("draw_triangles") {
@@ -153,7 +152,11 @@ fn batching(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Resul
             push(&mut series, format!("{} — GPU", scene_name(label)), p);
         }
         if let Some(c) = r.f("cpu_ms_median") {
-            push(&mut series, format!("{} — wall clock", scene_name(label)), Pt::new(b, c));
+            push(
+                &mut series,
+                format!("{} — wall clock", scene_name(label)),
+                Pt::new(b, c),
+            );
         }
     }
     if series.iter().map(|s| s.points.len()).sum::<usize>() < 2 {

@@ -117,7 +117,12 @@ fn front_of(rows: &[&Rec], xy: impl Fn(&Rec) -> Option<(f64, f64)>) -> Vec<usize
     pareto::front(&pts)
 }
 
-fn named(rows: &[&Rec], idx: &[usize], labels: &ConfigLabels, xy: impl Fn(&Rec) -> Option<(f64, f64)>) -> Vec<Named> {
+fn named(
+    rows: &[&Rec],
+    idx: &[usize],
+    labels: &ConfigLabels,
+    xy: impl Fn(&Rec) -> Option<(f64, f64)>,
+) -> Vec<Named> {
     idx.iter()
         .filter_map(|&i| {
             let (x, y) = xy(rows[i])?;
@@ -131,19 +136,31 @@ fn named(rows: &[&Rec], idx: &[usize], labels: &ConfigLabels, xy: impl Fn(&Rec) 
 }
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
-    let all: Vec<&Rec> = runs.study("methods").into_iter().filter(|r| r.ok()).collect();
+    let all: Vec<&Rec> = runs
+        .study("methods")
+        .into_iter()
+        .filter(|r| r.ok())
+        .collect();
     let methods: Vec<&Rec> = all.iter().copied().filter(|r| !r.is_floor()).collect();
     let styles = Styles::new(methods.iter().copied());
     let mut figs = Vec::new();
     let ci = ci_caption(runs);
     for (res, at_res) in Runs::group_by(methods.iter().copied(), resolution) {
-        for (label, g) in Runs::group_by(at_res.iter().copied(), |r| r.get("scene_label").into()) {
+        // Errors of different effects are different quantities: one front per scene and effect.
+        let effects = Runs::distinct(at_res.iter().copied(), "effect").len() > 1;
+        for (key, g) in Runs::group_by(at_res.iter().copied(), |r| {
+            let e = if effects { r.get("effect") } else { "" };
+            format!("{}\u{0}{e}", r.get("scene_label"))
+        }) {
+            let (label, effect) = key.split_once('\u{0}').unwrap_or((&key, ""));
             let floors: Vec<&Rec> = all
                 .iter()
                 .copied()
                 .filter(|r| r.is_floor() && r.get("scene_label") == label && resolution(r) == res)
                 .collect();
-            scene_figures(runs, &label, &res, &g, &floors, &styles, ci, dir, &mut figs)?;
+            scene_figures(
+                runs, label, effect, &res, &g, &floors, &styles, ci, dir, &mut figs,
+            )?;
         }
         time_vs_complexity(&at_res, &res, &styles, ci, dir, &mut figs)?;
         rates(&at_res, &res, &styles, dir, &mut figs)?;
@@ -156,6 +173,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
 fn scene_figures(
     runs: &Runs,
     label: &str,
+    effect: &str,
     res: &str,
     g: &[&Rec],
     floors: &[&Rec],
@@ -164,9 +182,39 @@ fn scene_figures(
     dir: &Path,
     figs: &mut Vec<Figure>,
 ) -> Result<()> {
-    let name = scene_name(label);
-    let stem = file_safe(&format!("{label}_{res}"));
+    let name = if effect.is_empty() {
+        scene_name(label)
+    } else {
+        format!("{}, {effect}", scene_name(label))
+    };
+    let stem = file_safe(&format!("{label}_{effect}_{res}"));
     let labels = ConfigLabels::new(g.iter().copied());
+    let configs = Runs::distinct_by(g, config_key);
+    if configs.len() < 2 {
+        figs.push(Figure::note(
+            format!("{name}, {res}"),
+            format!(
+                "one configuration only ({}): no front, memory or time chart to draw; its numbers are in the table below.",
+                g.first().map(|r| labels.get(r)).unwrap_or_default()
+            ),
+        ));
+        figs.push(Figure::html(
+            format!("Configurations — {name}, {res}"),
+            scene_table(
+                runs,
+                g,
+                floors,
+                &labels,
+                &Fronts {
+                    time: vec![],
+                    memory: vec![],
+                },
+                &name,
+                res,
+            ),
+        ));
+        return Ok(());
+    }
     let fixed = labels.fixed_note();
     let vlines: Vec<(f64, String)> = floors
         .iter()
@@ -181,7 +229,13 @@ fn scene_figures(
     let mem_time = |r: &Rec| Some((r.bytes_per_pixel()?, r.f("gpu_ms_median")?));
     // On the fronts an exact configuration's error is 0: its RMSE is f32 rounding, and ranking
     // exact methods by rounding noise would put a slower one on the front.
-    let judged = |r: &Rec, e: f64| if r.exact_result() == Some(true) { 0.0 } else { e };
+    let judged = |r: &Rec, e: f64| {
+        if r.exact_result() == Some(true) {
+            0.0
+        } else {
+            e
+        }
+    };
     let f_time = front_of(&timed, |r| time_err(r).map(|(t, e)| (t, judged(r, e))));
     let f_mem = front_of(g, |r| mem_err(r).map(|(m, e)| (m, judged(r, e))));
     let fronts = Fronts {
@@ -394,7 +448,12 @@ fn scene_table(
 /// "1.23 [1.20, 1.27]" or the median alone.
 pub fn time_cell(r: &Rec) -> String {
     match (r.f("gpu_ms_median"), r.gpu_ci()) {
-        (Some(m), Some((lo, hi))) => format!("{} [{}, {}]", short(Some(m)), short(Some(lo)), short(Some(hi))),
+        (Some(m), Some((lo, hi))) => format!(
+            "{} [{}, {}]",
+            short(Some(m)),
+            short(Some(lo)),
+            short(Some(hi))
+        ),
         (m, _) => short(m),
     }
 }
@@ -428,7 +487,9 @@ fn time_vs_complexity(
             log_x: true,
             log_y: true,
             lines: true,
-            series: config_series(&g, &labels, styles, |r| time_pt(r, r.f("depth_complexity_max")?)),
+            series: config_series(&g, &labels, styles, |r| {
+                time_pt(r, r.f("depth_complexity_max")?)
+            }),
             ..Default::default()
         };
         figs.push(xy.draw(
@@ -498,13 +559,32 @@ pub fn scene_families(labels: &[String]) -> Vec<(String, Vec<String>)> {
 
 /// Hazard, overflow and collision rates against depth complexity, one point per scene and
 /// configuration; a rate that is zero everywhere is one line instead of an empty chart.
-fn rates(at_res: &[&Rec], res: &str, styles: &Styles, dir: &Path, figs: &mut Vec<Figure>) -> Result<()> {
+fn rates(
+    at_res: &[&Rec],
+    res: &str,
+    styles: &Styles,
+    dir: &Path,
+    figs: &mut Vec<Figure>,
+) -> Result<()> {
     for (col, what) in [
-        ("hazard_rate", "pixels whose captured set is not the true k nearest (read-modify-write hazards)"),
-        ("overflow_rate", "pixels whose fragments exceeded the method's capacity"),
-        ("collision_rate", "true fragments merged or lost by bucket collisions"),
+        (
+            "hazard_rate",
+            "pixels whose captured set is not the true k nearest (read-modify-write hazards)",
+        ),
+        (
+            "overflow_rate",
+            "pixels whose fragments exceeded the method's capacity",
+        ),
+        (
+            "collision_rate",
+            "true fragments merged or lost by bucket collisions",
+        ),
     ] {
-        let g: Vec<&Rec> = at_res.iter().copied().filter(|r| r.f(col).is_some()).collect();
+        let g: Vec<&Rec> = at_res
+            .iter()
+            .copied()
+            .filter(|r| r.f(col).is_some())
+            .collect();
         if g.is_empty() {
             continue;
         }
@@ -513,7 +593,11 @@ fn rates(at_res: &[&Rec], res: &str, styles: &Styles, dir: &Path, figs: &mut Vec
             let methods = Runs::distinct(g.iter().copied(), "method");
             figs.push(Figure::note(
                 title,
-                format!("not drawn: {col} is 0 at all {} points ({}).", g.len(), methods.join(", ")),
+                format!(
+                    "not drawn: {col} is 0 at all {} points ({}).",
+                    g.len(),
+                    methods.join(", ")
+                ),
             ));
             continue;
         }
@@ -532,7 +616,10 @@ fn rates(at_res: &[&Rec], res: &str, styles: &Styles, dir: &Path, figs: &mut Vec
         figs.push(xy.draw(
             dir,
             &format!("methods_{col}_{res}"),
-            &format!("Fraction of {what}; one point per scene and configuration. {}", labels.fixed_note()),
+            &format!(
+                "Fraction of {what}; one point per scene and configuration. {}",
+                labels.fixed_note()
+            ),
         )?);
     }
     Ok(())
@@ -570,7 +657,10 @@ fn ratio_bars(at_res: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) ->
             if at_res.iter().any(|r| r.f(col).is_some()) {
                 figs.push(Figure::note(
                     title,
-                    format!("not drawn: only {} ran, a comparison with itself.", skip.unwrap_or("one method")),
+                    format!(
+                        "not drawn: only {} ran, a comparison with itself.",
+                        skip.unwrap_or("one method")
+                    ),
                 ));
             }
             continue;
@@ -609,7 +699,10 @@ fn ratio_bars(at_res: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) ->
         figs.push(bars.draw(
             dir,
             &format!("{stem}_{res}"),
-            &format!("Same scene, resolution and run; the vertical line marks 1×. {}", labels.fixed_note()),
+            &format!(
+                "Same scene, resolution and run; the vertical line marks 1×. {}",
+                labels.fixed_note()
+            ),
         )?);
     }
     Ok(())

@@ -61,14 +61,23 @@ fn error_vs_time(g: &[&Rec], name: &str, stem: &str, dir: &Path) -> Result<Figur
     }
     let pts: Vec<(f64, f64)> = g
         .iter()
-        .map(|r| (r.f("gpu_ms_median").unwrap_or(f64::NAN), r.f("vis_rmse").unwrap_or(f64::NAN)))
+        .map(|r| {
+            (
+                r.f("gpu_ms_median").unwrap_or(f64::NAN),
+                r.f("vis_rmse").unwrap_or(f64::NAN),
+            )
+        })
         .collect();
     let front = pareto::front(&pts)
         .into_iter()
         .map(|i| Named {
             x: pts[i].0,
             y: pts[i].1,
-            text: labels.get(g[i]).trim_start_matches("layered_ssm").trim().to_string(),
+            text: labels
+                .get(g[i])
+                .trim_start_matches("layered_ssm")
+                .trim()
+                .to_string(),
         })
         .collect();
     XY {

@@ -30,11 +30,14 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             .map(|r| r.get("stiffness").to_string())
             .unwrap_or_default();
         let labels = ConfigLabels::new(g.iter().copied());
-        let pt = |r: &Rec| Some(Pt::new(r.f("stiffness_value")?, r.f("rmse")?).flagged(r.flagged()));
+        let pt =
+            |r: &Rec| Some(Pt::new(r.f("stiffness_value")?, r.f("rmse")?).flagged(r.flagged()));
         // A series per method configuration and depth convention (reversed-Z is a scene
         // parameter, so it is folded into the name from the scene label).
         let mut series = Vec::new();
-        if g.iter().any(|r| r.get("scene_label").contains("reversed_z=true")) {
+        if g.iter()
+            .any(|r| r.get("scene_label").contains("reversed_z=true"))
+        {
             for rev in [false, true] {
                 let sub: Vec<&Rec> = g
                     .iter()
@@ -42,7 +45,11 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     .filter(|r| r.get("scene_label").contains("reversed_z=true") == rev)
                     .collect();
                 for mut s in config_series(&sub, &labels, &styles, pt) {
-                    s.name = format!("{} [{}]", s.name, if rev { "reversed-Z" } else { "standard Z" });
+                    s.name = format!(
+                        "{} [{}]",
+                        s.name,
+                        if rev { "reversed-Z" } else { "standard Z" }
+                    );
                     // Reversed-Z keeps the method's marker and takes the next colour.
                     s.color = s.color.map(|c| c * 2 + rev as usize);
                     series.push(s);
@@ -68,7 +75,15 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         let flagged: Vec<String> = g
             .iter()
             .filter(|r| r.flagged())
-            .map(|r| format!("{} {} ({} = {})", r.get("method"), r.flags().join("|"), stiffness, r.get("stiffness_value")))
+            .map(|r| {
+                format!(
+                    "{} {} ({} = {})",
+                    r.get("method"),
+                    r.flags().join("|"),
+                    stiffness,
+                    r.get("stiffness_value")
+                )
+            })
             .collect();
         let scenes = Runs::distinct(g.iter().copied(), "scene_label");
         let caption = format!(
