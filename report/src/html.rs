@@ -110,13 +110,12 @@ pub fn page(
         "<section id=\"summary\"><pre class=\"summary\">{}</pre></section>",
         esc(&crate::summary::summary_text(runs))
     );
-    flagged_table(&mut h, runs);
     if !sections.is_empty() {
         h.push_str("<h2>Contents</h2><ul>");
         for (i, (title, _)) in sections.iter().enumerate() {
             let _ = write!(h, "<li><a href=\"#s{i}\">{}</a></li>", esc(title));
         }
-        h.push_str("</ul>");
+        h.push_str("<li><a href=\"#flip\">FLIP: the worst points</a></li><li><a href=\"#flagged-points\">Flagged points</a></li><li><a href=\"#rows\">Rows</a></li></ul>");
     }
     for (i, (title, figs)) in sections.iter().enumerate() {
         let _ = write!(h, "<h2 id=\"s{i}\">{}</h2>", esc(title));
@@ -145,6 +144,7 @@ pub fn page(
     }
     h.push_str(extra_html);
     h.push_str(flip_html);
+    flagged_table(&mut h, runs);
     rows_table(&mut h, runs);
     let bad: Vec<&Rec> = runs.rows.iter().filter(|r| !r.ok()).collect();
     let _ = write!(h, "<h2>Skipped and failed rows ({})</h2><table id=\"notok\"><tr><th>status</th><th>point</th><th>reason</th></tr>", bad.len());
@@ -164,7 +164,11 @@ pub fn page(
 /// Every flagged ok row, with its flags and notes.
 fn flagged_table(h: &mut String, runs: &Runs) {
     let rows: Vec<&Rec> = runs.rows.iter().filter(|r| r.ok() && r.flagged()).collect();
-    let _ = write!(h, "<h2>Flagged points ({})</h2>", rows.len());
+    let _ = write!(
+        h,
+        "<h2 id=\"flagged-points\">Flagged points ({})</h2>",
+        rows.len()
+    );
     if rows.is_empty() {
         h.push_str("<p class=\"note\">No ok row carries a flag.</p>");
         return;

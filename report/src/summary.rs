@@ -290,7 +290,7 @@ fn platform_summary(out: &mut String, runs: &Runs, rows: &[&Rec]) {
             } else {
                 format!(", {effect}")
             };
-            let _ = writeln!(out, "{}{what}, {res}:", scene_name(label));
+            let _ = writeln!(out, "\n{}{what}, {res}:", scene_name(label));
             if IMAGE_STUDIES.contains(&study.as_str()) && g.iter().any(|r| r.f("rmse").is_some()) {
                 let floors: Vec<&Rec> = ok
                     .iter()

@@ -24,7 +24,8 @@ fn check_layouts(dir: &Path) -> usize {
             if p.is_dir() {
                 stack.push(p);
             } else if p.to_string_lossy().ends_with(".layout.json") {
-                let l: Layout = serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+                let l: Layout =
+                    serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
                 if let Err(e) = layout::check(&l) {
                     bad.extend(e);
                 }
@@ -38,7 +39,18 @@ fn check_layouts(dir: &Path) -> usize {
 
 const HEADER: &str = "schema,run_id,suite,study,scene,scene_label,width,height,method,point_key,adapter,backend,device_type,status,reason,gpu_ms_median,gpu_ms_ci_lo,gpu_ms_ci_hi,x_floor,rmse,bad_pixel_frac,matches_truth,flag,flip_mean,flip_p99,bytes_allocated,bytes_per_pixel,depth_complexity_max,overflow_rate";
 
-fn row(scene: &str, method: &str, axes: &str, ms: f64, rmse: &str, exact: bool, flag: &str, flip: &str, bpp: f64) -> String {
+#[allow(clippy::too_many_arguments)] // one CSV row, every cell named
+fn row(
+    scene: &str,
+    method: &str,
+    axes: &str,
+    ms: f64,
+    rmse: &str,
+    exact: bool,
+    flag: &str,
+    flip: &str,
+    bpp: f64,
+) -> String {
     let key = format!("methods|{scene}|64x64|{method}|{axes}");
     format!(
         "1,r,custom,methods,obj,\"{scene}\",64,64,{method},\"{key}\",lavapipe,vulkan,cpu,ok,,{ms},{},{},{},{rmse},0,{exact},{flag},{flip},{flip},{},{bpp},8,0",
@@ -53,33 +65,83 @@ fn row(scene: &str, method: &str, axes: &str, ms: f64, rmse: &str, exact: bool, 
 fn a_custom_suite_report_reads_well() {
     let d = tmp("custom");
     let mut rows = Vec::new();
-    for mesh in ["/home/someone/models/holes-a.obj", "/home/someone/models/holes-b.obj"] {
+    for mesh in [
+        "/home/someone/models/holes-a.obj",
+        "/home/someone/models/holes-b.obj",
+    ] {
         let scene = format!("obj(instances=4,path={mesh})");
         let key = format!("methods|{scene}|64x64|floor_depth|");
         rows.push(format!(
             "1,r,custom,methods,obj,\"{scene}\",64,64,floor_depth,\"{key}\",lavapipe,vulkan,cpu,ok,,0.1,0.09,0.11,,,,,,,,4096,16,8,"
         ));
-        rows.push(row(&scene, "depth_peel", "max_layers=64", 3.0, "0", true, "", "0", 120.0));
-        rows.push(row(&scene, "linked_list", "layers=8", 1.0, "0", true, "", "0", 300.0));
-        rows.push(row(&scene, "linked_list", "layers=4", 0.8, "2e-3", false, "overflow|noisy", "0.05", 160.0));
-        rows.push(row(&scene, "wboit", "", 0.3, "3e-2", false, "", "0.2", 24.0));
+        rows.push(row(
+            &scene,
+            "depth_peel",
+            "max_layers=64",
+            3.0,
+            "0",
+            true,
+            "",
+            "0",
+            120.0,
+        ));
+        rows.push(row(
+            &scene,
+            "linked_list",
+            "layers=8",
+            1.0,
+            "0",
+            true,
+            "",
+            "0",
+            300.0,
+        ));
+        rows.push(row(
+            &scene,
+            "linked_list",
+            "layers=4",
+            0.8,
+            "2e-3",
+            false,
+            "overflow|noisy",
+            "0.05",
+            160.0,
+        ));
+        rows.push(row(
+            &scene, "wboit", "", 0.3, "3e-2", false, "", "0.2", 24.0,
+        ));
     }
     rows.push("1,r,custom,methods,obj,x,64,64,bdp,methods|x|64x64|bdp|,lavapipe,vulkan,cpu,skipped,needs 8 colour attachments,,,,,,,,,,,,,,".into());
-    std::fs::write(d.join("runs.csv"), format!("{HEADER}\n{}\n", rows.join("\n"))).unwrap();
+    std::fs::write(
+        d.join("runs.csv"),
+        format!("{HEADER}\n{}\n", rows.join("\n")),
+    )
+    .unwrap();
     let page = report::build(&d, None).unwrap();
     let html = std::fs::read_to_string(&page).unwrap();
     let charts = check_layouts(&d.join("report"));
     assert!(charts >= 8, "{charts} charts");
     // Mesh stems name the scenes; no label is cut to a shared prefix.
-    assert!(html.contains("obj holes-a") && html.contains("obj holes-b"), "mesh stems");
+    assert!(
+        html.contains("obj holes-a") && html.contains("obj holes-b"),
+        "mesh stems"
+    );
     assert!(!html.contains('…'), "a label was cut");
     // The summary on the page is summary_text, escaped.
     let runs = report::Runs::load(&d.join("runs.csv")).unwrap();
     let text = report::summary_text(&runs);
-    assert!(text.contains("Fastest exact: linked_list layers=8 at 1 [0.95, 1.05] ms, 10× floor_depth"), "{text}");
+    assert!(
+        text.contains("Fastest exact: linked_list layers=8 at 1 [0.95, 1.05] ms, 10× floor_depth"),
+        "{text}"
+    );
     assert!(text.contains("RMSE ≤ 1e-2: linked_list layers=4"), "{text}");
     assert!(text.contains("needs 8 colour attachments"), "{text}");
-    assert!(html.contains(&text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")));
+    assert!(html.contains(
+        &text
+            .replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+    ));
     // FLIP columns are shown; the run has no FLIP images, which the page says in one line.
     assert!(html.contains("<th>FLIP mean</th>") && html.contains("has no FLIP images"));
     // The flagged point is listed; the exact points are in the zero band, not clamped.
@@ -89,7 +151,10 @@ fn a_custom_suite_report_reads_well() {
             std::fs::read_dir(d.join("report"))
                 .unwrap()
                 .map(|e| e.unwrap().path())
-                .find(|p| p.to_string_lossy().contains("methods_pareto_time_") && p.to_string_lossy().ends_with(".layout.json"))
+                .find(|p| {
+                    p.to_string_lossy().contains("methods_pareto_time_")
+                        && p.to_string_lossy().ends_with(".layout.json")
+                })
                 .unwrap(),
         )
         .unwrap(),

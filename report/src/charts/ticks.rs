@@ -38,15 +38,15 @@ pub fn zero_based_range(lo: f64, hi: f64) -> (f64, f64) {
     )
 }
 
-/// The 1-2-5 step nearest to `raw` from above.
+/// The 1-2-5 step nearest to `raw` (geometric midpoints between 1, 2, 5 and 10).
 fn nice_step(raw: f64) -> f64 {
     let e = raw.log10().floor();
     let m = raw / 10f64.powf(e);
-    let f = if m <= 1.0 {
+    let f = if m < 1.42 {
         1.0
-    } else if m <= 2.0 {
+    } else if m < 3.17 {
         2.0
-    } else if m <= 5.0 {
+    } else if m < 7.08 {
         5.0
     } else {
         10.0
@@ -76,7 +76,7 @@ pub fn linear_ticks(lo: f64, hi: f64, target: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Ticks of a log axis over `[lo, hi]` (> 0): 1-2-5 ticks when that gives three to eight of
+/// Ticks of a log axis over `[lo, hi]` (> 0): 1-2-5 ticks when that gives three to nine of
 /// them, else decades (every n-th beyond eight), else (a range narrower than about half a
 /// decade) round linear ticks.
 pub fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
@@ -90,7 +90,7 @@ pub fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
             }
         }
     }
-    if (3..=8).contains(&v.len()) {
+    if (3..=9).contains(&v.len()) {
         return v;
     }
     let decades: Vec<i32> = ((a - 1e-9).ceil() as i32..=(b + 1e-9).floor() as i32).collect();

@@ -479,9 +479,21 @@ fn time_vs_complexity(
             .copied()
             .filter(|r| scenes.iter().any(|s| s == r.get("scene_label")))
             .collect();
+        let title = format!("GPU time vs depth complexity — {family}, {res}");
+        let dcs = Runs::distinct(g.iter().copied(), "depth_complexity_max");
+        if dcs.len() < 2 {
+            figs.push(Figure::note(
+                title,
+                format!(
+                    "not drawn: every scene of the family has the same true depth complexity ({}); their times are in the scene tables.",
+                    dcs.join(", ")
+                ),
+            ));
+            continue;
+        }
         let labels = ConfigLabels::new(g.iter().copied());
         let xy = XY {
-            title: format!("GPU time vs depth complexity — {family}, {res}"),
+            title,
             x_label: "true max fragments per pixel".into(),
             y_label: "GPU time per frame [ms]".into(),
             log_x: true,
