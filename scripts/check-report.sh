@@ -1,6 +1,11 @@
 #!/usr/bin/env bash
 # Opens a report in a real browser (headless Chromium) and checks what a reader would see: every
-# <img> on the page loaded (complete, naturalWidth > 0) and the tables are there.
+# <img> on the page loaded (complete, naturalWidth > 0), the tables are there, and every chart's
+# layout record (<stem>.layout.json beside its SVG) passes the reader's rules of
+# report/src/charts/layout.rs `check`: the legend box does not overlap the plot area; each
+# numeric axis contains its data and reaches at most a decade beyond it (log: ≤ 10× padding on
+# each side; linear: axis span ≤ 10 × max(data span, a tenth of the data's magnitude)); no tick
+# label repeats (category names included).
 #
 #   scripts/check-report.sh DIR      DIR = a run folder (DIR/report/index.html), a report folder,
 #                                    or the index.html itself
@@ -8,6 +13,7 @@
 # Installs Debian `chromium` when missing (as root). Exit 0 with "PASSED", 1 with "FAILED: why",
 # or 0 with "SKIPPED: why" only when no Chromium can be had on this machine.
 # TABLES="runs rows notok" lists the table ids that must exist (default: runs rows notok);
+# MIN_CHARTS (default 0) the fewest charts with a layout record;
 # MIN_IMAGES (default 1) the fewest images the page must hold.
 set -uo pipefail
 say() { echo "check-report: $*"; }
@@ -43,6 +49,8 @@ trap 'rm -rf "$work"' EXIT
 profile=$work/profile
 mkdir -p "$profile" "$work/report"
 cp -r "$(dirname "$page")"/. "$work/report/"
+# The FLIP images live in the run folder (run/flip/), referenced as ../flip/… from the page.
+[ -d "$(dirname "$page")/../flip" ] && cp -r "$(dirname "$page")/../flip" "$work/flip"
 probe=$work/report/.check-report.html
 {
     cat "$page"
@@ -54,10 +62,46 @@ window.addEventListener("load", function () {
                 .map(function (i) { return i.getAttribute("src"); });
   var ids = Array.prototype.slice.call(document.querySelectorAll("table"))
                 .map(function (t) { return t.id || "(no id)"; });
+  // Every chart's layout record, read as the page sees it, judged by layout.rs's rules.
+  var charts = 0, layout = [];
+  imgs.forEach(function (i) {
+    var src = i.getAttribute("src");
+    if (!/\.svg$/.test(src)) return;
+    var rec = src.replace(/\.svg$/, ".layout.json"), l = null;
+    try {
+      var x = new XMLHttpRequest();
+      x.open("GET", rec, false);
+      x.send(null);
+      l = JSON.parse(x.responseText);
+    } catch (e) { layout.push(rec + ": no layout record (" + e + ")"); return; }
+    charts++;
+    var p = l.plot, g = l.legend;
+    if (g && g.x < p.x + p.w && p.x < g.x + g.w && g.y < p.y + p.h && p.y < g.y + g.h)
+      layout.push(l.stem + ": legend overlaps the plot area");
+    ["x", "y"].forEach(function (n) {
+      var a = l[n];
+      a.ticks.forEach(function (t, k) {
+        if (a.ticks.indexOf(t) < k) layout.push(l.stem + ": " + n + " tick label '" + t + "' repeats");
+      });
+      if (a.categorical || !a.data) return;
+      var r0 = a.range[0], r1 = a.range[1], d0 = a.data[0], d1 = a.data[1];
+      var tol = Math.abs(r1 - r0) * 1e-9;
+      if (d0 < r0 - tol || d1 > r1 + tol) layout.push(l.stem + ": " + n + " data outside the axis");
+      if (a.log) {
+        if (d0 <= 0 || r0 <= 0 || d0 / r0 > 10 * (1 + 1e-9) || r1 / d1 > 10 * (1 + 1e-9))
+          layout.push(l.stem + ": " + n + " log axis " + r0 + ".." + r1 + " reaches more than a decade beyond its data " + d0 + ".." + d1);
+      } else {
+        var span = Math.max(d1 - d0, 0.1 * Math.max(Math.abs(d0), Math.abs(d1)));
+        if (span > 0 && (r1 - r0) > 10 * span * (1 + 1e-9))
+          layout.push(l.stem + ": " + n + " axis " + r0 + ".." + r1 + " is more than ten times its data's span " + d0 + ".." + d1);
+      }
+    });
+  });
   var pre = document.createElement("pre");
   pre.id = "mfx-check";
   pre.textContent = "MFXCHECK images=" + imgs.length + " bad=" + JSON.stringify(bad) +
-                    " tables=" + JSON.stringify(ids) + " END";
+                    " tables=" + JSON.stringify(ids) + " charts=" + charts +
+                    " layout=" + JSON.stringify(layout) + " END";
   document.body.appendChild(pre);
 });
 </script>
@@ -77,13 +121,17 @@ fi
 n=$(sed 's/.*images=\([0-9]*\).*/\1/' <<<"$line")
 bad=$(sed 's/.* bad=\(\[[^]]*\]\).*/\1/' <<<"$line")
 tables=$(sed 's/.* tables=\(\[[^]]*\]\).*/\1/' <<<"$line")
+charts=$(sed 's/.* charts=\([0-9]*\).*/\1/' <<<"$line")
+layout=$(sed 's/.* layout=\(\[.*\]\) END$/\1/' <<<"$line")
 status=0
+if [ "$layout" != "[]" ]; then say "FAILED: chart layout: $layout"; status=1; fi
+if [ "$charts" -lt "${MIN_CHARTS:-0}" ]; then say "FAILED: $charts charts with a layout record (want at least ${MIN_CHARTS:-0})"; status=1; fi
 if [ "$bad" != "[]" ]; then say "FAILED: images that did not load: $bad"; status=1; fi
 if [ "$n" -lt "${MIN_IMAGES:-1}" ]; then say "FAILED: $n images on the page (want at least ${MIN_IMAGES:-1})"; status=1; fi
 for t in ${TABLES:-runs rows notok}; do
     grep -q "\"$t\"" <<<"$tables" || { say "FAILED: no table id=\"$t\" (tables: $tables)"; status=1; }
 done
 if [ "$status" = 0 ]; then
-    say "PASSED: $page in $($browser --version 2>/dev/null | head -n 1): $n images loaded, tables $tables"
+    say "PASSED: $page in $($browser --version 2>/dev/null | head -n 1): $n images loaded, $charts chart layouts pass, tables $tables"
 fi
 exit "$status"

@@ -6,17 +6,13 @@ use std::path::Path;
 use crate::{magma_rgb8, save_rgb8_png, FlipResult};
 
 /// Header of `flip/worst.csv`; paths are relative to the run folder.
-pub const WORST_CSV_HEADER: [&str; 9] = [
-    "rank",
-    "point_key",
-    "method",
-    "scene_label",
-    "flip_mean",
-    "flip_p99",
-    "method_png",
-    "truth_png",
-    "flip_png",
-];
+pub const WORST_CSV_HEADER: [&str; 9] = {
+    let c = schema::flip_worst::ALL;
+    [
+        c[0].name, c[1].name, c[2].name, c[3].name, c[4].name, c[5].name, c[6].name, c[7].name,
+        c[8].name,
+    ]
+};
 
 struct Entry {
     point_key: String,

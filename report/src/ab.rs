@@ -12,6 +12,7 @@
 //!
 //! Kept independent of the chart code: the page is plain HTML with an inline SVG.
 
+use schema::{cols, samples, Col};
 use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -25,14 +26,14 @@ use mfx_stats::{
 use crate::data::{Rec, Runs};
 
 /// Error columns compared, when present on both sides.
-pub const ERROR_COLUMNS: [&str; 7] = [
-    "rmse",
-    "max_abs_err",
-    "bad_pixel_frac",
-    "flip_mean",
-    "rmse_vs_k",
-    "max_abs_err_vs_k",
-    "matches_truth",
+pub const ERROR_COLUMNS: [Col; 7] = [
+    cols::RMSE,
+    cols::MAX_ABS_ERR,
+    cols::BAD_PIXEL_FRAC,
+    cols::FLIP_MEAN,
+    cols::RMSE_VS_K,
+    cols::MAX_ABS_ERR_VS_K,
+    cols::MATCHES_TRUTH,
 ];
 
 #[derive(Clone, Debug)]
@@ -92,7 +93,7 @@ pub struct PointCmp {
 #[derive(Clone, Debug, PartialEq)]
 pub struct ErrMove {
     pub key: String,
-    pub column: &'static str,
+    pub column: Col,
     pub base: String,
     pub new: String,
 }
@@ -122,7 +123,7 @@ pub struct AbReport {
 }
 
 fn platform(r: &Rec) -> String {
-    format!("{} ({})", r.get("adapter"), r.get("backend"))
+    format!("{} ({})", r.get(cols::ADAPTER), r.get(cols::BACKEND))
 }
 
 fn distinct(rows: &[Rec], f: impl Fn(&Rec) -> String) -> Vec<String> {
@@ -169,15 +170,19 @@ fn load_samples(path: &Path) -> Result<SampleMap> {
         .iter()
         .map(String::from)
         .collect();
-    let col = |name: &str| {
+    let col = |c: Col| {
         h.iter()
-            .position(|c| c == name)
-            .with_context(|| format!("{}: no '{name}' column", path.display()))
+            .position(|n| n == c.name)
+            .with_context(|| format!("{}: no '{c}' column", path.display()))
     };
-    let (ck, cr, cg) = (col("point_key")?, col("run_id")?, col("gpu_ms")?);
+    let (ck, cr, cg) = (
+        col(samples::POINT_KEY)?,
+        col(samples::RUN_ID)?,
+        col(samples::GPU_MS)?,
+    );
     let (cs, cd) = (
-        h.iter().position(|c| c == "sm_clock_mhz"),
-        h.iter().position(|c| c == "discarded"),
+        h.iter().position(|c| c == samples::SM_CLOCK_MHZ.name),
+        h.iter().position(|c| c == samples::DISCARDED.name),
     );
     let mut out: SampleMap = HashMap::new();
     for (i, rec) in rdr.records().enumerate() {
@@ -204,7 +209,7 @@ fn load_samples(path: &Path) -> Result<SampleMap> {
 fn load_side(p: &Path) -> Result<(Side, Runs, Option<SampleMap>)> {
     let (csv, samples_csv) = locate(p)?;
     let runs = Runs::load(&csv)?;
-    let schemas = distinct(&runs.rows, |r| r.get("schema").to_string());
+    let schemas = distinct(&runs.rows, |r| r.get(cols::SCHEMA).to_string());
     if schemas.len() > 1 {
         bail!(
             "{} mixes CSV schema versions {}: compare runs of one version",
@@ -221,24 +226,25 @@ fn load_side(p: &Path) -> Result<(Side, Runs, Option<SampleMap>)> {
         samples_csv,
         schema: schemas.into_iter().next().unwrap_or_default(),
         platforms: distinct(&runs.rows, platform),
-        run_ids: distinct(&runs.rows, |r| r.get("run_id").to_string()),
-        git_revs: distinct(&runs.rows, |r| r.get("git_rev").to_string()),
+        run_ids: distinct(&runs.rows, |r| r.get(cols::RUN_ID).to_string()),
+        git_revs: distinct(&runs.rows, |r| r.get(cols::GIT_REV).to_string()),
     };
     Ok((side, runs, samples))
 }
 
 fn noisy(r: &Rec) -> bool {
-    r.get("flag").split('|').any(|f| f == "noisy") || r.get("target_reached") == "false"
+    r.get(cols::FLAG).split('|').any(|f| f == "noisy") || r.get(cols::TARGET_REACHED) == "false"
 }
 
 /// The summary interval of a row: the median's CI where written, else min–max.
 fn interval(r: &Rec, scale: f64) -> Option<Interval> {
-    let median = r.f("gpu_ms_median")?;
-    let pair = |a: &str, b: &str| Some((r.f(a)?, r.f(b)?));
-    let range = pair("gpu_ms_ci_lo", "gpu_ms_ci_hi").or_else(|| pair("gpu_ms_min", "gpu_ms_max"));
+    let median = r.f(cols::GPU_MS_MEDIAN)?;
+    let pair = |a: Col, b: Col| Some((r.f(a)?, r.f(b)?));
+    let range = pair(cols::GPU_MS_CI_LO, cols::GPU_MS_CI_HI)
+        .or_else(|| pair(cols::GPU_MS_MIN, cols::GPU_MS_MAX));
     let n = r
-        .f("samples")
-        .or_else(|| r.f("reps"))
+        .f(cols::SAMPLES)
+        .or_else(|| r.f(cols::REPS))
         .map(|x| x as usize)
         .unwrap_or(0);
     Some(Interval {
@@ -274,7 +280,7 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
     }
     let dup = |rows: &[Rec]| {
         let mut seen = std::collections::HashSet::new();
-        rows.iter().any(|r| !seen.insert(r.get("point_key")))
+        rows.iter().any(|r| !seen.insert(r.get(cols::POINT_KEY)))
     };
     let by_platform = match (dup(&br.rows), dup(&nr.rows)) {
         (false, false) => false,
@@ -290,9 +296,9 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
     };
     let key = |r: &Rec| {
         if by_platform {
-            format!("{} @ {}", r.get("point_key"), platform(r))
+            format!("{} @ {}", r.get(cols::POINT_KEY), platform(r))
         } else {
-            r.get("point_key").to_string()
+            r.get(cols::POINT_KEY).to_string()
         }
     };
     let new_by_key: HashMap<String, &Rec> = nr.rows.iter().map(|r| (key(r), r)).collect();
@@ -320,12 +326,12 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
             rep.only_base.push(k);
             continue;
         };
-        if b.get("status") != n.get("status") {
+        if b.get(cols::STATUS) != n.get(cols::STATUS) {
             rep.status_changes.push(StatusChange {
                 key: k.clone(),
-                base: b.get("status").to_string(),
-                new: n.get("status").to_string(),
-                reason: [b.get("reason"), n.get("reason")]
+                base: b.get(cols::STATUS).to_string(),
+                new: n.get(cols::STATUS).to_string(),
+                reason: [b.get(cols::REASON), n.get(cols::REASON)]
                     .iter()
                     .filter(|s| !s.is_empty())
                     .copied()
@@ -347,14 +353,19 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
                 });
             }
         }
-        let (Some(bm), Some(nm)) = (b.f("gpu_ms_median"), n.f("gpu_ms_median")) else {
+        let (Some(bm), Some(nm)) = (b.f(cols::GPU_MS_MEDIAN), n.f(cols::GPU_MS_MEDIAN)) else {
             rep.untimed.push(k);
             continue;
         };
-        let (bc, nc) = (b.f("sm_clock_mhz_mean"), n.f("sm_clock_mhz_mean"));
+        let (bc, nc) = (b.f(cols::SM_CLOCK_MHZ_MEAN), n.f(cols::SM_CLOCK_MHZ_MEAN));
         let pick = |s: &Option<SampleMap>, r: &Rec| {
             s.as_ref()
-                .and_then(|m| m.get(&(r.get("run_id").to_string(), r.get("point_key").to_string())))
+                .and_then(|m| {
+                    m.get(&(
+                        r.get(cols::RUN_ID).to_string(),
+                        r.get(cols::POINT_KEY).to_string(),
+                    ))
+                })
                 .filter(|p| !p.gpu_ms.is_empty())
                 .cloned()
         };

@@ -7,6 +7,7 @@
 //! Points are matched by `point_key` (study|scene|resolution|method|axes), so two platforms are
 //! compared only on exactly the same scene, resolution and configuration.
 
+use schema::cols;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::path::Path;
@@ -15,7 +16,7 @@ use anyhow::{bail, Context, Result};
 
 use crate::charts::{Bars, Figure, Pt};
 use crate::data::{resolution, Rec, Runs};
-use crate::studies::methods::CONFIG_AXES;
+use crate::labels::{file_safe, scene_name, ConfigLabels};
 
 /// What the comparison adds to the page.
 pub struct Comparison {
@@ -28,7 +29,7 @@ pub struct Comparison {
 
 /// "adapter (backend)": the unit compared.
 pub fn platform(r: &Rec) -> String {
-    format!("{} ({})", r.get("adapter"), r.get("backend"))
+    format!("{} ({})", r.get(cols::ADAPTER), r.get(cols::BACKEND))
 }
 
 pub fn platforms(runs: &Runs) -> Vec<String> {
@@ -60,7 +61,7 @@ pub fn baseline(runs: &Runs, name: Option<&str>) -> Result<String> {
         None => Ok(runs
             .rows
             .iter()
-            .find(|r| r.get("device_type") == "cpu")
+            .find(|r| r.get(cols::DEVICE_TYPE) == "cpu")
             .map(platform)
             .or_else(|| all.first().cloned())
             .unwrap_or_default()),
@@ -72,13 +73,6 @@ fn esc(s: &str) -> String {
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
-}
-
-fn safe(s: &str) -> String {
-    s.chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-        .take(60)
-        .collect()
 }
 
 fn num(v: f64) -> String {
@@ -154,13 +148,13 @@ pub fn compare(
     let ok: Vec<&Rec> = runs
         .rows
         .iter()
-        .filter(|r| r.ok() && r.f("gpu_ms_median").is_some())
+        .filter(|r| r.ok() && r.f(cols::GPU_MS_MEDIAN).is_some())
         .collect();
     // point_key → platform → row
     let mut by_point: BTreeMap<&str, BTreeMap<String, &Rec>> = BTreeMap::new();
     let mut order: Vec<&str> = Vec::new();
     for r in &ok {
-        let k = r.get("point_key");
+        let k = r.get(cols::POINT_KEY);
         if !by_point.contains_key(k) {
             order.push(k);
         }
@@ -170,6 +164,7 @@ pub fn compare(
             .entry(platform(r))
             .or_insert(r);
     }
+    let labels = ConfigLabels::new(ok.iter().copied());
     let mut figures = Vec::new();
     let mut html = String::new();
     let _ = write!(
@@ -189,7 +184,7 @@ pub fn compare(
     // 1. Time per method configuration, one chart per scene × resolution, one bar per platform.
     let mut scenes: Vec<(String, String)> = Vec::new();
     for r in &ok {
-        let s = (r.get("scene_label").to_string(), resolution(r));
+        let s = (r.get(cols::SCENE_LABEL).to_string(), resolution(r));
         if !scenes.contains(&s) {
             scenes.push(s);
         }
@@ -200,7 +195,7 @@ pub fn compare(
             .copied()
             .filter(|k| {
                 let r = by_point[k].values().next().expect("non-empty");
-                r.get("scene_label") == label && resolution(r) == *res
+                r.get(cols::SCENE_LABEL) == label && resolution(r) == *res
             })
             .collect();
         // Only points measured on at least two platforms say anything about platforms.
@@ -215,8 +210,8 @@ pub fn compare(
             .iter()
             .map(|k| {
                 let r = by_point[k].values().next().expect("non-empty");
-                let study = r.get("study");
-                let c = r.config_label(CONFIG_AXES);
+                let study = r.get(cols::STUDY);
+                let c = labels.get(r);
                 if study == "methods" || c.starts_with("floor_") {
                     c
                 } else {
@@ -230,21 +225,16 @@ pub fn compare(
                 let v = here
                     .iter()
                     .map(|k| {
-                        by_point[k].get(p).map(|r| {
-                            Pt::spread(
-                                0.0,
-                                r.f("gpu_ms_median").unwrap_or(0.0),
-                                r.f("gpu_ms_min"),
-                                r.f("gpu_ms_max"),
-                            )
-                        })
+                        by_point[k]
+                            .get(p)
+                            .and_then(|r| crate::studies::methods::time_pt(r, 0.0))
                     })
                     .collect();
                 (p.clone(), v)
             })
             .collect();
         let bars = Bars {
-            title: format!("GPU time per platform — {label}, {res}"),
+            title: format!("GPU time per platform — {}, {res}", scene_name(label)),
             y_label: "GPU time per frame [ms]".into(),
             log_y: true,
             categories,
@@ -253,10 +243,12 @@ pub fn compare(
         };
         figures.push(bars.draw(
             out,
-            &format!("compare_time_{}_{res}", safe(label)),
-            "Median GPU time per frame of each configuration on each platform (whiskers: min–max \
-             of the timed repetitions), log scale. floor_depth/floor_opaque are the rasterisation \
-             floors of the same scene.",
+            &format!("compare_time_{}_{res}", file_safe(label)),
+            &format!(
+                "Median GPU time per frame of each configuration on each platform. {} \
+                 floor_depth/floor_opaque are the rasterisation floors of the same scene.",
+                crate::studies::methods::ci_caption(runs)
+            ),
         )?);
     }
 
@@ -268,13 +260,13 @@ pub fn compare(
     let mut speed: BTreeMap<String, BTreeMap<String, Vec<f64>>> = BTreeMap::new();
     for k in &order {
         let per = &by_point[k];
-        let Some(b) = per.get(&base).and_then(|r| r.f("gpu_ms_median")) else {
+        let Some(b) = per.get(&base).and_then(|r| r.f(cols::GPU_MS_MEDIAN)) else {
             continue;
         };
         let r0 = per.values().next().expect("non-empty");
-        let c = r0.config_label(CONFIG_AXES);
+        let c = labels.get(r0);
         for p in &others {
-            if let Some(t) = per.get(*p).and_then(|r| r.f("gpu_ms_median")) {
+            if let Some(t) = per.get(*p).and_then(|r| r.f(cols::GPU_MS_MEDIAN)) {
                 if t > 0.0 && b > 0.0 {
                     if !configs.contains(&c) {
                         configs.push(c.clone());
@@ -363,7 +355,7 @@ pub fn compare(
     for k in &order {
         let imgs: Vec<(&String, &Rec)> = by_point[k]
             .iter()
-            .filter(|(_, r)| !r.get("image_file").is_empty())
+            .filter(|(_, r)| !r.get(cols::IMAGE_FILE).is_empty())
             .map(|(p, r)| (p, *r))
             .collect();
         if imgs.len() < 2 {
@@ -372,7 +364,7 @@ pub fn compare(
         with_images += 1;
         let mut loaded = Vec::new();
         for (p, r) in &imgs {
-            let path = run_dir.join(r.get("image_file"));
+            let path = run_dir.join(r.get(cols::IMAGE_FILE));
             match read_image(&path) {
                 Ok(img) => loaded.push((*p, *r, img)),
                 Err(e) => problems.push(format!("{}: {e:#}", esc(p))),
@@ -398,8 +390,8 @@ pub fn compare(
                         k.to_string(),
                         (*pa).clone(),
                         (*pb).clone(),
-                        ra.get("rmse").to_string(),
-                        rb.get("rmse").to_string(),
+                        ra.get(cols::RMSE).to_string(),
+                        rb.get(cols::RMSE).to_string(),
                     ));
                 }
             }
@@ -520,8 +512,7 @@ mod tests {
         }
         // GPU over lavapipe: 20 / 0.5 = 40× for depth_peel, 1.0 / 0.1 = 10× for the floor.
         assert!(
-            c.html
-                .contains("<td>depth_peel (max_layers=8)</td><td>40.000×"),
+            c.html.contains("<td>depth_peel</td><td>40.000×"),
             "{}",
             c.html
         );
@@ -562,7 +553,7 @@ mod tests {
         );
         let mut one = runs.clone();
         one.rows
-            .retain(|r| r.get("adapter") == "GPU" && r.get("backend") == "vulkan");
+            .retain(|r| r.get(cols::ADAPTER) == "GPU" && r.get(cols::BACKEND) == "vulkan");
         assert!(compare(&one, &d, &d.join("report"), None)
             .unwrap()
             .is_none());

@@ -1,34 +1,78 @@
-//! The report page: run metadata, figures, a per-row summary, and every skipped/failed row.
+//! The report page: run metadata, the summary (the same text as `summary_text`), flagged points,
+//! figures and tables per study, FLIP images, every row, and every skipped/failed row.
 
+use schema::cols;
 use std::fmt::Write;
 
 use crate::charts::Figure;
 use crate::data::{Rec, Runs};
+use crate::labels::scene_name;
+use crate::studies::methods::time_cell;
 
-fn esc(s: &str) -> String {
+pub fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
 }
 
-pub fn page(runs: &Runs, sections: &[(String, Vec<Figure>)], extra_html: &str) -> String {
+/// A number in three significant digits (no trailing zeros), `e` notation outside
+/// [0.001, 100000); "" when absent.
+pub fn short(v: Option<f64>) -> String {
+    let Some(x) = v else { return String::new() };
+    if x == 0.0 {
+        return "0".into();
+    }
+    if x.is_nan() {
+        return "nan".into();
+    }
+    if x.is_infinite() {
+        return if x > 0.0 { "inf" } else { "-inf" }.into();
+    }
+    let a = x.abs();
+    if !(1e-3..1e5).contains(&a) {
+        let s = format!("{x:.2e}");
+        let (m, e) = s.split_once('e').expect("exponent form");
+        return format!("{}e{e}", trim(m));
+    }
+    let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
+    trim(&format!("{x:.decimals$}"))
+}
+
+fn trim(s: &str) -> String {
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s.to_string()
+    }
+}
+
+const STYLE: &str = "body{font-family:sans-serif;max-width:1400px;margin:2em auto;color:#222;padding:0 1em}\
+table{border-collapse:collapse;margin:1em 0;font-size:13px}td,th{border:1px solid #ccc;padding:3px 7px;text-align:left}\
+th{background:#f3f3f3}caption{text-align:left;color:#555;padding:4px 0}figure{margin:1.5em 0}\
+img{max-width:100%;border:1px solid #ddd}figcaption{color:#555;font-size:13px;max-width:1100px}\
+.failed{color:#b00}.skipped{color:#a60}tr.flagged td{background:#fff6e6}tr.floor td{color:#666;font-style:italic}\
+p.note{color:#555;font-size:14px;margin:.4em 0}pre.summary{white-space:pre-wrap;background:#f7f7f7;border:1px solid #ddd;padding:1em;font-size:13px}\
+.flip td{vertical-align:top}.flip img{width:256px;image-rendering:pixelated}";
+
+pub fn page(
+    runs: &Runs,
+    sections: &[(String, Vec<Figure>)],
+    extra_html: &str,
+    flip_html: &str,
+) -> String {
     let mut h = String::new();
     let _ = write!(
         h,
-        "<!doctype html><html><head><meta charset=\"utf-8\"><title>mfx report</title><style>\
-         body{{font-family:sans-serif;max-width:1300px;margin:2em auto;color:#222}}\
-         table{{border-collapse:collapse;margin:1em 0;font-size:13px}}td,th{{border:1px solid #ccc;padding:3px 7px;text-align:left}}\
-         th{{background:#f3f3f3}}figure{{margin:1.5em 0}}img{{max-width:100%;border:1px solid #ddd}}figcaption{{color:#555;font-size:13px}}\
-         .failed{{color:#b00}}.skipped{{color:#a60}}</style></head><body><h1>mfx report</h1>"
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>mfx report</title><style>{STYLE}</style></head><body><h1>mfx report</h1>"
     );
     // Metadata: one line per distinct machine/run.
     h.push_str("<h2>Runs</h2><table id=\"runs\"><tr><th>run_id</th><th>suite</th><th>git_rev</th><th>adapter</th><th>backend</th><th>device type</th><th>driver</th><th>rows ok / skipped / failed</th></tr>");
     let mut keys: Vec<(String, String)> = Vec::new();
     for r in &runs.rows {
         let k = (
-            r.get("run_id").to_string(),
-            r.get("adapter").to_string() + r.get("backend"),
+            r.get(cols::RUN_ID).to_string(),
+            r.get(cols::ADAPTER).to_string() + r.get(cols::BACKEND),
         );
         if !keys.contains(&k) {
             keys.push(k);
@@ -39,88 +83,183 @@ pub fn page(runs: &Runs, sections: &[(String, Vec<Figure>)], extra_html: &str) -
             .rows
             .iter()
             .filter(|r| {
-                r.get("run_id") == run && format!("{}{}", r.get("adapter"), r.get("backend")) == *ad
+                r.get(cols::RUN_ID) == run
+                    && format!("{}{}", r.get(cols::ADAPTER), r.get(cols::BACKEND)) == *ad
             })
             .collect();
         let f = rs[0];
-        let count = |s: &str| rs.iter().filter(|r| r.get("status") == s).count();
+        let count = |s: &str| rs.iter().filter(|r| r.get(cols::STATUS) == s).count();
         let _ = write!(
             h,
             "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} {}</td><td>{} / {} / {}</td></tr>",
             esc(run),
-            esc(f.get("suite")),
-            esc(f.get("git_rev")),
-            esc(f.get("adapter")),
-            esc(f.get("backend")),
-            esc(f.get("device_type")),
-            esc(f.get("driver")),
-            esc(f.get("driver_info")),
+            esc(f.get(cols::SUITE)),
+            esc(f.get(cols::GIT_REV)),
+            esc(f.get(cols::ADAPTER)),
+            esc(f.get(cols::BACKEND)),
+            esc(f.get(cols::DEVICE_TYPE)),
+            esc(f.get(cols::DRIVER)),
+            esc(f.get(cols::DRIVER_INFO)),
             count("ok"),
             count("skipped"),
             count("failed")
         );
     }
     h.push_str("</table>");
-    for (title, figs) in sections {
-        let _ = write!(h, "<h2>{}</h2>", esc(title));
+    // What the run found: the same text `mfx sweep` prints at its end.
+    let _ = write!(
+        h,
+        "<section id=\"summary\"><pre class=\"summary\">{}</pre></section>",
+        esc(&crate::summary::summary_text(runs))
+    );
+    if !sections.is_empty() {
+        h.push_str("<h2>Contents</h2><ul>");
+        for (i, (title, _)) in sections.iter().enumerate() {
+            let _ = write!(h, "<li><a href=\"#s{i}\">{}</a></li>", esc(title));
+        }
+        h.push_str("<li><a href=\"#flip\">FLIP: the worst points</a></li><li><a href=\"#flagged-points\">Flagged points</a></li><li><a href=\"#rows\">Rows</a></li></ul>");
+    }
+    for (i, (title, figs)) in sections.iter().enumerate() {
+        let _ = write!(h, "<h2 id=\"s{i}\">{}</h2>", esc(title));
         for f in figs {
-            // The page shows the SVG (vector, small enough to commit with reference runs); the
-            // PNG beside it is for slides and is not tracked under results/reference/.
-            let _ = write!(
-                h,
-                "<figure><img src=\"{0}.svg\" alt=\"{1}\"><figcaption>{1}. {2} (<a href=\"{0}.png\">PNG</a>)</figcaption></figure>",
-                esc(&f.stem),
-                esc(&f.title),
-                esc(&f.caption)
-            );
+            if let Some(n) = &f.note {
+                let _ = write!(
+                    h,
+                    "<p class=\"note\"><b>{}</b>: {}</p>",
+                    esc(&f.title),
+                    esc(n)
+                );
+            } else if let Some(block) = &f.html {
+                let _ = write!(h, "<h3>{}</h3>{block}", esc(&f.title));
+            } else {
+                // The page shows the SVG (vector, small enough to commit with reference runs);
+                // the PNG beside it is for slides and is not tracked under results/reference/.
+                let _ = write!(
+                    h,
+                    "<figure><img src=\"{0}.svg\" alt=\"{1}\"><figcaption>{1}. {2} (<a href=\"{0}.png\">PNG</a>)</figcaption></figure>",
+                    esc(&f.stem),
+                    esc(&f.title),
+                    esc(&f.caption)
+                );
+            }
         }
     }
     h.push_str(extra_html);
-    // Summary of ok rows.
-    h.push_str("<h2>Rows</h2><table id=\"rows\"><tr><th>adapter (backend)</th><th>study</th><th>scene</th><th>resolution</th><th>method</th><th>axes</th><th>GPU ms (median)</th><th>× floor</th><th>speedup vs depth_peel</th><th>RMSE</th><th>max abs err</th><th>flag</th></tr>");
-    for r in runs.rows.iter().filter(|r| r.ok()) {
-        let _ = write!(
-            h,
-            "<tr><td>{} ({})</td><td>{}</td><td>{}</td><td>{}x{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-            esc(r.get("adapter")),
-            esc(r.get("backend")),
-            esc(r.get("study")),
-            esc(r.get("scene_label")),
-            r.get("width"),
-            r.get("height"),
-            esc(r.get("method")),
-            esc(r.get("point_key").rsplit('|').next().unwrap_or("")),
-            short(r.f("gpu_ms_median")),
-            short(r.f("x_floor")),
-            short(r.f("speedup_vs_depth_peel")),
-            short(r.f("rmse")),
-            short(r.f("max_abs_err")),
-            esc(r.get("flag"))
-        );
-    }
-    h.push_str("</table>");
+    h.push_str(flip_html);
+    flagged_table(&mut h, runs);
+    rows_table(&mut h, runs);
     let bad: Vec<&Rec> = runs.rows.iter().filter(|r| !r.ok()).collect();
     let _ = write!(h, "<h2>Skipped and failed rows ({})</h2><table id=\"notok\"><tr><th>status</th><th>point</th><th>reason</th></tr>", bad.len());
     for r in bad {
         let _ = write!(
             h,
             "<tr class=\"{0}\"><td>{0}</td><td>{1}</td><td>{2}</td></tr>",
-            esc(r.get("status")),
-            esc(r.get("point_key")),
-            esc(r.get("reason"))
+            esc(r.get(cols::STATUS)),
+            esc(r.get(cols::POINT_KEY)),
+            esc(r.get(cols::REASON))
         );
     }
     h.push_str("</table></body></html>\n");
     h
 }
 
-fn short(v: Option<f64>) -> String {
-    match v {
-        None => String::new(),
-        Some(0.0) => "0".into(),
-        Some(x) if x.is_infinite() => "inf".into(),
-        Some(x) if x.abs() >= 100.0 => format!("{x:.0}"),
-        Some(x) if x.abs() >= 0.01 => format!("{x:.3}"),
-        Some(x) => format!("{x:.2e}"),
+/// Every flagged ok row, with its flags and notes.
+fn flagged_table(h: &mut String, runs: &Runs) {
+    let rows: Vec<&Rec> = runs.rows.iter().filter(|r| r.ok() && r.flagged()).collect();
+    let _ = write!(
+        h,
+        "<h2 id=\"flagged-points\">Flagged points ({})</h2>",
+        rows.len()
+    );
+    if rows.is_empty() {
+        h.push_str("<p class=\"note\">No ok row carries a flag.</p>");
+        return;
+    }
+    h.push_str("<p class=\"note\">A flag names a known failure mode the harness detected (overflow, hazard, collision, precision, lost_coplanar, fragments_differ, timestamps_incomplete, noisy, throttled); these points are drawn hollow in the charts.</p>\
+        <table id=\"flagged\"><tr><th>flag</th><th>study</th><th>scene</th><th>resolution</th><th>point</th><th>GPU ms</th><th>RMSE</th><th>notes</th></tr>");
+    for r in rows {
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}x{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(&r.flags().join(", ")),
+            esc(r.get(cols::STUDY)),
+            esc(&scene_name(r.get(cols::SCENE_LABEL))),
+            r.get(cols::WIDTH),
+            r.get(cols::HEIGHT),
+            esc(r.get(cols::POINT_KEY).rsplit('|').take(2).collect::<Vec<_>>().into_iter().rev().collect::<Vec<_>>().join(" ").as_str()),
+            time_cell(r),
+            short(r.f(cols::RMSE)),
+            esc(r.get(cols::NOTES))
+        );
+    }
+    h.push_str("</table>");
+}
+
+fn rows_table(h: &mut String, runs: &Runs) {
+    let flip = runs.has(cols::FLIP_MEAN);
+    let _ = write!(
+        h,
+        "<h2>Rows</h2><table id=\"rows\"><tr><th>adapter (backend)</th><th>study</th><th>scene</th><th>resolution</th><th>method</th><th>axes</th>\
+         <th>GPU ms (95 % CI)</th><th>× floor</th><th>bytes/px</th><th>RMSE</th>{}<th>max abs err</th><th>exact</th><th>flag</th></tr>",
+        if flip { "<th>FLIP mean</th><th>FLIP p99</th>" } else { "" }
+    );
+    for r in runs.rows.iter().filter(|r| r.ok()) {
+        let _ = write!(
+            h,
+            "<tr><td>{} ({})</td><td>{}</td><td>{}</td><td>{}x{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>{}<td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(r.get(cols::ADAPTER)),
+            esc(r.get(cols::BACKEND)),
+            esc(r.get(cols::STUDY)),
+            esc(r.get(cols::SCENE_LABEL)),
+            r.get(cols::WIDTH),
+            r.get(cols::HEIGHT),
+            esc(r.get(cols::METHOD)),
+            esc(r.get(cols::POINT_KEY).rsplit('|').next().unwrap_or("")),
+            time_cell(r),
+            short(r.f(cols::X_FLOOR)),
+            short(r.bytes_per_pixel()),
+            short(r.f(cols::RMSE)),
+            if flip {
+                format!("<td>{}</td><td>{}</td>", short(r.f(cols::FLIP_MEAN)), short(r.f(cols::FLIP_P99)))
+            } else {
+                String::new()
+            },
+            short(r.f(cols::MAX_ABS_ERR)),
+            match r.exact_result() {
+                Some(true) => "yes",
+                Some(false) => "no",
+                None => "",
+            },
+            esc(&r.flags().join(", "))
+        );
+    }
+    h.push_str("</table>");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::short;
+
+    #[test]
+    fn numbers_keep_three_significant_digits() {
+        let v: Vec<String> = [
+            0.0,
+            10.0,
+            1.0,
+            0.25,
+            12.345,
+            1234.6,
+            5e-4,
+            1.234e-6,
+            2.5e7,
+            f64::INFINITY,
+        ]
+        .iter()
+        .map(|x| short(Some(*x)))
+        .collect();
+        assert_eq!(
+            v,
+            ["0", "10", "1", "0.25", "12.3", "1235", "5e-4", "1.23e-6", "2.5e7", "inf"]
+        );
     }
 }

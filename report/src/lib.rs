@@ -1,19 +1,26 @@
 //! CSV → plots → HTML. Never touches a GPU: a report can be built from CSVs made on other
 //! machines, merged, or years old. `build(dir)` reads `dir/runs.csv` and writes
-//! `dir/report/index.html` with PNG and SVG figures beside it.
+//! `dir/report/index.html` with PNG and SVG figures (and their layout records) beside it;
+//! `summary_text` is the run's findings as text (the page's summary section, and what
+//! `mfx sweep` prints at its end).
 
 pub mod ab;
 pub mod charts;
 pub mod compare;
 pub mod data;
+pub mod flip;
 pub mod html;
+pub mod labels;
+pub mod pareto;
 pub mod studies;
+pub mod summary;
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
 pub use data::{Rec, Runs};
+pub use summary::summary_text;
 
 /// Builds the report of a run folder; returns the page's path.
 pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
@@ -21,6 +28,7 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
     let runs = Runs::load(&csv)?;
     let out = dir.join("report");
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    clear_charts(&out)?;
     // Each study's figures read one platform's rows: a merged CSV (several adapters or backends)
     // gets one set per platform, in its own subfolder, so no chart mixes two machines' rows.
     let plats = compare::platforms(&runs);
@@ -38,7 +46,9 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
                 let figs = figs
                     .into_iter()
                     .map(|mut f| {
-                        f.stem = format!("{sub}/{}", f.stem);
+                        if f.is_chart() {
+                            f.stem = format!("{sub}/{}", f.stem);
+                        }
                         f.title = format!("{} [{p}]", f.title);
                         f
                     })
@@ -53,8 +63,27 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
         sections.push(("Adapters and backends".to_string(), c.figures));
         extra = c.html;
     }
-    let page = html::page(&runs, &sections, &extra);
+    let flip = flip::section(dir, &out)?;
+    let page = html::page(&runs, &sections, &extra, &flip);
     let path = out.join("index.html");
     std::fs::write(&path, page).with_context(|| format!("writing {}", path.display()))?;
     Ok(path)
+}
+
+/// Removes the charts an earlier build left in the report folder (names change when a chart's
+/// rules do), so the folder holds only what this build drew. Only chart files are touched.
+fn clear_charts(out: &Path) -> Result<()> {
+    for e in std::fs::read_dir(out).with_context(|| format!("reading {}", out.display()))? {
+        let p = e?.path();
+        let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        if p.is_dir() && name.starts_with("platform") {
+            clear_charts(&p)?;
+        } else if [".png", ".svg", ".layout.json"]
+            .iter()
+            .any(|x| name.ends_with(x))
+        {
+            std::fs::remove_file(&p).with_context(|| format!("removing {}", p.display()))?;
+        }
+    }
+    Ok(())
 }

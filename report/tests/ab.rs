@@ -258,7 +258,7 @@ fn moved_errors_are_listed_and_rounding_is_not() {
     );
     let r = compare_runs(&a, &c, &AbOptions::default()).unwrap();
     assert_eq!(r.errors.len(), POINTS);
-    assert!(r.errors.iter().all(|e| e.column == "rmse"));
+    assert!(r.errors.iter().all(|e| e.column == schema::cols::RMSE));
     assert!(r.markdown().contains("Errors that moved (6)"));
 }
 

@@ -95,6 +95,10 @@ pub mod cols {
     pub const HEIGHT: Col = Col::new("height", "render target height in pixels");
     pub const REPS: Col = Col::new("reps", "timed repetitions per point");
     pub const WARMUP: Col = Col::new("warmup", "untimed warm-up frames before the timed ones");
+    pub const ORDER_SEED: Col = Col::new(
+        "order_seed",
+        "seed of the seeded random order in which the points of a group were measured (empty: suite order)",
+    );
 
     // ---- What was measured: scene, method, outcome ----
     pub const SCENE: Col = Col::new("scene", "scene generator name");
@@ -135,7 +139,7 @@ pub mod cols {
     );
     pub const FLAG: Col = Col::new(
         "flag",
-        "a known, reported failure mode: overflow, collision, lost_coplanar, precision, hazard (empty if none)",
+        "known failure modes of this row, |-joined: overflow, hazard, collision, precision, lost_coplanar, fragments_differ, timestamps_incomplete, noisy, throttled (empty if none; each is defined in results/README.md)",
     );
 
     // ---- Sweep axes shared by several methods (empty where an axis does not apply) ----
@@ -190,6 +194,30 @@ pub mod cols {
     pub const SMALL_MAX: Col = Col::new(
         "small_max",
         "compute_abuffer: largest triangle bounding box (pixels) one thread rasterises; larger ones are shared by workgroups",
+    );
+    pub const TRANSFORM: Col = Col::new(
+        "transform",
+        "compute_abuffer: vertex (every vertex transformed once into a 16 B-per-vertex clip buffer) | triangle (each triangle's corners transformed in every kernel)",
+    );
+    pub const COVERAGE: Col = Col::new(
+        "coverage",
+        "compute_abuffer: stepped (exact integer edge functions stepped pixel to pixel; big triangles' tiles classified empty/full/partial) | direct (three exact 64-bit products per bounding-box pixel)",
+    );
+    pub const RESOLVE_SORT: Col = Col::new(
+        "resolve_sort",
+        "compute_abuffer: workgroup (lists of up to 32 fragments sorted in workgroup memory) | private (every list in a per-thread array)",
+    );
+    pub const POOL: Col = Col::new(
+        "pool",
+        "linked_list: counted (one sub-pool per 8×8-pixel tile, sized by a prepare-time count) | fixed (layers × pixels nodes, one cursor)",
+    );
+    pub const POOL_SLACK: Col = Col::new(
+        "pool_slack",
+        "linked_list, counted pool: spare nodes per tile, percent of its prepare-time count",
+    );
+    pub const NODE: Col = Col::new(
+        "node",
+        "linked_list: compact (12 B: depth, primitive, next; attributes re-derived from the primitive) | full (32 B: colour, depths, object id, next)",
     );
 
     // ---- Effect parameters (axes of the effects fold) ----
@@ -525,13 +553,72 @@ pub mod cols {
     // ---- Measurements ----
     pub const GPU_MS_MEDIAN: Col = Col::new(
         "gpu_ms_median",
-        "median GPU time per frame in ms: sum of the frame's timestamped passes",
+        "median GPU time per frame in ms (sum of the frame's timestamped passes) over the kept samples",
     );
-    pub const GPU_MS_MIN: Col = Col::new("gpu_ms_min", "minimum GPU time per frame, ms");
-    pub const GPU_MS_MAX: Col = Col::new("gpu_ms_max", "maximum GPU time per frame, ms");
+    pub const GPU_MS_MIN: Col = Col::new(
+        "gpu_ms_min",
+        "minimum GPU time per frame over the kept samples, ms",
+    );
+    pub const GPU_MS_MAX: Col = Col::new(
+        "gpu_ms_max",
+        "maximum GPU time per frame over the kept samples, ms",
+    );
     pub const GPU_MS_REL_NOISE: Col = Col::new(
         "gpu_ms_rel_noise",
-        "relative spread of GPU time: (p90 − p10) / median",
+        "within-run spread of GPU time: (p90 − p10) / median of the kept samples (it says nothing of run-to-run spread: see gpu_ms_rel_ci and mfx compare)",
+    );
+    pub const GPU_MS_MEAN: Col = Col::new(
+        "gpu_ms_mean",
+        "mean GPU time per frame over the kept samples, ms",
+    );
+    pub const GPU_MS_CI_LO: Col = Col::new(
+        "gpu_ms_ci_lo",
+        "lower end of the bootstrap 95 % confidence interval of the median GPU time, ms",
+    );
+    pub const GPU_MS_CI_HI: Col = Col::new(
+        "gpu_ms_ci_hi",
+        "upper end of the bootstrap 95 % confidence interval of the median GPU time, ms",
+    );
+    pub const GPU_MS_MEAN_CI_LO: Col = Col::new(
+        "gpu_ms_mean_ci_lo",
+        "lower end of the bootstrap 95 % confidence interval of the mean GPU time, ms",
+    );
+    pub const GPU_MS_MEAN_CI_HI: Col = Col::new(
+        "gpu_ms_mean_ci_hi",
+        "upper end of the bootstrap 95 % confidence interval of the mean GPU time, ms",
+    );
+    pub const GPU_MS_REL_CI: Col = Col::new(
+        "gpu_ms_rel_ci",
+        "half-width of the median's bootstrap 95 % confidence interval over the median",
+    );
+    pub const GPU_MS_OUTLIERS: Col = Col::new(
+        "gpu_ms_outliers",
+        "samples outside Tukey's fences (1.5 IQR beyond the quartiles); kept, counted",
+    );
+    pub const SAMPLES: Col = Col::new("samples", "timed samples kept (throttled ones excluded)");
+    pub const SAMPLES_DISCARDED: Col = Col::new(
+        "samples_discarded",
+        "timed samples discarded because the SM clock was below 75 % of the reference clock (nvbench's rule)",
+    );
+    pub const WARMUP_FRAMES: Col = Col::new(
+        "warmup_frames",
+        "untimed frames run before the first sample, until frame times and the SM clock were steady",
+    );
+    pub const MEASURE_MS: Col = Col::new(
+        "measure_ms",
+        "wall-clock ms spent on warm-up and samples of this point",
+    );
+    pub const TARGET_REACHED: Col = Col::new(
+        "target_reached",
+        "true if the stopping rule met its noise target (false: max samples/time or drift; the row is flagged noisy)",
+    );
+    pub const STOP_REASON: Col = Col::new(
+        "stop_reason",
+        "why sampling stopped: target_reached, max_samples, max_time, no_improvement (the two halves of the samples differ: drift)",
+    );
+    pub const GPU_WALL_RATIO: Col = Col::new(
+        "gpu_wall_ratio",
+        "gpu_ms_median / cpu_ms_median: the share of the frame's wall-clock time that timestamps account for",
     );
     pub const CPU_MS_MEDIAN: Col = Col::new(
         "cpu_ms_median",
@@ -539,6 +626,38 @@ pub mod cols {
     );
     pub const CPU_MS_MIN: Col = Col::new("cpu_ms_min", "minimum wall-clock time per frame, ms");
     pub const CPU_MS_MAX: Col = Col::new("cpu_ms_max", "maximum wall-clock time per frame, ms");
+    pub const SM_CLOCK_MHZ_MEAN: Col = Col::new(
+        "sm_clock_mhz_mean",
+        "mean SM clock over the kept samples (NVML), MHz",
+    );
+    pub const SM_CLOCK_MHZ_MIN: Col = Col::new(
+        "sm_clock_mhz_min",
+        "lowest SM clock read during the point, MHz",
+    );
+    pub const SM_CLOCK_MHZ_MAX: Col = Col::new(
+        "sm_clock_mhz_max",
+        "highest SM clock read during the point, MHz",
+    );
+    pub const MEM_CLOCK_MHZ_MEAN: Col = Col::new(
+        "mem_clock_mhz_mean",
+        "mean memory clock over the kept samples, MHz",
+    );
+    pub const GPU_TEMP_C_MAX: Col = Col::new(
+        "gpu_temp_c_max",
+        "highest GPU temperature read during the point, °C",
+    );
+    pub const GPU_POWER_W_MEAN: Col = Col::new(
+        "gpu_power_w_mean",
+        "mean board power over the kept samples, W",
+    );
+    pub const THROTTLE_REASONS: Col = Col::new(
+        "throttle_reasons",
+        "NVML clock-throttle reasons seen during the point, |-joined (empty: none)",
+    );
+    pub const CLOCK_SOURCE: Col = Col::new(
+        "clock_source",
+        "nvml, or none: <why no clock was read> (then the clock columns are empty)",
+    );
     pub const PASS_MS: Col = Col::new(
         "pass_ms",
         "median GPU ms per pass label, JSON object (e.g. {\"peel\":1.2,\"composite\":0.1})",
@@ -555,6 +674,15 @@ pub mod cols {
         "bytes_allocated",
         "bytes of buffers and textures the method allocated (scene buffers excluded)",
     );
+    pub const BYTES_PER_PIXEL: Col = Col::new("bytes_per_pixel", "bytes_allocated / pixels");
+    pub const BYTES_OVERHEAD: Col = Col::new(
+        "bytes_overhead",
+        "of bytes_allocated, the per-pixel structures (heads, offsets, counters, output image) where the method reports them",
+    );
+    pub const FRAGMENT_BYTES_RATIO: Col = Col::new(
+        "fragment_bytes_ratio",
+        "(bytes_allocated − bytes_overhead) / bytes_true_fragments: fragment storage over what the true fragments need",
+    );
     pub const BYTES_TRUE_FRAGMENTS: Col = Col::new(
         "bytes_true_fragments",
         "bytes the scene's true fragments need: true_fragments × 8 (RGBA8 + f32 depth)",
@@ -563,25 +691,29 @@ pub mod cols {
         "x_floor",
         "gpu_ms_median over the floor_depth gpu_ms_median of the same scene, resolution and run",
     );
+    pub const X_BLEND: Col = Col::new(
+        "x_blend",
+        "gpu_ms_median over the floor_blend gpu_ms_median (unordered hardware blending of every fragment) of the same scene, resolution and run",
+    );
     pub const SPEEDUP_VS_DEPTH_PEEL: Col = Col::new(
         "speedup_vs_depth_peel",
         "depth_peel gpu_ms_median over this row's, same scene, resolution and run",
     );
     pub const RMSE: Col = Col::new(
         "rmse",
-        "root-mean-square error of the premultiplied RGBA image vs the CPU reference",
+        "root-mean-square error of the image vs the ground truth: the same effect over every fragment (f64 CPU reference)",
     );
     pub const PSNR_DB: Col = Col::new(
         "psnr_db",
-        "peak signal-to-noise ratio (peak 1) vs the CPU reference, dB (inf when identical)",
+        "peak signal-to-noise ratio (peak 1) vs the ground truth, dB (inf when identical)",
     );
     pub const MAX_ABS_ERR: Col = Col::new(
         "max_abs_err",
-        "largest absolute channel error vs the CPU reference",
+        "largest absolute channel error vs the ground truth",
     );
     pub const BAD_PIXEL_FRAC: Col = Col::new(
         "bad_pixel_frac",
-        "fraction of pixels with any channel error above bad_pixel_tol",
+        "fraction of pixels with any channel error above bad_pixel_tol vs the ground truth",
     );
     pub const BAD_PIXEL_TOL: Col = Col::new(
         "bad_pixel_tol",
@@ -590,6 +722,40 @@ pub mod cols {
     pub const NON_FINITE: Col = Col::new(
         "non_finite",
         "NaN/Inf channels in the output (never hidden: they also make the pixel bad)",
+    );
+    pub const MATCHES_TRUTH: Col = Col::new(
+        "matches_truth",
+        "true when the image equals the ground truth within bad_pixel_tol at every pixel and nothing is non-finite: the only sense in which a row is drawn as exact",
+    );
+    pub const RMSE_VS_K: Col = Col::new(
+        "rmse_vs_k",
+        "methods that keep k fragments per pixel: RMSE vs the same effect over the k nearest (or first) fragments, i.e. fidelity to the method's own truncated definition (empty for methods that keep everything)",
+    );
+    pub const PSNR_DB_VS_K: Col =
+        Col::new("psnr_db_vs_k", "as psnr_db, vs the k-truncated reference");
+    pub const MAX_ABS_ERR_VS_K: Col = Col::new(
+        "max_abs_err_vs_k",
+        "as max_abs_err, vs the k-truncated reference",
+    );
+    pub const BAD_PIXEL_FRAC_VS_K: Col = Col::new(
+        "bad_pixel_frac_vs_k",
+        "as bad_pixel_frac, vs the k-truncated reference",
+    );
+    pub const FLIP_MEAN: Col = Col::new(
+        "flip_mean",
+        "mean FLIP error (NVIDIA LDR-FLIP, 67 pixels per degree) of the image composited over white vs the ground truth composited the same way; 0 = identical, 1 = maximal",
+    );
+    pub const FLIP_P99: Col = Col::new(
+        "flip_p99",
+        "99th percentile over pixels of the FLIP error map",
+    );
+    pub const FRAGMENTS_MISSING: Col = Col::new(
+        "fragments_missing",
+        "exact methods: true fragments the capture lacks, summed over pixels",
+    );
+    pub const FRAGMENTS_EXTRA: Col = Col::new(
+        "fragments_extra",
+        "exact methods: fragments the capture has beyond the true ones, summed over pixels",
     );
     pub const LAYER_COUNT_ACCURACY: Col = Col::new(
         "layer_count_accuracy",
@@ -658,6 +824,7 @@ pub const GROUPS: &[Group] = &[
             cols::HEIGHT,
             cols::REPS,
             cols::WARMUP,
+            cols::ORDER_SEED,
         ],
     },
     Group {
@@ -696,6 +863,12 @@ pub const GROUPS: &[Group] = &[
             cols::BUCKET_PAIRING,
             cols::HIST_BINS,
             cols::SMALL_MAX,
+            cols::TRANSFORM,
+            cols::COVERAGE,
+            cols::RESOLVE_SORT,
+            cols::POOL,
+            cols::POOL_SLACK,
+            cols::NODE,
         ],
     },
     Group {
@@ -826,15 +999,41 @@ pub const GROUPS: &[Group] = &[
             cols::GPU_MS_MIN,
             cols::GPU_MS_MAX,
             cols::GPU_MS_REL_NOISE,
+            cols::GPU_MS_MEAN,
+            cols::GPU_MS_CI_LO,
+            cols::GPU_MS_CI_HI,
+            cols::GPU_MS_MEAN_CI_LO,
+            cols::GPU_MS_MEAN_CI_HI,
+            cols::GPU_MS_REL_CI,
+            cols::GPU_MS_OUTLIERS,
+            cols::SAMPLES,
+            cols::SAMPLES_DISCARDED,
+            cols::WARMUP_FRAMES,
+            cols::MEASURE_MS,
+            cols::TARGET_REACHED,
+            cols::STOP_REASON,
+            cols::GPU_WALL_RATIO,
             cols::CPU_MS_MEDIAN,
             cols::CPU_MS_MIN,
             cols::CPU_MS_MAX,
+            cols::SM_CLOCK_MHZ_MEAN,
+            cols::SM_CLOCK_MHZ_MIN,
+            cols::SM_CLOCK_MHZ_MAX,
+            cols::MEM_CLOCK_MHZ_MEAN,
+            cols::GPU_TEMP_C_MAX,
+            cols::GPU_POWER_W_MEAN,
+            cols::THROTTLE_REASONS,
+            cols::CLOCK_SOURCE,
             cols::PASS_MS,
             cols::GEOMETRY_PASSES,
             cols::LAYERS_CAPTURED_MAX,
             cols::BYTES_ALLOCATED,
+            cols::BYTES_PER_PIXEL,
+            cols::BYTES_OVERHEAD,
+            cols::FRAGMENT_BYTES_RATIO,
             cols::BYTES_TRUE_FRAGMENTS,
             cols::X_FLOOR,
+            cols::X_BLEND,
             cols::SPEEDUP_VS_DEPTH_PEEL,
             cols::RMSE,
             cols::PSNR_DB,
@@ -842,6 +1041,15 @@ pub const GROUPS: &[Group] = &[
             cols::BAD_PIXEL_FRAC,
             cols::BAD_PIXEL_TOL,
             cols::NON_FINITE,
+            cols::MATCHES_TRUTH,
+            cols::RMSE_VS_K,
+            cols::PSNR_DB_VS_K,
+            cols::MAX_ABS_ERR_VS_K,
+            cols::BAD_PIXEL_FRAC_VS_K,
+            cols::FLIP_MEAN,
+            cols::FLIP_P99,
+            cols::FRAGMENTS_MISSING,
+            cols::FRAGMENTS_EXTRA,
             cols::LAYER_COUNT_ACCURACY,
             cols::HAZARD_RATE,
             cols::COLLISION_RATE,
@@ -855,6 +1063,83 @@ pub const GROUPS: &[Group] = &[
         ],
     },
 ];
+
+/// `samples.csv`, beside `runs.csv`: one row per timed sample (long format), so anyone can
+/// re-analyse a run. A separate file with its own columns: not part of [`GROUPS`].
+pub mod samples {
+    use super::Col;
+    pub const POINT_KEY: Col = Col::new("point_key", "the sample's point (runs.csv point_key)");
+    pub const RUN_ID: Col = Col::new("run_id", "the run (runs.csv run_id)");
+    pub const ADAPTER: Col = Col::new("adapter", "adapter name");
+    pub const SAMPLE: Col = Col::new(
+        "sample",
+        "index of the sample within its point, from 0 (warm-up frames excluded)",
+    );
+    pub const GPU_MS: Col = Col::new(
+        "gpu_ms",
+        "GPU time of the frame: sum of its timestamped passes, ms",
+    );
+    pub const CPU_MS: Col = Col::new(
+        "cpu_ms",
+        "wall-clock time of the frame from first encode to GPU idle, ms",
+    );
+    pub const SM_CLOCK_MHZ: Col = Col::new(
+        "sm_clock_mhz",
+        "SM clock read right after the frame (NVML), MHz; empty without NVML",
+    );
+    pub const MEM_CLOCK_MHZ: Col = Col::new(
+        "mem_clock_mhz",
+        "memory clock read right after the frame, MHz; empty without NVML",
+    );
+    pub const DISCARDED: Col = Col::new(
+        "discarded",
+        "true if the sample was dropped (SM clock below 75 % of the reference: throttled)",
+    );
+    pub const ORDER: Col = Col::new(
+        "order",
+        "position of the frame in the group's measurement order (interleaved runs mix points)",
+    );
+    /// The header of `samples.csv`.
+    pub const ALL: &[Col] = &[
+        POINT_KEY,
+        RUN_ID,
+        ADAPTER,
+        SAMPLE,
+        GPU_MS,
+        CPU_MS,
+        SM_CLOCK_MHZ,
+        MEM_CLOCK_MHZ,
+        DISCARDED,
+        ORDER,
+    ];
+}
+
+/// `flip/worst.csv`: the run's worst image rows by FLIP mean, with the PNGs beside it (paths
+/// relative to the run folder). Written by the sweep, read by the report.
+pub mod flip_worst {
+    use super::Col;
+    pub const RANK: Col = Col::new("rank", "1 = the largest flip_mean of the run");
+    pub const POINT_KEY: Col = Col::new("point_key", "the row's point (runs.csv point_key)");
+    pub const METHOD: Col = Col::new("method", "the row's method");
+    pub const SCENE_LABEL: Col = Col::new("scene_label", "the row's scene");
+    pub const FLIP_MEAN: Col = Col::new("flip_mean", "mean FLIP error vs the ground truth");
+    pub const FLIP_P99: Col = Col::new("flip_p99", "99th percentile of the FLIP map");
+    pub const METHOD_PNG: Col = Col::new("method_png", "the method's image over white");
+    pub const TRUTH_PNG: Col = Col::new("truth_png", "the ground truth over white");
+    pub const FLIP_PNG: Col = Col::new("flip_png", "the FLIP map in the magma colour map");
+    /// The header of `flip/worst.csv`.
+    pub const ALL: [Col; 9] = [
+        RANK,
+        POINT_KEY,
+        METHOD,
+        SCENE_LABEL,
+        FLIP_MEAN,
+        FLIP_P99,
+        METHOD_PNG,
+        TRUTH_PNG,
+        FLIP_PNG,
+    ];
+}
 
 /// Every column in file order.
 pub fn all() -> impl Iterator<Item = Col> {

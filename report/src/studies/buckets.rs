@@ -1,69 +1,94 @@
 //! Figures of the bucket methods (bdp, bdp2, adp) in the `methods` study: collision rate vs
-//! depth complexity, and collision rate vs GPU time (what each bucket configuration buys).
+//! depth complexity (per family of scenes), and collision rate vs GPU time (what each bucket
+//! configuration buys).
 
+use schema::cols;
 use std::path::Path;
 
 use anyhow::Result;
 
-use crate::charts::{Figure, XY};
+use super::methods::{ci_caption, config_series, scene_families, Styles};
+use crate::charts::{Figure, Pt, XY};
 use crate::data::{resolution, Rec, Runs};
-
-use super::methods::series_by_config;
+use crate::labels::{file_safe, scene_names, ConfigLabels};
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     // Only rows that report a collision rate: the bucket methods.
     let rows: Vec<&Rec> = runs
         .study("methods")
         .into_iter()
-        .filter(|r| r.ok() && r.f("collision_rate").is_some())
+        .filter(|r| r.ok() && r.f(cols::COLLISION_RATE).is_some())
         .collect();
+    let styles = Styles::new(
+        runs.study("methods")
+            .into_iter()
+            .filter(|r| r.ok() && !r.is_floor()),
+    );
     let mut figs = Vec::new();
     for (res, at_res) in Runs::group_by(rows.iter().copied(), resolution) {
-        for (generator, g) in Runs::group_by(at_res.iter().copied(), |r| r.get("scene").into()) {
-            let series = series_by_config(
-                &g,
-                |r| Some((r.f("depth_complexity_max")?, r.f("collision_rate")?)),
-                false,
-            );
-            if series.iter().map(|s| s.points.len()).sum::<usize>() < 2 {
+        let scenes = Runs::distinct(at_res.iter().copied(), cols::SCENE_LABEL);
+        for (family, members) in scene_families(&scenes) {
+            if members.len() < 2 {
                 continue;
             }
+            let g: Vec<&Rec> = at_res
+                .iter()
+                .copied()
+                .filter(|r| members.iter().any(|m| m == r.get(cols::SCENE_LABEL)))
+                .collect();
+            let labels = ConfigLabels::new(g.iter().copied());
             let xy = XY {
-                title: format!("Bucket collisions vs depth complexity — {generator}, {res}"),
+                title: format!("Bucket collisions vs depth complexity — {family}, {res}"),
                 x_label: "true max fragments per pixel".into(),
                 y_label: "collision rate (fraction of true fragments merged or lost)".into(),
                 log_x: true,
-                log_y: false,
                 lines: true,
-                series,
+                series: config_series(&g, &labels, &styles, |r| {
+                    Some(
+                        Pt::new(r.f(cols::DEPTH_COMPLEXITY_MAX)?, r.f(cols::COLLISION_RATE)?)
+                            .flagged(r.flagged()),
+                    )
+                }),
+                ..Default::default()
             };
             figs.push(xy.draw(
                 dir,
-                &format!("buckets_collisions_vs_layers_{generator}_{res}"),
-                "Exact counts: per pixel, GPU-rasterized fragments (untimed counter pass) minus fragments the method captured.",
+                &format!("buckets_collisions_vs_complexity_{}_{res}", file_safe(&family)),
+                &format!(
+                    "Scenes: {}. Exact counts: per pixel, GPU-rasterized fragments (untimed counter pass) minus fragments the method captured. {}",
+                    scene_names(&members).join("; "),
+                    labels.fixed_note()
+                ),
             )?);
         }
-        let series = series_by_config(
-            &at_res,
-            |r| Some((r.f("gpu_ms_median")?, r.f("collision_rate")?)),
-            false,
-        );
-        if !series.is_empty() {
-            let xy = XY {
-                title: format!("Bucket collisions vs GPU time — all scenes, {res}"),
-                x_label: "GPU time per frame [ms]".into(),
-                y_label: "collision rate".into(),
-                log_x: true,
-                log_y: false,
-                lines: false,
-                series,
-            };
-            figs.push(xy.draw(
-                dir,
-                &format!("buckets_collisions_vs_time_{res}"),
-                "One point per bucket configuration and scene: lower-left is better.",
-            )?);
-        }
+        let labels = ConfigLabels::new(at_res.iter().copied());
+        let xy = XY {
+            title: format!("Bucket collisions vs GPU time — all scenes, {res}"),
+            x_label: "GPU time per frame [ms]".into(),
+            y_label: "collision rate".into(),
+            log_x: true,
+            series: config_series(&at_res, &labels, &styles, |r| {
+                let (lo, hi) = r.gpu_ci().unzip();
+                Some(Pt {
+                    x: r.f(cols::GPU_MS_MEDIAN)?,
+                    y: r.f(cols::COLLISION_RATE)?,
+                    xlo: lo,
+                    xhi: hi,
+                    flagged: r.flagged(),
+                    ..Default::default()
+                })
+            }),
+            ..Default::default()
+        };
+        figs.push(xy.draw(
+            dir,
+            &format!("buckets_collisions_vs_time_{res}"),
+            &format!(
+                "One point per bucket configuration and scene: lower-left is better. {} {}",
+                ci_caption(runs),
+                labels.fixed_note()
+            ),
+        )?);
     }
     Ok(figs)
 }

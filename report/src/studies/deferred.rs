@@ -3,6 +3,7 @@
 //! over threads. The debug views (tiles coloured by classification id, lights-per-tile heat maps)
 //! are PNGs from `mfx shading-views`, not CSV figures.
 
+use schema::{cols, Col};
 use std::path::Path;
 
 use anyhow::Result;
@@ -11,7 +12,7 @@ use crate::charts::{Bars, Figure, Pt, Series, XY};
 use crate::data::{resolution, Rec, Runs};
 
 /// Axes that tell configurations of one path apart.
-pub const CONFIG_AXES: &[&str] = &["tile_size", "cull_levels", "thread_count"];
+pub const CONFIG_AXES: &[Col] = &[cols::TILE_SIZE, cols::CULL_LEVELS, cols::THREAD_COUNT];
 
 pub(crate) fn safe(s: &str) -> String {
     s.chars()
@@ -37,10 +38,7 @@ pub(crate) fn series(
         match out.iter_mut().find(|s| s.name == n) {
             Some(s) if s.points.iter().any(|p| p.x == x) => {}
             Some(s) => s.points.push(Pt::new(x, y)),
-            None => out.push(Series {
-                name: n,
-                points: vec![Pt::new(x, y)],
-            }),
+            None => out.push(Series::new(n, vec![Pt::new(x, y)])),
         }
     }
     for s in &mut out {
@@ -54,40 +52,40 @@ pub(crate) fn rows_by_resolution<'a>(runs: &'a Runs, study: &str) -> Vec<(String
     let rows = runs
         .study(study)
         .into_iter()
-        .filter(|r| r.ok() && !r.get("method").starts_with("floor_"));
+        .filter(|r| r.ok() && !r.get(cols::METHOD).starts_with("floor_"));
     Runs::group_by(rows, resolution)
 }
 
 /// The time of a row: GPU ms, or the CPU lighting ms of CPU paths.
 fn time_ms(r: &Rec) -> Option<f64> {
-    if r.get("method") == "cpu_tiled" {
-        r.f("cpu_light_ms")
+    if r.get(cols::METHOD) == "cpu_tiled" {
+        r.f(cols::CPU_LIGHT_MS)
     } else {
-        r.f("gpu_ms_median")
+        r.f(cols::GPU_MS_MEDIAN)
     }
 }
 
 /// A short configuration label: "tiled 16px L2", "cpu_tiled 64px L1 ×8".
 fn short(r: &Rec) -> String {
-    let mut s = r.get("method").to_string();
-    if !r.get("tile_size").is_empty() {
-        s += &format!(" {}px", r.get("tile_size"));
+    let mut s = r.get(cols::METHOD).to_string();
+    if !r.get(cols::TILE_SIZE).is_empty() {
+        s += &format!(" {}px", r.get(cols::TILE_SIZE));
     }
-    if !r.get("cull_levels").is_empty() {
-        s += &format!(" L{}", r.get("cull_levels"));
+    if !r.get(cols::CULL_LEVELS).is_empty() {
+        s += &format!(" L{}", r.get(cols::CULL_LEVELS));
     }
-    if !r.get("thread_count").is_empty() {
-        s += &format!(" ×{}", r.get("thread_count"));
+    if !r.get(cols::THREAD_COUNT).is_empty() {
+        s += &format!(" ×{}", r.get(cols::THREAD_COUNT));
     }
     s
 }
 
 fn no_threshold(r: &Rec) -> bool {
-    r.f("attenuation_threshold").unwrap_or(0.0) == 0.0
+    r.f(cols::ATTENUATION_THRESHOLD).unwrap_or(0.0) == 0.0
 }
 
 fn outdoor(r: &Rec) -> bool {
-    !r.get("scene_label").contains("room=true")
+    !r.get(cols::SCENE_LABEL).contains("room=true")
 }
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
@@ -103,7 +101,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         let s = series(
             &base,
             |r| r.config_label(CONFIG_AXES),
-            |r| Some((r.f("light_count")?, time_ms(r)?)),
+            |r| Some((r.f(cols::LIGHT_COUNT)?, time_ms(r)?)),
         );
         if s.iter().any(|s| s.points.len() > 1) {
             figs.push(
@@ -115,19 +113,20 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("deferred_time_vs_lights_{stem}"), "Shading only (the G-buffer pass is shared). Attenuation threshold 0: culling drops a light only beyond its range, so every path is exact up to f32 rounding.")?,
             );
         }
         // Speedup over naive, per light count.
-        let lcs = Runs::distinct(base.iter().copied(), "light_count");
-        let cfgs: Vec<String> = Runs::distinct(base.iter().copied(), "method")
+        let lcs = Runs::distinct(base.iter().copied(), cols::LIGHT_COUNT);
+        let cfgs: Vec<String> = Runs::distinct(base.iter().copied(), cols::METHOD)
             .into_iter()
             .filter(|m| m != "naive")
             .flat_map(|m| {
                 let mut v: Vec<String> = base
                     .iter()
-                    .filter(|r| r.get("method") == m)
+                    .filter(|r| r.get(cols::METHOD) == m)
                     .map(|r| short(r))
                     .collect();
                 v.dedup();
@@ -139,7 +138,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                 }
                 acc
             });
-        if !cfgs.is_empty() && base.iter().any(|r| r.f("speedup_vs_naive").is_some()) {
+        if !cfgs.is_empty() && base.iter().any(|r| r.f(cols::SPEEDUP_VS_NAIVE).is_some()) {
             let series = lcs
                 .iter()
                 .map(|lc| {
@@ -148,8 +147,8 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                         cfgs.iter()
                             .map(|c| {
                                 base.iter()
-                                    .find(|r| r.get("light_count") == lc && &short(r) == c)
-                                    .and_then(|r| r.f("speedup_vs_naive"))
+                                    .find(|r| r.get(cols::LIGHT_COUNT) == lc && &short(r) == c)
+                                    .and_then(|r| r.f(cols::SPEEDUP_VS_NAIVE))
                                     .map(|v| Pt::new(0.0, v))
                             })
                             .collect(),
@@ -172,29 +171,31 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         let thr: Vec<&Rec> = at
             .iter()
             .copied()
-            .filter(|r| !r.get("attenuation_threshold").is_empty() && outdoor(r))
+            .filter(|r| !r.get(cols::ATTENUATION_THRESHOLD).is_empty() && outdoor(r))
             .collect();
         let s = series(
             &thr,
             |r| {
                 format!(
                     "{} ({} lights)",
-                    r.config_label(&["tile_size", "cull_levels", "thread_count"]),
-                    r.get("light_count")
+                    r.config_label(&[cols::TILE_SIZE, cols::CULL_LEVELS, cols::THREAD_COUNT]),
+                    r.get(cols::LIGHT_COUNT)
                 )
             },
-            |r| Some((time_ms(r)?, r.f("rmse")?.max(1e-7))),
+            |r| Some((time_ms(r)?, r.f(cols::RMSE)?)),
         );
         if s.iter().any(|s| s.points.len() > 1) {
             figs.push(
                 XY {
                     title: format!("Error vs time (attenuation threshold sweep) — {res}"),
+                    zero_label: "exact (0)".into(),
                     x_label: "time per frame [ms]".into(),
                     y_label: "RMSE vs f64 reference".into(),
                     log_x: true,
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("deferred_error_vs_time_{stem}"), "Each line walks the threshold τ (a light is culled from a tile where I·att ≤ τ everywhere in it); τ = 0 is the leftmost-error end.")?,
             );
@@ -203,23 +204,23 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         let culls: Vec<&Rec> = at
             .iter()
             .copied()
-            .filter(|r| r.get("method") == "cpu_tiled" && no_threshold(r) && outdoor(r))
+            .filter(|r| r.get(cols::METHOD) == "cpu_tiled" && no_threshold(r) && outdoor(r))
             .collect();
         let tmax = culls
             .iter()
-            .filter_map(|r| r.f("thread_count"))
+            .filter_map(|r| r.f(cols::THREAD_COUNT))
             .fold(0.0, f64::max);
         let culls: Vec<&Rec> = culls
             .into_iter()
-            .filter(|r| r.f("thread_count") == Some(tmax))
+            .filter(|r| r.f(cols::THREAD_COUNT) == Some(tmax))
             .collect();
-        let cats: Vec<String> = Runs::distinct(culls.iter().copied(), "cull_levels")
+        let cats: Vec<String> = Runs::distinct(culls.iter().copied(), cols::CULL_LEVELS)
             .into_iter()
             .map(|l| format!("cull_levels={l}"))
             .collect();
         if culls
             .iter()
-            .any(|r| r.get("quad_skip") == "false" || r.get("spec_skip") == "false")
+            .any(|r| r.get(cols::QUAD_SKIP) == "false" || r.get(cols::SPEC_SKIP) == "false")
         {
             let combos = [
                 ("true", "true"),
@@ -230,7 +231,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             let series = combos
                 .iter()
                 .flat_map(|(q, sp)| {
-                    Runs::distinct(culls.iter().copied(), "light_count")
+                    Runs::distinct(culls.iter().copied(), cols::LIGHT_COUNT)
                         .into_iter()
                         .map(|lc| {
                             let v = cats
@@ -239,12 +240,13 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                                     culls
                                         .iter()
                                         .find(|r| {
-                                            format!("cull_levels={}", r.get("cull_levels")) == *c
-                                                && r.get("quad_skip") == *q
-                                                && r.get("spec_skip") == *sp
-                                                && r.get("light_count") == lc
+                                            format!("cull_levels={}", r.get(cols::CULL_LEVELS))
+                                                == *c
+                                                && r.get(cols::QUAD_SKIP) == *q
+                                                && r.get(cols::SPEC_SKIP) == *sp
+                                                && r.get(cols::LIGHT_COUNT) == lc
                                         })
-                                        .and_then(|r| Some(Pt::new(0.0, r.f("cpu_light_ms")?)))
+                                        .and_then(|r| Some(Pt::new(0.0, r.f(cols::CPU_LIGHT_MS)?)))
                                 })
                                 .collect();
                             (format!("quad skip {q}, spec skip {sp}, {lc} lights"), v)
@@ -270,17 +272,17 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         let bf3: Vec<&Rec> = at
             .iter()
             .copied()
-            .filter(|r| r.get("method") == "cpu_tiled" && !r.get("cone_cull").is_empty())
+            .filter(|r| r.get(cols::METHOD) == "cpu_tiled" && !r.get(cols::CONE_CULL).is_empty())
             .collect();
         if bf3
             .iter()
-            .any(|r| r.get("cone_cull") == "false" || r.get("diffuse_skip") == "false")
+            .any(|r| r.get(cols::CONE_CULL) == "false" || r.get(cols::DIFFUSE_SKIP) == "false")
         {
             let key = |r: &Rec| {
                 format!(
                     "{}, diffuse-only {}",
                     if outdoor(r) { "city" } else { "room" },
-                    r.get("diffuse_only_frac")
+                    r.get(cols::DIFFUSE_ONLY_FRAC)
                 )
             };
             let mut cats: Vec<String> = Vec::new();
@@ -304,10 +306,10 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                         bf3.iter()
                             .find(|r| {
                                 key(r) == *c
-                                    && r.get("cone_cull") == *cone
-                                    && r.get("diffuse_skip") == *dif
+                                    && r.get(cols::CONE_CULL) == *cone
+                                    && r.get(cols::DIFFUSE_SKIP) == *dif
                             })
-                            .and_then(|r| Some(Pt::new(0.0, r.f("cpu_light_ms")?)))
+                            .and_then(|r| Some(Pt::new(0.0, r.f(cols::CPU_LIGHT_MS)?)))
                     })
                     .collect();
                 (format!("cone cull {cone}, diffuse skip {dif}"), v)
@@ -330,21 +332,21 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         let cpu: Vec<&Rec> = at
             .iter()
             .copied()
-            .filter(|r| r.get("method") == "cpu_tiled")
+            .filter(|r| r.get(cols::METHOD) == "cpu_tiled")
             .collect();
         let s = series(
             &cpu,
             |r| {
                 format!(
                     "{} lights, cull_levels={}, τ={}, quad skip {}, spec skip {}",
-                    r.get("light_count"),
-                    r.get("cull_levels"),
-                    r.get("attenuation_threshold"),
-                    r.get("quad_skip"),
-                    r.get("spec_skip")
+                    r.get(cols::LIGHT_COUNT),
+                    r.get(cols::CULL_LEVELS),
+                    r.get(cols::ATTENUATION_THRESHOLD),
+                    r.get(cols::QUAD_SKIP),
+                    r.get(cols::SPEC_SKIP)
                 )
             },
-            |r| Some((r.f("thread_count")?, r.f("cpu_light_ms")?)),
+            |r| Some((r.f(cols::THREAD_COUNT)?, r.f(cols::CPU_LIGHT_MS)?)),
         );
         if s.iter().any(|s| s.points.len() > 1) {
             figs.push(
@@ -356,6 +358,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("deferred_cpu_scaling_{stem}"), "Workers take 64×64 tiles from an atomic counter; SoA 4×4 quads. The G-buffer read-back is not timed.")?,
             );

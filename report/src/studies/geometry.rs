@@ -5,83 +5,72 @@
 //! 3.4), and the raster-stage check. Each `[[study]]` of a suite is told apart by the axes it
 //! sweeps (the point key's last field); every figure has min–max whiskers where times are drawn.
 
+use schema::{cols, Col};
 use std::path::Path;
 
 use anyhow::Result;
 
 use crate::charts::{Bars, Figure, Pt, Series, XY};
 use crate::data::{resolution, Rec, Runs};
+use crate::labels::{file_safe, scene_name};
+
+/// What the whiskers of this study's charts show.
+const WHISKERS: &str = "Whiskers: 95 % CI of the median GPU time where the CSV has one (none otherwise: min–max is not a spread of the median).";
 
 /// The axes a row's `[[study]]` swept (from its point key).
 fn swept(r: &Rec) -> Vec<&str> {
-    let key = r.get("point_key");
+    let key = r.get(cols::POINT_KEY);
     let last = key.rsplit('|').next().unwrap_or("");
     last.split(',')
         .filter_map(|kv| kv.split_once('=').map(|(k, _)| k))
         .collect()
 }
 
-fn sweeps(r: &Rec, axis: &str) -> bool {
-    swept(r).contains(&axis)
-}
-
-fn safe(s: &str) -> String {
-    s.chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-        .take(60)
-        .collect()
+fn sweeps(r: &Rec, axis: Col) -> bool {
+    swept(r).contains(&axis.name)
 }
 
 /// Triangles drawn per frame: `draw_triangles` (a prefix) or the whole scene.
 fn drawn(r: &Rec) -> Option<f64> {
-    match r.f("draw_triangles") {
+    match r.f(cols::DRAW_TRIANGLES) {
         Some(d) if d > 0.0 => Some(d),
-        _ => r.f("triangles"),
+        _ => r.f(cols::TRIANGLES),
     }
 }
 
 /// Vertices per draw call in the thesis's sense: indices (indexed) or corners (non-indexed).
 fn vertices_per_draw(r: &Rec) -> Option<f64> {
-    let batches = r.f("batches")?.max(1.0);
-    let v = if r.get("indexed") == "false" {
+    let batches = r.f(cols::BATCHES)?.max(1.0);
+    let v = if r.get(cols::INDEXED) == "false" {
         3.0 * drawn(r)?
     } else {
-        r.f("index_count")?
+        r.f(cols::INDEX_COUNT)?
     };
     Some(v / batches)
 }
 
-/// A rate `amount / gpu time` with whiskers from the min and max GPU times.
+/// A rate `amount / gpu time`, whiskers from the CI of the median time when measured.
 fn rate(r: &Rec, x: f64, amount: f64, scale: f64) -> Option<Pt> {
-    let ms = r.f("gpu_ms_median")?;
+    let ms = r.f(cols::GPU_MS_MEDIAN)?;
     if ms <= 0.0 {
         return None;
     }
-    let per = |m: Option<f64>| m.filter(|m| *m > 0.0).map(|m| amount / (m * 1e-3) / scale);
-    Some(Pt::spread(
-        x,
-        amount / (ms * 1e-3) / scale,
-        per(r.f("gpu_ms_max")),
-        per(r.f("gpu_ms_min")),
-    ))
+    let per = |m: f64| (m > 0.0).then(|| amount / (m * 1e-3) / scale);
+    let (lo, hi) = match r.gpu_ci() {
+        Some((lo, hi)) => (per(hi), per(lo)),
+        None => (None, None),
+    };
+    Some(Pt::spread(x, amount / (ms * 1e-3) / scale, lo, hi).flagged(r.flagged()))
 }
 
 fn gpu_ms(r: &Rec, x: f64) -> Option<Pt> {
-    Some(Pt::spread(
-        x,
-        r.f("gpu_ms_median")?,
-        r.f("gpu_ms_min"),
-        r.f("gpu_ms_max"),
-    ))
+    super::methods::time_pt(r, x)
 }
 
 fn push(series: &mut Vec<Series>, name: String, p: Pt) {
     match series.iter_mut().find(|s| s.name == name) {
         Some(s) => s.points.push(p),
-        None => series.push(Series {
-            name,
-            points: vec![p],
-        }),
+        None => series.push(Series::new(name, vec![p])),
     }
 }
 
@@ -96,7 +85,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let rows: Vec<&Rec> = runs
         .study("geometry")
         .into_iter()
-        .filter(|r| r.ok() && r.get("method") == "geometry")
+        .filter(|r| r.ok() && r.get(cols::METHOD) == "geometry")
         .collect();
     let mut figs = Vec::new();
     for (res, at) in Runs::group_by(rows.iter().copied(), resolution) {
@@ -113,14 +102,14 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
 /// Fig. 3.1: triangles/s vs vertices per draw call (log x), indexed and non-indexed, per scene.
 fn throughput(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<()> {
     let mut series = Vec::new();
-    for r in at.iter().filter(|r| sweeps(r, "draw_triangles")) {
+    for r in at.iter().filter(|r| sweeps(r, cols::DRAW_TRIANGLES)) {
         let (Some(x), Some(t)) = (vertices_per_draw(r), drawn(r)) else {
             continue;
         };
         let name = format!(
             "{} — {}",
-            r.get("scene_label"),
-            if r.get("indexed") == "false" {
+            scene_name(r.get(cols::SCENE_LABEL)),
+            if r.get(cols::INDEXED) == "false" {
                 "non-indexed"
             } else {
                 "indexed"
@@ -141,11 +130,12 @@ fn throughput(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Res
         log_y: false,
         lines: true,
         series: sorted(series),
+        ..Default::default()
     };
     figs.push(xy.draw(
         dir,
         &format!("geometry_throughput_vs_vertices_{res}"),
-        "Thesis Fig. 3.1: one draw of a growing prefix of the mesh; the thesis saw a cliff above ~1M vertices per indexed draw on GeForce 7 and none without indices. Whiskers: min–max GPU time.",
+        &format!("Thesis Fig. 3.1: one draw of a growing prefix of the mesh; the thesis saw a cliff above ~1M vertices per indexed draw on GeForce 7 and none without indices. {WHISKERS}"),
     )?);
     Ok(())
 }
@@ -155,18 +145,20 @@ fn batching(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Resul
     let mut series = Vec::new();
     for r in at
         .iter()
-        .filter(|r| sweeps(r, "batch_size") && !sweeps(r, "index_format"))
+        .filter(|r| sweeps(r, cols::BATCH_SIZE) && !sweeps(r, cols::INDEX_FORMAT))
     {
-        let Some(b) = r.f("batches") else { continue };
-        let label = r.get("scene_label");
+        let Some(b) = r.f(cols::BATCHES) else {
+            continue;
+        };
+        let label = r.get(cols::SCENE_LABEL);
         if let Some(p) = gpu_ms(r, b) {
-            push(&mut series, format!("{label} — GPU"), p);
+            push(&mut series, format!("{} — GPU", scene_name(label)), p);
         }
-        if let Some(c) = r.f("cpu_ms_median") {
+        if let Some(c) = r.f(cols::CPU_MS_MEDIAN) {
             push(
                 &mut series,
-                format!("{label} — wall clock"),
-                Pt::spread(b, c, r.f("cpu_ms_min"), r.f("cpu_ms_max")),
+                format!("{} — wall clock", scene_name(label)),
+                Pt::new(b, c),
             );
         }
     }
@@ -181,11 +173,12 @@ fn batching(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Resul
         log_y: true,
         lines: true,
         series: sorted(series),
+        ..Default::default()
     };
     figs.push(xy.draw(
         dir,
         &format!("geometry_time_vs_batches_{res}"),
-        "Thesis Fig. 3.2: the mesh cut into 1 … N draw calls. GPU = timestamped render pass; wall clock = encode + submit + wait, where per-draw CPU cost shows. Whiskers: min–max.",
+        &format!("Thesis Fig. 3.2: the mesh cut into 1 … N draw calls. GPU = timestamped render pass; wall clock = encode + submit + wait, where per-draw CPU cost shows. {WHISKERS}"),
     )?);
     Ok(())
 }
@@ -193,14 +186,18 @@ fn batching(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Resul
 /// Fig. 3.3: interleaved vs separate vertex buffers as extra float32x4 attributes grow.
 fn layout(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<()> {
     let mut series = Vec::new();
-    for r in at.iter().filter(|r| sweeps(r, "extra_attributes")) {
-        let Some(x) = r.f("extra_attributes") else {
+    for r in at.iter().filter(|r| sweeps(r, cols::EXTRA_ATTRIBUTES)) {
+        let Some(x) = r.f(cols::EXTRA_ATTRIBUTES) else {
             continue;
         };
         if let Some(p) = gpu_ms(r, x) {
             push(
                 &mut series,
-                format!("{} — {}", r.get("scene_label"), r.get("layout")),
+                format!(
+                    "{} — {}",
+                    scene_name(r.get(cols::SCENE_LABEL)),
+                    r.get(cols::LAYOUT)
+                ),
                 p,
             );
         }
@@ -216,11 +213,12 @@ fn layout(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<
         log_y: false,
         lines: true,
         series: sorted(series),
+        ..Default::default()
     };
     figs.push(xy.draw(
         dir,
         &format!("geometry_layout_vs_attributes_{res}"),
-        "Thesis Fig. 3.3: one draw of the whole mesh, every attribute read by the vertex shader. Whiskers: min–max GPU time.",
+        &format!("Thesis Fig. 3.3: one draw of the whole mesh, every attribute read by the vertex shader. {WHISKERS}"),
     )?);
     Ok(())
 }
@@ -231,15 +229,15 @@ fn index_precision(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -
     let rows: Vec<&Rec> = at
         .iter()
         .copied()
-        .filter(|r| sweeps(r, "index_format"))
+        .filter(|r| sweeps(r, cols::INDEX_FORMAT))
         .collect();
-    for label in Runs::distinct(rows.iter().copied(), "scene_label") {
+    for label in Runs::distinct(rows.iter().copied(), cols::SCENE_LABEL) {
         let g: Vec<&Rec> = rows
             .iter()
             .copied()
-            .filter(|r| r.get("scene_label") == label)
+            .filter(|r| r.get(cols::SCENE_LABEL) == label)
             .collect();
-        let cat = |r: &Rec| format!("{} {}", r.get("mesh_order"), r.get("primitive"));
+        let cat = |r: &Rec| format!("{} {}", r.get(cols::MESH_ORDER), r.get(cols::PRIMITIVE));
         let categories = Runs::distinct_by(&g, cat);
         let find =
             |c: &str, f: &dyn Fn(&Rec) -> bool| g.iter().copied().find(|r| cat(r) == c && f(r));
@@ -249,7 +247,7 @@ fn index_precision(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -
                 let vals = categories
                     .iter()
                     .map(|c| {
-                        find(c, &|r: &Rec| r.get("index_format") == *fmt)
+                        find(c, &|r: &Rec| r.get(cols::INDEX_FORMAT) == *fmt)
                             .and_then(|r| rate(r, 0.0, drawn(r)?, 1e6))
                     })
                     .collect();
@@ -260,7 +258,7 @@ fn index_precision(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -
         if !series.is_empty() {
             figs.push(
                 Bars {
-                    title: format!("Index precision × mesh order — {label}, {res}"),
+                    title: format!("Index precision × mesh order — {}, {res}", scene_name(&label)),
                     y_label: "million triangles per second".into(),
                     log_y: false,
                     categories: categories.clone(),
@@ -269,21 +267,21 @@ fn index_precision(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -
                 }
                 .draw(
                     dir,
-                    &format!("geometry_index_precision_{}_{res}", safe(&label)),
-                    "Thesis Tables 3.2–3.3: 16- vs 32-bit indices for each triangle order (original, shuffled, meshopt vertex cache, cache + fetch) as lists and as strips with primitive restart. Whiskers: from the min–max GPU time.",
+                    &format!("geometry_index_precision_{}_{res}", file_safe(&label)),
+                    &format!("Thesis Tables 3.2–3.3: 16- vs 32-bit indices for each triangle order (original, shuffled, meshopt vertex cache, cache + fetch) as lists and as strips with primitive restart. {WHISKERS}"),
                 )?,
             );
         }
         // Measured vs predicted post-transform cache behaviour (32-bit: no batch cuts).
         let mut series: Vec<(String, Vec<Option<Pt>>)> = Vec::new();
         for (name, col) in [
-            ("meshopt ACMR (FIFO 16)", "acmr"),
-            ("measured VS runs / triangle", "vs_acmr"),
+            ("meshopt ACMR (FIFO 16)", cols::ACMR),
+            ("measured VS runs / triangle", cols::VS_ACMR),
         ] {
             let vals = categories
                 .iter()
                 .map(|c| {
-                    find(c, &|r: &Rec| r.get("index_format") == "uint32")
+                    find(c, &|r: &Rec| r.get(cols::INDEX_FORMAT) == "uint32")
                         .and_then(|r| r.f(col))
                         .map(|v| Pt::new(0.0, v))
                 })
@@ -295,7 +293,7 @@ fn index_precision(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -
         if !series.is_empty() {
             figs.push(
                 Bars {
-                    title: format!("Vertex-shader runs per triangle — {label}, {res}"),
+                    title: format!("Vertex-shader runs per triangle — {}, {res}", scene_name(&label)),
                     y_label: "vertex-shader invocations per triangle".into(),
                     log_y: false,
                     categories,
@@ -304,7 +302,7 @@ fn index_precision(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -
                 }
                 .draw(
                     dir,
-                    &format!("geometry_acmr_{}_{res}", safe(&label)),
+                    &format!("geometry_acmr_{}_{res}", file_safe(&label)),
                     "Measured (pipeline statistics) against meshopt's FIFO-16 simulation of the same index stream, 32-bit indices; 3 = no reuse, the line at 0.5 is the ideal of a closed mesh.",
                 )?,
             );
@@ -315,35 +313,35 @@ fn index_precision(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -
 
 /// Table 3.4: one bar per attribute format, GPU time, per scene.
 fn formats(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<()> {
-    const AXES: [(&str, &str); 4] = [
-        ("vertex_format", "position"),
-        ("normal_format", "normal"),
-        ("color_format", "colour"),
-        ("texcoord_format", "texcoord"),
+    const AXES: [(Col, &str); 4] = [
+        (cols::VERTEX_FORMAT, "position"),
+        (cols::NORMAL_FORMAT, "normal"),
+        (cols::COLOR_FORMAT, "colour"),
+        (cols::TEXCOORD_FORMAT, "texcoord"),
     ];
     let rows: Vec<&Rec> = at
         .iter()
         .copied()
         .filter(|r| {
-            !sweeps(r, "index_format")
-                && !sweeps(r, "extra_attributes")
-                && AXES.iter().any(|(a, _)| sweeps(r, a))
+            !sweeps(r, cols::INDEX_FORMAT)
+                && !sweeps(r, cols::EXTRA_ATTRIBUTES)
+                && AXES.iter().any(|(a, _)| sweeps(r, *a))
         })
         .collect();
     // One chart per scene and per [[study]] (the set of format axes it swept).
     let which = |r: &Rec| {
         let s = swept(r);
         AXES.iter()
-            .filter(|(a, _)| s.contains(a))
+            .filter(|(a, _)| s.contains(&a.name))
             .map(|(_, n)| *n)
             .collect::<Vec<_>>()
             .join(" × ")
     };
-    for label in Runs::distinct(rows.iter().copied(), "scene_label") {
+    for label in Runs::distinct(rows.iter().copied(), cols::SCENE_LABEL) {
         let of_scene: Vec<&Rec> = rows
             .iter()
             .copied()
-            .filter(|r| r.get("scene_label") == label)
+            .filter(|r| r.get(cols::SCENE_LABEL) == label)
             .collect();
         for study in Runs::distinct_by(&of_scene, which) {
             let g: Vec<&Rec> = of_scene
@@ -353,20 +351,20 @@ fn formats(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result
                 .collect();
             // A category names the formats that vary in this study, e.g. "normal snorm8x4";
             // swept axes with one value (e.g. normal none) go in the title.
-            let varying: Vec<(&str, &str)> = AXES
+            let varying: Vec<(Col, &str)> = AXES
                 .iter()
                 .copied()
-                .filter(|(a, _)| Runs::distinct(g.iter().copied(), a).len() > 1)
+                .filter(|(a, _)| Runs::distinct(g.iter().copied(), *a).len() > 1)
                 .collect();
             let fixed: Vec<String> = AXES
                 .iter()
-                .filter(|(a, _)| sweeps(g[0], a) && !varying.iter().any(|(v, _)| v == a))
-                .map(|(a, n)| format!("{n} {}", g[0].get(a)))
+                .filter(|(a, _)| sweeps(g[0], *a) && !varying.iter().any(|(v, _)| v == a))
+                .map(|(a, n)| format!("{n} {}", g[0].get(*a)))
                 .collect();
             let cat = |r: &Rec| {
                 varying
                     .iter()
-                    .map(|(a, n)| format!("{n} {}", r.get(a)))
+                    .map(|(a, n)| format!("{n} {}", r.get(*a)))
                     .collect::<Vec<_>>()
                     .join(", ")
             };
@@ -383,13 +381,14 @@ fn formats(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result
             figs.push(
                 Bars {
                     title: format!(
-                        "Vertex formats ({}{}) — {label}, {res}",
+                        "Vertex formats ({}{}) — {}, {res}",
                         varying.iter().map(|(_, n)| *n).collect::<Vec<_>>().join(" × "),
                         if fixed.is_empty() {
                             String::new()
                         } else {
                             format!("; {}", fixed.join(", "))
-                        }
+                        },
+                        scene_name(&label)
                     ),
                     y_label: "GPU time per frame [ms]".into(),
                     log_y: false,
@@ -401,10 +400,10 @@ fn formats(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result
                     dir,
                     &format!(
                         "geometry_formats_{}_{}_{res}",
-                        safe(&study),
-                        safe(&label)
+                        file_safe(&study),
+                        file_safe(&label)
                     ),
-                    "Thesis Table 3.4: one draw of the whole mesh per attribute format; attributes not swept keep their defaults (position float32x3, normal float32x3, no colour, no texcoord). Whiskers: min–max GPU time.",
+                    &format!("Thesis Table 3.4: one draw of the whole mesh per attribute format; attributes not swept keep their defaults (position float32x3, normal float32x3, no colour, no texcoord). {WHISKERS}"),
                 )?,
             );
         }
@@ -417,11 +416,11 @@ fn formats(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result
 fn raster_check(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<()> {
     let mut series = Vec::new();
     for r in at {
-        if let (Some(ms), Some(ratio)) = (r.f("gpu_ms_median"), r.f("raster_bound_ratio")) {
+        if let (Some(ms), Some(ratio)) = (r.f(cols::GPU_MS_MEDIAN), r.f(cols::RASTER_BOUND_RATIO)) {
             push(
                 &mut series,
-                r.get("scene_label").to_string(),
-                Pt::new(ms, ratio),
+                scene_name(r.get(cols::SCENE_LABEL)),
+                Pt::new(ms, ratio).flagged(r.flagged()),
             );
         }
     }
@@ -436,6 +435,7 @@ fn raster_check(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> R
         log_y: false,
         lines: false,
         series: sorted(series),
+        ..Default::default()
     };
     figs.push(xy.draw(
         dir,
@@ -463,7 +463,7 @@ impl Runs {
 mod tests {
     use super::*;
 
-    fn rec(pairs: &[(&str, &str)]) -> Rec {
+    fn rec(pairs: &[(Col, &str)]) -> Rec {
         Rec(pairs
             .iter()
             .map(|(k, v)| (k.to_string(), v.to_string()))
@@ -473,28 +473,31 @@ mod tests {
     #[test]
     fn swept_axes_come_from_the_point_key() {
         let r = rec(&[(
-            "point_key",
+            cols::POINT_KEY,
             "geometry|quads(depth_complexity=8,seed=1)|64x64|geometry|index_format=uint16,mesh_order=vcache",
         )]);
-        assert_eq!(swept(&r), vec!["index_format", "mesh_order"]);
-        assert!(sweeps(&r, "mesh_order") && !sweeps(&r, "seed"));
+        assert_eq!(
+            swept(&r),
+            vec![cols::INDEX_FORMAT.name, cols::MESH_ORDER.name]
+        );
+        assert!(sweeps(&r, cols::MESH_ORDER) && !sweeps(&r, cols::BATCH_SIZE));
     }
 
     #[test]
     fn vertices_per_draw_counts_indices_or_corners() {
         let idx = rec(&[
-            ("indexed", "true"),
-            ("index_count", "3000"),
-            ("batches", "3"),
-            ("triangles", "1000"),
-            ("draw_triangles", "0"),
+            (cols::INDEXED, "true"),
+            (cols::INDEX_COUNT, "3000"),
+            (cols::BATCHES, "3"),
+            (cols::TRIANGLES, "1000"),
+            (cols::DRAW_TRIANGLES, "0"),
         ]);
         assert_eq!(vertices_per_draw(&idx), Some(1000.0));
         let non = rec(&[
-            ("indexed", "false"),
-            ("batches", "1"),
-            ("triangles", "1000"),
-            ("draw_triangles", "100"),
+            (cols::INDEXED, "false"),
+            (cols::BATCHES, "1"),
+            (cols::TRIANGLES, "1000"),
+            (cols::DRAW_TRIANGLES, "100"),
         ]);
         assert_eq!(vertices_per_draw(&non), Some(300.0));
     }

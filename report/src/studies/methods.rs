@@ -1,213 +1,72 @@
-//! Figures of the `methods` study: time vs layers, error vs time (Pareto), hazard / overflow /
-//! collision rates vs depth complexity, speedup over classic depth peeling, and multiples of the
+//! Figures of the `methods` study. Per scene and resolution: error vs GPU time as a Pareto front
+//! (RMSE vs the ground truth by default; FLIP mean as a second front when the CSV has it), error
+//! vs memory, time vs memory, and a table of every configuration. Across scenes: GPU time vs
+//! depth complexity (one chart per family of scenes that differ in one parameter), the hazard,
+//! overflow and collision rates, the speedup over classic depth peeling and the multiple of the
 //! depth-only floor.
 
+use schema::cols;
+use std::collections::BTreeMap;
+use std::fmt::Write;
 use std::path::Path;
 
 use anyhow::Result;
 
-use crate::charts::{Bars, Figure, Pt, Series, XY};
+use crate::charts::{Bars, Figure, Named, Pt, Series, XY};
 use crate::data::{resolution, Rec, Runs};
+use crate::html::{esc, short};
+use crate::labels::{config_key, file_safe, parse_scene, scene_name, scene_names, ConfigLabels};
+use crate::pareto;
 
-/// Axes that distinguish configurations of one method.
-pub const CONFIG_AXES: &[&str] = &[
-    "layers",
-    "max_layers",
-    "variant",
-    "payload",
-    "specialisation",
-    "effect",
-    "bucket_count",
-    "bucket_pairing",
-    "hist_bins",
-    "small_max",
-];
+/// Flags that make a point's time unusable for the front (its timestamps did not all arrive).
+const UNTIMED: &[&str] = &["timestamps_incomplete"];
 
-/// Errors of exact results are 0; drawn at this floor on log axes.
-pub const EXACT_FLOOR: f64 = 1e-7;
-
-fn safe(s: &str) -> String {
-    s.chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-        .collect::<String>()
-        .chars()
-        .take(60)
-        .collect()
+/// Colour (configuration) and marker (method family) of every configuration of a set of rows,
+/// fixed across a report's charts so a configuration looks the same everywhere.
+#[derive(Clone, Debug, Default)]
+pub struct Styles {
+    colors: BTreeMap<String, usize>,
+    families: BTreeMap<String, usize>,
 }
 
-pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
-    let rows: Vec<&Rec> = runs
-        .study("methods")
-        .into_iter()
-        .filter(|r| r.ok())
-        .collect();
-    let mut figs = Vec::new();
-    let methods: Vec<&Rec> = rows
-        .iter()
-        .copied()
-        .filter(|r| !r.get("method").starts_with("floor_"))
-        .collect();
-    for (res, at_res) in Runs::group_by(methods.iter().copied(), resolution) {
-        // Time vs layers: x = true max depth complexity of the scene, per generator.
-        for (generator, g) in Runs::group_by(at_res.iter().copied(), |r| r.get("scene").into()) {
-            let series = series_by_config(
-                &g,
-                |r| Some((r.f("depth_complexity_max")?, r.f("gpu_ms_median")?)),
-                true,
-            );
-            if series.iter().map(|s| s.points.len()).sum::<usize>() >= 2 {
-                let xy = XY {
-                    title: format!("GPU time vs depth complexity — {generator}, {res}"),
-                    x_label: "true max fragments per pixel".into(),
-                    y_label: "GPU time per frame [ms]".into(),
-                    log_x: true,
-                    log_y: true,
-                    lines: true,
-                    series,
-                };
-                figs.push(xy.draw(dir, &format!("methods_time_vs_layers_{}_{res}", safe(&generator)), "Median GPU time (whiskers: min–max over the timed repetitions) against the scene's true maximum depth complexity (CPU reference).")?);
-            }
+impl Styles {
+    pub fn new<'a>(rows: impl IntoIterator<Item = &'a Rec>) -> Styles {
+        let mut s = Styles::default();
+        for r in rows {
+            let n = s.colors.len();
+            s.colors.entry(config_key(r)).or_insert(n);
+            let n = s.families.len();
+            s.families
+                .entry(r.get(cols::METHOD).to_string())
+                .or_insert(n);
         }
-        // Error vs time, per scene: the Pareto view.
-        for (label, g) in Runs::group_by(at_res.iter().copied(), |r| r.get("scene_label").into()) {
-            let series = series_by_config(
-                &g,
-                |r| Some((r.f("gpu_ms_median")?, r.f("rmse")?.max(EXACT_FLOOR))),
-                false,
-            );
-            if series.is_empty() {
-                continue;
-            }
-            let xy = XY {
-                title: format!("Error vs time — {label}, {res}"),
-                x_label: "GPU time per frame [ms]".into(),
-                y_label: "RMSE vs f64 reference".into(),
-                log_x: true,
-                log_y: true,
-                lines: false,
-                series,
-            };
-            figs.push(xy.draw(dir, &format!("methods_error_vs_time_{}_{res}", safe(&label)), &format!("One point per method configuration. Exact results (RMSE 0) are drawn at {EXACT_FLOOR:.0e}.") )?);
-        }
-        // Failure rates vs depth complexity: k-buffer hazards, capacity overflow, bucket
-        // collisions; one figure per rate that some configuration reports.
-        for (col, what) in [
-            (
-                "hazard_rate",
-                "pixels whose captured set is not the true k nearest (RMW hazards)",
-            ),
-            (
-                "overflow_rate",
-                "pixels whose fragments exceeded the method's capacity",
-            ),
-            ("collision_rate", "true fragments merged or lost by buckets"),
-        ] {
-            let g: Vec<&Rec> = at_res
-                .iter()
-                .copied()
-                .filter(|r| r.f(col).is_some())
-                .collect();
-            let series = series_by_config(
-                &g,
-                |r| Some((r.f("depth_complexity_max")?, r.f(col)?)),
-                false,
-            );
-            if series.iter().map(|s| s.points.len()).sum::<usize>() < 2 {
-                continue;
-            }
-            let xy = XY {
-                title: format!("{col} vs depth complexity — {res}"),
-                x_label: "true max fragments per pixel".into(),
-                y_label: format!("{col} (fraction)"),
-                log_x: true,
-                log_y: false,
-                lines: false,
-                series,
-            };
-            figs.push(xy.draw(
-                dir,
-                &format!("methods_{col}_{res}"),
-                &format!("Fraction of {what}, one point per scene and configuration."),
-            )?);
-        }
-        // Speedup over depth peeling and multiple of the floor, per scene.
-        let labels = Runs::distinct(at_res.iter().copied(), "scene_label");
-        let configs = Runs::distinct_configs(&at_res);
-        for (col, title, ylab, stem, reference) in [
-            (
-                "speedup_vs_depth_peel",
-                "Speedup over classic depth peeling",
-                "speedup (×)",
-                "methods_speedup",
-                Some(1.0),
-            ),
-            (
-                "x_floor",
-                "Multiple of the depth-only floor",
-                "GPU time / floor_depth time (×)",
-                "methods_x_floor",
-                Some(1.0),
-            ),
-        ] {
-            let series: Vec<(String, Vec<Option<Pt>>)> = configs
-                .iter()
-                .map(|c| {
-                    let vals = labels
-                        .iter()
-                        .map(|l| {
-                            at_res
-                                .iter()
-                                .find(|r| {
-                                    r.get("scene_label") == l && &r.config_label(CONFIG_AXES) == c
-                                })
-                                .and_then(|r| r.f(col))
-                                .map(|v| Pt::new(0.0, v))
-                        })
-                        .collect();
-                    (c.clone(), vals)
-                })
-                .filter(|(_, v): &(String, Vec<Option<Pt>>)| v.iter().any(|p| p.is_some()))
-                .collect();
-            if series.is_empty() {
-                continue;
-            }
-            let bars = Bars {
-                title: format!("{title} — {res}"),
-                y_label: ylab.into(),
-                log_y: true,
-                categories: labels.clone(),
-                series,
-                reference,
-            };
-            figs.push(bars.draw(
-                dir,
-                &format!("{stem}_{res}"),
-                "Same scene, resolution and run; the line marks 1×.",
-            )?);
-        }
+        s
     }
-    Ok(figs)
+    pub fn color(&self, r: &Rec) -> usize {
+        self.colors.get(&config_key(r)).copied().unwrap_or(0)
+    }
+    pub fn family(&self, r: &Rec) -> usize {
+        self.families.get(r.get(cols::METHOD)).copied().unwrap_or(0)
+    }
 }
 
-/// One series per method configuration, points sorted by x.
-pub fn series_by_config(
+/// One series per configuration (named by `labels`), styled by `styles`, points sorted by x.
+pub fn config_series(
     rows: &[&Rec],
-    xy: impl Fn(&Rec) -> Option<(f64, f64)>,
-    spread: bool,
+    labels: &ConfigLabels,
+    styles: &Styles,
+    pt: impl Fn(&Rec) -> Option<Pt>,
 ) -> Vec<Series> {
     let mut out: Vec<Series> = Vec::new();
     for r in rows {
-        let Some((x, y)) = xy(r) else { continue };
-        let name = r.config_label(CONFIG_AXES);
-        let p = if spread {
-            Pt::spread(x, y, r.f("gpu_ms_min"), r.f("gpu_ms_max"))
-        } else {
-            Pt::new(x, y)
-        };
+        let Some(p) = pt(r) else { continue };
+        let name = labels.get(r);
         match out.iter_mut().find(|s| s.name == name) {
             Some(s) => s.points.push(p),
             None => out.push(Series {
                 name,
+                family: styles.family(r),
+                color: Some(styles.color(r)),
                 points: vec![p],
             }),
         }
@@ -218,16 +77,683 @@ pub fn series_by_config(
     out
 }
 
-impl Runs {
-    /// Distinct method configurations (method + config axes), first-seen order.
-    pub fn distinct_configs(rows: &[&Rec]) -> Vec<String> {
-        let mut out: Vec<String> = Vec::new();
-        for r in rows {
-            let c = r.config_label(CONFIG_AXES);
-            if !out.contains(&c) {
-                out.push(c);
+/// A GPU-time point: y = median, whisker = the 95 % CI of the median when the CSV has one.
+pub fn time_pt(r: &Rec, x: f64) -> Option<Pt> {
+    let (lo, hi) = r.gpu_ci().unzip();
+    Some(Pt::spread(x, r.f(cols::GPU_MS_MEDIAN)?, lo, hi).flagged(r.flagged()))
+}
+
+/// What the time whiskers of a run's charts mean, for captions.
+pub fn ci_caption(runs: &Runs) -> &'static str {
+    if runs.has(cols::GPU_MS_CI_LO) {
+        "Whiskers: 95 % bootstrap CI of the median GPU time."
+    } else {
+        "No whiskers: this CSV has no confidence interval of the median (gpu_ms_ci_lo/hi), and min–max is not one."
+    }
+}
+
+/// `ci_caption` for a set of rows (whether any has a CI).
+pub fn ci_caption_rows(rows: &[&Rec]) -> &'static str {
+    if rows.iter().any(|r| r.gpu_ci().is_some()) {
+        "Whiskers: 95 % bootstrap CI of the median GPU time."
+    } else {
+        "No whiskers: these rows have no confidence interval of the median (gpu_ms_ci_lo/hi), and min–max is not one."
+    }
+}
+
+fn untimed(r: &Rec) -> bool {
+    r.flags().iter().any(|f| UNTIMED.contains(f))
+}
+
+/// The rows of one scene at one resolution whose front is drawn; the front's members by key.
+struct Fronts {
+    time: Vec<String>,
+    memory: Vec<String>,
+}
+
+/// The non-dominated rows of `rows` for (x, y) = `xy(r)`.
+fn front_of(rows: &[&Rec], xy: impl Fn(&Rec) -> Option<(f64, f64)>) -> Vec<usize> {
+    let pts: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|r| xy(r).unwrap_or((f64::NAN, f64::NAN)))
+        .collect();
+    pareto::front(&pts)
+}
+
+fn named(
+    rows: &[&Rec],
+    idx: &[usize],
+    labels: &ConfigLabels,
+    xy: impl Fn(&Rec) -> Option<(f64, f64)>,
+) -> Vec<Named> {
+    idx.iter()
+        .filter_map(|&i| {
+            let (x, y) = xy(rows[i])?;
+            Some(Named {
+                x,
+                y,
+                text: labels.get(rows[i]),
+            })
+        })
+        .collect()
+}
+
+pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
+    let all: Vec<&Rec> = runs
+        .study("methods")
+        .into_iter()
+        .filter(|r| r.ok())
+        .collect();
+    let methods: Vec<&Rec> = all.iter().copied().filter(|r| !r.is_floor()).collect();
+    let styles = Styles::new(methods.iter().copied());
+    let mut figs = Vec::new();
+    let ci = ci_caption(runs);
+    for (res, at_res) in Runs::group_by(methods.iter().copied(), resolution) {
+        // Errors of different effects are different quantities: one front per scene and effect.
+        let effects = Runs::distinct(at_res.iter().copied(), cols::EFFECT).len() > 1;
+        for (key, g) in Runs::group_by(at_res.iter().copied(), |r| {
+            let e = if effects { r.get(cols::EFFECT) } else { "" };
+            format!("{}\u{0}{e}", r.get(cols::SCENE_LABEL))
+        }) {
+            let (label, effect) = key.split_once('\u{0}').unwrap_or((&key, ""));
+            let floors: Vec<&Rec> = all
+                .iter()
+                .copied()
+                .filter(|r| {
+                    r.is_floor() && r.get(cols::SCENE_LABEL) == label && resolution(r) == res
+                })
+                .collect();
+            scene_figures(
+                runs, label, effect, &res, &g, &floors, &styles, ci, dir, &mut figs,
+            )?;
+        }
+        time_vs_complexity(&at_res, &res, &styles, ci, dir, &mut figs)?;
+        rates(&at_res, &res, &styles, dir, &mut figs)?;
+        ratio_bars(&at_res, &res, dir, &mut figs)?;
+    }
+    Ok(figs)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn scene_figures(
+    runs: &Runs,
+    label: &str,
+    effect: &str,
+    res: &str,
+    g: &[&Rec],
+    floors: &[&Rec],
+    styles: &Styles,
+    ci: &str,
+    dir: &Path,
+    figs: &mut Vec<Figure>,
+) -> Result<()> {
+    let name = if effect.is_empty() {
+        scene_name(label)
+    } else {
+        format!("{}, {effect}", scene_name(label))
+    };
+    let stem = file_safe(&format!("{label}_{effect}_{res}"));
+    let labels = ConfigLabels::new(g.iter().copied());
+    let configs = Runs::distinct_by(g, config_key);
+    if configs.len() < 2 {
+        figs.push(Figure::note(
+            format!("{name}, {res}"),
+            format!(
+                "one configuration only ({}): no front, memory or time chart to draw; its numbers are in the table below.",
+                g.first().map(|r| labels.get(r)).unwrap_or_default()
+            ),
+        ));
+        figs.push(Figure::html(
+            format!("Configurations — {name}, {res}"),
+            scene_table(
+                runs,
+                g,
+                floors,
+                &labels,
+                &Fronts {
+                    time: vec![],
+                    memory: vec![],
+                },
+                &name,
+                res,
+            ),
+        ));
+        return Ok(());
+    }
+    let fixed = labels.fixed_note();
+    let vlines: Vec<(f64, String)> = floors
+        .iter()
+        .filter_map(|r| {
+            let ms = r.f(cols::GPU_MS_MEDIAN)?;
+            Some((ms, format!("{} {}", r.get(cols::METHOD), short(Some(ms)))))
+        })
+        .collect();
+    let timed: Vec<&Rec> = g.iter().copied().filter(|r| !untimed(r)).collect();
+    let time_err = |r: &Rec| Some((r.f(cols::GPU_MS_MEDIAN)?, r.f(cols::RMSE)?));
+    let mem_err = |r: &Rec| Some((r.bytes_per_pixel()?, r.f(cols::RMSE)?));
+    let mem_time = |r: &Rec| Some((r.bytes_per_pixel()?, r.f(cols::GPU_MS_MEDIAN)?));
+    // On the fronts an exact configuration's error is 0: its RMSE is f32 rounding, and ranking
+    // exact methods by rounding noise would put a slower one on the front.
+    let judged = |r: &Rec, e: f64| {
+        if r.exact_result() == Some(true) {
+            0.0
+        } else {
+            e
+        }
+    };
+    let f_time = front_of(&timed, |r| time_err(r).map(|(t, e)| (t, judged(r, e))));
+    let f_mem = front_of(g, |r| mem_err(r).map(|(m, e)| (m, judged(r, e))));
+    let fronts = Fronts {
+        time: f_time.iter().map(|&i| config_key(timed[i])).collect(),
+        memory: f_mem.iter().map(|&i| config_key(g[i])).collect(),
+    };
+    let x_ci = |r: &Rec, y: f64| {
+        let (lo, hi) = r.gpu_ci().unzip();
+        Some(Pt {
+            x: r.f(cols::GPU_MS_MEDIAN)?,
+            y,
+            xlo: lo,
+            xhi: hi,
+            flagged: r.flagged(),
+            ..Default::default()
+        })
+    };
+    let excluded = g.len() - timed.len();
+    let untimed_note = if excluded > 0 {
+        format!(" {excluded} point(s) with incomplete timestamps are drawn but left off the front.")
+    } else {
+        String::new()
+    };
+    // 1. RMSE vs time, the default front.
+    let xy = XY {
+        title: format!("Error vs GPU time — {name}, {res}"),
+        x_label: "GPU time per frame [ms]".into(),
+        y_label: "RMSE vs ground truth".into(),
+        log_x: true,
+        log_y: true,
+        series: config_series(g, &labels, styles, |r| x_ci(r, r.f(cols::RMSE)?)),
+        front: named(&timed, &f_time, &labels, time_err),
+        front_name: "Pareto front (RMSE, time)".into(),
+        vlines: vlines.clone(),
+        zero_label: "exact (0)".into(),
+        ..Default::default()
+    };
+    figs.push(xy.draw(
+        dir,
+        &format!("methods_pareto_time_{stem}"),
+        &format!(
+            "One point per configuration; the dashed line joins the configurations no other beats on both time and error (the Pareto front), each named. \
+             Exact configurations ({}) count as error 0 on the front. Zero error is drawn in the band under the log axis, not clamped. Hollow: flagged. Dashed verticals: the floors of the same scene. \
+             Horizontal whiskers: {} {fixed}{untimed_note}",
+            runs.exactness_rule(),
+            ci.trim_start_matches("Whiskers: ")
+        ),
+    )?);
+    // 2. FLIP mean vs time, when measured.
+    if g.iter().any(|r| r.f(cols::FLIP_MEAN).is_some()) {
+        let flip_time = |r: &Rec| Some((r.f(cols::GPU_MS_MEDIAN)?, r.f(cols::FLIP_MEAN)?));
+        let f = front_of(&timed, flip_time);
+        let xy = XY {
+            title: format!("FLIP vs GPU time — {name}, {res}"),
+            x_label: "GPU time per frame [ms]".into(),
+            y_label: "mean FLIP vs ground truth".into(),
+            log_x: true,
+            log_y: true,
+            series: config_series(g, &labels, styles, |r| x_ci(r, r.f(cols::FLIP_MEAN)?)),
+            front: named(&timed, &f, &labels, flip_time),
+            front_name: "Pareto front (FLIP mean, time)".into(),
+            vlines: vlines.clone(),
+            zero_label: "identical (0)".into(),
+            ..Default::default()
+        };
+        figs.push(xy.draw(
+            dir,
+            &format!("methods_pareto_flip_{stem}"),
+            &format!("The same configurations judged by NVIDIA's FLIP (mean over the image, LDR over white), a perceptual difference. {fixed}"),
+        )?);
+    }
+    // 3. RMSE vs memory, 4. time vs memory.
+    if g.iter().any(|r| r.bytes_per_pixel().is_some()) {
+        let xy = XY {
+            title: format!("Error vs memory — {name}, {res}"),
+            x_label: "bytes allocated per pixel".into(),
+            y_label: "RMSE vs ground truth".into(),
+            log_x: true,
+            log_y: true,
+            series: config_series(g, &labels, styles, |r| {
+                Some(Pt::new(r.bytes_per_pixel()?, r.f(cols::RMSE)?).flagged(r.flagged()))
+            }),
+            front: named(g, &f_mem, &labels, mem_err),
+            front_name: "Pareto front (RMSE, memory)".into(),
+            zero_label: "exact (0)".into(),
+            ..Default::default()
+        };
+        figs.push(xy.draw(
+            dir,
+            &format!("methods_pareto_memory_{stem}"),
+            &format!("Memory = every buffer and texture the method allocates (scene buffers excluded), per pixel of the target. Exact configurations count as error 0 on the front. {fixed}"),
+        )?);
+        let f = front_of(&timed, mem_time);
+        let xy = XY {
+            title: format!("GPU time vs memory — {name}, {res}"),
+            x_label: "bytes allocated per pixel".into(),
+            y_label: "GPU time per frame [ms]".into(),
+            log_x: true,
+            log_y: true,
+            series: config_series(g, &labels, styles, |r| time_pt(r, r.bytes_per_pixel()?)),
+            front: named(&timed, &f, &labels, mem_time),
+            front_name: "Pareto front (time, memory)".into(),
+            ..Default::default()
+        };
+        figs.push(xy.draw(
+            dir,
+            &format!("methods_time_vs_memory_{stem}"),
+            &format!("{ci} {fixed}"),
+        )?);
+    } else {
+        figs.push(Figure::note(
+            format!("Memory — {name}, {res}"),
+            "not drawn: this CSV has no bytes_allocated or bytes_per_pixel (memory not measured).",
+        ));
+    }
+    figs.push(Figure::html(
+        format!("Configurations — {name}, {res}"),
+        scene_table(runs, g, floors, &labels, &fronts, &name, res),
+    ));
+    Ok(())
+}
+
+/// The per-scene table: every configuration with its time, floor multiple, memory, errors, flag
+/// and whether it is on the fronts. Sorted by time.
+fn scene_table(
+    runs: &Runs,
+    g: &[&Rec],
+    floors: &[&Rec],
+    labels: &ConfigLabels,
+    fronts: &Fronts,
+    name: &str,
+    res: &str,
+) -> String {
+    let flip = runs.has(cols::FLIP_MEAN) || g.iter().any(|r| r.f(cols::FLIP_MEAN).is_some());
+    let mut rows: Vec<&Rec> = g.to_vec();
+    rows.sort_by(|a, b| {
+        a.f(cols::GPU_MS_MEDIAN)
+            .unwrap_or(f64::INFINITY)
+            .total_cmp(&b.f(cols::GPU_MS_MEDIAN).unwrap_or(f64::INFINITY))
+    });
+    let mut h = String::new();
+    let _ = write!(
+        h,
+        "<table class=\"scene\"><caption>{} at {}: every configuration, fastest first. \
+         Front: on the Pareto front of RMSE vs time (T) and of RMSE vs memory (M). {}</caption>\
+         <tr><th>method</th><th>configuration</th><th>GPU ms (95 % CI)</th><th>× floor_depth</th><th>bytes/px</th>\
+         <th>RMSE</th>{}<th>exact</th><th>flag</th><th>front</th></tr>",
+        esc(name),
+        esc(res),
+        esc(&runs.exactness_rule()),
+        if flip { "<th>FLIP mean</th><th>FLIP p99</th>" } else { "" }
+    );
+    for r in floors {
+        let _ = write!(
+            h,
+            "<tr class=\"floor\"><td>{}</td><td>(floor)</td><td>{}</td><td></td><td>{}</td><td></td>{}<td></td><td>{}</td><td></td></tr>",
+            esc(r.get(cols::METHOD)),
+            time_cell(r),
+            short(r.bytes_per_pixel()),
+            if flip { "<td></td><td></td>" } else { "" },
+            esc(r.get(cols::FLAG))
+        );
+    }
+    for r in rows {
+        let k = config_key(r);
+        let mut on = String::new();
+        if fronts.time.contains(&k) {
+            on.push('T');
+        }
+        if fronts.memory.contains(&k) {
+            on.push('M');
+        }
+        let label = labels.get(r);
+        let cfg = label
+            .strip_prefix(r.get(cols::METHOD))
+            .unwrap_or(&label)
+            .trim()
+            .to_string();
+        let _ = write!(
+            h,
+            "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>{}<td>{}</td><td>{}</td><td>{}</td></tr>",
+            if r.flagged() { " class=\"flagged\"" } else { "" },
+            esc(r.get(cols::METHOD)),
+            esc(&cfg),
+            time_cell(r),
+            short(r.f(cols::X_FLOOR)),
+            short(r.bytes_per_pixel()),
+            short(r.f(cols::RMSE)),
+            if flip {
+                format!("<td>{}</td><td>{}</td>", short(r.f(cols::FLIP_MEAN)), short(r.f(cols::FLIP_P99)))
+            } else {
+                String::new()
+            },
+            match r.exact_result() {
+                Some(true) => "yes",
+                Some(false) => "no",
+                None => "",
+            },
+            esc(&r.flags().join(", ")),
+            on
+        );
+    }
+    h.push_str("</table>");
+    if !flip {
+        h.push_str("<p class=\"note\">FLIP: not measured in this CSV (no flip_mean column).</p>");
+    }
+    h
+}
+
+/// "1.23 [1.20, 1.27]" or the median alone.
+pub fn time_cell(r: &Rec) -> String {
+    match (r.f(cols::GPU_MS_MEDIAN), r.gpu_ci()) {
+        (Some(m), Some((lo, hi))) => format!(
+            "{} [{}, {}]",
+            short(Some(m)),
+            short(Some(lo)),
+            short(Some(hi))
+        ),
+        (m, _) => short(m),
+    }
+}
+
+/// Scenes that differ from each other in one parameter only form a family; GPU time against
+/// the true depth complexity is drawn per family with at least two scenes, lines joining one
+/// configuration's points (never across different meshes or tessellations).
+fn time_vs_complexity(
+    at_res: &[&Rec],
+    res: &str,
+    styles: &Styles,
+    ci: &str,
+    dir: &Path,
+    figs: &mut Vec<Figure>,
+) -> Result<()> {
+    let labels_all = Runs::distinct(at_res.iter().copied(), cols::SCENE_LABEL);
+    for (family, scenes) in scene_families(&labels_all) {
+        if scenes.len() < 2 {
+            continue;
+        }
+        let g: Vec<&Rec> = at_res
+            .iter()
+            .copied()
+            .filter(|r| scenes.iter().any(|s| s == r.get(cols::SCENE_LABEL)))
+            .collect();
+        let title = format!("GPU time vs depth complexity — {family}, {res}");
+        let dcs = Runs::distinct(g.iter().copied(), cols::DEPTH_COMPLEXITY_MAX);
+        if dcs.len() < 2 {
+            figs.push(Figure::note(
+                title,
+                format!(
+                    "not drawn: every scene of the family has the same true depth complexity ({}); their times are in the scene tables.",
+                    dcs.join(", ")
+                ),
+            ));
+            continue;
+        }
+        let labels = ConfigLabels::new(g.iter().copied());
+        let xy = XY {
+            title,
+            x_label: "true max fragments per pixel".into(),
+            y_label: "GPU time per frame [ms]".into(),
+            log_x: true,
+            log_y: true,
+            lines: true,
+            series: config_series(&g, &labels, styles, |r| {
+                time_pt(r, r.f(cols::DEPTH_COMPLEXITY_MAX)?)
+            }),
+            ..Default::default()
+        };
+        figs.push(xy.draw(
+            dir,
+            &format!("methods_time_vs_complexity_{}_{res}", file_safe(&family)),
+            &format!(
+                "Scenes: {}. x: the scene's true maximum depth complexity (CPU reference). {ci} {}",
+                scene_names(&scenes).join("; "),
+                labels.fixed_note()
+            ),
+        )?);
+    }
+    Ok(())
+}
+
+/// Groups scene labels into families: same generator, same mesh, and every parameter equal but
+/// one (the one that varies most). Returns (family name, its scene labels).
+pub fn scene_families(labels: &[String]) -> Vec<(String, Vec<String>)> {
+    let mut by_gen: Vec<(String, Vec<&String>)> = Vec::new();
+    for l in labels {
+        let g = parse_scene(l).0;
+        match by_gen.iter_mut().find(|(n, _)| *n == g) {
+            Some((_, v)) => v.push(l),
+            None => by_gen.push((g, vec![l])),
+        }
+    }
+    let mut out = Vec::new();
+    for (g, ls) in by_gen {
+        // The parameter with the most distinct values is the one a family sweeps.
+        let mut counts: BTreeMap<String, Vec<String>> = BTreeMap::new();
+        for l in &ls {
+            for (k, v) in parse_scene(l).1 {
+                let e = counts.entry(k).or_default();
+                if !e.contains(&v) {
+                    e.push(v);
+                }
             }
         }
-        out
+        // A mesh path is what a family holds fixed; of equal counts the first name wins.
+        let swept = counts
+            .iter()
+            .filter(|(k, v)| v.len() > 1 && !matches!(k.as_str(), "path" | "mesh" | "file"))
+            .max_by(|a, b| a.1.len().cmp(&b.1.len()).then(b.0.cmp(a.0)))
+            .map(|(k, _)| k.clone());
+        let mut fams: Vec<(String, Vec<String>)> = Vec::new();
+        for l in &ls {
+            let rest: Vec<String> = parse_scene(l)
+                .1
+                .into_iter()
+                .filter(|(k, _)| Some(k) != swept.as_ref())
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect();
+            let name = scene_name(&format!("{g}({})", rest.join(",")));
+            let name = match &swept {
+                Some(s) => format!("{name}, {s} swept"),
+                None => name,
+            };
+            match fams.iter_mut().find(|(n, _)| *n == name) {
+                Some((_, v)) => v.push((*l).clone()),
+                None => fams.push((name, vec![(*l).clone()])),
+            }
+        }
+        out.extend(fams);
+    }
+    out
+}
+
+/// Hazard, overflow and collision rates against depth complexity, one point per scene and
+/// configuration; a rate that is zero everywhere is one line instead of an empty chart.
+fn rates(
+    at_res: &[&Rec],
+    res: &str,
+    styles: &Styles,
+    dir: &Path,
+    figs: &mut Vec<Figure>,
+) -> Result<()> {
+    for (col, what) in [
+        (
+            cols::HAZARD_RATE,
+            "pixels whose captured set is not the true k nearest (read-modify-write hazards)",
+        ),
+        (
+            cols::OVERFLOW_RATE,
+            "pixels whose fragments exceeded the method's capacity",
+        ),
+        (
+            cols::COLLISION_RATE,
+            "true fragments merged or lost by bucket collisions",
+        ),
+    ] {
+        let g: Vec<&Rec> = at_res
+            .iter()
+            .copied()
+            .filter(|r| r.f(col).is_some())
+            .collect();
+        if g.is_empty() {
+            continue;
+        }
+        let title = format!("{col} vs depth complexity — {res}");
+        if g.iter().all(|r| r.f(col) == Some(0.0)) {
+            let methods = Runs::distinct(g.iter().copied(), cols::METHOD);
+            figs.push(Figure::note(
+                title,
+                format!(
+                    "not drawn: {col} is 0 at all {} points ({}).",
+                    g.len(),
+                    methods.join(", ")
+                ),
+            ));
+            continue;
+        }
+        let labels = ConfigLabels::new(g.iter().copied());
+        let xy = XY {
+            title,
+            x_label: "true max fragments per pixel".into(),
+            y_label: format!("{col} (fraction)"),
+            log_x: true,
+            log_y: false,
+            series: config_series(&g, &labels, styles, |r| {
+                Some(Pt::new(r.f(cols::DEPTH_COMPLEXITY_MAX)?, r.f(col)?).flagged(r.flagged()))
+            }),
+            ..Default::default()
+        };
+        figs.push(xy.draw(
+            dir,
+            &format!("methods_{col}_{res}"),
+            &format!(
+                "Fraction of {what}; one point per scene and configuration. {}",
+                labels.fixed_note()
+            ),
+        )?);
+    }
+    Ok(())
+}
+
+/// Speedup over depth peeling and multiple of the floor: one row per configuration, one dot or
+/// bar per scene.
+fn ratio_bars(at_res: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<()> {
+    let scenes = Runs::distinct(at_res.iter().copied(), cols::SCENE_LABEL);
+    let names = scene_names(&scenes);
+    let labels = ConfigLabels::new(at_res.iter().copied());
+    for (col, title, ylab, stem, skip) in [
+        (
+            cols::SPEEDUP_VS_DEPTH_PEEL,
+            "Speedup over classic depth peeling",
+            "depth_peel GPU time / configuration's (×)",
+            "methods_speedup",
+            Some("depth_peel"),
+        ),
+        (
+            cols::X_FLOOR,
+            "Multiple of the depth-only floor",
+            "GPU time / floor_depth GPU time (×)",
+            "methods_x_floor",
+            None,
+        ),
+    ] {
+        let rows: Vec<&Rec> = at_res
+            .iter()
+            .copied()
+            .filter(|r| r.f(col).is_some() && Some(r.get(cols::METHOD)) != skip)
+            .collect();
+        let title = format!("{title} — {res}");
+        if rows.is_empty() {
+            if at_res.iter().any(|r| r.f(col).is_some()) {
+                figs.push(Figure::note(
+                    title,
+                    format!(
+                        "not drawn: only {} ran, a comparison with itself.",
+                        skip.unwrap_or("one method")
+                    ),
+                ));
+            }
+            continue;
+        }
+        let mut configs: Vec<(String, String)> = Vec::new();
+        for r in &rows {
+            let k = config_key(r);
+            if !configs.iter().any(|(c, _)| *c == k) {
+                configs.push((k, labels.get(r)));
+            }
+        }
+        let series = scenes
+            .iter()
+            .zip(&names)
+            .map(|(s, n)| {
+                let vals = configs
+                    .iter()
+                    .map(|(k, _)| {
+                        rows.iter()
+                            .find(|r| r.get(cols::SCENE_LABEL) == s && config_key(r) == *k)
+                            .and_then(|r| Some(Pt::new(0.0, r.f(col)?).flagged(r.flagged())))
+                    })
+                    .collect();
+                (n.clone(), vals)
+            })
+            .filter(|(_, v): &(String, Vec<Option<Pt>>)| v.iter().any(|p| p.is_some()))
+            .collect();
+        let bars = Bars {
+            title,
+            y_label: ylab.into(),
+            log_y: true,
+            categories: configs.into_iter().map(|(_, l)| l).collect(),
+            series,
+            reference: Some(1.0),
+        };
+        figs.push(bars.draw(
+            dir,
+            &format!("{stem}_{res}"),
+            &format!(
+                "Same scene, resolution and run; the vertical line marks 1×. {}",
+                labels.fixed_note()
+            ),
+        )?);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn families_never_join_different_meshes() {
+        let l: Vec<String> = [
+            "quads(depth_complexity=8)",
+            "quads(depth_complexity=32)",
+            "shells(count=16,segments=256)",
+            "shells(count=4,segments=16)",
+            "obj(instances=4,path=m/a.obj)",
+            "obj(instances=16,path=m/a.obj)",
+            "obj(instances=4,path=m/b.obj)",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        let f = scene_families(&l);
+        let sizes: Vec<(String, usize)> = f.iter().map(|(n, v)| (n.clone(), v.len())).collect();
+        assert_eq!(
+            sizes,
+            [
+                ("quads, depth_complexity swept".to_string(), 2),
+                ("shells (segments=256), count swept".to_string(), 1),
+                ("shells (segments=16), count swept".to_string(), 1),
+                ("obj a, instances swept".to_string(), 2),
+                ("obj b, instances swept".to_string(), 1),
+            ]
+        );
     }
 }

@@ -3,6 +3,7 @@
 //! threads with and without the overlapping second view, against the GPU-only frame with the
 //! same second view; the GPU-clock gap between pre-pass and material pass and what filled it).
 
+use schema::{cols, Col};
 use std::path::Path;
 
 use anyhow::Result;
@@ -11,17 +12,21 @@ use super::deferred::{rows_by_resolution, safe, series};
 use crate::charts::{Bars, Figure, Pt, Series, XY};
 use crate::data::{Rec, Runs};
 
-const AXES: &[&str] = &["light_accum", "light_buffer_format"];
+const AXES: &[Col] = &[cols::LIGHT_ACCUM, cols::LIGHT_BUFFER_FORMAT];
 
 /// "deferred" or "prepass <light buffer format>".
 fn short(r: &Rec) -> String {
-    format!("{} {}", r.get("method"), r.get("light_buffer_format"))
-        .trim()
-        .to_string()
+    format!(
+        "{} {}",
+        r.get(cols::METHOD),
+        r.get(cols::LIGHT_BUFFER_FORMAT)
+    )
+    .trim()
+    .to_string()
 }
 
 fn single_view(r: &Rec) -> bool {
-    r.get("second_view") != "true"
+    r.get(cols::SECOND_VIEW) != "true"
 }
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
@@ -31,13 +36,13 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         let one: Vec<&Rec> = at
             .iter()
             .copied()
-            .filter(|r| single_view(r) && r.get("method") != "prepass_cpu")
+            .filter(|r| single_view(r) && r.get(cols::METHOD) != "prepass_cpu")
             .collect();
         // Time vs light count.
         let s = series(
             &one,
             |r| r.config_label(AXES),
-            |r| Some((r.f("light_count")?, r.f("gpu_ms_median")?)),
+            |r| Some((r.f(cols::LIGHT_COUNT)?, r.f(cols::GPU_MS_MEDIAN)?)),
         );
         if s.iter().any(|s| s.points.len() > 1) {
             figs.push(
@@ -49,6 +54,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("prepass_time_vs_lights_{stem}"), "deferred: G-buffer + shading (one geometry pass). prepass: depth+normal pre-pass, light buffer, second geometry pass with the materials.")?,
             );
@@ -57,23 +63,25 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         let mut s = series(
             &one,
             |r| r.config_label(AXES),
-            |r| Some((r.f("light_count")?, r.f("rmse")?.max(1e-7))),
+            |r| Some((r.f(cols::LIGHT_COUNT)?, r.f(cols::RMSE)?)),
         );
         s.extend(series(
             &one,
             |_| "packing loss alone (f64: diffuse RGB + specular luminance)".into(),
-            |r| Some((r.f("light_count")?, r.f("spec_color_loss_rmse")?.max(1e-7))),
+            |r| Some((r.f(cols::LIGHT_COUNT)?, r.f(cols::SPEC_COLOR_LOSS_RMSE)?)),
         ));
         if s.iter().any(|s| s.points.len() > 1) {
             figs.push(
                 XY {
                     title: format!("Error vs the f64 reference — {res}"),
+                    zero_label: "exact (0)".into(),
                     x_label: "lights".into(),
                     y_label: "RMSE vs f64 full shading".into(),
                     log_x: true,
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("prepass_error_vs_lights_{stem}"), "The light buffer keeps the specular sum's luminance only (A): coloured lights lose the colour of their highlights (dielectrics: grey specular; metals: chroma of the diffuse light). rgba8 stores light ÷ 8 and clamps above 8.")?,
             );
@@ -83,15 +91,15 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             let mut v: Vec<String> = Vec::new();
             for r in &one {
                 let c = short(r);
-                if !v.contains(&c) && r.f("bytes_rt_written").is_some() {
+                if !v.contains(&c) && r.f(cols::BYTES_RT_WRITTEN).is_some() {
                     v.push(c);
                 }
             }
             v
         };
         if !cfgs.is_empty() {
-            let px = |r: &Rec| Some(r.f("width")? * r.f("height")?);
-            let col = |c: &str| -> Vec<Option<Pt>> {
+            let px = |r: &Rec| Some(r.f(cols::WIDTH)? * r.f(cols::HEIGHT)?);
+            let col = |c: Col| -> Vec<Option<Pt>> {
                 cfgs.iter()
                     .map(|cfg| {
                         one.iter()
@@ -101,8 +109,8 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     .collect()
             };
             let series = vec![
-                ("written".into(), col("bytes_rt_written")),
-                ("read".into(), col("bytes_rt_read")),
+                ("written".into(), col(cols::BYTES_RT_WRITTEN)),
+                ("read".into(), col(cols::BYTES_RT_READ)),
             ];
             figs.push(
                 Bars {
@@ -120,53 +128,50 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         let cpu: Vec<&Rec> = at
             .iter()
             .copied()
-            .filter(|r| r.get("method") == "prepass_cpu")
+            .filter(|r| r.get(cols::METHOD) == "prepass_cpu")
             .collect();
         let mut s = series(
             &cpu,
             |r| {
                 format!(
                     "CPU-lit, overlap={}, {} lights, {}",
-                    r.get("overlap"),
-                    r.get("light_count"),
-                    r.get("light_buffer_format")
+                    r.get(cols::OVERLAP),
+                    r.get(cols::LIGHT_COUNT),
+                    r.get(cols::LIGHT_BUFFER_FORMAT)
                 )
             },
-            |r| Some((r.f("thread_count")?, r.f("frame_ms")?)),
+            |r| Some((r.f(cols::THREAD_COUNT)?, r.f(cols::FRAME_MS)?)),
         );
         let tmin = cpu
             .iter()
-            .filter_map(|r| r.f("thread_count"))
+            .filter_map(|r| r.f(cols::THREAD_COUNT))
             .fold(f64::INFINITY, f64::min);
         let tmax = cpu
             .iter()
-            .filter_map(|r| r.f("thread_count"))
+            .filter_map(|r| r.f(cols::THREAD_COUNT))
             .fold(0.0, f64::max);
         let lit_on_cpu = |r: &Rec| {
             cpu.iter().any(|c| {
-                c.get("light_count") == r.get("light_count")
-                    && c.get("light_buffer_format") == r.get("light_buffer_format")
+                c.get(cols::LIGHT_COUNT) == r.get(cols::LIGHT_COUNT)
+                    && c.get(cols::LIGHT_BUFFER_FORMAT) == r.get(cols::LIGHT_BUFFER_FORMAT)
             })
         };
         for r in at.iter().filter(|r| {
-            r.get("method") == "prepass"
-                && r.get("second_view") == "true"
-                && r.get("light_accum") == "tiled"
+            r.get(cols::METHOD) == "prepass"
+                && r.get(cols::SECOND_VIEW) == "true"
+                && r.get(cols::LIGHT_ACCUM) == "tiled"
                 && lit_on_cpu(r)
                 && tmax > tmin
         }) {
-            if let Some(f) = r.f("frame_ms") {
+            if let Some(f) = r.f(cols::FRAME_MS) {
                 let name = format!(
                     "GPU-lit ({}), {} lights, {}",
-                    r.get("light_accum"),
-                    r.get("light_count"),
-                    r.get("light_buffer_format")
+                    r.get(cols::LIGHT_ACCUM),
+                    r.get(cols::LIGHT_COUNT),
+                    r.get(cols::LIGHT_BUFFER_FORMAT)
                 );
                 if !s.iter().any(|x| x.name == name) {
-                    s.push(Series {
-                        name,
-                        points: vec![Pt::new(tmin, f), Pt::new(tmax, f)],
-                    });
+                    s.push(Series::new(name, vec![Pt::new(tmin, f), Pt::new(tmax, f)]));
                 }
             }
         }
@@ -180,6 +185,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
                 .draw(dir, &format!("prepass_cpu_frame_{stem}"), "Every frame renders the main view and an independent second view. overlap=true submits the second view before the CPU lights, so the GPU renders it meanwhile; GPU-lit lines are the same two views with the light buffer lit on the GPU (flat: no threads).")?,
             );
@@ -190,33 +196,33 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             |r| {
                 format!(
                     "gap, overlap={}, {} lights",
-                    r.get("overlap"),
-                    r.get("light_count")
+                    r.get(cols::OVERLAP),
+                    r.get(cols::LIGHT_COUNT)
                 )
             },
-            |r| Some((r.f("thread_count")?, r.f("gpu_gap_ms")?)),
+            |r| Some((r.f(cols::THREAD_COUNT)?, r.f(cols::GPU_GAP_MS)?)),
         );
         s.extend(series(
             &cpu,
             |r| {
                 format!(
                     "GPU busy in gap, overlap={}, {} lights",
-                    r.get("overlap"),
-                    r.get("light_count")
+                    r.get(cols::OVERLAP),
+                    r.get(cols::LIGHT_COUNT)
                 )
             },
-            |r| Some((r.f("thread_count")?, r.f("gpu_busy_in_gap_ms")?.max(1e-3))),
+            |r| Some((r.f(cols::THREAD_COUNT)?, r.f(cols::GPU_BUSY_IN_GAP_MS)?)),
         ));
         s.extend(series(
             &cpu,
             |r| {
                 format!(
                     "CPU lighting, overlap={}, {} lights",
-                    r.get("overlap"),
-                    r.get("light_count")
+                    r.get(cols::OVERLAP),
+                    r.get(cols::LIGHT_COUNT)
                 )
             },
-            |r| Some((r.f("thread_count")?, r.f("cpu_light_ms")?)),
+            |r| Some((r.f(cols::THREAD_COUNT)?, r.f(cols::CPU_LIGHT_MS)?)),
         ));
         if s.iter().any(|s| s.points.len() > 1) {
             figs.push(
@@ -228,8 +234,9 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     log_y: true,
                     lines: true,
                     series: s,
+                    ..Default::default()
                 }
-                .draw(dir, &format!("prepass_cpu_gap_{stem}"), "gap: GPU clock from the end of the pre-pass to the start of the material pass (copy, map, CPU lighting, upload). busy: timed GPU passes inside it (the second view when overlapped; drawn at 1e-3 when none). A software rasteriser (lavapipe) shares the CPU cores, so there it cannot overlap for free.")?,
+                .draw(dir, &format!("prepass_cpu_gap_{stem}"), "gap: GPU clock from the end of the pre-pass to the start of the material pass (copy, map, CPU lighting, upload). busy: timed GPU passes inside it (the second view when overlapped; none: drawn in the 0 band under the axis). A software rasteriser (lavapipe) shares the CPU cores, so there it cannot overlap for free.")?,
             );
         }
     }

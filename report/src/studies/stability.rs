@@ -2,103 +2,103 @@
 //! per method configuration; and, from the `methods` study, the specialisation speedup (uber GPU
 //! time over specialised) per effect.
 
+use schema::cols;
 use std::path::Path;
 
 use anyhow::Result;
 
-use super::methods::{series_by_config, EXACT_FLOOR};
+use super::methods::{config_series, Styles};
 use crate::charts::{Bars, Figure, Pt, XY};
 use crate::data::{Rec, Runs};
-
-fn safe(s: &str) -> String {
-    s.chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-        .take(60)
-        .collect()
-}
+use crate::labels::{file_safe, scene_name, ConfigLabels};
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let rows: Vec<&Rec> = runs
         .study("stability")
         .into_iter()
-        .filter(|r| r.ok() && !r.get("method").starts_with("floor_"))
+        .filter(|r| r.ok() && !r.is_floor())
         .collect();
+    let styles = Styles::new(rows.iter().copied());
     let mut figs = Vec::new();
-    for case in Runs::distinct(rows.iter().copied(), "stability_case") {
+    for case in Runs::distinct(rows.iter().copied(), cols::STABILITY_CASE) {
         let g: Vec<&Rec> = rows
             .iter()
             .copied()
-            .filter(|r| r.get("stability_case") == case)
+            .filter(|r| r.get(cols::STABILITY_CASE) == case)
             .collect();
         let stiffness = g
             .first()
-            .map(|r| r.get("stiffness").to_string())
+            .map(|r| r.get(cols::STIFFNESS).to_string())
             .unwrap_or_default();
+        let labels = ConfigLabels::new(g.iter().copied());
+        let pt = |r: &Rec| {
+            Some(Pt::new(r.f(cols::STIFFNESS_VALUE)?, r.f(cols::RMSE)?).flagged(r.flagged()))
+        };
         // A series per method configuration and depth convention (reversed-Z is a scene
         // parameter, so it is folded into the name from the scene label).
-        let mut series = series_by_config(
-            &g,
-            |r| {
-                Some((
-                    r.f("stiffness_value")?.max(f64::MIN_POSITIVE),
-                    r.f("rmse")?.max(EXACT_FLOOR),
-                ))
-            },
-            false,
-        );
+        let mut series = Vec::new();
         if g.iter()
-            .any(|r| r.get("scene_label").contains("reversed_z=true"))
+            .any(|r| r.get(cols::SCENE_LABEL).contains("reversed_z=true"))
         {
-            series.clear();
             for rev in [false, true] {
                 let sub: Vec<&Rec> = g
                     .iter()
                     .copied()
-                    .filter(|r| r.get("scene_label").contains("reversed_z=true") == rev)
+                    .filter(|r| r.get(cols::SCENE_LABEL).contains("reversed_z=true") == rev)
                     .collect();
-                for mut s in series_by_config(
-                    &sub,
-                    |r| Some((r.f("stiffness_value")?, r.f("rmse")?.max(EXACT_FLOOR))),
-                    false,
-                ) {
+                for mut s in config_series(&sub, &labels, &styles, pt) {
                     s.name = format!(
                         "{} [{}]",
                         s.name,
                         if rev { "reversed-Z" } else { "standard Z" }
                     );
+                    // Reversed-Z keeps the method's marker and takes the next colour.
+                    s.color = s.color.map(|c| c * 2 + rev as usize);
                     series.push(s);
                 }
             }
-        }
-        if series.iter().map(|s| s.points.len()).sum::<usize>() == 0 {
-            continue;
+        } else {
+            series = config_series(&g, &labels, &styles, pt);
         }
         let positive_x = g
             .iter()
-            .all(|r| r.f("stiffness_value").is_some_and(|v| v > 0.0));
+            .all(|r| r.f(cols::STIFFNESS_VALUE).is_some_and(|v| v > 0.0));
         let xy = XY {
             title: format!("Error vs stiffness — {case}"),
             x_label: stiffness.clone(),
-            y_label: "RMSE vs f64 reference".into(),
+            y_label: "RMSE vs ground truth".into(),
             log_x: positive_x,
             log_y: true,
             lines: true,
             series,
+            zero_label: "exact (0)".into(),
+            ..Default::default()
         };
         let flagged: Vec<String> = g
             .iter()
-            .filter(|r| !r.get("flag").is_empty())
-            .map(|r| format!("{} ({})", r.get("flag"), r.get("stiffness_value")))
+            .filter(|r| r.flagged())
+            .map(|r| {
+                format!(
+                    "{} {} ({} = {})",
+                    r.get(cols::METHOD),
+                    r.flags().join("|"),
+                    stiffness,
+                    r.get(cols::STIFFNESS_VALUE)
+                )
+            })
             .collect();
+        let scenes = Runs::distinct(g.iter().copied(), cols::SCENE_LABEL);
         let caption = format!(
-            "Exact results (RMSE 0) are drawn at {EXACT_FLOOR:.0e}. Flags: {}.",
+            "Zero error is drawn in the band under the log axis. Hollow: flagged ({}). Scenes: {}. {}",
             if flagged.is_empty() {
                 "none".to_string()
             } else {
                 flagged.join(", ")
-            }
+            },
+            scenes.iter().map(|s| scene_name(s)).collect::<Vec<_>>().join("; "),
+            labels.fixed_note()
         );
-        figs.push(xy.draw(dir, &format!("stability_{}", safe(&case)), &caption)?);
+        figs.push(xy.draw(dir, &format!("stability_{}", file_safe(&case)), &caption)?);
     }
     figs.extend(specialisation(runs, dir)?);
     Ok(figs)
@@ -109,19 +109,23 @@ fn specialisation(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let rows: Vec<&Rec> = runs
         .study("methods")
         .into_iter()
-        .filter(|r| r.ok() && !r.get("specialisation").is_empty())
+        .filter(|r| r.ok() && !r.get(cols::SPECIALISATION).is_empty())
         .collect();
     let key = |r: &Rec| {
         format!(
-            "{} {} {}x{} occlusion_stop={}",
-            r.get("method"),
-            r.get("scene_label"),
-            r.get("width"),
-            r.get("height"),
-            r.get("occlusion_stop")
+            "{} — {} {}x{}{}",
+            r.get(cols::METHOD),
+            scene_name(r.get(cols::SCENE_LABEL)),
+            r.get(cols::WIDTH),
+            r.get(cols::HEIGHT),
+            if r.get(cols::OCCLUSION_STOP).is_empty() {
+                String::new()
+            } else {
+                format!(", occlusion_stop={}", r.get(cols::OCCLUSION_STOP))
+            }
         )
     };
-    let effects = Runs::distinct(rows.iter().copied(), "effect");
+    let effects = Runs::distinct(rows.iter().copied(), cols::EFFECT);
     let mut cats: Vec<String> = Vec::new();
     for r in &rows {
         let k = key(r);
@@ -138,9 +142,11 @@ fn specialisation(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                     let find = |s: &str| {
                         rows.iter()
                             .find(|r| {
-                                &key(r) == c && r.get("effect") == e && r.get("specialisation") == s
+                                &key(r) == c
+                                    && r.get(cols::EFFECT) == e
+                                    && r.get(cols::SPECIALISATION) == s
                             })
-                            .and_then(|r| r.f("gpu_ms_median"))
+                            .and_then(|r| r.f(cols::GPU_MS_MEDIAN))
                     };
                     match (find("uber"), find("specialised")) {
                         (Some(u), Some(s)) if s > 0.0 => Some(Pt::new(0.0, u / s)),

@@ -1,0 +1,190 @@
+//! Whole reports, read as a reader would: every chart's layout passes `layout::check`, the page
+//! carries the summary `summary_text` writes, FLIP columns and images show when measured, and
+//! every committed reference CSV still renders.
+
+use std::path::{Path, PathBuf};
+
+use report::charts::{layout, Layout};
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("mfx-report-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Every `*.layout.json` under `dir`, checked; returns how many there were.
+fn check_layouts(dir: &Path) -> usize {
+    let mut n = 0;
+    let mut bad = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.to_string_lossy().ends_with(".layout.json") {
+                let l: Layout =
+                    serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+                if let Err(e) = layout::check(&l) {
+                    bad.extend(e);
+                }
+                n += 1;
+            }
+        }
+    }
+    assert!(bad.is_empty(), "{}: {bad:#?}", dir.display());
+    n
+}
+
+const HEADER: &str = "schema,run_id,suite,study,scene,scene_label,width,height,method,point_key,adapter,backend,device_type,status,reason,gpu_ms_median,gpu_ms_ci_lo,gpu_ms_ci_hi,x_floor,rmse,bad_pixel_frac,matches_truth,flag,flip_mean,flip_p99,bytes_allocated,bytes_per_pixel,depth_complexity_max,overflow_rate";
+
+#[allow(clippy::too_many_arguments)] // one CSV row, every cell named
+fn row(
+    scene: &str,
+    method: &str,
+    axes: &str,
+    ms: f64,
+    rmse: &str,
+    exact: bool,
+    flag: &str,
+    flip: &str,
+    bpp: f64,
+) -> String {
+    let key = format!("methods|{scene}|64x64|{method}|{axes}");
+    format!(
+        "1,r,custom,methods,obj,\"{scene}\",64,64,{method},\"{key}\",lavapipe,vulkan,cpu,ok,,{ms},{},{},{},{rmse},0,{exact},{flag},{flip},{flip},{},{bpp},8,0",
+        ms * 0.95,
+        ms * 1.05,
+        ms / 0.1,
+        bpp * 4096.0
+    )
+}
+
+#[test]
+fn a_custom_suite_report_reads_well() {
+    let d = tmp("custom");
+    let mut rows = Vec::new();
+    for mesh in [
+        "/home/someone/models/holes-a.obj",
+        "/home/someone/models/holes-b.obj",
+    ] {
+        let scene = format!("obj(instances=4,path={mesh})");
+        let key = format!("methods|{scene}|64x64|floor_depth|");
+        rows.push(format!(
+            "1,r,custom,methods,obj,\"{scene}\",64,64,floor_depth,\"{key}\",lavapipe,vulkan,cpu,ok,,0.1,0.09,0.11,,,,,,,,4096,16,8,"
+        ));
+        rows.push(row(
+            &scene,
+            "depth_peel",
+            "max_layers=64",
+            3.0,
+            "0",
+            true,
+            "",
+            "0",
+            120.0,
+        ));
+        rows.push(row(
+            &scene,
+            "linked_list",
+            "layers=8",
+            1.0,
+            "0",
+            true,
+            "",
+            "0",
+            300.0,
+        ));
+        rows.push(row(
+            &scene,
+            "linked_list",
+            "layers=4",
+            0.8,
+            "2e-3",
+            false,
+            "overflow|noisy",
+            "0.05",
+            160.0,
+        ));
+        rows.push(row(
+            &scene, "wboit", "", 0.3, "3e-2", false, "", "0.2", 24.0,
+        ));
+    }
+    rows.push("1,r,custom,methods,obj,x,64,64,bdp,methods|x|64x64|bdp|,lavapipe,vulkan,cpu,skipped,needs 8 colour attachments,,,,,,,,,,,,,,".into());
+    std::fs::write(
+        d.join("runs.csv"),
+        format!("{HEADER}\n{}\n", rows.join("\n")),
+    )
+    .unwrap();
+    let page = report::build(&d, None).unwrap();
+    let html = std::fs::read_to_string(&page).unwrap();
+    let charts = check_layouts(&d.join("report"));
+    assert!(charts >= 8, "{charts} charts");
+    // Mesh stems name the scenes; no label is cut to a shared prefix.
+    assert!(
+        html.contains("obj holes-a") && html.contains("obj holes-b"),
+        "mesh stems"
+    );
+    assert!(!html.contains('…'), "a label was cut");
+    // The summary on the page is summary_text, escaped.
+    let runs = report::Runs::load(&d.join("runs.csv")).unwrap();
+    let text = report::summary_text(&runs);
+    assert!(
+        text.contains("Fastest exact: linked_list layers=8 at 1 [0.95, 1.05] ms, 10× floor_depth"),
+        "{text}"
+    );
+    assert!(text.contains("RMSE ≤ 1e-2: linked_list layers=4"), "{text}");
+    assert!(text.contains("needs 8 colour attachments"), "{text}");
+    assert!(html.contains(
+        &text
+            .replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+    ));
+    // FLIP columns are shown; the run has no FLIP images, which the page says in one line.
+    assert!(html.contains("<th>FLIP mean</th>") && html.contains("has no FLIP images"));
+    // The flagged point is listed; the exact points are in the zero band, not clamped.
+    assert!(html.contains("id=\"flagged\"") && html.contains("overflow, noisy"));
+    let l: Layout = serde_json::from_str(
+        &std::fs::read_to_string(
+            std::fs::read_dir(d.join("report"))
+                .unwrap()
+                .map(|e| e.unwrap().path())
+                .find(|p| {
+                    p.to_string_lossy().contains("methods_pareto_time_")
+                        && p.to_string_lossy().ends_with(".layout.json")
+                })
+                .unwrap(),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    assert!(l.zero_band > 0.0 && l.y.range[0] > 1e-4, "{l:?}");
+    // A rate that is zero everywhere is one line, not an empty chart.
+    assert!(html.contains("overflow_rate is 0 at all"), "overflow note");
+}
+
+#[test]
+fn every_committed_reference_csv_still_renders() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../results/reference");
+    let mut csvs = Vec::new();
+    let mut stack = vec![root];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() && !p.ends_with("report") && !p.ends_with("images") {
+                stack.push(p);
+            } else if p.file_name().is_some_and(|n| n == "runs.csv") {
+                csvs.push(p);
+            }
+        }
+    }
+    assert!(csvs.len() >= 10, "{csvs:?}");
+    for (i, csv) in csvs.iter().enumerate() {
+        let d = tmp(&format!("ref{i}"));
+        std::fs::copy(csv, d.join("runs.csv")).unwrap();
+        report::build(&d, None).unwrap_or_else(|e| panic!("{}: {e:#}", csv.display()));
+        check_layouts(&d.join("report"));
+    }
+}
