@@ -109,6 +109,30 @@ pub const AXES: &[Column] = &[
         "small_max",
         "compute_abuffer: largest triangle bounding box (pixels) one thread rasterises; larger ones are shared by workgroups",
     ),
+    c(
+        "transform",
+        "compute_abuffer: vertex (every vertex transformed once into a 16 B-per-vertex clip buffer) | triangle (each triangle's corners transformed in every kernel)",
+    ),
+    c(
+        "coverage",
+        "compute_abuffer: stepped (exact integer edge functions stepped pixel to pixel; big triangles' 32×32 tiles classified empty/full/partial) | direct (three exact 64-bit products per bounding-box pixel)",
+    ),
+    c(
+        "resolve_sort",
+        "compute_abuffer: workgroup (lists of up to 32 fragments sorted in workgroup memory) | private (every list in a per-thread array)",
+    ),
+    c(
+        "pool",
+        "linked_list: counted (one sub-pool per 8×8-pixel tile, sized by a prepare-time count) | fixed (layers × pixels nodes, one cursor)",
+    ),
+    c(
+        "pool_slack",
+        "linked_list, counted pool: spare nodes per tile, percent of its prepare-time count",
+    ),
+    c(
+        "node",
+        "linked_list: compact (12 B: depth, primitive, next; attributes re-derived from the primitive) | full (32 B: colour, depths, object id, next)",
+    ),
 ];
 
 /// Measurements.
