@@ -69,7 +69,9 @@ const W_DROPPED: u32 = 3u;     // fragments dropped by the resolve's sort capaci
 const W_TOTAL: u32 = 4u;       // fragments counted (the scan's total)
 const W_BIG_LOST: u32 = 5u;    // big triangles beyond `big_cap` (their fragments are missing)
 const W_CHUNKS: u32 = 6u;      // tiles of the listed big triangles
-const W_TILE_EMPTY: u32 = 7u;  // count pass, stepped: (fan triangle, tile) pairs skipped as empty
+// Count pass, stepped (one atomic per tile: ≤ 1/1024 of its pixel atomics): (fan triangle,
+// tile) pairs
+const W_TILE_EMPTY: u32 = 7u;  // skipped as empty
 const W_TILE_FULL: u32 = 8u;   // … covered whole (no per-pixel test)
 const W_TILE_PARTIAL: u32 = 9u; // … tested pixel by pixel
 const W_BLOCKS: u32 = 16u;
