@@ -36,6 +36,15 @@ pub struct Capture {
     /// A knowingly-failed mode (overflow, collision, lost_coplanar, precision, hazard).
     pub flag: Option<String>,
     pub notes: String,
+    /// The image the method's own definition gives (its CPU twin run on the reference's
+    /// fragments, e.g. k nearest plus a blended tail, or MLAB in primitive order), when that is
+    /// not the k-truncated composite `expected` names: judged into the `*_vs_k` columns. Set in
+    /// `Prepared::judge`, which sees the reference.
+    pub definition: Option<Vec<[f64; 4]>>,
+    /// Fragments a bounded capture dropped this frame (`fragments_dropped`).
+    pub dropped_fragments: Option<u64>,
+    /// Fragments a bounded capture blended into its out-of-order tail (`fragments_tailed`).
+    pub tailed_fragments: Option<u64>,
 }
 
 impl Capture {
@@ -49,6 +58,9 @@ impl Capture {
             hazard_pixels: None,
             flag: None,
             notes: String::new(),
+            definition: None,
+            dropped_fragments: None,
+            tailed_fragments: None,
         }
     }
 }

@@ -82,7 +82,9 @@ pub fn shard_groups(groups: Vec<Group>, shard: (usize, usize)) -> Vec<Group> {
 }
 
 /// Rows per group: the two floors plus the study's points.
-pub const FLOORS: &[&str] = &["floor_depth", "floor_opaque"];
+/// (`floor_blend`: every fragment blended unordered in hardware: what an engine without OIT
+/// pays, the ratio LucidRaster reports.)
+pub const FLOORS: &[&str] = &["floor_depth", "floor_opaque", "floor_blend"];
 
 pub fn rows_in(groups: &[Group]) -> usize {
     groups.iter().map(|g| g.points.len() + FLOORS.len()).sum()
@@ -215,25 +217,28 @@ pub fn run(
                     if *f == "floor_depth" {
                         ctx.floor_ms = m.gpu_ms.map(|s| s.median);
                     }
+                    if *f == "floor_blend" {
+                        ctx.blend_ms = m.gpu_ms.map(|s| s.median);
+                    }
                     row
                 }
                 Err(e) => failed_row(row, &e.to_string()),
             };
             let mut row = meta(row, f, &Params::new());
-            set_x_floor(&mut row, ctx.floor_ms);
+            set_x_floor(&mut row, ctx.floor_ms, ctx.blend_ms);
             sink.point_done(&row)?;
             written += 1;
         }
         let study = studies::by_kind(&group.kind).expect("checked in expand");
         let mut done = vec![false; group.points.len()];
         let mut sink_err: Option<CoreError> = None;
-        let floor_ms = ctx.floor_ms;
+        let (floor_ms, blend_ms) = (ctx.floor_ms, ctx.blend_ms);
         let res = {
             let mut emit = |i: usize, mut row: Row| -> Result<()> {
                 let p = &group.points[i];
                 add_scene(&mut row);
                 let mut row = meta(row, &p.method, p.given());
-                set_x_floor(&mut row, floor_ms);
+                set_x_floor(&mut row, floor_ms, blend_ms);
                 if done[i] {
                     return Err(CoreError::Schema(format!(
                         "point {} emitted twice",
@@ -273,14 +278,17 @@ pub fn run(
     Ok(written)
 }
 
-fn set_x_floor(row: &mut Row, floor_ms: Option<f64>) {
-    if let (Some(f), Some(g)) = (
-        floor_ms,
-        row.get(cols::GPU_MS_MEDIAN)
-            .and_then(|s| s.parse::<f64>().ok()),
-    ) {
-        if f > 0.0 && row.get(cols::STATUS) == Some("ok") {
-            row.set_f(cols::X_FLOOR, g / f);
+/// `x_floor` and `x_blend`: the row's median GPU time over the group's floors.
+fn set_x_floor(row: &mut Row, floor_ms: Option<f64>, blend_ms: Option<f64>) {
+    let Some(g) = row.get_f(cols::GPU_MS_MEDIAN) else {
+        return;
+    };
+    if row.get(cols::STATUS) != Some("ok") {
+        return;
+    }
+    for (col, floor) in [(cols::X_FLOOR, floor_ms), (cols::X_BLEND, blend_ms)] {
+        if let Some(f) = floor.filter(|f| *f > 0.0) {
+            row.set_f(col, g / f);
         }
     }
 }

@@ -45,7 +45,8 @@ fn err(method: &str, spec: &SceneSpec, params: &Params) -> (f64, f64) {
 }
 
 /// Depth peeling (specialised and uber), the compute A-buffer (attributes re-derived from the
-/// primitive: every effect) and the linked list (one pass, every effect but Fresnel, so last).
+/// primitive: every effect) and the linked list (one pass; its default compact nodes re-derive
+/// attributes from the primitive too).
 const RUNS: &[(&str, Option<&str>)] = &[
     ("depth_peel", Some("specialised")),
     ("depth_peel", Some("uber")),
@@ -123,9 +124,10 @@ fn translucency_stable_and_naive_48px_match_reference_near_the_eye() {
 
 #[test]
 fn fresnel_48px_matches_reference() {
-    // The linked list's nodes carry no normal: it reports fresnel as unsupported (below).
+    // The linked list's compact nodes (its default) re-derive the normal; its full nodes carry
+    // none: it reports fresnel as unsupported for them (below).
     check_runs(
-        &RUNS[..3],
+        RUNS,
         shells(),
         Params::new()
             .with("effect", s("fresnel"))
@@ -138,7 +140,12 @@ fn fresnel_48px_matches_reference() {
     let why = ll
         .supports(
             gpu,
-            &testing::point(&*ll, &Params::new().with("effect", s("fresnel"))),
+            &testing::point(
+                &*ll,
+                &Params::new()
+                    .with("effect", s("fresnel"))
+                    .with("node", s("full")),
+            ),
         )
         .unwrap_err();
     assert!(why.contains("normal"), "{why}");

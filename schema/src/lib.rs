@@ -757,6 +757,14 @@ pub mod cols {
         "fragments_extra",
         "exact methods: fragments the capture has beyond the true ones, summed over pixels",
     );
+    pub const FRAGMENTS_DROPPED: Col = Col::new(
+        "fragments_dropped",
+        "bounded captures: fragments that did not fit and were dropped this frame",
+    );
+    pub const FRAGMENTS_TAILED: Col = Col::new(
+        "fragments_tailed",
+        "bounded captures with tail = blend: fragments that did not fit and were blended out of order into the tail this frame",
+    );
     pub const LAYER_COUNT_ACCURACY: Col = Col::new(
         "layer_count_accuracy",
         "fraction of pixels whose captured fragment count equals the expected count",
@@ -1050,6 +1058,8 @@ pub const GROUPS: &[Group] = &[
             cols::FLIP_P99,
             cols::FRAGMENTS_MISSING,
             cols::FRAGMENTS_EXTRA,
+            cols::FRAGMENTS_DROPPED,
+            cols::FRAGMENTS_TAILED,
             cols::LAYER_COUNT_ACCURACY,
             cols::HAZARD_RATE,
             cols::COLLISION_RATE,

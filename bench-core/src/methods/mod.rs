@@ -4,12 +4,13 @@
 //! |----------------|--------------------------------|----------------------------|-----------------|---------------------------|
 //! | `floor_depth`  | the yardstick (issue "Compare GPUs") | — (no image)          | 1               | 4 B depth                 |
 //! | `floor_opaque` | the yardstick, one colour       | — (no image)              | 1               | 4 B depth + 4 B RGBA8     |
+//! | `floor_blend`  | the yardstick of unsorted transparency (LucidRaster's ratio) | — (not judged: primitive order) | 1 | 4 B RGBA8 |
 //! | `depth_peel`   | Everitt 2001, classic front-to-back peeling; every effect via the fold | exact up to `max_layers`; coplanar ties lost (`variant=tiebreak` keeps them) | layers + 1 | 2×4 B depth + 4–36 B layer payload + 64 B fold state + 16 B per output image + 4 B count |
 //! | `dual_peel`    | Bavoil & Myers 2008, dual depth peeling (MAX blending, nearest + farthest per pass) | exact up to `max_layers`; coplanar ties merged | ⌈layers/2⌉ + 1 | 2×8 B depth + 2×16 B layers + 2×16 B accumulation + 16 B image + 4 B count |
 //! | `kbuffer_rmw`  | Bavoil 2007 ch. 4, k-buffer by non-atomic read-modify-write insertion | k nearest, but RMW hazards (measured: `hazard_rate`) | 1 (+ resolve) | k × (4 B key + 32 B entry) + 16 B image |
 //! | `kbuffer_atomic` | hazard-free k-buffer: 32-bit atomicMax bubbling of depth keys, then a payload pass | exact k nearest (ties get their own slots) | 2 (+ resolve) | k × (4 B key + 4 B claim + 32 B entry) + 16 B image |
-//! | `linked_list`  | Yang et al. 2010, per-pixel linked lists (atomic heads, one node pool), sorted in the resolve | exact within the pool (`layers` nodes per pixel on average); overflow counted | 1 (+ resolve) | 28 B (head, lost, count, image) + layers × 32 B node |
-//! | `compute_abuffer` | Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no render pass; Laine & Karras 2011 in spirit), attributes re-derived per primitive (visibility buffer) | exact: coverage rule for rule as the reference, sized by a prepare-time count; lists over 128 counted | 2 (count, fill) + scan + resolve | 4 B offset + 16 B image + exactly 8 B per fragment |
+//! | `linked_list`  | Yang et al. 2010, per-pixel linked lists (atomic heads; per-8×8-tile node pools counted at prepare, or one layers × pixels pool), sorted in the resolve; compact nodes re-derived per primitive | exact within the pool; overflow counted | 1 (+ resolve) | 32 B (head, lost, count, image, stand-in depth) + 12 B per true fragment (compact, counted; 32 B full nodes, or layers × nodes when fixed) |
+//! | `compute_abuffer` | Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no render pass; Laine & Karras 2011 in spirit), attributes re-derived per primitive (visibility buffer) | exact: coverage rule for rule as the reference, sized by a prepare-time count; lists over 128 counted | 2 (count, fill) + scan + resolve | 4 B offset + 16 B image + exactly 8 B per fragment (+ 16 B per vertex with `transform = vertex`) |
 //! | `wboit`        | McGuire & Bavoil 2013, weighted blended OIT | approximate (exact for one layer or one colour/alpha) | 1 (+ resolve) | 8 B RGBA16F + 2 B R16F + 16 B result |
 //! | `bdp`          | Liu et al., GPU Pro ch. 1, uniform bucket depth peeling | approximate: exact iff ≤1 fragment per bucket (2 if paired); collisions counted | 2 | 8 B range + 4 B × channels (≤32) + 68 B resolve |
 //! | `bdp2`         | Liu et al., GPU Pro ch. 1, two-pass BDP | approximate: 2 fragments per bucket; collisions counted | 3 | 8 B range + 2 × 4 B × K + 68 B resolve |
@@ -44,6 +45,7 @@ pub fn all() -> Vec<Box<dyn Method>> {
     vec![
         Box::new(floor::FloorDepth),
         Box::new(floor::FloorOpaque),
+        Box::new(floor::FloorBlend),
         Box::new(depth_peel::DepthPeel),
         Box::new(dual_peel::DualPeel),
         Box::new(kbuffer_rmw::KBufferRmw),

@@ -85,6 +85,8 @@ pub struct GroupCtx<'a> {
     pub warmup: u32,
     /// floor_depth median GPU ms of this group, when measured.
     pub floor_ms: Option<f64>,
+    /// floor_blend median GPU ms of this group, when measured.
+    pub blend_ms: Option<f64>,
     /// Where `save_image` writes point images (`mfx sweep --save-images`); none = not saved.
     pub images_dir: Option<std::path::PathBuf>,
     reference: OnceCell<FragmentLists>,
@@ -112,6 +114,7 @@ impl<'a> GroupCtx<'a> {
             reps,
             warmup,
             floor_ms: None,
+            blend_ms: None,
             images_dir: None,
             reference: OnceCell::new(),
         }

@@ -1,22 +1,35 @@
 // An exact A-buffer built without the raster pipeline: triangles are rasterised in compute, twice.
+// Transform (override PRETRANSFORM, axis `transform = vertex`): every vertex's clip position once,
+// into `clipv`, which every later kernel reads instead of transforming per triangle corner.
 // Count: every covered pixel centre adds 1 to its pixel (atomicAdd). Scan: an exclusive prefix
 // sum turns the counts into each pixel's first slot. Fill: the same coverage again; each fragment
 // takes the next slot of its pixel (atomicAdd on the start, which so ends as the pixel's end) and
 // stores 8 B: its window depth and its primitive id (bit 31: front facing). Resolve: per pixel,
 // sort the slots by (depth, primitive) and fold them, re-deriving colour, normal, view depth and
-// object id from the primitive's vertices at the pixel centre (visibility-buffer style), so a
-// fragment costs exactly the 8 B of its depth and identity.
+// object id from the primitive's vertices at the pixel centre (visibility-buffer style, in
+// visibility.wgsl), so a fragment costs exactly the 8 B of its depth and identity.
 //
 // Coverage matches the reference rasteriser (`reference/raster.rs`) rule for rule: clip to
 // 0 ≤ z ≤ w, clip x/y to a guard band of ±GUARD·w only where a vertex lies outside it, snap to
-// 1/256 px, sample pixel centres, top-left fill rule. Edge functions are evaluated exactly (64-bit
-// products emulated with 32-bit integers), so shared edges are watertight and ties are decided as
-// the reference decides them. Triangles whose bounding box holds at most `small_max` pixels are
-// rasterised by one thread each; larger (and clipped) ones are cut into chunks of CHUNK
-// bounding-box pixels, one workgroup per chunk (`raster_big`), so neither a full-screen
-// triangle stalls one thread nor a 200-pixel one idles a workgroup.
+// 1/256 px, sample pixel centres, top-left fill rule. Edge functions are evaluated exactly in
+// integers, so shared edges are watertight and ties are decided as the reference decides them:
+// with override STEPPED (axis `coverage = stepped`) they are stepped from pixel to pixel — in i32
+// for a triangle that spans at most SMALL_EXTENT units (|E| ≤ 2·extent² < 2^31), in emulated
+// 64-bit for larger ones, whose 32×32 tiles are first classified from their corners as empty
+// (skipped), full (no per-pixel test) or partial; without it (`coverage = direct`) every pixel
+// evaluates the three 64-bit products anew (the first version's cost). Triangles whose bounding
+// box holds at most `small_max` pixels (and that span at most SMALL_EXTENT when stepped) are
+// rasterised by one thread each; larger (and clipped) ones are cut into tiles of TILE_PIXELS
+// pixels of their bounding box (32×32, or narrower and taller for a box under 32 px wide), one
+// workgroup per tile (`raster_big`), so neither a full-screen triangle stalls one thread nor a
+// 200-pixel one idles a workgroup.
 
 override FILL: bool = false;
+override PRETRANSFORM: bool = true;
+override STEPPED: bool = true;
+// Resolve: sort lists of up to WG_CAP fragments in workgroup memory (axis `resolve_sort =
+// workgroup`); longer lists, and every list when false, in a per-thread array.
+override WG_SORT: bool = true;
 // Sizes read at run time, so that one compiled kernel serves every scene and resolution (a
 // software driver compiles each specialisation anew).
 struct Sizes {
@@ -25,12 +38,13 @@ struct Sizes {
     nblocks: u32,
     // Fragment slots allocated (the prepare-time count); a fragment beyond it is counted as lost.
     capacity: u32,
-    // Capacity of the big-triangle list (2 words each: primitive, first chunk).
+    // Capacity of the big-triangle list (2 words each: primitive, first tile).
     big_cap: u32,
-    // Capacity of the chunk → big-triangle table.
+    // Capacity of the tile → big-triangle table.
     chunk_cap: u32,
     // Largest bounding box (pixels) one thread rasterises.
     small_max: u32,
+    nvert: u32,
 };
 @group(0) @binding(10) var<uniform> sizes: Sizes;
 // Per-pixel sort capacity of the resolve (a register/local array; WGSL needs a constant size).
@@ -38,18 +52,29 @@ const SORT_MAX: u32 = 128u;
 const GUARD: f32 = 1024.0;
 const MAXV: u32 = 9u;
 const SUB: f32 = 256.0;
+// Largest x or y span (1/256-px units, 126 px) of a triangle whose edge functions are stepped in
+// i32: |E| ≤ 2·(SMALL_EXTENT + 256)·SMALL_EXTENT < 2^31 even one step past the bounding box.
+const SMALL_EXTENT: i32 = 32256;
+// Pixels of a big triangle's tiles: 64 threads × 16 pixels; at most TILE_W wide.
+const TILE_PIXELS: u32 = 1024u;
+const TILE_W: u32 = 32u;
+// Resolve: fragments per pixel sorted in workgroup memory (64 pixels × WG_CAP × 8 B = 16 KiB).
+const WG_CAP: u32 = 32u;
 
-// `work` layout (u32 words): counters, the scan's block sums, the big-triangle list, the chunks.
+// `work` layout (u32 words): counters, the scan's block sums, the big-triangle list, the tiles.
 const W_BIG: u32 = 0u;         // big triangles listed this frame
 const W_LOST: u32 = 1u;        // fragments beyond `capacity`
 const W_OVF_PIXELS: u32 = 2u;  // pixels with more than SORT_MAX fragments
 const W_DROPPED: u32 = 3u;     // fragments dropped by the resolve's sort capacity
 const W_TOTAL: u32 = 4u;       // fragments counted (the scan's total)
 const W_BIG_LOST: u32 = 5u;    // big triangles beyond `big_cap` (their fragments are missing)
-const W_CHUNKS: u32 = 6u;      // chunks of the listed big triangles
+const W_CHUNKS: u32 = 6u;      // tiles of the listed big triangles
+// Count pass, stepped (one atomic per tile: ≤ 1/1024 of its pixel atomics): (fan triangle,
+// tile) pairs
+const W_TILE_EMPTY: u32 = 7u;  // skipped as empty
+const W_TILE_FULL: u32 = 8u;   // … covered whole (no per-pixel test)
+const W_TILE_PARTIAL: u32 = 9u; // … tested pixel by pixel
 const W_BLOCKS: u32 = 16u;
-// Bounding-box pixels per chunk: 64 threads × 16.
-const CHUNK: u32 = 1024u;
 
 fn list_at(k: u32) -> u32 {
     return W_BLOCKS + sizes.nblocks + 2u * k;
@@ -70,13 +95,21 @@ fn owner_at(c: u32) -> u32 {
 @group(0) @binding(7) var<storage, read_write> frags: array<vec2<u32>>;
 @group(0) @binding(8) var<storage, read_write> work: array<atomic<u32>>;
 @group(0) @binding(9) var<storage, read_write> out_image: array<vec4<f32>>;
+// Per vertex: clip position (written by `transform`; one element when PRETRANSFORM is off).
+@group(0) @binding(11) var<storage, read_write> clipv: array<vec4<f32>>;
 
-fn position(i: u32) -> vec3<f32> {
-    return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
+fn clip_at(i: u32) -> vec4<f32> {
+    if PRETRANSFORM {
+        return clipv[i];
+    }
+    return clip_of(i);
 }
 
-fn clip_of(i: u32) -> vec4<f32> {
-    return camera.clip_from_world * vec4<f32>(position(i), 1.0);
+@compute @workgroup_size(256)
+fn transform(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
+    for (var i = gid.x; i < sizes.nvert; i = i + nw.x * 256u) {
+        clipv[i] = clip_of(i);
+    }
 }
 
 struct Poly {
@@ -138,9 +171,10 @@ fn snap(v: f32) -> f32 {
 fn setup(prim: u32) -> Poly {
     var p: Poly;
     p.n = 3u;
-    for (var k = 0u; k < 3u; k = k + 1u) {
-        p.v[k] = clip_of(indices[3u * prim + k]);
-    }
+    let idx = tri_indices(prim);
+    p.v[0] = clip_at(idx.x);
+    p.v[1] = clip_at(idx.y);
+    p.v[2] = clip_at(idx.z);
     var inside = true;
     for (var k = 0u; k < 3u; k = k + 1u) {
         let c = p.v[k];
@@ -287,13 +321,48 @@ fn make_tri(p: Poly, k: u32) -> Tri {
     return t;
 }
 
-// Window depth at pixel (x, y) if `t` covers its centre, else a negative value.
-fn cover(t: Tri, x: i32, y: i32) -> f32 {
-    let c = vec2<i32>(x * 256 + 128, y * 256 + 128);
-    let s = vec3<i32>(edge_sign(t.i1, t.i2, c), edge_sign(t.i2, t.i0, c), edge_sign(t.i0, t.i1, c));
-    if any(s < vec3<i32>(0)) || any((s == vec3<i32>(0)) & !t.tl) {
-        return -1.0;
+// Sign-bit test of a 64-bit two's complement value (lo, hi).
+fn neg64(e: vec2<u32>) -> bool {
+    return (e.y & 0x80000000u) != 0u;
+}
+
+fn add64(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
+    let lo = a.x + b.x;
+    return vec2<u32>(lo, a.y + b.y + select(0u, 1u, lo < a.x));
+}
+
+fn sub64(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
+    return vec2<u32>(a.x - b.x, a.y - b.y - select(0u, 1u, a.x < b.x));
+}
+
+// Pixel centre (x, y) in 1/256-px units.
+fn centre_units(x: i32, y: i32) -> vec2<i32> {
+    return vec2<i32>(x * 256 + 128, y * 256 + 128);
+}
+
+// Edge k of `t` (0: i1→i2, 1: i2→i0, 2: i0→i1) at pixel (x, y), exactly in 64 bits, minus 1 when
+// the edge is not top-left: the pixel is covered iff all three are ≥ 0.
+fn edge_biased64(t: Tri, k: u32, x: i32, y: i32) -> vec2<u32> {
+    let c = centre_units(x, y);
+    var a = t.i0;
+    var b = t.i1;
+    var tl = t.tl.z;
+    if k == 0u {
+        a = t.i1;
+        b = t.i2;
+        tl = t.tl.x;
+    } else if k == 1u {
+        a = t.i2;
+        b = t.i0;
+        tl = t.tl.y;
     }
+    let e = sub64(mul64(b.x - a.x, c.y - a.y), mul64(b.y - a.y, c.x - a.x));
+    return sub64(e, vec2<u32>(select(1u, 0u, tl), 0u));
+}
+
+// Window depth of `t` at pixel (x, y)'s centre (screen-space barycentrics of the snapped fan
+// triangle, as the reference interpolates window depth).
+fn depth_at(t: Tri, x: i32, y: i32) -> f32 {
     let cf = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
     // The exact area is not 0 (`ok`), but its f32 value can round to 0 on a huge sliver.
     let area = select(t.area, 1.0, t.area == 0.0);
@@ -301,20 +370,104 @@ fn cover(t: Tri, x: i32, y: i32) -> f32 {
     return clamp(b.x * t.f0.z + b.y * t.f1.z + b.z * t.f2.z, 0.0, 1.0);
 }
 
+// Window depth at pixel (x, y) if `t` covers its centre, else a negative value (`coverage =
+// direct`: three exact 64-bit edge signs per pixel).
+fn cover(t: Tri, x: i32, y: i32) -> f32 {
+    let c = centre_units(x, y);
+    let s = vec3<i32>(edge_sign(t.i1, t.i2, c), edge_sign(t.i2, t.i0, c), edge_sign(t.i0, t.i1, c));
+    if any(s < vec3<i32>(0)) || any((s == vec3<i32>(0)) & !t.tl) {
+        return -1.0;
+    }
+    return depth_at(t, x, y);
+}
+
+// Whether a 3-vertex polygon spans at most SMALL_EXTENT units in x and y (its i32 edge
+// functions cannot overflow over its bounding box).
+fn fits_i32(p: Poly) -> bool {
+    let a = units(p.v[0]);
+    let b = units(p.v[1]);
+    let c = units(p.v[2]);
+    let e = max(max(a, b), c) - min(min(a, b), c);
+    return e.x <= SMALL_EXTENT && e.y <= SMALL_EXTENT;
+}
+
+fn edge_i32(a: vec2<i32>, b: vec2<i32>, c: vec2<i32>) -> i32 {
+    return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+}
+
 fn emit(x: i32, y: i32, depth: f32, prim: u32, front: bool) {
     let p = u32(y) * u32(camera.viewport.x) + u32(x);
-    let slot = atomicAdd(&offs[p], 1u);
     if FILL {
+        let slot = atomicAdd(&offs[p], 1u);
         if slot < sizes.capacity {
             frags[slot] = vec2<u32>(bitcast<u32>(depth), prim | select(0u, 0x80000000u, front));
         } else {
             atomicAdd(&work[W_LOST], 1u);
         }
+    } else {
+        atomicAdd(&offs[p], 1u);
     }
 }
 
-// One thread per triangle; triangles with a large bounding box (or a clipped polygon) are listed
-// for `raster_big` by the count pass (the fill pass skips them the same way).
+// A covered pixel: the count pass needs no depth.
+fn emit_covered(t: Tri, x: i32, y: i32, prim: u32) {
+    var z = 0.0;
+    if FILL {
+        z = depth_at(t, x, y);
+    }
+    emit(x, y, z, prim, t.front);
+}
+
+// One thread over a small triangle's bounding box `bb`, edge functions stepped in i32 (exact:
+// `fits_i32`).
+fn raster_stepped(t: Tri, bb: vec4<i32>, prim: u32) {
+    let c0 = centre_units(bb.x, bb.y);
+    let bias = select(vec3<i32>(1), vec3<i32>(0), t.tl);
+    var row = vec3<i32>(edge_i32(t.i1, t.i2, c0), edge_i32(t.i2, t.i0, c0), edge_i32(t.i0, t.i1, c0)) - bias;
+    // dE/dx and dE/dy per pixel of each edge a→b: −(b.y − a.y)·256 and (b.x − a.x)·256.
+    let sx = vec3<i32>(t.i1.y - t.i2.y, t.i2.y - t.i0.y, t.i0.y - t.i1.y) * 256;
+    let sy = vec3<i32>(t.i2.x - t.i1.x, t.i0.x - t.i2.x, t.i1.x - t.i0.x) * 256;
+    for (var y = bb.y; y <= bb.w; y = y + 1) {
+        var e = row;
+        for (var x = bb.x; x <= bb.z; x = x + 1) {
+            if (e.x | e.y | e.z) >= 0 {
+                emit_covered(t, x, y, prim);
+            }
+            e = e + sx;
+        }
+        row = row + sy;
+    }
+}
+
+fn raster_direct(t: Tri, bb: vec4<i32>, prim: u32) {
+    for (var y = bb.y; y <= bb.w; y = y + 1) {
+        for (var x = bb.x; x <= bb.z; x = x + 1) {
+            let z = cover(t, x, y);
+            if z >= 0.0 {
+                emit(x, y, z, prim, t.front);
+            }
+        }
+    }
+}
+
+// Tile width × height for bounding box `bb`: TILE_W wide, or the power of two at or above a
+// narrower box's width (so a vertical sliver keeps every lane busy), TILE_PIXELS in all.
+fn tile_shape(bb: vec4<i32>) -> vec2<u32> {
+    let bw = u32(bb.z - bb.x + 1);
+    let w = min(TILE_W, 1u << (32u - countLeadingZeros(bw - 1u)));
+    return vec2<u32>(w, TILE_PIXELS / w);
+}
+
+// Tiles (x, y) covering bounding box `bb`.
+fn tile_grid(bb: vec4<i32>) -> vec2<u32> {
+    let t = tile_shape(bb);
+    let size = vec2<u32>(u32(bb.z - bb.x + 1), u32(bb.w - bb.y + 1));
+    return (size + t - 1u) / t;
+}
+
+// One thread per triangle; triangles with a large bounding box (or a clipped polygon, or, when
+// stepped, a span over SMALL_EXTENT) are listed for `raster_big` by the count pass (the fill
+// pass skips them the same way).
 @compute @workgroup_size(64)
 fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
     for (var prim = gid.x; prim < sizes.ntri; prim = prim + nw.x * 64u) {
@@ -324,10 +477,11 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             continue;
         }
         let px = u32(bb.z - bb.x + 1) * u32(bb.w - bb.y + 1);
-        if p.n != 3u || px > sizes.small_max {
+        if p.n != 3u || px > sizes.small_max || (STEPPED && !fits_i32(p)) {
             if !FILL {
                 let k = atomicAdd(&work[W_BIG], 1u);
-                let nch = (px + CHUNK - 1u) / CHUNK;
+                let grid = tile_grid(bb);
+                let nch = grid.x * grid.y;
                 let first = atomicAdd(&work[W_CHUNKS], nch);
                 if k < sizes.big_cap && first + nch <= sizes.chunk_cap {
                     atomicStore(&work[list_at(k)], prim);
@@ -345,24 +499,44 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         if !t.ok {
             continue;
         }
-        for (var y = bb.y; y <= bb.w; y = y + 1) {
-            for (var x = bb.x; x <= bb.z; x = x + 1) {
-                let z = cover(t, x, y);
-                if z >= 0.0 {
-                    emit(x, y, z, prim, t.front);
-                }
-            }
+        if STEPPED {
+            raster_stepped(t, bb, prim);
+        } else {
+            raster_direct(t, bb, prim);
         }
     }
 }
 
-// Big triangles: one workgroup per chunk (of CHUNK bounding-box pixels) of a listed triangle.
-// Thread 0 sets the triangle up once and shares it (per-thread setup dominated: 64 setups per
-// medium triangle cost as much as the rest of the pass).
+// Big triangles: one workgroup per tile (`tile_shape`, w × h) of a listed triangle's bounding
+// box. Thread 0 sets the triangle up once and shares it (per-thread setup dominated: 64 setups
+// per medium triangle cost as much as the rest of the pass). Thread i covers column i % w, every
+// (64 / w)-th row from i / w, so a warp's atomics fall on consecutive pixels.
 var<workgroup> wg_poly: Poly;
 var<workgroup> wg_prim: u32;
-// First bounding-box pixel of this chunk, or 0xffffffff when the workgroup has nothing to do.
-var<workgroup> wg_start: u32;
+// Top-left pixel of this workgroup's tile; x < 0 when it has nothing to do.
+var<workgroup> wg_tile: vec2<i32>;
+// Stepped: per (edge, corner), 1 when the biased edge function is negative there.
+var<workgroup> wg_cls: array<u32, 12>;
+
+// A partial tile's pixels of thread column x, rows y0, y0 + dy, … ≤ y1: 64-bit edge values
+// stepped dy rows at a time.
+fn tile_partial(t: Tri, x: i32, y0: i32, y1: i32, dy: i32, prim: u32) {
+    var e0 = edge_biased64(t, 0u, x, y0);
+    var e1 = edge_biased64(t, 1u, x, y0);
+    var e2 = edge_biased64(t, 2u, x, y0);
+    // dy rows (256·dy units, ≤ 2^14) of dE/dy = b.x − a.x.
+    let s0 = mul64(t.i2.x - t.i1.x, 256 * dy);
+    let s1 = mul64(t.i0.x - t.i2.x, 256 * dy);
+    let s2 = mul64(t.i1.x - t.i0.x, 256 * dy);
+    for (var y = y0; y <= y1; y = y + dy) {
+        if ((e0.y | e1.y | e2.y) & 0x80000000u) == 0u {
+            emit_covered(t, x, y, prim);
+        }
+        e0 = add64(e0, s0);
+        e1 = add64(e1, s1);
+        e2 = add64(e2, s2);
+    }
+}
 
 @compute @workgroup_size(64)
 fn raster_big(
@@ -371,7 +545,7 @@ fn raster_big(
     @builtin(num_workgroups) nw: vec3<u32>,
 ) {
     if li == 0u {
-        wg_start = 0xffffffffu;
+        wg_tile = vec2<i32>(-1, 0);
         let c = wg.x + wg.y * nw.x;
         if c < min(atomicLoad(&work[W_CHUNKS]), sizes.chunk_cap) {
             let k = atomicLoad(&work[owner_at(c)]);
@@ -380,40 +554,80 @@ fn raster_big(
                 let first = atomicLoad(&work[list_at(k) + 1u]);
                 let p = setup(prim);
                 let bb = bounds(p);
-                let px = u32(bb.z - bb.x + 1) * u32(bb.w - bb.y + 1);
                 // A stale table entry (only after a listing overflow, which is flagged) is
                 // not this triangle's.
-                if bb.x <= bb.z && bb.y <= bb.w && c >= first && (c - first) * CHUNK < px {
-                    wg_poly = p;
-                    wg_prim = prim;
-                    wg_start = (c - first) * CHUNK;
+                if bb.x <= bb.z && bb.y <= bb.w && c >= first {
+                    let grid = tile_grid(bb);
+                    let ts = tile_shape(bb);
+                    let ci = c - first;
+                    if ci < grid.x * grid.y {
+                        wg_poly = p;
+                        wg_prim = prim;
+                        wg_tile = bb.xy + vec2<i32>(ts * vec2<u32>(ci % grid.x, ci / grid.x));
+                    }
                 }
             }
         }
     }
-    let start = workgroupUniformLoad(&wg_start);
-    if start == 0xffffffffu {
+    let tile = workgroupUniformLoad(&wg_tile);
+    if tile.x < 0 {
         return;
     }
-    let p = wg_poly;
-    let prim = wg_prim;
+    let p = workgroupUniformLoad(&wg_poly);
+    let prim = workgroupUniformLoad(&wg_prim);
     let bb = bounds(p);
-    let bw = u32(bb.z - bb.x + 1);
-    let px = bw * u32(bb.w - bb.y + 1);
+    let ts = tile_shape(bb);
+    // Last pixel of the tile inside the bounding box; rows between a thread's pixels.
+    let hi = min(tile + vec2<i32>(ts) - 1, bb.zw);
+    let x = tile.x + i32(li % ts.x);
+    let y0 = tile.y + i32(li / ts.x);
+    let dy = i32(64u / ts.x);
     for (var t_i = 1u; t_i + 1u < p.n; t_i = t_i + 1u) {
         let t = make_tri(p, t_i);
         if !t.ok {
             continue;
         }
-        for (var j = li; j < CHUNK; j = j + 64u) {
-            let i = start + j;
-            if i < px {
-                let x = bb.x + i32(i % bw);
-                let y = bb.y + i32(i / bw);
-                let z = cover(t, x, y);
-                if z >= 0.0 {
-                    emit(x, y, z, prim, t.front);
+        if !STEPPED {
+            if x <= hi.x {
+                for (var y = y0; y <= hi.y; y = y + dy) {
+                    let z = cover(t, x, y);
+                    if z >= 0.0 {
+                        emit(x, y, z, prim, t.front);
+                    }
                 }
+            }
+            continue;
+        }
+        // Classify the tile from its corner pixels: an edge function is affine, so its extremes
+        // over the tile's pixel centres are at the corners.
+        if li < 12u {
+            let corner = li % 4u;
+            let cx = select(tile.x, hi.x, (corner & 1u) != 0u);
+            let cy = select(tile.y, hi.y, (corner & 2u) != 0u);
+            wg_cls[li] = select(0u, 1u, neg64(edge_biased64(t, li / 4u, cx, cy)));
+        }
+        let cls = workgroupUniformLoad(&wg_cls);
+        var full = true;
+        var empty = false;
+        for (var k = 0u; k < 3u; k = k + 1u) {
+            let neg = cls[4u * k] + cls[4u * k + 1u] + cls[4u * k + 2u] + cls[4u * k + 3u];
+            full = full && neg == 0u;
+            empty = empty || neg == 4u;
+        }
+        // wg_cls is rewritten for the next fan triangle.
+        workgroupBarrier();
+        if !FILL && li == 0u {
+            atomicAdd(&work[select(select(W_TILE_PARTIAL, W_TILE_FULL, full), W_TILE_EMPTY, empty)], 1u);
+        }
+        // No `continue` on a per-thread condition: the next fan triangle's barrier must stay in
+        // uniform control flow.
+        if !empty && x <= hi.x {
+            if full {
+                for (var y = y0; y <= hi.y; y = y + dy) {
+                    emit_covered(t, x, y, prim);
+                }
+            } else {
+                tile_partial(t, x, y0, hi.y, dy, prim);
             }
         }
     }
@@ -499,68 +713,19 @@ fn scan_add(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_inde
     }
 }
 
-// Perspective-correct weights of a triangle's three vertices at NDC point `ndc` (2D homogeneous
-// rasterisation, Olano & Greer 1997): solve [v0 v1 v2]·λ ∝ (x, y, 1) over the clip-space
-// (x, y, w) columns, each scaled to unit size first so vertices at 1e20 neither overflow nor
-// cancel; valid for vertices behind the eye too. A covered point lies inside the triangle, so
-// its weights are in [0, 1]: they are clamped there (rounding), and a triangle degenerate in clip
-// space (collinear vertices that snapping turned into a covering sliver: λ ≈ 0/0) gets equal
-// weights instead of NaN.
-fn persp_weights(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, ndc: vec2<f32>) -> vec3<f32> {
-    let s = 1.0 / max(vec3<f32>(
-        max(max(abs(c0.x), abs(c0.y)), abs(c0.w)),
-        max(max(abs(c1.x), abs(c1.y)), abs(c1.w)),
-        max(max(abs(c2.x), abs(c2.y)), abs(c2.w)),
-    ), vec3<f32>(1e-30));
-    let a = c0.xyw * s.x;
-    let b = c1.xyw * s.y;
-    let c = c2.xyw * s.z;
-    let q = vec3<f32>(ndc, 1.0);
-    let l = vec3<f32>(dot(cross(b, c), q), dot(cross(c, a), q), dot(cross(a, b), q)) * s;
-    let sum = l.x + l.y + l.z;
-    if !(abs(sum) > 1e-6 * (abs(l.x) + abs(l.y) + abs(l.z))) {
-        return vec3<f32>(1.0 / 3.0);
-    }
-    let w = clamp(l / sum, vec3<f32>(0.0), vec3<f32>(1.0));
-    let t = w.x + w.y + w.z;
-    if !(t > 0.0) {
-        return vec3<f32>(1.0 / 3.0);
-    }
-    return w / t;
-}
+
+// Workgroup-memory sort slots: pixel li's slot j at j·64 + li (consecutive lanes, consecutive
+// banks).
+var<workgroup> sort_d: array<f32, 2048>;
+var<workgroup> sort_t: array<u32, 2048>;
 
 fn fragment(depth: f32, tag: u32, ndc: vec2<f32>) -> Frag {
-    let prim = tag & 0x7fffffffu;
-    let i0 = indices[3u * prim];
-    let i1 = indices[3u * prim + 1u];
-    let i2 = indices[3u * prim + 2u];
-    let p0 = vec4<f32>(position(i0), 1.0);
-    let p1 = vec4<f32>(position(i1), 1.0);
-    let p2 = vec4<f32>(position(i2), 1.0);
-    let m = camera.clip_from_world;
-    let b = persp_weights(m * p0, m * p1, m * p2, ndc);
-    let v = camera.view_from_world;
-    let vz = -vec3<f32>((v * p0).z, (v * p1).z, (v * p2).z);
-    let n0 = vec3<f32>(normals[3u * i0], normals[3u * i0 + 1u], normals[3u * i0 + 2u]);
-    let n1 = vec3<f32>(normals[3u * i1], normals[3u * i1 + 1u], normals[3u * i1 + 2u]);
-    let n2 = vec3<f32>(normals[3u * i2], normals[3u * i2 + 1u], normals[3u * i2 + 2u]);
-    return Frag(
-        depth,
-        dot(b, vz),
-        b.x * colors[i0] + b.y * colors[i1] + b.z * colors[i2],
-        b.x * n0 + b.y * n1 + b.z * n2,
-        object_ids[i0],
-        (tag >> 31u) != 0u,
-    );
-}
-
-// (depth, primitive) of slot a nearer than of slot b: ties keep submission order, as the reference.
-fn before(da: f32, pa: u32, db: f32, pb: u32) -> bool {
-    return nearer(da, db) || (da == db && (pa & 0x7fffffffu) < (pb & 0x7fffffffu));
+    let i = tri_indices(tag & 0x7fffffffu);
+    return frag_from(depth, tag, ndc, i, clip_at(i.x), clip_at(i.y), clip_at(i.z));
 }
 
 @compute @workgroup_size(8, 8)
-fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
+fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let w = u32(camera.viewport.x);
     let h = u32(camera.viewport.y);
     if id.x >= w || id.y >= h {
@@ -576,34 +741,57 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     var t: array<u32, SORT_MAX>;
     var n = 0u;
     var dropped = 0u;
-    for (var s = start; s < end; s = s + 1u) {
-        let e = frags[s];
-        let z = bitcast<f32>(e.x);
-        if n == SORT_MAX {
-            dropped = dropped + 1u;
-            if !before(z, e.y, d[n - 1u], t[n - 1u]) {
-                continue;
+    let in_wg = WG_SORT && end - start <= WG_CAP;
+    if in_wg {
+        for (var s = start; s < end; s = s + 1u) {
+            let e = frags[s];
+            let z = bitcast<f32>(e.x);
+            var j = n;
+            loop {
+                if j == 0u || !before(z, e.y, sort_d[(j - 1u) * 64u + li], sort_t[(j - 1u) * 64u + li]) {
+                    break;
+                }
+                sort_d[j * 64u + li] = sort_d[(j - 1u) * 64u + li];
+                sort_t[j * 64u + li] = sort_t[(j - 1u) * 64u + li];
+                j = j - 1u;
             }
-            n = n - 1u;
+            sort_d[j * 64u + li] = z;
+            sort_t[j * 64u + li] = e.y;
+            n = n + 1u;
         }
-        var j = n;
-        loop {
-            if j == 0u || !before(z, e.y, d[j - 1u], t[j - 1u]) {
-                break;
+    } else {
+        for (var s = start; s < end; s = s + 1u) {
+            let e = frags[s];
+            let z = bitcast<f32>(e.x);
+            if n == SORT_MAX {
+                dropped = dropped + 1u;
+                if !before(z, e.y, d[n - 1u], t[n - 1u]) {
+                    continue;
+                }
+                n = n - 1u;
             }
-            d[j] = d[j - 1u];
-            t[j] = t[j - 1u];
-            j = j - 1u;
+            var j = n;
+            loop {
+                if j == 0u || !before(z, e.y, d[j - 1u], t[j - 1u]) {
+                    break;
+                }
+                d[j] = d[j - 1u];
+                t[j] = t[j - 1u];
+                j = j - 1u;
+            }
+            d[j] = z;
+            t[j] = e.y;
+            n = n + 1u;
         }
-        d[j] = z;
-        t[j] = e.y;
-        n = n + 1u;
     }
-    let centre = vec2<f32>(id.xy) + 0.5;
-    let ndc = vec2<f32>(centre.x * camera.viewport.z * 2.0 - 1.0, 1.0 - centre.y * camera.viewport.w * 2.0);
-    var st = fold_init_at(centre);
+    let ndc = pixel_ndc(id.xy);
+    var st = fold_init_at(vec2<f32>(id.xy) + 0.5);
     for (var i = 0u; i < n; i = i + 1u) {
-        fold_step(&st, fragment(d[i], t[i], ndc));
+        if in_wg {
+            fold_step(&st, fragment(sort_d[i * 64u + li], sort_t[i * 64u + li], ndc));
+        } else {
+            fold_step(&st, fragment(d[i], t[i], ndc));
+        }
     }
     for (var k = 0u; k < fold_image_count(); k = k + 1u) {
         out_image[k * w * h + p] = fold_finish_image(st, k);

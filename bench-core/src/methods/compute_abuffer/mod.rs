@@ -13,24 +13,39 @@
 //! The fragment array is sized by one count at prepare time (the scene is static); every frame
 //! counts again and a fragment beyond the allocation is counted as lost (flag `overflow`), never
 //! silent — a dynamic scene would grow the array from that count, as engines do.
+//!
+//! Speed axes (each exact; what they trade is in `PERF.md` beside this file):
+//! - `transform = vertex|triangle`: `vertex` (default) transforms every vertex once into a
+//!   16 B-per-vertex clip buffer that count, fill and resolve read; `triangle` transforms each
+//!   triangle's corners in every kernel (the first version).
+//! - `coverage = stepped|direct`: `stepped` (default) steps exact integer edge functions from
+//!   pixel to pixel (i32 for triangles spanning ≤ 126 px, emulated 64-bit otherwise) and
+//!   classifies big triangles' 32×32 tiles as empty/full/partial from their corners; `direct`
+//!   evaluates three 64-bit products per bounding-box pixel (the first version).
+//! - `resolve_sort = workgroup|private`: `workgroup` (default) insertion-sorts lists of up to 32
+//!   fragments in workgroup memory (16 KiB per 8×8 pixels), longer ones in a per-thread array;
+//!   `private` sorts every list in the per-thread array (the first version).
+//!
+//! Memory: `bytes_overhead` is the per-pixel part (offsets, scan block sums, counters, output
+//! images); the rest is the fragments (8 B each), the clip buffer (16 B per vertex with
+//! `transform = vertex`) and the big-triangle list (2 words per big triangle + 1 per tile).
 
-use crate::effects::FOLD_WGSL;
+use super::{Capture, Expected, FrameStats, Method, Prepared};
+use crate::axes::{Axis, Point};
+use crate::effects::{self, EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
+use crate::gpu::Gpu;
+use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::gpu_util::{
     bind_buffers, camera_entry, check_storage_size, compute_pipeline, read_vec, shader,
     storage_entry, STORAGE_RW,
 };
-
-use super::{Capture, Expected, FrameStats};
-use super::{Method, Prepared};
-use crate::axes::{Axis, Point};
-use crate::effects::{self, EffectConfig};
-use crate::gpu::Gpu;
-use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::record::cols;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
 const WGSL: &str = include_str!("compute_abuffer.wgsl");
+/// Attribute re-derivation from a primitive id (also used by `linked_list`'s compact nodes).
+pub const VISIBILITY_WGSL: &str = include_str!("visibility.wgsl");
 /// The resolve's per-pixel sort capacity (`SORT_MAX` in the WGSL).
 pub const SORT_MAX: u32 = 128;
 /// Bytes per stored fragment: f32 window depth + u32 primitive id (bit 31: front facing).
@@ -41,10 +56,16 @@ const COUNTERS: u64 = 16;
 const SCAN_BLOCK: u64 = 1024;
 /// Largest dispatch dimension wgpu guarantees.
 const MAX_GROUPS: u32 = 65_535;
-/// Bounding-box pixels per chunk of a shared triangle (`CHUNK` in the WGSL).
-const CHUNK: u32 = 1024;
+/// Pixels of a shared triangle's tiles, and their widest width (`TILE_PIXELS`, `TILE_W` in the
+/// WGSL; a narrower box gets narrower, taller tiles, so no tile is under 32 px tall).
+const TILE_PIXELS: u32 = 1024;
+const TILE_W: u32 = 32;
 /// Storage buffers the kernels bind.
-const STORAGE_BUFFERS: u32 = 9;
+const STORAGE_BUFFERS: u32 = 10;
+/// Workgroup memory of the resolve's `resolve_sort = workgroup` (2 × 2048 words).
+const WG_SORT_BYTES: u32 = 16 * 1024;
+/// Bytes per vertex of the clip buffer (`transform = vertex`).
+const CLIP_BYTES: u64 = 16;
 
 pub struct ComputeAbuffer;
 
@@ -55,30 +76,55 @@ const SMALL_MAX: Axis = Axis::int(
     1,
     1 << 20,
 );
+const TRANSFORM: Axis = Axis::choice(
+    cols::TRANSFORM,
+    "vertex: each vertex transformed once into a clip buffer; triangle: per triangle in every kernel",
+    "vertex",
+    &["vertex", "triangle"],
+);
+const COVERAGE: Axis = Axis::choice(
+    cols::COVERAGE,
+    "stepped: integer edge functions stepped, big triangles' tiles classified; direct: 64-bit products per pixel",
+    "stepped",
+    &["stepped", "direct"],
+);
+const RESOLVE_SORT: Axis = Axis::choice(
+    cols::RESOLVE_SORT,
+    "workgroup: short lists sorted in workgroup memory; private: every list in a per-thread array",
+    "workgroup",
+    &["workgroup", "private"],
+);
 
 impl Method for ComputeAbuffer {
     fn name(&self) -> &'static str {
         "compute_abuffer"
     }
     fn describe(&self) -> &'static str {
-        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment"
+        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 16 B per vertex)"
     }
     fn exact(&self) -> bool {
         true
     }
     fn axes(&self) -> Vec<Axis> {
-        let mut v = vec![SMALL_MAX];
+        let mut v = vec![SMALL_MAX, TRANSFORM, COVERAGE, RESOLVE_SORT];
         v.extend_from_slice(effects::AXES);
         v
     }
     fn validate(&self, point: &Point) -> std::result::Result<(), String> {
         EffectConfig::from_point(point).map(|_| ())
     }
-    fn supports(&self, gpu: &Gpu, _: &Point) -> std::result::Result<(), String> {
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
         let have = gpu.limits.max_storage_buffers_per_shader_stage;
         if have < STORAGE_BUFFERS {
             return Err(format!(
                 "needs {STORAGE_BUFFERS} storage buffers per shader stage, the adapter allows {have}"
+            ));
+        }
+        let v = variants(point);
+        let wg = gpu.limits.max_compute_workgroup_storage_size;
+        if v.wg_sort && wg < WG_SORT_BYTES {
+            return Err(format!(
+                "resolve_sort = workgroup needs {WG_SORT_BYTES} B of workgroup memory, the adapter allows {wg}"
             ));
         }
         Ok(())
@@ -86,7 +132,37 @@ impl Method for ComputeAbuffer {
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let small = point.int(&SMALL_MAX) as u32;
         let effect = EffectConfig::from_point(point).map_err(CoreError::Param)?;
-        Ok(Box::new(PreparedAbuffer::new(gpu, scene, small, &effect)?))
+        let v = variants(point);
+        Ok(Box::new(PreparedAbuffer::new(
+            gpu, scene, small, &effect, v,
+        )?))
+    }
+}
+
+/// The speed axes (module doc): each choice is exact, they trade work against memory.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+struct Variants {
+    /// `transform = vertex`: one clip-space transform per vertex, into a buffer.
+    pretransform: bool,
+    /// `coverage = stepped`: edge functions stepped, big triangles' tiles classified.
+    stepped: bool,
+    /// `resolve_sort = workgroup`: short lists sorted in workgroup memory.
+    wg_sort: bool,
+}
+
+fn variants(point: &Point) -> Variants {
+    Variants {
+        pretransform: point.choice(&TRANSFORM) == "vertex",
+        stepped: point.choice(&COVERAGE) == "stepped",
+        wg_sort: point.choice(&RESOLVE_SORT) == "workgroup",
+    }
+}
+
+fn flag(b: bool) -> f64 {
+    if b {
+        1.0
+    } else {
+        0.0
     }
 }
 
@@ -101,7 +177,7 @@ struct Sizes {
     big_cap: u32,
     chunk_cap: u32,
     small_max: u32,
-    pad: u32,
+    nvert: u32,
 }
 
 /// The two raster kernels of one mode (count or fill).
@@ -111,6 +187,7 @@ struct Kernels {
 }
 
 struct PreparedAbuffer {
+    transform: Option<(wgpu::ComputePipeline, (u32, u32))>,
     count: Kernels,
     fill: Kernels,
     scan: [wgpu::ComputePipeline; 3],
@@ -129,7 +206,10 @@ struct PreparedAbuffer {
     images: usize,
     prep_note: String,
     _sizes: wgpu::Buffer,
+    _clipv: wgpu::Buffer,
     alloc: AllocCounter,
+    #[allow(dead_code)]
+    overhead: u64,
 }
 
 struct Layout {
@@ -138,8 +218,12 @@ struct Layout {
     pipeline: wgpu::PipelineLayout,
 }
 
-fn kernels(gpu: &Gpu, l: &Layout, fill: bool) -> Kernels {
-    let c = [("FILL", if fill { 1.0 } else { 0.0 })];
+fn kernels(gpu: &Gpu, l: &Layout, fill: bool, v: Variants) -> Kernels {
+    let c = [
+        ("FILL", flag(fill)),
+        ("PRETRANSFORM", flag(v.pretransform)),
+        ("STEPPED", flag(v.stepped)),
+    ];
     let mk = |entry: &str| compute_pipeline(gpu, entry, &l.pipeline, &l.module, entry, &c, false);
     Kernels {
         small: mk("raster_small"),
@@ -168,7 +252,13 @@ fn dispatch(
 }
 
 impl PreparedAbuffer {
-    fn new(gpu: &Gpu, scene: &GpuScene, small_max: u32, effect: &EffectConfig) -> Result<Self> {
+    fn new(
+        gpu: &Gpu,
+        scene: &GpuScene,
+        small_max: u32,
+        effect: &EffectConfig,
+        v: Variants,
+    ) -> Result<Self> {
         let d = &gpu.device;
         let px = scene.pixels() as u64;
         let nblocks = px.div_ceil(SCAN_BLOCK);
@@ -179,7 +269,8 @@ impl PreparedAbuffer {
             )));
         }
         let ntri = scene.index_count / 3;
-        let src = format!("{WGSL}\n{FOLD_WGSL}");
+        let nvert = (scene.positions.size() / 12) as u32;
+        let src = format!("{WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}");
         let module = shader(gpu, "compute_abuffer", &src);
         let cs = wgpu::ShaderStages::COMPUTE;
         let mut entries = vec![camera_entry(0)];
@@ -188,6 +279,7 @@ impl PreparedAbuffer {
         let mut uniform = camera_entry(10);
         uniform.visibility = cs;
         entries.push(uniform);
+        entries.push(storage_entry(11, false, cs));
         let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("compute_abuffer"),
             entries: &entries,
@@ -210,7 +302,7 @@ impl PreparedAbuffer {
             big_cap: big_cap as u32,
             chunk_cap: chunk_cap as u32,
             small_max,
-            pad: 0,
+            nvert,
         };
         let sizes_buf = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("abuffer sizes"),
@@ -225,8 +317,31 @@ impl PreparedAbuffer {
         let scan_groups = [(nblocks as u32, 1), (1, 1), (nblocks as u32, 1)];
         let scan = ["scan_blocks", "scan_sums", "scan_add"]
             .map(|e| compute_pipeline(gpu, e, &l.pipeline, &l.module, e, &[], false));
-        let count = kernels(gpu, &l, false);
+        let count = kernels(gpu, &l, false, v);
         let small_groups = (ntri.div_ceil(64).clamp(1, MAX_GROUPS), 1);
+        let mut alloc = AllocCounter::default();
+        // The clip buffer is kept (written each frame); a 16 B stand-in when unused.
+        let clip_bytes = if v.pretransform {
+            nvert.max(1) as u64 * CLIP_BYTES
+        } else {
+            CLIP_BYTES
+        };
+        check_storage_size(gpu, "compute_abuffer clip buffer", clip_bytes)?;
+        let clipv = alloc.buffer(gpu, "abuffer clip positions", clip_bytes, STORAGE_RW);
+        let transform = v.pretransform.then(|| {
+            let p = compute_pipeline(
+                gpu,
+                "transform",
+                &l.pipeline,
+                &l.module,
+                "transform",
+                &[],
+                false,
+            );
+            (p, (nvert.div_ceil(256).clamp(1, MAX_GROUPS), 1))
+        });
+        let pre: Vec<(&wgpu::ComputePipeline, (u32, u32))> =
+            transform.iter().map(|(p, g)| (p, *g)).collect();
 
         // Sizing, in two counts read back: (1) list the big triangles (a list as long as the
         // scene, no chunk table) for their number and chunks; (2) with the exact list and table,
@@ -264,6 +379,7 @@ impl PreparedAbuffer {
                     work,
                     image,
                     &sizes_buf,
+                    &clipv,
                 ],
             )
         };
@@ -272,6 +388,7 @@ impl PreparedAbuffer {
         let mut enc = d.create_command_encoder(&Default::default());
         enc.clear_buffer(&offs, 0, None);
         enc.clear_buffer(&listing, 0, None);
+        dispatch(&mut enc, None, "sizing: transform", &listing_bind, &pre);
         dispatch(
             &mut enc,
             None,
@@ -285,7 +402,6 @@ impl PreparedAbuffer {
         drop(listing_bind);
         drop(listing);
 
-        let mut alloc = AllocCounter::default();
         alloc.bytes += px * 4; // the offsets (allocated above, kept)
         let work_bytes = work_words(nbig, nchunks) * 4;
         check_storage_size(gpu, "compute_abuffer work", work_bytes)?;
@@ -302,6 +418,7 @@ impl PreparedAbuffer {
         let mut enc = d.create_command_encoder(&Default::default());
         enc.clear_buffer(&offs, 0, None);
         enc.clear_buffer(&work, 0, None);
+        dispatch(&mut enc, None, "sizing: transform", &sizing_bind, &pre);
         dispatch(
             &mut enc,
             None,
@@ -333,8 +450,10 @@ impl PreparedAbuffer {
         let image = alloc.buffer(gpu, "abuffer image", image_bytes, STORAGE_RW);
         let bind = bind_with(&frags, &work, &image);
         set_sizes(sizes(capacity, big_cap, chunk_cap));
-        let fill = kernels(gpu, &l, true);
-        let rc = effect.constants();
+        let fill = kernels(gpu, &l, true, v);
+        let mut rc = effect.constants();
+        rc.push(("PRETRANSFORM", flag(v.pretransform)));
+        rc.push(("WG_SORT", flag(v.wg_sort)));
         let resolve = compute_pipeline(
             gpu,
             "resolve",
@@ -345,10 +464,13 @@ impl PreparedAbuffer {
             false,
         );
         let prep_note = format!(
-            "sized by prepare-time counts: {total} fragments, {nbig} shared (big or clipped) triangles in {nchunks} chunks of {CHUNK} px, {} B of sizing scratch freed",
+            "sized by prepare-time counts: {total} fragments, {nbig} shared (big or clipped) triangles in {nchunks} tiles of {TILE_PIXELS} px (≤ {TILE_W} wide), {} B of sizing scratch freed",
             scratch.bytes - px * 4
         );
+        drop(pre);
+        let overhead = px * 4 + (COUNTERS + nblocks) * 4 + image_bytes;
         Ok(PreparedAbuffer {
+            transform,
             count,
             fill,
             scan,
@@ -364,7 +486,9 @@ impl PreparedAbuffer {
             images,
             prep_note,
             _sizes: sizes_buf,
+            _clipv: clipv,
             alloc,
+            overhead,
         })
     }
 }
@@ -374,6 +498,9 @@ impl Prepared for PreparedAbuffer {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.offs, 0, None);
         enc.clear_buffer(&self.work, 0, Some(COUNTERS * 4));
+        if let Some((p, g)) = &self.transform {
+            dispatch(&mut enc, Some(timer), "transform", &self.bind, &[(p, *g)]);
+        }
         dispatch(
             &mut enc,
             Some(timer),
@@ -440,12 +567,13 @@ impl Prepared for PreparedAbuffer {
             c[4] as u64,
             c[5] as u64,
         );
+        let (empty, full, partial) = (c[7], c[8], c[9]);
         cap.overflow_pixels = Some(ovf_px + short);
         if lost + dropped + big_lost > 0 {
             cap.flag = Some("overflow".into());
         }
         cap.notes = format!(
-            "{}; this frame {total} fragments, {lost} beyond the allocation, {dropped} beyond the sort capacity ({SORT_MAX}) in {ovf_px} pixels, {big_lost} big triangles unlisted",
+            "{}; this frame {total} fragments, {lost} beyond the allocation, {dropped} beyond the sort capacity ({SORT_MAX}) in {ovf_px} pixels, {big_lost} big triangles unlisted; big-triangle tiles {empty} empty, {full} full, {partial} partial",
             self.prep_note
         );
         Ok(cap)
@@ -453,6 +581,11 @@ impl Prepared for PreparedAbuffer {
 
     fn bytes_allocated(&self) -> u64 {
         self.alloc.bytes
+    }
+    /// The per-pixel structures (offsets or heads, counters, output images): everything but
+    /// the fragments (or nodes) and what holds them.
+    fn bytes_overhead(&self) -> Option<u64> {
+        Some(self.overhead)
     }
 }
 

@@ -1,5 +1,5 @@
 use glam::{DVec3, Vec3};
-use scenarios::ParamValue::Int;
+use scenarios::ParamValue::{Int, Str};
 use scenarios::{Camera, Mesh, Params, Scene, SceneSpec};
 
 use super::*;
@@ -19,17 +19,109 @@ fn check(name: &str, s: &Scene, w: u32, h: u32, p: &Params) {
     assert!(e <= IMAGE_TOL, "{name}: error {e} at pixel {at}");
 }
 
+/// The default variant and each non-default speed axis value alone (one factor at a time).
+const VARIANTS: &[&[(&str, &str)]] = &[
+    &[],
+    &[("transform", "triangle")],
+    &[("coverage", "direct")],
+    &[("resolve_sort", "private")],
+];
+
+fn variant_params(v: &[(&str, &str)], small: i64) -> (String, Params) {
+    let mut kv: Vec<(&str, scenarios::ParamValue)> = vec![("small_max", Int(small))];
+    kv.extend(v.iter().map(|(k, s)| (*k, Str(s.to_string()))));
+    let label = v
+        .iter()
+        .map(|(k, s)| format!("{k}={s}"))
+        .collect::<Vec<_>>()
+        .join(",");
+    (label, params(&kv))
+}
+
 #[test]
-fn equals_the_reference_with_small_big_and_all_shared_triangles() {
+fn equals_the_reference_with_small_big_and_all_shared_triangles_in_every_variant() {
     let shells = scene("shells", &[("count", Int(4)), ("segments", Int(12))]);
     let grass = scene("grass", &[("blades", Int(300))]);
     let quads = scene("quads", &[("depth_complexity", Int(6))]);
     // small_max 1: (almost) every triangle takes the shared path; 1 << 20: every unclipped one
-    // is rasterised by a single thread.
-    for small in [1, 128, 1 << 20] {
-        let p = params(&[("small_max", Int(small))]);
-        for (name, s) in [("shells", &shells), ("grass", &grass), ("quads", &quads)] {
-            check(&format!("{name} small_max {small}"), s, 48, 40, &p);
+    // that spans at most 126 px (all of these at 48×40) is rasterised by a single thread.
+    for v in VARIANTS {
+        for small in [1, 128, 1 << 20] {
+            let (label, p) = variant_params(v, small);
+            for (name, s) in [("shells", &shells), ("grass", &grass), ("quads", &quads)] {
+                check(&format!("{name} small_max {small} {label}"), s, 48, 40, &p);
+            }
+        }
+    }
+}
+
+/// Runs `s` and returns the capture's big-triangle tile counts (empty, full, partial) from its
+/// notes.
+fn tile_classes(notes: &str) -> [u64; 3] {
+    let at = notes
+        .find("big-triangle tiles ")
+        .expect("tile counts in the notes")
+        + 19;
+    let words: Vec<u64> = notes[at..]
+        .split(|c: char| !c.is_ascii_digit())
+        .filter(|w| !w.is_empty())
+        .take(3)
+        .map(|w| w.parse().unwrap())
+        .collect();
+    [words[0], words[1], words[2]]
+}
+
+#[test]
+fn big_triangles_tiles_empty_full_and_partial_equal_the_reference() {
+    // 160×128: the quads span up to ~150 px, so a triangle's 32×32 tiles fall wholly outside
+    // it, wholly inside it and across its edges; 40 layers exceed the workgroup sort's 32 slots
+    // at the centre, so the resolve's fallback to the per-thread array runs too.
+    let quads = scene("quads", &[("depth_complexity", Int(40))]);
+    for v in VARIANTS {
+        let (label, p) = variant_params(v, 1);
+        let (cap, lists) = run(&ComputeAbuffer, &quads, 160, 128, &p);
+        assert!(lists.max_depth_complexity() > 32);
+        if !label.contains("direct") {
+            let [empty, full, partial] = tile_classes(&cap.notes);
+            assert!(
+                empty > 0 && full > 0 && partial > 0,
+                "{label}: every tile class occurs: {}",
+                cap.notes
+            );
+        }
+        check(&format!("quads(40) 160×128 {label}"), &quads, 160, 128, &p);
+    }
+}
+
+#[test]
+fn long_slivers_take_the_shared_path_and_equal_the_reference() {
+    // Thin triangles spanning ~350 px with bounding boxes of a few hundred pixels: with
+    // small_max 1 << 20 their span (over 126 px) still sends them to the tiles, whose stepped
+    // 64-bit edges must decide every pixel as the reference does. Horizontal ones get 32-wide
+    // tiles; vertical ones (the mesh turned 90°, bounding boxes under 32 px wide) narrow, tall
+    // tiles.
+    for vertical in [false, true] {
+        let mut m = Mesh::default();
+        for k in 0..6 {
+            let y = -0.3 + 0.1 * k as f32;
+            let mut v = [
+                [-2.5, y, 0.1 * k as f32],
+                [2.5, y + 0.013, 0.0],
+                [-2.4, y + 0.031, 0.0],
+            ];
+            if vertical {
+                v = v.map(|[x, y, z]| [y, x, z]);
+            }
+            tri(&mut m, v, [0.2 + 0.1 * k as f32, 0.5, 0.7, 0.5], k);
+        }
+        let s = scene_with(m, 5.0, 0.5);
+        let (w, h) = if vertical { (48, 400) } else { (400, 48) };
+        for v in VARIANTS {
+            for small in [1 << 20, 256] {
+                let (label, p) = variant_params(v, small);
+                let name = format!("slivers vertical {vertical} small_max {small} {label}");
+                check(&name, &s, w, h, &p);
+            }
         }
     }
 }
@@ -72,46 +164,98 @@ fn clips_at_the_near_plane_and_the_guard_band_like_the_reference() {
         2,
     );
     let s = scene_with(m, 5.0, 0.5);
-    for small in [1, 128] {
-        check(
-            &format!("clipped small_max {small}"),
-            &s,
-            40,
-            32,
-            &params(&[("small_max", Int(small))]),
-        );
+    for v in VARIANTS {
+        for small in [1, 128] {
+            let (label, p) = variant_params(v, small);
+            check(
+                &format!("clipped small_max {small} {label}"),
+                &s,
+                40,
+                32,
+                &p,
+            );
+        }
     }
 }
 
 #[test]
-fn allocates_exactly_eight_bytes_per_true_fragment() {
+fn pixel_centres_on_shared_edges_are_covered_once_by_the_top_left_rule() {
+    // Vertices projected exactly onto pixel centres (eye at z = 5, 60°, 32×32): a fan of four
+    // triangles about (15, 15) whose edges run through whole rows, columns and diagonals of
+    // pixel centres, and a quad split along its diagonal on a nearer plane. Every centre on a
+    // shared edge must be covered exactly once, boundary centres as the top-left rule says.
+    let (w, h) = (32u32, 32u32);
+    let at = |i: f64, j: f64, z: f64| -> [f32; 3] {
+        let half = (5.0 - z) * 30f64.to_radians().tan();
+        let x = ((i + 0.5) / (w as f64 / 2.0) - 1.0) * half;
+        let y = (1.0 - (j + 0.5) / (h as f64 / 2.0)) * half;
+        [x as f32, y as f32, z as f32]
+    };
+    let mut m = Mesh::default();
+    let e = at(15.0, 15.0, 0.0);
+    let ring = [(4.0, 4.0), (27.0, 4.0), (27.0, 27.0), (4.0, 27.0)].map(|(i, j)| at(i, j, 0.0));
+    for k in 0..4 {
+        tri(
+            &mut m,
+            [e, ring[k], ring[(k + 1) % 4]],
+            [0.3, 0.6, 0.2, 0.5],
+            k as u32,
+        );
+    }
+    let q = [(8.0, 10.0), (20.0, 10.0), (20.0, 22.0), (8.0, 22.0)].map(|(i, j)| at(i, j, 1.0));
+    tri(&mut m, [q[0], q[1], q[2]], [0.8, 0.1, 0.1, 0.4], 4);
+    tri(&mut m, [q[0], q[2], q[3]], [0.1, 0.1, 0.8, 0.4], 5);
+    let s = scene_with(m, 5.0, 0.5);
+    let lists = rasterize(&s, w, h);
+    // The scene does put centres on edges: the fan's 4 diagonals alone hold 4 × 11 of them.
+    let covered = lists.depth_complexity().iter().filter(|&&d| d > 0).count();
+    assert_eq!(covered, 23 * 23, "the fan covers rows and columns 4..=26");
+    for v in VARIANTS {
+        for small in [1, 1 << 20] {
+            let (label, p) = variant_params(v, small);
+            check(
+                &format!("edges on centres small_max {small} {label}"),
+                &s,
+                w,
+                h,
+                &p,
+            );
+        }
+    }
+}
+
+#[test]
+fn allocates_exactly_eight_bytes_per_true_fragment_beside_the_declared_overhead() {
     let s = scene("shells", &[("count", Int(3)), ("segments", Int(10))]);
     let (w, h) = (40u32, 36u32);
     let g = gpu();
     let gs = GpuScene::upload(g, &s, w, h);
-    let m = crate::measure::measure(
-        g,
-        &gs,
-        &ComputeAbuffer,
-        &crate::testing::point(&ComputeAbuffer, &Params::new()),
-        0,
-        1,
-    )
-    .unwrap();
     let total = rasterize(&s, w, h).total_fragments();
     assert!(total > 0);
     let px = (w * h) as u64;
     let blocks = px.div_ceil(SCAN_BLOCK);
-    let fixed = px * 4 + px * 16;
-    // The big-triangle list (2 words) and chunk table (≤ px / CHUNK + 1 words) per triangle.
+    let overhead = px * 4 + px * 16 + (COUNTERS + blocks) * 4;
+    let nvert = s.mesh.positions.len() as u64;
+    // The big-triangle list (2 words) and tile table per triangle: tiles are at most 32 wide
+    // and at least 32 tall, so ≤ ⌈w/32⌉·⌈h/32⌉ of them.
     let ntri = s.mesh.indices.len() as u64 / 3;
-    let work_max = (COUNTERS + blocks + ntri * (3 + px / CHUNK as u64)) * 4;
-    let bytes = m.prepared.bytes_allocated();
-    assert!(
-        bytes >= fixed + total * FRAG_BYTES && bytes <= fixed + total * FRAG_BYTES + work_max,
-        "{bytes} B for {total} fragments ({} B of them, {fixed} B per-pixel)",
-        total * FRAG_BYTES
-    );
+    let tiles = (w.div_ceil(TILE_W) * h.div_ceil(TILE_W)) as u64;
+    let list_max = ntri * (2 + tiles) * 4 + 3 * 4;
+    for (transform, clip) in [("vertex", nvert * CLIP_BYTES), ("triangle", CLIP_BYTES)] {
+        let p = params(&[("transform", Str(transform.into()))]);
+        let pt = crate::testing::point(&ComputeAbuffer, &p);
+        let v = variants(&pt);
+        let e = EffectConfig::from_point(&pt).unwrap();
+        let prepared = PreparedAbuffer::new(g, &gs, 256, &e, v).unwrap();
+        assert_eq!(prepared.bytes_overhead().unwrap(), overhead, "{transform}");
+        let bytes = prepared.bytes_allocated();
+        let least = overhead + total * FRAG_BYTES + clip;
+        assert!(
+            bytes >= least && bytes <= least + list_max,
+            "{transform}: {bytes} B for {total} fragments ({} B of them, {overhead} B per pixel, {clip} B clip positions)",
+            total * FRAG_BYTES
+        );
+    }
 }
 
 #[test]

@@ -1,44 +1,71 @@
 // Per-pixel linked lists (an A-buffer; Yang et al. 2010). Capture: every fragment takes the next
-// node of one fixed pool (atomicAdd on a counter), stores its payload there and pushes the node
-// onto its pixel's list (atomicExchange of the head). A fragment finding the pool full is counted
+// node of its pool (atomicAdd on the pool's cursor), stores its payload there and pushes the node
+// onto its pixel's list (atomicExchange of the head). A fragment finding its pool full is counted
 // as lost in its pixel (atomicAdd), never dropped silently. Resolve: per pixel, walk the list,
 // insertion-sort it (bounded by SORT_MAX, beyond which the farthest are dropped and counted),
 // fold nearest first, and count overflowed pixels and lost fragments.
+//
+// Pools (override TILED): one pool with one cursor (`pool = fixed`: every fragment of the frame
+// increments the same word), or one sub-pool per 8×8-pixel tile sized from a prepare-time count
+// of that tile's fragments (`pool = counted`), so the cursors a frame increments are spread over
+// the screen. Nodes (the variant file appended to this one): `full` (32 B: colour, depths,
+// object id, next) or `compact` (12 B: depth, primitive | front << 31, next; the resolve
+// re-derives attributes from the primitive, as compute_abuffer does).
 
-override POOL: u32 = 1u;
+override TILED: bool = false;
 // Per-pixel sort capacity of the resolve (a register/local array; WGSL needs a constant size).
 const SORT_MAX: u32 = 128u;
-
-struct Node {
-    color: vec4<f32>,
-    depth: f32,
-    view_z: f32,
-    // bit 31: front facing
-    object_id: u32,
-    // next node index + 1; 0 ends the list
-    next: u32,
-};
+// Side (pixels) of a counted pool's tiles.
+const TILE_SIDE: u32 = 8u;
+const NO_NODE: u32 = 0xffffffffu;
 
 // node index + 1 of the pixel's newest node; 0 = empty list.
 @group(0) @binding(1) var<storage, read_write> heads: array<atomic<u32>>;
-@group(0) @binding(2) var<storage, read_write> nodes: array<Node>;
+// NODE_WORDS words per node (layout in the variant file); word NEXT: next node index + 1, 0 ends.
+@group(0) @binding(2) var<storage, read_write> nodes: array<u32>;
 @group(0) @binding(3) var<storage, read_write> out_image: array<vec4<f32>>;
-// 0: next free node, 1: overflowed pixels, 2: lost fragments (pool full or over SORT_MAX)
+// 0: overflowed pixels, 1: lost fragments (pool full or over SORT_MAX)
 @group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>>;
-@group(0) @binding(5) var<storage, read_write> lost: array<atomic<u32>>;
-@group(0) @binding(6) var<storage, read_write> counts: array<u32>;
+// Per pixel p: [2p] fragments lost to a full pool, [2p + 1] fragments resolved.
+@group(0) @binding(5) var<storage, read_write> pix: array<atomic<u32>>;
+// Per pool (one, or one per tile): nodes taken this frame.
+@group(0) @binding(6) var<storage, read_write> cursors: array<atomic<u32>>;
+// Per pool: (first node, nodes).
+@group(0) @binding(7) var<storage, read> ranges: array<vec2<u32>>;
 
-@fragment
-fn fs_append(in: Varyings, @builtin(front_facing) ff: bool) {
-    let p = u32(in.clip.y) * u32(camera.viewport.x) + u32(in.clip.x);
-    let i = atomicAdd(&counters[0], 1u);
-    if i >= POOL {
-        atomicAdd(&lost[p], 1u);
-        return;
+fn pixel_of(pos: vec4<f32>) -> u32 {
+    return u32(pos.y) * u32(camera.viewport.x) + u32(pos.x);
+}
+
+fn pool_of(pos: vec4<f32>) -> u32 {
+    if !TILED {
+        return 0u;
     }
-    let oid = (in.object_id & 0x7fffffffu) | select(0u, 0x80000000u, ff);
-    nodes[i] = Node(in.color, in.clip.z, in.view_z, oid, 0u);
-    nodes[i].next = atomicExchange(&heads[p], i + 1u);
+    let tiles_x = (u32(camera.viewport.x) + TILE_SIDE - 1u) / TILE_SIDE;
+    return (u32(pos.y) / TILE_SIDE) * tiles_x + u32(pos.x) / TILE_SIDE;
+}
+
+// A free node for the fragment at `pos`, or NO_NODE (counted as lost) when its pool is full.
+fn take_node(pos: vec4<f32>) -> u32 {
+    let t = pool_of(pos);
+    let i = atomicAdd(&cursors[t], 1u);
+    let r = ranges[t];
+    if i >= r.y {
+        atomicAdd(&pix[2u * pixel_of(pos)], 1u);
+        return NO_NODE;
+    }
+    return r.x + i;
+}
+
+// Links node `n` (payload written) at the head of its pixel's list.
+fn push_node(pos: vec4<f32>, n: u32) {
+    nodes[n * NODE_WORDS + NEXT] = atomicExchange(&heads[pixel_of(pos)], n + 1u);
+}
+
+// Prepare-time sizing of counted pools: fragments per tile.
+@fragment
+fn fs_count(@builtin(position) pos: vec4<f32>) {
+    atomicAdd(&cursors[pool_of(pos)], 1u);
 }
 
 @compute @workgroup_size(8, 8)
@@ -50,7 +77,7 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let p = id.y * w + id.x;
     var d: array<f32, SORT_MAX>;
-    var ix: array<u32, SORT_MAX>;
+    var key: array<u32, SORT_MAX>;
     var n = 0u;
     var dropped = 0u;
     var cur = atomicLoad(&heads[p]);
@@ -59,40 +86,41 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
             break;
         }
         let ni = cur - 1u;
-        let z = nodes[ni].depth;
-        cur = nodes[ni].next;
+        let z = node_depth(ni);
+        let k = node_key(ni);
+        cur = nodes[ni * NODE_WORDS + NEXT];
         if n == SORT_MAX {
             dropped = dropped + 1u;
-            if !nearer(z, d[n - 1u]) {
+            if !list_before(z, k, d[n - 1u], key[n - 1u]) {
                 continue;
             }
             n = n - 1u;
         }
         var j = n;
         loop {
-            if j == 0u || !nearer(z, d[j - 1u]) {
+            if j == 0u || !list_before(z, k, d[j - 1u], key[j - 1u]) {
                 break;
             }
             d[j] = d[j - 1u];
-            ix[j] = ix[j - 1u];
+            key[j] = key[j - 1u];
             j = j - 1u;
         }
         d[j] = z;
-        ix[j] = ni;
+        key[j] = k;
         n = n + 1u;
     }
+    let ndc = vec2<f32>((f32(id.x) + 0.5) * camera.viewport.z * 2.0 - 1.0, 1.0 - (f32(id.y) + 0.5) * camera.viewport.w * 2.0);
     var s = fold_init_at(vec2<f32>(id.xy) + 0.5);
     for (var i = 0u; i < n; i = i + 1u) {
-        let e = nodes[ix[i]];
-        fold_step(&s, Frag(e.depth, e.view_z, e.color, vec3<f32>(0.0), e.object_id & 0x7fffffffu, (e.object_id >> 31u) != 0u));
+        fold_step(&s, list_frag(d[i], key[i], ndc));
     }
     for (var k = 0u; k < fold_image_count(); k = k + 1u) {
         out_image[k * w * h + p] = fold_finish_image(s, k);
     }
-    counts[p] = n;
-    let gone = atomicLoad(&lost[p]) + dropped;
+    atomicStore(&pix[2u * p + 1u], n);
+    let gone = atomicLoad(&pix[2u * p]) + dropped;
     if gone > 0u {
-        atomicAdd(&counters[1], 1u);
-        atomicAdd(&counters[2], gone);
+        atomicAdd(&counters[0], 1u);
+        atomicAdd(&counters[1], gone);
     }
 }

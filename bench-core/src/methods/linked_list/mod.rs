@@ -1,39 +1,87 @@
 //! Per-pixel linked-list A-buffer (Yang, Hensley, Grün & Thibieroz 2010): one geometry pass
-//! appends every fragment to its pixel's list (atomic head pointers, one node pool); a compute
-//! resolve sorts each list and folds it nearest first (the effects fold: every effect but Fresnel,
-//! whose normal the nodes do not store). The pool is fixed:
-//! `layers` × pixels nodes (`layers` = average nodes per pixel). Fragments that find the pool
-//! full, or lists longer than the resolve's sort capacity (128), are counted on the GPU and
-//! reported (`overflow_pixels`, flag `overflow`, lost fragments in notes), never silent.
+//! appends every fragment to its pixel's list (atomic head pointers, a node pool); a compute
+//! resolve sorts each list and folds it nearest first (the effects fold). Fragments that find
+//! their pool full, or lists longer than the resolve's sort capacity (128), are counted on the
+//! GPU and reported (`overflow_pixels`, flag `overflow`, lost fragments in notes), never silent.
+//!
+//! Axes:
+//! - `pool = counted|fixed`. `counted` (default): prepare counts each 8×8-pixel tile's fragments
+//!   once (a render pass of atomic increments, not timed) and gives every tile its own sub-pool
+//!   of count + ⌈count · `pool_slack` / 100⌉ nodes with its own cursor, so the nodes are sized
+//!   to the true fragments and a frame's allocations spread over one counter per tile instead of
+//!   one for the screen; the lists stay dynamic (a fragment may land anywhere within its tile's
+//!   sub-pool), and a frame with more fragments than prepare counted loses the extra ones,
+//!   counted and flagged. `fixed`: one pool of `layers` × pixels nodes, one cursor.
+//! - `pool_slack` (percent, default 0; counted pools): spare nodes per tile for scenes that
+//!   change after prepare. 0 suffices for the static scenes measured here (the frame rasterises
+//!   exactly the fragments prepare counted).
+//! - `node = compact|full`. `compact` (default; needs PRIMITIVE_INDEX): 12 B nodes (depth,
+//!   primitive | front, next) written by a fragment stage that reads no attributes; the resolve
+//!   re-derives them from the primitive (every effect, Fresnel included). `full`: 32 B nodes with
+//!   colour, depths and object id (every effect but Fresnel).
+//!
+//! Memory: `bytes_overhead` is everything but the nodes (heads, per-pixel lost/resolved counts,
+//! output images, the per-tile cursors and ranges, the stand-in depth attachment).
 
-use crate::effects::FOLD_WGSL;
-use crate::gpu_util::{
-    bind_buffers, camera_entry, check_storage_size, compute_pipeline, read_vec, shader,
-    storage_entry, STORAGE_RW,
-};
+use wgpu::util::DeviceExt;
 
-use super::store::{dummy_depth, storage_pass, storage_pipeline, ENTRY_BYTES};
+use super::compute_abuffer::VISIBILITY_WGSL;
+use super::store::storage_pass;
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
-use crate::effects::{self, Effect, EffectConfig};
+use crate::effects::{self, Effect, EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::gpu_util::{
+    bind_buffers, camera_entry, check_storage_size, compute_pipeline, read_vec, storage_entry,
+    COMMON_WGSL, STORAGE_RW,
+};
 use crate::record::cols;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
 const WGSL: &str = include_str!("linked_list.wgsl");
+const FULL_WGSL: &str = include_str!("full_node.wgsl");
+const COMPACT_WGSL: &str = include_str!("compact_node.wgsl");
 /// The resolve's per-pixel sort capacity (`SORT_MAX` in the WGSL).
 pub const SORT_MAX: u32 = 128;
+/// Side (pixels) of a counted pool's tiles (`TILE_SIDE` in the WGSL).
+pub const TILE_SIDE: u32 = 8;
+/// Bytes of a `full` node (`NODE_WORDS` × 4 in full_node.wgsl).
+pub const FULL_NODE_BYTES: u64 = 32;
+/// Bytes of a `compact` node (compact_node.wgsl).
+pub const COMPACT_NODE_BYTES: u64 = 12;
+/// Storage buffers bound in the fragment stage (group 0) and in the compact resolve (+ mesh).
+const STORAGE_BUFFERS: u32 = 7;
+const MESH_BUFFERS: u32 = 5;
 
 pub struct LinkedList;
 
 const LAYERS: Axis = Axis::int(
     cols::LAYERS,
-    "node pool size in nodes per pixel on average (pool = layers × pixels)",
+    "pool = fixed: nodes per pixel on average (pool = layers × pixels); unused by a counted pool",
     8,
     1,
     1024,
+);
+const POOL: Axis = Axis::choice(
+    cols::POOL,
+    "counted: per-8×8-tile sub-pools sized by a prepare-time count; fixed: layers × pixels nodes",
+    "counted",
+    &["counted", "fixed"],
+);
+const POOL_SLACK: Axis = Axis::int(
+    cols::POOL_SLACK,
+    "counted pool: spare nodes per tile, percent of its count",
+    0,
+    0,
+    400,
+);
+const NODE: Axis = Axis::choice(
+    cols::NODE,
+    "compact: 12 B nodes, attributes re-derived from the primitive; full: 32 B nodes",
+    "compact",
+    &["compact", "full"],
 );
 
 impl Method for LinkedList {
@@ -41,137 +89,399 @@ impl Method for LinkedList {
         "linked_list"
     }
     fn describe(&self) -> &'static str {
-        "Yang et al. 2010: per-pixel linked lists in one node pool (layers × pixels nodes), sorted in a compute resolve; exact within the pool, overflow counted; 1 geometry pass + resolve; 28 B + layers × 32 B per pixel"
+        "Yang et al. 2010: per-pixel linked lists, sorted in a compute resolve; node pool counted per 8×8 tile at prepare (pool=counted, default) or layers × pixels (pool=fixed); 12 B compact nodes re-derived from the primitive (node=compact, default) or 32 B full nodes; exact within the pool, overflow counted; 1 geometry pass + resolve"
     }
     fn exact(&self) -> bool {
         true
     }
     fn axes(&self) -> Vec<Axis> {
-        let mut v = vec![LAYERS];
+        let mut v = vec![LAYERS, POOL, POOL_SLACK, NODE];
         v.extend_from_slice(effects::AXES);
         v
     }
     fn validate(&self, point: &Point) -> std::result::Result<(), String> {
         EffectConfig::from_point(point).map(|_| ())
     }
-    fn supports(&self, _: &Gpu, point: &Point) -> std::result::Result<(), String> {
-        effect_config(point).map(|_| ())
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        let c = list_config(point);
+        effect_config(point, c.compact)?;
+        if c.compact && !gpu.has(wgpu::Features::PRIMITIVE_INDEX) {
+            return Err("node = compact needs PRIMITIVE_INDEX (use node = full)".into());
+        }
+        let need = STORAGE_BUFFERS + if c.compact { MESH_BUFFERS } else { 0 };
+        let have = gpu.limits.max_storage_buffers_per_shader_stage;
+        if have < need {
+            return Err(format!(
+                "needs {need} storage buffers per shader stage, the adapter allows {have}"
+            ));
+        }
+        Ok(())
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let layers = point.int(&LAYERS) as u64;
-        let effect = effect_config(point).map_err(CoreError::Param)?;
-        Ok(Box::new(PreparedList::new(gpu, scene, layers, &effect)?))
+        let c = list_config(point);
+        let effect = effect_config(point, c.compact).map_err(CoreError::Param)?;
+        Ok(Box::new(PreparedList::new(gpu, scene, layers, c, &effect)?))
     }
 }
 
-/// The effect of a point: a node stores colour, window depth, view depth, object id and facing,
-/// so every effect but Fresnel (which needs the normal) folds from it.
-fn effect_config(point: &Point) -> std::result::Result<EffectConfig, String> {
+/// The pool and node axes (module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+struct ListConfig {
+    /// `pool = counted`: per-tile sub-pools sized by a prepare-time count.
+    counted: bool,
+    /// `pool_slack`: spare nodes per counted tile, percent of its count.
+    slack_pct: u64,
+    /// `node = compact`: 12 B nodes, attributes re-derived from the primitive.
+    compact: bool,
+}
+
+fn list_config(point: &Point) -> ListConfig {
+    ListConfig {
+        counted: point.choice(&POOL) == "counted",
+        slack_pct: point.int(&POOL_SLACK) as u64,
+        compact: point.choice(&NODE) == "compact",
+    }
+}
+
+/// The effect of a point: a full node stores colour, window depth, view depth, object id and
+/// facing, so every effect but Fresnel (which needs the normal) folds from it; a compact node
+/// re-derives everything.
+fn effect_config(point: &Point, compact: bool) -> std::result::Result<EffectConfig, String> {
     let e = EffectConfig::from_point(point)?;
-    if e.effect == Effect::Fresnel {
-        return Err("linked_list nodes store no normal: fresnel needs one".into());
+    if e.effect == Effect::Fresnel && !compact {
+        return Err("linked_list full nodes store no normal: fresnel needs one (node = compact re-derives it)".into());
     }
     Ok(e)
+}
+
+/// A storage-only render pipeline over `vs` (both faces, the stand-in depth never tested).
+fn list_pipeline(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    (vs, attrs): (&str, Attrs),
+    fs: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::RenderPipeline {
+    let layouts: Vec<_> = GpuScene::layouts(attrs).into_iter().map(Some).collect();
+    let options = wgpu::PipelineCompilationOptions {
+        constants,
+        zero_initialize_workgroup_memory: false,
+    };
+    gpu.device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some(vs),
+                compilation_options: options.clone(),
+                buffers: &layouts,
+            },
+            // Both faces: transparency sees back faces too (like the reference).
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some(fs),
+                compilation_options: options,
+                targets: &[],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
 }
 
 struct PreparedList {
     append: wgpu::RenderPipeline,
     resolve: wgpu::ComputePipeline,
     bind: wgpu::BindGroup,
+    mesh_bind: Option<wgpu::BindGroup>,
+    attrs: Attrs,
     depth: wgpu::TextureView,
     heads: wgpu::Buffer,
     image: wgpu::Buffer,
     counters: wgpu::Buffer,
-    lost: wgpu::Buffer,
-    counts: wgpu::Buffer,
-    pool: u64,
+    pix: wgpu::Buffer,
+    cursors: wgpu::Buffer,
+    pools: usize,
+    pool_note: String,
     images: usize,
     alloc: AllocCounter,
+    #[allow(dead_code)]
+    overhead: u64,
 }
 
 impl PreparedList {
-    fn new(gpu: &Gpu, scene: &GpuScene, layers: u64, effect: &EffectConfig) -> Result<Self> {
+    fn new(
+        gpu: &Gpu,
+        scene: &GpuScene,
+        layers: u64,
+        c: ListConfig,
+        effect: &EffectConfig,
+    ) -> Result<Self> {
         let d = &gpu.device;
         let px = scene.pixels() as u64;
-        let pool = layers * px;
-        if pool >= u32::MAX as u64 {
-            return Err(CoreError::Param(format!(
-                "linked_list pool of {pool} nodes does not fit 32-bit node indices"
-            )));
-        }
-        check_storage_size(gpu, "linked_list node pool", pool * ENTRY_BYTES)?;
-        let src = format!("{WGSL}\n{FOLD_WGSL}");
-        let module = shader(gpu, "linked_list", &src);
+        let (node_bytes, variant) = if c.compact {
+            (
+                COMPACT_NODE_BYTES,
+                format!("{COMPACT_WGSL}\n{VISIBILITY_WGSL}"),
+            )
+        } else {
+            (FULL_NODE_BYTES, FULL_WGSL.to_string())
+        };
+        // `enable` directives must open the module, before the common vertex stage.
+        let enable = if c.compact {
+            "enable primitive_index;\n"
+        } else {
+            ""
+        };
+        let src = format!("{enable}{COMMON_WGSL}\n{WGSL}\n{variant}\n{EFFECTS_WGSL}");
+        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("linked_list"),
+            source: wgpu::ShaderSource::Wgsl(src.into()),
+        });
         let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
         let mut entries = vec![camera_entry(0)];
         entries.extend((1..7).map(|b| storage_entry(b, false, fc)));
+        entries.push(storage_entry(7, true, fc));
         let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("linked_list"),
             entries: &entries,
         });
-        let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("linked_list"),
+        let mesh_bgl = c.compact.then(|| {
+            let cs = wgpu::ShaderStages::COMPUTE;
+            let e: Vec<_> = (0..MESH_BUFFERS)
+                .map(|b| storage_entry(b, true, cs))
+                .collect();
+            d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("linked_list mesh"),
+                entries: &e,
+            })
+        });
+        let raster_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("linked_list append"),
             bind_group_layouts: &[Some(&bgl)],
             immediate_size: 0,
         });
-        let pc = [("POOL", pool as f64)];
-        let mut rc = vec![("POOL", pool as f64)];
-        rc.extend(effect.constants());
-        let images = effect.effect.image_count();
-        let append = storage_pipeline(
+        let resolve_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("linked_list resolve"),
+            bind_group_layouts: &[Some(&bgl), mesh_bgl.as_ref()],
+            immediate_size: 0,
+        });
+        let tiled = [("TILED", if c.counted { 1.0 } else { 0.0 })];
+        let (vs, attrs) = if c.compact {
+            ("vs_position", Attrs::POSITION_ONLY)
+        } else {
+            ("vs_full", Attrs::ALL)
+        };
+        let append = list_pipeline(
             gpu,
             "linked_list append",
-            &layout,
+            &raster_layout,
             &module,
+            (vs, attrs),
             "fs_append",
-            &pc,
+            &tiled,
         );
+        let rc = effect.constants();
         let resolve = compute_pipeline(
             gpu,
             "linked_list resolve",
-            &layout,
+            &resolve_layout,
             &module,
             "resolve",
             &rc,
             false,
         );
+        let images = effect.effect.image_count();
         let mut alloc = AllocCounter::default();
-        let depth = dummy_depth(gpu, &mut alloc, scene);
+        let depth = super::store::dummy_depth(gpu, &mut alloc, scene);
         let heads = alloc.buffer(gpu, "list heads", px * 4, STORAGE_RW);
-        let nodes = alloc.buffer(gpu, "list nodes", pool * ENTRY_BYTES, STORAGE_RW);
         let image = alloc.buffer(gpu, "list image", px * 16 * images as u64, STORAGE_RW);
         let counters = alloc.buffer(gpu, "list counters", 16, STORAGE_RW);
-        let lost = alloc.buffer(gpu, "list lost", px * 4, STORAGE_RW);
-        let counts = alloc.buffer(gpu, "list counts", px * 4, STORAGE_RW);
-        let bind = bind_buffers(
-            gpu,
-            "linked_list",
-            &bgl,
-            &[
-                &scene.camera,
-                &heads,
-                &nodes,
-                &image,
-                &counters,
-                &lost,
-                &counts,
-            ],
-        );
+        let pix = alloc.buffer(gpu, "list lost + resolved counts", px * 8, STORAGE_RW);
+        let tiles_x = scene.width.div_ceil(TILE_SIDE);
+        let pools = if c.counted {
+            (tiles_x * scene.height.div_ceil(TILE_SIDE)) as usize
+        } else {
+            1
+        };
+        let cursors = alloc.buffer(gpu, "list pool cursors", pools as u64 * 4, STORAGE_RW);
+        let bind_with = |nodes: &wgpu::Buffer, ranges: &wgpu::Buffer| {
+            bind_buffers(
+                gpu,
+                "linked_list",
+                &bgl,
+                &[
+                    &scene.camera,
+                    &heads,
+                    nodes,
+                    &image,
+                    &counters,
+                    &pix,
+                    &cursors,
+                    ranges,
+                ],
+            )
+        };
+        // Pool ranges: (first node, nodes) per pool.
+        let (ranges, pool_note): (Vec<[u32; 2]>, String) = if c.counted {
+            let counts = count_tiles(
+                gpu,
+                scene,
+                &module,
+                &raster_layout,
+                &depth,
+                &cursors,
+                |n, r| bind_with(n, r),
+            )?;
+            let true_frags: u64 = counts.iter().map(|&n| n as u64).sum();
+            let mut first = 0u64;
+            let mut r = Vec::with_capacity(pools);
+            for &n in &counts {
+                let cap = n as u64 + (n as u64 * c.slack_pct).div_ceil(100);
+                r.push([
+                    first.min(u32::MAX as u64) as u32,
+                    cap.min(u32::MAX as u64) as u32,
+                ]);
+                first += cap;
+            }
+            let note = format!(
+                "counted pool: {true_frags} fragments at prepare in {pools} tiles of {TILE_SIDE}×{TILE_SIDE} px, {} % slack",
+                c.slack_pct
+            );
+            (r, note)
+        } else {
+            let pool = layers * px;
+            let note = format!("fixed pool: {layers} nodes per pixel");
+            (vec![[0, pool.min(u32::MAX as u64) as u32]], note)
+        };
+        let pool: u64 = ranges.iter().map(|r| r[1] as u64).sum();
+        let pool_end = ranges
+            .last()
+            .map(|r| r[0] as u64 + r[1] as u64)
+            .unwrap_or(0);
+        if pool_end >= u32::MAX as u64 || (!c.counted && layers * px >= u32::MAX as u64) {
+            return Err(CoreError::Param(format!(
+                "linked_list pool of {} nodes does not fit 32-bit node indices",
+                pool_end.max(layers * px * u64::from(!c.counted))
+            )));
+        }
+        let node_buffer_bytes = pool.max(1) * node_bytes;
+        check_storage_size(gpu, "linked_list node pool", node_buffer_bytes)?;
+        let nodes = alloc.buffer(gpu, "list nodes", node_buffer_bytes, STORAGE_RW);
+        let range_bytes: &[u8] = bytemuck::cast_slice(&ranges);
+        alloc.bytes += range_bytes.len() as u64;
+        let ranges_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("list pool ranges"),
+            contents: range_bytes,
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let bind = bind_with(&nodes, &ranges_buf);
+        let mesh_bind = mesh_bgl.as_ref().map(|l| {
+            bind_buffers(
+                gpu,
+                "linked_list mesh",
+                l,
+                &[
+                    &scene.positions,
+                    &scene.normals,
+                    &scene.colors,
+                    &scene.object_ids,
+                    &scene.indices,
+                ],
+            )
+        });
+        let overhead = alloc.bytes - node_buffer_bytes;
         Ok(PreparedList {
             append,
             resolve,
             bind,
+            mesh_bind,
+            attrs,
             depth,
             heads,
             image,
             counters,
-            lost,
-            counts,
-            pool,
+            pix,
+            cursors,
+            pools,
+            pool_note: format!("{pool_note}; {pool} nodes of {node_bytes} B"),
             images,
             alloc,
+            overhead,
         })
     }
+}
+
+/// Prepare-time count of each 8×8 tile's fragments: one render pass of `fs_count` (atomic
+/// increments of the tile's cursor) over the scene, read back.
+fn count_tiles(
+    gpu: &Gpu,
+    scene: &GpuScene,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    depth: &wgpu::TextureView,
+    cursors: &wgpu::Buffer,
+    bind_with: impl Fn(&wgpu::Buffer, &wgpu::Buffer) -> wgpu::BindGroup,
+) -> Result<Vec<u32>> {
+    let pipeline = list_pipeline(
+        gpu,
+        "linked_list count",
+        layout,
+        module,
+        ("vs_position", Attrs::POSITION_ONLY),
+        "fs_count",
+        &[("TILED", 1.0)],
+    );
+    // The count touches only the cursors: stand-ins for the node pool and ranges.
+    let stand_in = |label| {
+        gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        })
+    };
+    let bind = bind_with(
+        &stand_in("list nodes (sizing)"),
+        &stand_in("list ranges (sizing)"),
+    );
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    enc.clear_buffer(cursors, 0, None);
+    {
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("linked_list count"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind, &[]);
+        scene.draw(&mut pass, Attrs::POSITION_ONLY);
+    }
+    gpu.queue.submit([enc.finish()]);
+    let n = (cursors.size() / 4) as usize;
+    read_vec::<u32>(gpu, cursors, n)
 }
 
 impl Prepared for PreparedList {
@@ -179,12 +489,13 @@ impl Prepared for PreparedList {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.heads, 0, None);
         enc.clear_buffer(&self.counters, 0, None);
-        enc.clear_buffer(&self.lost, 0, None);
+        enc.clear_buffer(&self.pix, 0, None);
+        enc.clear_buffer(&self.cursors, 0, None);
         {
             let mut pass = storage_pass(&mut enc, &self.depth, timer, "append");
             pass.set_pipeline(&self.append);
             pass.set_bind_group(0, &self.bind, &[]);
-            scene.draw(&mut pass, Attrs::ALL);
+            scene.draw(&mut pass, self.attrs);
         }
         {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -193,6 +504,9 @@ impl Prepared for PreparedList {
             });
             pass.set_pipeline(&self.resolve);
             pass.set_bind_group(0, &self.bind, &[]);
+            if let Some(m) = &self.mesh_bind {
+                pass.set_bind_group(1, m, &[]);
+            }
             pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
         }
         gpu.queue.submit([enc.finish()]);
@@ -206,17 +520,22 @@ impl Prepared for PreparedList {
         let n = scene.pixels();
         let mut cap = Capture::empty();
         cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n * self.images)?);
-        cap.counts = Some(read_vec::<u32>(gpu, &self.counts, n)?);
+        let pix = read_vec::<[u32; 2]>(gpu, &self.pix, n)?;
+        cap.counts = Some(pix.iter().map(|p| p[1]).collect());
         cap.expected = Expected::All;
-        let c = read_vec::<u32>(gpu, &self.counters, 4)?;
-        let (used, ovf, lost) = (c[0] as u64, c[1] as u64, c[2] as u64);
+        let c = read_vec::<u32>(gpu, &self.counters, 2)?;
+        let (ovf, lost) = (c[0] as u64, c[1] as u64);
+        let arrived: u64 = read_vec::<u32>(gpu, &self.cursors, self.pools)?
+            .iter()
+            .map(|&k| k as u64)
+            .sum();
         cap.overflow_pixels = Some(ovf);
         if ovf > 0 {
             cap.flag = Some("overflow".into());
         }
         cap.notes = format!(
-            "pool {} nodes, {used} fragments arrived, {ovf} overflowed pixels, {lost} lost fragments",
-            self.pool
+            "{}; {arrived} fragments arrived, {ovf} overflowed pixels, {lost} lost fragments",
+            self.pool_note
         );
         Ok(cap)
     }
@@ -224,57 +543,219 @@ impl Prepared for PreparedList {
     fn bytes_allocated(&self) -> u64 {
         self.alloc.bytes
     }
+    /// The per-pixel structures (offsets or heads, counters, output images): everything but
+    /// the fragments (or nodes) and what holds them.
+    fn bytes_overhead(&self) -> Option<u64> {
+        Some(self.overhead)
+    }
 }
 
 #[cfg(test)]
 mod tests {
-    use scenarios::ParamValue::Int;
+    use glam::{DVec3, Vec3};
+    use scenarios::ParamValue::{Int, Str};
+    use scenarios::{Camera, Mesh, Scene, SceneSpec};
 
     use super::*;
-    use crate::testing::{count_mismatch, max_err, params, run, scene};
+    use crate::reference::rasterize;
+    use crate::testing::{count_mismatch, gpu, max_err, params, run, scene};
+    use scenarios::Params;
 
-    /// Composite of up to 16 layers in f32 vs f64: a few f32 ulps per step.
-    const IMAGE_TOL: f64 = 2e-5;
+    /// Composite of up to 16 layers in f32 vs f64: a few f32 ulps per step (compact nodes
+    /// re-derive attributes in f32 from the primitive, as compute_abuffer does).
+    const IMAGE_TOL: f64 = 5e-5;
+
+    const POOLS: [&str; 2] = ["counted", "fixed"];
+    const NODES: [&str; 2] = ["compact", "full"];
+
+    fn list_params(pool: &str, node: &str, layers: i64) -> Params {
+        params(&[
+            ("pool", Str(pool.into())),
+            ("node", Str(node.into())),
+            ("layers", Int(layers)),
+        ])
+    }
 
     #[test]
-    fn equals_the_reference_within_the_pool() {
+    fn equals_the_reference_within_the_pool_for_every_pool_and_node() {
         let shells = scene("shells", &[("count", Int(4)), ("segments", Int(12))]);
         let grass = scene("grass", &[("blades", Int(300))]);
-        for (name, s) in [("shells", &shells), ("grass", &grass)] {
-            // 16 nodes per pixel on average is far more than these scenes' mean depth.
-            let (cap, lists) = run(&LinkedList, s, 48, 48, &params(&[("layers", Int(16))]));
-            assert_eq!(cap.overflow_pixels, Some(0), "{name}: {}", cap.notes);
-            assert!(cap.flag.is_none(), "{name}: {:?}", cap.flag);
-            let (e, at) = max_err(&cap, &lists);
-            assert!(e <= IMAGE_TOL, "{name}: error {e} at pixel {at}");
-            let (bad, first) = count_mismatch(&cap, &lists, u32::MAX);
-            assert_eq!(bad, 0, "{name}: counts differ first at {first:?}");
+        for pool in POOLS {
+            for node in NODES {
+                for (name, s) in [("shells", &shells), ("grass", &grass)] {
+                    let name = format!("{name} pool={pool} node={node}");
+                    // 16 nodes per pixel on average (fixed pool) is far more than these scenes'
+                    // mean depth; the counted pool holds exactly their fragments.
+                    let (cap, lists) = run(&LinkedList, s, 48, 48, &list_params(pool, node, 16));
+                    assert_eq!(cap.overflow_pixels, Some(0), "{name}: {}", cap.notes);
+                    assert!(cap.flag.is_none(), "{name}: {:?}", cap.flag);
+                    let (e, at) = max_err(&cap, &lists);
+                    assert!(e <= IMAGE_TOL, "{name}: error {e} at pixel {at}");
+                    let (bad, first) = count_mismatch(&cap, &lists, u32::MAX);
+                    assert_eq!(bad, 0, "{name}: counts differ first at {first:?}");
+                }
+            }
         }
     }
 
     #[test]
     fn overflow_is_counted_on_a_scene_built_to_overflow() {
-        // 12 full-screen-ish quads over the centre with a pool of 1 node per pixel: the pool
-        // holds fewer nodes than fragments, so some pixels must lose fragments.
+        // 12 full-screen-ish quads over the centre with a fixed pool of 1 node per pixel: the
+        // pool holds fewer nodes than fragments, so some pixels must lose fragments.
         let s = scene("quads", &[("depth_complexity", Int(12))]);
-        let (cap, lists) = run(&LinkedList, &s, 32, 32, &params(&[("layers", Int(1))]));
-        let total = lists.total_fragments();
-        let pool = 32 * 32;
-        assert!(
-            total > pool,
-            "the scene overflows the pool ({total} fragments)"
-        );
-        let ovf = cap.overflow_pixels.expect("reported");
-        assert!(ovf > 0, "overflow must be counted: {}", cap.notes);
-        assert_eq!(cap.flag.as_deref(), Some("overflow"));
-        // Pixels that kept every fragment are exact; the count of captured fragments is the pool.
-        let counts = cap.counts.as_ref().unwrap();
-        assert_eq!(counts.iter().map(|&c| c as u64).sum::<u64>(), pool);
-        let dc = lists.depth_complexity();
-        let short = (0..dc.len()).filter(|&p| counts[p] < dc[p]).count() as u64;
-        assert_eq!(
-            short, ovf,
-            "overflowed pixels are exactly those missing fragments"
-        );
+        for node in NODES {
+            let (cap, lists) = run(&LinkedList, &s, 32, 32, &list_params("fixed", node, 1));
+            let total = lists.total_fragments();
+            let pool = 32 * 32;
+            assert!(
+                total > pool,
+                "the scene overflows the pool ({total} fragments)"
+            );
+            let ovf = cap.overflow_pixels.expect("reported");
+            assert!(ovf > 0, "{node}: overflow must be counted: {}", cap.notes);
+            assert_eq!(cap.flag.as_deref(), Some("overflow"));
+            // Pixels that kept every fragment are exact; the captured fragments fill the pool.
+            let counts = cap.counts.as_ref().unwrap();
+            assert_eq!(counts.iter().map(|&c| c as u64).sum::<u64>(), pool);
+            let dc = lists.depth_complexity();
+            let short = (0..dc.len()).filter(|&p| counts[p] < dc[p]).count() as u64;
+            assert_eq!(
+                short, ovf,
+                "{node}: overflowed pixels are exactly those missing fragments"
+            );
+        }
+    }
+
+    #[test]
+    fn a_counted_pool_holds_exactly_the_true_fragments_plus_the_declared_slack() {
+        let s = scene("shells", &[("count", Int(3)), ("segments", Int(10))]);
+        let (w, h) = (40u32, 36u32);
+        let g = gpu();
+        let gs = GpuScene::upload(g, &s, w, h);
+        let total = rasterize(&s, w, h).total_fragments();
+        assert!(total > 0);
+        let px = (w * h) as u64;
+        let tiles = (w.div_ceil(TILE_SIDE) * h.div_ceil(TILE_SIDE)) as u64;
+        for (node, bytes) in [("compact", COMPACT_NODE_BYTES), ("full", FULL_NODE_BYTES)] {
+            for slack in [0i64, 50] {
+                let mut p = list_params("counted", node, 8);
+                p.0.insert("pool_slack".into(), Int(slack));
+                let pt = crate::testing::point(&LinkedList, &p);
+                let c = list_config(&pt);
+                let e = effect_config(&pt, c.compact).unwrap();
+                let prepared = PreparedList::new(g, &gs, 8, c, &e).unwrap();
+                let nodes = prepared.bytes_allocated() - prepared.bytes_overhead().unwrap();
+                // Per tile ⌈count · slack / 100⌉ spare nodes: at most one more than the share.
+                let most = total * (100 + slack as u64) / 100 + tiles;
+                let least = total + total * slack as u64 / 100;
+                assert!(
+                    nodes >= least * bytes && nodes <= most * bytes,
+                    "{node} slack {slack}: {nodes} B of nodes for {total} fragments"
+                );
+                if slack == 0 {
+                    assert_eq!(nodes, total * bytes, "{node}: exactly the true fragments");
+                }
+                // Heads 4, lost + resolved counts 8, image 16, stand-in depth 4 B per pixel;
+                // a cursor (4 B) and a range (8 B) per tile; 16 B of counters.
+                assert_eq!(
+                    prepared.bytes_overhead().unwrap(),
+                    px * 32 + tiles * 12 + 16
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn fragments_beyond_a_counted_pool_are_counted_not_written() {
+        // Prepare on 6 quads of which 4 lie behind the eye, then (as a dynamic scene would) move
+        // those into view with the same buffers: their tiles' sub-pools hold only what prepare
+        // counted, so the extra fragments must be reported and the kept ones stay exact.
+        let quads = |hidden_z: f32| {
+            let mut m = Mesh::default();
+            for (i, z) in [
+                0.0,
+                0.5,
+                hidden_z,
+                hidden_z + 0.1,
+                hidden_z + 0.2,
+                hidden_z + 0.3,
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                let h = 0.8;
+                let c = [
+                    Vec3::new(-h, -h, z),
+                    Vec3::new(h, -h, z),
+                    Vec3::new(h, h, z),
+                    Vec3::new(-h, h, z),
+                ];
+                m.push_quad(c, [0.5, 0.5, 0.5, 0.3], i as u32);
+            }
+            let cam = Camera::look_at(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO, 60.0, 0.5, 100.0);
+            Scene::new(SceneSpec::new("test", Params::new()), m, cam)
+        };
+        let (small, big) = (quads(10.0), quads(1.0));
+        let total_small = rasterize(&small, 32, 32).total_fragments();
+        let lists_big = rasterize(&big, 32, 32);
+        assert!(lists_big.total_fragments() > total_small);
+        let g = gpu();
+        for node in NODES {
+            let gs_small = GpuScene::upload(g, &small, 32, 32);
+            let gs_big = GpuScene::upload(g, &big, 32, 32);
+            let p = list_params("counted", node, 8);
+            let mut prepared = LinkedList
+                .prepare(g, &gs_small, &crate::testing::point(&LinkedList, &p))
+                .unwrap();
+            let mut enc = g.device.create_command_encoder(&Default::default());
+            enc.copy_buffer_to_buffer(&gs_big.positions, 0, &gs_small.positions, 0, None);
+            g.queue.submit([enc.finish()]);
+            let mut timer = GpuTimer::new(g);
+            prepared.frame(g, &gs_small, &mut timer).unwrap();
+            let cap = prepared.readback(g, &gs_small).unwrap();
+            assert_eq!(
+                cap.flag.as_deref(),
+                Some("overflow"),
+                "{node}: {}",
+                cap.notes
+            );
+            let counts = cap.counts.as_ref().unwrap();
+            let kept: u64 = counts.iter().map(|&c| c as u64).sum();
+            assert_eq!(
+                kept, total_small,
+                "{node}: every counted node is used, none twice"
+            );
+            let dc = lists_big.depth_complexity();
+            let short = (0..dc.len()).filter(|&p| counts[p] < dc[p]).count() as u64;
+            assert_eq!(cap.overflow_pixels, Some(short), "{node}: {}", cap.notes);
+        }
+    }
+
+    #[test]
+    fn compact_nodes_fold_fresnel_and_full_nodes_refuse_it() {
+        // tests/effects.rs's Fresnel case (σ = 0.5, shells(3, 16) at 48²).
+        let s = scene("shells", &[("count", Int(3)), ("segments", Int(16))]);
+        let mut p = list_params("counted", "compact", 8);
+        p.0.insert("effect".into(), Str("fresnel".into()));
+        p.0.insert("sigma".into(), scenarios::ParamValue::Float(0.5));
+        let (cap, lists) = run(&LinkedList, &s, 48, 48, &p);
+        let reference =
+            crate::effects::EffectConfig::from_point(&crate::testing::point(&LinkedList, &p))
+                .unwrap()
+                .reference(&s, &lists, cap.expected);
+        let img = cap.image.as_ref().unwrap();
+        let worst = reference
+            .iter()
+            .zip(img)
+            .flat_map(|(r, g)| (0..4).map(move |c| (r[c] - g[c] as f64).abs()))
+            .fold(0.0f64, f64::max);
+        // As tests/effects.rs: view depth and normals interpolated from unsnapped vertices on
+        // the GPU, snapped in the reference (σ·Δl up to ~1e-3 at sphere silhouettes).
+        assert!(worst <= 2e-3, "fresnel error {worst}: {}", cap.notes);
+        let mut full = p.clone();
+        full.0.insert("node".into(), Str("full".into()));
+        assert!(LinkedList
+            .supports(gpu(), &crate::testing::point(&LinkedList, &full))
+            .is_err());
     }
 }
