@@ -150,7 +150,7 @@ pub struct Gpu {
     /// (no NVIDIA driver, not an NVIDIA adapter): every point's `clock_source` says which.
     pub monitor: std::result::Result<crate::clocks::GpuMonitor, String>,
     /// The busy kernel that lifts a lowered SM clock (`measure`), built on first use.
-    pub spin: std::sync::OnceLock<crate::measure::Spin>,
+    spin: std::sync::OnceLock<Spin>,
 }
 
 /// Lists adapters for a backend choice, in enumeration order (the `--adapter-index` order).
@@ -400,4 +400,78 @@ pub fn read_texture(
 pub fn read_rgba32f(gpu: &Gpu, tex: &wgpu::Texture) -> Result<Vec<[f32; 4]>> {
     let b = read_texture(gpu, tex, 16, wgpu::TextureAspect::All)?;
     Ok(bytemuck::cast_slice(&b).to_vec())
+}
+
+/// Busy compute work that raises a lowered SM clock (the clock lift of `measure`): every SM
+/// runs dependent FMAs for a few ms (about 2 ms on an H200 at 1980 MHz, by its FMA rate).
+/// Here, not in `measure`, so that `Gpu` can cache it without a module cycle.
+struct Spin {
+    pipeline: wgpu::ComputePipeline,
+    bind: wgpu::BindGroup,
+}
+
+const SPIN_WGSL: &str = "
+@group(0) @binding(0) var<storage, read_write> sink: array<f32>;
+@compute @workgroup_size(256)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    var x = f32(id.x & 255u) * 1e-3;
+    for (var i = 0u; i < 65536u; i = i + 1u) {
+        x = fma(x, 0.9999, 1e-4);
+    }
+    // Never true; keeps the loop from being removed as dead code.
+    if x == 12345.0 {
+        sink[id.x & 255u] = x;
+    }
+}";
+
+impl Spin {
+    fn new(device: &wgpu::Device) -> Spin {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("clock lift"),
+            source: wgpu::ShaderSource::Wgsl(SPIN_WGSL.into()),
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("clock lift"),
+            layout: None,
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let sink = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("clock lift sink"),
+            size: 1024,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("clock lift"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: sink.as_entire_binding(),
+            }],
+        });
+        Spin { pipeline, bind }
+    }
+}
+
+impl Gpu {
+    /// One untimed busy dispatch, waited for.
+    pub fn spin(&self) -> Result<()> {
+        let spin = self.spin.get_or_init(|| Spin::new(&self.device));
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("clock lift"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&spin.pipeline);
+            pass.set_bind_group(0, &spin.bind, &[]);
+            // 4096 workgroups × 256 threads: every SM of a large GPU busy.
+            pass.dispatch_workgroups(4096, 1, 1);
+        }
+        self.queue.submit([enc.finish()]);
+        self.wait()
+    }
 }

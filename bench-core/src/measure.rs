@@ -293,10 +293,9 @@ impl<'g> PointTimer<'g> {
             return Ok(());
         }
         let t0 = std::time::Instant::now();
-        let spin = self.gpu.spin.get_or_init(|| Spin::new(self.gpu));
         let mut now = before;
         while now < target && t0.elapsed().as_secs_f64() * 1e3 < self.plan.clock_lift_ms {
-            spin.run(self.gpu)?;
+            self.gpu.spin()?;
             now = m.sample().sm_mhz.unwrap_or(now);
         }
         let ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -614,68 +613,3 @@ pub fn set_timing(row: &mut Row, m: &Measured, mesh: &scenarios::Mesh) {
     }
 }
 
-/// Busy compute work that raises a lowered SM clock: every SM runs dependent FMAs for a few ms
-/// (about 2 ms on an H200 at 1980 MHz, by its FMA rate), untimed.
-pub struct Spin {
-    pipeline: wgpu::ComputePipeline,
-    bind: wgpu::BindGroup,
-}
-
-const SPIN_WGSL: &str = "
-@group(0) @binding(0) var<storage, read_write> sink: array<f32>;
-@compute @workgroup_size(256)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    var x = f32(id.x & 255u) * 1e-3;
-    for (var i = 0u; i < 65536u; i = i + 1u) {
-        x = fma(x, 0.9999, 1e-4);
-    }
-    if x == 12345.0 {
-        sink[id.x & 255u] = x;
-    }
-}";
-
-impl Spin {
-    fn new(gpu: &Gpu) -> Spin {
-        use crate::gpu_util::{bind_buffers, compute_pipeline, shader, storage_entry, STORAGE_RW};
-        let module = shader(gpu, "clock lift", SPIN_WGSL);
-        let bgl = gpu
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("clock lift"),
-                entries: &[storage_entry(0, false, wgpu::ShaderStages::COMPUTE)],
-            });
-        let layout = gpu
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("clock lift"),
-                bind_group_layouts: &[Some(&bgl)],
-                immediate_size: 0,
-            });
-        let pipeline = compute_pipeline(gpu, "clock lift", &layout, &module, "main", &[], false);
-        let sink = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("clock lift sink"),
-            size: 1024,
-            usage: STORAGE_RW,
-            mapped_at_creation: false,
-        });
-        let bind = bind_buffers(gpu, "clock lift", &bgl, &[&sink]);
-        Spin { pipeline, bind }
-    }
-
-    /// One dispatch, waited for.
-    fn run(&self, gpu: &Gpu) -> Result<()> {
-        let mut enc = gpu.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("clock lift"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &self.bind, &[]);
-            // 4096 workgroups × 256 threads: every SM of a large GPU busy.
-            pass.dispatch_workgroups(4096, 1, 1);
-        }
-        gpu.queue.submit([enc.finish()]);
-        gpu.wait()
-    }
-}
