@@ -34,6 +34,7 @@ pub mod floor;
 pub mod kbuffer_atomic;
 pub mod kbuffer_rmw;
 pub mod linked_list;
+pub mod moments;
 pub mod packing;
 pub mod store;
 pub mod wboit;
@@ -53,6 +54,7 @@ pub fn all() -> Vec<Box<dyn Method>> {
         Box::new(linked_list::LinkedList),
         Box::new(compute_abuffer::ComputeAbuffer),
         Box::new(wboit::Wboit),
+        Box::new(moments::Moments),
         Box::new(bdp::Bdp),
         Box::new(bdp2::Bdp2),
         Box::new(adp::Adp),
