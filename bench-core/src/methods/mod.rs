@@ -34,9 +34,11 @@ pub mod floor;
 pub mod kbuffer_atomic;
 pub mod kbuffer_rmw;
 pub mod linked_list;
+pub mod mlab;
 pub mod moments;
 pub mod packing;
 pub mod store;
+pub mod tail;
 pub mod wboit;
 
 pub use crate::method::{supports, Capture, Expected, FrameStats, Method, Prepared};
@@ -55,6 +57,8 @@ pub fn all() -> Vec<Box<dyn Method>> {
         Box::new(compute_abuffer::ComputeAbuffer),
         Box::new(wboit::Wboit),
         Box::new(moments::Moments),
+        Box::new(mlab::Mlab),
+        Box::new(mlab::MlabIdeal),
         Box::new(bdp::Bdp),
         Box::new(bdp2::Bdp2),
         Box::new(adp::Adp),
