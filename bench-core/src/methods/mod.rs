@@ -23,6 +23,7 @@
 //! `effects.wgsl` ([`FOLD_WGSL`]) is the effects fold, and `packing` the float colour packing
 //! shared with the bucket methods.
 
+pub mod adaptive;
 pub mod adp;
 pub mod bdp;
 pub mod bdp2;
@@ -59,6 +60,8 @@ pub fn all() -> Vec<Box<dyn Method>> {
         Box::new(moments::Moments),
         Box::new(mlab::Mlab),
         Box::new(mlab::MlabIdeal),
+        Box::new(adaptive::Adaptive),
+        Box::new(adaptive::AdaptiveIdeal),
         Box::new(bdp::Bdp),
         Box::new(bdp2::Bdp2),
         Box::new(adp::Adp),
