@@ -32,6 +32,7 @@ pub mod compute_abuffer;
 pub mod depth_peel;
 pub mod dual_peel;
 pub mod floor;
+pub mod hybrid;
 pub mod kbuffer_atomic;
 pub mod kbuffer_rmw;
 pub mod linked_list;
@@ -62,6 +63,7 @@ pub fn all() -> Vec<Box<dyn Method>> {
         Box::new(mlab::MlabIdeal),
         Box::new(adaptive::Adaptive),
         Box::new(adaptive::AdaptiveIdeal),
+        Box::new(hybrid::Hybrid),
         Box::new(bdp::Bdp),
         Box::new(bdp2::Bdp2),
         Box::new(adp::Adp),

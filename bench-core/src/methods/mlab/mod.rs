@@ -264,30 +264,7 @@ impl PreparedRace {
         let depth = dummy_depth(gpu, &mut alloc, scene);
         let tail = blend.then(|| TailTargets::new(gpu, &mut alloc, scene));
         // Without a tail the resolve's (dead) tail reads see 1×1 stand-ins.
-        let stand_in = (!blend).then(|| {
-            let t = |f| {
-                d.create_texture(&wgpu::TextureDescriptor {
-                    label: Some("mlab tail (unused)"),
-                    size: wgpu::Extent3d {
-                        width: 1,
-                        height: 1,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: f,
-                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                    view_formats: &[],
-                })
-                .create_view(&Default::default())
-            };
-            TailTargets {
-                sums: t(tail::SUMS),
-                trans: t(tail::TRANS),
-                count: t(tail::COUNT),
-            }
-        });
+        let stand_in = (!blend).then(|| TailTargets::stand_ins(gpu));
         fn buf(binding: u32, x: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
             wgpu::BindGroupEntry {
                 binding,
