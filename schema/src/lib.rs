@@ -145,7 +145,7 @@ pub mod cols {
     // ---- Sweep axes shared by several methods (empty where an axis does not apply) ----
     pub const LAYERS: Col = Col::new(
         "layers",
-        "k: fragments kept per pixel (k-buffer, buckets, linked-list capacity per pixel)",
+        "k: fragments kept per pixel (k-buffer, buckets, linked-list capacity per pixel; MLAB blend layers, adaptive-transparency nodes, hybrid transparency's exact core)",
     );
     pub const MAX_LAYERS: Col = Col::new(
         "max_layers",
@@ -799,7 +799,7 @@ pub mod cols {
     );
     pub const HAZARD_RATE: Col = Col::new(
         "hazard_rate",
-        "k-buffer: fraction of pixels whose captured set differs from the true k nearest, excluding pixels with an f32 depth tie among their k + 1 nearest (those are flagged lost_coplanar and counted in notes)",
+        "unguarded read-modify-write captures: k-buffer: fraction of pixels whose captured set differs from the true k nearest, excluding pixels with an f32 depth tie among their k + 1 nearest (those are flagged lost_coplanar and counted in notes); mlab, adaptive: fraction of pixels whose image differs from the ideal-order (primitive order) twin by more than 1e-4",
     );
     pub const COLLISION_RATE: Col = Col::new(
         "collision_rate",

@@ -183,9 +183,8 @@ fn list_pipeline(
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     (vs, attrs): (&str, Attrs),
-    fs: &str,
+    (fs, targets): (&str, &[Option<wgpu::ColorTargetState>]),
     constants: &[(&str, f64)],
-    targets: &[Option<wgpu::ColorTargetState>],
 ) -> wgpu::RenderPipeline {
     let layouts: Vec<_> = GpuScene::layouts(attrs).into_iter().map(Some).collect();
     let options = wgpu::PipelineCompilationOptions {
@@ -331,9 +330,8 @@ impl PreparedList {
             &raster_layout,
             &module,
             (vs, attrs),
-            fs,
+            (fs, &targets),
             &tiled,
-            &targets,
         );
         let mut rc = effect.constants();
         rc.push(("TAIL", if c.tail { 1.0 } else { 0.0 }));
@@ -524,9 +522,8 @@ fn count_tiles(
         layout,
         module,
         ("vs_position", Attrs::POSITION_ONLY),
-        "fs_count",
+        ("fs_count", &[]),
         &[("TILED", 1.0)],
-        &[],
     );
     // The count touches only the cursors: stand-ins for the node pool and ranges.
     let stand_in = |label| {

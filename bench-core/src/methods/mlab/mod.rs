@@ -89,7 +89,10 @@ pub fn hazards(image: &[[f32; 4]], definition: &[[f64; 4]]) -> (u64, Option<usiz
     let mut n = 0;
     let mut first = None;
     for (p, (g, d)) in image.iter().zip(definition).enumerate() {
-        if (0..4).any(|c| !((g[c] as f64 - d[c]).abs() <= HAZARD_TOL)) {
+        if (0..4).any(|c| {
+            let e = (g[c] as f64 - d[c]).abs();
+            e.is_nan() || e > HAZARD_TOL
+        }) {
             n += 1;
             first.get_or_insert(p);
         }

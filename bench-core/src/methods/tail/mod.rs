@@ -272,7 +272,7 @@ impl Bounding {
     ) {
         let Some(counts) = &cap.counts else { return };
         let kept: u64 = counts.iter().map(|&c| c as u64).sum();
-        let missing = (lists.total_fragments() as u64).saturating_sub(kept);
+        let missing = lists.total_fragments().saturating_sub(kept);
         if self.blends() {
             cap.tailed_fragments = Some(tailed);
             cap.dropped_fragments = Some(missing.saturating_sub(tailed));
@@ -380,7 +380,7 @@ pub(crate) fn check_tail_and_keep(method: &dyn crate::method::Method, tol: f64) 
                         let e = (0..4)
                             .map(|c| (g[c] as f64 - d[c]).abs())
                             .fold(0.0, f64::max);
-                        if !(e <= worst) {
+                        if e.is_nan() || e > worst {
                             (worst, at) = (e, p);
                         }
                     }
