@@ -6,7 +6,7 @@
 use std::collections::BTreeSet;
 
 use bench_core::methods;
-use bench_core::runner::run_suite;
+use bench_core::runner::{expand, run_suite};
 use bench_core::testing;
 use schema::cols;
 
@@ -72,4 +72,56 @@ fn continuum_ci_runs_every_method_and_every_approximate_row_has_finite_errors() 
     .map(String::from)
     .collect();
     assert_eq!(seen, want, "every continuum method has ok rows");
+}
+
+#[test]
+fn continuum_sweeps_every_method_on_the_four_scenes_at_1024_and_the_opacity_sweep() {
+    let text = include_str!("../../scenarios/suites/continuum.toml");
+    let suite = scenarios::Suite::parse(text, "continuum.toml").expect("parses");
+    assert!(
+        bench_core::check::check_suite(&suite).is_empty(),
+        "checks clean"
+    );
+    let groups = expand(&suite, false).expect("expands");
+    let main: Vec<_> = groups.iter().filter(|g| g.study_index == 0).collect();
+    let scenes: BTreeSet<String> = main.iter().map(|g| g.scene.generator.clone()).collect();
+    assert_eq!(
+        scenes,
+        ["grass", "hair", "particles", "shells"]
+            .map(String::from)
+            .into(),
+        "the four scenes"
+    );
+    for g in &main {
+        assert_eq!((g.width, g.height), (1024, 1024));
+        let m: BTreeSet<&str> = g.points.iter().map(|p| p.method.as_str()).collect();
+        for want in [
+            "mlab",
+            "mlab_ideal",
+            "adaptive",
+            "adaptive_ideal",
+            "hybrid",
+            "moments",
+            "wboit",
+        ] {
+            assert!(m.contains(want), "{want} in {}", g.scene.label());
+        }
+        let ks: BTreeSet<String> = g
+            .points
+            .iter()
+            .filter(|p| p.method == "mlab")
+            .map(|p| p.point.get("layers").unwrap().to_string())
+            .collect();
+        assert_eq!(ks, ["1", "2", "4", "8"].map(String::from).into());
+    }
+    let alphas: BTreeSet<String> = groups
+        .iter()
+        .filter(|g| g.study_index >= 2)
+        .map(|g| g.scene.params.get("alpha").unwrap().to_string())
+        .collect();
+    assert_eq!(alphas.len(), 5, "{alphas:?}");
+    assert!(
+        alphas.contains("0.05") && alphas.contains("0.95"),
+        "{alphas:?}"
+    );
 }
