@@ -27,7 +27,7 @@
 //!   `private` sorts every list in the per-thread array (the first version).
 //!
 //! Memory: `bytes_overhead` is the per-pixel part (offsets, scan block sums, counters, output
-//! images); the rest is the fragments (8 B each), the clip buffer (16 B per vertex with
+//! images); the rest is the fragments (8 B each), the clip buffer (24 B per vertex with
 //! `transform = vertex`) and the big-triangle list (2 words per big triangle + 1 per tile).
 
 use super::{Capture, Expected, FrameStats, Method, Prepared};
@@ -46,6 +46,8 @@ use crate::{CoreError, Result};
 const WGSL: &str = include_str!("compute_abuffer.wgsl");
 /// Attribute re-derivation from a primitive id (also used by `linked_list`'s compact nodes).
 pub const VISIBILITY_WGSL: &str = include_str!("visibility.wgsl");
+/// Double-f32 arithmetic (error-free transformations), for the snapped screen positions.
+pub const DF32_WGSL: &str = include_str!("df32.wgsl");
 /// Helpers of replay kernels (a pixel's slots, sorted into primitive order in place).
 const REPLAY_WGSL: &str = include_str!("replay.wgsl");
 /// First `work` word a replay kernel may use for its counters (`W_REPLAY` in replay.wgsl).
@@ -79,8 +81,9 @@ const TILE_W: u32 = 32;
 const STORAGE_BUFFERS: u32 = 10;
 /// Workgroup memory of the resolve's `resolve_sort = workgroup` (2 × 2048 words).
 const WG_SORT_BYTES: u32 = 16 * 1024;
-/// Bytes per vertex of the clip buffer (`transform = vertex`).
-const CLIP_BYTES: u64 = 16;
+/// Bytes per vertex of the clip buffer (`transform = vertex`): clip position and snapped screen
+/// position.
+const CLIP_BYTES: u64 = 24;
 
 pub struct ComputeAbuffer;
 
@@ -115,7 +118,7 @@ impl Method for ComputeAbuffer {
         "compute_abuffer"
     }
     fn describe(&self) -> &'static str {
-        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 16 B per vertex)"
+        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position)"
     }
     fn exact(&self) -> bool {
         true
@@ -303,7 +306,7 @@ impl PreparedAbuffer {
         let ntri = scene.index_count / 3;
         let nvert = (scene.positions.size() / 12) as u32;
         let extra = replay.map_or(String::new(), |r| format!("{REPLAY_WGSL}\n{}", r.wgsl));
-        let src = format!("{WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}\n{extra}");
+        let src = format!("{WGSL}\n{DF32_WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}\n{extra}");
         let module = shader(gpu, "compute_abuffer", &src);
         let cs = wgpu::ShaderStages::COMPUTE;
         let mut entries = vec![camera_entry(0)];
@@ -353,7 +356,7 @@ impl PreparedAbuffer {
         let count = kernels(gpu, &l, false, v);
         let small_groups = (ntri.div_ceil(64).clamp(1, MAX_GROUPS), 1);
         let mut alloc = AllocCounter::default();
-        // The clip buffer is kept (written each frame); a 16 B stand-in when unused.
+        // The clip buffer is kept (written each frame); a one-vertex stand-in when unused.
         let clip_bytes = if v.pretransform {
             nvert.max(1) as u64 * CLIP_BYTES
         } else {
