@@ -49,6 +49,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "shadows-bunny",
         include_str!("../suites/shadows-bunny.toml"),
     ),
+    ("continuum", include_str!("../suites/continuum.toml")),
+    ("continuum-ci", include_str!("../suites/continuum-ci.toml")),
 ];
 
 #[derive(Clone, Debug)]

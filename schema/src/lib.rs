@@ -150,7 +150,7 @@ pub mod cols {
     // ---- Sweep axes shared by several methods (empty where an axis does not apply) ----
     pub const LAYERS: Col = Col::new(
         "layers",
-        "k: fragments kept per pixel (k-buffer, buckets, linked-list capacity per pixel)",
+        "k: fragments kept per pixel (k-buffer, buckets, linked-list capacity per pixel; MLAB blend layers, adaptive-transparency nodes, hybrid transparency's exact core)",
     );
     pub const MAX_LAYERS: Col = Col::new(
         "max_layers",
@@ -223,6 +223,34 @@ pub mod cols {
     pub const NODE: Col = Col::new(
         "node",
         "linked_list: compact (12 B: depth, primitive, next; attributes re-derived from the primitive) | full (32 B: colour, depths, object id, next)",
+    );
+    pub const TAIL: Col = Col::new(
+        "tail",
+        "bounded captures (kbuffer_rmw, kbuffer_atomic, linked_list, mlab): what happens to fragments that do not fit: drop | blend (blended out of order into a tail composited behind the kept ones); mlab also merge (its own rule, the default)",
+    );
+    pub const KEEP: Col = Col::new(
+        "keep",
+        "k-buffers: which k fragments are kept exactly: nearest (the k nearest) | first (the first k to arrive)",
+    );
+    pub const MOMENT_KIND: Col = Col::new(
+        "moment_kind",
+        "moments: power | trigonometric moments of the absorbance over warped depth",
+    );
+    pub const MOMENT_COUNT: Col = Col::new(
+        "moment_count",
+        "moments: moments besides b0: power 4, 6, 8 or trigonometric 2, 3, 4 (the paper's naming)",
+    );
+    pub const MOMENT_PRECISION: Col = Col::new(
+        "moment_precision",
+        "moments: f32 (additive blending into 32-bit float targets) | unorm16 (the paper's quantised 16-bit moments, unguarded read-modify-write in storage)",
+    );
+    pub const MOMENT_BIAS: Col = Col::new(
+        "moment_bias",
+        "moments: bias β: paper (the paper's value for the kind, count and precision) or a number",
+    );
+    pub const MOMENT_NORMALIZE: Col = Col::new(
+        "moment_normalize",
+        "moments: true to normalise the resolved colour by the total absorbance (exact for one layer)",
     );
 
     // ---- Effect parameters (axes of the effects fold) ----
@@ -786,7 +814,7 @@ pub mod cols {
     );
     pub const HAZARD_RATE: Col = Col::new(
         "hazard_rate",
-        "k-buffer: fraction of pixels whose captured set differs from the true k nearest, excluding pixels with an f32 depth tie among their k + 1 nearest (those are flagged lost_coplanar and counted in notes)",
+        "unguarded read-modify-write captures: k-buffer: fraction of pixels whose captured set differs from the true k nearest, excluding pixels with an f32 depth tie among their k + 1 nearest (those are flagged lost_coplanar and counted in notes); mlab, adaptive: fraction of pixels whose image differs from the ideal-order (primitive order) twin by more than 1e-4",
     );
     pub const COLLISION_RATE: Col = Col::new(
         "collision_rate",
@@ -891,6 +919,13 @@ pub const GROUPS: &[Group] = &[
             cols::POOL,
             cols::POOL_SLACK,
             cols::NODE,
+            cols::TAIL,
+            cols::KEEP,
+            cols::MOMENT_KIND,
+            cols::MOMENT_COUNT,
+            cols::MOMENT_PRECISION,
+            cols::MOMENT_BIAS,
+            cols::MOMENT_NORMALIZE,
         ],
     },
     Group {

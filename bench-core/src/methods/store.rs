@@ -34,6 +34,19 @@ pub fn storage_pipeline(
     fs: &str,
     constants: &[(&str, f64)],
 ) -> wgpu::RenderPipeline {
+    storage_pipeline_with(gpu, label, layout, module, fs, constants, &[])
+}
+
+/// [`storage_pipeline`] whose fragment stage also writes colour `targets` (a blended tail).
+pub fn storage_pipeline_with(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    fs: &str,
+    constants: &[(&str, f64)],
+    targets: &[Option<wgpu::ColorTargetState>],
+) -> wgpu::RenderPipeline {
     let layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
         .into_iter()
         .map(Some)
@@ -65,7 +78,7 @@ pub fn storage_pipeline(
                     constants,
                     zero_initialize_workgroup_memory: false,
                 },
-                targets: &[],
+                targets,
             }),
             multiview_mask: None,
             cache: None,
@@ -79,9 +92,20 @@ pub fn storage_pass<'e>(
     timer: &mut GpuTimer,
     label: &str,
 ) -> wgpu::RenderPass<'e> {
+    storage_pass_with(enc, depth, &[], timer, label)
+}
+
+/// [`storage_pass`] with colour attachments (a blended tail).
+pub fn storage_pass_with<'e>(
+    enc: &'e mut wgpu::CommandEncoder,
+    depth: &wgpu::TextureView,
+    colors: &[Option<wgpu::RenderPassColorAttachment<'_>>],
+    timer: &mut GpuTimer,
+    label: &str,
+) -> wgpu::RenderPass<'e> {
     enc.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
-        color_attachments: &[],
+        color_attachments: colors,
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
             view: depth,
             depth_ops: Some(wgpu::Operations {

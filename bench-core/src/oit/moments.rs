@@ -286,6 +286,10 @@ pub fn normalized<T: Real>(st: &MomentState<T>, cfg: &MomentConfig) -> Vec<T> {
 }
 
 /// The transmittance in front of view distance `z`, reconstructed from `st` (1 where b₀ is 0).
+/// A reconstruction that fails (a non-finite fraction: rounding pushed the stored moments out
+/// of the positive definite cone, so the kernel polynomial has complex roots or the system is
+/// singular; seen for ~1 % of single layers with 6 power moments in f32) gives T = 0, as the
+/// paper's HLSL `saturate` turns its NaN into 0: the fragment is hidden. GPU builds count these.
 pub fn transmittance_at<T: Real>(st: &MomentState<T>, z: T, cfg: &MomentConfig) -> T {
     if st.b0 <= T::ZERO {
         return T::ONE;
@@ -314,6 +318,9 @@ pub fn transmittance_at<T: Real>(st: &MomentState<T>, z: T, cfg: &MomentConfig) 
             trig_fraction(&tb, circle_point(zw, &zone), over, &zone)
         }
     };
+    if !fraction.is_finite() {
+        return T::ZERO;
+    }
     (-st.b0 * fraction).exp().clamp(T::ZERO, T::ONE)
 }
 
@@ -406,14 +413,25 @@ pub fn moments(frags: &[RefFragment], cfg: &MomentConfig) -> [f64; 4] {
 /// can be far wider: e.g. `particles` fills 0.24–0.47 of [−1, 1] between its camera's planes).
 /// A GPU method passes the same two numbers as uniforms.
 pub fn depth_range(scene: &scenarios::Scene) -> (f64, f64) {
-    let view = scene.camera.view().as_mat4().as_dmat4();
+    let view = scene.camera.view().as_mat4();
+    depth_range_of(
+        &scene.mesh.positions,
+        view,
+        scene.camera.near,
+        scene.camera.far,
+    )
+}
+
+/// [`depth_range`] from vertex positions and the (f32) view matrix, as a GPU method has them
+/// after uploading the scene (the same arithmetic, so both sides warp identically).
+pub fn depth_range_of(positions: &[[f32; 3]], view: glam::Mat4, near: f64, far: f64) -> (f64, f64) {
+    let view = view.as_dmat4();
     let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
-    for p in &scene.mesh.positions {
+    for p in positions {
         let z = -(view * glam::Vec3::from(*p).as_dvec3().extend(1.0)).z;
         lo = lo.min(z);
         hi = hi.max(z);
     }
-    let (near, far) = (scene.camera.near, scene.camera.far);
     let lo = lo.clamp(near, far);
     let hi = hi.clamp(near, far);
     if hi > lo {
@@ -432,7 +450,7 @@ pub mod quant {
     /// Matrices (row-major, y = M·x) per m = 2, 3, 4: (quantise odd, quantise even,
     /// dequantise odd, dequantise even).
     #[rustfmt::skip]
-    fn matrices(m: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+    pub fn matrices(m: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
         match m {
             2 => (
                 vec![1.5, -2.0, S3 * 0.5, -S3 * 2.0 / 9.0],

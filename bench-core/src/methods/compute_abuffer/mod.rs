@@ -48,6 +48,21 @@ const WGSL: &str = include_str!("compute_abuffer.wgsl");
 pub const VISIBILITY_WGSL: &str = include_str!("visibility.wgsl");
 /// Double-f32 arithmetic (error-free transformations), for the snapped screen positions.
 pub const DF32_WGSL: &str = include_str!("df32.wgsl");
+/// Helpers of replay kernels (a pixel's slots, sorted into primitive order in place).
+const REPLAY_WGSL: &str = include_str!("replay.wgsl");
+/// First `work` word a replay kernel may use for its counters (`W_REPLAY` in replay.wgsl).
+const W_REPLAY: usize = 10;
+
+/// A kernel that replaces the resolve (the ideal-order twins `mlab_ideal`, `adaptive_ideal`):
+/// it sees every captured fragment of its pixel, so it can run an order-dependent rule in
+/// primitive order, which is what the rule gives with ordering hardware. `wgsl` is appended to
+/// the module (with `replay.wgsl`); `entry` runs on 8×8 pixel workgroups; it may use the `work`
+/// words `W_REPLAY..W_REPLAY + 6` as counters (read back by [`PreparedAbuffer::replay_counters`]).
+pub(crate) struct Replay {
+    pub wgsl: String,
+    pub entry: &'static str,
+    pub constants: Vec<(&'static str, f64)>,
+}
 /// The resolve's per-pixel sort capacity (`SORT_MAX` in the WGSL).
 pub const SORT_MAX: u32 = 128;
 /// Bytes per stored fragment: f32 window depth + u32 primitive id (bit 31: front facing).
@@ -137,7 +152,7 @@ impl Method for ComputeAbuffer {
         let effect = EffectConfig::from_point(point).map_err(CoreError::Param)?;
         let v = variants(point);
         Ok(Box::new(PreparedAbuffer::new(
-            gpu, scene, small, &effect, v,
+            gpu, scene, small, &effect, v, None,
         )?))
     }
 }
@@ -189,7 +204,7 @@ struct Kernels {
     big: wgpu::ComputePipeline,
 }
 
-struct PreparedAbuffer {
+pub(crate) struct PreparedAbuffer {
     transform: Option<(wgpu::ComputePipeline, (u32, u32))>,
     count: Kernels,
     fill: Kernels,
@@ -255,12 +270,29 @@ fn dispatch(
 }
 
 impl PreparedAbuffer {
+    /// The exact capture with `replay` in place of the resolve (default speed axes).
+    pub(crate) fn replay(gpu: &Gpu, scene: &GpuScene, replay: &Replay) -> Result<Self> {
+        let v = Variants {
+            pretransform: true,
+            stepped: true,
+            wg_sort: false,
+        };
+        Self::new(gpu, scene, 256, &EffectConfig::default(), v, Some(replay))
+    }
+
+    /// The replay kernel's counters (`work[W_REPLAY..W_REPLAY + 6]`) after the last frame.
+    pub(crate) fn replay_counters(&self, gpu: &Gpu) -> Result<[u32; 6]> {
+        let c = read_vec::<u32>(gpu, &self.work, W_REPLAY + 6)?;
+        Ok(std::array::from_fn(|i| c[W_REPLAY + i]))
+    }
+
     fn new(
         gpu: &Gpu,
         scene: &GpuScene,
         small_max: u32,
         effect: &EffectConfig,
         v: Variants,
+        replay: Option<&Replay>,
     ) -> Result<Self> {
         let d = &gpu.device;
         let px = scene.pixels() as u64;
@@ -273,7 +305,8 @@ impl PreparedAbuffer {
         }
         let ntri = scene.index_count / 3;
         let nvert = (scene.positions.size() / 12) as u32;
-        let src = format!("{WGSL}\n{DF32_WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}");
+        let extra = replay.map_or(String::new(), |r| format!("{REPLAY_WGSL}\n{}", r.wgsl));
+        let src = format!("{WGSL}\n{DF32_WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}\n{extra}");
         let module = shader(gpu, "compute_abuffer", &src);
         let cs = wgpu::ShaderStages::COMPUTE;
         let mut entries = vec![camera_entry(0)];
@@ -457,15 +490,15 @@ impl PreparedAbuffer {
         let mut rc = effect.constants();
         rc.push(("PRETRANSFORM", flag(v.pretransform)));
         rc.push(("WG_SORT", flag(v.wg_sort)));
-        let resolve = compute_pipeline(
-            gpu,
-            "resolve",
-            &l.pipeline,
-            &l.module,
-            "resolve",
-            &rc,
-            false,
-        );
+        let (entry, rc) = match replay {
+            None => ("resolve", rc),
+            Some(r) => {
+                let mut c = r.constants.clone();
+                c.push(("PRETRANSFORM", flag(v.pretransform)));
+                (r.entry, c)
+            }
+        };
+        let resolve = compute_pipeline(gpu, entry, &l.pipeline, &l.module, entry, &rc, false);
         let prep_note = format!(
             "sized by prepare-time counts: {total} fragments, {nbig} shared (big or clipped) triangles in {nchunks} tiles of {TILE_PIXELS} px (≤ {TILE_W} wide), {} B of sizing scratch freed",
             scratch.bytes - px * 4

@@ -246,7 +246,7 @@ fn allocates_exactly_eight_bytes_per_true_fragment_beside_the_declared_overhead(
         let pt = crate::testing::point(&ComputeAbuffer, &p);
         let v = variants(&pt);
         let e = EffectConfig::from_point(&pt).unwrap();
-        let prepared = PreparedAbuffer::new(g, &gs, 256, &e, v).unwrap();
+        let prepared = PreparedAbuffer::new(g, &gs, 256, &e, v, None).unwrap();
         assert_eq!(prepared.bytes_overhead().unwrap(), overhead, "{transform}");
         let bytes = prepared.bytes_allocated();
         let least = overhead + total * FRAG_BYTES + clip;

@@ -53,24 +53,110 @@ fn fs_keys(in: Varyings) {
     }
 }
 
-@fragment
-fn fs_payload(in: Varyings, @builtin(front_facing) ff: bool) {
+// Writes the fragment's payload if its key was captured; false if it was not (the tail's).
+fn payload(in: Varyings, ff: bool) -> bool {
     let base = slot_base(in.clip);
     let key = near_key(in.clip.z);
     for (var i = 0u; i < K; i = i + 1u) {
         let s = atomicLoad(&keys[base + i]);
         // Sorted nearest first: past this key (or at the empty tail) it is not captured.
         if s < key {
-            return;
+            return false;
         }
         if s == key && atomicAdd(&claims[base + i], 1u) == 0u {
             entries[base + i] = Entry(in.color, in.clip.z, in.view_z, in.object_id, select(0u, 1u, ff));
-            return;
+            return true;
         }
     }
+    return false;
+}
+
+@fragment
+fn fs_payload(in: Varyings, @builtin(front_facing) ff: bool) {
+    _ = payload(in, ff);
+}
+
+// tail = blend: a fragment that was not captured goes to the blended tail (tail.wgsl).
+@fragment
+fn fs_payload_tail(in: Varyings, @builtin(front_facing) ff: bool) -> TailOut {
+    if payload(in, ff) {
+        return tail_none();
+    }
+    return tail_of(in.color.rgb * in.color.a, in.color.a);
+}
+
+// keep = first, one pass instead of keys + payload: the first K fragments to arrive claim the
+// pixel's slots in arrival order (claims[base] counts arrivals; atomic, so none is lost).
+fn keep_first(in: Varyings, ff: bool) -> bool {
+    let base = slot_base(in.clip);
+    let i = atomicAdd(&claims[base], 1u);
+    if i >= K {
+        return false;
+    }
+    atomicStore(&keys[base + i], near_key(in.clip.z));
+    entries[base + i] = Entry(in.color, in.clip.z, in.view_z, in.object_id, select(0u, 1u, ff));
+    return true;
+}
+
+@fragment
+fn fs_first(in: Varyings, @builtin(front_facing) ff: bool) {
+    _ = keep_first(in, ff);
+}
+
+@fragment
+fn fs_first_tail(in: Varyings, @builtin(front_facing) ff: bool) -> TailOut {
+    if keep_first(in, ff) {
+        return tail_none();
+    }
+    return tail_of(in.color.rgb * in.color.a, in.color.a);
 }
 
 // ---- resolve: walk each pixel's slots nearest first through the effects fold ----
+
+// keep = first: the slots hold the first arrivals unsorted; the resolve sorts them.
+override KEEP_FIRST: bool = false;
+// Largest K the resolve sorts (kbuffer_rmw's MAX_K).
+const KMAX: u32 = 64u;
+
+fn fold_kept(p: u32) -> FoldState {
+    let base = p * K;
+    var s = fold_init();
+    if !KEEP_FIRST {
+        // keep = nearest: the slots are sorted nearest first.
+        for (var i = 0u; i < K; i = i + 1u) {
+            if atomicLoad(&keys[base + i]) == 0u {
+                break;
+            }
+            let e = entries[base + i];
+            fold_step(&s, Frag(e.depth, e.view_z, e.color, vec3<f32>(0.0), e.object_id, (e.flags & 1u) != 0u));
+        }
+        return s;
+    }
+    // keep = first: sort the slots nearest first (larger key); equal keys keep arrival order.
+    var order: array<u32, KMAX>;
+    var n = 0u;
+    for (var i = 0u; i < K; i = i + 1u) {
+        let key = atomicLoad(&keys[base + i]);
+        if key == 0u {
+            break;
+        }
+        var j = n;
+        loop {
+            if j == 0u || atomicLoad(&keys[base + order[j - 1u]]) >= key {
+                break;
+            }
+            order[j] = order[j - 1u];
+            j = j - 1u;
+        }
+        order[j] = i;
+        n = n + 1u;
+    }
+    for (var i = 0u; i < n; i = i + 1u) {
+        let e = entries[base + order[i]];
+        fold_step(&s, Frag(e.depth, e.view_z, e.color, vec3<f32>(0.0), e.object_id, (e.flags & 1u) != 0u));
+    }
+    return s;
+}
 
 @compute @workgroup_size(8, 8)
 fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -80,14 +166,17 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let p = id.y * w + id.x;
-    let base = p * K;
-    var s = fold_init();
-    for (var i = 0u; i < K; i = i + 1u) {
-        if atomicLoad(&keys[base + i]) == 0u {
-            break;
-        }
-        let e = entries[base + i];
-        fold_step(&s, Frag(e.depth, e.view_z, e.color, vec3<f32>(0.0), e.object_id, (e.flags & 1u) != 0u));
+    out_image[p] = fold_finish(fold_kept(p));
+}
+
+// tail = blend: the kept fragments with the tail behind them (tail/resolve.wgsl).
+@compute @workgroup_size(8, 8)
+fn resolve_tail(@builtin(global_invocation_id) id: vec3<u32>) {
+    let w = u32(camera.viewport.x);
+    let h = u32(camera.viewport.y);
+    if id.x >= w || id.y >= h {
+        return;
     }
-    out_image[p] = fold_finish(s);
+    let p = id.y * w + id.x;
+    out_image[p] = with_tail(id.xy, fold_finish(fold_kept(p)));
 }

@@ -4,15 +4,24 @@
 //! rate is judged exactly like `kbuffer_rmw`'s and is 0 by construction (tested). Why not one
 //! pass of 64-bit atomicMin of (depth, payload): see the WGSL header (naga allows 64-bit min/max
 //! only without a return value, and the insertion needs it).
+//!
+//! `tail = blend` (default `drop`): the payload pass returns every fragment that was not
+//! captured to the blended tail (methods/tail), composited behind the k in the resolve.
+//! `keep = first` (default `nearest`): one pass instead of keys + payload, in which the first k
+//! fragments to arrive claim the slots (an atomic counter per pixel; which fragments are "first"
+//! is the GPU's order, judged against primitive order); the resolve sorts them. The hazard judge
+//! applies to `keep = nearest` only. `hybrid` is this capture with a mean-alpha tail.
 
-use super::kbuffer_rmw::{kslots_layout, KSlots, LAYERS};
-use super::store::{dummy_depth, storage_pass, storage_pipeline};
+use super::kbuffer_rmw::{kslots_entries, kslots_layout, KSlots, LAYERS};
+use super::store::{dummy_depth, storage_pass_with, storage_pipeline_with};
+use super::tail::{self, Bounding, TailTargets, RESOLVE_WGSL, TAIL_WGSL};
 use super::{Capture, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::effects::FOLD_WGSL;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{bind_buffers, compute_pipeline, shader, STORAGE_RW};
+use crate::oit::Keep;
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
 use crate::Result;
@@ -32,29 +41,45 @@ impl Method for KBufferAtomic {
         true
     }
     fn axes(&self) -> Vec<Axis> {
-        vec![LAYERS]
+        vec![LAYERS, tail::TAIL, tail::KEEP]
+    }
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        if Bounding::of(point, true).blends() {
+            tail::supports(gpu, 0)?;
+        }
+        Ok(())
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let k = point.int(&LAYERS) as u32;
-        Ok(Box::new(PreparedAtomic::new(gpu, scene, k)?))
+        Ok(Box::new(PreparedAtomic::new(
+            gpu,
+            scene,
+            k,
+            Bounding::of(point, true),
+        )?))
     }
 }
 
-struct PreparedAtomic {
-    keys_pass: wgpu::RenderPipeline,
+pub(crate) struct PreparedAtomic {
+    /// The keys pass (`keep = nearest`); `keep = first` has only the claim pass.
+    keys_pass: Option<wgpu::RenderPipeline>,
     payload_pass: wgpu::RenderPipeline,
     resolve: wgpu::ComputePipeline,
     bind: wgpu::BindGroup,
+    resolve_bind: Option<wgpu::BindGroup>,
     depth: wgpu::TextureView,
     slots: KSlots,
     claims: wgpu::Buffer,
+    bounding: Bounding,
+    tail: Option<TailTargets>,
+    tailed: u64,
     alloc: AllocCounter,
 }
 
 impl PreparedAtomic {
-    fn new(gpu: &Gpu, scene: &GpuScene, k: u32) -> Result<Self> {
+    pub(crate) fn new(gpu: &Gpu, scene: &GpuScene, k: u32, bounding: Bounding) -> Result<Self> {
         let d = &gpu.device;
-        let src = format!("{WGSL}\n{FOLD_WGSL}");
+        let src = format!("{WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}");
         let module = shader(gpu, "kbuffer_atomic", &src);
         let bgl = kslots_layout(gpu, 1);
         let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -63,26 +88,69 @@ impl PreparedAtomic {
             immediate_size: 0,
         });
         let kc = [("K", k as f64)];
-        let rc = [("K", k as f64), ("EFFECT", 0.0)];
-        let keys_pass =
-            storage_pipeline(gpu, "kbuffer_atomic keys", &layout, &module, "fs_keys", &kc);
-        let payload_pass = storage_pipeline(
+        let [keep_first, mean_alpha] = bounding.constants();
+        let rc = [("K", k as f64), ("EFFECT", 0.0), keep_first, mean_alpha];
+        let blend = bounding.blends();
+        let targets = if blend {
+            TailTargets::color_targets()
+        } else {
+            Vec::new()
+        };
+        let nearest = bounding.keep == Keep::Nearest;
+        let keys_pass = nearest.then(|| {
+            storage_pipeline_with(
+                gpu,
+                "kbuffer_atomic keys",
+                &layout,
+                &module,
+                "fs_keys",
+                &kc,
+                &[],
+            )
+        });
+        let fs = match (nearest, blend) {
+            (true, false) => "fs_payload",
+            (true, true) => "fs_payload_tail",
+            (false, false) => "fs_first",
+            (false, true) => "fs_first_tail",
+        };
+        let payload_pass = storage_pipeline_with(
             gpu,
             "kbuffer_atomic payload",
             &layout,
             &module,
-            "fs_payload",
+            fs,
             &kc,
+            &targets,
         );
-        let resolve = compute_pipeline(
-            gpu,
-            "kbuffer_atomic resolve",
-            &layout,
-            &module,
-            "resolve",
-            &rc,
-            false,
-        );
+        let resolve_bgl = blend.then(|| tail::resolve_layout(gpu, kslots_entries(1)));
+        let resolve = match &resolve_bgl {
+            None => compute_pipeline(
+                gpu,
+                "kbuffer_atomic resolve",
+                &layout,
+                &module,
+                "resolve",
+                &rc,
+                false,
+            ),
+            Some(bgl) => {
+                let l = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("kbuffer_atomic tail resolve"),
+                    bind_group_layouts: &[Some(bgl)],
+                    immediate_size: 0,
+                });
+                compute_pipeline(
+                    gpu,
+                    "kbuffer_atomic tail resolve",
+                    &l,
+                    &module,
+                    "resolve_tail",
+                    &rc,
+                    false,
+                )
+            }
+        };
         let mut alloc = AllocCounter::default();
         let depth = dummy_depth(gpu, &mut alloc, scene);
         let slots = KSlots::new(gpu, &mut alloc, scene, k)?;
@@ -92,26 +160,31 @@ impl PreparedAtomic {
             scene.pixels() as u64 * k as u64 * 4,
             STORAGE_RW,
         );
-        let bind = bind_buffers(
-            gpu,
-            "kbuffer_atomic",
-            &bgl,
-            &[
-                &scene.camera,
-                &slots.keys,
-                &slots.entries,
-                &slots.image,
-                &claims,
-            ],
-        );
+        let buffers = [
+            &scene.camera,
+            &slots.keys,
+            &slots.entries,
+            &slots.image,
+            &claims,
+        ];
+        let bind = bind_buffers(gpu, "kbuffer_atomic", &bgl, &buffers);
+        let tail = blend.then(|| TailTargets::new(gpu, &mut alloc, scene));
+        let resolve_bind = resolve_bgl
+            .as_ref()
+            .zip(tail.as_ref())
+            .map(|(l, t)| tail::resolve_bind(gpu, l, &buffers, t));
         Ok(PreparedAtomic {
             keys_pass,
             payload_pass,
             resolve,
             bind,
+            resolve_bind,
             depth,
             slots,
             claims,
+            bounding,
+            tail,
+            tailed: 0,
             alloc,
         })
     }
@@ -122,9 +195,16 @@ impl Prepared for PreparedAtomic {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.slots.keys, 0, None);
         enc.clear_buffer(&self.claims, 0, None);
-        for (label, pipe) in [("keys", &self.keys_pass), ("payload", &self.payload_pass)] {
-            let mut pass = storage_pass(&mut enc, &self.depth, timer, label);
-            pass.set_pipeline(pipe);
+        if let Some(keys) = &self.keys_pass {
+            let mut pass = storage_pass_with(&mut enc, &self.depth, &[], timer, "keys");
+            pass.set_pipeline(keys);
+            pass.set_bind_group(0, &self.bind, &[]);
+            scene.draw(&mut pass, Attrs::ALL);
+        }
+        {
+            let colors = self.tail.as_ref().map_or(Vec::new(), |t| t.attachments());
+            let mut pass = storage_pass_with(&mut enc, &self.depth, &colors, timer, "payload");
+            pass.set_pipeline(&self.payload_pass);
             pass.set_bind_group(0, &self.bind, &[]);
             scene.draw(&mut pass, Attrs::ALL);
         }
@@ -134,22 +214,32 @@ impl Prepared for PreparedAtomic {
                 timestamp_writes: timer.compute_pass("resolve"),
             });
             pass.set_pipeline(&self.resolve);
-            pass.set_bind_group(0, &self.bind, &[]);
+            pass.set_bind_group(0, self.resolve_bind.as_ref().unwrap_or(&self.bind), &[]);
             pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
         }
         gpu.queue.submit([enc.finish()]);
         Ok(FrameStats {
-            geometry_passes: 2,
+            geometry_passes: if self.keys_pass.is_some() { 2 } else { 1 },
             layers: self.slots.k,
         })
     }
 
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
+        self.tailed = match &self.tail {
+            Some(t) => t.tailed(gpu)?,
+            None => 0,
+        };
         self.slots.readback(gpu, scene)
     }
 
     fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
-        self.slots.judge(cap, reference);
+        if self.bounding.keep == Keep::Nearest {
+            self.slots.judge(cap, reference);
+        } else {
+            cap.notes = "keep = first: no k-nearest hazard judge (the first k are the GPU's arrival order, judged against primitive order in *_vs_k)".into();
+        }
+        self.bounding.report(cap, reference, self.tailed);
+        cap.definition = self.bounding.definition(reference, self.slots.k as usize);
     }
 
     fn bytes_allocated(&self) -> u64 {
@@ -182,5 +272,11 @@ mod tests {
                 assert_eq!(bad, 0, "{name} k={k}: counts differ first at {first:?}");
             }
         }
+    }
+
+    #[test]
+    fn tail_and_keep_modes_equal_their_definition_and_count_what_did_not_fit() {
+        // Up to 8 kept layers composited in f32, plus f32 tail sums (≤ 30 terms here).
+        crate::methods::tail::check_tail_and_keep(&KBufferAtomic, 2.0 * IMAGE_TOL);
     }
 }

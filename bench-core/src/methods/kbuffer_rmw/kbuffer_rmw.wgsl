@@ -27,13 +27,23 @@ fn near_key(d: f32) -> u32 {
     return select(~b, max(b, 1u), camera.near_far.z > 0.5);
 }
 
-@fragment
-fn fs_insert(in: Varyings, @builtin(front_facing) ff: bool) {
+// keep = first: a full pixel takes no more fragments (the first K to arrive stay).
+override KEEP_FIRST: bool = false;
+
+// Inserts the fragment; returns what fell out as (premultiplied rgb, α): the fragment itself
+// (rejected), the farthest kept one (evicted), or α = −1 when nothing did.
+fn insert(in: Varyings, ff: bool) -> vec4<f32> {
     let base = (u32(in.clip.y) * u32(camera.viewport.x) + u32(in.clip.x)) * K;
     let key = near_key(in.clip.z);
-    // Full and not nearer than the farthest kept: nothing to insert.
-    if keys[base + K - 1u] >= key {
-        return;
+    let last = keys[base + K - 1u];
+    // Full and not nearer than the farthest kept (or keep = first): nothing to insert.
+    if last != 0u && (KEEP_FIRST || last >= key) {
+        return vec4<f32>(in.color.rgb * in.color.a, in.color.a);
+    }
+    var out = vec4<f32>(0.0, 0.0, 0.0, -1.0);
+    if last != 0u {
+        let e = entries[base + K - 1u];
+        out = vec4<f32>(e.color.rgb * e.color.a, e.color.a);
     }
     // Start at the first empty slot (or the last one when full).
     var j = K - 1u;
@@ -58,6 +68,22 @@ fn fs_insert(in: Varyings, @builtin(front_facing) ff: bool) {
     }
     keys[base + j] = key;
     entries[base + j] = Entry(in.color, in.clip.z, in.view_z, in.object_id, select(0u, 1u, ff));
+    return out;
+}
+
+@fragment
+fn fs_insert(in: Varyings, @builtin(front_facing) ff: bool) {
+    _ = insert(in, ff);
+}
+
+// tail = blend: what fell out goes to the blended tail (tail.wgsl).
+@fragment
+fn fs_insert_tail(in: Varyings, @builtin(front_facing) ff: bool) -> TailOut {
+    let o = insert(in, ff);
+    if o.a < 0.0 {
+        return tail_none();
+    }
+    return tail_of(o.rgb, o.a);
 }
 
 // ---- resolve: walk each pixel's slots nearest first through the effects fold ----
@@ -71,6 +97,10 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let p = id.y * w + id.x;
     let base = p * K;
+    out_image[p] = fold_finish(fold_kept(base));
+}
+
+fn fold_kept(base: u32) -> FoldState {
     var s = fold_init();
     for (var i = 0u; i < K; i = i + 1u) {
         if keys[base + i] == 0u {
@@ -79,5 +109,17 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
         let e = entries[base + i];
         fold_step(&s, Frag(e.depth, e.view_z, e.color, vec3<f32>(0.0), e.object_id, (e.flags & 1u) != 0u));
     }
-    out_image[p] = fold_finish(s);
+    return s;
+}
+
+// tail = blend: the kept fragments with the tail behind them (tail/resolve.wgsl).
+@compute @workgroup_size(8, 8)
+fn resolve_tail(@builtin(global_invocation_id) id: vec3<u32>) {
+    let w = u32(camera.viewport.x);
+    let h = u32(camera.viewport.y);
+    if id.x >= w || id.y >= h {
+        return;
+    }
+    let p = id.y * w + id.x;
+    out_image[p] = with_tail(id.xy, fold_finish(fold_kept(p * K)));
 }

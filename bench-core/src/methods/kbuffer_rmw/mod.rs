@@ -13,8 +13,14 @@
 //! The hazard rate is measured, not assumed: `judge` compares the captured k depths of every
 //! pixel with the reference's true k nearest (`hazard_pixels`, flag `hazard`). [`twin_insert`] is
 //! the insertion rule on the CPU, applied one fragment at a time (what a hazard-free run keeps).
+//!
+//! `tail = blend` (default `drop`): the fragment that falls out of a pixel (rejected, or the
+//! farthest kept one evicted by a nearer one) is returned to the blended tail (methods/tail).
+//! `keep = first` (default `nearest`): a full pixel takes no more fragments, so the first k to
+//! arrive stay (the hazard judge then does not apply: its truth is the k nearest).
 
-use super::store::{self, dummy_depth, storage_pass, storage_pipeline, ENTRY_BYTES};
+use super::store::{self, dummy_depth, storage_pass_with, storage_pipeline_with, ENTRY_BYTES};
+use super::tail::{self, Bounding, TailTargets, RESOLVE_WGSL, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::effects::FOLD_WGSL;
@@ -24,6 +30,7 @@ use crate::gpu_util::{
     bind_buffers, camera_entry, check_storage_size, compute_pipeline, read_vec, shader,
     storage_entry, STORAGE_RW,
 };
+use crate::oit::Keep;
 use crate::record::cols;
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
@@ -55,7 +62,13 @@ impl Method for KBufferRmw {
         false
     }
     fn axes(&self) -> Vec<Axis> {
-        vec![LAYERS, HEURISTICS]
+        vec![LAYERS, HEURISTICS, tail::TAIL, tail::KEEP]
+    }
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        if Bounding::of(point, true).blends() {
+            tail::supports(gpu, 0)?;
+        }
+        Ok(())
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let k = point.int(&LAYERS) as u32;
@@ -64,6 +77,7 @@ impl Method for KBufferRmw {
             scene,
             k,
             point.bool(&HEURISTICS),
+            Bounding::of(point, true),
         )?))
     }
 }
@@ -173,31 +187,46 @@ struct PreparedRmw {
     insert: wgpu::RenderPipeline,
     resolve: wgpu::ComputePipeline,
     bind: wgpu::BindGroup,
+    resolve_bind: Option<wgpu::BindGroup>,
     depth: wgpu::TextureView,
     slots: KSlots,
     /// `heuristics`: front-to-back sorted index buffer, drawn in batches.
     sorted: Option<wgpu::Buffer>,
+    bounding: Bounding,
+    tail: Option<TailTargets>,
+    tailed: u64,
     alloc: AllocCounter,
 }
 
 /// Bind group layout shared by the insert and resolve stages: camera, keys, entries, image.
 pub fn kslots_layout(gpu: &Gpu, extra: u32) -> wgpu::BindGroupLayout {
+    gpu.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("k-buffer"),
+            entries: &kslots_entries(extra),
+        })
+}
+
+/// The entries of [`kslots_layout`] (a tail resolve adds its textures to them).
+pub fn kslots_entries(extra: u32) -> Vec<wgpu::BindGroupLayoutEntry> {
     let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
     let mut entries = vec![camera_entry(0)];
     for b in 1..4 + extra {
         entries.push(storage_entry(b, false, fc));
     }
-    gpu.device
-        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("k-buffer"),
-            entries: &entries,
-        })
+    entries
 }
 
 impl PreparedRmw {
-    fn new(gpu: &Gpu, scene: &GpuScene, k: u32, heuristics: bool) -> Result<Self> {
+    fn new(
+        gpu: &Gpu,
+        scene: &GpuScene,
+        k: u32,
+        heuristics: bool,
+        bounding: Bounding,
+    ) -> Result<Self> {
         let d = &gpu.device;
-        let src = format!("{WGSL}\n{FOLD_WGSL}");
+        let src = format!("{WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}");
         let module = shader(gpu, "kbuffer_rmw", &src);
         let bgl = kslots_layout(gpu, 0);
         let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -205,34 +234,62 @@ impl PreparedRmw {
             bind_group_layouts: &[Some(&bgl)],
             immediate_size: 0,
         });
-        let kc = [("K", k as f64)];
-        let rc = [("K", k as f64), ("EFFECT", 0.0)];
-        let insert = storage_pipeline(
+        let [keep_first, mean_alpha] = bounding.constants();
+        let kc = [("K", k as f64), keep_first];
+        let rc = [("K", k as f64), ("EFFECT", 0.0), mean_alpha];
+        let blend = bounding.blends();
+        let (fs, targets) = if blend {
+            ("fs_insert_tail", TailTargets::color_targets())
+        } else {
+            ("fs_insert", Vec::new())
+        };
+        let insert = storage_pipeline_with(
             gpu,
             "kbuffer_rmw insert",
             &layout,
             &module,
-            "fs_insert",
+            fs,
             &kc,
+            &targets,
         );
-        let resolve = compute_pipeline(
-            gpu,
-            "kbuffer_rmw resolve",
-            &layout,
-            &module,
-            "resolve",
-            &rc,
-            false,
-        );
+        let resolve_bgl = blend.then(|| tail::resolve_layout(gpu, kslots_entries(0)));
+        let resolve = match &resolve_bgl {
+            None => compute_pipeline(
+                gpu,
+                "kbuffer_rmw resolve",
+                &layout,
+                &module,
+                "resolve",
+                &rc,
+                false,
+            ),
+            Some(bgl) => {
+                let l = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("kbuffer_rmw tail resolve"),
+                    bind_group_layouts: &[Some(bgl)],
+                    immediate_size: 0,
+                });
+                compute_pipeline(
+                    gpu,
+                    "kbuffer_rmw tail resolve",
+                    &l,
+                    &module,
+                    "resolve_tail",
+                    &rc,
+                    false,
+                )
+            }
+        };
         let mut alloc = AllocCounter::default();
         let depth = dummy_depth(gpu, &mut alloc, scene);
         let slots = KSlots::new(gpu, &mut alloc, scene, k)?;
-        let bind = bind_buffers(
-            gpu,
-            "kbuffer_rmw",
-            &bgl,
-            &[&scene.camera, &slots.keys, &slots.entries, &slots.image],
-        );
+        let buffers = [&scene.camera, &slots.keys, &slots.entries, &slots.image];
+        let bind = bind_buffers(gpu, "kbuffer_rmw", &bgl, &buffers);
+        let tail = blend.then(|| TailTargets::new(gpu, &mut alloc, scene));
+        let resolve_bind = resolve_bgl
+            .as_ref()
+            .zip(tail.as_ref())
+            .map(|(l, t)| tail::resolve_bind(gpu, l, &buffers, t));
         let sorted = if heuristics {
             Some(sorted_indices(gpu, scene)?)
         } else {
@@ -242,9 +299,13 @@ impl PreparedRmw {
             insert,
             resolve,
             bind,
+            resolve_bind,
             depth,
             slots,
             sorted,
+            bounding,
+            tail,
+            tailed: 0,
             alloc,
         })
     }
@@ -293,7 +354,8 @@ impl Prepared for PreparedRmw {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.slots.keys, 0, None);
         {
-            let mut pass = storage_pass(&mut enc, &self.depth, timer, "insert");
+            let colors = self.tail.as_ref().map_or(Vec::new(), |t| t.attachments());
+            let mut pass = storage_pass_with(&mut enc, &self.depth, &colors, timer, "insert");
             pass.set_pipeline(&self.insert);
             pass.set_bind_group(0, &self.bind, &[]);
             match &self.sorted {
@@ -316,7 +378,7 @@ impl Prepared for PreparedRmw {
                 timestamp_writes: timer.compute_pass("resolve"),
             });
             pass.set_pipeline(&self.resolve);
-            pass.set_bind_group(0, &self.bind, &[]);
+            pass.set_bind_group(0, self.resolve_bind.as_ref().unwrap_or(&self.bind), &[]);
             pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
         }
         gpu.queue.submit([enc.finish()]);
@@ -327,6 +389,10 @@ impl Prepared for PreparedRmw {
     }
 
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
+        self.tailed = match &self.tail {
+            Some(t) => t.tailed(gpu)?,
+            None => 0,
+        };
         let mut cap = self.slots.readback(gpu, scene)?;
         if self.sorted.is_some() {
             cap.notes = format!(
@@ -337,7 +403,18 @@ impl Prepared for PreparedRmw {
     }
 
     fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
-        self.slots.judge(cap, reference);
+        if self.bounding.keep == Keep::Nearest {
+            self.slots.judge(cap, reference);
+        } else {
+            let note = "keep = first: no k-nearest hazard judge (its truth is the k nearest; races show in *_vs_k against primitive order)";
+            cap.notes = if cap.notes.is_empty() {
+                note.into()
+            } else {
+                format!("{}; {note}", cap.notes)
+            };
+        }
+        self.bounding.report(cap, reference, self.tailed);
+        cap.definition = self.bounding.definition(reference, self.slots.k as usize);
     }
 
     fn bytes_allocated(&self) -> u64 {
@@ -449,5 +526,11 @@ mod tests {
                 usage: wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: false,
             })
+    }
+
+    #[test]
+    fn tail_and_keep_modes_equal_their_definition_and_count_what_did_not_fit() {
+        // Up to 8 kept layers composited in f32, plus f32 tail sums (≤ 30 terms here).
+        crate::methods::tail::check_tail_and_keep(&KBufferRmw, 2.0 * IMAGE_TOL);
     }
 }

@@ -29,6 +29,24 @@ fn fs_append(
     push_node(pos, n);
 }
 
+// tail = blend: the full vertex stage, so a fragment that finds its pool full has a colour for
+// the blended tail (tail.wgsl).
+@fragment
+fn fs_append_tail(
+    in: Varyings,
+    @builtin(front_facing) ff: bool,
+    @builtin(primitive_index) prim: u32,
+) -> TailOut {
+    let n = take_node(in.clip);
+    if n == NO_NODE {
+        return tail_of(in.color.rgb * in.color.a, in.color.a);
+    }
+    nodes[n * NODE_WORDS] = bitcast<u32>(in.clip.z);
+    nodes[n * NODE_WORDS + 1u] = prim | select(0u, 0x80000000u, ff);
+    push_node(in.clip, n);
+    return tail_none();
+}
+
 fn node_depth(ni: u32) -> f32 {
     return bitcast<f32>(nodes[ni * NODE_WORDS]);
 }

@@ -6,9 +6,23 @@ const NEXT: u32 = 7u;
 
 @fragment
 fn fs_append(in: Varyings, @builtin(front_facing) ff: bool) {
+    _ = append(in, ff);
+}
+
+// tail = blend: a fragment that finds its pool full goes to the blended tail (tail.wgsl).
+@fragment
+fn fs_append_tail(in: Varyings, @builtin(front_facing) ff: bool) -> TailOut {
+    if append(in, ff) {
+        return tail_none();
+    }
+    return tail_of(in.color.rgb * in.color.a, in.color.a);
+}
+
+// Appends the fragment; false if its pool is full.
+fn append(in: Varyings, ff: bool) -> bool {
     let n = take_node(in.clip);
     if n == NO_NODE {
-        return;
+        return false;
     }
     let b = n * NODE_WORDS;
     nodes[b] = bitcast<u32>(in.color.r);
@@ -19,6 +33,7 @@ fn fs_append(in: Varyings, @builtin(front_facing) ff: bool) {
     nodes[b + 5u] = bitcast<u32>(in.view_z);
     nodes[b + 6u] = (in.object_id & 0x7fffffffu) | select(0u, 0x80000000u, ff);
     push_node(in.clip, n);
+    return true;
 }
 
 fn node_depth(ni: u32) -> f32 {

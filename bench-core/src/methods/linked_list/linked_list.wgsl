@@ -68,6 +68,20 @@ fn fs_count(@builtin(position) pos: vec4<f32>) {
     atomicAdd(&cursors[pool_of(pos)], 1u);
 }
 
+// tail = blend: the fragments the sort drops are summed here (tail.wgsl of this folder
+// composites them with the pool's tail targets); tail = drop leaves this unused.
+override TAIL: bool = false;
+var<private> sort_tail_sums: vec4<f32>;
+var<private> sort_tail_trans: f32;
+var<private> sort_tail_count: f32;
+
+fn sort_drops(f: Frag) {
+    let a = f.color.a;
+    sort_tail_sums = sort_tail_sums + vec4<f32>(f.color.rgb * a, a);
+    sort_tail_trans = sort_tail_trans * (1.0 - a);
+    sort_tail_count = sort_tail_count + 1.0;
+}
+
 @compute @workgroup_size(8, 8)
 fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = u32(camera.viewport.x);
@@ -75,7 +89,21 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= w || id.y >= h {
         return;
     }
+    let s = resolve_lists(id.xy);
     let p = id.y * w + id.x;
+    for (var k = 0u; k < fold_image_count(); k = k + 1u) {
+        out_image[k * w * h + p] = fold_finish_image(s, k);
+    }
+}
+
+// Pixel `xy`'s list sorted (the SORT_MAX nearest) and folded; counts written.
+fn resolve_lists(xy: vec2<u32>) -> FoldState {
+    let w = u32(camera.viewport.x);
+    let p = xy.y * w + xy.x;
+    sort_tail_sums = vec4<f32>(0.0);
+    sort_tail_trans = 1.0;
+    sort_tail_count = 0.0;
+    let ndc = vec2<f32>((f32(xy.x) + 0.5) * camera.viewport.z * 2.0 - 1.0, 1.0 - (f32(xy.y) + 0.5) * camera.viewport.w * 2.0);
     var d: array<f32, SORT_MAX>;
     var key: array<u32, SORT_MAX>;
     var n = 0u;
@@ -92,7 +120,13 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
         if n == SORT_MAX {
             dropped = dropped + 1u;
             if !list_before(z, k, d[n - 1u], key[n - 1u]) {
+                if TAIL {
+                    sort_drops(list_frag(z, k, ndc));
+                }
                 continue;
+            }
+            if TAIL {
+                sort_drops(list_frag(d[n - 1u], key[n - 1u], ndc));
             }
             n = n - 1u;
         }
@@ -109,13 +143,9 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
         key[j] = k;
         n = n + 1u;
     }
-    let ndc = vec2<f32>((f32(id.x) + 0.5) * camera.viewport.z * 2.0 - 1.0, 1.0 - (f32(id.y) + 0.5) * camera.viewport.w * 2.0);
-    var s = fold_init_at(vec2<f32>(id.xy) + 0.5);
+    var s = fold_init_at(vec2<f32>(xy) + 0.5);
     for (var i = 0u; i < n; i = i + 1u) {
         fold_step(&s, list_frag(d[i], key[i], ndc));
-    }
-    for (var k = 0u; k < fold_image_count(); k = k + 1u) {
-        out_image[k * w * h + p] = fold_finish_image(s, k);
     }
     atomicStore(&pix[2u * p + 1u], n);
     let gone = atomicLoad(&pix[2u * p]) + dropped;
@@ -123,4 +153,5 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
         atomicAdd(&counters[0], 1u);
         atomicAdd(&counters[1], gone);
     }
+    return s;
 }

@@ -20,13 +20,21 @@
 //!   re-derives them from the primitive (every effect, Fresnel included). `full`: 32 B nodes with
 //!   colour, depths and object id (every effect but Fresnel).
 //!
+//! - `tail = drop|blend` (default `drop`): `blend` sends the fragments that find their pool full
+//!   (the append pass's fragment stage returns them to methods/tail's blend targets; with compact
+//!   nodes the append pass then runs the full vertex stage for their colour) and those beyond the
+//!   resolve's sort capacity (summed in the resolve, which sees them) to an out-of-order tail
+//!   composited behind the list. A pool fills in arrival order, so what a pixel keeps is its first
+//!   arrivals (`keep = first` of the twin `oit::tail`); transparency only.
+//!
 //! Memory: `bytes_overhead` is everything but the nodes (heads, per-pixel lost/resolved counts,
 //! output images, the per-tile cursors and ranges, the stand-in depth attachment).
 
 use wgpu::util::DeviceExt;
 
 use super::compute_abuffer::VISIBILITY_WGSL;
-use super::store::storage_pass;
+use super::store::storage_pass_with;
+use super::tail::{self, TailTargets, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::effects::{self, Effect, EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
@@ -41,6 +49,7 @@ use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
 const WGSL: &str = include_str!("linked_list.wgsl");
+const TAIL_RESOLVE_WGSL: &str = include_str!("tail.wgsl");
 const FULL_WGSL: &str = include_str!("full_node.wgsl");
 const COMPACT_WGSL: &str = include_str!("compact_node.wgsl");
 /// The resolve's per-pixel sort capacity (`SORT_MAX` in the WGSL).
@@ -95,7 +104,7 @@ impl Method for LinkedList {
         true
     }
     fn axes(&self) -> Vec<Axis> {
-        let mut v = vec![LAYERS, POOL, POOL_SLACK, NODE];
+        let mut v = vec![LAYERS, POOL, POOL_SLACK, NODE, tail::TAIL];
         v.extend_from_slice(effects::AXES);
         v
     }
@@ -104,7 +113,16 @@ impl Method for LinkedList {
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
         let c = list_config(point);
-        effect_config(point, c.compact)?;
+        let e = effect_config(point, c.compact)?;
+        if c.tail {
+            tail::supports(gpu, 0)?;
+            if e.effect != Effect::Transparency {
+                return Err(format!(
+                    "tail = blend composites a transparency tail: not {}",
+                    e.effect.name()
+                ));
+            }
+        }
         if c.compact && !gpu.has(wgpu::Features::PRIMITIVE_INDEX) {
             return Err("node = compact needs PRIMITIVE_INDEX (use node = full)".into());
         }
@@ -134,6 +152,8 @@ struct ListConfig {
     slack_pct: u64,
     /// `node = compact`: 12 B nodes, attributes re-derived from the primitive.
     compact: bool,
+    /// `tail = blend`: what does not fit goes to a blended tail.
+    tail: bool,
 }
 
 fn list_config(point: &Point) -> ListConfig {
@@ -141,6 +161,7 @@ fn list_config(point: &Point) -> ListConfig {
         counted: point.choice(&POOL) == "counted",
         slack_pct: point.int(&POOL_SLACK) as u64,
         compact: point.choice(&NODE) == "compact",
+        tail: tail::tail_mode(point) == crate::oit::TailMode::Blend,
     }
 }
 
@@ -162,7 +183,7 @@ fn list_pipeline(
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     (vs, attrs): (&str, Attrs),
-    fs: &str,
+    (fs, targets): (&str, &[Option<wgpu::ColorTargetState>]),
     constants: &[(&str, f64)],
 ) -> wgpu::RenderPipeline {
     let layouts: Vec<_> = GpuScene::layouts(attrs).into_iter().map(Some).collect();
@@ -194,7 +215,7 @@ fn list_pipeline(
                 module,
                 entry_point: Some(fs),
                 compilation_options: options,
-                targets: &[],
+                targets,
             }),
             multiview_mask: None,
             cache: None,
@@ -216,6 +237,10 @@ struct PreparedList {
     pools: usize,
     pool_note: String,
     images: usize,
+    /// `tail = blend`: the tail targets and the resolve's group 2 over them.
+    tail: Option<(TailTargets, wgpu::BindGroup)>,
+    /// Per pixel, fragments its pool turned away in the last frame (read back for `judge`).
+    pool_lost: Vec<u32>,
     alloc: AllocCounter,
     #[allow(dead_code)]
     overhead: u64,
@@ -245,7 +270,9 @@ impl PreparedList {
         } else {
             ""
         };
-        let src = format!("{enable}{COMMON_WGSL}\n{WGSL}\n{variant}\n{EFFECTS_WGSL}");
+        let src = format!(
+            "{enable}{COMMON_WGSL}\n{WGSL}\n{variant}\n{EFFECTS_WGSL}\n{TAIL_WGSL}\n{TAIL_RESOLVE_WGSL}"
+        );
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("linked_list"),
             source: wgpu::ShaderSource::Wgsl(src.into()),
@@ -273,16 +300,29 @@ impl PreparedList {
             bind_group_layouts: &[Some(&bgl)],
             immediate_size: 0,
         });
+        // tail = blend: the tail textures as group 2 of the resolve only (the append pass
+        // renders into them).
+        let tail_bgl = c.tail.then(|| {
+            d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("linked_list tail"),
+                entries: &TailTargets::layout_entries(0, wgpu::ShaderStages::COMPUTE),
+            })
+        });
         let resolve_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("linked_list resolve"),
-            bind_group_layouts: &[Some(&bgl), mesh_bgl.as_ref()],
+            bind_group_layouts: &[Some(&bgl), mesh_bgl.as_ref(), tail_bgl.as_ref()],
             immediate_size: 0,
         });
         let tiled = [("TILED", if c.counted { 1.0 } else { 0.0 })];
-        let (vs, attrs) = if c.compact {
+        let (vs, attrs) = if c.compact && !c.tail {
             ("vs_position", Attrs::POSITION_ONLY)
         } else {
             ("vs_full", Attrs::ALL)
+        };
+        let (fs, targets) = if c.tail {
+            ("fs_append_tail", TailTargets::color_targets())
+        } else {
+            ("fs_append", Vec::new())
         };
         let append = list_pipeline(
             gpu,
@@ -290,16 +330,18 @@ impl PreparedList {
             &raster_layout,
             &module,
             (vs, attrs),
-            "fs_append",
+            (fs, &targets),
             &tiled,
         );
-        let rc = effect.constants();
+        let mut rc = effect.constants();
+        rc.push(("TAIL", if c.tail { 1.0 } else { 0.0 }));
+        let entry = if c.tail { "resolve_tail" } else { "resolve" };
         let resolve = compute_pipeline(
             gpu,
             "linked_list resolve",
             &resolve_layout,
             &module,
-            "resolve",
+            entry,
             &rc,
             false,
         );
@@ -402,6 +444,15 @@ impl PreparedList {
                 ],
             )
         });
+        let tail = tail_bgl.as_ref().map(|l| {
+            let t = TailTargets::new(gpu, &mut alloc, scene);
+            let b = d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("linked_list tail"),
+                layout: l,
+                entries: &t.bind_entries(0),
+            });
+            (t, b)
+        });
         let overhead = alloc.bytes - node_buffer_bytes;
         Ok(PreparedList {
             append,
@@ -418,10 +469,40 @@ impl PreparedList {
             pools,
             pool_note: format!("{pool_note}; {pool} nodes of {node_bytes} B"),
             images,
+            tail,
+            pool_lost: Vec::new(),
             alloc,
             overhead,
         })
     }
+}
+
+/// Per pixel: its first `nodes(p)` fragments in primitive order got nodes, of which the
+/// resolve keeps the [`SORT_MAX`] nearest; everything else is blended into the tail (exact
+/// opacity), composited behind them.
+pub fn first_arrivals_with_tail(
+    lists: &crate::reference::FragmentLists,
+    nodes: impl Fn(usize) -> usize + Sync,
+) -> Vec<[f64; 4]> {
+    use crate::oit::tail::{behind, split, TailSums};
+    use crate::oit::{composite_sorted, frags, Frag, Keep, Order};
+    use rayon::prelude::*;
+    (0..lists.pixels())
+        .into_par_iter()
+        .map(|p| {
+            let f: Vec<Frag<f64>> = frags(lists.pixel(p), Order::Arrival);
+            let got = nodes(p).min(f.len());
+            let (kept, mut rest) = split(&f[..got], SORT_MAX as usize, Keep::Nearest);
+            rest.extend(got..f.len());
+            let (c, t) = composite_sorted(kept.iter().map(|&i| &f[i]));
+            let mut sums = TailSums::default();
+            for &i in &rest {
+                sums.add(&f[i]);
+            }
+            let o = sums.exact_opacity();
+            behind(c, t, sums.premultiplied(o), o)
+        })
+        .collect()
 }
 
 /// Prepare-time count of each 8×8 tile's fragments: one render pass of `fs_count` (atomic
@@ -441,7 +522,7 @@ fn count_tiles(
         layout,
         module,
         ("vs_position", Attrs::POSITION_ONLY),
-        "fs_count",
+        ("fs_count", &[]),
         &[("TILED", 1.0)],
     );
     // The count touches only the cursors: stand-ins for the node pool and ranges.
@@ -492,7 +573,11 @@ impl Prepared for PreparedList {
         enc.clear_buffer(&self.pix, 0, None);
         enc.clear_buffer(&self.cursors, 0, None);
         {
-            let mut pass = storage_pass(&mut enc, &self.depth, timer, "append");
+            let colors = self
+                .tail
+                .as_ref()
+                .map_or(Vec::new(), |(t, _)| t.attachments());
+            let mut pass = storage_pass_with(&mut enc, &self.depth, &colors, timer, "append");
             pass.set_pipeline(&self.append);
             pass.set_bind_group(0, &self.bind, &[]);
             scene.draw(&mut pass, self.attrs);
@@ -506,6 +591,9 @@ impl Prepared for PreparedList {
             pass.set_bind_group(0, &self.bind, &[]);
             if let Some(m) = &self.mesh_bind {
                 pass.set_bind_group(1, m, &[]);
+            }
+            if let Some((_, b)) = &self.tail {
+                pass.set_bind_group(2, b, &[]);
             }
             pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
         }
@@ -522,6 +610,7 @@ impl Prepared for PreparedList {
         cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n * self.images)?);
         let pix = read_vec::<[u32; 2]>(gpu, &self.pix, n)?;
         cap.counts = Some(pix.iter().map(|p| p[1]).collect());
+        self.pool_lost = pix.iter().map(|p| p[0]).collect();
         cap.expected = Expected::All;
         let c = read_vec::<u32>(gpu, &self.counters, 2)?;
         let (ovf, lost) = (c[0] as u64, c[1] as u64);
@@ -537,7 +626,26 @@ impl Prepared for PreparedList {
             "{}; {arrived} fragments arrived, {ovf} overflowed pixels, {lost} lost fragments",
             self.pool_note
         );
+        if self.tail.is_some() {
+            cap.tailed_fragments = Some(lost);
+            cap.dropped_fragments = Some(0);
+            cap.notes = format!("{}, all blended into the tail", cap.notes);
+        } else {
+            cap.dropped_fragments = Some(lost);
+        }
         Ok(cap)
+    }
+
+    /// `tail = blend`: the definition is the twin with each pixel's first arrivals kept (as many
+    /// as its pool gave nodes; of those the resolve's SORT_MAX nearest) and the rest tailed.
+    fn judge(&mut self, cap: &mut Capture, reference: &crate::reference::FragmentLists) {
+        if self.tail.is_none() || self.pool_lost.len() != reference.pixels() {
+            return;
+        }
+        let lost = &self.pool_lost;
+        cap.definition = Some(first_arrivals_with_tail(reference, |p| {
+            reference.pixel(p).len().saturating_sub(lost[p] as usize)
+        }));
     }
 
     fn bytes_allocated(&self) -> u64 {
@@ -757,5 +865,79 @@ mod tests {
         assert!(LinkedList
             .supports(gpu(), &crate::testing::point(&LinkedList, &full))
             .is_err());
+    }
+
+    #[test]
+    fn a_fixed_pool_with_a_blended_tail_keeps_alpha_exact_and_equals_its_twin() {
+        // The overflow scene above (12 quads, 1 node per pixel) and small particles (2 nodes
+        // per pixel on average): fragments turned away by the pool go to the tail.
+        let quads = scene("quads", &[("depth_complexity", Int(12))]);
+        let particles = scene(
+            "particles",
+            &[
+                ("count", Int(400)),
+                ("size", scenarios::ParamValue::Float(0.5)),
+            ],
+        );
+        for (s, layers) in [(&quads, 1), (&particles, 2)] {
+            for node in NODES {
+                let what = format!("{} node={node} layers={layers}", s.label());
+                let mut p = list_params("fixed", node, layers);
+                p.0.insert("tail".into(), Str("blend".into()));
+                let (cap, lists) = run(&LinkedList, s, 32, 32, &p);
+                let lost = cap.tailed_fragments.expect("tailed fragments reported");
+                assert!(lost > 0, "{what}: the pool overflows: {}", cap.notes);
+                assert_eq!(cap.dropped_fragments, Some(0), "{what}");
+                let kept: u64 = cap.counts.as_ref().unwrap().iter().map(|&c| c as u64).sum();
+                assert_eq!(kept + lost, lists.total_fragments(), "{what}");
+                let def = cap.definition.as_ref().expect("the twin's image");
+                let img = cap.image.as_ref().unwrap();
+                let truth = lists.composite();
+                for p in 0..lists.pixels() {
+                    // ≤ 40 layers composited and summed in f32.
+                    let e = (0..4)
+                        .map(|c| (img[p][c] as f64 - def[p][c]).abs())
+                        .fold(0.0, f64::max);
+                    assert!(e <= IMAGE_TOL, "{what}: pixel {p}: {e:.2e} vs the twin");
+                    // The tail's opacity is exact, so A is the ground truth's.
+                    assert!(
+                        (img[p][3] as f64 - truth[p][3]).abs() <= IMAGE_TOL,
+                        "{what}: A at {p}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn lists_beyond_the_sort_capacity_blend_the_farthest_into_the_tail() {
+        let s = scene(
+            "quads",
+            &[
+                ("depth_complexity", Int(140)),
+                ("alpha", scenarios::ParamValue::Float(0.02)),
+            ],
+        );
+        for node in NODES {
+            let mut p = list_params("counted", node, 8);
+            p.0.insert("tail".into(), Str("blend".into()));
+            let (cap, lists) = run(&LinkedList, &s, 16, 16, &p);
+            assert!(lists.max_depth_complexity() > SORT_MAX);
+            let beyond: u64 = lists
+                .depth_complexity()
+                .iter()
+                .map(|&d| d.saturating_sub(SORT_MAX) as u64)
+                .sum();
+            assert_eq!(cap.tailed_fragments, Some(beyond), "{node}: {}", cap.notes);
+            let def = cap.definition.as_ref().unwrap();
+            let img = cap.image.as_ref().unwrap();
+            for p in 0..lists.pixels() {
+                // 140 layers of α = 0.02 composited and summed in f32.
+                let e = (0..4)
+                    .map(|c| (img[p][c] as f64 - def[p][c]).abs())
+                    .fold(0.0, f64::max);
+                assert!(e <= 1e-4, "{node}: pixel {p}: {e:.2e}");
+            }
+        }
     }
 }

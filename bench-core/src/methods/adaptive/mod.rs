@@ -1,0 +1,459 @@
+//! Adaptive transparency (Salvi, Montgomery & Lefohn, HPG 2011): each pixel's visibility
+//! function compressed to k nodes as fragments arrive, the node whose removal changes the area
+//! under it least dropped on overflow; a second pass shades every fragment through it (CPU twin
+//! [`crate::oit::adaptive`]). Order-dependent like MLAB, so built twice:
+//!
+//! - `adaptive`: pass 1 unguarded read-modify-write of each pixel's nodes in storage (races
+//!   measured: `hazard_pixels` counts pixels whose image differs from the ideal-order twin beyond
+//!   f32 rounding), pass 2 additive blending of vis(z)·α·c, then a compute composite.
+//! - `adaptive_ideal`: compute_abuffer's exact capture replayed per pixel in primitive order
+//!   through the same rule: what the method gives with ordering hardware (its time is the
+//!   A-buffer's).
+//!
+//! Both fill `Capture.definition` with the twin on the reference fragments in primitive order.
+//! Axis: `layers` = k nodes (1–16). Fragments beyond k per pixel: `overflow_pixels`, node removals
+//! in the notes (nothing is dropped: absorption moves forward, so the image darkens).
+//!
+//! Memory per pixel (race build): k × 8 B nodes + 4 B arrival count + 16 B resolve sum + 16 B
+//! image + 4 B stand-in depth.
+
+use super::compute_abuffer::{PreparedAbuffer, Replay};
+use super::mlab::{hazards, HAZARD_TOL};
+use super::store::{dummy_depth, storage_pass, storage_pipeline};
+use super::{Capture, Expected, FrameStats, Method, Prepared};
+use crate::axes::{Axis, Point};
+use crate::gpu::Gpu;
+use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::gpu_util::{
+    camera_entry, check_storage_size, compute_pipeline, read_vec, shader, storage_entry,
+    texture_entry, STORAGE_RW,
+};
+use crate::oit::{self, Order};
+use crate::record::cols;
+use crate::reference::FragmentLists;
+use crate::timing::GpuTimer;
+use crate::Result;
+
+const RULE_WGSL: &str = include_str!("adaptive.wgsl");
+const RACE_WGSL: &str = include_str!("race.wgsl");
+const IDEAL_WGSL: &str = include_str!("ideal.wgsl");
+/// Largest k (`KMAX` in adaptive.wgsl).
+pub const MAX_K: i64 = 16;
+const ACCUM: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+const LAYERS: Axis = Axis::int(cols::LAYERS, "k: visibility nodes per pixel", 4, 1, MAX_K);
+
+/// The twin's image of the reference fragments in primitive order.
+pub fn definition(lists: &FragmentLists, k: usize) -> Vec<[f64; 4]> {
+    oit::image(lists, true, |list| {
+        oit::adaptive::adaptive_pixel(list, k, Order::Arrival).0
+    })
+}
+
+fn report(cap: &mut Capture, pixels: u64, removals: u64) {
+    cap.overflow_pixels = Some(pixels);
+    cap.notes = format!("{removals} node removals in {pixels} pixels");
+}
+
+pub struct Adaptive;
+pub struct AdaptiveIdeal;
+
+impl Method for Adaptive {
+    fn name(&self) -> &'static str {
+        "adaptive"
+    }
+    fn describe(&self) -> &'static str {
+        "Salvi et al. 2011 adaptive transparency: k visibility nodes by unguarded read-modify-write (no rasterizer-ordered views: races measured as hazard_rate vs the ideal-order twin), least-area node removed on overflow, then a shading pass; approximate (exact for depth complexity ≤ k); 2 geometry passes + composite; k × 8 B + 40 B per pixel"
+    }
+    fn exact(&self) -> bool {
+        false
+    }
+    fn axes(&self) -> Vec<Axis> {
+        vec![LAYERS]
+    }
+    fn supports(&self, gpu: &Gpu, _: &Point) -> std::result::Result<(), String> {
+        if !gpu.has(wgpu::Features::FLOAT32_BLENDABLE) {
+            return Err("adapter lacks FLOAT32_BLENDABLE (additive blending into RGBA32F)".into());
+        }
+        if !gpu.renderable(ACCUM) {
+            return Err(format!("{ACCUM:?} is not renderable on this adapter"));
+        }
+        Ok(())
+    }
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let k = point.int(&LAYERS) as u32;
+        Ok(Box::new(PreparedRace::new(gpu, scene, k)?))
+    }
+}
+
+impl Method for AdaptiveIdeal {
+    fn name(&self) -> &'static str {
+        "adaptive_ideal"
+    }
+    fn describe(&self) -> &'static str {
+        "adaptive transparency as ordering hardware gives it: compute_abuffer's exact capture replayed per pixel in primitive order (the reference for adaptive's race, not a fast path); approximate (exact for depth complexity ≤ k); compute_abuffer's passes; 8 B per fragment + 20 B per pixel"
+    }
+    fn exact(&self) -> bool {
+        false
+    }
+    fn axes(&self) -> Vec<Axis> {
+        vec![LAYERS]
+    }
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let k = point.int(&LAYERS) as u32;
+        let replay = Replay {
+            wgsl: format!("{RULE_WGSL}\n{IDEAL_WGSL}"),
+            entry: "replay_adaptive",
+            constants: vec![("K", k as f64)],
+        };
+        Ok(Box::new(PreparedIdeal {
+            inner: PreparedAbuffer::replay(gpu, scene, &replay)?,
+            k,
+        }))
+    }
+}
+
+struct PreparedRace {
+    k: u32,
+    insert: wgpu::RenderPipeline,
+    shade: wgpu::RenderPipeline,
+    composite: wgpu::ComputePipeline,
+    bind_capture: wgpu::BindGroup,
+    bind_composite: wgpu::BindGroup,
+    depth: wgpu::TextureView,
+    accum: wgpu::TextureView,
+    arrived: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    image: wgpu::Buffer,
+    alloc: AllocCounter,
+}
+
+fn entry(binding: u32, x: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: x.as_entire_binding(),
+    }
+}
+
+impl PreparedRace {
+    fn new(gpu: &Gpu, scene: &GpuScene, k: u32) -> Result<Self> {
+        let d = &gpu.device;
+        let module = shader(gpu, "adaptive", &format!("{RULE_WGSL}\n{RACE_WGSL}"));
+        let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
+        let capture_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("adaptive capture"),
+            entries: &[
+                camera_entry(0),
+                storage_entry(1, false, fc),
+                storage_entry(2, false, fc),
+            ],
+        });
+        let float = wgpu::TextureSampleType::Float { filterable: false };
+        let composite_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("adaptive composite"),
+            entries: &[
+                camera_entry(0),
+                storage_entry(1, false, fc),
+                storage_entry(2, false, fc),
+                storage_entry(3, false, fc),
+                storage_entry(4, false, fc),
+                texture_entry(5, float, fc),
+            ],
+        });
+        let layout = |bgl: &wgpu::BindGroupLayout| {
+            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("adaptive"),
+                bind_group_layouts: &[Some(bgl)],
+                immediate_size: 0,
+            })
+        };
+        let constants = [("K", k as f64)];
+        let capture_layout = layout(&capture_bgl);
+        let insert = storage_pipeline(
+            gpu,
+            "adaptive nodes",
+            &capture_layout,
+            &module,
+            "fs_nodes",
+            &constants,
+        );
+        let add = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let shade = super::store::storage_pipeline_with(
+            gpu,
+            "adaptive shade",
+            &capture_layout,
+            &module,
+            "fs_shade",
+            &constants,
+            &[Some(wgpu::ColorTargetState {
+                format: ACCUM,
+                blend: Some(wgpu::BlendState {
+                    color: add,
+                    alpha: add,
+                }),
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+        );
+        let composite = compute_pipeline(
+            gpu,
+            "adaptive composite",
+            &layout(&composite_bgl),
+            &module,
+            "composite",
+            &constants,
+            false,
+        );
+        let mut alloc = AllocCounter::default();
+        let px = scene.pixels() as u64;
+        let node_bytes = px * k as u64 * 8;
+        check_storage_size(gpu, "adaptive nodes", node_bytes)?;
+        let nodes = alloc.buffer(gpu, "adaptive nodes", node_bytes, STORAGE_RW);
+        let arrived = alloc.buffer(gpu, "adaptive arrivals", px * 4, STORAGE_RW);
+        let image = alloc.buffer(gpu, "adaptive image", px * 16, STORAGE_RW);
+        let counters = alloc.buffer(gpu, "adaptive counters", 8, STORAGE_RW);
+        let depth = dummy_depth(gpu, &mut alloc, scene);
+        let accum = alloc
+            .texture(
+                gpu,
+                "adaptive colour sum",
+                scene.width,
+                scene.height,
+                ACCUM,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            )
+            .create_view(&Default::default());
+        let bind_capture = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("adaptive capture"),
+            layout: &capture_bgl,
+            entries: &[
+                entry(0, &scene.camera),
+                entry(1, &nodes),
+                entry(2, &arrived),
+            ],
+        });
+        let bind_composite = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("adaptive composite"),
+            layout: &composite_bgl,
+            entries: &[
+                entry(0, &scene.camera),
+                entry(1, &nodes),
+                entry(2, &arrived),
+                entry(3, &image),
+                entry(4, &counters),
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(&accum),
+                },
+            ],
+        });
+        Ok(PreparedRace {
+            k,
+            insert,
+            shade,
+            composite,
+            bind_capture,
+            bind_composite,
+            depth,
+            accum,
+            arrived,
+            counters,
+            image,
+            alloc,
+        })
+    }
+}
+
+impl Prepared for PreparedRace {
+    fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.clear_buffer(&self.arrived, 0, None);
+        enc.clear_buffer(&self.counters, 0, None);
+        {
+            let mut pass = storage_pass(&mut enc, &self.depth, timer, "nodes");
+            pass.set_pipeline(&self.insert);
+            pass.set_bind_group(0, &self.bind_capture, &[]);
+            scene.draw(&mut pass, Attrs::ALL);
+        }
+        {
+            let colors = [crate::gpu::cleared(&self.accum, wgpu::Color::TRANSPARENT)];
+            let mut pass =
+                super::store::storage_pass_with(&mut enc, &self.depth, &colors, timer, "shade");
+            pass.set_pipeline(&self.shade);
+            pass.set_bind_group(0, &self.bind_capture, &[]);
+            scene.draw(&mut pass, Attrs::ALL);
+        }
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("composite"),
+                timestamp_writes: timer.compute_pass("composite"),
+            });
+            pass.set_pipeline(&self.composite);
+            pass.set_bind_group(0, &self.bind_composite, &[]);
+            pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
+        }
+        gpu.queue.submit([enc.finish()]);
+        Ok(FrameStats {
+            geometry_passes: 2,
+            layers: self.k,
+        })
+    }
+
+    fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
+        let mut cap = Capture::empty();
+        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, scene.pixels())?);
+        cap.expected = Expected::All;
+        let c = read_vec::<u32>(gpu, &self.counters, 2)?;
+        report(&mut cap, c[0] as u64, c[1] as u64);
+        cap.notes = format!(
+            "{}; unguarded read-modify-write (no rasterizer-ordered views in wgpu)",
+            cap.notes
+        );
+        Ok(cap)
+    }
+
+    fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
+        let def = definition(reference, self.k as usize);
+        if let Some(img) = &cap.image {
+            let (n, first) = hazards(img, &def);
+            cap.hazard_pixels = Some(n);
+            if let Some(p) = first {
+                cap.flag.get_or_insert_with(|| "hazard".into());
+                let (x, y) = (p as u32 % reference.width, p as u32 / reference.width);
+                cap.notes = format!(
+                    "{}; {n} pixels differ from the ideal-order twin by more than {HAZARD_TOL:e} (first ({x},{y}))",
+                    cap.notes
+                );
+            }
+        }
+        cap.definition = Some(def);
+    }
+
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+struct PreparedIdeal {
+    inner: PreparedAbuffer,
+    k: u32,
+}
+
+impl Prepared for PreparedIdeal {
+    fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
+        let mut f = self.inner.frame(gpu, scene, timer)?;
+        f.layers = self.k;
+        Ok(f)
+    }
+
+    fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
+        let mut cap = self.inner.readback(gpu, scene)?;
+        cap.counts = None;
+        let capture_notes = std::mem::take(&mut cap.notes);
+        let c = self.inner.replay_counters(gpu)?;
+        report(&mut cap, c[0] as u64, c[1] as u64);
+        cap.notes = format!(
+            "{}; replayed in primitive order from compute_abuffer's capture ({capture_notes})",
+            cap.notes
+        );
+        Ok(cap)
+    }
+
+    fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
+        cap.definition = Some(definition(reference, self.k as usize));
+    }
+
+    fn bytes_allocated(&self) -> u64 {
+        self.inner.bytes_allocated()
+    }
+
+    fn bytes_overhead(&self) -> Option<u64> {
+        self.inner.bytes_overhead()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use scenarios::ParamValue::{Float, Int};
+
+    use super::*;
+    use crate::testing::{max_err, params, run, scene};
+
+    fn vs_definition(cap: &Capture) -> (f64, usize) {
+        let def = cap.definition.as_ref().expect("judge sets the definition");
+        let img = cap.image.as_ref().unwrap();
+        let mut worst = (0.0f64, 0usize);
+        for (p, (d, g)) in def.iter().zip(img).enumerate() {
+            for c in 0..4 {
+                let e = (d[c] - g[c] as f64).abs();
+                if e.is_nan() || e > worst.0 {
+                    worst = (if e.is_nan() { f64::INFINITY } else { e }, p);
+                }
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn both_builds_are_exact_where_depth_complexity_is_at_most_k() {
+        let quads = scene("quads", &[("depth_complexity", Int(4))]);
+        let shells = scene("shells", &[("count", Int(2)), ("segments", Int(12))]);
+        for s in [&quads, &shells] {
+            for m in [&Adaptive as &dyn Method, &AdaptiveIdeal] {
+                for k in [4, 8] {
+                    let (cap, lists) = run(m, s, 40, 40, &params(&[("layers", Int(k))]));
+                    assert!(lists.max_depth_complexity() <= 4);
+                    let (e, at) = max_err(&cap, &lists);
+                    // ≤ 4 layers shaded in f32 through exact products of their transmittances.
+                    assert!(
+                        e <= 1e-5,
+                        "{} {} k {k}: {e:.2e} at {at}",
+                        m.name(),
+                        s.label()
+                    );
+                    assert_eq!(cap.overflow_pixels, Some(0));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn both_builds_equal_the_twin_in_primitive_order_alpha_exact_and_darker() {
+        let scenes = [
+            scene("shells", &[("count", Int(3)), ("segments", Int(12))]),
+            scene("particles", &[("count", Int(400)), ("size", Float(0.5))]),
+            scene("hair", &[("strands", Int(300))]),
+        ];
+        for s in &scenes {
+            for m in [&Adaptive as &dyn Method, &AdaptiveIdeal] {
+                for k in [1, 2, 4, 8] {
+                    let what = format!("{} {} k {k}", m.name(), s.label());
+                    let (cap, lists) = run(m, s, 40, 40, &params(&[("layers", Int(k))]));
+                    let (e, at) = vs_definition(&cap);
+                    // f32 arithmetic alone (oit::adaptive's adaptive_f32_twin_follows_f64_to_1e5).
+                    assert!(e <= 1e-5, "{what}: {e:.2e} at {at}: {}", cap.notes);
+                    if m.name() == "adaptive" {
+                        // lavapipe runs one pixel's fragments in order: no race to see.
+                        assert_eq!(cap.hazard_pixels, Some(0), "{what}: {}", cap.notes);
+                    }
+                    let dc = lists.depth_complexity();
+                    let over = dc.iter().filter(|&&d| d > k as u32).count() as u64;
+                    assert_eq!(cap.overflow_pixels, Some(over), "{what}");
+                    // The twin's properties, on the GPU image: A exact (removals keep the last
+                    // node), colour never above the exact one (absorption moves forward); f32
+                    // rounding over ≤ 64 layers allows 1e-5.
+                    let img = cap.image.as_ref().unwrap();
+                    for (p, t) in lists.composite().iter().enumerate() {
+                        assert!((img[p][3] as f64 - t[3]).abs() <= 1e-5, "{what}: A at {p}");
+                        for c in 0..3 {
+                            assert!(img[p][c] as f64 <= t[c] + 1e-5, "{what}: brighter at {p}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

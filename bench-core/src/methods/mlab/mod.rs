@@ -1,0 +1,418 @@
+//! Multi-layer alpha blending (Salvi & Vaidyanathan, I3D 2014): k blend layers per pixel kept in
+//! depth order as fragments arrive, the two farthest merged on overflow (CPU twin
+//! [`crate::oit::mlab`]). The result depends on arrival order, and the paper relies on
+//! rasterizer-ordered views to serialise each pixel's fragments in primitive order; wgpu has
+//! none. So, as for the k-buffer, two builds:
+//!
+//! - `mlab`: one geometry pass of unguarded read-modify-write of each pixel's layers in storage,
+//!   then a compute resolve. Concurrent fragments of one pixel race (lost or mixed insertions).
+//!   `hazard_pixels` counts pixels whose image differs from the ideal-order twin beyond f32
+//!   rounding, so the rate is measured, not assumed (none on lavapipe, which runs a pixel's
+//!   fragments in order).
+//! - `mlab_ideal`: compute_abuffer's exact capture, each pixel's fragments replayed in primitive
+//!   order through the same rule: what MLAB gives with ordering hardware. Its time is the
+//!   A-buffer's, not MLAB's; it exists to separate the algorithm's error from the race.
+//!
+//! Both fill `Capture.definition` with the twin on the reference fragments in primitive order,
+//! so `*_vs_k` is the race (plus f32 rounding) for `mlab` and f32 rounding for `mlab_ideal`.
+//!
+//! Axes: `layers` = k (1–16); `tail = merge | drop | blend`: `merge` is MLAB (default); `drop` and
+//! `blend` replace the merge by dropping the farthest layer or blending it into an out-of-order
+//! tail (methods/tail), which keeps the k nearest (the twin `oit::tail_blend`, keep = nearest).
+//! Fragments beyond k per pixel are reported: `overflow_pixels`, and `fragments_dropped` /
+//! `fragments_tailed` (merges are counted in the notes).
+//!
+//! Memory per pixel (race build): k × 20 B layers + 4 B arrival count + 16 B image + 4 B stand-in
+//! depth (+ 24 B tail targets with `tail = blend`).
+
+use super::compute_abuffer::{PreparedAbuffer, Replay};
+use super::store::{dummy_depth, storage_pass_with, storage_pipeline_with};
+use super::tail::{self, TailTargets, TAIL_WGSL};
+use super::{Capture, Expected, FrameStats, Method, Prepared};
+use crate::axes::{Axis, Point};
+use crate::gpu::Gpu;
+use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::gpu_util::{
+    camera_entry, check_storage_size, compute_pipeline, read_vec, shader, storage_entry, STORAGE_RW,
+};
+use crate::oit::{self, Keep, Order, TailMode};
+use crate::record::cols;
+use crate::reference::FragmentLists;
+use crate::timing::GpuTimer;
+use crate::Result;
+
+const RULE_WGSL: &str = include_str!("mlab.wgsl");
+const RACE_WGSL: &str = include_str!("race.wgsl");
+const IDEAL_WGSL: &str = include_str!("ideal.wgsl");
+/// Largest k (`KMAX` in mlab.wgsl).
+pub const MAX_K: i64 = 16;
+/// Bytes of one layer in storage (depth, premultiplied RGB, transmittance).
+const LAYER_BYTES: u64 = 20;
+/// A pixel whose image differs from the ideal-order twin by more than this is a hazard: ten
+/// times what f32 arithmetic alone gives over 300 fragments (the twin's `mlab_f32_twin_follows_
+/// f64_to_1e5`), plus the GPU's f32 attribute interpolation.
+pub const HAZARD_TOL: f64 = 1e-4;
+
+const LAYERS: Axis = Axis::int(cols::LAYERS, "k: blend layers per pixel", 4, 1, MAX_K);
+const TAIL: Axis = Axis::choice(
+    cols::TAIL,
+    "merge: MLAB's merge of the two farthest layers; drop / blend: the farthest layer is dropped or blended into an out-of-order tail (keeps the k nearest)",
+    "merge",
+    &["merge", "drop", "blend"],
+);
+
+/// The overflow rule of a point: `None` is MLAB's merge.
+fn tail_rule(point: &Point) -> Option<TailMode> {
+    TailMode::parse(&point.choice(&TAIL))
+}
+
+fn tail_constant(rule: Option<TailMode>) -> f64 {
+    match rule {
+        None => 0.0,
+        Some(TailMode::Drop) => 1.0,
+        Some(TailMode::Blend) => 2.0,
+    }
+}
+
+/// The twin's image of the reference fragments in primitive order: MLAB, or the k nearest with
+/// the farthest dropped or tailed.
+pub fn definition(lists: &FragmentLists, k: usize, rule: Option<TailMode>) -> Vec<[f64; 4]> {
+    oit::image(lists, true, |list| match rule {
+        None => oit::mlab::mlab_pixel(list, k, Order::Arrival).0,
+        Some(mode) => oit::tail_blend(list, k, Keep::Nearest, mode).rgba,
+    })
+}
+
+/// Pixels whose image differs from `definition` by more than [`HAZARD_TOL`] in some channel,
+/// and the first one.
+pub fn hazards(image: &[[f32; 4]], definition: &[[f64; 4]]) -> (u64, Option<usize>) {
+    let mut n = 0;
+    let mut first = None;
+    for (p, (g, d)) in image.iter().zip(definition).enumerate() {
+        if (0..4).any(|c| {
+            let e = (g[c] as f64 - d[c]).abs();
+            e.is_nan() || e > HAZARD_TOL
+        }) {
+            n += 1;
+            first.get_or_insert(p);
+        }
+    }
+    (n, first)
+}
+
+/// Reports fragments beyond k: overflow pixels, and dropped or tailed fragments by rule.
+fn report_overflow(cap: &mut Capture, rule: Option<TailMode>, pixels: u64, beyond: u64) {
+    cap.overflow_pixels = Some(pixels);
+    match rule {
+        None => {
+            cap.notes = format!("{beyond} merges in {pixels} pixels");
+        }
+        Some(TailMode::Drop) => {
+            cap.dropped_fragments = Some(beyond);
+            cap.notes = format!("{beyond} fragments dropped in {pixels} pixels");
+        }
+        Some(TailMode::Blend) => {
+            cap.tailed_fragments = Some(beyond);
+            cap.notes = format!("{beyond} fragments blended into the tail in {pixels} pixels");
+        }
+    }
+}
+
+pub struct Mlab;
+pub struct MlabIdeal;
+
+impl Method for Mlab {
+    fn name(&self) -> &'static str {
+        "mlab"
+    }
+    fn describe(&self) -> &'static str {
+        "Salvi & Vaidyanathan 2014 multi-layer alpha blending: k layers by unguarded read-modify-write (no rasterizer-ordered views: races measured as hazard_rate vs the ideal-order twin), two farthest merged on overflow (tail = drop|blend: farthest dropped or tailed); approximate (exact for depth complexity ≤ k); 1 geometry pass + resolve; k × 20 B + 24 B per pixel"
+    }
+    fn exact(&self) -> bool {
+        false
+    }
+    fn axes(&self) -> Vec<Axis> {
+        vec![LAYERS, TAIL]
+    }
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        if tail_rule(point) == Some(TailMode::Blend) {
+            tail::supports(gpu, 0)?;
+        }
+        Ok(())
+    }
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let k = point.int(&LAYERS) as u32;
+        Ok(Box::new(PreparedRace::new(
+            gpu,
+            scene,
+            k,
+            tail_rule(point),
+        )?))
+    }
+}
+
+impl Method for MlabIdeal {
+    fn name(&self) -> &'static str {
+        "mlab_ideal"
+    }
+    fn describe(&self) -> &'static str {
+        "multi-layer alpha blending as ordering hardware gives it: compute_abuffer's exact capture replayed per pixel in primitive order (the reference for mlab's race, not a fast path); approximate (exact for depth complexity ≤ k); compute_abuffer's passes; 8 B per fragment + 20 B per pixel"
+    }
+    fn exact(&self) -> bool {
+        false
+    }
+    fn axes(&self) -> Vec<Axis> {
+        vec![LAYERS, TAIL]
+    }
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let k = point.int(&LAYERS) as u32;
+        let rule = tail_rule(point);
+        let replay = Replay {
+            wgsl: format!("{TAIL_WGSL}\n{RULE_WGSL}\n{IDEAL_WGSL}"),
+            entry: "replay_mlab",
+            constants: vec![("K", k as f64), ("TAIL_MODE", tail_constant(rule))],
+        };
+        Ok(Box::new(PreparedIdeal {
+            inner: PreparedAbuffer::replay(gpu, scene, &replay)?,
+            k,
+            rule,
+        }))
+    }
+}
+
+struct PreparedRace {
+    k: u32,
+    rule: Option<TailMode>,
+    insert: wgpu::RenderPipeline,
+    resolve: wgpu::ComputePipeline,
+    bind_capture: wgpu::BindGroup,
+    bind_resolve: wgpu::BindGroup,
+    depth: wgpu::TextureView,
+    arrived: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    image: wgpu::Buffer,
+    tail: Option<TailTargets>,
+    alloc: AllocCounter,
+}
+
+impl PreparedRace {
+    fn new(gpu: &Gpu, scene: &GpuScene, k: u32, rule: Option<TailMode>) -> Result<Self> {
+        let d = &gpu.device;
+        let module = shader(
+            gpu,
+            "mlab",
+            &format!("{TAIL_WGSL}\n{RULE_WGSL}\n{RACE_WGSL}"),
+        );
+        let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
+        let capture_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("mlab capture"),
+            entries: &[
+                camera_entry(0),
+                storage_entry(1, false, fc),
+                storage_entry(7, false, fc),
+            ],
+        });
+        let mut entries = vec![
+            camera_entry(0),
+            storage_entry(1, false, fc),
+            storage_entry(2, false, fc),
+            storage_entry(3, false, fc),
+            storage_entry(7, false, fc),
+        ];
+        entries.extend(TailTargets::layout_entries(4, fc));
+        let resolve_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("mlab resolve"),
+            entries: &entries,
+        });
+        let layout = |bgl: &wgpu::BindGroupLayout| {
+            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("mlab"),
+                bind_group_layouts: &[Some(bgl)],
+                immediate_size: 0,
+            })
+        };
+        let constants = [("K", k as f64), ("TAIL_MODE", tail_constant(rule))];
+        let blend = rule == Some(TailMode::Blend);
+        let (fs, targets) = if blend {
+            ("fs_mlab_tail", TailTargets::color_targets())
+        } else {
+            ("fs_mlab", Vec::new())
+        };
+        let insert = storage_pipeline_with(
+            gpu,
+            "mlab insert",
+            &layout(&capture_bgl),
+            &module,
+            fs,
+            &constants,
+            &targets,
+        );
+        let resolve = compute_pipeline(
+            gpu,
+            "mlab resolve",
+            &layout(&resolve_bgl),
+            &module,
+            "resolve",
+            &constants,
+            false,
+        );
+        let mut alloc = AllocCounter::default();
+        let px = scene.pixels() as u64;
+        let layer_bytes = px * k as u64 * LAYER_BYTES;
+        check_storage_size(gpu, "mlab layers", layer_bytes)?;
+        let layers = alloc.buffer(gpu, "mlab layers", layer_bytes, STORAGE_RW);
+        let arrived = alloc.buffer(gpu, "mlab arrivals", px * 4, STORAGE_RW);
+        let image = alloc.buffer(gpu, "mlab image", px * 16, STORAGE_RW);
+        let counters = alloc.buffer(gpu, "mlab counters", 8, STORAGE_RW);
+        let depth = dummy_depth(gpu, &mut alloc, scene);
+        let tail = blend.then(|| TailTargets::new(gpu, &mut alloc, scene));
+        // Without a tail the resolve's (dead) tail reads see 1×1 stand-ins.
+        let stand_in = (!blend).then(|| TailTargets::stand_ins(gpu));
+        fn buf(binding: u32, x: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: x.as_entire_binding(),
+            }
+        }
+        let bind_capture = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("mlab capture"),
+            layout: &capture_bgl,
+            entries: &[buf(0, &scene.camera), buf(1, &layers), buf(7, &arrived)],
+        });
+        let t = tail.as_ref().or(stand_in.as_ref()).expect("one of them");
+        let mut e = vec![
+            buf(0, &scene.camera),
+            buf(1, &layers),
+            buf(2, &image),
+            buf(3, &counters),
+            buf(7, &arrived),
+        ];
+        e.extend(t.bind_entries(4));
+        let bind_resolve = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("mlab resolve"),
+            layout: &resolve_bgl,
+            entries: &e,
+        });
+        Ok(PreparedRace {
+            k,
+            rule,
+            insert,
+            resolve,
+            bind_capture,
+            bind_resolve,
+            depth,
+            arrived,
+            counters,
+            image,
+            tail,
+            alloc,
+        })
+    }
+}
+
+impl Prepared for PreparedRace {
+    fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.clear_buffer(&self.arrived, 0, None);
+        enc.clear_buffer(&self.counters, 0, None);
+        {
+            let colors = self.tail.as_ref().map_or(Vec::new(), |t| t.attachments());
+            let mut pass = storage_pass_with(&mut enc, &self.depth, &colors, timer, "insert");
+            pass.set_pipeline(&self.insert);
+            pass.set_bind_group(0, &self.bind_capture, &[]);
+            scene.draw(&mut pass, Attrs::ALL);
+        }
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("resolve"),
+                timestamp_writes: timer.compute_pass("resolve"),
+            });
+            pass.set_pipeline(&self.resolve);
+            pass.set_bind_group(0, &self.bind_resolve, &[]);
+            pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
+        }
+        gpu.queue.submit([enc.finish()]);
+        Ok(FrameStats {
+            geometry_passes: 1,
+            layers: self.k,
+        })
+    }
+
+    fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
+        let mut cap = Capture::empty();
+        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, scene.pixels())?);
+        cap.expected = Expected::All;
+        let c = read_vec::<u32>(gpu, &self.counters, 2)?;
+        report_overflow(&mut cap, self.rule, c[0] as u64, c[1] as u64);
+        cap.notes = format!(
+            "{}; unguarded read-modify-write (no rasterizer-ordered views in wgpu)",
+            cap.notes
+        );
+        Ok(cap)
+    }
+
+    /// The ideal-order twin as the definition; pixels that differ from it are hazards.
+    fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
+        let def = definition(reference, self.k as usize, self.rule);
+        if let Some(img) = &cap.image {
+            let (n, first) = hazards(img, &def);
+            cap.hazard_pixels = Some(n);
+            if let Some(p) = first {
+                cap.flag.get_or_insert_with(|| "hazard".into());
+                let (x, y) = (p as u32 % reference.width, p as u32 / reference.width);
+                cap.notes = format!(
+                    "{}; {n} pixels differ from the ideal-order twin by more than {HAZARD_TOL:e} (first ({x},{y}))",
+                    cap.notes
+                );
+            }
+        }
+        cap.definition = Some(def);
+    }
+
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+struct PreparedIdeal {
+    inner: PreparedAbuffer,
+    k: u32,
+    rule: Option<TailMode>,
+}
+
+impl Prepared for PreparedIdeal {
+    fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
+        let mut f = self.inner.frame(gpu, scene, timer)?;
+        f.layers = self.k;
+        Ok(f)
+    }
+
+    fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
+        let mut cap = self.inner.readback(gpu, scene)?;
+        // The A-buffer's counts are its capture, not what MLAB keeps.
+        cap.counts = None;
+        let capture_notes = std::mem::take(&mut cap.notes);
+        let c = self.inner.replay_counters(gpu)?;
+        report_overflow(&mut cap, self.rule, c[0] as u64, c[1] as u64);
+        cap.notes = format!(
+            "{}; replayed in primitive order from compute_abuffer's capture ({capture_notes})",
+            cap.notes
+        );
+        Ok(cap)
+    }
+
+    fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
+        cap.definition = Some(definition(reference, self.k as usize, self.rule));
+    }
+
+    fn bytes_allocated(&self) -> u64 {
+        self.inner.bytes_allocated()
+    }
+
+    fn bytes_overhead(&self) -> Option<u64> {
+        self.inner.bytes_overhead()
+    }
+}
+
+#[cfg(test)]
+mod tests;
