@@ -60,9 +60,111 @@ pub fn texture_entry(
     }
 }
 
+/// Texture entry for `textureLoad` of a multisampled texture (`texture_multisampled_2d`,
+/// `texture_depth_multisampled_2d`) when `multisampled`, else [`texture_entry`].
+pub fn texture_entry_ms(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+    stages: wgpu::ShaderStages,
+    multisampled: bool,
+) -> wgpu::BindGroupLayoutEntry {
+    let mut e = texture_entry(binding, sample_type, stages);
+    if let wgpu::BindingType::Texture {
+        multisampled: m, ..
+    } = &mut e.ty
+    {
+        *m = multisampled;
+    }
+    e
+}
+
+/// The MSAA state of a pipeline drawing into `samples`-sample targets.
+pub fn multisample(samples: u32) -> wgpu::MultisampleState {
+    wgpu::MultisampleState {
+        count: samples,
+        mask: !0,
+        alpha_to_coverage_enabled: false,
+    }
+}
+
+/// The sample-rate form of a raster module's source (`COMMON_WGSL` + body): every
+/// user-defined input of a fragment entry point — its `@location` parameters and the fields of
+/// `struct Varyings`, which is also the vertex stages' output — gets
+/// `@interpolate(perspective, sample)` unless it already names its interpolation (flat ids
+/// keep theirs). WGSL then runs such fragment entries once per covered sample with inputs
+/// interpolated at the sample (the vertex output must match, hence the struct). With
+/// `sample_index`, each fragment entry also takes `@builtin(sample_index)` and stores it in
+/// the module's `var<private> SAMPLE: i32` as its first statement (for `textureLoad` of a
+/// multisampled texture at this sample). Panics if the source has no `struct Varyings` or no
+/// fragment entry: the rewrite must not silently do nothing.
+pub fn per_sample_source(src: &str, sample_index: bool) -> String {
+    const SAMPLE: &str = "@interpolate(perspective, sample) ";
+    fn tag_locations(s: &str) -> String {
+        let mut out = String::with_capacity(s.len() + 64);
+        let mut rest = s;
+        while let Some(i) = rest.find("@location(") {
+            let close = i + rest[i..].find(')').expect("@location(N)") + 1;
+            out.push_str(&rest[..close]);
+            let after = &rest[close..];
+            // `@location(N) @interpolate(…)` keeps its own (the sources write it in this order).
+            if !after.trim_start().starts_with("@interpolate") {
+                out.push(' ');
+                out.push_str(SAMPLE.trim_end());
+            }
+            rest = after;
+        }
+        out.push_str(rest);
+        out
+    }
+    let mut s = src.to_string();
+    // struct Varyings { … }
+    let start = s
+        .find("struct Varyings {")
+        .expect("struct Varyings in the source");
+    let end = start + s[start..].find("};").expect("end of struct Varyings");
+    let body = tag_locations(&s[start..end]);
+    s.replace_range(start..end, &body);
+    // Every `@fragment fn name(params) … {`.
+    let mut out = String::with_capacity(s.len() + 256);
+    let mut rest = s.as_str();
+    let mut entries = 0;
+    while let Some(i) = rest.find("@fragment") {
+        let open = i + rest[i..].find('(').expect("fragment entry parameters");
+        let mut depth = 0;
+        let close = open
+            + rest[open..]
+                .char_indices()
+                .find(|&(_, c)| {
+                    depth += (c == '(') as i32 - (c == ')') as i32;
+                    depth == 0
+                })
+                .expect("end of parameters")
+                .0;
+        let body = close + rest[close..].find('{').expect("fragment entry body") + 1;
+        out.push_str(&rest[..=open]);
+        if sample_index {
+            out.push_str("@builtin(sample_index) sample_index_: u32, ");
+        }
+        out.push_str(&tag_locations(&rest[open + 1..close]));
+        out.push_str(&rest[close..body]);
+        if sample_index {
+            out.push_str("\n    SAMPLE = i32(sample_index_);");
+        }
+        rest = &rest[body..];
+        entries += 1;
+    }
+    out.push_str(rest);
+    assert!(entries > 0, "no @fragment entry point to make per-sample");
+    out
+}
+
 /// Compiles `COMMON_WGSL` + `body` into one module.
 pub fn shader(gpu: &Gpu, label: &str, body: &str) -> wgpu::ShaderModule {
-    let src = format!("{COMMON_WGSL}\n{body}");
+    shader_source(gpu, label, format!("{COMMON_WGSL}\n{body}"))
+}
+
+/// Compiles a whole WGSL source (e.g. a [`per_sample_source`] of `COMMON_WGSL` + body).
+pub fn shader_source(gpu: &Gpu, label: &str, src: String) -> wgpu::ShaderModule {
     gpu.device
         .create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(label),

@@ -35,6 +35,7 @@ pub mod kbuffer_atomic;
 pub mod kbuffer_rmw;
 pub mod linked_list;
 pub mod packing;
+pub mod ssaa;
 pub mod store;
 pub mod wboit;
 
