@@ -24,11 +24,12 @@ use crate::gpu::Gpu;
 use crate::method::{Capture, Expected};
 use crate::record::cols;
 use crate::reference::multisample::{
-    box_filter_2x2, coverage_lists, sample_list, standard_positions,
+    box_filter_2x2, coverage_lists, sample_list, sample_list_centre_attributes, standard_positions,
 };
 use crate::reference::raster::{covers, top_left_edges};
 use crate::reference::{rasterize, FragmentLists};
 
+pub use crate::reference::multisample::AaCapture;
 pub use crate::reference::AaMode;
 
 pub const AA: Axis = Axis::choice(
@@ -43,25 +44,6 @@ pub const AA_CAPTURE: Axis = Axis::choice(
     "sample",
     &["sample", "coverage"],
 );
-
-/// How MSAA fragments are captured (`aa_capture`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum AaCapture {
-    /// Sample shading: depth, attributes and lists per sample (memory × samples).
-    Sample,
-    /// Pixel-rate shading: one fragment per pixel with its coverage mask, attributes and depth
-    /// at the pixel centre, resolved per sample.
-    Coverage,
-}
-
-impl AaCapture {
-    pub fn name(self) -> &'static str {
-        match self {
-            AaCapture::Sample => "sample",
-            AaCapture::Coverage => "coverage",
-        }
-    }
-}
 
 /// A point's antialiasing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -300,6 +282,47 @@ pub fn coverage_definition(
         .map(|s| effect.reference(scene, &cl.sample(s), expected))
         .collect();
     crate::reference::multisample::resolve(&per)
+}
+
+/// A per-sample capture's own definition when its inputs are interpolated at the pixel centre
+/// (lavapipe): per sample, coverage, depth and order there, attributes at the centre; the mean
+/// over samples. Equal to [`truth`] for attributes constant over each triangle (every colour of
+/// the generators), different for view depth and normals.
+pub fn sample_definition(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    samples: u32,
+    effect: &EffectConfig,
+    expected: Expected,
+) -> Vec<[f64; 4]> {
+    let per: Vec<Vec<[f64; 4]>> = standard_positions(samples)
+        .iter()
+        .map(|&pos| {
+            let lists = sample_list_centre_attributes(scene, width, height, pos);
+            effect.reference(scene, &lists, expected)
+        })
+        .collect();
+    crate::reference::multisample::resolve(&per)
+}
+
+/// The image an MSAA capture's own rule gives (for `Capture.definition` and the `*_vs_k`
+/// columns, set by the judge, which has the scene): coverage masks → [`coverage_definition`],
+/// per sample → [`sample_definition`]; `None` for other captures.
+pub fn definition(
+    cap: &Capture,
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    effect: &EffectConfig,
+) -> Option<Vec<[f64; 4]>> {
+    let Some(AaMode::Msaa(s)) = cap.aa else {
+        return None;
+    };
+    Some(match cap.aa_capture? {
+        AaCapture::Coverage => coverage_definition(scene, width, height, s, effect, cap.expected),
+        AaCapture::Sample => sample_definition(scene, width, height, s, effect, cap.expected),
+    })
 }
 
 /// A content hash of what the truth depends on (the label alone is not enough: tests edit

@@ -50,6 +50,9 @@ pub struct Capture {
     /// that mode (`aa::ground_truth`), `counts` is `None` (a pixel has one count per sample),
     /// and `overflow_pixels` counts output pixels with any overflowing sample.
     pub aa: Option<crate::reference::AaMode>,
+    /// How an MSAA capture took its samples (per sample or coverage masks): selects its own
+    /// definition (`aa::definition`) for the `*_vs_k` columns.
+    pub aa_capture: Option<crate::reference::multisample::AaCapture>,
     /// MSAA captures: what the sample-position probe found on this adapter
     /// (`aa::sample_positions`: `standard`, `differs: …`, `unverified: …`).
     pub sample_positions: Option<String>,
@@ -70,6 +73,7 @@ impl Capture {
             dropped_fragments: None,
             tailed_fragments: None,
             aa: None,
+            aa_capture: None,
             sample_positions: None,
         }
     }

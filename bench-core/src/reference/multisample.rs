@@ -77,6 +77,27 @@ impl AaMode {
     }
 }
 
+/// How MSAA fragments are captured (the `aa_capture` axis).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum AaCapture {
+    /// Sample shading: coverage, depth and lists per sample (memory × samples); attributes
+    /// where the driver interpolates them (the centre on lavapipe, see
+    /// `gpu_util::per_sample_source`).
+    Sample,
+    /// Pixel-rate shading: one fragment per pixel with its coverage mask, attributes and depth
+    /// at the pixel centre, resolved per sample.
+    Coverage,
+}
+
+impl AaCapture {
+    pub fn name(self) -> &'static str {
+        match self {
+            AaCapture::Sample => "sample",
+            AaCapture::Coverage => "coverage",
+        }
+    }
+}
+
 /// Vulkan's standard sample locations (the spec's table, "Multisampling"), offsets within the
 /// pixel with (0, 0) its top-left corner; index i is sample i. 1 sample: the centre. Every
 /// offset is a multiple of 1/16, so it lies exactly on the 1/256 sub-pixel grid: coverage at a
@@ -116,6 +137,30 @@ pub fn sample_list(scene: &Scene, width: u32, height: u32, pos: (f64, f64)) -> F
         Sampling {
             coverage: &one,
             attributes: pos,
+            depth: None,
+        },
+    )
+    .0
+}
+
+/// The lists of sample position `pos` with coverage and depth there and attributes at the
+/// pixel centre: what a per-sample capture shades when its driver interpolates inputs at the
+/// centre (lavapipe; see `AaCapture::Sample`).
+pub fn sample_list_centre_attributes(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    pos: (f64, f64),
+) -> FragmentLists {
+    let one = [pos];
+    rasterize_with(
+        scene,
+        width,
+        height,
+        Sampling {
+            coverage: &one,
+            attributes: CENTRE.attributes,
+            depth: Some(pos),
         },
     )
     .0
@@ -149,6 +194,7 @@ pub fn coverage_lists(scene: &Scene, width: u32, height: u32, samples: u32) -> C
         Sampling {
             coverage: standard_positions(samples),
             attributes: CENTRE.attributes,
+            depth: None,
         },
     );
     CoverageLists {

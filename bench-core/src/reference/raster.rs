@@ -132,15 +132,18 @@ pub struct Sampling<'a> {
     /// Coverage samples; a fragment is emitted where any of them is covered, with bit `i` of
     /// its mask set for sample `i`.
     pub coverage: &'a [(f64, f64)],
-    /// Where depth and attributes are interpolated (extrapolated when the point lies outside the
+    /// Where attributes are interpolated (extrapolated when the point lies outside the
     /// triangle, as a GPU does for a pixel-rate fragment that covers only some samples).
     pub attributes: (f64, f64),
+    /// Where window depth is interpolated; `None`: at `attributes`.
+    pub depth: Option<(f64, f64)>,
 }
 
 /// The pixel centre: one sample, attributes there (the single-sample reference).
 pub const CENTRE: Sampling<'static> = Sampling {
     coverage: &[(0.5, 0.5)],
     attributes: (0.5, 0.5),
+    depth: None,
 };
 
 /// Projects, clips and snaps every triangle, then rasterizes row strips in parallel.
@@ -336,8 +339,20 @@ pub fn rasterize_with(
                             edge(p[0], p[1], c),
                         ];
                         let b = [e[0] / t.area, e[1] / t.area, e[2] / t.area];
-                        let depth =
-                            (b[0] * t.v[0].z + b[1] * t.v[1].z + b[2] * t.v[2].z).clamp(0.0, 1.0);
+                        let bd = match sampling.depth {
+                            None => b,
+                            Some((dx, dy)) => {
+                                let c = (x as f64 + dx, y as f64 + dy);
+                                let e = [
+                                    edge(p[1], p[2], c),
+                                    edge(p[2], p[0], c),
+                                    edge(p[0], p[1], c),
+                                ];
+                                [e[0] / t.area, e[1] / t.area, e[2] / t.area]
+                            }
+                        };
+                        let depth = (bd[0] * t.v[0].z + bd[1] * t.v[1].z + bd[2] * t.v[2].z)
+                            .clamp(0.0, 1.0);
                         let pw = [
                             b[0] * t.v[0].inv_w,
                             b[1] * t.v[1].inv_w,

@@ -86,7 +86,7 @@ impl PreparedWboit {
         let d = &gpu.device;
         let samples = aa.msaa();
         let module = if samples > 1 && aa.capture == aa::AaCapture::Sample {
-            let src = per_sample_source(&format!("{COMMON_WGSL}\n{WGSL}"), false);
+            let src = per_sample_source(&format!("{COMMON_WGSL}\n{WGSL}"));
             shader_source(gpu, "wboit (per sample)", src)
         } else {
             shader(gpu, "wboit", WGSL)
@@ -289,6 +289,7 @@ impl Prepared for PreparedWboit {
         cap.expected = Expected::All;
         cap.notes = "approximate: weighted average colour (RGBA16F), revealage R16F".into();
         cap.aa = self.aa.capture_mode();
+        cap.aa_capture = cap.aa.map(|_| self.aa.capture);
         cap.sample_positions = self.sample_positions.clone();
         Ok(cap)
     }

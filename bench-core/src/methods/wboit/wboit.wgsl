@@ -4,6 +4,9 @@
 // divides the weighted sum by the summed weighted alpha and scales by 1 − revealage. Exact when
 // a pixel has one layer, or all its layers share one colour; otherwise approximate.
 
+// Set per sample by the sample-rate form of this module (`gpu_util::per_sample_source`).
+var<private> SAMPLE: i32 = 0;
+
 struct WbOut {
     @location(0) accum: vec4<f32>,
     @location(1) reveal: f32,
