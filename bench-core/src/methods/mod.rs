@@ -11,7 +11,8 @@
 //! | `kbuffer_atomic` | hazard-free k-buffer: 32-bit atomicMax bubbling of depth keys, then a payload pass | exact k nearest (ties get their own slots) | 2 (+ resolve) | k × (4 B key + 4 B claim + 32 B entry) + 16 B image |
 //! | `linked_list`  | Yang et al. 2010, per-pixel linked lists (atomic heads; per-8×8-tile node pools counted at prepare, or one layers × pixels pool), sorted in the resolve; compact nodes re-derived per primitive | exact within the pool; overflow counted | 1 (+ resolve) | 32 B (head, lost, count, image, stand-in depth) + 12 B per true fragment (compact, counted; 32 B full nodes, or layers × nodes when fixed) |
 //! | `compute_abuffer` | Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no render pass; Laine & Karras 2011 in spirit), attributes re-derived per primitive (visibility buffer) | exact: coverage rule for rule as the reference, sized by a prepare-time count; lists over 128 counted | 2 (count, fill) + scan + resolve | 4 B offset + 16 B image + exactly 8 B per fragment (+ 16 B per vertex with `transform = vertex`) |
-//! | `wboit`        | McGuire & Bavoil 2013, weighted blended OIT | approximate (exact for one layer or one colour/alpha) | 1 (+ resolve) | 8 B RGBA16F + 2 B R16F + 16 B result |
+//! | `wboit`        | McGuire & Bavoil 2013, weighted blended OIT | approximate (exact for one layer or one colour/alpha) | 1 (+ resolve) | 8 B RGBA16F + 2 B R16F + 16 B result (× samples for the targets under MSAA) |
+//! | `stochastic`   | Enderton et al. 2010 stochastic transparency (random α·S sample masks, MSAA depth test, passes averaged, alpha correction) | approximate: unbiased without the correction, noise ∝ 1/√(S·passes); judged vs the S-sample truth | 2 per pass (+1 for the correction) | S × (4 B depth + 16 B RGBA32F + 4 B R32F) + 32 B |
 //! | `bdp`          | Liu et al., GPU Pro ch. 1, uniform bucket depth peeling | approximate: exact iff ≤1 fragment per bucket (2 if paired); collisions counted | 2 | 8 B range + 4 B × channels (≤32) + 68 B resolve |
 //! | `bdp2`         | Liu et al., GPU Pro ch. 1, two-pass BDP | approximate: 2 fragments per bucket; collisions counted | 3 | 8 B range + 2 × 4 B × K + 68 B resolve |
 //! | `adp`          | Liu et al., GPU Pro ch. 1, adaptive (histogram-equalised) BDP | approximate: fragments sharing a histogram bin collide | 2 + ⌈occupied bins / K⌉ | hist_bins/8 B + 8 B × K + 8 B range + 68 B resolve |
@@ -19,7 +20,10 @@
 //! Every method implements [`Method`] (what it is, which axes and features it needs, and
 //! `prepare`, which creates every GPU object) and [`Prepared`] (`frame`, the timed per-frame
 //! work, and `readback`). Nothing assumes a render pass: a compute-only method only has to fill
-//! the same [`Capture`]. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL;
+//! the same [`Capture`]. Antialiasing (`aa`, `aa_capture`: `crate::aa`) is declared per method:
+//! `depth_peel` (per sample), `wboit` (both), `compute_abuffer` (coverage masks),
+//! `linked_list` and `kbuffer_atomic` (both), and each of them under `ssaa2x2` (`ssaa`); the rest
+//! are `skipped` rows. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL;
 //! `effects.wgsl` ([`FOLD_WGSL`]) is the effects fold, and `packing` the float colour packing
 //! shared with the bucket methods.
 
@@ -36,6 +40,7 @@ pub mod kbuffer_rmw;
 pub mod linked_list;
 pub mod packing;
 pub mod ssaa;
+pub mod stochastic;
 pub mod store;
 pub mod wboit;
 
@@ -54,6 +59,7 @@ pub fn all() -> Vec<Box<dyn Method>> {
         Box::new(linked_list::LinkedList),
         Box::new(compute_abuffer::ComputeAbuffer),
         Box::new(wboit::Wboit),
+        Box::new(stochastic::Stochastic),
         Box::new(bdp::Bdp),
         Box::new(bdp2::Bdp2),
         Box::new(adp::Adp),
