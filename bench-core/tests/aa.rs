@@ -7,9 +7,10 @@
 //! GPU composites each sample in f32 with the reference's formula, ~1e-6 per layer over ≤ 16
 //! layers; every generator's colours are constant per triangle, so where a driver interpolates
 //! them does not matter; one sample of different coverage moves a pixel by α/S ≥ 0.04 and
-//! fails). Pixels where two fragments of one sample lie within 1e-4 of window depth (intersecting
-//! grass blades at grazing angles: the GPU's f32 depth from unsnapped vertices may order them
-//! otherwise; measured: a swap at a gap of 1e-5) are left out, at most 2% of them. Effects that read interpolated view depth are judged against the capture's own
+//! fails). Pixels where two fragments of different colours at one sample lie within 3e-5 of
+//! window depth (intersecting grass blades at grazing angles: the GPU's f32 depth from unsnapped
+//! vertices may order them otherwise; measured: a swap at a gap of 1e-5) are left out, at most
+//! 10% of them (the crossing lines of tilted quads). Effects that read interpolated view depth are judged against the capture's own
 //! definition (`aa::definition`: attributes at the pixel centre, where lavapipe interpolates
 //! them) with the effects tests' 2e-3 (the GPU interpolates from unsnapped vertices, the
 //! reference from snapped ones: ≤ 0.5/512 of view depth per pixel).
@@ -61,6 +62,19 @@ fn check(
     tol: f64,
     why: &str,
 ) -> Vec<String> {
+    check_on(&scenes(), method, extra, want, against, tol, why)
+}
+
+/// [`check`] on `scenes`.
+fn check_on(
+    scenes: &[Scene],
+    method: &dyn Method,
+    extra: &[(&str, ParamValue)],
+    want: &[(&str, &str)],
+    against: Against,
+    tol: f64,
+    why: &str,
+) -> Vec<String> {
     let gpu = testing::gpu();
     let mut ran = Vec::new();
     for &(mode, capture) in want {
@@ -76,19 +90,19 @@ fn check(
             );
             continue;
         }
-        for scene in scenes() {
-            let (cap, truth) = run_truth(method, &scene, 40, 32, &p);
+        for scene in scenes {
+            let (cap, truth) = run_truth(method, scene, 40, 32, &p);
             let expect = (mode != "none").then(|| AaMode::parse(mode).unwrap());
             assert_eq!(cap.aa, expect, "{} {mode}: capture's aa", method.name());
             let reference = match against {
                 Against::Truth => truth,
                 Against::Definition => {
                     let fx = EffectConfig::from_point(&point(method, &p)).unwrap();
-                    aa::definition(&cap, &scene, 40, 32, &fx).expect("an MSAA definition")
+                    aa::definition(&cap, scene, 40, 32, &fx).expect("an MSAA definition")
                 }
             };
             // Pixels with a near depth tie at some sample are left out (module doc).
-            let ties = near_ties(&scene, 40, 32, cap.aa.unwrap_or(AaMode::None));
+            let ties = near_ties(scene, 40, 32, cap.aa.unwrap_or(AaMode::None));
             let mut masked = reference.clone();
             let img = cap.image.as_ref().unwrap();
             for (p, &t) in ties.iter().enumerate() {
@@ -100,10 +114,11 @@ fn check(
                 }
             }
             let left_out = ties.iter().filter(|&&t| t).count();
+            // Intersection lines of the crossing tilted quads are ~5% of a 40×32 image.
             assert!(
-                left_out * 50 <= ties.len(),
-                "{} near-tie pixels of {}",
-                left_out,
+                left_out * 10 <= ties.len(),
+                "{}, aa={mode} {capture}: {left_out} near-tie pixels of {}",
+                scene.label(),
                 ties.len()
             );
             let (e, px) = max_err_vs(&cap, &masked);
@@ -119,22 +134,30 @@ fn check(
     ran
 }
 
-/// Pixels where two fragments of some sample lie within 1e-4 of window depth: intersecting
+/// Pixels where two fragments of different colours at some sample (or, for coverage captures,
+/// in centre-depth order) lie within 3e-5 of window depth: intersecting
 /// triangles at grazing angles (grass) that the GPU's f32 depth, interpolated from unsnapped
 /// vertices, may order differently from the reference (measured: a swap at a gap of 1e-5).
 fn near_ties(scene: &Scene, w: u32, h: u32, mode: AaMode) -> Vec<bool> {
     use bench_core::reference::multisample::{sample_lists, standard_positions};
+    let differ = |a: &[f64; 4], b: &[f64; 4]| (0..4).any(|c| (a[c] - b[c]).abs() > 1e-6);
     let tie = |l: &bench_core::reference::FragmentLists, p: usize| {
+        // Fragments of one colour composite alike in either order (a sphere's front and back
+        // meeting at its silhouette).
         l.pixel(p)
             .windows(2)
-            .any(|f| (f[1].depth - f[0].depth).abs() < 1e-4)
+            .any(|f| (f[1].depth - f[0].depth).abs() < 3e-5 && differ(&f[0].color, &f[1].color))
     };
     let n = (w * h) as usize;
     match mode {
         AaMode::Msaa(k) => {
             let ls = sample_lists(scene, w, h, k);
             assert_eq!(ls.len(), standard_positions(k).len());
-            (0..n).map(|p| ls.iter().any(|l| tie(l, p))).collect()
+            // Coverage captures order by centre depth: their ties count too.
+            let cl = bench_core::reference::multisample::coverage_lists(scene, w, h, k).lists;
+            (0..n)
+                .map(|p| ls.iter().any(|l| tie(l, p)) || tie(&cl, p))
+                .collect()
         }
         AaMode::Ssaa2x2 => {
             let l = bench_core::reference::rasterize(scene, 2 * w, 2 * h);
@@ -276,4 +299,59 @@ fn wboit_with_aa_runs_on_every_scene() {
             assert_eq!(img.len(), truth.len());
         }
     }
+}
+
+#[test]
+fn compute_abuffer_coverage_masks_match_their_definition_in_every_raster_path() {
+    // Rasterised in compute: 2×, 4× and 8× run on any adapter. The default path at every count,
+    // and at 4× each other raster path: direct, workgroup-shared tiles (small_max 1, stepped and
+    // direct), private sorting.
+    let m = methods::get("compute_abuffer");
+    let want = [
+        ("msaa2", "coverage"),
+        ("msaa4", "coverage"),
+        ("msaa8", "coverage"),
+    ];
+    let ran = check(&*m, &[], &want, Against::Definition, 1e-4, TRANSPARENCY);
+    assert_eq!(ran.len(), 3, "{ran:?}");
+    for extra in [
+        vec![("coverage", s("direct"))],
+        vec![("small_max", Int(1))],
+        vec![("small_max", Int(1)), ("coverage", s("direct"))],
+        vec![("resolve_sort", s("private"))],
+    ] {
+        let ran = check(
+            &*m,
+            &extra,
+            &want[1..2],
+            Against::Definition,
+            1e-4,
+            TRANSPARENCY,
+        );
+        assert_eq!(ran.len(), 1, "{extra:?}: {ran:?}");
+    }
+    // Against the truth: equal where a fragment's centre depth orders it as each sample's depth
+    // does (screen-parallel quads). Elsewhere the centre depth of a fragment covering a few
+    // samples is extrapolated and may reorder it (a sphere's silhouette over another: measured
+    // 0.015 at 2×): the rows report that as error against the truth.
+    let flat = [testing::scene("quads", &[("depth_complexity", Int(6))])];
+    check_on(&flat, &*m, &[], &want, Against::Truth, 1e-4, TRANSPARENCY);
+    check(
+        &*m,
+        &[],
+        &[("ssaa2x2", "sample")],
+        Against::Truth,
+        1e-4,
+        TRANSPARENCY,
+    );
+    // Per-sample capture is not offered (one fragment per pixel with its mask).
+    let p = params(&[("aa", s("msaa4")), ("aa_capture", s("sample"))]);
+    let why = m.supports(testing::gpu(), &point(&*m, &p)).unwrap_err();
+    assert!(why.contains("coverage"), "{why}");
+    // Every effect folds per sample: translucency against the coverage definition.
+    let fx = [
+        ("effect", s("translucency")),
+        ("sigma", ParamValue::Float(0.5)),
+    ];
+    check(&*m, &fx, &want[1..2], Against::Definition, 2e-3, VIEW_DEPTH);
 }
