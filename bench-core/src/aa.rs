@@ -351,7 +351,8 @@ pub fn truth_cached(
     expected: Expected,
 ) -> Arc<Truth> {
     type Key = (u64, u32, u32, AaMode, String, String);
-    static CACHE: OnceLock<Mutex<Vec<(Key, Arc<Truth>)>>> = OnceLock::new();
+    type Cache = Mutex<Vec<(Key, Arc<Truth>)>>;
+    static CACHE: OnceLock<Cache> = OnceLock::new();
     const KEEP: usize = 6;
     let key: Key = (
         scene_key(scene),
@@ -626,7 +627,9 @@ pub fn sample_positions(gpu: &Gpu, samples: u32) -> String {
     if samples <= 1 {
         return "standard".into();
     }
-    static CACHE: OnceLock<Mutex<HashMap<(String, String, String, u32), String>>> = OnceLock::new();
+    /// (adapter, backend, driver, samples) → verdict.
+    type Cache = Mutex<HashMap<(String, String, String, u32), String>>;
+    static CACHE: OnceLock<Cache> = OnceLock::new();
     let f = &gpu.facts;
     let key = (
         f.name.clone(),

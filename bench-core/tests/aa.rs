@@ -10,7 +10,12 @@
 //! fails). Pixels where two fragments of different colours at one sample lie within 3e-5 of
 //! window depth (intersecting grass blades at grazing angles: the GPU's f32 depth from unsnapped
 //! vertices may order them otherwise; measured: a swap at a gap of 1e-5) are left out, at most
-//! 10% of them (the crossing lines of tilted quads). Effects that read interpolated view depth are judged against the capture's own
+//! 10% of them (the crossing lines of tilted quads). Hardware MSAA may differ from the reference at
+//! one sample of at most 1 pixel in 200 (by at most one sample's worth, 1/S): lavapipe decides
+//! coverage at MSAA samples less precisely than at pixel centres (measured on slivers: a sample
+//! 0.12/256 px outside a needle's edge, well inside one sub-pixel step, counted as covered;
+//! single-sample and 2×2-supersampled coverage match exactly). compute_abuffer, rasterised by
+//! the reference's integer rule, gets no such slack. Effects that read interpolated view depth are judged against the capture's own
 //! definition (`aa::definition`: attributes at the pixel centre, where lavapipe interpolates
 //! them) with the effects tests' 2e-3 (the GPU interpolates from unsnapped vertices, the
 //! reference from snapped ones: ≤ 0.5/512 of view depth per pixel).
@@ -39,6 +44,10 @@ fn scenes() -> Vec<Scene> {
         ),
         testing::scene("shells", &[("count", Int(2)), ("segments", Int(12))]),
         testing::scene("grass", &[("blades", Int(40))]),
+        testing::scene(
+            "slivers",
+            &[("count", Int(24)), ("width", ParamValue::Float(0.03))],
+        ),
     ]
 }
 
@@ -121,6 +130,32 @@ fn check_on(
                 scene.label(),
                 ties.len()
             );
+            // Hardware MSAA: a pixel may be off by one sample (module doc), at most 1 in 200.
+            if let (Some(AaMode::Msaa(k)), false) = (cap.aa, method.name() == "compute_abuffer") {
+                let off: Vec<usize> = (0..masked.len())
+                    .filter(|&i| (0..4).any(|c| (img[i][c] as f64 - masked[i][c]).abs() > tol))
+                    .collect();
+                assert!(
+                    off.len() * 200 <= masked.len().max(200),
+                    "{} {mode} on {}: {} pixels off (first {:?})",
+                    method.name(),
+                    scene.label(),
+                    off.len(),
+                    off.first()
+                );
+                for &i in &off {
+                    let worst = (0..4)
+                        .map(|c| (img[i][c] as f64 - masked[i][c]).abs())
+                        .fold(0.0, f64::max);
+                    assert!(
+                        worst <= 1.0 / k as f64 + tol,
+                        "{} {mode} on {}: pixel {i} off by {worst}, more than one sample",
+                        method.name(),
+                        scene.label()
+                    );
+                    masked[i] = img[i].map(|c| c as f64);
+                }
+            }
             let (e, px) = max_err_vs(&cap, &masked);
             assert!(
                 e <= tol,

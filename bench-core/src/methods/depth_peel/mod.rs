@@ -542,6 +542,7 @@ impl PreparedPeel {
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn dispatch(
         &self,
         enc: &mut wgpu::CommandEncoder,
