@@ -1,11 +1,11 @@
 //! `mfx`: sweep multi-fragment methods on a GPU, log tidy CSV, and report.
 
+mod sweep;
+
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use bench_core::methods;
-use bench_core::record::{CsvSink, Row, Sink};
-use bench_core::runner::{self, RunOptions};
 use bench_core::{BackendChoice, Gpu, GpuOptions};
 use clap::{Args, Parser, Subcommand};
 use scenarios::{ParamValue, Params, SceneSpec, Suite};
@@ -23,7 +23,7 @@ struct Cli {
 }
 
 #[derive(Args, Clone)]
-struct GpuArgs {
+pub(crate) struct GpuArgs {
     /// wgpu backend: vulkan, gl or any.
     #[arg(long, default_value = "vulkan")]
     backend: BackendChoice,
@@ -36,7 +36,7 @@ struct GpuArgs {
 }
 
 impl GpuArgs {
-    fn options(&self) -> GpuOptions {
+    pub(crate) fn options(&self) -> GpuOptions {
         GpuOptions {
             backend: self.backend,
             adapter: self.adapter.clone(),
@@ -55,22 +55,24 @@ enum Cmd {
         gpu: GpuArgs,
     },
     /// Run a suite (a name in scenarios/suites or a TOML path) and write runs.csv + plots.
-    Sweep {
-        suite: String,
-        /// Output folder (default results/<run_id>/).
+    Sweep(sweep::SweepArgs),
+    /// Compare two runs point by point (run folders or runs.csv files): ratio of medians with
+    /// its CI, SAME / FASTER / SLOWER / UNSURE, and errors that moved.
+    Compare {
+        base: PathBuf,
+        new: PathBuf,
+        /// Changes within this band are SAME even when significant (default 2%).
         #[arg(long)]
-        out: Option<PathBuf>,
-        /// Run shard I of N (e.g. 0/4): every scene group lands in exactly one shard.
-        #[arg(long, value_parser = parse_shard)]
-        shard: Option<(usize, usize)>,
-        /// Skip the report after the sweep.
+        noise_band: Option<String>,
+        /// Significance level of the Mann–Whitney test (default 0.05).
         #[arg(long)]
-        no_report: bool,
-        /// Save each point's image as OUT/images/<hash>.npy (for cross-backend comparison).
+        alpha: Option<f64>,
+        /// Exit 1 when a point is significantly slower by more than this (e.g. 5%).
         #[arg(long)]
-        save_images: bool,
-        #[command(flatten)]
-        gpu: GpuArgs,
+        fail_on_slower: Option<String>,
+        /// Folder for compare.html (default NEW/report/).
+        #[arg(long)]
+        html: Option<PathBuf>,
     },
     /// Check suites (names or TOML paths) without a GPU: every problem at once; exit 2 if any.
     Check {
@@ -120,9 +122,13 @@ enum Cmd {
         /// Write the method's image (composited over white) here.
         #[arg(long)]
         png: Option<PathBuf>,
-        /// Also write the CPU reference composite here.
+        /// Also write the ground truth here: the composite of every fragment (f64 reference).
         #[arg(long)]
         reference_png: Option<PathBuf>,
+        /// Also write the method's own truncated definition here (the k nearest fragments), for
+        /// a method that keeps k.
+        #[arg(long)]
+        reference_k_png: Option<PathBuf>,
         /// Write the camera (row-major clip-from-world matrix, wgpu conventions) as JSON.
         #[arg(long)]
         camera_out: Option<PathBuf>,
@@ -159,7 +165,7 @@ enum Cmd {
     },
 }
 
-fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String> {
+pub(crate) fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String> {
     let (i, n) = s.split_once('/').ok_or("shard must be I/N, e.g. 0/4")?;
     let i: usize = i
         .parse()
@@ -193,7 +199,7 @@ fn parse_kv(s: &str) -> Result<(String, ParamValue)> {
 /// A bad suite or bad arguments, found before any GPU work: exit code 2, so a script can tell
 /// it from a run that failed (1).
 #[derive(Debug)]
-struct Usage(String);
+pub(crate) struct Usage(String);
 
 impl std::fmt::Display for Usage {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -203,12 +209,12 @@ impl std::fmt::Display for Usage {
 
 impl std::error::Error for Usage {}
 
-fn usage(msg: impl Into<String>) -> anyhow::Error {
+pub(crate) fn usage(msg: impl Into<String>) -> anyhow::Error {
     anyhow::Error::new(Usage(msg.into()))
 }
 
 /// Loads and checks a suite; every problem at once as a usage error.
-fn checked_suite(name: &str) -> Result<Suite> {
+pub(crate) fn checked_suite(name: &str) -> Result<Suite> {
     bench_core::check::load(name).map_err(|p| {
         usage(format!(
             "suite '{name}': {} problem{}:\n{}",
@@ -236,14 +242,22 @@ fn main() {
 fn run(cli: Cli) -> Result<()> {
     match cli.cmd {
         Cmd::List { what, gpu } => list(what.as_deref(), &gpu),
-        Cmd::Sweep {
-            suite,
-            out,
-            shard,
-            no_report,
-            save_images,
-            gpu,
-        } => sweep(&suite, out, shard, no_report, save_images, &gpu),
+        Cmd::Sweep(a) => sweep::sweep(&a),
+        Cmd::Compare {
+            base,
+            new,
+            noise_band,
+            alpha,
+            fail_on_slower,
+            html,
+        } => sweep::compare(
+            &base,
+            &new,
+            noise_band.as_deref(),
+            alpha,
+            fail_on_slower.as_deref(),
+            html.as_deref(),
+        ),
         Cmd::Check { suites } => {
             let mut bad = 0;
             for name in &suites {
@@ -302,6 +316,7 @@ fn run(cli: Cli) -> Result<()> {
             height,
             png,
             reference_png,
+            reference_k_png,
             camera_out,
             camera_in,
             reference_out,
@@ -336,6 +351,7 @@ fn run(cli: Cli) -> Result<()> {
                 height,
                 png,
                 reference_png,
+                reference_k_png,
                 camera_out,
                 camera_in,
                 reference_out,
@@ -497,114 +513,7 @@ fn models_line(suite: &Suite) -> String {
     }
 }
 
-/// Progress bar + CSV as one sink.
-struct Progress<'a> {
-    csv: CsvSink,
-    bar: &'a indicatif::ProgressBar,
-    failed: usize,
-    skipped: usize,
-}
-
-impl Sink for Progress<'_> {
-    fn point_done(&mut self, row: &Row) -> bench_core::Result<()> {
-        self.csv.point_done(row)?;
-        match row.get(cols::STATUS) {
-            Some("failed") => {
-                self.failed += 1;
-                self.bar.println(format!(
-                    "failed: {} — {}",
-                    row.get(cols::POINT_KEY).unwrap_or(""),
-                    row.get(cols::REASON).unwrap_or("")
-                ));
-            }
-            Some("skipped") => self.skipped += 1,
-            _ => {}
-        }
-        self.bar.set_message(format!(
-            "{} {}",
-            row.get(cols::SCENE_LABEL).unwrap_or(""),
-            row.get(cols::METHOD).unwrap_or("")
-        ));
-        self.bar.inc(1);
-        Ok(())
-    }
-}
-
-fn sweep(
-    suite_name: &str,
-    out: Option<PathBuf>,
-    shard: Option<(usize, usize)>,
-    no_report: bool,
-    save_images: bool,
-    gpu_args: &GpuArgs,
-) -> Result<()> {
-    let suite = checked_suite(suite_name)?;
-    let gpu = Gpu::new(&gpu_args.options())?;
-    let shard = shard.unwrap_or((0, 1));
-    let groups = runner::expand(&suite, gpu.facts.is_software)?;
-    let groups = runner::shard_groups(groups, shard);
-    let stamp = chrono_stamp();
-    let run_id = if shard.1 > 1 {
-        format!("{stamp}-{}-shard{}of{}", suite.name, shard.0, shard.1)
-    } else {
-        format!("{stamp}-{}", suite.name)
-    };
-    let out = out.unwrap_or_else(|| PathBuf::from("results").join(&run_id));
-    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    let csv_path = out.join("runs.csv");
-    // Studies that write images (shadows) put them beside the CSV.
-    std::env::set_var("MFX_OUT_DIR", &out);
-    eprintln!(
-        "mfx: suite '{}' on {} ({}, {}){}: {} groups, {} rows -> {}",
-        suite.name,
-        gpu.facts.name,
-        gpu.facts.backend,
-        gpu.facts.device_type,
-        if gpu.facts.is_software && suite.software.is_some() {
-            " [software profile]"
-        } else {
-            ""
-        },
-        groups.len(),
-        runner::rows_in(&groups),
-        csv_path.display()
-    );
-    let bar = indicatif::ProgressBar::new(runner::rows_in(&groups) as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} [{elapsed}] {msg}").unwrap(),
-    );
-    if std::env::var_os("CI").is_some() {
-        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-    }
-    let mut sink = Progress {
-        csv: CsvSink::create(&csv_path)?,
-        bar: &bar,
-        failed: 0,
-        skipped: 0,
-    };
-    let opts = RunOptions {
-        run_id,
-        git_rev: runner::git_rev(),
-        shard,
-        save_images: save_images.then(|| out.clone()),
-    };
-    let n = runner::run(&gpu, &suite, &groups, &opts, &mut sink)?;
-    bar.finish_and_clear();
-    eprintln!(
-        "mfx: wrote {n} rows ({} failed, {} skipped) to {}",
-        sink.failed,
-        sink.skipped,
-        csv_path.display()
-    );
-    if !no_report {
-        let page =
-            report::build(&out, None).with_context(|| format!("report of {}", out.display()))?;
-        eprintln!("mfx: report {}", page.display());
-    }
-    Ok(())
-}
-
-fn chrono_stamp() -> String {
+pub(crate) fn chrono_stamp() -> String {
     let now = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .unwrap_or_default()
@@ -641,6 +550,7 @@ struct RenderJob {
     height: Option<u32>,
     png: Option<PathBuf>,
     reference_png: Option<PathBuf>,
+    reference_k_png: Option<PathBuf>,
     camera_out: Option<PathBuf>,
     camera_in: Option<PathBuf>,
     reference_out: Option<PathBuf>,
@@ -725,8 +635,7 @@ fn render(job: &RenderJob) -> Result<()> {
         bail!("--png and --reference-png take one method; use --reference-out DIR for several");
     }
     let need_gpu = job.png.is_some() || job.reference_out.is_some();
-    let lists = (job.reference_out.is_some() || job.reference_png.is_some())
-        .then(|| bench_core::reference::rasterize(&scene, w, h));
+    let lists = Some(bench_core::reference::rasterize(&scene, w, h));
     if let (Some(dir), Some(lists)) = (&job.reference_out, &lists) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         std::fs::write(dir.join("camera.json"), &cam_json)?;
@@ -775,10 +684,21 @@ fn render(job: &RenderJob) -> Result<()> {
             println!("{method}: skipped ({why})");
             continue;
         }
-        let mut measured = bench_core::measure::measure(&gpu, &gscene, m.as_ref(), point, 0, 1)?;
-        let cap = measured.prepared.readback(&gpu, &gscene)?;
+        // A short timing (a few warm frames, a few samples): enough to say what one frame
+        // costs; sweeps time properly.
+        let plan = bench_core::measure::TimingPlan::from_spec(&scenarios::TimingSpec {
+            min_samples: Some(5),
+            max_samples: Some(5),
+            warmup_frames: Some(2),
+            warmup_max_frames: Some(2),
+            ..Default::default()
+        })
+        .expect("a valid plan");
+        let mut measured = bench_core::measure::measure(&gpu, &gscene, m.as_ref(), point, &plan)?;
+        let mut cap = measured.prepared.readback(&gpu, &gscene)?;
         let img = cap
             .image
+            .clone()
             .with_context(|| format!("{method} produces no image"))?;
         if let Some(png) = &job.png {
             image_io::write_png(png, w, h, &img, [1.0, 1.0, 1.0])?;
@@ -800,23 +720,80 @@ fn render(job: &RenderJob) -> Result<()> {
                 [1.0, 1.0, 1.0],
             )?;
         }
-        if let Some(lists) = &lists {
-            let reference =
-                bench_core::effects::reference_image("transparency", lists, cap.expected)
-                    .expect("known effect");
-            if let Some(r) = &job.reference_png {
-                let ref32: Vec<[f32; 4]> = reference.iter().map(|p| p.map(|c| c as f32)).collect();
-                image_io::write_png(r, w, h, &ref32, [1.0, 1.0, 1.0])?;
-                println!("reference -> {}", r.display());
-            }
-            let e = bench_core::metrics::image_error(
-                &reference,
-                &img,
-                bench_core::metrics::BAD_PIXEL_TOL,
-            );
+        let lists = lists
+            .as_ref()
+            .expect("the reference is rasterised for every render");
+        measured.prepared.judge(&mut cap, lists);
+        let folds = bench_core::effects::AXES
+            .iter()
+            .all(|e| m.axes().iter().any(|a| a.name() == e.name()));
+        let effect = if folds {
+            bench_core::effects::EffectConfig::from_point(point).map_err(usage)?
+        } else {
+            bench_core::effects::EffectConfig::default()
+        };
+        let j = bench_core::judge::judge(
+            &cap,
+            lists,
+            bench_core::judge::Context {
+                scene: &scene,
+                effect: &effect,
+                exact: m.exact(),
+                flip: true,
+            },
+        )
+        .map_err(|e| anyhow::anyhow!("{method}: {e}"))?;
+        let truth = effect.reference(&scene, lists, methods::Expected::All);
+        let to32 =
+            |v: &[[f64; 4]]| -> Vec<[f32; 4]> { v.iter().map(|p| p.map(|c| c as f32)).collect() };
+        if let Some(r) = &job.reference_png {
+            image_io::write_png(r, w, h, &to32(&truth), [1.0, 1.0, 1.0])?;
+            println!("ground truth (every fragment) -> {}", r.display());
+        }
+        if let (Some(r), methods::Expected::FirstK(k)) = (&job.reference_k_png, cap.expected) {
+            let own = effect.reference(&scene, lists, methods::Expected::FirstK(k));
+            image_io::write_png(r, w, h, &to32(&own), [1.0, 1.0, 1.0])?;
             println!(
-                "{method} on {}: rmse {:.3e}, max abs {:.3e}, bad pixels {:.4}% vs the reference",
-                gpu.facts.name,
+                "its own definition ({k} nearest fragments) -> {}",
+                r.display()
+            );
+        }
+        let capacity = match cap.expected {
+            methods::Expected::All => "every fragment".to_string(),
+            methods::Expected::FirstK(k) => format!("{k} nearest per pixel"),
+        };
+        let mut row = bench_core::record::Row::new();
+        j.write(&mut row);
+        println!(
+            "{method} on {} at {w}x{h}: GPU {} ms (wall {:.3} ms); keeps {capacity}; layers captured max {}; overflow in {:.2} % of pixels; flags: {}",
+            gpu.facts.name,
+            measured
+                .gpu_median()
+                .map(|g| format!("{g:.3}"))
+                .unwrap_or_else(|| "— (no timestamps)".into()),
+            measured.cpu.median,
+            j.layers_captured_max
+                .map(|n| n.to_string())
+                .unwrap_or_else(|| "?".into()),
+            100.0 * j.overflow_rate,
+            row.get(cols::FLAG).filter(|f| !f.is_empty()).unwrap_or("none"),
+        );
+        if let Some(e) = &j.truth {
+            println!(
+                "  vs the ground truth (every fragment): rmse {:.3e}, max abs {:.3e}, bad pixels {:.4} %{}{}",
+                e.rmse,
+                e.max_abs,
+                100.0 * e.bad_pixel_frac,
+                j.flip
+                    .as_ref()
+                    .map(|f| format!(", FLIP mean {:.4} (p99 {:.4})", f.result.mean, f.result.p99))
+                    .unwrap_or_default(),
+                if j.matches_truth == Some(true) { " — matches" } else { "" }
+            );
+        }
+        if let Some(e) = &j.vs_k {
+            println!(
+                "  vs its own definition ({capacity}): rmse {:.3e}, max abs {:.3e}, bad pixels {:.4} %",
                 e.rmse,
                 e.max_abs,
                 100.0 * e.bad_pixel_frac

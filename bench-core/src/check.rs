@@ -17,6 +17,14 @@ use crate::studies::{self, Methods, Study};
 /// Every problem of `suite` (empty when it can run).
 pub fn check_suite(suite: &Suite) -> Vec<Problem> {
     let mut out = Vec::new();
+    for (software, table) in [(false, "[timing]"), (true, "[software]")] {
+        if software && suite.software.is_none() {
+            continue;
+        }
+        if let Err(why) = crate::measure::TimingPlan::from_spec(&suite.timing_for(software)) {
+            out.push(Problem::new(&suite.source, table, "", why));
+        }
+    }
     for spec in &suite.studies {
         check_study(suite, spec, &mut out);
     }

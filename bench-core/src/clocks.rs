@@ -10,6 +10,7 @@
 //! throttled ones (see `mfx_stats::throttle`, reference [`GpuMonitor::reference_sm_mhz`]) to
 //! [`PointClocks::push_discarded`]; write [`PointClocks::to_cells`] into the row.
 
+use crate::record::{cols, Col};
 use std::collections::BTreeSet;
 
 use nvml_wrapper::bitmasks::device::ThrottleReasons;
@@ -309,7 +310,7 @@ impl PointClocks {
     }
 
     /// The row's cells, by the column names of the CSV contract.
-    pub fn to_cells(&self) -> Vec<(&'static str, String)> {
+    pub fn to_cells(&self) -> Vec<(Col, String)> {
         let mhz = |v: Option<f64>| v.map(|x| format!("{x:.1}")).unwrap_or_default();
         let sm_min = self.sm.iter().copied().reduce(f64::min);
         let sm_max = self.sm.iter().copied().reduce(f64::max);
@@ -321,23 +322,23 @@ impl PointClocks {
             Err(e) => format!("none: {e}"),
         };
         vec![
-            ("sm_clock_mhz_mean", mhz(self.sm_mean())),
-            ("sm_clock_mhz_min", mhz(sm_min)),
-            ("sm_clock_mhz_max", mhz(sm_max)),
-            ("mem_clock_mhz_mean", mhz(mem)),
+            (cols::SM_CLOCK_MHZ_MEAN, mhz(self.sm_mean())),
+            (cols::SM_CLOCK_MHZ_MIN, mhz(sm_min)),
+            (cols::SM_CLOCK_MHZ_MAX, mhz(sm_max)),
+            (cols::MEM_CLOCK_MHZ_MEAN, mhz(mem)),
             (
-                "gpu_temp_c_max",
+                cols::GPU_TEMP_C_MAX,
                 self.temp_max.map(|t| format!("{t}")).unwrap_or_default(),
             ),
             (
-                "gpu_power_w_mean",
+                cols::GPU_POWER_W_MEAN,
                 power.map(|p| format!("{p:.3}")).unwrap_or_default(),
             ),
             (
-                "throttle_reasons",
+                cols::THROTTLE_REASONS,
                 self.reasons.iter().copied().collect::<Vec<_>>().join("|"),
             ),
-            ("clock_source", source),
+            (cols::CLOCK_SOURCE, source),
         ]
     }
 }
@@ -390,7 +391,8 @@ mod tests {
         p.push(&r(1980.0, 40.0, vec!["gpu_idle"]));
         p.push(&r(1950.0, 45.0, vec!["sw_power_cap"]));
         p.push_discarded(&r(900.0, 52.0, vec!["hw_thermal_slowdown"]));
-        let cells: std::collections::BTreeMap<_, _> = p.to_cells().into_iter().collect();
+        let cells: std::collections::BTreeMap<&str, String> =
+            p.to_cells().into_iter().map(|(c, v)| (c.name, v)).collect();
         assert_eq!(cells["sm_clock_mhz_mean"], "1965.0");
         assert_eq!(cells["sm_clock_mhz_min"], "1950.0");
         assert_eq!(cells["sm_clock_mhz_max"], "1980.0");
@@ -411,7 +413,7 @@ mod tests {
         let p = PointClocks::for_monitor(&Err("NVML not available: no driver".into()));
         let cells = p.to_cells();
         for (k, v) in &cells {
-            if *k == "clock_source" {
+            if *k == cols::CLOCK_SOURCE {
                 assert_eq!(v, "none: NVML not available: no driver");
             } else {
                 assert!(v.is_empty(), "{k} = {v}");

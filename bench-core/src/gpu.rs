@@ -152,6 +152,9 @@ pub struct Gpu {
     pub downlevel: wgpu::DownlevelCapabilities,
     /// Set by the device-lost callback; a lost device fails every later point with this reason.
     pub lost: Arc<Mutex<Option<String>>>,
+    /// NVML for this adapter's clocks, temperature, power and throttle reasons, or why not
+    /// (no NVIDIA driver, not an NVIDIA adapter): every point's `clock_source` says which.
+    pub monitor: std::result::Result<crate::clocks::GpuMonitor, String>,
 }
 
 /// Lists adapters for a backend choice, in enumeration order (the `--adapter-index` order).
@@ -238,6 +241,17 @@ impl Gpu {
             log::error!("uncaptured wgpu error: {e}")
         }));
         let downlevel = adapter.get_downlevel_capabilities();
+        // 0x10DE: NVIDIA's PCI vendor id (NVML knows no other vendor's GPUs).
+        let monitor = if info.vendor == 0x10DE {
+            crate::clocks::GpuMonitor::open(
+                Some(info.device_pci_bus_id.as_str()).filter(|s| !s.is_empty()),
+            )
+        } else {
+            Err(format!(
+                "not an NVIDIA adapter ({}, vendor {:#06x}): no NVML clocks",
+                info.name, info.vendor
+            ))
+        };
         Ok(Gpu {
             facts: AdapterFacts::of(&info, features),
             adapter,
@@ -247,6 +261,7 @@ impl Gpu {
             limits,
             downlevel,
             lost,
+            monitor,
         })
     }
 

@@ -14,6 +14,7 @@ pub mod gpu_scene;
 pub mod gpu_util;
 pub mod image_io;
 pub mod interrupt;
+pub mod judge;
 pub mod manifest;
 pub mod measure;
 pub mod merge;
@@ -50,6 +51,9 @@ pub enum CoreError {
     Schema(String),
     #[error("I/O: {0}")]
     Io(String),
+    /// A signal asked the run to stop after the row in flight.
+    #[error("interrupted by {0}")]
+    Interrupted(String),
 }
 
 pub type Result<T, E = CoreError> = std::result::Result<T, E>;

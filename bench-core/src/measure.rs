@@ -1,26 +1,155 @@
-//! Timing one prepared method on one scene: untimed preparation, warm-up, timed frames, GPU
-//! errors caught as typed errors; and the timing columns of a row.
+//! Timing one prepared method on one scene: untimed preparation, a warm-up until frame times and
+//! the SM clock are steady, then timed frames until the stopping rule is met (mfx-stats: a
+//! target on the 95 % CI of the median, caps on samples and time, a drift check), the SM clock
+//! read after every frame where NVML is present (throttled samples discarded: nvbench's 75 %
+//! rule), GPU errors caught as typed errors; and the timing columns of a row.
 
 use std::collections::BTreeMap;
 
-use crate::axes::Point;
+use mfx_stats::{
+    Decision, Sampler, StopReason, StopRule, Summary, Warmup, WarmupDecision, WarmupRule,
+};
 
+use crate::axes::Point;
+use crate::clocks::{MonitorSample, PointClocks};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
 use crate::method::{FrameStats, Method, Prepared};
-use crate::record::{cols, Row};
-use crate::timing::{GpuTimer, Stats};
+use crate::record::{cols, Row, Sample};
+use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
+
+/// How a point is timed: warm-up and stopping rules, and the seed of its bootstrap.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TimingPlan {
+    pub warmup: WarmupRule,
+    pub stop: StopRule,
+    /// Seed of the bootstrap CIs (and of a seeded measurement order, when interleaved).
+    pub seed: u64,
+    /// Sample the points of a group interleaved in a seeded random order.
+    pub interleave: bool,
+}
+
+impl Default for TimingPlan {
+    fn default() -> Self {
+        TimingPlan {
+            warmup: WarmupRule::default(),
+            stop: StopRule::default(),
+            seed: 1,
+            interleave: false,
+        }
+    }
+}
+
+impl TimingPlan {
+    /// One frame, no warm-up: for a single render (tests, `mfx render`), not for timings.
+    pub fn once() -> TimingPlan {
+        TimingPlan {
+            warmup: WarmupRule {
+                min_frames: 0,
+                max_frames: 0,
+                ..WarmupRule::default()
+            },
+            stop: StopRule {
+                min_samples: 1,
+                max_samples: 1,
+                max_noise: f64::INFINITY,
+                ..StopRule::default()
+            },
+            seed: 1,
+            interleave: false,
+        }
+    }
+
+    /// The plan a suite's `[timing]` (with `[software]`'s overrides applied) asks for: every
+    /// key it leaves unset takes the default. `Err` names a setting that cannot work.
+    pub fn from_spec(spec: &scenarios::TimingSpec) -> std::result::Result<TimingPlan, String> {
+        let d = TimingPlan::default();
+        let mut stop = d.stop.clone();
+        let mut warmup = d.warmup.clone();
+        if let Some(v) = spec.min_samples {
+            stop.min_samples = v as usize;
+        }
+        if let Some(v) = spec.max_samples {
+            stop.max_samples = v as usize;
+            // A fixed count (min = max) takes no minimum above it.
+            stop.min_samples = stop.min_samples.min(stop.max_samples);
+        }
+        if let Some(v) = spec.min_samples {
+            stop.min_samples = (v as usize).min(stop.max_samples);
+        }
+        if let Some(v) = spec.max_noise {
+            stop.max_noise = v;
+        }
+        if let Some(v) = spec.min_time_ms {
+            stop.min_time_ms = v;
+        }
+        if let Some(v) = spec.max_time_ms {
+            stop.max_time_ms = v;
+        }
+        if let Some(v) = spec.warmup_frames {
+            warmup.min_frames = v as usize;
+            warmup.max_frames = warmup.max_frames.max(v as usize);
+        }
+        if let Some(v) = spec.warmup_max_frames {
+            warmup.max_frames = v as usize;
+            warmup.min_frames = warmup.min_frames.min(v as usize);
+        }
+        stop.validate()?;
+        Ok(TimingPlan {
+            warmup,
+            stop,
+            seed: spec.seed.unwrap_or(d.seed),
+            interleave: spec.interleave.unwrap_or(false),
+        })
+    }
+
+    /// The one-line description written to each row (`timing_rule`).
+    pub fn describe(&self) -> String {
+        let s = &self.stop;
+        format!(
+            "warm-up {}–{} frames until steady; {}–{} samples, stop at ±{:.2} % (95 % CI of the median), ≤ {} ms; drift check every {}",
+            self.warmup.min_frames,
+            self.warmup.max_frames,
+            s.min_samples,
+            s.max_samples,
+            s.max_noise * 100.0,
+            s.max_time_ms,
+            s.drift_every
+        )
+    }
+}
 
 /// The result of timing one method on one scene.
 pub struct Measured {
-    pub gpu_ms: Option<Stats>,
-    pub cpu_ms: Stats,
-    /// Median ms per pass label (passes with the same label in one frame are summed).
+    /// GPU time per frame over the kept samples (None without timestamp queries).
+    pub gpu: Option<Summary>,
+    /// Wall-clock time per frame over the kept samples.
+    pub cpu: Summary,
+    /// Median ms per pass label over the kept samples (passes with one label in one frame are
+    /// summed).
     pub pass_ms: BTreeMap<String, f64>,
     pub frame: FrameStats,
     pub bytes_allocated: u64,
+    pub bytes_overhead: Option<u64>,
     pub prepared: Box<dyn Prepared>,
+    /// Every timed frame in order, discarded ones included (`samples.csv`).
+    pub samples: Vec<Sample>,
+    pub warmup_frames: usize,
+    pub stop_reason: StopReason,
+    pub target_reached: bool,
+    /// Wall-clock ms of warm-up and samples.
+    pub measure_ms: f64,
+    pub clocks: PointClocks,
+}
+
+impl Measured {
+    pub fn gpu_median(&self) -> Option<f64> {
+        self.gpu.as_ref().map(|s| s.median)
+    }
+    pub fn discarded(&self) -> usize {
+        self.samples.iter().filter(|s| s.discarded).count()
+    }
 }
 
 fn scope_error(e: Option<wgpu::Error>, what: &str) -> Result<()> {
@@ -33,93 +162,396 @@ fn scope_error(e: Option<wgpu::Error>, what: &str) -> Result<()> {
     }
 }
 
-/// Prepares `method` (untimed), runs `warmup` frames, then `reps` timed frames.
+/// What one frame gave: the GPU passes' ms (empty without timestamps), the wall ms, and the
+/// clocks right after it.
+type FrameTimes = (Vec<(String, f64)>, f64, MonitorSample);
+
+/// One frame: encode, submit, wait.
+fn one_frame(
+    gpu: &Gpu,
+    scene: &GpuScene,
+    prepared: &mut dyn Prepared,
+    timer: &mut GpuTimer,
+    frame: &mut FrameStats,
+) -> Result<FrameTimes> {
+    timer.begin_frame();
+    let t0 = std::time::Instant::now();
+    *frame = prepared.frame(gpu, scene, timer)?;
+    gpu.wait()?;
+    let cpu = t0.elapsed().as_secs_f64() * 1e3;
+    let passes = timer.read(gpu)?;
+    gpu.check_lost()?;
+    let clocks = match &gpu.monitor {
+        Ok(m) => m.sample(),
+        Err(_) => MonitorSample::default(),
+    };
+    Ok((passes, cpu, clocks))
+}
+
+/// Timed frames of this process so far: each sample's `seq`, the measurement order.
+static FRAMES_TIMED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// One point being timed, in stages (so a group's points can be sampled interleaved): prepared,
+/// warmed up, sampled one frame at a time, finished into a [`Measured`].
+pub struct PointTimer<'g> {
+    gpu: &'g Gpu,
+    scene: &'g GpuScene,
+    plan: TimingPlan,
+    prepared: Box<dyn Prepared>,
+    bytes_allocated: u64,
+    bytes_overhead: Option<u64>,
+    timer: GpuTimer,
+    reference_mhz: Option<f64>,
+    clocks: PointClocks,
+    frame: FrameStats,
+    samples: Vec<Sample>,
+    per_label: BTreeMap<String, Vec<f64>>,
+    sampler: Sampler,
+    warmup_frames: usize,
+    /// Wall time spent on this point's warm-up and samples (its own, when interleaved).
+    spent_ms: f64,
+    stopped: Option<StopReason>,
+}
+
+/// Runs `f` in validation and out-of-memory error scopes; a captured error names `what`.
+fn scoped<T>(gpu: &Gpu, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+    let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let r = f();
+    scope_error(pollster::block_on(oom.pop()), what)?;
+    scope_error(pollster::block_on(validation.pop()), what)?;
+    r
+}
+
+impl<'g> PointTimer<'g> {
+    /// Prepares `method` (untimed: every GPU object is created here).
+    pub fn prepare(
+        gpu: &'g Gpu,
+        scene: &'g GpuScene,
+        method: &dyn Method,
+        point: &Point,
+        plan: &TimingPlan,
+    ) -> Result<PointTimer<'g>> {
+        gpu.check_lost()?;
+        let prepared = scoped(gpu, "prepare", || method.prepare(gpu, scene, point))?;
+        Ok(PointTimer {
+            gpu,
+            scene,
+            plan: plan.clone(),
+            bytes_allocated: prepared.bytes_allocated(),
+            bytes_overhead: prepared.bytes_overhead(),
+            prepared,
+            timer: GpuTimer::new(gpu),
+            reference_mhz: gpu.monitor.as_ref().ok().and_then(|m| m.reference_sm_mhz()),
+            clocks: PointClocks::for_monitor(&gpu.monitor),
+            frame: FrameStats::default(),
+            samples: Vec::new(),
+            per_label: BTreeMap::new(),
+            sampler: Sampler::new(plan.stop.clone()),
+            warmup_frames: 0,
+            spent_ms: 0.0,
+            stopped: None,
+        })
+    }
+
+    /// Untimed frames until frame times (and the SM clock, where read) stop moving.
+    pub fn warm_up(&mut self) -> Result<()> {
+        if self.plan.warmup.max_frames == 0 {
+            return Ok(());
+        }
+        let mut warmup = Warmup::new(self.plan.warmup.clone());
+        let w0 = std::time::Instant::now();
+        let (gpu, scene) = (self.gpu, self.scene);
+        scoped(gpu, "warm-up", || loop {
+            let (passes, cpu, c) = one_frame(
+                gpu,
+                scene,
+                self.prepared.as_mut(),
+                &mut self.timer,
+                &mut self.frame,
+            )?;
+            let ms = if self.timer.enabled() {
+                passes.iter().map(|(_, ms)| ms).sum()
+            } else {
+                cpu
+            };
+            let elapsed = w0.elapsed().as_secs_f64() * 1e3;
+            if let WarmupDecision::Done(_) = warmup.push(ms, c.sm_mhz, elapsed) {
+                return Ok(());
+            }
+        })?;
+        self.warmup_frames = warmup.frames();
+        self.spent_ms += w0.elapsed().as_secs_f64() * 1e3;
+        Ok(())
+    }
+
+    /// One timed frame; `Some(reason)` once the stopping rule ends the point.
+    pub fn sample(&mut self) -> Result<Option<StopReason>> {
+        if let Some(r) = self.stopped {
+            return Ok(Some(r));
+        }
+        let t0 = std::time::Instant::now();
+        let (gpu, scene) = (self.gpu, self.scene);
+        let (passes, cpu, c) = scoped(gpu, "frame", || {
+            one_frame(
+                gpu,
+                scene,
+                self.prepared.as_mut(),
+                &mut self.timer,
+                &mut self.frame,
+            )
+        })?;
+        self.spent_ms += t0.elapsed().as_secs_f64() * 1e3;
+        let gpu_ms = self
+            .timer
+            .enabled()
+            .then(|| passes.iter().map(|(_, ms)| ms).sum::<f64>());
+        let discarded = match (c.sm_mhz, self.reference_mhz) {
+            (Some(sm), Some(r)) => mfx_stats::discard(sm, r),
+            _ => false,
+        };
+        self.samples.push(Sample {
+            gpu_ms,
+            cpu_ms: cpu,
+            sm_mhz: c.sm_mhz,
+            mem_mhz: c.mem_mhz,
+            discarded,
+            seq: FRAMES_TIMED.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+        });
+        let decision = if discarded {
+            self.clocks.push_discarded(&c);
+            self.sampler.push_discarded(self.spent_ms)
+        } else {
+            self.clocks.push(&c);
+            let mut frame_labels: BTreeMap<String, f64> = BTreeMap::new();
+            for (l, ms) in passes {
+                *frame_labels.entry(l).or_default() += ms;
+            }
+            for (l, ms) in frame_labels {
+                self.per_label.entry(l).or_default().push(ms);
+            }
+            // The stopping rule watches the GPU time (the wall time without timestamps).
+            self.sampler.push(gpu_ms.unwrap_or(cpu), self.spent_ms)
+        };
+        if let Decision::Stop(reason) = decision {
+            self.stopped = Some(reason);
+        }
+        Ok(self.stopped)
+    }
+
+    /// The point's statistics (after the rule stopped it).
+    pub fn finish(self) -> Result<Measured> {
+        let stop_reason = self.stopped.unwrap_or(StopReason::MaxSamples);
+        let kept: Vec<&Sample> = self.samples.iter().filter(|s| !s.discarded).collect();
+        let gpu_kept: Vec<f64> = kept.iter().filter_map(|s| s.gpu_ms).collect();
+        let cpu_kept: Vec<f64> = kept.iter().map(|s| s.cpu_ms).collect();
+        let seed = self.plan.seed;
+        let summary = |v: &[f64]| Summary::of(v, seed);
+        let median = |v: &[f64]| {
+            let mut s = v.to_vec();
+            s.sort_by(f64::total_cmp);
+            (!s.is_empty()).then(|| mfx_stats::median_of_sorted(&s))
+        };
+        let cpu = summary(&cpu_kept)
+            .or_else(|| summary(&self.samples.iter().map(|s| s.cpu_ms).collect::<Vec<_>>()))
+            .ok_or_else(|| CoreError::Gpu("no frame was timed".into()))?;
+        Ok(Measured {
+            gpu: if !kept.is_empty() && gpu_kept.len() == kept.len() {
+                summary(&gpu_kept)
+            } else {
+                None
+            },
+            cpu,
+            pass_ms: self
+                .per_label
+                .into_iter()
+                .map(|(l, v)| (l, median(&v).unwrap_or(0.0)))
+                .collect(),
+            frame: self.frame,
+            bytes_allocated: self.bytes_allocated,
+            bytes_overhead: self.bytes_overhead,
+            prepared: self.prepared,
+            warmup_frames: self.warmup_frames,
+            target_reached: stop_reason == StopReason::TargetReached,
+            stop_reason,
+            samples: self.samples,
+            measure_ms: self.spent_ms,
+            clocks: self.clocks,
+        })
+    }
+}
+
+/// Prepares `method` (untimed), warms up, then samples frames until `plan`'s rule stops.
 pub fn measure(
     gpu: &Gpu,
     scene: &GpuScene,
     method: &dyn Method,
     point: &Point,
-    warmup: u32,
-    reps: u32,
+    plan: &TimingPlan,
 ) -> Result<Measured> {
-    gpu.check_lost()?;
-    let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let prepared = method.prepare(gpu, scene, point);
-    scope_error(pollster::block_on(oom.pop()), "prepare")?;
-    scope_error(pollster::block_on(validation.pop()), "prepare")?;
-    let mut prepared = prepared?;
-    let bytes_allocated = prepared.bytes_allocated();
+    let mut t = PointTimer::prepare(gpu, scene, method, point, plan)?;
+    t.warm_up()?;
+    while t.sample()?.is_none() {}
+    t.finish()
+}
 
-    let mut timer = GpuTimer::new(gpu);
-    let mut gpu_samples = Vec::new();
-    let mut cpu_samples = Vec::new();
-    let mut per_label: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-    let mut frame = FrameStats::default();
-    let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let mut run = || -> Result<()> {
-        for rep in 0..warmup + reps {
-            timer.begin_frame();
-            let t0 = std::time::Instant::now();
-            frame = prepared.frame(gpu, scene, &mut timer)?;
-            gpu.wait()?;
-            let cpu = t0.elapsed().as_secs_f64() * 1e3;
-            let passes = timer.read(gpu)?;
-            gpu.check_lost()?;
-            if rep >= warmup {
-                cpu_samples.push(cpu);
-                if timer.enabled() {
-                    gpu_samples.push(passes.iter().map(|(_, ms)| ms).sum());
-                    let mut frame_labels: BTreeMap<String, f64> = BTreeMap::new();
-                    for (l, ms) in passes {
-                        *frame_labels.entry(l).or_default() += ms;
-                    }
-                    for (l, ms) in frame_labels {
-                        per_label.entry(l).or_default().push(ms);
+/// Times several points of one group interleaved (`[timing] interleave = true`): all prepared
+/// and warmed up first, then sampled in rounds, one frame of every still-active point per round
+/// in a seeded order shuffled afresh each round, so drift spreads over all points as noise
+/// instead of biasing the ones measured last. Every point's GPU objects are alive at once.
+pub fn measure_interleaved<'g>(
+    gpu: &'g Gpu,
+    scene: &'g GpuScene,
+    items: &[(&dyn Method, &Point)],
+    plan: &TimingPlan,
+) -> Vec<Result<Measured>> {
+    let mut timers: Vec<Option<Result<PointTimer<'g>>>> = items
+        .iter()
+        .map(|(m, p)| {
+            Some(
+                PointTimer::prepare(gpu, scene, *m, p, plan).and_then(|mut t| {
+                    t.warm_up()?;
+                    Ok(t)
+                }),
+            )
+        })
+        .collect();
+    let mut active: Vec<usize> = (0..items.len())
+        .filter(|&i| matches!(timers[i], Some(Ok(_))))
+        .collect();
+    let mut round = 0u64;
+    while !active.is_empty() {
+        for i in mfx_stats::round_order(&active, round, plan.seed) {
+            if let Some(Ok(t)) = &mut timers[i] {
+                match t.sample() {
+                    Ok(Some(_)) => active.retain(|&a| a != i),
+                    Ok(None) => {}
+                    Err(e) => {
+                        timers[i] = Some(Err(e));
+                        active.retain(|&a| a != i);
                     }
                 }
             }
         }
-        Ok(())
-    };
-    let res = run();
-    scope_error(pollster::block_on(oom.pop()), "frame")?;
-    scope_error(pollster::block_on(validation.pop()), "frame")?;
-    res?;
-    Ok(Measured {
-        gpu_ms: Stats::of(&gpu_samples),
-        cpu_ms: Stats::of(&cpu_samples).unwrap_or_default(),
-        pass_ms: per_label
-            .into_iter()
-            .map(|(l, v)| (l, Stats::of(&v).map(|s| s.median).unwrap_or(0.0)))
-            .collect(),
-        frame,
-        bytes_allocated,
-        prepared,
-    })
+        round += 1;
+    }
+    timers
+        .into_iter()
+        .map(|t| match t.expect("every point is kept") {
+            Ok(t) => t.finish(),
+            Err(e) => Err(e),
+        })
+        .collect()
 }
 
-/// Timing, pass and memory columns of a measured point.
+/// What [`FrameLoop::push`] made of a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// An untimed warm-up frame.
+    Warmup,
+    /// A timed sample; `last`: the stopping rule ends the point with it.
+    Sample { last: bool },
+}
+
+/// The warm-up and stopping rules for studies that run their own frames (geometry feeding, the
+/// light pre-pass): feed each frame's time, keep the frames it calls samples, stop when told.
+pub struct FrameLoop {
+    warmup: Option<Warmup>,
+    sampler: Sampler,
+    start: std::time::Instant,
+    warmup_frames: usize,
+}
+
+impl FrameLoop {
+    pub fn new(plan: &TimingPlan) -> FrameLoop {
+        FrameLoop {
+            warmup: (plan.warmup.max_frames > 0).then(|| Warmup::new(plan.warmup.clone())),
+            sampler: Sampler::new(plan.stop.clone()),
+            start: std::time::Instant::now(),
+            warmup_frames: 0,
+        }
+    }
+
+    /// Feeds one frame's time in ms (GPU time, or wall time without timestamps).
+    pub fn push(&mut self, ms: f64) -> Step {
+        let elapsed = self.start.elapsed().as_secs_f64() * 1e3;
+        if let Some(w) = &mut self.warmup {
+            match w.push(ms, None, elapsed) {
+                WarmupDecision::Continue => return Step::Warmup,
+                WarmupDecision::Done(_) => {
+                    self.warmup_frames = w.frames();
+                    self.warmup = None;
+                    self.start = std::time::Instant::now();
+                    return Step::Warmup;
+                }
+            }
+        }
+        let elapsed = self.start.elapsed().as_secs_f64() * 1e3;
+        let last = matches!(self.sampler.push(ms, elapsed), Decision::Stop(_));
+        Step::Sample { last }
+    }
+
+    pub fn warmup_frames(&self) -> usize {
+        self.warmup_frames
+    }
+    pub fn target_reached(&self) -> bool {
+        self.sampler.target_reached()
+    }
+}
+
+/// Timing, pass, clock and memory columns of a measured point, and the flags a timing earns:
+/// `noisy` (the stopping rule's target was not met) and `throttled` (a sample was discarded
+/// or NVML reported a slowdown).
 pub fn set_timing(row: &mut Row, m: &Measured, mesh: &scenarios::Mesh) {
-    if let Some(g) = m.gpu_ms {
+    if let Some(g) = &m.gpu {
         row.set_f(cols::GPU_MS_MEDIAN, g.median)
+            .set_f(cols::GPU_MS_MEAN, g.mean)
             .set_f(cols::GPU_MS_MIN, g.min)
             .set_f(cols::GPU_MS_MAX, g.max)
-            .set_f(cols::GPU_MS_REL_NOISE, g.rel_noise);
+            .set_f(cols::GPU_MS_CI_LO, g.median_ci.0)
+            .set_f(cols::GPU_MS_CI_HI, g.median_ci.1)
+            .set_f(cols::GPU_MS_MEAN_CI_LO, g.mean_ci.0)
+            .set_f(cols::GPU_MS_MEAN_CI_HI, g.mean_ci.1)
+            .set_f(cols::GPU_MS_REL_CI, g.rel_ci)
+            .set_f(cols::GPU_MS_REL_NOISE, g.rel_noise)
+            .set(cols::GPU_MS_OUTLIERS, g.outliers);
         if g.median > 0.0 {
             let secs = g.median * 1e-3 / m.frame.geometry_passes.max(1) as f64;
             row.set_f(cols::TRIANGLES_PER_S, mesh.triangle_count() as f64 / secs)
                 .set_f(cols::VERTICES_PER_S, mesh.indices.len() as f64 / secs);
         }
+        if m.cpu.median > 0.0 {
+            row.set_f(cols::GPU_WALL_RATIO, g.median / m.cpu.median);
+        }
     }
-    row.set_f(cols::CPU_MS_MEDIAN, m.cpu_ms.median)
-        .set_f(cols::CPU_MS_MIN, m.cpu_ms.min)
-        .set_f(cols::CPU_MS_MAX, m.cpu_ms.max);
+    row.set_f(cols::CPU_MS_MEDIAN, m.cpu.median)
+        .set_f(cols::CPU_MS_MIN, m.cpu.min)
+        .set_f(cols::CPU_MS_MAX, m.cpu.max);
     row.set(
         cols::PASS_MS,
         serde_json::to_string(&m.pass_ms).unwrap_or_default(),
     );
+    row.set(cols::SAMPLES, m.samples.len() - m.discarded())
+        .set(cols::SAMPLES_DISCARDED, m.discarded())
+        .set(cols::WARMUP_FRAMES, m.warmup_frames)
+        .set_f(cols::MEASURE_MS, m.measure_ms)
+        .set(cols::TARGET_REACHED, m.target_reached)
+        .set(cols::STOP_REASON, m.stop_reason.as_str());
+    for (col, v) in m.clocks.to_cells() {
+        if !v.is_empty() {
+            row.set(col, v);
+        }
+    }
+    row.samples = m.samples.clone();
     row.set(cols::GEOMETRY_PASSES, m.frame.geometry_passes)
         .set(cols::BYTES_ALLOCATED, m.bytes_allocated);
+    if let Some(o) = m.bytes_overhead {
+        row.set(cols::BYTES_OVERHEAD, o);
+    }
+    if !m.target_reached {
+        row.add_flag(crate::record::Flag::Noisy);
+    }
+    if m.discarded() > 0 || m.clocks.slowdown() {
+        row.add_flag(crate::record::Flag::Throttled);
+    }
 }

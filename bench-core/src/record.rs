@@ -14,10 +14,95 @@ pub use schema::{cols, Col, SCHEMA_VERSION};
 
 use crate::{CoreError, Result};
 
-/// One CSV row: declared column → cell text.
+/// A known, reported failure mode of a row (the `flag` column holds them `|`-joined, in this
+/// order). Each is defined in results/README.md.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Flag {
+    /// Fragments exceeded the method's capacity (k, a pool, a sort buffer).
+    Overflow,
+    /// k-buffer read-modify-write races changed the captured set.
+    Hazard,
+    /// Bucket methods merged or lost fragments sharing a bucket.
+    Collision,
+    /// Distinct layers merged in the method's depth precision, or a non-finite output.
+    Precision,
+    /// Fragments at exactly equal depths lost (strict peeling).
+    LostCoplanar,
+    /// An exact method's fragment set differs from the reference's (fragments missing without
+    /// an overflow, or fragments the reference does not have).
+    FragmentsDiffer,
+    /// GPU time far below the wall-clock time of the same frames: the timestamps missed work.
+    TimestampsIncomplete,
+    /// The stopping rule's noise target was not reached (max samples, max time or drift).
+    Noisy,
+    /// A sample was taken below 75 % of the reference SM clock, or NVML reported a slowdown.
+    Throttled,
+}
+
+impl Flag {
+    pub const ALL: [Flag; 9] = [
+        Flag::Overflow,
+        Flag::Hazard,
+        Flag::Collision,
+        Flag::Precision,
+        Flag::LostCoplanar,
+        Flag::FragmentsDiffer,
+        Flag::TimestampsIncomplete,
+        Flag::Noisy,
+        Flag::Throttled,
+    ];
+    pub fn name(self) -> &'static str {
+        match self {
+            Flag::Overflow => "overflow",
+            Flag::Hazard => "hazard",
+            Flag::Collision => "collision",
+            Flag::Precision => "precision",
+            Flag::LostCoplanar => "lost_coplanar",
+            Flag::FragmentsDiffer => "fragments_differ",
+            Flag::TimestampsIncomplete => "timestamps_incomplete",
+            Flag::Noisy => "noisy",
+            Flag::Throttled => "throttled",
+        }
+    }
+    pub fn parse(s: &str) -> Option<Flag> {
+        Flag::ALL.iter().copied().find(|f| f.name() == s)
+    }
+}
+
+/// One timed frame of a point (a row of `samples.csv`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Sum of the frame's timestamped passes (None without timestamp queries).
+    pub gpu_ms: Option<f64>,
+    /// Wall clock from the first encode to GPU idle.
+    pub cpu_ms: f64,
+    pub sm_mhz: Option<f64>,
+    pub mem_mhz: Option<f64>,
+    /// Dropped by the throttle rule (not in the statistics).
+    pub discarded: bool,
+    /// Position of the frame among all timed frames of this process: the measurement order,
+    /// also when a group's points are interleaved.
+    pub seq: u64,
+}
+
+/// A row's FLIP comparison with the 8-bit images it was computed from, for the run's gallery of
+/// worst points (`flip/worst.csv`).
+#[derive(Clone, Debug)]
+pub struct FlipImages {
+    pub result: mfx_flip::FlipResult,
+    pub method_rgb8: Vec<u8>,
+    pub truth_rgb8: Vec<u8>,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// One CSV row: declared column → cell text; and what travels with it to the sinks without
+/// being a column (the point's samples for `samples.csv`, its FLIP images for the gallery).
 #[derive(Clone, Debug, Default)]
 pub struct Row {
     pub cells: BTreeMap<&'static str, String>,
+    pub samples: Vec<Sample>,
+    pub flip: Option<Box<FlipImages>>,
 }
 
 impl Row {
@@ -50,6 +135,43 @@ impl Row {
     /// The cell as a number, when set and numeric.
     pub fn get_f(&self, col: Col) -> Option<f64> {
         self.get(col).and_then(|s| s.parse().ok())
+    }
+
+    /// Adds a flag to the `flag` cell (kept `|`-joined, ordered, without repeats). A method's
+    /// own flag word that is not a known flag is kept too (named, never dropped).
+    pub fn add_flag(&mut self, flag: Flag) -> &mut Self {
+        self.add_flag_word(flag.name())
+    }
+
+    /// `add_flag` for a flag given as text (a method's `Capture.flag`, `|`-joined or not).
+    pub fn add_flag_word(&mut self, words: &str) -> &mut Self {
+        let mut known: Vec<Flag> = Vec::new();
+        let mut other: Vec<String> = Vec::new();
+        let cell = self.get(cols::FLAG).unwrap_or("").to_string();
+        for w in cell.split('|').chain(words.split('|')) {
+            let w = w.trim();
+            if w.is_empty() {
+                continue;
+            }
+            match Flag::parse(w) {
+                Some(f) if !known.contains(&f) => known.push(f),
+                Some(_) => {}
+                None if !other.iter().any(|o| o == w) => other.push(w.to_string()),
+                None => {}
+            }
+        }
+        known.sort();
+        let all: Vec<String> = known
+            .iter()
+            .map(|f| f.name().to_string())
+            .chain(other)
+            .collect();
+        self.set(cols::FLAG, all.join("|"))
+    }
+
+    pub fn has_flag(&self, flag: Flag) -> bool {
+        self.get(cols::FLAG)
+            .is_some_and(|c| c.split('|').any(|w| w == flag.name()))
     }
 
     /// Appends `note` to the `notes` cell (`; `-separated).
@@ -137,6 +259,131 @@ impl CsvSink {
     }
 }
 
+impl CsvSink {
+    /// Opens an existing `runs.csv` to append to (a resumed run). Its header must be this
+    /// build's, or the rows would not line up: the error says which schema wrote it.
+    pub fn append(path: &Path) -> Result<CsvSink> {
+        let header = schema::header();
+        let found = read_header(path)?;
+        if found != header {
+            return Err(CoreError::Schema(format!(
+                "{} was written with another column set ({} columns, schema {}); this build writes schema {SCHEMA_VERSION} ({} columns): start a new run folder (or --force)",
+                path.display(),
+                found.len(),
+                schema_of(path).unwrap_or_else(|| "?".into()),
+                header.len()
+            )));
+        }
+        let file = std::fs::OpenOptions::new()
+            .append(true)
+            .open(path)
+            .map_err(|e| CoreError::Io(format!("{}: {e}", path.display())))?;
+        Ok(CsvSink {
+            file,
+            header,
+            rows_written: 0,
+        })
+    }
+}
+
+fn read_header(path: &Path) -> Result<Vec<String>> {
+    let mut r = csv::Reader::from_path(path)
+        .map_err(|e| CoreError::Io(format!("{}: {e}", path.display())))?;
+    Ok(r.headers()
+        .map_err(|e| CoreError::Io(format!("{}: {e}", path.display())))?
+        .iter()
+        .map(String::from)
+        .collect())
+}
+
+/// The `schema` cell of a runs.csv's first row.
+fn schema_of(path: &Path) -> Option<String> {
+    let mut r = csv::Reader::from_path(path).ok()?;
+    let h = r.headers().ok()?.clone();
+    let i = h.iter().position(|c| c == cols::SCHEMA.name)?;
+    r.records().next()?.ok()?.get(i).map(String::from)
+}
+
+/// The point keys (and the run id) of the rows a `runs.csv` holds: what a resumed run skips.
+pub fn existing_points(path: &Path) -> Result<(std::collections::HashSet<String>, Option<String>)> {
+    let mut r = csv::Reader::from_path(path)
+        .map_err(|e| CoreError::Io(format!("{}: {e}", path.display())))?;
+    let h = r
+        .headers()
+        .map_err(|e| CoreError::Io(format!("{}: {e}", path.display())))?
+        .clone();
+    let col = |c: Col| h.iter().position(|x| x == c.name);
+    let (Some(k), run) = (col(cols::POINT_KEY), col(cols::RUN_ID)) else {
+        return Err(CoreError::Schema(format!(
+            "{}: no point_key column: not an mfx runs.csv",
+            path.display()
+        )));
+    };
+    let mut keys = std::collections::HashSet::new();
+    let mut run_id = None;
+    for rec in r.records() {
+        let rec = rec.map_err(|e| CoreError::Io(format!("{}: {e}", path.display())))?;
+        if let Some(v) = rec.get(k) {
+            keys.insert(v.to_string());
+        }
+        if run_id.is_none() {
+            run_id = run.and_then(|i| rec.get(i)).map(String::from);
+        }
+    }
+    Ok((keys, run_id))
+}
+
+/// Writes `samples.csv`: every timed frame of every row, long format (`schema::samples`).
+pub struct SamplesSink {
+    w: csv::Writer<File>,
+}
+
+impl SamplesSink {
+    /// Creates `path` with its header, or appends to it (`append`: a resumed run).
+    pub fn open(path: &Path, append: bool) -> Result<SamplesSink> {
+        let exists = path.is_file();
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .append(append)
+            .write(true)
+            .truncate(!append)
+            .open(path)
+            .map_err(|e| CoreError::Io(format!("{}: {e}", path.display())))?;
+        let mut w = csv::WriterBuilder::new()
+            .has_headers(false)
+            .from_writer(file);
+        if !(append && exists) {
+            w.write_record(schema::samples::ALL.iter().map(|c| c.name))
+                .map_err(|e| CoreError::Io(e.to_string()))?;
+        }
+        Ok(SamplesSink { w })
+    }
+}
+
+impl Sink for SamplesSink {
+    fn point_done(&mut self, row: &Row) -> Result<()> {
+        let get = |c: Col| row.get(c).unwrap_or("").to_string();
+        let opt = |v: Option<f64>| v.map(fmt_f64).unwrap_or_default();
+        for (i, s) in row.samples.iter().enumerate() {
+            self.w
+                .write_record([
+                    get(cols::POINT_KEY),
+                    get(cols::RUN_ID),
+                    get(cols::ADAPTER),
+                    i.to_string(),
+                    opt(s.gpu_ms),
+                    fmt_f64(s.cpu_ms),
+                    opt(s.sm_mhz),
+                    opt(s.mem_mhz),
+                    s.discarded.to_string(),
+                    s.seq.to_string(),
+                ])
+                .map_err(|e| CoreError::Io(e.to_string()))?;
+        }
+        self.w.flush().map_err(|e| CoreError::Io(e.to_string()))
+    }
+}
+
 /// Serialises a row in header order, refusing undeclared columns.
 pub fn row_record(header: &[&'static str], row: &Row) -> Result<Vec<String>> {
     if let Some(k) = row.cells.keys().find(|k| !header.contains(k)) {
@@ -177,5 +424,21 @@ impl Sink for VecSink {
         row_record(&schema::header(), row)?;
         self.0.push(row.clone());
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flags_are_ordered_and_unique_and_unknown_words_kept() {
+        let mut r = Row::new();
+        r.add_flag(Flag::Noisy)
+            .add_flag_word("overflow|weird")
+            .add_flag(Flag::Overflow)
+            .add_flag(Flag::Hazard);
+        assert_eq!(r.get(cols::FLAG), Some("overflow|hazard|noisy|weird"));
+        assert!(r.has_flag(Flag::Hazard) && !r.has_flag(Flag::Collision));
     }
 }

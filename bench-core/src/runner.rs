@@ -7,7 +7,7 @@ use scenarios::{Params, Scene, Suite};
 use crate::axes::Point;
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
-use crate::measure::{measure, set_timing};
+use crate::measure::{measure, set_timing, TimingPlan};
 use crate::methods;
 use crate::record::{cols, Row, Sink, SCHEMA_VERSION};
 pub use crate::record::{failed_row, one_line, set_params, skipped_row};
@@ -15,6 +15,7 @@ use crate::studies::{self, Group, GroupCtx, PointSpec};
 use crate::{CoreError, Result};
 
 /// Where a sweep runs and how it identifies itself.
+#[derive(Clone, Default)]
 pub struct RunOptions {
     pub run_id: String,
     pub git_rev: String,
@@ -22,6 +23,12 @@ pub struct RunOptions {
     pub shard: (usize, usize),
     /// Folder where studies save each point's image (`--save-images`), or none.
     pub save_images: Option<std::path::PathBuf>,
+    /// Compute FLIP for image rows.
+    pub flip: bool,
+    /// Point keys that already have a row (a resumed run): not run again.
+    pub done: std::collections::HashSet<String>,
+    /// Asked between rows: `Some(signal)` stops the run after the row in flight.
+    pub interrupted: Option<fn() -> Option<&'static str>>,
 }
 
 /// Expands every study of the suite into groups, in suite order (deterministic: the shard
@@ -90,35 +97,45 @@ pub fn rows_in(groups: &[Group]) -> usize {
     groups.iter().map(|g| g.points.len() + FLOORS.len()).sum()
 }
 
-/// Runs the groups, sending every row to `sink`. Returns the number of rows written.
+/// How a run ended.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunOutcome {
+    /// Rows written by this run (a resumed run's earlier rows excluded).
+    pub written: usize,
+    /// Points skipped because the run folder already had their rows (`--resume`).
+    pub already_done: usize,
+    /// The signal that stopped the run after the row in flight, if one did.
+    pub interrupted: Option<&'static str>,
+}
+
+/// The timing plan of a suite on this adapter kind (`[timing]`, then `[software]`'s
+/// overrides on a software adapter).
+pub fn timing_plan(suite: &Suite, software: bool) -> Result<TimingPlan> {
+    TimingPlan::from_spec(&suite.timing_for(software))
+        .map_err(|e| CoreError::Param(format!("suite '{}' [timing]: {e}", suite.name)))
+}
+
+/// Runs the groups, sending every row to `sink`; points whose key is in `opts.done` are not
+/// run again (their floors are re-measured, unwritten, as the yardstick of the rest). Stops
+/// after the row in flight when `opts.interrupted` says so.
 pub fn run(
     gpu: &Gpu,
     suite: &Suite,
     groups: &[Group],
     opts: &RunOptions,
     sink: &mut dyn Sink,
-) -> Result<usize> {
+) -> Result<RunOutcome> {
     let software = gpu.facts.is_software;
-    let reps = if software {
-        suite
-            .software
-            .as_ref()
-            .and_then(|s| s.reps)
-            .unwrap_or(suite.reps)
-    } else {
-        suite.reps
-    };
-    let warmup = if software {
-        suite
-            .software
-            .as_ref()
-            .and_then(|s| s.warmup)
-            .unwrap_or(suite.warmup)
-    } else {
-        suite.warmup
-    };
-    let mut written = 0;
+    let plan = timing_plan(suite, software)?;
+    let timing_rule = plan.describe();
+    let mut out = RunOutcome::default();
+    let stop_now = || opts.interrupted.and_then(|f| f());
     for group in groups {
+        if let Some(sig) = stop_now() {
+            out.interrupted = Some(sig);
+            return Ok(out);
+        }
+        let key_of = |p: &PointSpec| group.point_key(&p.method, p.given());
         let meta = |mut row: Row, method: &str, params: &Params| -> Row {
             let f = &gpu.facts;
             row.set(cols::SCHEMA, SCHEMA_VERSION)
@@ -141,10 +158,12 @@ pub fn run(
                 .set(cols::ADAPTER_FEATURES, &f.features)
                 .set(cols::WIDTH, group.width)
                 .set(cols::HEIGHT, group.height)
-                .set(cols::REPS, reps)
-                .set(cols::WARMUP, warmup)
+                .set(cols::TIMING_RULE, &timing_rule)
                 .set(cols::SCENE, &group.scene.generator)
                 .set(cols::SCENE_LABEL, group.scene.label());
+            if plan.interleave {
+                row.set(cols::ORDER_SEED, plan.seed);
+            }
             if row.get(cols::METHOD).is_none() {
                 row.set(cols::METHOD, method);
             }
@@ -153,31 +172,59 @@ pub fn run(
             }
             row
         };
-        let all_points: Vec<PointSpec> = FLOORS
+        let floors: Vec<PointSpec> = FLOORS
             .iter()
             .map(|f| PointSpec {
                 method: f.to_string(),
                 point: Point::empty(),
             })
-            .chain(group.points.iter().cloned())
             .collect();
-        let fail_all = |sink: &mut dyn Sink, why: &str, skipped: bool| -> Result<usize> {
-            for p in &all_points {
-                let mut row = Row::new();
-                set_params(&mut row, p.point.values())?;
-                let row = if skipped {
-                    skipped_row(row, why)
-                } else {
-                    failed_row(row, why)
-                };
-                sink.point_done(&meta(row, &p.method, p.given()))?;
-            }
-            Ok(all_points.len())
+        // What this run still owes: the points (and floors) without a row yet.
+        let todo: Vec<PointSpec> = group
+            .points
+            .iter()
+            .filter(|p| !opts.done.contains(&key_of(p)))
+            .cloned()
+            .collect();
+        let floors_todo: Vec<bool> = floors
+            .iter()
+            .map(|p| !opts.done.contains(&key_of(p)))
+            .collect();
+        let owed = todo.len() + floors_todo.iter().filter(|t| **t).count();
+        out.already_done += group.points.len() + floors.len() - owed;
+        if owed == 0 {
+            continue;
+        }
+        let group = Group {
+            points: todo,
+            ..group.clone()
         };
+        let group = &group;
+        let write = |sink: &mut dyn Sink, row: &Row, out: &mut RunOutcome| -> Result<()> {
+            sink.point_done(row)?;
+            out.written += 1;
+            Ok(())
+        };
+        let fail_all =
+            |sink: &mut dyn Sink, out: &mut RunOutcome, why: &str, skipped: bool| -> Result<()> {
+                let owed_floors = floors.iter().zip(&floors_todo).filter(|(_, t)| **t);
+                for p in owed_floors.map(|(p, _)| p).chain(group.points.iter()) {
+                    let mut row = Row::new();
+                    set_params(&mut row, p.point.values())?;
+                    let row = if skipped {
+                        skipped_row(row, why)
+                    } else {
+                        failed_row(row, why)
+                    };
+                    sink.point_done(&meta(row, &p.method, p.given()))?;
+                    out.written += 1;
+                }
+                Ok(())
+            };
         let scene: Scene = match group.scene.build() {
             Ok(s) => s,
             Err(e) => {
-                written += fail_all(sink, &format!("scene: {e}"), false)?;
+                fail_all(sink, &mut out, &format!("scene: {e}"), false)?;
                 continue;
             }
         };
@@ -188,51 +235,55 @@ pub fn run(
                         "{} triangles exceed this suite's software-adapter limit of {max}",
                         scene.mesh.triangle_count()
                     );
-                    written += fail_all(sink, &why, true)?;
+                    fail_all(sink, &mut out, &why, true)?;
                     continue;
                 }
             }
         }
         if let Err(e) = gpu.check_lost() {
-            written += fail_all(sink, &e.to_string(), false)?;
+            fail_all(sink, &mut out, &e.to_string(), false)?;
             continue;
         }
         let gscene = GpuScene::upload(gpu, &scene, group.width, group.height);
         let spec = &suite.studies[group.study_index];
-        let mut ctx = GroupCtx::new(gpu, suite, spec, group, &scene, &gscene, reps, warmup);
+        let mut ctx = GroupCtx::new(gpu, suite, spec, group, &scene, &gscene, plan.clone());
         ctx.images_dir = opts.save_images.clone();
+        ctx.flip = opts.flip;
         let add_scene = |row: &mut Row| {
             row.set(cols::TRIANGLES, scene.mesh.triangle_count())
                 .set(cols::VERTICES, scene.mesh.vertex_count());
         };
-        // Floors first: they are every other row's yardstick.
-        for f in FLOORS {
+        // Floors first: they are every other row's yardstick (re-measured on a resumed run
+        // whose floor rows exist, but not written again).
+        for (f, owed) in FLOORS.iter().zip(&floors_todo) {
             let method = methods::by_name(f).expect("floor methods exist");
             let mut row = Row::new();
             row.set(cols::METHOD, *f).set(cols::EXACT, false);
             add_scene(&mut row);
-            let row = match measure(gpu, &gscene, method.as_ref(), &Point::empty(), warmup, reps) {
+            let row = match measure(gpu, &gscene, method.as_ref(), &Point::empty(), &plan) {
                 Ok(m) => {
                     set_timing(&mut row, &m, &scene.mesh);
                     if *f == "floor_depth" {
-                        ctx.floor_ms = m.gpu_ms.map(|s| s.median);
+                        ctx.floor_ms = m.gpu_median();
                     }
                     if *f == "floor_blend" {
-                        ctx.blend_ms = m.gpu_ms.map(|s| s.median);
+                        ctx.blend_ms = m.gpu_median();
                     }
                     row
                 }
                 Err(e) => failed_row(row, &e.to_string()),
             };
-            let mut row = meta(row, f, &Params::new());
-            set_x_floor(&mut row, ctx.floor_ms, ctx.blend_ms);
-            sink.point_done(&row)?;
-            written += 1;
+            if *owed {
+                let mut row = meta(row, f, &Params::new());
+                set_x_floor(&mut row, ctx.floor_ms, ctx.blend_ms);
+                write(sink, &row, &mut out)?;
+            }
         }
         let study = studies::by_kind(&group.kind).expect("checked in expand");
         let mut done = vec![false; group.points.len()];
         let mut sink_err: Option<CoreError> = None;
         let (floor_ms, blend_ms) = (ctx.floor_ms, ctx.blend_ms);
+        let mut interrupted = None;
         let res = {
             let mut emit = |i: usize, mut row: Row| -> Result<()> {
                 let p = &group.points[i];
@@ -250,6 +301,12 @@ pub fn run(
                     sink_err = Some(CoreError::Io(e.to_string()));
                     return Err(e);
                 }
+                out.written += 1;
+                // A signal ends the run after the row in flight: the study stops here.
+                if let Some(sig) = stop_now() {
+                    interrupted = Some(sig);
+                    return Err(CoreError::Interrupted(sig.to_string()));
+                }
                 Ok(())
             };
             study.run_group(&ctx, &mut emit)
@@ -257,7 +314,11 @@ pub fn run(
         if let Some(e) = sink_err {
             return Err(e);
         }
-        written += done.iter().filter(|d| **d).count();
+        if let Some(sig) = interrupted {
+            // The points not emitted stay owed: `--resume` runs them.
+            out.interrupted = Some(sig);
+            return Ok(out);
+        }
         // A study that stopped early still owes a row for every point it did not emit.
         let why = match &res {
             Ok(()) => {
@@ -270,12 +331,15 @@ pub fn run(
                 let mut row = Row::new();
                 set_params(&mut row, p.point.values())?;
                 add_scene(&mut row);
-                sink.point_done(&meta(failed_row(row, &why), &p.method, p.given()))?;
-                written += 1;
+                write(
+                    sink,
+                    &meta(failed_row(row, &why), &p.method, p.given()),
+                    &mut out,
+                )?;
             }
         }
     }
-    Ok(written)
+    Ok(out)
 }
 
 /// `x_floor` and `x_blend`: the row's median GPU time over the group's floors.
@@ -293,32 +357,9 @@ fn set_x_floor(row: &mut Row, floor_ms: Option<f64>, blend_ms: Option<f64>) {
     }
 }
 
-/// `git describe`-like revision of the working tree, or `unknown`.
+/// The commit mfx was built from (embedded at build time; never asked of the current directory).
 pub fn git_rev() -> String {
-    // A revision embedded at build time wins: the device machine gets a copy of the working
-    // tree whose `.git` may be a stale snapshot, so asking git there names the wrong commit.
-    if let Some(rev) = option_env!("MFX_GIT_REV") {
-        return rev.to_string();
-    }
-    let out = std::process::Command::new("git")
-        .args(["rev-parse", "--short=12", "HEAD"])
-        .output();
-    match out {
-        Ok(o) if o.status.success() => {
-            let rev = String::from_utf8_lossy(&o.stdout).trim().to_string();
-            let dirty = std::process::Command::new("git")
-                .args(["status", "--porcelain", "--untracked-files=no"])
-                .output()
-                .map(|o| !o.stdout.is_empty())
-                .unwrap_or(false);
-            if dirty {
-                format!("{rev}+dirty")
-            } else {
-                rev
-            }
-        }
-        _ => "unknown".to_string(),
-    }
+    crate::build_info::git_rev()
 }
 
 /// Parses, checks and runs a suite's text on `gpu`, unsharded, and returns every row (tests and
@@ -338,11 +379,12 @@ pub fn run_checked(gpu: &Gpu, suite: &Suite) -> Result<Vec<Row>> {
     let mut sink = crate::record::VecSink::default();
     let opts = RunOptions {
         run_id: "test".into(),
-        git_rev: "test".into(),
+        git_rev: crate::build_info::git_rev(),
         shard: (0, 1),
-        save_images: None,
+        flip: true,
+        ..Default::default()
     };
-    let written = run(gpu, suite, &groups, &opts, &mut sink)?;
+    let written = run(gpu, suite, &groups, &opts, &mut sink)?.written;
     if written != rows_in(&groups) || sink.0.len() != written {
         return Err(CoreError::Schema(format!(
             "{} rows written for {} points",

@@ -10,7 +10,7 @@ use scenarios::{ParamValue, Params, Scene, SceneSpec};
 use crate::axes::Point;
 use crate::gpu::{Gpu, GpuOptions};
 use crate::gpu_scene::GpuScene;
-use crate::measure::measure;
+use crate::measure::{measure, TimingPlan};
 use crate::method::{supports, Capture, Expected, FrameStats, Method};
 use crate::reference::{rasterize, FragmentLists};
 
@@ -82,8 +82,8 @@ pub fn render(
         panic!("{name} cannot run on {}: {why}", gpu.facts.name);
     }
     let gs = GpuScene::upload(gpu, scene, w, h);
-    let mut measured =
-        measure(gpu, &gs, method, &p, 0, 1).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let mut measured = measure(gpu, &gs, method, &p, &TimingPlan::once())
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
     let cap = measured
         .prepared
         .readback(gpu, &gs)
@@ -107,7 +107,8 @@ pub fn run(
         panic!("{name} cannot run on {}: {why}", gpu.facts.name);
     }
     let gs = GpuScene::upload(gpu, scene, w, h);
-    let mut m = measure(gpu, &gs, method, &p, 0, 1).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let mut m = measure(gpu, &gs, method, &p, &TimingPlan::once())
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
     let mut cap = m
         .prepared
         .readback(gpu, &gs)

@@ -93,7 +93,7 @@ fn a_misspelt_methods_key_and_an_empty_methods_list_are_errors() {
 
 #[test]
 fn software_profile_typos_are_errors() {
-    let top = "[software]\nmax_triangle = 10\nreps = \"three\"";
+    let top = "[software]\nmax_triangle = 10\nmax_samples = \"three\"";
     let text = suite(top, PEEL, QUADS);
     one(
         &text,
@@ -104,7 +104,10 @@ fn software_profile_typos_are_errors() {
             "max_triangles",
         ],
     );
-    one(&text, &["[software]", "'reps' = \"three\"", "integer"]);
+    one(
+        &text,
+        &["[software]", "'max_samples' = \"three\"", "integer"],
+    );
 }
 
 #[test]

@@ -223,9 +223,11 @@ fn sweep(text: &str) -> bench_core::Result<Vec<bench_core::record::Row>> {
 fn effect_axis_rows_are_judged_per_effect_and_a_method_without_a_fold_is_skipped_16px() {
     let rows = sweep(
         r#"
-        reps = 1
-        warmup = 0
         resolutions = [[16, 16]]
+        [timing]
+        min_samples = 1
+        max_samples = 1
+        warmup_frames = 0
         [[study]]
         kind = "methods"
         methods = ["depth_peel", "floor_opaque"]

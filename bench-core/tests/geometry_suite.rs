@@ -12,9 +12,11 @@ use scenarios::Suite;
 fn geometry_suite_runs_through_the_runner_mesh_800_at_32px() {
     let text = r#"
 name = "geometry-test"
-reps = 2
-warmup = 1
 resolutions = [[32, 32]]
+[timing]
+min_samples = 2
+max_samples = 2
+warmup_frames = 1
 [[study]]
 kind = "geometry"
 small_viewport_divisor = 4
@@ -32,8 +34,11 @@ triangles = 800
         git_rev: "t".into(),
         shard: (0, 1),
         save_images: None,
+        ..Default::default()
     };
-    let n = bench_core::runner::run(gpu, &suite, &groups, &opts, &mut sink).unwrap();
+    let n = bench_core::runner::run(gpu, &suite, &groups, &opts, &mut sink)
+        .unwrap()
+        .written;
     assert_eq!(n, bench_core::runner::rows_in(&groups));
     let rows: Vec<&Row> = sink
         .0
@@ -124,9 +129,12 @@ fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
         git_rev: "t".into(),
         shard: (0, 1),
         save_images: None,
+        ..Default::default()
     };
     let t0 = std::time::Instant::now();
-    let n = bench_core::runner::run(gpu, &suite, &groups, &opts, &mut sink).unwrap();
+    let n = bench_core::runner::run(gpu, &suite, &groups, &opts, &mut sink)
+        .unwrap()
+        .written;
     eprintln!(
         "geometry-ci: {n} rows in {:.1} s",
         t0.elapsed().as_secs_f64()
@@ -236,8 +244,11 @@ fn geometry_models_without_the_meshes_fails_rows_naming_the_file() {
         git_rev: "t".into(),
         shard: (0, 1),
         save_images: None,
+        ..Default::default()
     };
-    let n = bench_core::runner::run(gpu, &suite, &groups, &opts, &mut sink).unwrap();
+    let n = bench_core::runner::run(gpu, &suite, &groups, &opts, &mut sink)
+        .unwrap()
+        .written;
     assert_eq!(n, bench_core::runner::rows_in(&groups));
     assert_eq!(sink.0.len(), n);
     for r in &sink.0 {

@@ -12,9 +12,11 @@ fn run(text: &str) -> bench_core::Result<Vec<Row>> {
 }
 
 const SUITE: &str = r#"
-    reps = 1
-    warmup = 0
     resolutions = [[48, 32]]
+    [timing]
+    min_samples = 1
+    max_samples = 1
+    warmup_frames = 0
     [[study]]
     kind = "prepass"
     methods = ["deferred", "prepass", "prepass_cpu"]

@@ -13,9 +13,11 @@ fn run(text: &str) -> Vec<Row> {
 #[test]
 fn out_of_range_axis_is_refused_before_any_gpu_work_and_a_valid_one_runs() {
     let text = r#"
-        reps = 1
-        warmup = 0
         resolutions = [[16, 16]]
+        [timing]
+        min_samples = 1
+        max_samples = 1
+        warmup_frames = 0
         [[study]]
         kind = "methods"
         methods = ["depth_peel"]
@@ -53,9 +55,11 @@ fn a_scene_that_cannot_be_built_fails_every_row_of_its_group_with_the_reason() {
     // The check refuses a missing model before any GPU work; a file that goes missing after the
     // check (or a sweep that skips it) still gives a failed row per point, none lost.
     let text = r#"
-        reps = 1
-        warmup = 0
         resolutions = [[16, 16]]
+        [timing]
+        min_samples = 1
+        max_samples = 1
+        warmup_frames = 0
         [[study]]
         kind = "methods"
         methods = ["depth_peel"]
@@ -78,6 +82,7 @@ fn a_scene_that_cannot_be_built_fails_every_row_of_its_group_with_the_reason() {
         git_rev: "t".into(),
         shard: (0, 1),
         save_images: None,
+        ..Default::default()
     };
     runner::run(testing::gpu(), &suite, &groups, &opts, &mut sink).unwrap();
     let rows = sink.0;

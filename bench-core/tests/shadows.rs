@@ -12,9 +12,11 @@ fn run(text: &str) -> Vec<Row> {
 }
 
 const HEAD: &str = r#"
-    reps = 1
-    warmup = 0
     resolutions = [[32, 32]]
+    [timing]
+    min_samples = 1
+    max_samples = 1
+    warmup_frames = 0
     [[study]]
     kind = "shadows"
     shadow_rays = 16

@@ -18,8 +18,11 @@ fn sweep(gpu: &bench_core::Gpu, suite: &Suite, shard: (usize, usize), out: &Path
         git_rev: "test".into(),
         shard,
         save_images: images.then(|| out.to_path_buf()),
+        ..Default::default()
     };
-    let n = runner::run(gpu, suite, &groups, &opts, &mut sink).unwrap();
+    let n = runner::run(gpu, suite, &groups, &opts, &mut sink)
+        .unwrap()
+        .written;
     assert_eq!(n, runner::rows_in(&groups));
 }
 

@@ -244,7 +244,8 @@ fn interval(r: &Rec, scale: f64) -> Option<Interval> {
         .or_else(|| pair(cols::GPU_MS_MIN, cols::GPU_MS_MAX));
     let n = r
         .f(cols::SAMPLES)
-        .or_else(|| r.f(cols::REPS))
+        // Schema 1 CSVs had a fixed count in `reps` (no longer a column).
+        .or_else(|| r.f_name("reps"))
         .map(|x| x as usize)
         .unwrap_or(0);
     Some(Interval {

@@ -14,7 +14,7 @@ pub use camera::Camera;
 pub use params::{ParamValue, Params, ValueKind};
 pub use problem::Problem;
 pub use scenes::{AreaLight, Light, LightKind, Material, Mesh, ObjectInfo, Scene, SceneSpec, Sun};
-pub use suite::{StudySpec, Suite};
+pub use suite::{StudySpec, Suite, TimingSpec};
 
 /// Errors from building scenes and reading suites. Each names the file, scene or value at fault.
 #[derive(Debug, thiserror::Error)]

@@ -6,8 +6,8 @@
 //!
 //! ```toml
 //! name = "smoke"
-//! reps = 5
-//! warmup = 2
+//! [timing]
+//! max_samples = 20
 //! resolutions = [[64, 64]]
 //! [[study]]
 //! kind = "methods"
@@ -55,13 +55,16 @@ pub const BUILTIN: &[(&str, &str)] = &[
 pub struct Suite {
     pub name: String,
     pub description: String,
-    pub reps: u32,
-    pub warmup: u32,
+    /// How points are timed (`[timing]`; unset keys take the harness's defaults).
+    pub timing: TimingSpec,
     pub resolutions: Vec<(u32, u32)>,
     /// Applied when the adapter is a CPU (software) device, so a GPU-sized suite stays runnable.
     pub software: Option<SoftwareProfile>,
     pub studies: Vec<StudySpec>,
+    /// Where the suite came from: its file, or `(built-in) NAME`.
     pub source: String,
+    /// The suite's TOML text as read (copied into a run's manifest).
+    pub text: String,
 }
 
 /// Overrides for software adapters (lavapipe, llvmpipe).
@@ -70,8 +73,8 @@ pub struct SoftwareProfile {
     pub resolutions: Option<Vec<(u32, u32)>>,
     /// Scenes above this many triangles become skipped rows on a software adapter.
     pub max_triangles: Option<u64>,
-    pub reps: Option<u32>,
-    pub warmup: Option<u32>,
+    /// Overrides of `[timing]` on a software adapter (the same keys, in `[software]`).
+    pub timing: TimingSpec,
 }
 
 #[derive(Clone, Debug)]
@@ -147,6 +150,15 @@ impl Suite {
         }
     }
 
+    /// The timing a study runs with on this adapter kind: `[timing]`, then `[software]`'s
+    /// overrides on a software adapter.
+    pub fn timing_for(&self, software: bool) -> TimingSpec {
+        match (&self.software, software) {
+            (Some(sw), true) => self.timing.overlay(&sw.timing),
+            _ => self.timing.clone(),
+        }
+    }
+
     /// Resolutions a study runs at (its own, else the suite's, else the software override).
     pub fn study_resolutions(&self, study: &StudySpec, software: bool) -> Vec<(u32, u32)> {
         if software {
@@ -165,14 +177,78 @@ impl Suite {
 pub const TOP_KEYS: &[&str] = &[
     "name",
     "description",
-    "reps",
-    "warmup",
+    "timing",
     "resolutions",
     "software",
     "study",
 ];
 /// Keys of the `[software]` table.
-pub const SOFTWARE_KEYS: &[&str] = &["resolutions", "max_triangles", "reps", "warmup"];
+pub const SOFTWARE_KEYS: &[&str] = &[
+    "resolutions",
+    "max_triangles",
+    "min_samples",
+    "max_samples",
+    "max_noise",
+    "min_time_ms",
+    "max_time_ms",
+    "warmup_frames",
+    "warmup_max_frames",
+    "interleave",
+    "seed",
+];
+/// Keys of the `[timing]` table (also accepted in `[software]`, as overrides).
+pub const TIMING_KEYS: &[&str] = &[
+    "min_samples",
+    "max_samples",
+    "max_noise",
+    "min_time_ms",
+    "max_time_ms",
+    "warmup_frames",
+    "warmup_max_frames",
+    "interleave",
+    "seed",
+];
+
+/// How the points of a suite are timed: each unset key takes the harness's default
+/// (`bench_core::measure::TimingPlan`, documented in results/README.md).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TimingSpec {
+    /// Samples before the noise target may end a point.
+    pub min_samples: Option<u32>,
+    /// Samples at most.
+    pub max_samples: Option<u32>,
+    /// Target half-width of the median's 95 % CI, relative to the median.
+    pub max_noise: Option<f64>,
+    /// Summed measured time before the target may end a point.
+    pub min_time_ms: Option<f64>,
+    /// Wall time at most per point.
+    pub max_time_ms: Option<f64>,
+    /// Warm-up frames at least (then until steady).
+    pub warmup_frames: Option<u32>,
+    /// Warm-up frames at most.
+    pub warmup_max_frames: Option<u32>,
+    /// Sample a group's points interleaved in a seeded random order.
+    pub interleave: Option<bool>,
+    /// Seed of the bootstrap and of the interleaved order.
+    pub seed: Option<u64>,
+}
+
+impl TimingSpec {
+    /// `self` with every key `over` sets replaced.
+    pub fn overlay(&self, over: &TimingSpec) -> TimingSpec {
+        TimingSpec {
+            min_samples: over.min_samples.or(self.min_samples),
+            max_samples: over.max_samples.or(self.max_samples),
+            max_noise: over.max_noise.or(self.max_noise),
+            min_time_ms: over.min_time_ms.or(self.min_time_ms),
+            max_time_ms: over.max_time_ms.or(self.max_time_ms),
+            warmup_frames: over.warmup_frames.or(self.warmup_frames),
+            warmup_max_frames: over.warmup_max_frames.or(self.warmup_max_frames),
+            interleave: over.interleave.or(self.interleave),
+            seed: over.seed.or(self.seed),
+        }
+    }
+}
 /// Keys every `[[study]]` table may have; a study kind declares its own options besides these.
 pub const STUDY_KEYS: &[&str] = &[
     "kind",
@@ -264,14 +340,14 @@ fn parse_into(text: &str, source: &str, problems: &mut Vec<Problem>) -> Option<S
             .string(&table, top, "name")
             .unwrap_or_else(|| "unnamed".into()),
         description: cx.string(&table, top, "description").unwrap_or_default(),
-        reps: cx.int(&table, top, "reps", 1, 100_000).unwrap_or(10) as u32,
-        warmup: cx.int(&table, top, "warmup", 0, 100_000).unwrap_or(3) as u32,
+        timing: TimingSpec::default(),
         resolutions: cx
             .resolutions(&table, top)
             .unwrap_or_else(|| vec![(256, 256)]),
         software: None,
         studies: Vec::new(),
         source: source.into(),
+        text: text.into(),
     };
     if let Some(sw) = table.get("software") {
         match sw.as_table() {
@@ -286,9 +362,42 @@ fn parse_into(text: &str, source: &str, problems: &mut Vec<Problem>) -> Option<S
                     max_triangles: cx
                         .int(t, tn, "max_triangles", 1, i64::MAX)
                         .map(|i| i as u64),
-                    reps: cx.int(t, tn, "reps", 1, 100_000).map(|i| i as u32),
-                    warmup: cx.int(t, tn, "warmup", 0, 100_000).map(|i| i as u32),
+                    timing: timing_spec(&mut cx, t, tn),
                 });
+            }
+        }
+    }
+    match table.get("timing") {
+        None => {}
+        Some(toml::Value::Table(t)) => {
+            cx.unknown_keys(t, "[timing]", TIMING_KEYS);
+            suite.timing = timing_spec(&mut cx, t, "[timing]");
+        }
+        Some(_) => {
+            cx.push(top, "timing", "must be a table ([timing])");
+        }
+    }
+    for (old, new) in [("reps", "max_samples"), ("warmup", "warmup_frames")] {
+        for (t, tn) in [
+            (Some(&table), top),
+            (
+                table.get("software").and_then(|v| v.as_table()),
+                "[software]",
+            ),
+        ] {
+            if let Some(p) = t.and_then(|t| t.get(old)).map(|v| v.to_string()) {
+                // The fixed repetitions became a stopping rule: say where the knob went.
+                if let Some(last) = cx
+                    .problems
+                    .iter_mut()
+                    .rev()
+                    .find(|x| x.table == tn && x.key == old)
+                {
+                    last.message = format!(
+                        "was replaced by a stopping rule: use [timing] {new} (and min_samples, max_noise, max_time_ms)"
+                    );
+                    last.value = Some(p);
+                }
             }
         }
     }
@@ -319,6 +428,48 @@ fn parse_into(text: &str, source: &str, problems: &mut Vec<Problem>) -> Option<S
         }
     }
     Some(suite)
+}
+
+/// The timing keys of a table (`[timing]`, or the overrides in `[software]`).
+fn timing_spec(cx: &mut Ctx<'_>, t: &toml::Table, tn: &str) -> TimingSpec {
+    let int = |cx: &mut Ctx<'_>, k: &str, min: i64, max: i64| cx.int(t, tn, k, min, max);
+    let float = |cx: &mut Ctx<'_>, k: &str, min: f64, max: f64| match t.get(k) {
+        None => None,
+        Some(v) => match v.as_float().or_else(|| v.as_integer().map(|i| i as f64)) {
+            Some(x) if x.is_finite() && (min..=max).contains(&x) => Some(x),
+            _ => {
+                cx.push(tn, k, format!("must be a number in [{min}, {max}]"))
+                    .value = Some(v.to_string());
+                None
+            }
+        },
+    };
+    let interleave = match t.get("interleave") {
+        None => None,
+        Some(toml::Value::Boolean(b)) => Some(*b),
+        Some(v) => {
+            cx.push(tn, "interleave", "must be true or false").value = Some(v.to_string());
+            None
+        }
+    };
+    let spec = TimingSpec {
+        min_samples: int(cx, "min_samples", 1, 1_000_000).map(|i| i as u32),
+        max_samples: int(cx, "max_samples", 1, 1_000_000).map(|i| i as u32),
+        max_noise: float(cx, "max_noise", 0.0, 1.0),
+        min_time_ms: float(cx, "min_time_ms", 0.0, 3.6e6),
+        max_time_ms: float(cx, "max_time_ms", 1.0, 3.6e6),
+        warmup_frames: int(cx, "warmup_frames", 0, 100_000).map(|i| i as u32),
+        warmup_max_frames: int(cx, "warmup_max_frames", 0, 100_000).map(|i| i as u32),
+        interleave,
+        seed: int(cx, "seed", 0, i64::MAX).map(|i| i as u64),
+    };
+    if let (Some(a), Some(b)) = (spec.min_samples, spec.max_samples) {
+        if a > b {
+            cx.push(tn, "min_samples", format!("is above max_samples ({b})"))
+                .value = Some(a.to_string());
+        }
+    }
+    spec
 }
 
 fn resolutions(v: &toml::Value) -> std::result::Result<Vec<(u32, u32)>, String> {

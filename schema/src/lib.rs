@@ -13,7 +13,10 @@ use std::fmt;
 ///
 /// - 1: the first schema.
 /// - 2: `variant` split into named axes (`heuristics`, `tiebreak`, `thickness`); every axis a
-///   method reads is written to its row, defaults included.
+///   method reads is written to its row, defaults included; errors are vs the ground truth (the
+///   whole composite) with `*_vs_k` for a method's own definition; `flag` is a `|`-joined set;
+///   fixed `reps`/`warmup` replaced by a stopping rule (`timing_rule`, `samples`, CIs, clocks);
+///   the `floor_blend` floor and `x_blend`.
 pub const SCHEMA_VERSION: u32 = 2;
 
 /// One declared column: its name in the CSV header and what it means (units in the name).
@@ -93,8 +96,10 @@ pub mod cols {
     );
     pub const WIDTH: Col = Col::new("width", "render target width in pixels");
     pub const HEIGHT: Col = Col::new("height", "render target height in pixels");
-    pub const REPS: Col = Col::new("reps", "timed repetitions per point");
-    pub const WARMUP: Col = Col::new("warmup", "untimed warm-up frames before the timed ones");
+    pub const TIMING_RULE: Col = Col::new(
+        "timing_rule",
+        "how each point was timed: warm-up bounds, sample bounds, the noise target on the 95 % CI of the median, the time cap (the suite's [timing])",
+    );
     pub const ORDER_SEED: Col = Col::new(
         "order_seed",
         "seed of the seeded random order in which the points of a group were measured (empty: suite order)",
@@ -863,8 +868,7 @@ pub const GROUPS: &[Group] = &[
             cols::ADAPTER_FEATURES,
             cols::WIDTH,
             cols::HEIGHT,
-            cols::REPS,
-            cols::WARMUP,
+            cols::TIMING_RULE,
             cols::ORDER_SEED,
         ],
     },

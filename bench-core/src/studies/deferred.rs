@@ -344,7 +344,7 @@ impl Study for DeferredStudy {
                 tau,
                 diffuse_only: frac,
             };
-            let mut meas = match measure(gpu, gscene, &m, &pt.point, ctx.warmup, ctx.reps) {
+            let mut meas = match measure(gpu, gscene, &m, &pt.point, &ctx.plan) {
                 Ok(m) => m,
                 Err(e) => {
                     emit(i, failed_row(row, &e.to_string()))?;
@@ -352,7 +352,7 @@ impl Study for DeferredStudy {
                 }
             };
             set_timing(&mut row, &meas, &ctx.scene.mesh);
-            let g = meas.gpu_ms.map(|s| s.median);
+            let g = meas.gpu_median();
             if pt.method == "naive" && naive_ms.is_none() {
                 if let Some(g) = g {
                     naive_by_frac.insert(frac.to_bits(), g);

@@ -4,13 +4,13 @@
 use super::{Emit, GroupCtx, Methods, PointSpec, Study};
 use crate::axes::{Axis, Point};
 use crate::effects::{self, EffectConfig};
-use crate::measure::{measure, set_timing};
+use crate::judge;
+use crate::measure::{measure, measure_interleaved, set_timing};
 use crate::method::Method;
-use crate::methods::{self, Expected};
-use crate::metrics::{image_error, layer_count_accuracy, BAD_PIXEL_TOL};
+use crate::methods::{self};
 use crate::record::cols;
-use crate::record::Row;
 use crate::record::{failed_row, set_params, skipped_row};
+use crate::record::{Flag, Row};
 use crate::Result;
 
 pub struct MethodsStudy;
@@ -74,179 +74,159 @@ impl Study for MethodsStudy {
 }
 
 /// Runs every point of a methods-like group (also used by the `stability` study, which adds
-/// its columns through `extra` on each row before it is emitted).
+/// its columns through `extra` on each row before it is emitted): time it, read it back, judge
+/// it against the ground truth (`judge`), emit one row per point.
 pub fn run_methods_group(
     ctx: &GroupCtx<'_>,
     emit: &mut Emit<'_>,
     extra: &dyn Fn(&mut Row, &PointSpec),
 ) -> Result<()> {
-    {
-        // depth_peel first so every other row can carry its speedup over it.
-        let mut order: Vec<usize> = (0..ctx.group.points.len()).collect();
-        order.sort_by_key(|&i| ctx.group.points[i].method != BASELINE);
-        let mut peel_ms: Option<f64> = None;
-        for i in order {
-            let pt = &ctx.group.points[i];
-            let method = methods::by_name(&pt.method).expect("checked in points()");
-            let mut row = Row::new();
-            row.set(cols::METHOD, &pt.method)
-                .set(cols::EXACT, method.exact());
-            set_params(&mut row, pt.point.values())?;
-            extra(&mut row, pt);
-            let effect = match effect_of(method.as_ref(), &pt.point) {
-                Ok(e) => e,
-                Err(why) => {
-                    emit(i, skipped_row(row, &why))?;
-                    continue;
-                }
-            };
-            row.set(cols::EFFECT, effect.effect.name());
-            if let Some(p) = method.payload(&pt.point) {
-                row.set(cols::PAYLOAD, p);
-            }
-            if effect.effect != effects::Effect::Transparency && !folds_effects(method.as_ref()) {
-                let why = format!(
-                    "{} resolves no effects fold (it stores colour only): it cannot supply {}",
-                    pt.method,
-                    effect.effect.name()
-                );
+    // depth_peel first so every other row can carry its speedup over it.
+    let mut order: Vec<usize> = (0..ctx.group.points.len()).collect();
+    order.sort_by_key(|&i| ctx.group.points[i].method != BASELINE);
+    // What can run: a base row per point; what cannot is a skipped row now.
+    let mut runnable: Vec<Ready> = Vec::new();
+    for i in order {
+        let pt = &ctx.group.points[i];
+        let method = methods::by_name(&pt.method).expect("checked in points()");
+        let mut row = Row::new();
+        row.set(cols::METHOD, &pt.method)
+            .set(cols::EXACT, method.exact());
+        set_params(&mut row, pt.point.values())?;
+        extra(&mut row, pt);
+        let effect = match effect_of(method.as_ref(), &pt.point) {
+            Ok(e) => e,
+            Err(why) => {
                 emit(i, skipped_row(row, &why))?;
                 continue;
             }
-            if let Err(why) = methods::supports(method.as_ref(), ctx.gpu, &pt.point) {
-                emit(i, skipped_row(row, &why))?;
-                continue;
-            }
-            let mut m = match measure(
-                ctx.gpu,
-                ctx.gscene,
-                method.as_ref(),
-                &pt.point,
-                ctx.warmup,
-                ctx.reps,
-            ) {
-                Ok(m) => m,
-                Err(e) => {
-                    emit(i, failed_row(row, &e.to_string()))?;
-                    continue;
-                }
-            };
-            set_timing(&mut row, &m, &ctx.scene.mesh);
-            let mut cap = match m.prepared.readback(ctx.gpu, ctx.gscene) {
-                Ok(c) => c,
-                Err(e) => {
-                    emit(i, failed_row(row, &format!("readback: {e}")))?;
-                    continue;
-                }
-            };
-            let lists = ctx.reference();
-            m.prepared.judge(&mut cap, lists);
-            set_reference_columns(&mut row, lists);
-            let dc = lists.depth_complexity();
-            let k = match cap.expected {
-                Expected::All => u32::MAX,
-                Expected::FirstK(k) => k,
-            };
-            // Beyond a FirstK capacity, or as the method counted it (pools, unpeeled layers).
-            let overflow = dc
-                .iter()
-                .filter(|&&d| d > k)
-                .count()
-                .max(cap.overflow_pixels.unwrap_or(0) as usize);
-            row.set_f(
-                cols::OVERFLOW_RATE,
-                overflow as f64 / dc.len().max(1) as f64,
-            );
-            let mut flag = cap.flag.clone();
-            if overflow > 0 && flag.is_none() {
-                flag = Some("overflow".into());
-            }
-            if let Some(counts) = &cap.counts {
-                // Fragments the method should have captured (within its k) but did not. At a
-                // pixel whose f64 reference has exact depth ties this is the coplanar loss of
-                // strict peeling; elsewhere distinct layers merged in the method's own depth
-                // precision (e.g. a large far/near ratio).
-                let (mut coplanar, mut precision) = (0u64, 0u64);
-                for (p, (&d, &c)) in dc.iter().zip(counts).enumerate() {
-                    let lost = d.min(k).saturating_sub(c) as u64;
-                    if lost > 0 {
-                        let f = lists.pixel(p);
-                        if f.windows(2).any(|w| w[0].depth == w[1].depth) {
-                            coplanar += lost;
-                        } else {
-                            precision += lost;
-                        }
-                    }
-                }
-                row.set(cols::LOST_FRAGMENTS, coplanar + precision);
-                if coplanar > 0 {
-                    flag.get_or_insert_with(|| "lost_coplanar".into());
-                } else if precision > 0 {
-                    flag.get_or_insert_with(|| "precision".into());
-                }
-            }
-            if let Some(img) = &cap.image {
-                let reference = effect.reference(ctx.scene, lists, cap.expected);
-                if reference.len() != img.len() {
-                    let why = format!(
-                        "image has {} pixels, the {} reference {}",
-                        img.len(),
-                        effect.effect.name(),
-                        reference.len()
-                    );
-                    emit(i, failed_row(row, &why))?;
-                    continue;
-                }
-                let e = image_error(&reference, img, BAD_PIXEL_TOL);
-                row.set_f(cols::RMSE, e.rmse)
-                    .set_f(cols::PSNR_DB, e.psnr_db)
-                    .set_f(cols::MAX_ABS_ERR, e.max_abs)
-                    .set_f(cols::BAD_PIXEL_FRAC, e.bad_pixel_frac)
-                    .set_f(cols::BAD_PIXEL_TOL, BAD_PIXEL_TOL)
-                    .set(cols::NON_FINITE, e.non_finite);
-                if e.non_finite > 0 {
-                    flag.get_or_insert_with(|| "precision".into());
-                }
-                ctx.save_image(&mut row, &pt.method, pt.given(), img)?;
-            }
-            if let Some(counts) = &cap.counts {
-                let expected: Vec<u32> = dc.iter().map(|&d| d.min(k)).collect();
-                row.set_f(
-                    cols::LAYER_COUNT_ACCURACY,
-                    layer_count_accuracy(&expected, counts),
-                );
-                row.set(
-                    cols::LAYERS_CAPTURED_MAX,
-                    counts.iter().max().copied().unwrap_or(0),
-                );
-            }
-            if let Some(c) = cap.collision_fragments {
-                row.set_f(
-                    cols::COLLISION_RATE,
-                    c as f64 / lists.total_fragments().max(1) as f64,
-                );
-            }
-            if let Some(h) = cap.hazard_pixels {
-                row.set_f(cols::HAZARD_RATE, h as f64 / dc.len().max(1) as f64);
-            }
-            if let Some(f) = flag {
-                row.set(cols::FLAG, f);
-            }
-            row.add_note(&cap.notes);
-            if let Some(g) = m.gpu_ms.map(|s| s.median) {
-                if pt.method == BASELINE && peel_ms.is_none() {
-                    peel_ms = Some(g);
-                }
-                if let Some(p) = peel_ms {
-                    if g > 0.0 {
-                        row.set_f(cols::SPEEDUP_VS_DEPTH_PEEL, p / g);
-                    }
-                }
-            }
-            emit(i, row)?;
+        };
+        row.set(cols::EFFECT, effect.effect.name());
+        if let Some(p) = method.payload(&pt.point) {
+            row.set(cols::PAYLOAD, p);
         }
-        Ok(())
+        if effect.effect != effects::Effect::Transparency && !folds_effects(method.as_ref()) {
+            let why = format!(
+                "{} resolves no effects fold (it stores colour only): it cannot supply {}",
+                pt.method,
+                effect.effect.name()
+            );
+            emit(i, skipped_row(row, &why))?;
+            continue;
+        }
+        if let Err(why) = methods::supports(method.as_ref(), ctx.gpu, &pt.point) {
+            emit(i, skipped_row(row, &why))?;
+            continue;
+        }
+        runnable.push(Ready {
+            index: i,
+            method,
+            effect,
+            row,
+        });
     }
+    let mut peel_ms: Option<f64> = None;
+    if ctx.plan.interleave {
+        // All points prepared and sampled in a seeded interleaved order, then judged.
+        let items: Vec<(&dyn Method, &crate::axes::Point)> = runnable
+            .iter()
+            .map(|r| (r.method.as_ref(), &ctx.group.points[r.index].point))
+            .collect();
+        let measured = measure_interleaved(ctx.gpu, ctx.gscene, &items, &ctx.plan);
+        for (r, m) in runnable.into_iter().zip(measured) {
+            finish_point(ctx, r, m, &mut peel_ms, emit)?;
+        }
+    } else {
+        for r in runnable {
+            let pt = &ctx.group.points[r.index];
+            let m = measure(ctx.gpu, ctx.gscene, r.method.as_ref(), &pt.point, &ctx.plan);
+            finish_point(ctx, r, m, &mut peel_ms, emit)?;
+        }
+    }
+    Ok(())
+}
+
+/// A point that can run, with its row so far.
+struct Ready {
+    index: usize,
+    method: Box<dyn Method>,
+    effect: EffectConfig,
+    row: Row,
+}
+
+/// Reads back, judges and emits one measured point.
+fn finish_point(
+    ctx: &GroupCtx<'_>,
+    r: Ready,
+    measured: Result<crate::measure::Measured>,
+    peel_ms: &mut Option<f64>,
+    emit: &mut Emit<'_>,
+) -> Result<()> {
+    let Ready {
+        index: i,
+        method,
+        effect,
+        mut row,
+    } = r;
+    let pt = &ctx.group.points[i];
+    let mut m = match measured {
+        Ok(m) => m,
+        Err(e) => return emit(i, failed_row(row, &e.to_string())),
+    };
+    set_timing(&mut row, &m, &ctx.scene.mesh);
+    // This study's frames are GPU work only: a wall time far above the GPU time means the
+    // timestamps missed work (judge::timestamps_incomplete says how far).
+    if let Some(g) = m.gpu_median() {
+        if judge::timestamps_incomplete(g, m.cpu.median) {
+            row.add_flag(Flag::TimestampsIncomplete);
+        }
+    }
+    let px = ctx.gscene.pixels() as f64;
+    row.set_f(
+        cols::BYTES_PER_PIXEL,
+        m.bytes_allocated as f64 / px.max(1.0),
+    );
+    let mut cap = match m.prepared.readback(ctx.gpu, ctx.gscene) {
+        Ok(c) => c,
+        Err(e) => return emit(i, failed_row(row, &format!("readback: {e}"))),
+    };
+    let lists = ctx.reference();
+    m.prepared.judge(&mut cap, lists);
+    set_reference_columns(&mut row, lists);
+    if let (Some(o), true) = (m.bytes_overhead, lists.total_fragments() > 0) {
+        let frag = m.bytes_allocated.saturating_sub(o) as f64;
+        row.set_f(
+            cols::FRAGMENT_BYTES_RATIO,
+            frag / (lists.total_fragments() * 8) as f64,
+        );
+    }
+    row.set_opt(cols::FRAGMENTS_DROPPED, cap.dropped_fragments)
+        .set_opt(cols::FRAGMENTS_TAILED, cap.tailed_fragments);
+    let cx = judge::Context {
+        scene: ctx.scene,
+        effect: &effect,
+        exact: method.exact(),
+        flip: ctx.flip,
+    };
+    let j = match judge::judge(&cap, lists, cx) {
+        Ok(j) => j,
+        Err(why) => return emit(i, failed_row(row, &why)),
+    };
+    j.write(&mut row);
+    if let Some(img) = &cap.image {
+        ctx.save_image(&mut row, &pt.method, pt.given(), img)?;
+    }
+    if let Some(g) = m.gpu_median() {
+        if pt.method == BASELINE && peel_ms.is_none() {
+            *peel_ms = Some(g);
+        }
+        if let Some(p) = *peel_ms {
+            if g > 0.0 {
+                row.set_f(cols::SPEEDUP_VS_DEPTH_PEEL, p / g);
+            }
+        }
+    }
+    emit(i, row)
 }
 
 /// True if some pixel holds two fragments at exactly the same window depth.

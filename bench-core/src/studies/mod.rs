@@ -27,6 +27,7 @@ use scenarios::{ParamValue, Params, Scene, SceneSpec, StudySpec, Suite, ValueKin
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
+use crate::measure::TimingPlan;
 use crate::record::cols;
 use crate::record::Row;
 use crate::reference::{rasterize, FragmentLists};
@@ -81,8 +82,10 @@ pub struct GroupCtx<'a> {
     pub group: &'a Group,
     pub scene: &'a Scene,
     pub gscene: &'a GpuScene,
-    pub reps: u32,
-    pub warmup: u32,
+    /// How every point of the group is timed (the suite's `[timing]`).
+    pub plan: TimingPlan,
+    /// Compute FLIP for image rows.
+    pub flip: bool,
     /// floor_depth median GPU ms of this group, when measured.
     pub floor_ms: Option<f64>,
     /// floor_blend median GPU ms of this group, when measured.
@@ -93,7 +96,6 @@ pub struct GroupCtx<'a> {
 }
 
 impl<'a> GroupCtx<'a> {
-    #[allow(clippy::too_many_arguments)]
     pub fn new(
         gpu: &'a Gpu,
         suite: &'a Suite,
@@ -101,8 +103,7 @@ impl<'a> GroupCtx<'a> {
         group: &'a Group,
         scene: &'a Scene,
         gscene: &'a GpuScene,
-        reps: u32,
-        warmup: u32,
+        plan: TimingPlan,
     ) -> Self {
         GroupCtx {
             gpu,
@@ -111,8 +112,8 @@ impl<'a> GroupCtx<'a> {
             group,
             scene,
             gscene,
-            reps,
-            warmup,
+            plan,
+            flip: true,
             floor_ms: None,
             blend_ms: None,
             images_dir: None,

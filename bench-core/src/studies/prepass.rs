@@ -68,6 +68,8 @@ fn axes_of(m: &str) -> Vec<Axis> {
 pub struct PrepassStudy;
 
 struct Timed {
+    /// Untimed frames before the samples (the stopping rule's warm-up).
+    warmup_frames: usize,
     gpu: Option<Stats>,
     wall: Stats,
     idle: Stats,
@@ -99,7 +101,8 @@ fn time_frames(
     let (mut g, mut w, mut idle) = (vec![], vec![], vec![]);
     let (mut gap, mut busy) = (vec![], vec![]);
     let mut per: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-    for rep in 0..ctx.warmup + ctx.reps {
+    let mut lp = crate::measure::FrameLoop::new(&ctx.plan);
+    loop {
         timer.begin_frame();
         let t0 = Instant::now();
         frame(&mut timer)?;
@@ -108,7 +111,13 @@ fn time_frames(
         let spans = timer.read_spans(gpu)?;
         let passes: Vec<(String, f64)> = spans.iter().map(|s| (s.0.clone(), s.2 - s.1)).collect();
         gpu.check_lost()?;
-        if rep >= ctx.warmup {
+        let ms = if timer.enabled() {
+            passes.iter().map(|(_, ms)| ms).sum()
+        } else {
+            wall
+        };
+        let step = lp.push(ms);
+        if let crate::measure::Step::Sample { .. } = step {
             if let Some((a, b)) = gap_of(&spans) {
                 gap.push(a);
                 busy.push(b);
@@ -123,8 +132,12 @@ fn time_frames(
                 }
             }
         }
+        if step == (crate::measure::Step::Sample { last: true }) {
+            break;
+        }
     }
     Ok(Timed {
+        warmup_frames: lp.warmup_frames(),
         gpu: Stats::of(&g),
         wall: Stats::of(&w).unwrap_or_default(),
         idle: Stats::of(&idle).unwrap_or_default(),
@@ -306,7 +319,7 @@ impl PrepassStudy {
             .set(cols::BYTES_RT_READ, rd)
             .set(cols::BYTES_ALLOCATED, pp.bytes_allocated())
             .set(cols::GEOMETRY_PASSES, if view2 { 3 } else { 2 });
-        let s = &pp.samples[(ctx.warmup as usize).min(pp.samples.len())..];
+        let s = &pp.samples[t.warmup_frames.min(pp.samples.len())..];
         if !s.is_empty() {
             row.set_f(cols::LATENCY_MS, median(s.iter().map(|f| f.latency_ms)));
             if matches!(accum, Accum::Cpu { .. }) {

@@ -101,21 +101,43 @@ fn owner_at(c: u32) -> u32 {
 @group(0) @binding(7) var<storage, read_write> frags: array<vec2<u32>>;
 @group(0) @binding(8) var<storage, read_write> work: array<atomic<u32>>;
 @group(0) @binding(9) var<storage, read_write> out_image: array<vec4<f32>>;
-// Per vertex: clip position (written by `transform`; one element when PRETRANSFORM is off).
-@group(0) @binding(11) var<storage, read_write> clipv: array<vec4<f32>>;
+// Per vertex, three elements (written by `transform`; three in all when PRETRANSFORM is off): the
+// clip position's (x, y) and (z, w), then the snapped screen position (`screen_of`).
+@group(0) @binding(11) var<storage, read_write> clipv: array<vec2<f32>>;
 
 fn clip_at(i: u32) -> vec4<f32> {
     if PRETRANSFORM {
-        return clipv[i];
+        return vec4<f32>(clipv[3u * i], clipv[3u * i + 1u]);
     }
     return clip_of(i);
+}
+
+fn screen_at(i: u32) -> vec2<f32> {
+    if PRETRANSFORM {
+        return clipv[3u * i + 2u];
+    }
+    return screen_of(i);
 }
 
 @compute @workgroup_size(256)
 fn transform(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
     for (var i = gid.x; i < sizes.nvert; i = i + nw.x * 256u) {
-        clipv[i] = clip_of(i);
+        let c = clip_of(i);
+        clipv[3u * i] = c.xy;
+        clipv[3u * i + 1u] = c.zw;
+        clipv[3u * i + 2u] = screen_of(i);
     }
+}
+
+// 1.0 that the compiler cannot fold (df32.wgsl): the viewport width is positive.
+fn df_one() -> f32 {
+    return sign(camera.viewport.x);
+}
+
+// A vertex's snapped screen position, as the f64 reference computes it, in double-f32
+// (`df_screen`, df32.wgsl): used only for a triangle that is not clipped.
+fn screen_of(i: u32) -> vec2<f32> {
+    return df_screen(camera.clip_from_world, position(i), camera.viewport.xy);
 }
 
 struct Poly {
@@ -187,6 +209,7 @@ fn setup(prim: u32) -> Poly {
         inside = inside && c.z >= 0.0 && c.w - c.z >= 0.0;
     }
     var guard = false;
+    var clipped = false;
     // Near and far planes first, then (only where a vertex still lies outside) the guard band.
     // One loop over the planes keeps a single inlined copy of the clipper.
     for (var k = 0u; k < 6u; k = k + 1u) {
@@ -200,10 +223,20 @@ fn setup(prim: u32) -> Poly {
             continue;
         }
         clip_poly(&p, CLIP_PLANES[k], CLIP_AXIS[k], CLIP_SIGN[k]);
+        clipped = true;
     }
     if p.n < 3u {
         p.n = 0u;
     }
+    if !clipped {
+        let s = array<vec2<f32>, 3>(screen_at(idx.x), screen_at(idx.y), screen_at(idx.z));
+        for (var k = 0u; k < 3u; k = k + 1u) {
+            p.v[k] = vec4<f32>(s[k], p.v[k].z * (1.0 / p.v[k].w), 0.0);
+        }
+        return p;
+    }
+    // A clipped polygon's new vertices are snapped from f32 (the reference computes them in f64;
+    // such triangles reach the near plane or span the guard band, and are rare).
     let w = camera.viewport.x;
     let h = camera.viewport.y;
     for (var k = 0u; k < p.n; k = k + 1u) {

@@ -55,6 +55,8 @@ use crate::{CoreError, Result};
 const WGSL: &str = include_str!("compute_abuffer.wgsl");
 /// Attribute re-derivation from a primitive id (also used by `linked_list`'s compact nodes).
 pub const VISIBILITY_WGSL: &str = include_str!("visibility.wgsl");
+/// Double-f32 arithmetic (error-free transformations), for the snapped screen positions.
+pub const DF32_WGSL: &str = include_str!("df32.wgsl");
 /// The resolve's per-pixel sort capacity (`SORT_MAX` in the WGSL).
 pub const SORT_MAX: u32 = 128;
 /// Bytes per stored fragment: f32 window depth + u32 primitive id (bit 31: front facing).
@@ -73,8 +75,9 @@ const TILE_W: u32 = 32;
 const STORAGE_BUFFERS: u32 = 10;
 /// Workgroup memory of the resolve's `resolve_sort = workgroup` (2 × 2048 words).
 const WG_SORT_BYTES: u32 = 16 * 1024;
-/// Bytes per vertex of the clip buffer (`transform = vertex`).
-const CLIP_BYTES: u64 = 16;
+/// Bytes per vertex of the clip buffer (`transform = vertex`): clip position and snapped screen
+/// position.
+const CLIP_BYTES: u64 = 24;
 
 pub struct ComputeAbuffer;
 
@@ -325,7 +328,7 @@ impl PreparedAbuffer {
             )));
         }
         let nvert = (scene.positions.size() / 12) as u32;
-        let src = format!("{WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}");
+        let src = format!("{WGSL}\n{DF32_WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}");
         let module = shader(gpu, "compute_abuffer", &src);
         let cs = wgpu::ShaderStages::COMPUTE;
         let mut entries = vec![camera_entry(0)];
@@ -375,7 +378,7 @@ impl PreparedAbuffer {
         let count = kernels(gpu, &l, false, v);
         let small_groups = (ntri.div_ceil(64).clamp(1, MAX_GROUPS), 1);
         let mut alloc = AllocCounter::default();
-        // The clip buffer is kept (written each frame); a 16 B stand-in when unused.
+        // The clip buffer is kept (written each frame); a one-vertex stand-in when unused.
         let clip_bytes = if v.pretransform {
             nvert.max(1) as u64 * CLIP_BYTES
         } else {

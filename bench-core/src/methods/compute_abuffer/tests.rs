@@ -348,3 +348,186 @@ fn slivers_of_snapped_degenerate_triangles_stay_finite() {
     let bad = img.iter().flatten().filter(|v| !v.is_finite()).count();
     assert_eq!(bad, 0, "{bad} non-finite channels; {}", cap.notes);
 }
+
+/// Runs `main` of `body` (after df32.wgsl) over `n` threads with read-only storage buffers
+/// `inputs` at bindings 0.. and a read-write output of `out_bytes` after them; returns the output.
+fn run_kernel(body: &str, inputs: &[&[u8]], out_bytes: u64, n: u32) -> Vec<u8> {
+    use crate::gpu_util::{bind_buffers, compute_pipeline, shader, storage_entry};
+    use wgpu::util::DeviceExt;
+    let g = gpu();
+    let module = shader(g, "kernel test", &format!("{DF32_WGSL}\n{body}"));
+    let cs = wgpu::ShaderStages::COMPUTE;
+    let k = inputs.len() as u32;
+    let mut entries: Vec<_> = (0..k).map(|b| storage_entry(b, true, cs)).collect();
+    entries.push(storage_entry(k, false, cs));
+    let bgl = g
+        .device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: None,
+            entries: &entries,
+        });
+    let layout = g
+        .device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: None,
+            bind_group_layouts: &[Some(&bgl)],
+            immediate_size: 0,
+        });
+    let pipe = compute_pipeline(g, "kernel test", &layout, &module, "main", &[], false);
+    let mut bufs: Vec<wgpu::Buffer> = inputs
+        .iter()
+        .map(|b| {
+            g.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: None,
+                    contents: b,
+                    usage: wgpu::BufferUsages::STORAGE,
+                })
+        })
+        .collect();
+    bufs.push(g.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: out_bytes,
+        usage: crate::gpu_util::STORAGE_RW,
+        mapped_at_creation: false,
+    }));
+    let refs: Vec<&wgpu::Buffer> = bufs.iter().collect();
+    let bind = bind_buffers(g, "kernel test", &bgl, &refs);
+    let mut enc = g.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipe);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups(n.div_ceil(64), 1, 1);
+    }
+    g.queue.submit([enc.finish()]);
+    g.read_buffer(refs[k as usize], out_bytes).unwrap()
+}
+
+/// The driver keeps f32 adds and multiplies correctly rounded and unreassociated, as the
+/// double-f32 snap needs: TwoSum and TwoProd are exact on this adapter (a driver that fused,
+/// reassociated or flushed them would fail here, and the snap would silently lose precision).
+#[test]
+fn double_f32_error_free_transformations_are_exact_on_this_adapter() {
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut rnd = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    // Random signs and mantissas; exponents within ±30 of 1, and within 20 of each other in a
+    // pair, so that both a + b and a · b are exact in f64.
+    let mut input = Vec::new();
+    for _ in 0..4096 {
+        let e = (rnd() % 40 + 107) as u32;
+        for d in [0, rnd() % 21] {
+            let r = rnd() as u32;
+            input.push(f32::from_bits(
+                (r & 0x807f_ffff) | (e + d as u32 - 10) << 23,
+            ));
+        }
+    }
+    let n = input.len() / 2;
+    let body = "
+@group(0) @binding(0) var<storage, read> inp: array<vec2<f32>>;
+@group(0) @binding(1) var<storage, read_write> outp: array<vec4<f32>>;
+fn df_one() -> f32 { return f32(min(arrayLength(&inp), 1u)); }
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= arrayLength(&inp) { return; }
+    let v = inp[id.x];
+    outp[2u * id.x] = vec4<f32>(two_sum(v.x, v.y), two_prod(v.x, v.y));
+    outp[2u * id.x + 1u] = vec4<f32>(df_div(vec2<f32>(v.x, 0.0), vec2<f32>(v.y, 0.0)), 0.0, 0.0);
+}";
+    let out = run_kernel(
+        body,
+        &[bytemuck::cast_slice(&input)],
+        n as u64 * 32,
+        n as u32,
+    );
+    let got: &[[f32; 4]] = bytemuck::cast_slice(&out);
+    let (mut sum_bad, mut prod_bad, mut div_worst) = (0, 0, 0.0f64);
+    for i in 0..n {
+        let (a, b) = (input[2 * i] as f64, input[2 * i + 1] as f64);
+        let [s, se, p, pe] = got[2 * i];
+        sum_bad += usize::from(s as f64 + se as f64 != a + b);
+        prod_bad += usize::from(p as f64 + pe as f64 != a * b);
+        let q = got[2 * i + 1][0] as f64 + got[2 * i + 1][1] as f64;
+        div_worst = div_worst.max(((q - a / b) / (a / b)).abs());
+    }
+    assert_eq!(
+        (sum_bad, prod_bad),
+        (0, 0),
+        "of {n} pairs, inexact TwoSum, TwoProd"
+    );
+    assert!(
+        div_worst < 1e-12,
+        "double-f32 division relative error {div_worst:e}"
+    );
+}
+
+/// `df_screen` on the GPU snaps every vertex of a dense scene to the reference's 1/256 px.
+#[test]
+fn double_f32_screen_positions_equal_the_f64_references_snapped_ones() {
+    let grass = scene("grass", &[("blades", Int(10000))]);
+    let (w, h) = (128u32, 96u32);
+    let m = grass.camera.clip_from_world_gpu(w as f64 / h as f64);
+    let mut consts: Vec<f32> = m.to_cols_array().to_vec();
+    consts.extend([w as f32, h as f32, 0.0, 0.0]);
+    let pos: Vec<f32> = grass.mesh.positions.iter().flatten().copied().collect();
+    let n = grass.mesh.positions.len();
+    let body = "
+@group(0) @binding(0) var<storage, read> k: array<vec4<f32>, 5>;
+@group(0) @binding(1) var<storage, read> pos: array<f32>;
+@group(0) @binding(2) var<storage, read_write> outp: array<vec2<f32>>;
+fn df_one() -> f32 { return sign(k[4].x); }
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&outp) { return; }
+    let m = mat4x4<f32>(k[0], k[1], k[2], k[3]);
+    let p = vec3<f32>(pos[3u * i], pos[3u * i + 1u], pos[3u * i + 2u]);
+    outp[i] = df_screen(m, p, k[4].xy);
+}";
+    let out = run_kernel(
+        body,
+        &[bytemuck::cast_slice(&consts), bytemuck::cast_slice(&pos)],
+        n as u64 * 8,
+        n as u32,
+    );
+    let got: &[[f32; 2]] = bytemuck::cast_slice(&out);
+    let md = m.as_dmat4();
+    let snap = |v: f64| (v * 256.0).round() / 256.0;
+    let mut bad = Vec::new();
+    for (i, p) in grass.mesh.positions.iter().enumerate() {
+        let c = md * Vec3::from(*p).as_dvec3().extend(1.0);
+        let inv_w = 1.0 / c.w;
+        let want = [
+            snap((c.x * inv_w * 0.5 + 0.5) * w as f64),
+            snap((0.5 - c.y * inv_w * 0.5) * h as f64),
+        ];
+        if [got[i][0] as f64, got[i][1] as f64] != want {
+            bad.push((i, got[i], want));
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "{} of {n} vertices, first {:?}",
+        bad.len(),
+        &bad[..bad.len().min(4)]
+    );
+}
+
+/// Every fragment of 10 000 grass blades at 128², where f32 snapping put two vertices on the other
+/// side of a 1/512-px rounding boundary and so two fragments beyond the reference's.
+#[test]
+fn snaps_vertices_as_the_f64_reference_does_on_dense_grass() {
+    let grass = scene("grass", &[("blades", Int(10000))]);
+    for v in VARIANTS {
+        let (label, p) = variant_params(v, 256);
+        let (cap, lists) = run(&ComputeAbuffer, &grass, 128, 128, &p);
+        let (bad, first) = count_mismatch(&cap, &lists, u32::MAX);
+        assert_eq!(bad, 0, "{label}: counts differ first at {first:?}");
+    }
+}

@@ -448,8 +448,7 @@ mod tests {
             &gs,
             &DualPeel,
             &crate::testing::point(&DualPeel, &p),
-            0,
-            1,
+            &crate::measure::TimingPlan::once(),
         )
         .unwrap();
         let n = crate::reference::rasterize(&s, 32, 32).max_depth_complexity();

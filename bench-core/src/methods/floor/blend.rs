@@ -199,7 +199,14 @@ mod tests {
     fn render(s: &scenarios::Scene, w: u32, h: u32) -> (Vec<[f32; 4]>, FragmentLists) {
         let g = gpu();
         let gs = GpuScene::upload(g, s, w, h);
-        let mut m = crate::measure::measure(g, &gs, &FloorBlend, &Point::empty(), 0, 1).unwrap();
+        let mut m = crate::measure::measure(
+            g,
+            &gs,
+            &FloorBlend,
+            &Point::empty(),
+            &crate::measure::TimingPlan::once(),
+        )
+        .unwrap();
         let cap = m.prepared.readback(g, &gs).unwrap();
         (cap.image.unwrap(), rasterize(s, w, h))
     }

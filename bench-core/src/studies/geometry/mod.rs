@@ -778,27 +778,33 @@ pub fn scoped<T>(gpu: &Gpu, what: &str, f: impl FnOnce() -> Result<T>) -> Result
 }
 
 /// GPU and wall-clock ms of `reps` frames into target `t` after `warmup` (as `runner::measure`).
+/// Frames of one feed until the suite's stopping rule ends them (warm-up untimed).
 fn time_frames(
     gpu: &Gpu,
     feed: &FeedGpu,
     t: usize,
-    warmup: u32,
-    reps: u32,
+    plan: &crate::measure::TimingPlan,
 ) -> Result<(Option<Stats>, Stats)> {
     let mut timer = GpuTimer::new(gpu);
+    let mut lp = crate::measure::FrameLoop::new(plan);
     let mut g = Vec::new();
     let mut c = Vec::new();
-    for rep in 0..warmup + reps {
+    loop {
         timer.begin_frame();
         let t0 = std::time::Instant::now();
         feed.frame(gpu, t, Some(&mut timer), false);
         gpu.wait()?;
         let cpu = t0.elapsed().as_secs_f64() * 1e3;
         let passes = timer.read(gpu)?;
-        if rep >= warmup {
+        let gms: f64 = passes.iter().map(|(_, ms)| ms).sum();
+        let ms = if timer.enabled() { gms } else { cpu };
+        if let crate::measure::Step::Sample { last } = lp.push(ms) {
             c.push(cpu);
             if timer.enabled() {
-                g.push(passes.iter().map(|(_, ms)| ms).sum());
+                g.push(gms);
+            }
+            if last {
+                break;
             }
         }
     }
@@ -904,9 +910,9 @@ fn measure_feed(
         ))
     })?;
     scoped(gpu, "frame", || {
-        let (gpu_ms, cpu_ms) = time_frames(gpu, &fg, 0, ctx.warmup, ctx.reps)?;
+        let (gpu_ms, cpu_ms) = time_frames(gpu, &fg, 0, &ctx.plan)?;
         let gpu_ms_small = match small {
-            Some(_) => time_frames(gpu, &fg, 1, ctx.warmup, ctx.reps)?.0,
+            Some(_) => time_frames(gpu, &fg, 1, &ctx.plan)?.0,
             None => None,
         };
         let invocations = fg.invocations(gpu)?;

@@ -165,9 +165,7 @@ impl Study for ShadowsStudy {
                 emit(i, skipped_row(row, &why))?;
                 continue;
             }
-            let mut m = match measure(
-                ctx.gpu, ctx.gscene, &method, &pt.point, ctx.warmup, ctx.reps,
-            ) {
+            let mut m = match measure(ctx.gpu, ctx.gscene, &method, &pt.point, &ctx.plan) {
                 Ok(m) => m,
                 Err(e) => {
                     emit(i, failed_row(row, &e.to_string()))?;

@@ -49,8 +49,14 @@ fn errors_where(
     configs
         .iter()
         .map(|p| {
-            let mut m =
-                measure(gpu, &gs, &method, &crate::testing::point(&method, p), 0, 1).unwrap();
+            let mut m = measure(
+                gpu,
+                &gs,
+                &method,
+                &crate::testing::point(&method, p),
+                &crate::measure::TimingPlan::once(),
+            )
+            .unwrap();
             let vis: Vec<f32> = m
                 .prepared
                 .readback(gpu, &gs)
@@ -209,8 +215,14 @@ fn hsm_never_drops_an_occluder_at_stride_one() {
             let p = cfg(64, 3)
                 .with("max_nspp", ParamValue::Int(65536))
                 .with("hsm", ParamValue::Bool(hsm));
-            let mut m =
-                measure(gpu, &gs, &method, &crate::testing::point(&method, &p), 0, 1).unwrap();
+            let mut m = measure(
+                gpu,
+                &gs,
+                &method,
+                &crate::testing::point(&method, &p),
+                &crate::measure::TimingPlan::once(),
+            )
+            .unwrap();
             m.prepared.readback(gpu, &gs).unwrap().image.unwrap()
         };
         let (on, off) = (vis(true), vis(false));

@@ -1,0 +1,494 @@
+//! Judging a capture against the exact reference: a pure function of the capture, the
+//! reference's fragment lists, the scene and the effect (no GPU), so every rule here is tested
+//! on hand-made captures.
+//!
+//! - **Ground truth is the whole composite.** `rmse`, `psnr_db`, `max_abs_err`,
+//!   `bad_pixel_frac`, `flip_*` compare the image with the same effect over *every* fragment.
+//! - **Fidelity to the method's own definition** is separate (`*_vs_k`): the same effect over
+//!   the k nearest (or first) fragments for a method that keeps k, or the method's CPU twin
+//!   (`Capture.definition`), e.g. k nearest plus a blended tail.
+//! - **`matches_truth`** is the only sense in which a row is exact: every pixel within
+//!   `bad_pixel_tol` of the ground truth and nothing non-finite.
+//! - **Flags** name each known failure (`record::Flag`); counts behind them are columns.
+
+use scenarios::Scene;
+
+use crate::effects::EffectConfig;
+use crate::method::{Capture, Expected};
+use crate::metrics::{image_error, layer_count_accuracy, ImageError, BAD_PIXEL_TOL};
+use crate::record::{cols, Flag, Row};
+use crate::reference::FragmentLists;
+
+/// What the judge needs besides the capture and the reference.
+#[derive(Clone, Copy, Debug)]
+pub struct Context<'a> {
+    pub scene: &'a Scene,
+    pub effect: &'a EffectConfig,
+    /// The method claims to capture every fragment (within capacity).
+    pub exact: bool,
+    /// Compute FLIP (a perceptual error, ~0.1 s per 1024² image on 16 cores).
+    pub flip: bool,
+}
+
+/// FLIP of a row, with the 8-bit images it was computed from (for the worst-points gallery).
+pub type Flip = crate::record::FlipImages;
+
+/// The verdict on one capture.
+#[derive(Clone, Debug, Default)]
+pub struct Judgement {
+    /// vs the ground truth (None without an image).
+    pub truth: Option<ImageError>,
+    /// vs the method's own definition (k-truncated composite or its CPU twin), when it keeps
+    /// less than everything.
+    pub vs_k: Option<ImageError>,
+    pub matches_truth: Option<bool>,
+    pub flip: Option<Flip>,
+    pub overflow_rate: f64,
+    pub layer_count_accuracy: Option<f64>,
+    pub layers_captured_max: Option<u32>,
+    /// Fragments within capacity the method did not capture, at depth ties / elsewhere.
+    pub lost_coplanar: u64,
+    pub lost_precision: u64,
+    /// Exact methods: fragments missing / extra vs the reference, summed over pixels.
+    pub fragments_missing: Option<u64>,
+    pub fragments_extra: Option<u64>,
+    pub collision_rate: Option<f64>,
+    pub hazard_rate: Option<f64>,
+    pub flags: Vec<Flag>,
+    /// The method's own flag words that are not known flags (kept, never dropped).
+    pub other_flags: Vec<String>,
+    pub notes: Vec<String>,
+}
+
+impl Judgement {
+    fn flag(&mut self, f: Flag) {
+        if !self.flags.contains(&f) {
+            self.flags.push(f);
+        }
+    }
+
+    /// Writes the judged columns and flags into `row`.
+    pub fn write(&self, row: &mut Row) {
+        if let Some(e) = &self.truth {
+            row.set_f(cols::RMSE, e.rmse)
+                .set_f(cols::PSNR_DB, e.psnr_db)
+                .set_f(cols::MAX_ABS_ERR, e.max_abs)
+                .set_f(cols::BAD_PIXEL_FRAC, e.bad_pixel_frac)
+                .set_f(cols::BAD_PIXEL_TOL, BAD_PIXEL_TOL)
+                .set(cols::NON_FINITE, e.non_finite);
+        }
+        if let Some(e) = &self.vs_k {
+            row.set_f(cols::RMSE_VS_K, e.rmse)
+                .set_f(cols::PSNR_DB_VS_K, e.psnr_db)
+                .set_f(cols::MAX_ABS_ERR_VS_K, e.max_abs)
+                .set_f(cols::BAD_PIXEL_FRAC_VS_K, e.bad_pixel_frac);
+        }
+        row.set_opt(cols::MATCHES_TRUTH, self.matches_truth);
+        if let Some(f) = &self.flip {
+            row.set_f(cols::FLIP_MEAN, f.result.mean)
+                .set_f(cols::FLIP_P99, f.result.p99);
+            row.flip = Some(Box::new(f.clone()));
+        }
+        row.set_f(cols::OVERFLOW_RATE, self.overflow_rate);
+        if let Some(a) = self.layer_count_accuracy {
+            row.set_f(cols::LAYER_COUNT_ACCURACY, a);
+        }
+        row.set_opt(cols::LAYERS_CAPTURED_MAX, self.layers_captured_max);
+        if self.layer_count_accuracy.is_some() {
+            row.set(
+                cols::LOST_FRAGMENTS,
+                self.lost_coplanar + self.lost_precision,
+            );
+        }
+        row.set_opt(cols::FRAGMENTS_MISSING, self.fragments_missing)
+            .set_opt(cols::FRAGMENTS_EXTRA, self.fragments_extra);
+        if let Some(c) = self.collision_rate {
+            row.set_f(cols::COLLISION_RATE, c);
+        }
+        if let Some(h) = self.hazard_rate {
+            row.set_f(cols::HAZARD_RATE, h);
+        }
+        for f in &self.flags {
+            row.add_flag(*f);
+        }
+        for w in &self.other_flags {
+            row.add_flag_word(w);
+        }
+        for n in &self.notes {
+            row.add_note(n);
+        }
+    }
+}
+
+/// Judges `cap` against `lists`. `Err` when the image cannot be compared (wrong size).
+pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Judgement, String> {
+    let mut j = Judgement::default();
+    if let Some(words) = &cap.flag {
+        for w in words.split('|').filter(|w| !w.is_empty()) {
+            match Flag::parse(w) {
+                Some(f) => j.flag(f),
+                None => j.other_flags.push(w.to_string()),
+            }
+        }
+    }
+    let dc = lists.depth_complexity();
+    let px = dc.len().max(1);
+    let k = match cap.expected {
+        Expected::All => u32::MAX,
+        Expected::FirstK(k) => k,
+    };
+    // Beyond a FirstK capacity, or as the method counted it (pools, unpeeled layers).
+    let overflow = dc
+        .iter()
+        .filter(|&&d| d > k)
+        .count()
+        .max(cap.overflow_pixels.unwrap_or(0) as usize);
+    j.overflow_rate = overflow as f64 / px as f64;
+    if overflow > 0 {
+        j.flag(Flag::Overflow);
+    }
+
+    if let Some(counts) = &cap.counts {
+        if counts.len() != dc.len() {
+            return Err(format!(
+                "counts cover {} pixels, the reference {}",
+                counts.len(),
+                dc.len()
+            ));
+        }
+        // Fragments the method should have captured (within its k) but did not: at a pixel
+        // whose f64 reference has exact depth ties this is strict peeling's coplanar loss;
+        // elsewhere distinct layers merged in the method's own depth precision.
+        let (mut missing, mut extra) = (0u64, 0u64);
+        for (p, (&d, &c)) in dc.iter().zip(counts).enumerate() {
+            let want = d.min(k);
+            let lost = want.saturating_sub(c) as u64;
+            if lost > 0 {
+                if lists.pixel(p).windows(2).any(|w| w[0].depth == w[1].depth) {
+                    j.lost_coplanar += lost;
+                } else {
+                    j.lost_precision += lost;
+                }
+            }
+            missing += d.saturating_sub(c) as u64;
+            extra += c.saturating_sub(d) as u64;
+        }
+        if j.lost_coplanar > 0 {
+            j.flag(Flag::LostCoplanar);
+        } else if j.lost_precision > 0 && overflow == 0 {
+            j.flag(Flag::Precision);
+        }
+        // An exact method is held to the whole fragment set when it keeps everything, or keeps k
+        // and no pixel has more (peeling with max_layers ≥ the depth complexity).
+        let all_within = cap.expected == Expected::All || dc.iter().all(|&d| d <= k);
+        if cx.exact && all_within {
+            j.fragments_missing = Some(missing);
+            j.fragments_extra = Some(extra);
+            // Missing fragments with an overflow are the overflow's; extra ones never are. A
+            // method that keeps k may lose coplanar ties by its definition (strict peeling): those
+            // are flagged lost_coplanar, not as a different set.
+            let unexplained = match cap.expected {
+                Expected::All => missing,
+                Expected::FirstK(_) => missing.saturating_sub(j.lost_coplanar),
+            };
+            if extra > 0 || (unexplained > 0 && overflow == 0) {
+                j.flag(Flag::FragmentsDiffer);
+                j.notes.push(format!(
+                    "fragment set differs from the reference: {missing} missing, {extra} extra"
+                ));
+            }
+        }
+        let expected: Vec<u32> = dc.iter().map(|&d| d.min(k)).collect();
+        j.layer_count_accuracy = Some(layer_count_accuracy(&expected, counts));
+        j.layers_captured_max = Some(counts.iter().max().copied().unwrap_or(0));
+    }
+
+    if let Some(img) = &cap.image {
+        let truth = cx.effect.reference(cx.scene, lists, Expected::All);
+        if truth.len() != img.len() {
+            return Err(format!(
+                "image has {} pixels, the {} ground truth {}",
+                img.len(),
+                cx.effect.effect.name(),
+                truth.len()
+            ));
+        }
+        let e = image_error(&truth, img, BAD_PIXEL_TOL);
+        j.matches_truth = Some(e.bad_pixel_frac == 0.0 && e.non_finite == 0);
+        if e.non_finite > 0 {
+            j.flag(Flag::Precision);
+        }
+        j.truth = Some(e);
+        let own = match (&cap.definition, cap.expected) {
+            (Some(d), _) => Some(d.clone()),
+            (None, Expected::FirstK(k)) => {
+                Some(cx.effect.reference(cx.scene, lists, Expected::FirstK(k)))
+            }
+            (None, Expected::All) => None,
+        };
+        if let Some(own) = own {
+            if own.len() != img.len() {
+                return Err(format!(
+                    "image has {} pixels, the method's own definition {}",
+                    img.len(),
+                    own.len()
+                ));
+            }
+            j.vs_k = Some(image_error(&own, img, BAD_PIXEL_TOL));
+        }
+        if cx.flip {
+            j.flip = Some(flip(&truth, img, lists.width, lists.height));
+        }
+    }
+    if let Some(c) = cap.collision_fragments {
+        j.collision_rate = Some(c as f64 / lists.total_fragments().max(1) as f64);
+    }
+    if let Some(h) = cap.hazard_pixels {
+        j.hazard_rate = Some(h as f64 / px as f64);
+    }
+    if !cap.notes.is_empty() {
+        j.notes.insert(0, cap.notes.clone());
+    }
+    Ok(j)
+}
+
+/// FLIP of an image against the truth, both composited over white as the PNGs show them; an
+/// effect with several images (dof) is judged as the images stacked vertically.
+fn flip(truth: &[[f64; 4]], img: &[[f32; 4]], w: u32, h: u32) -> Flip {
+    let stacked = (img.len() / (w * h).max(1) as usize).max(1) as u32;
+    let truth32: Vec<[f32; 4]> = truth.iter().map(|p| p.map(|c| c as f32)).collect();
+    let white = [1.0f32; 3];
+    let truth_rgb8 = mfx_flip::composite_srgb8(&truth32, white);
+    let method_rgb8 = mfx_flip::composite_srgb8(img, white);
+    let result = mfx_flip::flip_ldr(&truth_rgb8, &method_rgb8, w, h * stacked, mfx_flip::PPD);
+    Flip {
+        result,
+        method_rgb8,
+        truth_rgb8,
+        width: w,
+        height: h * stacked,
+    }
+}
+
+/// `timestamps_incomplete`: the GPU time of a frame is under 5 % of its wall-clock time and
+/// the gap exceeds 5 ms. For points whose frame is GPU work only (the methods and stability
+/// studies), this means the timestamps missed work: lavapipe's compute passes (0.3 ms of GPU
+/// time for 172 ms of wall time) trip it; on the committed H100 runs no methods/stability row
+/// does (the smallest ratio with a gap over 2 ms is 0.12: occlusion-query round trips of
+/// depth peeling).
+pub fn timestamps_incomplete(gpu_ms: f64, cpu_ms: f64) -> bool {
+    gpu_ms < 0.05 * cpu_ms && cpu_ms - gpu_ms > 5.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reference::RefFragment;
+    use scenarios::{Camera, Mesh, Params, SceneSpec};
+
+    /// `dc[p]` fragments per pixel at depths 0.1, 0.2, … (ties where `tie` says), colour 0.5
+    /// with alpha 0.5.
+    fn lists(dc: &[u32], tie: bool) -> FragmentLists {
+        let mut offsets = vec![0u32];
+        let mut frags = Vec::new();
+        for &d in dc {
+            for i in 0..d {
+                let z = if tie { 0.5 } else { 0.1 * (i + 1) as f64 };
+                frags.push(RefFragment {
+                    depth: z,
+                    view_z: z * 10.0,
+                    color: [0.2 + 0.1 * i as f64, 0.5, 0.5, 0.5],
+                    normal: [0.0, 0.0, 1.0],
+                    object_id: i,
+                    front_facing: true,
+                    prim: i,
+                });
+            }
+            offsets.push(frags.len() as u32);
+        }
+        FragmentLists {
+            width: dc.len() as u32,
+            height: 1,
+            reversed_z: false,
+            offsets,
+            frags,
+        }
+    }
+
+    fn scene() -> Scene {
+        let cam = Camera::look_at(
+            glam::DVec3::new(0.0, 0.0, 5.0),
+            glam::DVec3::ZERO,
+            45.0,
+            0.1,
+            100.0,
+        );
+        Scene::new(SceneSpec::new("test", Params::new()), Mesh::default(), cam)
+    }
+
+    fn cap_with(img: Vec<[f64; 4]>, counts: Vec<u32>, expected: Expected) -> Capture {
+        let mut c = Capture::empty();
+        c.image = Some(img.iter().map(|p| p.map(|v| v as f32)).collect());
+        c.counts = Some(counts);
+        c.expected = expected;
+        c
+    }
+
+    fn run(cap: &Capture, l: &FragmentLists, exact: bool) -> Judgement {
+        let s = scene();
+        let e = EffectConfig::default();
+        judge(
+            cap,
+            l,
+            Context {
+                scene: &s,
+                effect: &e,
+                exact,
+                flip: false,
+            },
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn a_truncated_image_is_wrong_vs_the_truth_and_right_vs_its_own_definition() {
+        // 4 layers per pixel, a method keeping the 2 nearest and compositing them exactly.
+        let l = lists(&[4, 4, 4], false);
+        let cap = cap_with(l.composite_first(2), vec![2, 2, 2], Expected::FirstK(2));
+        let j = run(&cap, &l, true);
+        assert!(j.truth.unwrap().rmse > 0.05, "{:?}", j.truth);
+        assert!(j.vs_k.unwrap().rmse < 1e-7, "{:?}", j.vs_k);
+        assert_eq!(j.matches_truth, Some(false));
+        assert!(j.flags.contains(&Flag::Overflow));
+        assert_eq!(j.overflow_rate, 1.0);
+        // Counts equal min(dc, k): no fragment lost within capacity.
+        assert_eq!(j.layer_count_accuracy, Some(1.0));
+        assert_eq!(j.lost_coplanar + j.lost_precision, 0);
+    }
+
+    #[test]
+    fn an_exact_capture_matches_the_truth_and_has_no_vs_k() {
+        let l = lists(&[3, 0, 5], false);
+        let cap = cap_with(l.composite(), vec![3, 0, 5], Expected::All);
+        let j = run(&cap, &l, true);
+        assert_eq!(j.matches_truth, Some(true));
+        assert!(j.vs_k.is_none() && j.flags.is_empty(), "{:?}", j.flags);
+        assert_eq!((j.fragments_missing, j.fragments_extra), (Some(0), Some(0)));
+    }
+
+    #[test]
+    fn an_exact_method_with_extra_fragments_is_flagged_even_if_the_image_is_close() {
+        // compute_abuffer on 10 000 grass blades at 128² once counted 2 fragments beyond the
+        // reference's (f32 vertex snapping): the count differs, and it is named.
+        let l = lists(&[3, 3], false);
+        let cap = cap_with(l.composite(), vec![4, 3], Expected::All);
+        let j = run(&cap, &l, true);
+        assert!(j.flags.contains(&Flag::FragmentsDiffer), "{:?}", j.flags);
+        assert_eq!(j.fragments_extra, Some(1));
+        let mut row = Row::new();
+        j.write(&mut row);
+        assert_eq!(row.get(cols::FLAG), Some("fragments_differ"));
+        assert_eq!(row.get(cols::FRAGMENTS_EXTRA), Some("1"));
+    }
+
+    #[test]
+    fn peeling_with_enough_layers_is_held_to_the_whole_fragment_set() {
+        // k = 4 ≥ every pixel's 3: the set must be complete; with k = 2 it cannot be.
+        let l = lists(&[3, 3], false);
+        let cap = cap_with(l.composite(), vec![3, 2], Expected::FirstK(4));
+        let j = run(&cap, &l, true);
+        assert_eq!(j.fragments_missing, Some(1));
+        assert!(j.flags.contains(&Flag::FragmentsDiffer), "{:?}", j.flags);
+        let cap = cap_with(l.composite_first(2), vec![2, 2], Expected::FirstK(2));
+        let j = run(&cap, &l, true);
+        assert_eq!(j.fragments_missing, None);
+        // Strict peeling's coplanar loss is its definition, flagged as such only.
+        let tied = lists(&[3], true);
+        let cap = cap_with(tied.composite(), vec![2], Expected::FirstK(8));
+        let j = run(&cap, &tied, true);
+        assert_eq!(j.fragments_missing, Some(1));
+        assert!(j.flags.contains(&Flag::LostCoplanar), "{:?}", j.flags);
+        assert!(!j.flags.contains(&Flag::FragmentsDiffer), "{:?}", j.flags);
+    }
+
+    #[test]
+    fn losses_at_depth_ties_are_coplanar_and_elsewhere_precision() {
+        let tied = lists(&[3], true);
+        let cap = cap_with(tied.composite(), vec![2], Expected::All);
+        let j = run(&cap, &tied, true);
+        assert!(j.flags.contains(&Flag::LostCoplanar), "{:?}", j.flags);
+        let distinct = lists(&[3], false);
+        let cap = cap_with(distinct.composite(), vec![2], Expected::All);
+        let j = run(&cap, &distinct, true);
+        assert!(j.flags.contains(&Flag::Precision), "{:?}", j.flags);
+        assert!(j.flags.contains(&Flag::FragmentsDiffer));
+    }
+
+    #[test]
+    fn a_method_definition_replaces_the_k_truncated_one() {
+        let l = lists(&[4, 4], false);
+        let mut cap = cap_with(l.composite(), vec![2, 2], Expected::FirstK(2));
+        cap.definition = Some(l.composite());
+        let j = run(&cap, &l, false);
+        assert!(j.vs_k.unwrap().rmse < 1e-7);
+        assert_eq!(j.matches_truth, Some(true));
+    }
+
+    #[test]
+    fn nan_is_precision_and_not_a_match() {
+        let l = lists(&[1], false);
+        let mut img = l.composite();
+        img[0][1] = f64::NAN;
+        let cap = cap_with(img, vec![1], Expected::All);
+        let j = run(&cap, &l, true);
+        assert_eq!(j.matches_truth, Some(false));
+        assert!(j.flags.contains(&Flag::Precision));
+    }
+
+    #[test]
+    fn the_method_own_flag_words_are_kept() {
+        let l = lists(&[1], false);
+        let mut cap = cap_with(l.composite(), vec![1], Expected::All);
+        cap.flag = Some("hazard|mystery".into());
+        let j = run(&cap, &l, false);
+        let mut row = Row::new();
+        j.write(&mut row);
+        assert_eq!(row.get(cols::FLAG), Some("hazard|mystery"));
+    }
+
+    #[test]
+    fn flip_is_zero_for_the_truth_and_positive_for_a_wrong_image() {
+        let l = lists(&[2; 64], false);
+        let s = scene();
+        let e = EffectConfig::default();
+        let cx = Context {
+            scene: &s,
+            effect: &e,
+            exact: true,
+            flip: true,
+        };
+        let good = cap_with(l.composite(), vec![2; 64], Expected::All);
+        let j = judge(&good, &l, cx).unwrap();
+        assert_eq!(j.flip.unwrap().result.mean, 0.0);
+        let bad = cap_with(l.composite_first(1), vec![1; 64], Expected::All);
+        let j = judge(&bad, &l, cx).unwrap();
+        assert!(j.flip.unwrap().result.mean > 0.01);
+    }
+
+    #[test]
+    fn the_timestamps_rule_trips_on_lavapipe_like_gaps_only() {
+        assert!(
+            timestamps_incomplete(0.30, 172.0),
+            "lavapipe compute_abuffer"
+        );
+        assert!(
+            !timestamps_incomplete(0.002, 0.085),
+            "a tiny GPU frame: the gap is overhead"
+        );
+        assert!(
+            !timestamps_incomplete(265.0, 924.0),
+            "peeling's CPU round trips: 0.29"
+        );
+        assert!(!timestamps_incomplete(31.9, 33.0));
+    }
+}
