@@ -306,9 +306,10 @@ pub fn sample_definition(
     crate::reference::multisample::resolve(&per)
 }
 
-/// The image an MSAA capture's own rule gives (for `Capture.definition` and the `*_vs_k`
-/// columns, set by the judge, which has the scene): coverage masks → [`coverage_definition`],
-/// per sample → [`sample_definition`]; `None` for other captures.
+/// The image an MSAA capture's own rule gives (the `*_vs_k` columns; the judge has the scene,
+/// `Prepared::judge` does not): coverage masks → [`coverage_definition`], per sample →
+/// [`sample_definition`], each over the capture's `expected` set per sample; `None` for other
+/// captures.
 pub fn definition(
     cap: &Capture,
     scene: &Scene,
@@ -375,21 +376,67 @@ pub fn truth_cached(
     t
 }
 
-/// The ground truth `cap` is judged against, for the judge: the single-sample reference of
-/// `effect` over `lists` when the capture is not antialiased (exactly what it was before AA
-/// existed), else the multisampled [`truth`] of its mode.
+/// The ground truth `cap` is judged against (the judge's rule: the effect over every
+/// fragment): the single-sample reference over `lists` when the capture is not antialiased
+/// (exactly what it was before AA existed), else the multisampled [`truth`] of its mode.
 pub fn ground_truth(
     cap: &Capture,
     scene: &Scene,
     lists: &FragmentLists,
     effect: &EffectConfig,
 ) -> Vec<[f64; 4]> {
-    match cap.aa {
-        None | Some(AaMode::None) => effect.reference(scene, lists, cap.expected),
-        Some(mode) => truth_cached(scene, lists.width, lists.height, mode, effect, cap.expected)
+    match antialiased(cap) {
+        None => effect.reference(scene, lists, Expected::All),
+        Some(mode) => truth_cached(scene, lists.width, lists.height, mode, effect, Expected::All)
             .image
             .clone(),
     }
+}
+
+/// The capture's AA mode, `None` for a single-sample one.
+pub fn antialiased(cap: &Capture) -> Option<AaMode> {
+    cap.aa.filter(|m| *m != AaMode::None)
+}
+
+/// Everything the judge needs for an antialiased capture, in one call (`None` for a
+/// single-sample capture: the judge's own path, unchanged).
+#[derive(Clone, Debug)]
+pub struct AaReference {
+    pub mode: AaMode,
+    /// The ground truth (every fragment, multisampled): `rmse`, `flip_*`, `matches_truth`.
+    pub truth: Vec<[f64; 4]>,
+    /// The capture's own definition for the `*_vs_k` columns: its k nearest per sample, or its
+    /// per-sample / coverage-mask rule ([`definition`]); `None` when that is the truth.
+    pub own: Option<Vec<[f64; 4]>>,
+    /// Most fragments at one sample of each pixel (a FirstK(k) capture overflows where > k);
+    /// replaces `lists.depth_complexity()` for the overflow rate.
+    pub depth_complexity: Vec<u32>,
+}
+
+/// [`AaReference`] of `cap` (`lists`: the single-sample reference, for its size).
+pub fn reference_for(
+    cap: &Capture,
+    scene: &Scene,
+    lists: &FragmentLists,
+    effect: &EffectConfig,
+) -> Option<AaReference> {
+    let mode = antialiased(cap)?;
+    let (w, h) = (lists.width, lists.height);
+    let all = truth_cached(scene, w, h, mode, effect, Expected::All);
+    let own = match (&cap.definition, definition(cap, scene, w, h, effect)) {
+        (Some(d), _) => Some(d.clone()),
+        (None, Some(d)) => Some(d),
+        (None, None) => match cap.expected {
+            Expected::FirstK(_) => Some(truth(scene, w, h, mode, effect, cap.expected).image),
+            Expected::All => None,
+        },
+    };
+    Some(AaReference {
+        mode,
+        truth: all.image.clone(),
+        own,
+        depth_complexity: all.depth_complexity.clone(),
+    })
 }
 
 // ---- the sample-position probe ----
