@@ -387,9 +387,16 @@ pub fn ground_truth(
 ) -> Vec<[f64; 4]> {
     match antialiased(cap) {
         None => effect.reference(scene, lists, Expected::All),
-        Some(mode) => truth_cached(scene, lists.width, lists.height, mode, effect, Expected::All)
-            .image
-            .clone(),
+        Some(mode) => truth_cached(
+            scene,
+            lists.width,
+            lists.height,
+            mode,
+            effect,
+            Expected::All,
+        )
+        .image
+        .clone(),
     }
 }
 

@@ -10,12 +10,9 @@
 //! fails). Pixels where two fragments of different colours at one sample lie within 3e-5 of
 //! window depth (intersecting grass blades at grazing angles: the GPU's f32 depth from unsnapped
 //! vertices may order them otherwise; measured: a swap at a gap of 1e-5) are left out, at most
-//! 10% of them (the crossing lines of tilted quads). Hardware MSAA may differ from the reference at
-//! one sample of at most 1 pixel in 200 (by at most one sample's worth, 1/S): lavapipe decides
-//! coverage at MSAA samples less precisely than at pixel centres (measured on slivers: a sample
-//! 0.12/256 px outside a needle's edge, well inside one sub-pixel step, counted as covered;
-//! single-sample and 2×2-supersampled coverage match exactly). compute_abuffer, rasterised by
-//! the reference's integer rule, gets no such slack. Effects that read interpolated view depth are judged against the capture's own
+//! 10% of them (the crossing lines of tilted quads). The slivers stay inside the view: a
+//! driver clips a triangle that leaves it with its own arithmetic (lavapipe: a needle with a
+//! vertex 1.7 px off screen covered one sample that the snapped triangle does not). Effects that read interpolated view depth are judged against the capture's own
 //! definition (`aa::definition`: attributes at the pixel centre, where lavapipe interpolates
 //! them) with the effects tests' 2e-3 (the GPU interpolates from unsnapped vertices, the
 //! reference from snapped ones: ≤ 0.5/512 of view depth per pixel).
@@ -135,32 +132,6 @@ fn check_on(
                 scene.label(),
                 ties.len()
             );
-            // Hardware MSAA: a pixel may be off by one sample (module doc), at most 1 in 200.
-            if let (Some(AaMode::Msaa(k)), false) = (cap.aa, method.name() == "compute_abuffer") {
-                let off: Vec<usize> = (0..masked.len())
-                    .filter(|&i| (0..4).any(|c| (img[i][c] as f64 - masked[i][c]).abs() > tol))
-                    .collect();
-                assert!(
-                    off.len() * 200 <= masked.len().max(200),
-                    "{} {mode} on {}: {} pixels off (first {:?})",
-                    method.name(),
-                    scene.label(),
-                    off.len(),
-                    off.first()
-                );
-                for &i in &off {
-                    let worst = (0..4)
-                        .map(|c| (img[i][c] as f64 - masked[i][c]).abs())
-                        .fold(0.0, f64::max);
-                    assert!(
-                        worst <= 1.0 / k as f64 + tol,
-                        "{} {mode} on {}: pixel {i} off by {worst}, more than one sample",
-                        method.name(),
-                        scene.label()
-                    );
-                    masked[i] = img[i].map(|c| c as f64);
-                }
-            }
             let (e, px) = max_err_vs(&cap, &masked);
             assert!(
                 e <= tol,
@@ -394,4 +365,54 @@ fn compute_abuffer_coverage_masks_match_their_definition_in_every_raster_path() 
         ("sigma", ParamValue::Float(0.5)),
     ];
     check(&*m, &fx, &want[1..2], Against::Definition, 2e-3, VIEW_DEPTH);
+}
+
+#[test]
+fn aa_ci_runs_through_the_runner_with_no_failed_rows_and_aa_checks() {
+    use scenarios::suite::{Suite, BUILTIN};
+    use schema::cols;
+    let text = |name: &str| BUILTIN.iter().find(|(n, _)| *n == name).unwrap().1;
+    // The H200 suite is valid as a whole (what `mfx check aa` says) and expands on a GPU.
+    let aa = Suite::parse(text("aa"), "(built-in) aa").unwrap();
+    let problems = bench_core::check::check_suite(&aa);
+    assert!(problems.is_empty(), "{problems:?}");
+    let groups = bench_core::runner::expand(&aa, false).unwrap();
+    assert_eq!(groups.len(), 10, "four scenes at 1024² in two tables, two for stochastic");
+
+    let rows = bench_core::runner::run_suite(testing::gpu(), text("aa-ci"), "(built-in) aa-ci")
+        .expect("aa-ci runs");
+    let get = |r: &bench_core::record::Row, c| r.get(c).unwrap_or("").to_string();
+    let failed: Vec<String> = rows
+        .iter()
+        .filter(|r| get(r, cols::STATUS) == "failed")
+        .map(|r| {
+            format!(
+                "{} {}: {}",
+                get(r, cols::METHOD),
+                get(r, cols::AA),
+                get(r, cols::REASON)
+            )
+        })
+        .collect();
+    assert!(failed.is_empty(), "{failed:#?}");
+    // Every method ran under every AA mode it was given, on every scene.
+    for (method, mode) in [
+        ("depth_peel", "msaa4"),
+        ("depth_peel", "ssaa2x2"),
+        ("wboit", "msaa4"),
+        ("compute_abuffer", "msaa8"),
+        ("compute_abuffer", "ssaa2x2"),
+    ] {
+        let n = rows
+            .iter()
+            .filter(|r| get(r, cols::METHOD) == method && get(r, cols::AA) == mode)
+            .filter(|r| get(r, cols::STATUS) == "ok")
+            .count();
+        assert_eq!(n, 4, "{method} {mode}: ok on the four scenes");
+    }
+    let st = rows
+        .iter()
+        .filter(|r| get(r, cols::METHOD) == "stochastic" && get(r, cols::STATUS) == "ok")
+        .count();
+    assert_eq!(st, 12, "stochastic: 3 pass counts × correction × 2 scenes");
 }

@@ -49,6 +49,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "shadows-bunny",
         include_str!("../suites/shadows-bunny.toml"),
     ),
+    ("aa", include_str!("../suites/aa.toml")),
+    ("aa-ci", include_str!("../suites/aa-ci.toml")),
 ];
 
 #[derive(Clone, Debug)]
