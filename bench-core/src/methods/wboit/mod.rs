@@ -288,8 +288,8 @@ impl Prepared for PreparedWboit {
         cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, scene.pixels())?);
         cap.expected = Expected::All;
         cap.notes = "approximate: weighted average colour (RGBA16F), revealage R16F".into();
+        // No `aa_capture`: WBOIT's own definition is WBOIT, not an exact per-sample composite.
         cap.aa = self.aa.capture_mode();
-        cap.aa_capture = cap.aa.map(|_| self.aa.capture);
         cap.sample_positions = self.sample_positions.clone();
         Ok(cap)
     }
