@@ -141,6 +141,15 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
     let csv_path = out.join("runs.csv");
     let mut done = std::collections::HashSet::new();
     if csv_path.is_file() {
+        if a.resume {
+            let cut = bench_core::record::drop_partial_tail(&csv_path)?;
+            if cut > 0 {
+                eprintln!(
+                    "mfx: {}: dropped a half-written last line ({cut} B) left by the interrupted run",
+                    csv_path.display()
+                );
+            }
+        }
         let (keys, old_run) = bench_core::record::existing_points(&csv_path)
             .with_context(|| format!("reading {}", csv_path.display()))?;
         if a.resume {
@@ -154,6 +163,11 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
                         suite.source
                     )));
                 }
+            }
+            let samples = out.join("samples.csv");
+            if samples.is_file() {
+                bench_core::record::drop_partial_tail(&samples)?;
+                bench_core::record::retain_samples(&samples, &keys)?;
             }
             done = keys;
             if let Some(r) = old_run {

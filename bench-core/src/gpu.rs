@@ -155,6 +155,8 @@ pub struct Gpu {
     /// NVML for this adapter's clocks, temperature, power and throttle reasons, or why not
     /// (no NVIDIA driver, not an NVIDIA adapter): every point's `clock_source` says which.
     pub monitor: std::result::Result<crate::clocks::GpuMonitor, String>,
+    /// The busy kernel that lifts a lowered SM clock (`measure`), built on first use.
+    pub spin: std::sync::OnceLock<crate::measure::Spin>,
 }
 
 /// Lists adapters for a backend choice, in enumeration order (the `--adapter-index` order).
@@ -262,6 +264,7 @@ impl Gpu {
             downlevel,
             lost,
             monitor,
+            spin: std::sync::OnceLock::new(),
         })
     }
 

@@ -28,6 +28,9 @@ pub struct TimingPlan {
     pub seed: u64,
     /// Sample the points of a group interleaved in a seeded random order.
     pub interleave: bool,
+    /// Busy GPU work allowed per point before its warm-up to lift a lowered SM clock (NVML
+    /// adapters only; 0: never). See [`PointTimer::lift_clock`].
+    pub clock_lift_ms: f64,
 }
 
 impl Default for TimingPlan {
@@ -37,9 +40,15 @@ impl Default for TimingPlan {
             stop: StopRule::default(),
             seed: 1,
             interleave: false,
+            clock_lift_ms: CLOCK_LIFT_MS,
         }
     }
 }
+
+/// Default of `[timing] clock_lift_ms`.
+pub const CLOCK_LIFT_MS: f64 = 500.0;
+/// A clock at or above this share of the adapter's maximum SM clock needs no lift.
+pub const CLOCK_LIFT_TARGET: f64 = 0.97;
 
 impl TimingPlan {
     /// One frame, no warm-up: for a single render (tests, `mfx render`), not for timings.
@@ -58,6 +67,7 @@ impl TimingPlan {
             },
             seed: 1,
             interleave: false,
+            clock_lift_ms: 0.0,
         }
     }
 
@@ -101,6 +111,7 @@ impl TimingPlan {
             stop,
             seed: spec.seed.unwrap_or(d.seed),
             interleave: spec.interleave.unwrap_or(false),
+            clock_lift_ms: spec.clock_lift_ms.unwrap_or(d.clock_lift_ms),
         })
     }
 
@@ -108,7 +119,8 @@ impl TimingPlan {
     pub fn describe(&self) -> String {
         let s = &self.stop;
         format!(
-            "warm-up {}–{} frames until steady; {}–{} samples, stop at ±{:.2} % (95 % CI of the median), ≤ {} ms; drift check every {}",
+            "clock lift ≤ {} ms; warm-up {}–{} frames until steady; {}–{} samples, stop at ±{:.2} % (95 % CI of the median), ≤ {} ms; drift check every {}",
+            self.clock_lift_ms,
             self.warmup.min_frames,
             self.warmup.max_frames,
             s.min_samples,
@@ -141,6 +153,9 @@ pub struct Measured {
     /// Wall-clock ms of warm-up and samples.
     pub measure_ms: f64,
     pub clocks: PointClocks,
+    /// Clock lift before the warm-up: (ms of busy work, SM MHz before, SM MHz after); None when
+    /// none was needed or possible.
+    pub clock_lift: Option<(f64, f64, f64)>,
 }
 
 impl Measured {
@@ -211,6 +226,7 @@ pub struct PointTimer<'g> {
     /// Wall time spent on this point's warm-up and samples (its own, when interleaved).
     spent_ms: f64,
     stopped: Option<StopReason>,
+    clock_lift: Option<(f64, f64, f64)>,
 }
 
 /// Runs `f` in validation and out-of-memory error scopes; a captured error names `what`.
@@ -251,7 +267,42 @@ impl<'g> PointTimer<'g> {
             warmup_frames: 0,
             spent_ms: 0.0,
             stopped: None,
+            clock_lift: None,
         })
+    }
+
+    /// Lifts an SM clock the driver has lowered. Measured on the H200: within one sweep the SM
+    /// clock stepped down from 1980 MHz to 1485–1740 MHz for whole groups of light points (no
+    /// throttle reason, 38 °C, 120 W of 700) and back up after the next idle spell, so whole
+    /// groups ran up to 1.3× slower in one run than in its twin while their cycles agreed. When
+    /// the clock reads under [`CLOCK_LIFT_TARGET`] of the adapter's maximum, busy compute work
+    /// (a few ms per dispatch) runs until it is back or `clock_lift_ms` is spent; the point's
+    /// warm-up follows. The settings of the GPU are never changed.
+    pub fn lift_clock(&mut self) -> Result<()> {
+        let Ok(m) = &self.gpu.monitor else {
+            return Ok(());
+        };
+        let (Some(max), true) = (m.max_sm_mhz(), self.plan.clock_lift_ms > 0.0) else {
+            return Ok(());
+        };
+        let target = CLOCK_LIFT_TARGET * max;
+        let Some(before) = m.sample().sm_mhz else {
+            return Ok(());
+        };
+        if before >= target {
+            return Ok(());
+        }
+        let t0 = std::time::Instant::now();
+        let spin = self.gpu.spin.get_or_init(|| Spin::new(self.gpu));
+        let mut now = before;
+        while now < target && t0.elapsed().as_secs_f64() * 1e3 < self.plan.clock_lift_ms {
+            spin.run(self.gpu)?;
+            now = m.sample().sm_mhz.unwrap_or(now);
+        }
+        let ms = t0.elapsed().as_secs_f64() * 1e3;
+        self.spent_ms += ms;
+        self.clock_lift = Some((ms, before, now));
+        Ok(())
     }
 
     /// Untimed frames until frame times (and the SM clock, where read) stop moving.
@@ -377,6 +428,7 @@ impl<'g> PointTimer<'g> {
             samples: self.samples,
             measure_ms: self.spent_ms,
             clocks: self.clocks,
+            clock_lift: self.clock_lift,
         })
     }
 }
@@ -390,6 +442,7 @@ pub fn measure(
     plan: &TimingPlan,
 ) -> Result<Measured> {
     let mut t = PointTimer::prepare(gpu, scene, method, point, plan)?;
+    t.lift_clock()?;
     t.warm_up()?;
     while t.sample()?.is_none() {}
     t.finish()
@@ -553,5 +606,76 @@ pub fn set_timing(row: &mut Row, m: &Measured, mesh: &scenarios::Mesh) {
     }
     if m.discarded() > 0 || m.clocks.slowdown() {
         row.add_flag(crate::record::Flag::Throttled);
+    }
+    if let Some((ms, before, after)) = m.clock_lift {
+        row.set_f(cols::CLOCK_LIFT_MS, ms)
+            .set_f(cols::CLOCK_LIFT_FROM_MHZ, before)
+            .set_f(cols::CLOCK_LIFT_TO_MHZ, after);
+    }
+}
+
+/// Busy compute work that raises a lowered SM clock: every SM runs dependent FMAs for a few ms
+/// (about 2 ms on an H200 at 1980 MHz, by its FMA rate), untimed.
+pub struct Spin {
+    pipeline: wgpu::ComputePipeline,
+    bind: wgpu::BindGroup,
+}
+
+const SPIN_WGSL: &str = "
+@group(0) @binding(0) var<storage, read_write> sink: array<f32>;
+@compute @workgroup_size(256)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    var x = f32(id.x & 255u) * 1e-3;
+    for (var i = 0u; i < 65536u; i = i + 1u) {
+        x = fma(x, 0.9999, 1e-4);
+    }
+    if x == 12345.0 {
+        sink[id.x & 255u] = x;
+    }
+}";
+
+impl Spin {
+    fn new(gpu: &Gpu) -> Spin {
+        use crate::gpu_util::{bind_buffers, compute_pipeline, shader, storage_entry, STORAGE_RW};
+        let module = shader(gpu, "clock lift", SPIN_WGSL);
+        let bgl = gpu
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("clock lift"),
+                entries: &[storage_entry(0, false, wgpu::ShaderStages::COMPUTE)],
+            });
+        let layout = gpu
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("clock lift"),
+                bind_group_layouts: &[Some(&bgl)],
+                immediate_size: 0,
+            });
+        let pipeline = compute_pipeline(gpu, "clock lift", &layout, &module, "main", &[], false);
+        let sink = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("clock lift sink"),
+            size: 1024,
+            usage: STORAGE_RW,
+            mapped_at_creation: false,
+        });
+        let bind = bind_buffers(gpu, "clock lift", &bgl, &[&sink]);
+        Spin { pipeline, bind }
+    }
+
+    /// One dispatch, waited for.
+    fn run(&self, gpu: &Gpu) -> Result<()> {
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("clock lift"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.bind, &[]);
+            // 4096 workgroups × 256 threads: every SM of a large GPU busy.
+            pass.dispatch_workgroups(4096, 1, 1);
+        }
+        gpu.queue.submit([enc.finish()]);
+        gpu.wait()
     }
 }

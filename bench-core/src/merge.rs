@@ -184,7 +184,10 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
                 Some((v0, f0)) if *v0 != v => {
                     return Err(CoreError::Schema(format!(
                         "cannot merge {} (schema version {v0}) and {} (schema version {v}, \
-                         row {}): different CSV schema versions",
+                         row {}): different CSV schema versions. Their columns mean different \
+                         things (schema 1 had fixed reps and errors against the truncated \
+                         definition; see results/README.md), so no row is converted: merge runs \
+                         of one schema, or rerun the older suite with this build",
                         f0.display(),
                         f.display(),
                         n + 2

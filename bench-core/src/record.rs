@@ -333,6 +333,59 @@ pub fn existing_points(path: &Path) -> Result<(std::collections::HashSet<String>
     Ok((keys, run_id))
 }
 
+/// Cuts a line a killed process left half-written off the end of a CSV file (rows are written
+/// with one `write` each, but a SIGKILL or a full disk can still split one): everything after
+/// the last newline goes. Returns the bytes dropped.
+pub fn drop_partial_tail(path: &Path) -> Result<u64> {
+    let bytes =
+        std::fs::read(path).map_err(|e| CoreError::Io(format!("{}: {e}", path.display())))?;
+    let keep = match bytes.iter().rposition(|&b| b == b'\n') {
+        Some(i) => i + 1,
+        None => 0,
+    };
+    let dropped = (bytes.len() - keep) as u64;
+    if dropped > 0 {
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(|e| CoreError::Io(format!("{}: {e}", path.display())))?;
+        f.set_len(keep as u64)
+            .map_err(|e| CoreError::Io(format!("{}: {e}", path.display())))?;
+    }
+    Ok(dropped)
+}
+
+/// Keeps only the samples of points in `keep` (a resumed run: samples of a point whose row was
+/// not written would otherwise be there twice once it is measured again). Returns rows dropped.
+pub fn retain_samples(path: &Path, keep: &std::collections::HashSet<String>) -> Result<usize> {
+    let io = |e: csv::Error| CoreError::Io(format!("{}: {e}", path.display()));
+    let mut r = csv::Reader::from_path(path).map_err(io)?;
+    let h = r.headers().map_err(io)?.clone();
+    let k = h
+        .iter()
+        .position(|c| c == schema::samples::POINT_KEY.name)
+        .ok_or_else(|| CoreError::Schema(format!("{}: no point_key column", path.display())))?;
+    let mut kept = Vec::new();
+    let mut dropped = 0;
+    for rec in r.records() {
+        let rec = rec.map_err(io)?;
+        if rec.get(k).is_some_and(|v| keep.contains(v)) {
+            kept.push(rec);
+        } else {
+            dropped += 1;
+        }
+    }
+    if dropped > 0 {
+        let mut w = csv::Writer::from_path(path).map_err(io)?;
+        w.write_record(&h).map_err(io)?;
+        for rec in &kept {
+            w.write_record(rec).map_err(io)?;
+        }
+        w.flush().map_err(|e| CoreError::Io(e.to_string()))?;
+    }
+    Ok(dropped)
+}
+
 /// Writes `samples.csv`: every timed frame of every row, long format (`schema::samples`).
 pub struct SamplesSink {
     w: csv::Writer<File>,

@@ -83,7 +83,13 @@ impl ValueKind {
     pub fn expected(&self) -> String {
         match self {
             ValueKind::Int { min, max, .. } => format!("an integer in {min}..={max}"),
-            ValueKind::Float { min, max, .. } => format!("a finite number in [{min}, {max}]"),
+            // An open end (f64::MAX) reads as a bound, not as 309 digits.
+            ValueKind::Float { min, max, .. } => match (*min <= f64::MIN, *max >= f64::MAX) {
+                (true, true) => "a finite number".into(),
+                (false, true) => format!("a finite number ≥ {min}"),
+                (true, false) => format!("a finite number ≤ {max}"),
+                (false, false) => format!("a finite number in [{min}, {max}]"),
+            },
             ValueKind::Bool { .. } => "true or false".into(),
             ValueKind::Choice { choices, .. } => format!("one of {}", choices.join(", ")),
             ValueKind::Text { .. } => "a string".into(),

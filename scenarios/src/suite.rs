@@ -197,6 +197,7 @@ pub const SOFTWARE_KEYS: &[&str] = &[
     "warmup_max_frames",
     "interleave",
     "seed",
+    "clock_lift_ms",
 ];
 /// Keys of the `[timing]` table (also accepted in `[software]`, as overrides).
 pub const TIMING_KEYS: &[&str] = &[
@@ -209,6 +210,7 @@ pub const TIMING_KEYS: &[&str] = &[
     "warmup_max_frames",
     "interleave",
     "seed",
+    "clock_lift_ms",
 ];
 
 /// How the points of a suite are timed: each unset key takes the harness's default
@@ -231,6 +233,9 @@ pub struct TimingSpec {
     pub warmup_max_frames: Option<u32>,
     /// Sample a group's points interleaved in a seeded random order.
     pub interleave: Option<bool>,
+    /// Busy GPU work allowed per point, before its warm-up, to lift an SM clock the driver has
+    /// lowered back to the adapter's maximum (0: never).
+    pub clock_lift_ms: Option<f64>,
     /// Seed of the bootstrap and of the interleaved order.
     pub seed: Option<u64>,
 }
@@ -248,6 +253,7 @@ impl TimingSpec {
             warmup_max_frames: over.warmup_max_frames.or(self.warmup_max_frames),
             interleave: over.interleave.or(self.interleave),
             seed: over.seed.or(self.seed),
+            clock_lift_ms: over.clock_lift_ms.or(self.clock_lift_ms),
         }
     }
 }
@@ -464,6 +470,7 @@ fn timing_spec(cx: &mut Ctx<'_>, t: &toml::Table, tn: &str) -> TimingSpec {
         warmup_max_frames: int(cx, "warmup_max_frames", 0, 100_000).map(|i| i as u32),
         interleave,
         seed: int(cx, "seed", 0, i64::MAX).map(|i| i as u64),
+        clock_lift_ms: float(cx, "clock_lift_ms", 0.0, 60_000.0),
     };
     if let (Some(a), Some(b)) = (spec.min_samples, spec.max_samples) {
         if a > b {

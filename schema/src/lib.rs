@@ -638,6 +638,16 @@ pub mod cols {
         "samples_discarded",
         "timed samples discarded because the SM clock was below 75 % of the reference clock (nvbench's rule)",
     );
+    pub const CLOCK_LIFT_MS: Col = Col::new(
+        "clock_lift_ms",
+        "ms of untimed busy GPU work run before the warm-up because the SM clock read under 97 % of the adapter's maximum (empty: none needed, or no NVML)",
+    );
+    pub const CLOCK_LIFT_FROM_MHZ: Col =
+        Col::new("clock_lift_from_mhz", "SM clock before the clock lift, MHz");
+    pub const CLOCK_LIFT_TO_MHZ: Col = Col::new(
+        "clock_lift_to_mhz",
+        "SM clock after the clock lift, MHz (below 97 % of the maximum: the lift ran out of time)",
+    );
     pub const WARMUP_FRAMES: Col = Col::new(
         "warmup_frames",
         "untimed frames run before the first sample, until frame times and the SM clock were steady",
@@ -1061,6 +1071,9 @@ pub const GROUPS: &[Group] = &[
             cols::GPU_MS_OUTLIERS,
             cols::SAMPLES,
             cols::SAMPLES_DISCARDED,
+            cols::CLOCK_LIFT_MS,
+            cols::CLOCK_LIFT_FROM_MHZ,
+            cols::CLOCK_LIFT_TO_MHZ,
             cols::WARMUP_FRAMES,
             cols::MEASURE_MS,
             cols::TARGET_REACHED,

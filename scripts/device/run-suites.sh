@@ -1,30 +1,84 @@
 #!/usr/bin/env bash
-# Runs on the GPU machine of the device tool (no Rust there): a release `mfx` built on the CPU
-# machine is carried in ./.gpu, the Vulkan loader debs in ./.gl (scripts from ../shared/device),
-# test meshes in ./models. Each suite's run folder is packed into $OUT/<suite>.tgz.
-# Usage (as the device command): bash scripts/device/run-suites.sh SUITE [SUITE...]
-# SUITE_TIMEOUT (s, default 290) bounds each suite: rows are flushed as they are measured, so a
-# suite cut short still returns every finished row. Reports are drawn on the CPU machine with
-# `mfx report` (REPORT=1 draws them here too).
+# Runs on the GPU machine of the device tool (no Rust there), in one call: a release `mfx` built
+# on the CPU machine is carried in ./.gpu (./.gpu/mfx, or gzipped as ./.gpu/mfx.gz), the Vulkan
+# loader debs in ./.gl (../shared/device/prepare-gl.sh), and, for suites that read models,
+# ./models/stanford-bunny.obj (the stacked bunnies are baked here: the 45 MB OBJ is not carried).
+#
+# Usage (as the device command): bash scripts/device/run-suites.sh JOB [JOB...]
+#   JOB = SUITE or SUITE@TAG (a name or a TOML path; the run folder is SUITE or SUITE-TAG), so
+#   one suite can run twice back to back (methods@a methods@b) for run-to-run spread.
+# Environment:
+#   BUDGET (s, default 560): jobs are not started once less than MIN_LEFT (default 30) s is left,
+#     and each runs with `timeout` of the time left, so the call ends within its 10 minutes;
+#     rows are flushed as they are measured, so a suite cut short still returns every finished row.
+#   COMPARE="A:B C:D": after the jobs, `mfx compare A B` of run folders (markdown + html kept).
+#   REPORT=1 draws reports here too (they are normally drawn on the CPU machine with `mfx report`).
+# Writes $OUT/runs.tgz (every run folder, each with gpu.txt and sweep.log; clocks.csv sampled by
+# nvidia-smi once a second over the whole call; compare-*.md) and $OUT/session.log.
 set -u
+start=$(date +%s)
+budget=${BUDGET:-560}
+min_left=${MIN_LEFT:-30}
+out=${OUT:-/tmp/out}
+r=/tmp/r
+mkdir -p "$out" "$r"
+exec > >(tee "$out/session.log") 2>&1
 for f in .gl/*.deb; do dpkg -x "$f" /; done
 ldconfig
 export VK_DRIVER_FILES=${VK_DRIVER_FILES:-/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json}
 export XDG_RUNTIME_DIR=/tmp
-out=${OUT:-/tmp/out}
-mkdir -p "$out" /tmp/r
-nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv > /tmp/r/gpu.txt 2>&1
-./.gpu/mfx list adapters >> /tmp/r/gpu.txt 2>&1
-cat /tmp/r/gpu.txt
-for suite in "$@"; do
-  start=$(date +%s)
+mfx=./.gpu/mfx
+if [ ! -x "$mfx" ] && [ -f ./.gpu/mfx.gz ]; then
+  gunzip -c ./.gpu/mfx.gz > /tmp/mfx && chmod +x /tmp/mfx && mfx=/tmp/mfx
+fi
+# The clocks over the whole call: what state each run started in, and whether it moved.
+nvidia-smi --query-gpu=timestamp,clocks.sm,clocks.mem,temperature.gpu,power.draw,clocks_throttle_reasons.active \
+  --format=csv -l 1 > "$r/clocks.csv" 2>&1 &
+smi=$!
+{
+  nvidia-smi --query-gpu=name,pci.bus_id,driver_version,clocks.sm,clocks.max.sm,clocks.mem,temperature.gpu --format=csv 2>&1
+  "$mfx" --version 2>&1
+  "$mfx" list adapters 2>&1
+} > "$r/gpu.txt"
+cat "$r/gpu.txt"
+need_bunny=0
+for job in "$@"; do
+  case "${job%@*}" in perf-abuffer* | *bunny*) need_bunny=1 ;; esac
+done
+if [ "$need_bunny" = 1 ] && [ ! -f models/bunny-stack16.obj ]; then
+  bash scripts/bake-bunny-stack.sh models/stanford-bunny.obj models/bunny-stack16.obj \
+    || echo "bake failed: the bunny-stack rows will fail with 'file not found'"
+fi
+echo "set-up done in $(( $(date +%s) - start )) s"
+for job in "$@"; do
+  suite=${job%@*}
+  name=$(basename "$suite" .toml)
+  [ "$job" != "$suite" ] && name="$name-${job#*@}"
+  left=$(( budget - ($(date +%s) - start) ))
+  if [ "$left" -lt "$min_left" ]; then
+    echo "job $job: not started ($left s left of the budget)"
+    continue
+  fi
+  s=$(date +%s)
   extra=(--no-report)
   [ "${REPORT:-0}" = 1 ] && extra=()
-  timeout "${SUITE_TIMEOUT:-290}" ./.gpu/mfx sweep "$suite" "${extra[@]}" --out "/tmp/r/$suite" > "/tmp/r/$suite.log" 2>&1
+  timeout "$left" "$mfx" sweep "$suite" "${extra[@]}" --out "$r/$name" > "$r/$name.log" 2>&1
   rc=$?
-  echo "suite $suite: exit $rc in $(( $(date +%s) - start )) s; $(tail -2 "/tmp/r/$suite.log" | head -1)"
-  cp /tmp/r/gpu.txt "/tmp/r/$suite/gpu.txt"
-  mv "/tmp/r/$suite.log" "/tmp/r/$suite/sweep.log"
-  tar czf "$out/$suite.tgz" -C /tmp/r "$suite"
+  echo "job $job: exit $rc in $(( $(date +%s) - s )) s; $(grep -m1 -E '^mfx: .* rows' "$r/$name.log" | tail -c 200)"
+  mkdir -p "$r/$name"
+  cp "$r/gpu.txt" "$r/$name/gpu.txt"
+  mv "$r/$name.log" "$r/$name/sweep.log"
 done
+for pair in ${COMPARE:-}; do
+  a=${pair%%:*}
+  b=${pair#*:}
+  if [ -f "$r/$a/runs.csv" ] && [ -f "$r/$b/runs.csv" ]; then
+    "$mfx" compare "$r/$a" "$r/$b" --html "$r/compare-$a-$b" > "$r/compare-$a-$b.md" 2> "$r/compare-$a-$b.log"
+    echo "compare $a $b: exit $?; $(grep -m1 'points compared' "$r/compare-$a-$b.md")"
+  fi
+done
+kill "$smi" 2>/dev/null
+nvidia-smi --query-gpu=clocks.sm,clocks.mem,temperature.gpu,power.draw --format=csv >> "$r/gpu.txt" 2>&1
+tar czf "$out/runs.tgz" -C "$r" .
+echo "done in $(( $(date +%s) - start )) s"
 ls -la "$out"

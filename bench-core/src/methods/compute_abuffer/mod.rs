@@ -35,7 +35,7 @@
 //! the width and height and box-filters.
 //!
 //! Memory: `bytes_overhead` is the per-pixel part (offsets, scan block sums, counters, output
-//! images); the rest is the fragments (8 B each), the clip buffer (16 B per vertex with
+//! images); the rest is the fragments (8 B each), the clip buffer (24 B per vertex with
 //! `transform = vertex`) and the big-triangle list (2 words per big triangle + 1 per tile).
 
 use super::{Capture, Expected, FrameStats, Method, Prepared};
@@ -121,7 +121,7 @@ impl Method for ComputeAbuffer {
         "compute_abuffer"
     }
     fn describe(&self) -> &'static str {
-        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 16 B per vertex)"
+        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position)"
     }
     fn exact(&self) -> bool {
         true
