@@ -21,9 +21,9 @@
 //! `prepare`, which creates every GPU object) and [`Prepared`] (`frame`, the timed per-frame
 //! work, and `readback`). Nothing assumes a render pass: a compute-only method only has to fill
 //! the same [`Capture`]. Antialiasing (`aa`, `aa_capture`: `crate::aa`) is declared per method:
-//! `depth_peel` (per sample), `wboit` (both), `compute_abuffer` (coverage masks),
-//! `linked_list` and `kbuffer_atomic` (both), and each of them under `ssaa2x2` (`ssaa`); the rest
-//! are `skipped` rows. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL;
+//! `depth_peel` (per sample), `wboit` (both), `compute_abuffer` (coverage masks), each of them
+//! also under `ssaa2x2` (`ssaa`), and `stochastic` (MSAA by construction); the rest
+//! (`linked_list` and `kbuffer_atomic` included, for now) are `skipped` rows with the reason. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL;
 //! `effects.wgsl` ([`FOLD_WGSL`]) is the effects fold, and `packing` the float colour packing
 //! shared with the bucket methods.
 
