@@ -45,6 +45,12 @@ pub const FEATURE_NAMES: &[(wgpu::Features, &str)] = &[
         "VERTEX_WRITABLE_STORAGE",
     ),
     (wgpu::Features::PRIMITIVE_INDEX, "PRIMITIVE_INDEX"),
+    // MSAA with 2 or 8 samples (WebGPU guarantees only 1 and 4): the adapter's own format
+    // capabilities apply where this is granted.
+    (
+        wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES,
+        "TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES",
+    ),
 ];
 
 /// The union of [`FEATURE_NAMES`].

@@ -119,6 +119,45 @@ impl GpuScene {
         (self.width * self.height) as usize
     }
 
+    /// The same scene (vertex and index buffers shared) seen at `width`×`height` with the same
+    /// aspect: its own camera uniform, whose viewport is the new size (the projection depends on
+    /// the aspect only, so it is unchanged). Supersampling renders into one of these.
+    pub fn at_resolution(&self, gpu: &Gpu, width: u32, height: u32) -> GpuScene {
+        assert_eq!(
+            width as u64 * self.height as u64,
+            height as u64 * self.width as u64,
+            "at_resolution keeps the aspect"
+        );
+        let mut camera_data = self.camera_data;
+        camera_data.viewport = [
+            width as f32,
+            height as f32,
+            1.0 / width as f32,
+            1.0 / height as f32,
+        ];
+        let camera = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("camera (resized)"),
+                contents: bytemuck::bytes_of(&camera_data),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            });
+        GpuScene {
+            positions: self.positions.clone(),
+            normals: self.normals.clone(),
+            colors: self.colors.clone(),
+            object_ids: self.object_ids.clone(),
+            indices: self.indices.clone(),
+            index_count: self.index_count,
+            camera,
+            camera_data,
+            width,
+            height,
+            reversed_z: self.reversed_z,
+            bytes: self.bytes,
+        }
+    }
+
     /// Vertex buffer layouts for the attributes `a` (slot order: position, then the enabled ones).
     pub fn layouts(a: Attrs) -> Vec<wgpu::VertexBufferLayout<'static>> {
         let mut v = vec![wgpu::VertexBufferLayout {
@@ -222,8 +261,23 @@ impl AllocCounter {
         format: wgpu::TextureFormat,
         usage: wgpu::TextureUsages,
     ) -> wgpu::Texture {
+        self.texture_ms(gpu, label, w, h, format, usage, 1)
+    }
+
+    /// A texture of `samples` samples per texel (MSAA), counted as `samples` texels' bytes.
+    #[allow(clippy::too_many_arguments)]
+    pub fn texture_ms(
+        &mut self,
+        gpu: &Gpu,
+        label: &str,
+        w: u32,
+        h: u32,
+        format: wgpu::TextureFormat,
+        usage: wgpu::TextureUsages,
+        samples: u32,
+    ) -> wgpu::Texture {
         let bpp = format.block_copy_size(None).unwrap_or(4) as u64;
-        self.bytes += w as u64 * h as u64 * bpp;
+        self.bytes += w as u64 * h as u64 * bpp * samples as u64;
         gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
             size: wgpu::Extent3d {
@@ -232,7 +286,7 @@ impl AllocCounter {
                 depth_or_array_layers: 1,
             },
             mip_level_count: 1,
-            sample_count: 1,
+            sample_count: samples,
             dimension: wgpu::TextureDimension::D2,
             format,
             usage,

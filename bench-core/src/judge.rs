@@ -17,7 +17,7 @@ use crate::effects::EffectConfig;
 use crate::method::{Capture, Expected};
 use crate::metrics::{image_error, layer_count_accuracy, ImageError, BAD_PIXEL_TOL};
 use crate::record::{cols, Flag, Row};
-use crate::reference::FragmentLists;
+use crate::reference::{AaMode, FragmentLists};
 
 /// What the judge needs besides the capture and the reference.
 #[derive(Clone, Copy, Debug)]
@@ -42,6 +42,10 @@ pub struct Judgement {
     /// less than everything.
     pub vs_k: Option<ImageError>,
     pub matches_truth: Option<bool>,
+    /// Samples per output pixel of an antialiased capture (`aa_samples`).
+    pub aa_samples: Option<u32>,
+    /// What the sample-position probe found (`sample_positions`).
+    pub sample_positions: Option<String>,
     pub flip: Option<Flip>,
     pub overflow_rate: f64,
     pub layer_count_accuracy: Option<f64>,
@@ -84,6 +88,10 @@ impl Judgement {
                 .set_f(cols::BAD_PIXEL_FRAC_VS_K, e.bad_pixel_frac);
         }
         row.set_opt(cols::MATCHES_TRUTH, self.matches_truth);
+        row.set_opt(cols::AA_SAMPLES, self.aa_samples);
+        if let Some(s) = &self.sample_positions {
+            row.set(cols::SAMPLE_POSITIONS, s.as_str());
+        }
         if let Some(f) = &self.flip {
             row.set_f(cols::FLIP_MEAN, f.result.mean)
                 .set_f(cols::FLIP_P99, f.result.p99);
@@ -131,7 +139,21 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
             }
         }
     }
-    let dc = lists.depth_complexity();
+    // An antialiased capture is judged against the multisampled truth of its mode; its depth
+    // complexity is the most fragments at one sample of a pixel (what a FirstK(k) overflows on).
+    let aa = crate::aa::reference_for(cap, cx.scene, lists, cx.effect);
+    if let Some(a) = &aa {
+        j.aa_samples = Some(match a.mode {
+            AaMode::Msaa(n) => n,
+            AaMode::Ssaa2x2 => 4,
+            AaMode::None => 1,
+        });
+        j.sample_positions = cap.sample_positions.clone();
+    }
+    let dc = match &aa {
+        Some(a) => a.depth_complexity.clone(),
+        None => lists.depth_complexity(),
+    };
     let px = dc.len().max(1);
     let k = match cap.expected {
         Expected::All => u32::MAX,
@@ -148,7 +170,8 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
         j.flag(Flag::Overflow);
     }
 
-    if let Some(counts) = &cap.counts {
+    // Per-pixel counts are single-sample by contract (an AA capture leaves them `None`).
+    if let (Some(counts), None) = (&cap.counts, &aa) {
         if counts.len() != dc.len() {
             return Err(format!(
                 "counts cover {} pixels, the reference {}",
@@ -204,7 +227,10 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
     }
 
     if let Some(img) = &cap.image {
-        let truth = cx.effect.reference(cx.scene, lists, Expected::All);
+        let truth = match &aa {
+            Some(a) => a.truth.clone(),
+            None => cx.effect.reference(cx.scene, lists, Expected::All),
+        };
         if truth.len() != img.len() {
             return Err(format!(
                 "image has {} pixels, the {} ground truth {}",
@@ -220,6 +246,7 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
         }
         j.truth = Some(e);
         let own = match (&cap.definition, cap.expected) {
+            _ if aa.is_some() => aa.as_ref().and_then(|a| a.own.clone()),
             (Some(d), _) => Some(d.clone()),
             (None, Expected::FirstK(k)) => {
                 Some(cx.effect.reference(cx.scene, lists, Expected::FirstK(k)))

@@ -3,6 +3,7 @@
 //! `methods/mod.rs` (what is measured), `reference/mod.rs` (what it is judged against),
 //! `record.rs` (what is written), `runner.rs` (how a suite becomes rows).
 
+pub mod aa;
 pub mod axes;
 pub mod build_info;
 pub mod check;

@@ -45,6 +45,17 @@ pub struct Capture {
     pub dropped_fragments: Option<u64>,
     /// Fragments a bounded capture blended into its out-of-order tail (`fragments_tailed`).
     pub tailed_fragments: Option<u64>,
+    /// The antialiasing the image was made with; `None` for a single-sample capture. When set
+    /// (and not `AaMode::None`) the image is judged against the multisampled ground truth of
+    /// that mode (`aa::ground_truth`), `counts` is `None` (a pixel has one count per sample),
+    /// and `overflow_pixels` counts output pixels with any overflowing sample.
+    pub aa: Option<crate::reference::AaMode>,
+    /// How an MSAA capture took its samples (per sample or coverage masks): selects its own
+    /// definition (`aa::definition`) for the `*_vs_k` columns.
+    pub aa_capture: Option<crate::reference::multisample::AaCapture>,
+    /// MSAA captures: what the sample-position probe found on this adapter
+    /// (`aa::sample_positions`: `standard`, `differs: …`, `unverified: …`).
+    pub sample_positions: Option<String>,
 }
 
 impl Capture {
@@ -61,6 +72,9 @@ impl Capture {
             definition: None,
             dropped_fragments: None,
             tailed_fragments: None,
+            aa: None,
+            aa_capture: None,
+            sample_positions: None,
         }
     }
 }
@@ -132,6 +146,12 @@ pub trait Prepared {
     /// Of those, the per-pixel structures (heads, offsets, counters, output image), when the
     /// method knows them; the rest holds fragments.
     fn bytes_overhead(&self) -> Option<u64> {
+        None
+    }
+    /// The storage buffer the frame's output image is written to (premultiplied RGBA as
+    /// `vec4<f32>` per pixel, every effect image one after another), for methods that keep it
+    /// in one: the 2×2 supersampling wrapper box-filters it on the GPU.
+    fn image_buffer(&self) -> Option<&wgpu::Buffer> {
         None
     }
     /// Judges what only the method can judge against the exact reference (e.g. the k-buffer's

@@ -129,8 +129,39 @@ pub fn reference_of(cap: &Capture, lists: &FragmentLists) -> Vec<[f64; 4]> {
 /// Largest per-channel error of `cap`'s image against the transparency reference of its
 /// `expected` set, and the pixel where it is (NaN counts as the worst).
 pub fn max_err(cap: &Capture, lists: &FragmentLists) -> (f64, usize) {
-    let reference = reference_of(cap, lists);
+    max_err_vs(cap, &reference_of(cap, lists))
+}
+
+/// One frame of `method` on `scene` (as [`run`]) and the ground truth its image is judged
+/// against (`aa::ground_truth`): the multisampled truth of the capture's `aa` mode, or the
+/// single-sample reference, of the point's effect (transparency for a method without effects).
+pub fn run_truth(
+    method: &dyn Method,
+    scene: &Scene,
+    w: u32,
+    h: u32,
+    params: &Params,
+) -> (Capture, Vec<[f64; 4]>) {
+    let (cap, lists) = run(method, scene, w, h, params);
+    let p = point(method, params);
+    let effect = if method
+        .axes()
+        .iter()
+        .any(|a| a.name() == crate::effects::EFFECT.name())
+    {
+        crate::effects::EffectConfig::from_point(&p).expect("validated")
+    } else {
+        Default::default()
+    };
+    let truth = crate::aa::ground_truth(&cap, scene, &lists, &effect);
+    (cap, truth)
+}
+
+/// Largest per-channel error of `cap`'s image against `reference`, and the pixel where it is
+/// (NaN counts as the worst).
+pub fn max_err_vs(cap: &Capture, reference: &[[f64; 4]]) -> (f64, usize) {
     let img = cap.image.as_ref().expect("an image");
+    assert_eq!(img.len(), reference.len(), "image and reference sizes");
     let mut worst = (0.0f64, 0usize);
     for (p, (r, g)) in reference.iter().zip(img).enumerate() {
         for c in 0..4 {

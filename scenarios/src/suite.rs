@@ -51,6 +51,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ),
     ("continuum", include_str!("../suites/continuum.toml")),
     ("continuum-ci", include_str!("../suites/continuum-ci.toml")),
+    ("aa", include_str!("../suites/aa.toml")),
+    ("aa-ci", include_str!("../suites/aa-ci.toml")),
 ];
 
 #[derive(Clone, Debug)]

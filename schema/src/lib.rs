@@ -253,6 +253,39 @@ pub mod cols {
         "moments: true to normalise the resolved colour by the total absorbance (exact for one layer)",
     );
 
+    pub const AA: Col = Col::new(
+        "aa",
+        "antialiasing: none (one sample at the pixel centre) | msaa2 | msaa4 | msaa8 (MSAA at the standard sample positions) | ssaa2x2 (rendered at 2× width and height, 2×2 box filter); such rows are judged against the multisampled ground truth (the mean of the samples' exact composites)",
+    );
+    pub const AA_CAPTURE: Col = Col::new(
+        "aa_capture",
+        "MSAA capture: sample (sample shading: one fragment per covered sample, memory × samples) | coverage (one fragment per pixel with its coverage mask, resolved per sample: nvpro's OIT_COVERAGE_SHADING)",
+    );
+    pub const AA_SAMPLES: Col = Col::new(
+        "aa_samples",
+        "samples per output pixel of the row's antialiasing (1, 2, 4, 8; 4 for ssaa2x2; stochastic: st_samples)",
+    );
+    pub const SAMPLE_POSITIONS: Col = Col::new(
+        "sample_positions",
+        "MSAA rows: standard (a probe render's per-sample coverage matched the reference at Vulkan's standard sample locations) | differs: <measured positions, 1/16 px> | unverified: <why>",
+    );
+    pub const ST_SAMPLES: Col = Col::new(
+        "st_samples",
+        "stochastic: MSAA samples per pass S (4 or 8); each fragment covers ≈ α·S of them",
+    );
+    pub const ST_PASSES: Col = Col::new(
+        "st_passes",
+        "stochastic: passes accumulated (independent masks each), st_samples × st_passes samples in all",
+    );
+    pub const ST_CORRECTION: Col = Col::new(
+        "st_correction",
+        "stochastic: true to apply Enderton et al.'s alpha correction (colour × exact total alpha / stochastic alpha, from an extra accumulation pass)",
+    );
+    pub const ST_SEED: Col = Col::new(
+        "st_seed",
+        "stochastic: seed of the per-fragment sample masks (the same seed gives the same frame)",
+    );
+
     // ---- Effect parameters (axes of the effects fold) ----
     pub const SIGMA: Col = Col::new(
         "sigma",
@@ -926,6 +959,14 @@ pub const GROUPS: &[Group] = &[
             cols::MOMENT_PRECISION,
             cols::MOMENT_BIAS,
             cols::MOMENT_NORMALIZE,
+            cols::AA,
+            cols::AA_CAPTURE,
+            cols::AA_SAMPLES,
+            cols::SAMPLE_POSITIONS,
+            cols::ST_SAMPLES,
+            cols::ST_PASSES,
+            cols::ST_CORRECTION,
+            cols::ST_SEED,
         ],
     },
     Group {

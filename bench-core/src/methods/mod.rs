@@ -17,13 +17,14 @@
 //!
 //! | `linked_list`  | Yang et al. 2010, per-pixel linked lists (atomic heads; per-8×8-tile node pools counted at prepare, or one layers × pixels pool), sorted in the resolve; compact nodes re-derived per primitive | exact within the pool; overflow counted | 1 (+ resolve) | 32 B (head, lost, count, image, stand-in depth) + 12 B per true fragment (compact, counted; 32 B full nodes, or layers × nodes when fixed) |
 //! | `compute_abuffer` | Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no render pass; Laine & Karras 2011 in spirit), attributes re-derived per primitive (visibility buffer) | exact: coverage rule for rule as the reference, sized by a prepare-time count; lists over 128 counted | 2 (count, fill) + scan + resolve | 4 B offset + 16 B image + exactly 8 B per fragment (+ 24 B per vertex with `transform = vertex`) |
-//! | `wboit`        | McGuire & Bavoil 2013, weighted blended OIT | approximate (exact for one layer or one colour/alpha) | 1 (+ resolve) | 8 B RGBA16F + 2 B R16F + 16 B result |
+//! | `wboit`        | McGuire & Bavoil 2013, weighted blended OIT | approximate (exact for one layer or one colour/alpha) | 1 (+ resolve) | 8 B RGBA16F + 2 B R16F + 16 B result (× samples for the targets under MSAA) |
 //! | `moments`      | Münstermann et al. 2018, moment-based OIT: b₀ + 4/6/8 power or 2/3/4 trigonometric moments, f32 blending or the paper's unorm16 (unguarded RMW), reconstruction per fragment, optional normalisation | approximate (exact for one layer, normalised); failed f32 reconstructions counted (flag precision) | 2 (+ composite) | 4 B b₀ + 4 B (2 B) per moment + 16 B sum + 16 B image |
 //! | `mlab`         | Salvi & Vaidyanathan 2014, multi-layer alpha blending by unguarded RMW (no ROVs); `tail = merge\|drop\|blend` | approximate (exact for n ≤ k); races measured vs the ideal-order twin (`hazard_rate`) | 1 (+ resolve) | k × 20 B + 4 B count + 16 B image (+ 24 B tail) |
 //! | `mlab_ideal`   | MLAB as ordering hardware gives it: compute_abuffer's capture replayed per pixel in primitive order | approximate (exact for n ≤ k); separates MLAB's error from the race | compute_abuffer's | 8 B per fragment + compute_abuffer's |
 //! | `adaptive`     | Salvi et al. 2011, adaptive transparency: k visibility nodes by unguarded RMW, least-area removal, shading pass | approximate (exact for n ≤ k; darkens); races measured vs the ideal-order twin | 2 (+ composite) | k × 8 B + 4 B count + 16 B sum + 16 B image |
 //! | `adaptive_ideal` | adaptive transparency replayed in primitive order from compute_abuffer's capture | approximate (exact for n ≤ k) | compute_abuffer's | 8 B per fragment + compute_abuffer's |
 //! | `hybrid`       | Maule et al. 2013, hybrid transparency: the atomic k-buffer's k nearest exact + a mean-alpha weighted tail behind them | approximate (exact for n ≤ k), order-independent | 2 (+ resolve) | k × 40 B + 16 B image + 24 B tail |
+//! | `stochastic`   | Enderton et al. 2010 stochastic transparency (random α·S sample masks, MSAA depth test, passes averaged, alpha correction) | approximate: unbiased without the correction, noise ∝ 1/√(S·passes); judged vs the S-sample truth | 2 per pass (+1 for the correction) | S × (4 B depth + 16 B RGBA32F + 4 B R32F) + 32 B |
 //! | `bdp`          | Liu et al., GPU Pro ch. 1, uniform bucket depth peeling | approximate: exact iff ≤1 fragment per bucket (2 if paired); collisions counted | 2 | 8 B range + 4 B × channels (≤32) + 68 B resolve |
 //! | `bdp2`         | Liu et al., GPU Pro ch. 1, two-pass BDP | approximate: 2 fragments per bucket; collisions counted | 3 | 8 B range + 2 × 4 B × K + 68 B resolve |
 //! | `adp`          | Liu et al., GPU Pro ch. 1, adaptive (histogram-equalised) BDP | approximate: fragments sharing a histogram bin collide | 2 + ⌈occupied bins / K⌉ | hist_bins/8 B + 8 B × K + 8 B range + 68 B resolve |
@@ -31,7 +32,10 @@
 //! Every method implements [`Method`] (what it is, which axes and features it needs, and
 //! `prepare`, which creates every GPU object) and [`Prepared`] (`frame`, the timed per-frame
 //! work, and `readback`). Nothing assumes a render pass: a compute-only method only has to fill
-//! the same [`Capture`]. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL;
+//! the same [`Capture`]. Antialiasing (`aa`, `aa_capture`: `crate::aa`) is declared per method:
+//! `depth_peel` (per sample), `wboit` (both), `compute_abuffer` (coverage masks), each of them
+//! also under `ssaa2x2` (`ssaa`), and `stochastic` (MSAA by construction); the rest
+//! (`linked_list` and `kbuffer_atomic` included, for now) are `skipped` rows with the reason. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL;
 //! `effects.wgsl` ([`FOLD_WGSL`]) is the effects fold, and `packing` the float colour packing
 //! shared with the bucket methods. The approximate (continuum) methods' per-pixel rules have CPU
 //! twins in [`crate::oit`], which `Prepared::judge` runs on the reference fragments to fill
@@ -53,6 +57,8 @@ pub mod linked_list;
 pub mod mlab;
 pub mod moments;
 pub mod packing;
+pub mod ssaa;
+pub mod stochastic;
 pub mod store;
 pub mod tail;
 pub mod wboit;
@@ -78,6 +84,7 @@ pub fn all() -> Vec<Box<dyn Method>> {
         Box::new(adaptive::Adaptive),
         Box::new(adaptive::AdaptiveIdeal),
         Box::new(hybrid::Hybrid),
+        Box::new(stochastic::Stochastic),
         Box::new(bdp::Bdp),
         Box::new(bdp2::Bdp2),
         Box::new(adp::Adp),

@@ -4,11 +4,14 @@
 //! depth range 0 ≤ z ≤ w like Vulkan, snaps screen positions to the GPU's 8 sub-pixel bits,
 //! samples pixel centres with the top-left fill rule, interpolates depth linearly in screen space
 //! and attributes perspective-correctly. Slow and obviously right on purpose; parallel over row
-//! strips with rayon. Everything a GPU method outputs is judged against this.
+//! strips with rayon. Everything a GPU method outputs is judged against this. `multisample`
+//! runs the same rasteriser at MSAA sample positions (and supersampled) for antialiased rows.
 
+pub mod multisample;
 pub mod raster;
 
-pub use raster::{rasterize, RefFragment, SUBPIXEL_BITS};
+pub use multisample::AaMode;
+pub use raster::{rasterize, rasterize_with, RefFragment, Sampling, SUBPIXEL_BITS};
 
 /// Per-pixel fragment lists in compressed-row form, each list sorted nearest first.
 #[derive(Clone, Debug)]

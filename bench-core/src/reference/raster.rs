@@ -125,8 +125,54 @@ fn top_left(a: (f64, f64), b: (f64, f64)) -> bool {
     (dy == 0.0 && dx > 0.0) || dy < 0.0
 }
 
+/// Where one raster pass samples: the coverage sample positions and the point attributes and
+/// depth are evaluated at, as offsets within a pixel (x right, y down, pixel corner = (0, 0)).
+#[derive(Clone, Copy, Debug)]
+pub struct Sampling<'a> {
+    /// Coverage samples; a fragment is emitted where any of them is covered, with bit `i` of
+    /// its mask set for sample `i`.
+    pub coverage: &'a [(f64, f64)],
+    /// Where attributes are interpolated (extrapolated when the point lies outside the
+    /// triangle, as a GPU does for a pixel-rate fragment that covers only some samples).
+    pub attributes: (f64, f64),
+    /// Where window depth is interpolated; `None`: at `attributes`.
+    pub depth: Option<(f64, f64)>,
+}
+
+/// The pixel centre: one sample, attributes there (the single-sample reference).
+pub const CENTRE: Sampling<'static> = Sampling {
+    coverage: &[(0.5, 0.5)],
+    attributes: (0.5, 0.5),
+    depth: None,
+};
+
 /// Projects, clips and snaps every triangle, then rasterizes row strips in parallel.
 pub fn rasterize(scene: &Scene, width: u32, height: u32) -> FragmentLists {
+    rasterize_with(scene, width, height, CENTRE).0
+}
+
+/// [`rasterize`] at the sample positions and attribute point of `sampling`: the fragment lists
+/// and, parallel to `frags`, each fragment's coverage mask (bit i: `sampling.coverage[i]`).
+/// With [`CENTRE`] the lists are exactly those of [`rasterize`].
+pub fn rasterize_with(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    sampling: Sampling<'_>,
+) -> (FragmentLists, Vec<u32>) {
+    assert!(
+        !sampling.coverage.is_empty() && sampling.coverage.len() <= 32,
+        "1 to 32 coverage samples, not {}",
+        sampling.coverage.len()
+    );
+    // Pixels whose samples may lie in [min, max]: pixel x samples x + o for each offset o.
+    let (omin, omax) = sampling.coverage.iter().fold(
+        (
+            (f64::INFINITY, f64::INFINITY),
+            (f64::NEG_INFINITY, f64::NEG_INFINITY),
+        ),
+        |(lo, hi), &(x, y)| ((lo.0.min(x), lo.1.min(y)), (hi.0.max(x), hi.1.max(y))),
+    );
     let aspect = width as f64 / height as f64;
     let m: DMat4 = scene.camera.clip_from_world_gpu(aspect).as_dmat4();
     let view: DMat4 = scene.camera.view().as_mat4().as_dmat4();
@@ -224,11 +270,12 @@ pub fn rasterize(scene: &Scene, width: u32, height: u32) -> FragmentLists {
                     ys.iter().cloned().fold(f64::INFINITY, f64::min),
                     ys.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
                 );
-                // Pixel centres (i + 0.5) inside [min, max].
-                let x0 = (minx - 0.5).ceil().max(0.0);
-                let x1 = (maxx - 0.5).floor().min(w - 1.0);
-                let y0 = (miny - 0.5).ceil().max(0.0);
-                let y1 = (maxy - 0.5).floor().min(h - 1.0);
+                // Pixels with a sample (i + o) inside [min, max] (the centres, i + 0.5, when
+                // the one sample is the centre).
+                let x0 = (minx - omax.0).ceil().max(0.0);
+                let x1 = (maxx - omin.0).floor().min(w - 1.0);
+                let y0 = (miny - omax.1).ceil().max(0.0);
+                let y1 = (maxy - omin.1).floor().min(h - 1.0);
                 if x0 > x1 || y0 > y1 {
                     continue;
                 }
@@ -258,13 +305,14 @@ pub fn rasterize(scene: &Scene, width: u32, height: u32) -> FragmentLists {
     }
     let reversed = scene.camera.reversed_z;
 
-    let strips: Vec<Vec<Vec<RefFragment>>> = bins
+    let (ax, ay) = sampling.attributes;
+    let strips: Vec<Vec<Vec<(RefFragment, u32)>>> = bins
         .par_iter()
         .enumerate()
         .map(|(s, bin)| {
             let row0 = s as u32 * STRIP;
             let rows = STRIP.min(height - row0);
-            let mut px: Vec<Vec<RefFragment>> = vec![Vec::new(); (rows * width) as usize];
+            let mut px: Vec<Vec<(RefFragment, u32)>> = vec![Vec::new(); (rows * width) as usize];
             for &ti in bin {
                 let t = &tris[ti as usize];
                 let p = [
@@ -272,26 +320,39 @@ pub fn rasterize(scene: &Scene, width: u32, height: u32) -> FragmentLists {
                     (t.v[1].x, t.v[1].y),
                     (t.v[2].x, t.v[2].y),
                 ];
-                let tl = [
-                    top_left(p[1], p[2]),
-                    top_left(p[2], p[0]),
-                    top_left(p[0], p[1]),
-                ];
+                let tl = top_left_edges(p);
                 for y in t.y0.max(row0)..=t.y1.min(row0 + rows - 1) {
-                    let cy = y as f64 + 0.5;
                     for x in t.x0..=t.x1 {
-                        let c = (x as f64 + 0.5, cy);
+                        let mut mask = 0u32;
+                        for (i, &(ox, oy)) in sampling.coverage.iter().enumerate() {
+                            if covers(p, tl, (x as f64 + ox, y as f64 + oy)) {
+                                mask |= 1 << i;
+                            }
+                        }
+                        if mask == 0 {
+                            continue;
+                        }
+                        let c = (x as f64 + ax, y as f64 + ay);
                         let e = [
                             edge(p[1], p[2], c),
                             edge(p[2], p[0], c),
                             edge(p[0], p[1], c),
                         ];
-                        if (0..3).any(|i| e[i] < 0.0 || (e[i] == 0.0 && !tl[i])) {
-                            continue;
-                        }
                         let b = [e[0] / t.area, e[1] / t.area, e[2] / t.area];
-                        let depth =
-                            (b[0] * t.v[0].z + b[1] * t.v[1].z + b[2] * t.v[2].z).clamp(0.0, 1.0);
+                        let bd = match sampling.depth {
+                            None => b,
+                            Some((dx, dy)) => {
+                                let c = (x as f64 + dx, y as f64 + dy);
+                                let e = [
+                                    edge(p[1], p[2], c),
+                                    edge(p[2], p[0], c),
+                                    edge(p[0], p[1], c),
+                                ];
+                                [e[0] / t.area, e[1] / t.area, e[2] / t.area]
+                            }
+                        };
+                        let depth = (bd[0] * t.v[0].z + bd[1] * t.v[1].z + bd[2] * t.v[2].z)
+                            .clamp(0.0, 1.0);
                         let pw = [
                             b[0] * t.v[0].inv_w,
                             b[1] * t.v[1].inv_w,
@@ -305,7 +366,7 @@ pub fn rasterize(scene: &Scene, width: u32, height: u32) -> FragmentLists {
                                 + pw[2] * t.v[2].attrs[k])
                                 / sum;
                         }
-                        px[((y - row0) * width + x) as usize].push(RefFragment {
+                        let f = RefFragment {
                             depth,
                             view_z: a[7],
                             color: [a[0], a[1], a[2], a[3]],
@@ -313,13 +374,14 @@ pub fn rasterize(scene: &Scene, width: u32, height: u32) -> FragmentLists {
                             object_id: t.object_id,
                             front_facing: t.front,
                             prim: t.prim,
-                        });
+                        };
+                        px[((y - row0) * width + x) as usize].push((f, mask));
                     }
                 }
             }
             for list in &mut px {
                 // Nearest first; ties keep submission order (a stable, documented choice).
-                list.sort_by(|a, b| {
+                list.sort_by(|(a, _), (b, _)| {
                     let o = if reversed {
                         b.depth.total_cmp(&a.depth)
                     } else {
@@ -335,18 +397,45 @@ pub fn rasterize(scene: &Scene, width: u32, height: u32) -> FragmentLists {
     let mut offsets = Vec::with_capacity((width * height + 1) as usize);
     let total: usize = strips.iter().flatten().map(|l| l.len()).sum();
     let mut frags = Vec::with_capacity(total);
+    let mut masks = Vec::with_capacity(total);
     offsets.push(0u32);
     for strip in strips {
         for list in strip {
-            frags.extend(list);
+            for (f, m) in list {
+                frags.push(f);
+                masks.push(m);
+            }
             offsets.push(frags.len() as u32);
         }
     }
-    FragmentLists {
+    let lists = FragmentLists {
         width,
         height,
         reversed_z: reversed,
         offsets,
         frags,
-    }
+    };
+    (lists, masks)
+}
+
+/// Whether point `c` is inside the positively wound triangle `p` (y down) under the top-left
+/// rule: every edge function positive, or zero on a top or left edge (`tl`, per edge
+/// p1→p2, p2→p0, p0→p1). Shared edges are watertight: a point on one is owned by exactly one of
+/// the two triangles.
+pub fn covers(p: [(f64, f64); 3], tl: [bool; 3], c: (f64, f64)) -> bool {
+    let e = [
+        edge(p[1], p[2], c),
+        edge(p[2], p[0], c),
+        edge(p[0], p[1], c),
+    ];
+    !(0..3).any(|i| e[i] < 0.0 || (e[i] == 0.0 && !tl[i]))
+}
+
+/// The top-left flags of a positively wound screen triangle's edges p1→p2, p2→p0, p0→p1.
+pub fn top_left_edges(p: [(f64, f64); 3]) -> [bool; 3] {
+    [
+        top_left(p[1], p[2]),
+        top_left(p[2], p[0]),
+        top_left(p[0], p[1]),
+    ]
 }

@@ -228,3 +228,250 @@ fn vertices_far_outside_the_view_give_exact_finite_fragments() {
         }
     }
 }
+
+// ---- the multisampled reference ----
+
+use super::multisample::{
+    box_filter_2x2, coverage_lists, resolve, sample_list, sample_lists, standard_positions,
+};
+
+/// World point on the plane `z` that projects to screen position (sx, sy) of a w×h image
+/// (inverting the GPU's f32 matrix in f64; the f32 vertex is then within ~1e-5 px, which the
+/// 1/256 snap removes).
+fn screen_point(s: &Scene, w: u32, h: u32, sx: f64, sy: f64, z: f64) -> Vec3 {
+    let m = s.camera.clip_from_world_gpu(w as f64 / h as f64).as_dmat4();
+    let (nx, ny) = (sx / w as f64 * 2.0 - 1.0, 1.0 - sy / h as f64 * 2.0);
+    // clip = m·(x, y, z, 1); solve cx − nx·cw = 0, cy − ny·cw = 0 for x, y.
+    let row = |r: usize| glam::DVec4::new(m.x_axis[r], m.y_axis[r], m.z_axis[r], m.w_axis[r]);
+    let (rx, ry, rw) = (row(0), row(1), row(3));
+    let a = rx - rw * nx;
+    let b = ry - rw * ny;
+    let (c1, c2) = (-(a.z * z + a.w), -(b.z * z + b.w));
+    let det = a.x * b.y - a.y * b.x;
+    Vec3::new(
+        ((c1 * b.y - a.y * c2) / det) as f32,
+        ((a.x * c2 - c1 * b.x) / det) as f32,
+        z as f32,
+    )
+}
+
+/// A quad given by its screen rectangle [x0, x1] × [y0, y1] on the plane `z`.
+fn screen_quad(s: &mut Scene, w: u32, h: u32, r: [f64; 4], z: f64, color: [f32; 4], id: u32) {
+    let [x0, y0, x1, y1] = r;
+    let p = |x, y| screen_point(s, w, h, x, y, z);
+    let c = [p(x0, y1), p(x1, y1), p(x1, y0), p(x0, y0)];
+    s.mesh.push_quad(c, color, id);
+}
+
+fn empty_scene() -> Scene {
+    scene_with(Mesh::default())
+}
+
+/// The mean over sample positions of each sample's composite: the multisampled truth of
+/// transparency (what `aa::truth` computes for it).
+fn msaa_composite(s: &Scene, w: u32, h: u32, samples: u32) -> Vec<[f64; 4]> {
+    let per: Vec<Vec<[f64; 4]>> = sample_lists(s, w, h, samples)
+        .iter()
+        .map(|l| l.composite())
+        .collect();
+    resolve(&per)
+}
+
+#[test]
+fn standard_positions_are_vulkans_table_on_the_sixteenth_grid() {
+    for n in [1, 2, 4, 8] {
+        let p = standard_positions(n);
+        assert_eq!(p.len(), n as usize);
+        // On the 1/16 grid, inside the pixel, distinct, and centred on average (the table is
+        // symmetric about the centre).
+        for &(x, y) in p {
+            assert!((x * 16.0).fract() == 0.0 && (y * 16.0).fract() == 0.0);
+            assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
+        }
+        let mean = p.iter().fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+        assert_eq!((mean.0 / n as f64, mean.1 / n as f64), (0.5, 0.5));
+    }
+    assert_eq!(standard_positions(4)[0], (0.375, 0.125));
+    assert_eq!(standard_positions(8)[7], (0.9375, 0.0625));
+}
+
+#[test]
+fn a_half_covered_pixel_resolves_to_half_in_every_mode() {
+    // An opaque white quad whose left edge runs down the middle of pixel column 8 (x = 8.5) at
+    // 32×32: half the samples of 2×, 4×, 8× and of the 2×2 supersamples lie right of it.
+    let (w, h) = (32, 32);
+    let mut s = empty_scene();
+    screen_quad(&mut s, w, h, [8.5, 8.0, 24.0, 24.0], 0.0, [1.0; 4], 0);
+    let at = |img: &[[f64; 4]], x: u32, y: u32| img[(y * w + x) as usize];
+    for samples in [2, 4, 8] {
+        let img = msaa_composite(&s, w, h, samples);
+        assert_eq!(at(&img, 8, 16), [0.5; 4], "{samples}×: the cut pixel");
+        assert_eq!(at(&img, 9, 16), [1.0; 4], "{samples}×: inside");
+        assert_eq!(at(&img, 7, 16), [0.0; 4], "{samples}×: outside");
+        // The coverage masks say the same: exactly half the bits at the cut pixel.
+        let cl = coverage_lists(&s, w, h, samples);
+        let p = (16 * w + 8) as usize;
+        let m = cl.masks[cl.lists.offsets[p] as usize];
+        assert_eq!(cl.lists.pixel(p).len(), 1);
+        assert_eq!(m.count_ones(), samples / 2, "{samples}×: mask {m:#b}");
+        assert_eq!(cl.composite_first(usize::MAX)[p], [0.5; 4]);
+    }
+    let big = rasterize(&s, 2 * w, 2 * h).composite();
+    let ssaa = box_filter_2x2(&big, w, h);
+    assert_eq!(at(&ssaa, 8, 16), [0.5; 4], "ssaa2x2: the cut pixel");
+    assert_eq!(at(&ssaa, 9, 16), [1.0; 4]);
+    // One sample at the centre: the centre lies on the (left, so owned) edge.
+    assert_eq!(at(&rasterize(&s, w, h).composite(), 8, 16), [1.0; 4]);
+}
+
+#[test]
+fn shared_edges_through_sample_positions_cover_every_sample_exactly_once() {
+    // A grid of quads (each two triangles sharing a diagonal) whose vertical and horizontal
+    // edges pass exactly through 2×, 4× and 8× sample positions (x = k + 0.375, y = k + 0.125,
+    // …), and a fan of 16 triangles with slanted shared edges: every sample inside is covered
+    // by exactly one triangle, in the per-sample lists and in the coverage masks alike.
+    let (w, h) = (32, 32);
+    let mut s = empty_scene();
+    let xs = [3.375, 7.5625, 11.25, 15.9375, 19.75, 23.4375, 28.0625];
+    let ys = [3.125, 6.3125, 10.75, 14.8125, 18.25, 22.0625, 27.9375];
+    for i in 0..xs.len() - 1 {
+        for j in 0..ys.len() - 1 {
+            let r = [xs[i], ys[j], xs[i + 1], ys[j + 1]];
+            screen_quad(&mut s, w, h, r, 0.0, [1.0; 4], 0);
+        }
+    }
+    let inside = |x: f64, y: f64| x > xs[0] && x < xs[6] && y > ys[0] && y < ys[6];
+    let mut on_edge = 0;
+    for samples in [1, 2, 4, 8] {
+        let pos = standard_positions(samples);
+        for (k, lists) in sample_lists(&s, w, h, samples).iter().enumerate() {
+            let dc = lists.depth_complexity();
+            for y in 0..h {
+                for x in 0..w {
+                    let (sx, sy) = (x as f64 + pos[k].0, y as f64 + pos[k].1);
+                    let d = dc[(y * w + x) as usize];
+                    on_edge += (xs.contains(&sx) || ys.contains(&sy)) as u32;
+                    if inside(sx, sy) {
+                        assert_eq!(
+                            d, 1,
+                            "{samples}×, sample {k} of ({x},{y}): covered {d} times"
+                        );
+                    } else {
+                        assert!(
+                            d <= 1,
+                            "{samples}×, sample {k} of ({x},{y}): covered {d} times"
+                        );
+                    }
+                }
+            }
+        }
+        let cl = coverage_lists(&s, w, h, samples);
+        for p in 0..cl.lists.pixels() {
+            let (a, b) = (
+                cl.lists.offsets[p] as usize,
+                cl.lists.offsets[p + 1] as usize,
+            );
+            let mut seen = 0u32;
+            for &m in &cl.masks[a..b] {
+                assert_eq!(seen & m, 0, "{samples}×: pixel {p} has a sample twice");
+                seen |= m;
+            }
+            let (x, y) = ((p as u32 % w) as f64, (p as u32 / w) as f64);
+            let all_inside = pos.iter().all(|&(ox, oy)| inside(x + ox, y + oy));
+            if all_inside {
+                assert_eq!(
+                    seen,
+                    (1u32 << samples) - 1,
+                    "{samples}×: pixel {p} misses samples"
+                );
+            }
+        }
+    }
+    assert!(
+        on_edge > 100,
+        "the grid's edges pass through samples ({on_edge})"
+    );
+
+    // The fan of the single-sample test, at 8 samples: no sample twice, none missed inside.
+    let mut m = Mesh::default();
+    let n = 16;
+    m.positions.push([0.0, 0.0, 0.0]);
+    for i in 0..n {
+        let a = std::f32::consts::TAU * i as f32 / n as f32;
+        m.positions.push([3.0 * a.cos(), 3.0 * a.sin(), 0.0]);
+    }
+    for _ in 0..=n {
+        m.normals.push([0.0, 0.0, 1.0]);
+        m.colors.push([1.0; 4]);
+        m.object_ids.push(0);
+    }
+    for i in 0..n {
+        m.indices.extend_from_slice(&[0, 1 + i, 1 + (i + 1) % n]);
+    }
+    let fan = scene_with(m);
+    for (k, lists) in sample_lists(&fan, 64, 64, 8).iter().enumerate() {
+        let (ox, oy) = standard_positions(8)[k];
+        for (p, &d) in lists.depth_complexity().iter().enumerate() {
+            let (x, y) = ((p % 64) as f64 + ox - 32.0, (p / 64) as f64 + oy - 32.0);
+            assert!(d <= 1, "fan: sample {k} of pixel {p} covered {d} times");
+            if (x * x + y * y).sqrt() < 20.0 {
+                assert_eq!(d, 1, "fan: sample {k} of pixel {p} missed");
+            }
+        }
+    }
+}
+
+#[test]
+fn one_sample_at_the_centre_is_the_single_sample_reference() {
+    for s in [
+        SceneSpec::new(
+            "grass",
+            Params::new().with("blades", scenarios::ParamValue::Int(60)),
+        )
+        .build()
+        .unwrap(),
+        SceneSpec::new("shells", Params::new()).build().unwrap(),
+    ] {
+        let single = rasterize(&s, 48, 40);
+        let one = &sample_lists(&s, 48, 40, 1)[0];
+        assert_eq!(one.offsets, single.offsets, "{}", s.label());
+        assert_eq!(one.frags, single.frags, "{}", s.label());
+        let cl = coverage_lists(&s, 48, 40, 1);
+        assert_eq!(cl.lists.frags, single.frags);
+        assert!(cl.masks.iter().all(|&m| m == 1));
+        assert_eq!(cl.composite_first(usize::MAX), single.composite());
+        assert_eq!(msaa_composite(&s, 48, 40, 1), single.composite());
+    }
+}
+
+#[test]
+fn coverage_masks_equal_per_sample_lists_where_depth_and_colour_are_constant_in_a_pixel() {
+    // Screen-parallel quads of one colour each: a fragment's centre depth and colour are its
+    // depth and colour at every sample, so the coverage view composites exactly as the
+    // per-sample one (up to the order of f64 additions).
+    let s = SceneSpec::new(
+        "quads",
+        Params::new().with("depth_complexity", scenarios::ParamValue::Int(6)),
+    )
+    .build()
+    .unwrap();
+    for samples in [2, 4, 8] {
+        let a = msaa_composite(&s, 40, 40, samples);
+        let b = coverage_lists(&s, 40, 40, samples).composite_first(usize::MAX);
+        let worst = a
+            .iter()
+            .zip(&b)
+            .flat_map(|(x, y)| (0..4).map(move |c| (x[c] - y[c]).abs()))
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-12, "{samples}×: {worst}");
+        // And antialiasing changed something: edge pixels are fractional.
+        let single = rasterize(&s, 40, 40).composite();
+        assert!(a
+            .iter()
+            .zip(&single)
+            .any(|(x, y)| (x[3] - y[3]).abs() > 0.05));
+    }
+    // A half-width sample list is what sample_list gives at that position.
+    let l = sample_list(&s, 40, 40, (0.25, 0.75));
+    assert_eq!(l.pixels(), 1600);
+}

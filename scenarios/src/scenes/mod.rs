@@ -17,6 +17,7 @@
 //! | `soft_shadow` | occluders over a ground plane under a square area light | ray-traced visibility |
 //! | `particles` | N camera-facing low-alpha quads in a smoke column (stratified depths) | ≈ 0.022·N at the centre |
 //! | `hair`   | many thin curved ribbons hanging from a scalp, facing the camera | —                 |
+//! | `slivers` | N thin needles crossing the view at distinct depths: nearly every pixel an edge (AA) | — |
 
 pub mod city;
 pub mod grass;
@@ -25,6 +26,7 @@ pub mod mesh;
 pub mod particles;
 pub mod quads;
 pub mod shells;
+pub mod slivers;
 pub mod soft_shadow;
 pub mod stiff;
 
@@ -294,6 +296,7 @@ impl SceneSpec {
             "soft_shadow" => soft_shadow::build(self)?,
             "particles" => particles::build(self)?,
             "hair" => hair::build(self)?,
+            "slivers" => slivers::build(self)?,
             other => {
                 return Err(SceneError::UnknownGenerator(
                     other.to_string(),
@@ -319,6 +322,7 @@ pub const GENERATORS: &[&str] = &[
     "city",
     "particles",
     "hair",
+    "slivers",
 ];
 
 /// One-line description per generator, for `mfx list scenes`.
@@ -337,6 +341,7 @@ pub fn describe(generator: &str) -> &'static str {
         "soft_shadow" => "case=spheres|leaves|slabs|tangent|quad|obj, light_size, light_height, …: occluders over a ground plane under a square area light",
         "particles" => "count, alpha_min, alpha_max, size, spread, seed: camera-facing low-alpha quads in a smoke column, ≈ 0.022·count layers at the centre",
         "hair" => "strands, segments, width, length, alpha, seed: thin curved ribbons hanging from a scalp, facing the camera",
+        "slivers" => "count, width, alpha, span, distance, seed: thin needles crossing the view at distinct depths, nearly every covered pixel an edge (antialiasing)",
         _ => "",
     }
 }

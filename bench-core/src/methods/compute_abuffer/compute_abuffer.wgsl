@@ -27,6 +27,12 @@
 override FILL: bool = false;
 override PRETRANSFORM: bool = true;
 override STEPPED: bool = true;
+// MSAA coverage masks (aa = msaa*, aa_capture = coverage): coverage is tested at AA_SAMPLES
+// sample positions (Vulkan's standard locations, `sample_off`) by the same exact integer edge
+// rule; a pixel with any sample covered gets one fragment, depth at the pixel centre, tagged
+// prim | mask << TAG_PRIM_BITS (23) | front << 31; the resolve folds each sample over the
+// fragments whose mask has its bit and averages the samples. 1: pixel centres only.
+override AA_SAMPLES: u32 = 1u;
 // Resolve: sort lists of up to WG_CAP fragments in workgroup memory (axis `resolve_sort =
 // workgroup`); longer lists, and every list when false, in a per-thread array.
 override WG_SORT: bool = true;
@@ -246,8 +252,30 @@ fn setup(prim: u32) -> Poly {
     return p;
 }
 
-// Pixel-centre bounds (x0, y0, x1, y1) of a screen polygon, clamped to the viewport; x0 > x1 or
-// y0 > y1 when it covers no centre.
+// Sample s's position in pixel (x, y)'s square, in 1/256 px from its top-left corner: Vulkan's
+// standard sample locations × 256 (the Rust table `reference::multisample::standard_positions`;
+// the AA tests compare with it), or the centre.
+fn sample_off(s: u32) -> vec2<i32> {
+    if AA_SAMPLES == 2u {
+        return select(vec2<i32>(64, 64), vec2<i32>(192, 192), s == 0u);
+    }
+    if AA_SAMPLES == 4u {
+        var t = array<vec2<i32>, 4>(vec2<i32>(96, 32), vec2<i32>(224, 96), vec2<i32>(32, 160), vec2<i32>(160, 224));
+        return t[s];
+    }
+    if AA_SAMPLES == 8u {
+        var t = array<vec2<i32>, 8>(
+            vec2<i32>(144, 80), vec2<i32>(112, 176), vec2<i32>(208, 144), vec2<i32>(80, 48),
+            vec2<i32>(48, 208), vec2<i32>(16, 112), vec2<i32>(176, 240), vec2<i32>(240, 16),
+        );
+        return t[s];
+    }
+    return vec2<i32>(128, 128);
+}
+
+// Pixel bounds (x0, y0, x1, y1) of a screen polygon, clamped to the viewport: the pixels whose
+// centre (or, with AA_SAMPLES > 1, any point of whose square) lies within its bounding box; x0 >
+// x1 or y0 > y1 when there is none.
 fn bounds(p: Poly) -> vec4<i32> {
     var lo = vec2<f32>(3.4e38);
     var hi = vec2<f32>(-3.4e38);
@@ -256,8 +284,12 @@ fn bounds(p: Poly) -> vec4<i32> {
         hi = max(hi, p.v[k].xy);
     }
     let vp = camera.viewport.xy;
-    let a = max(ceil(lo - 0.5), vec2<f32>(0.0));
-    let b = min(floor(hi - 0.5), vp - 1.0);
+    var a = max(ceil(lo - 0.5), vec2<f32>(0.0));
+    var b = min(floor(hi - 0.5), vp - 1.0);
+    if AA_SAMPLES > 1u {
+        a = max(ceil(lo - 1.0), vec2<f32>(0.0));
+        b = min(floor(hi), vp - 1.0);
+    }
     if p.n < 3u || a.x > b.x || a.y > b.y {
         return vec4<i32>(0, 0, -1, -1);
     }
@@ -364,6 +396,11 @@ fn add64(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
     return vec2<u32>(lo, a.y + b.y + select(0u, 1u, lo < a.x));
 }
 
+// An i32 as 64-bit two's complement.
+fn sext64(v: i32) -> vec2<u32> {
+    return vec2<u32>(bitcast<u32>(v), select(0u, 0xffffffffu, v < 0));
+}
+
 fn sub64(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
     return vec2<u32>(a.x - b.x, a.y - b.y - select(0u, 1u, a.x < b.x));
 }
@@ -376,7 +413,11 @@ fn centre_units(x: i32, y: i32) -> vec2<i32> {
 // Edge k of `t` (0: i1→i2, 1: i2→i0, 2: i0→i1) at pixel (x, y), exactly in 64 bits, minus 1 when
 // the edge is not top-left: the pixel is covered iff all three are ≥ 0.
 fn edge_biased64(t: Tri, k: u32, x: i32, y: i32) -> vec2<u32> {
-    let c = centre_units(x, y);
+    return edge_biased64_at(t, k, centre_units(x, y));
+}
+
+// As `edge_biased64`, at point `c` (1/256-px units).
+fn edge_biased64_at(t: Tri, k: u32, c: vec2<i32>) -> vec2<u32> {
     var a = t.i0;
     var b = t.i1;
     var tl = t.tl.z;
@@ -414,6 +455,33 @@ fn cover(t: Tri, x: i32, y: i32) -> f32 {
     return depth_at(t, x, y);
 }
 
+// Coverage mask of `t` over pixel (x, y)'s AA_SAMPLES samples (`coverage = direct`: three exact
+// 64-bit edge signs per sample).
+fn cover_mask(t: Tri, x: i32, y: i32) -> u32 {
+    var m = 0u;
+    for (var s = 0u; s < AA_SAMPLES; s = s + 1u) {
+        let c = vec2<i32>(x * 256, y * 256) + sample_off(s);
+        let e = vec3<i32>(edge_sign(t.i1, t.i2, c), edge_sign(t.i2, t.i0, c), edge_sign(t.i0, t.i1, c));
+        if !(any(e < vec3<i32>(0)) || any((e == vec3<i32>(0)) & !t.tl)) {
+            m = m | (1u << s);
+        }
+    }
+    return m;
+}
+
+// Per-sample offsets of the three (i32, stepped) edge functions from their pixel-centre value:
+// dE/dx·(o.x − 128) + dE/dy·(o.y − 128) for sample offset o.
+fn sample_steps(t: Tri) -> array<vec3<i32>, 8> {
+    let dx = vec3<i32>(t.i1.y - t.i2.y, t.i2.y - t.i0.y, t.i0.y - t.i1.y);
+    let dy = vec3<i32>(t.i2.x - t.i1.x, t.i0.x - t.i2.x, t.i1.x - t.i0.x);
+    var out: array<vec3<i32>, 8>;
+    for (var s = 0u; s < AA_SAMPLES; s = s + 1u) {
+        let o = sample_off(s) - vec2<i32>(128);
+        out[s] = dx * o.x + dy * o.y;
+    }
+    return out;
+}
+
 // Whether a 3-vertex polygon spans at most SMALL_EXTENT units in x and y (its i32 edge
 // functions cannot overflow over its bounding box).
 fn fits_i32(p: Poly) -> bool {
@@ -429,11 +497,17 @@ fn edge_i32(a: vec2<i32>, b: vec2<i32>, c: vec2<i32>) -> i32 {
 }
 
 fn emit(x: i32, y: i32, depth: f32, prim: u32, front: bool) {
+    emit_mask(x, y, depth, prim, front, 0u);
+}
+
+// A fragment with its coverage mask (0 and unused when AA_SAMPLES = 1).
+fn emit_mask(x: i32, y: i32, depth: f32, prim: u32, front: bool, mask: u32) {
     let p = u32(y) * u32(camera.viewport.x) + u32(x);
     if FILL {
         let slot = atomicAdd(&offs[p], 1u);
         if slot < sizes.capacity {
-            frags[slot] = vec2<u32>(bitcast<u32>(depth), prim | select(0u, 0x80000000u, front));
+            let tag = prim | (mask << TAG_PRIM_BITS) | select(0u, 0x80000000u, front);
+            frags[slot] = vec2<u32>(bitcast<u32>(depth), tag);
         } else {
             atomicAdd(&work[W_LOST], 1u);
         }
@@ -444,11 +518,28 @@ fn emit(x: i32, y: i32, depth: f32, prim: u32, front: bool) {
 
 // A covered pixel: the count pass needs no depth.
 fn emit_covered(t: Tri, x: i32, y: i32, prim: u32) {
+    emit_covered_mask(t, x, y, prim, 0u);
+}
+
+fn emit_covered_mask(t: Tri, x: i32, y: i32, prim: u32, mask: u32) {
     var z = 0.0;
     if FILL {
         z = depth_at(t, x, y);
     }
-    emit(x, y, z, prim, t.front);
+    emit_mask(x, y, z, prim, t.front, mask);
+}
+
+// Samples of an edge-function triple `e` (biased, at the pixel centre) that are covered, with
+// per-sample offsets `so` (`sample_steps`).
+fn stepped_mask(e: vec3<i32>, so: array<vec3<i32>, 8>) -> u32 {
+    var m = 0u;
+    for (var s = 0u; s < AA_SAMPLES; s = s + 1u) {
+        let es = e + so[s];
+        if (es.x | es.y | es.z) >= 0 {
+            m = m | (1u << s);
+        }
+    }
+    return m;
 }
 
 // One thread over a small triangle's bounding box `bb`, edge functions stepped in i32 (exact:
@@ -460,10 +551,16 @@ fn raster_stepped(t: Tri, bb: vec4<i32>, prim: u32) {
     // dE/dx and dE/dy per pixel of each edge a→b: −(b.y − a.y)·256 and (b.x − a.x)·256.
     let sx = vec3<i32>(t.i1.y - t.i2.y, t.i2.y - t.i0.y, t.i0.y - t.i1.y) * 256;
     let sy = vec3<i32>(t.i2.x - t.i1.x, t.i0.x - t.i2.x, t.i1.x - t.i0.x) * 256;
+    let so = sample_steps(t);
     for (var y = bb.y; y <= bb.w; y = y + 1) {
         var e = row;
         for (var x = bb.x; x <= bb.z; x = x + 1) {
-            if (e.x | e.y | e.z) >= 0 {
+            if AA_SAMPLES > 1u {
+                let m = stepped_mask(e, so);
+                if m != 0u {
+                    emit_covered_mask(t, x, y, prim, m);
+                }
+            } else if (e.x | e.y | e.z) >= 0 {
                 emit_covered(t, x, y, prim);
             }
             e = e + sx;
@@ -475,11 +572,23 @@ fn raster_stepped(t: Tri, bb: vec4<i32>, prim: u32) {
 fn raster_direct(t: Tri, bb: vec4<i32>, prim: u32) {
     for (var y = bb.y; y <= bb.w; y = y + 1) {
         for (var x = bb.x; x <= bb.z; x = x + 1) {
-            let z = cover(t, x, y);
-            if z >= 0.0 {
-                emit(x, y, z, prim, t.front);
-            }
+            direct_pixel(t, x, y, prim);
         }
+    }
+}
+
+// One pixel of `coverage = direct`: its centre, or its samples' mask.
+fn direct_pixel(t: Tri, x: i32, y: i32, prim: u32) {
+    if AA_SAMPLES > 1u {
+        let m = cover_mask(t, x, y);
+        if m != 0u {
+            emit_covered_mask(t, x, y, prim, m);
+        }
+        return;
+    }
+    let z = cover(t, x, y);
+    if z >= 0.0 {
+        emit(x, y, z, prim, t.front);
     }
 }
 
@@ -561,8 +670,26 @@ fn tile_partial(t: Tri, x: i32, y0: i32, y1: i32, dy: i32, prim: u32) {
     let s0 = mul64(t.i2.x - t.i1.x, 256 * dy);
     let s1 = mul64(t.i0.x - t.i2.x, 256 * dy);
     let s2 = mul64(t.i1.x - t.i0.x, 256 * dy);
+    var so: array<vec3<i32>, 8>;
+    if AA_SAMPLES > 1u {
+        so = sample_steps(t);
+    }
     for (var y = y0; y <= y1; y = y + dy) {
-        if ((e0.y | e1.y | e2.y) & 0x80000000u) == 0u {
+        if AA_SAMPLES > 1u {
+            // Per sample: the centre's 64-bit values plus the (small, i32) sample offsets.
+            var m = 0u;
+            for (var s = 0u; s < AA_SAMPLES; s = s + 1u) {
+                let a = add64(e0, sext64(so[s].x));
+                let b = add64(e1, sext64(so[s].y));
+                let c = add64(e2, sext64(so[s].z));
+                if ((a.y | b.y | c.y) & 0x80000000u) == 0u {
+                    m = m | (1u << s);
+                }
+            }
+            if m != 0u {
+                emit_covered_mask(t, x, y, prim, m);
+            }
+        } else if ((e0.y | e1.y | e2.y) & 0x80000000u) == 0u {
             emit_covered(t, x, y, prim);
         }
         e0 = add64(e0, s0);
@@ -623,21 +750,27 @@ fn raster_big(
         if !STEPPED {
             if x <= hi.x {
                 for (var y = y0; y <= hi.y; y = y + dy) {
-                    let z = cover(t, x, y);
-                    if z >= 0.0 {
-                        emit(x, y, z, prim, t.front);
-                    }
+                    direct_pixel(t, x, y, prim);
                 }
             }
             continue;
         }
         // Classify the tile from its corner pixels: an edge function is affine, so its extremes
         // over the tile's pixel centres are at the corners.
+        // With AA_SAMPLES > 1 the corners of the tile's pixel squares: every sample lies in
+        // their rectangle, so the classes hold for every sample.
         if li < 12u {
             let corner = li % 4u;
             let cx = select(tile.x, hi.x, (corner & 1u) != 0u);
             let cy = select(tile.y, hi.y, (corner & 2u) != 0u);
-            wg_cls[li] = select(0u, 1u, neg64(edge_biased64(t, li / 4u, cx, cy)));
+            var c = centre_units(cx, cy);
+            if AA_SAMPLES > 1u {
+                c = vec2<i32>(
+                    select(tile.x * 256, (hi.x + 1) * 256, (corner & 1u) != 0u),
+                    select(tile.y * 256, (hi.y + 1) * 256, (corner & 2u) != 0u),
+                );
+            }
+            wg_cls[li] = select(0u, 1u, neg64(edge_biased64_at(t, li / 4u, c)));
         }
         let cls = workgroupUniformLoad(&wg_cls);
         var full = true;
@@ -657,7 +790,7 @@ fn raster_big(
         if !empty && x <= hi.x {
             if full {
                 for (var y = y0; y <= hi.y; y = y + dy) {
-                    emit_covered(t, x, y, prim);
+                    emit_covered_mask(t, x, y, prim, (1u << AA_SAMPLES) - 1u);
                 }
             } else {
                 tile_partial(t, x, y0, hi.y, dy, prim);
@@ -753,7 +886,7 @@ var<workgroup> sort_d: array<f32, 2048>;
 var<workgroup> sort_t: array<u32, 2048>;
 
 fn fragment(depth: f32, tag: u32, ndc: vec2<f32>) -> Frag {
-    let i = tri_indices(tag & 0x7fffffffu);
+    let i = tri_indices(tag_prim(tag));
     return frag_from(depth, tag, ndc, i, clip_at(i.x), clip_at(i.y), clip_at(i.z));
 }
 
@@ -818,16 +951,49 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocati
         }
     }
     let ndc = pixel_ndc(id.xy);
-    var st = fold_init_at(vec2<f32>(id.xy) + 0.5);
-    for (var i = 0u; i < n; i = i + 1u) {
-        if in_wg {
-            fold_step(&st, fragment(sort_d[i * 64u + li], sort_t[i * 64u + li], ndc));
-        } else {
-            fold_step(&st, fragment(d[i], t[i], ndc));
+    if AA_SAMPLES > 1u {
+        // One fold per sample over the fragments whose mask covers it; attributes derived once
+        // per fragment (at the centre); the image is the samples' mean.
+        var ss: array<FoldState, 8>;
+        for (var s = 0u; s < AA_SAMPLES; s = s + 1u) {
+            ss[s] = fold_init_at(vec2<f32>(id.xy) + 0.5);
         }
-    }
-    for (var k = 0u; k < fold_image_count(); k = k + 1u) {
-        out_image[k * w * h + p] = fold_finish_image(st, k);
+        for (var i = 0u; i < n; i = i + 1u) {
+            var z = d[i];
+            var tag = t[i];
+            if in_wg {
+                z = sort_d[i * 64u + li];
+                tag = sort_t[i * 64u + li];
+            }
+            let f = fragment(z, tag, ndc);
+            let mask = (tag >> TAG_PRIM_BITS) & 0xffu;
+            for (var s = 0u; s < AA_SAMPLES; s = s + 1u) {
+                if (mask & (1u << s)) != 0u {
+                    var st = ss[s];
+                    fold_step(&st, f);
+                    ss[s] = st;
+                }
+            }
+        }
+        for (var k = 0u; k < fold_image_count(); k = k + 1u) {
+            var sum = vec4<f32>(0.0);
+            for (var s = 0u; s < AA_SAMPLES; s = s + 1u) {
+                sum = sum + fold_finish_image(ss[s], k);
+            }
+            out_image[k * w * h + p] = sum / f32(AA_SAMPLES);
+        }
+    } else {
+        var st = fold_init_at(vec2<f32>(id.xy) + 0.5);
+        for (var i = 0u; i < n; i = i + 1u) {
+            if in_wg {
+                fold_step(&st, fragment(sort_d[i * 64u + li], sort_t[i * 64u + li], ndc));
+            } else {
+                fold_step(&st, fragment(d[i], t[i], ndc));
+            }
+        }
+        for (var k = 0u; k < fold_image_count(); k = k + 1u) {
+            out_image[k * w * h + p] = fold_finish_image(st, k);
+        }
     }
     if dropped > 0u {
         atomicAdd(&work[W_OVF_PIXELS], 1u);

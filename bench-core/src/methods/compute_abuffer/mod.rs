@@ -26,11 +26,20 @@
 //!   fragments in workgroup memory (16 KiB per 8×8 pixels), longer ones in a per-thread array;
 //!   `private` sorts every list in the per-thread array (the first version).
 //!
+//! Antialiasing (`aa`): `aa_capture = coverage` tests coverage at the MSAA sample positions
+//! (Vulkan's standard locations) by the same exact integer rule, in the count and fill passes
+//! alike, and stores one fragment per pixel with its coverage mask packed into the tag (8 B
+//! still: primitive in 23 bits, so at most 2^23 triangles); the resolve folds each sample over
+//! the fragments covering it (attributes and depth at the pixel centre) and averages. No MSAA
+//! hardware is involved: every sample count runs on every adapter. `ssaa2x2` rasterises at twice
+//! the width and height and box-filters.
+//!
 //! Memory: `bytes_overhead` is the per-pixel part (offsets, scan block sums, counters, output
 //! images); the rest is the fragments (8 B each), the clip buffer (24 B per vertex with
 //! `transform = vertex`) and the big-triangle list (2 words per big triangle + 1 per tile).
 
 use super::{Capture, Expected, FrameStats, Method, Prepared};
+use crate::aa::{self, AaCapture, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
 use crate::effects::{self, EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
 use crate::gpu::Gpu;
@@ -87,6 +96,15 @@ const CLIP_BYTES: u64 = 24;
 
 pub struct ComputeAbuffer;
 
+const AA_SUPPORT: AaSupport = AaSupport {
+    sample: false,
+    coverage: true,
+    ssaa: true,
+    why: "compute_abuffer keeps one fragment per pixel with its coverage mask (aa_capture = coverage)",
+};
+/// Primitive bits of a tag that carries an 8-bit coverage mask.
+const MASKED_PRIM_BITS: u32 = 23;
+
 const SMALL_MAX: Axis = Axis::int(
     cols::SMALL_MAX,
     "largest triangle bounding box (pixels) one thread rasterises; larger ones are shared",
@@ -126,6 +144,7 @@ impl Method for ComputeAbuffer {
     fn axes(&self) -> Vec<Axis> {
         let mut v = vec![SMALL_MAX, TRANSFORM, COVERAGE, RESOLVE_SORT];
         v.extend_from_slice(effects::AXES);
+        v.extend([aa::AA, aa::AA_CAPTURE]);
         v
     }
     fn validate(&self, point: &Point) -> std::result::Result<(), String> {
@@ -145,12 +164,22 @@ impl Method for ComputeAbuffer {
                 "resolve_sort = workgroup needs {WG_SORT_BYTES} B of workgroup memory, the adapter allows {wg}"
             ));
         }
-        Ok(())
+        AA_SUPPORT.check(self.name(), AaConfig::from_point(point))
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let small = point.int(&SMALL_MAX) as u32;
         let effect = EffectConfig::from_point(point).map_err(CoreError::Param)?;
         let v = variants(point);
+        let aa = AaConfig::from_point(point);
+        if aa.mode == AaMode::Ssaa2x2 {
+            return super::ssaa::prepare(gpu, scene, |big| {
+                Ok(Box::new(PreparedAbuffer::new(gpu, big, small, &effect, v)?))
+            });
+        }
+        let v = Variants {
+            aa_samples: aa.msaa(),
+            ..v
+        };
         Ok(Box::new(PreparedAbuffer::new(
             gpu, scene, small, &effect, v, None,
         )?))
@@ -166,6 +195,8 @@ struct Variants {
     stepped: bool,
     /// `resolve_sort = workgroup`: short lists sorted in workgroup memory.
     wg_sort: bool,
+    /// MSAA coverage-mask samples (1: pixel centres).
+    aa_samples: u32,
 }
 
 fn variants(point: &Point) -> Variants {
@@ -173,6 +204,20 @@ fn variants(point: &Point) -> Variants {
         pretransform: point.choice(&TRANSFORM) == "vertex",
         stepped: point.choice(&COVERAGE) == "stepped",
         wg_sort: point.choice(&RESOLVE_SORT) == "workgroup",
+        aa_samples: 1,
+    }
+}
+
+impl Variants {
+    /// The override constants every kernel of this variant shares.
+    fn aa_constants(&self) -> [(&'static str, f64); 3] {
+        let ms = self.aa_samples > 1;
+        let bits = if ms { MASKED_PRIM_BITS } else { 31 };
+        [
+            ("AA_SAMPLES", self.aa_samples as f64),
+            ("TAG_PRIM_BITS", bits as f64),
+            ("EXTRAPOLATE", flag(ms)),
+        ]
     }
 }
 
@@ -223,6 +268,7 @@ pub(crate) struct PreparedAbuffer {
     scan_groups: [(u32, u32); 3],
     images: usize,
     prep_note: String,
+    aa_samples: u32,
     _sizes: wgpu::Buffer,
     _clipv: wgpu::Buffer,
     alloc: AllocCounter,
@@ -237,10 +283,14 @@ struct Layout {
 }
 
 fn kernels(gpu: &Gpu, l: &Layout, fill: bool, v: Variants) -> Kernels {
+    let [aa_n, aa_bits, aa_x] = v.aa_constants();
     let c = [
         ("FILL", flag(fill)),
         ("PRETRANSFORM", flag(v.pretransform)),
         ("STEPPED", flag(v.stepped)),
+        aa_n,
+        aa_bits,
+        aa_x,
     ];
     let mk = |entry: &str| compute_pipeline(gpu, entry, &l.pipeline, &l.module, entry, &c, false);
     Kernels {
@@ -304,6 +354,11 @@ impl PreparedAbuffer {
             )));
         }
         let ntri = scene.index_count / 3;
+        if v.aa_samples > 1 && ntri >= 1 << MASKED_PRIM_BITS {
+            return Err(CoreError::Param(format!(
+                "compute_abuffer with coverage masks tags primitives in {MASKED_PRIM_BITS} bits: {ntri} triangles are too many"
+            )));
+        }
         let nvert = (scene.positions.size() / 12) as u32;
         let extra = replay.map_or(String::new(), |r| format!("{REPLAY_WGSL}\n{}", r.wgsl));
         let src = format!("{WGSL}\n{DF32_WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}\n{extra}");
@@ -490,6 +545,9 @@ impl PreparedAbuffer {
         let mut rc = effect.constants();
         rc.push(("PRETRANSFORM", flag(v.pretransform)));
         rc.push(("WG_SORT", flag(v.wg_sort)));
+        rc.extend(v.aa_constants());
+        // A replay kernel (the ideal-order twins) replaces the resolve; it runs single-sample,
+        // so the override defaults (one sample, 31 primitive bits) are its tag layout.
         let (entry, rc) = match replay {
             None => ("resolve", rc),
             Some(r) => {
@@ -521,6 +579,7 @@ impl PreparedAbuffer {
             scan_groups,
             images,
             prep_note,
+            aa_samples: v.aa_samples,
             _sizes: sizes_buf,
             _clipv: clipv,
             alloc,
@@ -593,8 +652,16 @@ impl Prepared for PreparedAbuffer {
             counts.push((e - prev.min(e)).min(SORT_MAX));
             prev = end;
         }
-        cap.counts = Some(counts);
         cap.expected = Expected::All;
+        if self.aa_samples > 1 {
+            // Counts are fragments per pixel (coverage masks), not per sample.
+            cap.aa = Some(AaMode::Msaa(self.aa_samples));
+            cap.aa_capture = Some(AaCapture::Coverage);
+            cap.sample_positions =
+                Some("standard (rasterised in compute at the standard positions)".into());
+        } else {
+            cap.counts = Some(counts);
+        }
         let c = read_vec::<u32>(gpu, &self.work, COUNTERS as usize)?;
         let (lost, ovf_px, dropped, total, big_lost) = (
             c[1] as u64,
@@ -622,6 +689,10 @@ impl Prepared for PreparedAbuffer {
     /// the fragments (or nodes) and what holds them.
     fn bytes_overhead(&self) -> Option<u64> {
         Some(self.overhead)
+    }
+
+    fn image_buffer(&self) -> Option<&wgpu::Buffer> {
+        Some(&self.image)
     }
 }
 

@@ -3,6 +3,19 @@
 // again at the pixel centre from the primitive's three vertices. The including shader declares
 // the mesh bindings `positions`, `normals`, `colors`, `object_ids` and `indices` (and the camera).
 
+// Bits of a stored tag that hold the primitive (below them: nothing else; above: a coverage
+// mask under MSAA, then bit 31 front facing). 31 unless a method packs a mask (23: 8 samples).
+override TAG_PRIM_BITS: u32 = 31u;
+
+// Weights of a point outside its triangle are extrapolated instead of clamped: a fragment that
+// covers some MSAA samples but not the pixel centre is shaded at the centre, as a GPU shades a
+// pixel-rate fragment (and as the coverage reference does).
+override EXTRAPOLATE: bool = false;
+
+fn tag_prim(tag: u32) -> u32 {
+    return tag & ((1u << TAG_PRIM_BITS) - 1u);
+}
+
 fn position(i: u32) -> vec3<f32> {
     return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
 }
@@ -37,6 +50,9 @@ fn persp_weights(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, ndc: vec2<f32>) ->
     if !(abs(sum) > 1e-6 * (abs(l.x) + abs(l.y) + abs(l.z))) {
         return vec3<f32>(1.0 / 3.0);
     }
+    if EXTRAPOLATE {
+        return l / sum;
+    }
     let w = clamp(l / sum, vec3<f32>(0.0), vec3<f32>(1.0));
     let t = w.x + w.y + w.z;
     if !(t > 0.0) {
@@ -45,7 +61,7 @@ fn persp_weights(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, ndc: vec2<f32>) ->
     return w / t;
 }
 
-// The fragment of primitive `tag & 0x7fffffff` (vertices `i`, clip positions `c0..c2`) at NDC
+// The fragment of primitive `tag_prim(tag)` (vertices `i`, clip positions `c0..c2`) at NDC
 // point `ndc`. Attributes an effect does not read are dead code once EFFECT is fixed.
 fn frag_from(depth: f32, tag: u32, ndc: vec2<f32>, i: vec3<u32>, c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>) -> Frag {
     let b = persp_weights(c0, c1, c2, ndc);
@@ -76,5 +92,5 @@ fn pixel_ndc(id: vec2<u32>) -> vec2<f32> {
 
 // (depth, primitive) of a nearer than of b: ties keep submission order, as the reference.
 fn before(da: f32, pa: u32, db: f32, pb: u32) -> bool {
-    return nearer(da, db) || (da == db && (pa & 0x7fffffffu) < (pb & 0x7fffffffu));
+    return nearer(da, db) || (da == db && tag_prim(pa) < tag_prim(pb));
 }

@@ -14,6 +14,14 @@
 
 override PEEL: bool = true;
 override TIEBREAK: bool = false;
+// MSAA (aa = msaa*, sample shading): samples per pixel. The Rust side then compiles this file
+// with every texture multisampled (`texture_2d` → `texture_multisampled_2d`) and each fragment
+// entry per sample (`gpu_util::per_sample_source`, which sets SAMPLE to the sample index); the
+// resolve runs one invocation per (pixel, sample) with SAMPLE = global_invocation_id.z and keeps
+// one fold state per sample; fold_end averages the samples' images. With one sample SAMPLE is 0,
+// the textureLoad level, and every index below is the pixel's.
+override SAMPLES: u32 = 1u;
+var<private> SAMPLE: i32 = 0;
 
 @group(0) @binding(1) var prev_depth: texture_depth_2d;
 // The previous layer's object ids (TIEBREAK only; a 1×1 dummy otherwise).
@@ -72,9 +80,9 @@ fn peel_keep(pos: vec4<f32>, id: u32) -> bool {
         return true;
     }
     let px = vec2<i32>(pos.xy);
-    let prev = textureLoad(prev_depth, px, 0);
+    let prev = textureLoad(prev_depth, px, SAMPLE);
     if TIEBREAK {
-        return nearer(prev, pos.z) || (pos.z == prev && id > textureLoad(prev_id, px, 0).x);
+        return nearer(prev, pos.z) || (pos.z == prev && id > textureLoad(prev_id, px, SAMPLE).x);
     }
     return nearer(prev, pos.z);
 }
@@ -155,19 +163,22 @@ fn fs_all(in: Varyings, @builtin(front_facing) front: bool) -> AllOut {
 @group(1) @binding(6) var<storage, read_write> counts: array<u32>;
 @group(1) @binding(7) var<storage, read_write> image: array<vec4<f32>>;
 
+// The fold slot of invocation `id`: its pixel's (one sample), or its (pixel, sample)'s; -1
+// outside the image. Sets SAMPLE for the texture loads.
 fn pixel_index(id: vec3<u32>) -> i32 {
     let w = u32(camera.viewport.x);
     let h = u32(camera.viewport.y);
     if id.x >= w || id.y >= h {
         return -1;
     }
-    return i32(id.y * w + id.x);
+    SAMPLE = i32(id.z);
+    return i32((id.y * w + id.x) * SAMPLES + id.z);
 }
 
 // The layer's window depth at `id`, or a negative value where the layer is empty (the depth
 // buffer still holds its clear value).
 fn layer_at(id: vec3<u32>) -> f32 {
-    let d = textureLoad(layer_depth, vec2<i32>(id.xy), 0);
+    let d = textureLoad(layer_depth, vec2<i32>(id.xy), SAMPLE);
     if d == camera.near_far.w {
         return -1.0;
     }
@@ -191,7 +202,7 @@ fn resolve_rgba(@builtin(global_invocation_id) id: vec3<u32>) {
     if i < 0 { return; }
     let d = layer_at(id);
     if d < 0.0 { return; }
-    let c = textureLoad(layer_color, vec2<i32>(id.xy), 0);
+    let c = textureLoad(layer_color, vec2<i32>(id.xy), SAMPLE);
     step_pixel(i, frag(d, 0.0, c, vec3<f32>(0.0), 0u));
 }
 
@@ -201,7 +212,7 @@ fn resolve_z(@builtin(global_invocation_id) id: vec3<u32>) {
     if i < 0 { return; }
     let d = layer_at(id);
     if d < 0.0 { return; }
-    let z = textureLoad(layer_z, vec2<i32>(id.xy), 0).x;
+    let z = textureLoad(layer_z, vec2<i32>(id.xy), SAMPLE).x;
     step_pixel(i, frag(d, z, vec4<f32>(0.0), vec3<f32>(0.0), 0u));
 }
 
@@ -211,7 +222,7 @@ fn resolve_zn(@builtin(global_invocation_id) id: vec3<u32>) {
     if i < 0 { return; }
     let d = layer_at(id);
     if d < 0.0 { return; }
-    let nz = textureLoad(layer_zn, vec2<i32>(id.xy), 0);
+    let nz = textureLoad(layer_zn, vec2<i32>(id.xy), SAMPLE);
     step_pixel(i, frag(d, nz.w, vec4<f32>(0.0), nz.xyz, 0u));
 }
 
@@ -221,7 +232,7 @@ fn resolve_id(@builtin(global_invocation_id) id: vec3<u32>) {
     if i < 0 { return; }
     let d = layer_at(id);
     if d < 0.0 { return; }
-    let o = textureLoad(layer_id, vec2<i32>(id.xy), 0).x;
+    let o = textureLoad(layer_id, vec2<i32>(id.xy), SAMPLE).x;
     step_pixel(i, frag(d, 0.0, vec4<f32>(0.0), vec3<f32>(0.0), o));
 }
 
@@ -231,8 +242,8 @@ fn resolve_rgbaz(@builtin(global_invocation_id) id: vec3<u32>) {
     if i < 0 { return; }
     let d = layer_at(id);
     if d < 0.0 { return; }
-    let c = textureLoad(layer_color, vec2<i32>(id.xy), 0);
-    let z = textureLoad(layer_z, vec2<i32>(id.xy), 0).x;
+    let c = textureLoad(layer_color, vec2<i32>(id.xy), SAMPLE);
+    let z = textureLoad(layer_z, vec2<i32>(id.xy), SAMPLE).x;
     step_pixel(i, frag(d, z, c, vec3<f32>(0.0), 0u));
 }
 
@@ -242,20 +253,25 @@ fn resolve_all(@builtin(global_invocation_id) id: vec3<u32>) {
     if i < 0 { return; }
     let d = layer_at(id);
     if d < 0.0 { return; }
-    let c = textureLoad(layer_color, vec2<i32>(id.xy), 0);
-    let nz = textureLoad(layer_zn, vec2<i32>(id.xy), 0);
-    let o = textureLoad(layer_id, vec2<i32>(id.xy), 0).x;
+    let c = textureLoad(layer_color, vec2<i32>(id.xy), SAMPLE);
+    let nz = textureLoad(layer_zn, vec2<i32>(id.xy), SAMPLE);
+    let o = textureLoad(layer_id, vec2<i32>(id.xy), SAMPLE).x;
     step_pixel(i, frag(d, nz.w, c, nz.xyz, o));
 }
 
 // ---- init and finish: once per frame ----
 
+// Dispatched over pixels only (z = 0): each invocation covers its pixel's samples.
 @compute @workgroup_size(8, 8)
 fn fold_begin(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = pixel_index(id);
     if i < 0 { return; }
-    fold[i] = fold_init_at(vec2<f32>(id.xy) + 0.5);
-    counts[i] = 0u;
+    // Every sample's view ray is the pixel centre's (as the reference's effects take it).
+    let init = fold_init_at(vec2<f32>(id.xy) + 0.5);
+    for (var s = 0u; s < SAMPLES; s = s + 1u) {
+        fold[u32(i) + s] = init;
+        counts[u32(i) + s] = 0u;
+    }
 }
 
 @compute @workgroup_size(8, 8)
@@ -263,8 +279,17 @@ fn fold_end(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = pixel_index(id);
     if i < 0 { return; }
     let n = u32(camera.viewport.x) * u32(camera.viewport.y);
-    let s = fold[i];
+    let p = u32(i) / SAMPLES;
     for (var k = 0u; k < fold_image_count(); k = k + 1u) {
-        image[k * n + u32(i)] = fold_finish_image(s, k);
+        if SAMPLES == 1u {
+            image[k * n + p] = fold_finish_image(fold[i], k);
+        } else {
+            // The resolve: the mean of the samples' images.
+            var sum = vec4<f32>(0.0);
+            for (var s = 0u; s < SAMPLES; s = s + 1u) {
+                sum = sum + fold_finish_image(fold[u32(i) + s], k);
+            }
+            image[k * n + p] = sum / f32(SAMPLES);
+        }
     }
 }

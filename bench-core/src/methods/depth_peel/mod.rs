@@ -11,15 +11,23 @@
 //! `uber`: all attributes fetched and colour + normal + view depth + id stored every pass) and
 //! `tiebreak` (peel on (depth, object id) pairs so coplanar fragments with distinct ids are not
 //! lost, at the cost of the full payload).
+//!
+//! Antialiasing (`aa`): MSAA peels every sample (`aa_capture = sample` only: each sample's depth
+//! is compared with the previous layer's at that sample, so the fragment stage runs per sample);
+//! the depth, layer and id targets are multisampled, the fold keeps one state per sample (64 B ×
+//! samples) and its end averages the samples' images. `ssaa2x2` peels at twice the width and
+//! height and box-filters.
 
 use super::{Capture, Expected, FrameStats, Method, Prepared};
+use crate::aa::{self, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
 use crate::effects::{self, EffectConfig, Payload};
 use crate::effects::{FOLD_STATE_BYTES, FOLD_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
-    camera_entry, clear_depth, depth_state, read_vec, shader, storage_entry, texture_entry,
+    camera_entry, clear_depth, depth_state, multisample, per_sample_source, read_vec,
+    shader_source, storage_entry, texture_entry_ms, COMMON_WGSL,
 };
 use crate::record::cols;
 use crate::timing::GpuTimer;
@@ -56,6 +64,13 @@ const TIEBREAK: Axis = Axis::bool(
     false,
 );
 
+const AA_SUPPORT: AaSupport = AaSupport {
+    sample: true,
+    coverage: false,
+    ssaa: true,
+    why: "peeling compares each sample's depth with the previous layer's at that sample, so it shades per sample (aa_capture = sample)",
+};
+
 /// A point's configuration, read from its axes.
 #[derive(Clone, Copy, Debug)]
 struct Config {
@@ -64,6 +79,7 @@ struct Config {
     uber: bool,
     tiebreak: bool,
     effect: EffectConfig,
+    aa: AaConfig,
 }
 
 impl Config {
@@ -74,6 +90,7 @@ impl Config {
             uber: point.choice(&SPECIALISATION) == "uber",
             tiebreak: point.bool(&TIEBREAK),
             effect: EffectConfig::from_point(point)?,
+            aa: AaConfig::from_point(point),
         })
     }
 
@@ -101,6 +118,7 @@ impl Method for DepthPeel {
     fn axes(&self) -> Vec<Axis> {
         let mut v = vec![MAX_LAYERS, OCCLUSION_STOP, SPECIALISATION, TIEBREAK];
         v.extend_from_slice(effects::AXES);
+        v.extend([aa::AA, aa::AA_CAPTURE]);
         v
     }
     fn validate(&self, point: &Point) -> std::result::Result<(), String> {
@@ -121,10 +139,22 @@ impl Method for DepthPeel {
                 return Err(format!("{f:?} is not renderable on this adapter"));
             }
         }
-        Ok(())
+        AA_SUPPORT.check(self.name(), cfg.aa)?;
+        let mut formats = vec![wgpu::TextureFormat::Depth32Float];
+        formats.extend(variant(p).targets.iter().map(|&(f, _)| f));
+        aa::check_adapter(gpu, cfg.aa, &formats)
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let cfg = Config::read(point).map_err(CoreError::Param)?;
+        if cfg.aa.mode == AaMode::Ssaa2x2 {
+            let inner = Config {
+                aa: AaConfig::NONE,
+                ..cfg
+            };
+            return super::ssaa::prepare(gpu, scene, |big| {
+                Ok(Box::new(PreparedPeel::new(gpu, big, inner)))
+            });
+        }
         Ok(Box::new(PreparedPeel::new(gpu, scene, cfg)))
     }
 }
@@ -212,6 +242,8 @@ struct PreparedPeel {
     occ_read: wgpu::Buffer,
     cfg: Config,
     reversed: bool,
+    samples: u32,
+    sample_positions: Option<String>,
     alloc: AllocCounter,
 }
 
@@ -219,7 +251,22 @@ impl PreparedPeel {
     fn new(gpu: &Gpu, scene: &GpuScene, cfg: Config) -> Self {
         let d = &gpu.device;
         let (w, h) = (scene.width, scene.height);
-        let module = shader(gpu, "depth_peel", &format!("{FOLD_WGSL}\n{WGSL}"));
+        let samples = cfg.aa.msaa();
+        let ms = samples > 1;
+        let module = if ms {
+            // Every texture multisampled, every fragment entry per sample (module doc).
+            let body = WGSL
+                .replace("texture_depth_2d", "texture_depth_multisampled_2d")
+                .replace("texture_2d<", "texture_multisampled_2d<");
+            let src = per_sample_source(&format!("{COMMON_WGSL}\n{FOLD_WGSL}\n{body}"));
+            shader_source(gpu, "depth_peel (per sample)", src)
+        } else {
+            shader_source(
+                gpu,
+                "depth_peel",
+                format!("{COMMON_WGSL}\n{FOLD_WGSL}\n{WGSL}"),
+            )
+        };
         let var = variant(cfg.payload());
         let frag = wgpu::ShaderStages::FRAGMENT;
         let comp = wgpu::ShaderStages::COMPUTE;
@@ -230,17 +277,22 @@ impl PreparedPeel {
             label: Some("peel"),
             entries: &[
                 camera_entry(0),
-                texture_entry(1, wgpu::TextureSampleType::Depth, frag),
-                texture_entry(2, wgpu::TextureSampleType::Uint, frag),
+                texture_entry_ms(1, wgpu::TextureSampleType::Depth, frag, ms),
+                texture_entry_ms(2, wgpu::TextureSampleType::Uint, frag, ms),
             ],
         });
         let sample_type = |f: wgpu::TextureFormat| match f {
             ID_FORMAT => wgpu::TextureSampleType::Uint,
             _ => wgpu::TextureSampleType::Float { filterable: false },
         };
-        let mut resolve_entries = vec![texture_entry(1, wgpu::TextureSampleType::Depth, comp)];
+        let mut resolve_entries = vec![texture_entry_ms(
+            1,
+            wgpu::TextureSampleType::Depth,
+            comp,
+            ms,
+        )];
         for &(f, binding) in var.targets {
-            resolve_entries.push(texture_entry(binding, sample_type(f), comp));
+            resolve_entries.push(texture_entry_ms(binding, sample_type(f), comp, ms));
         }
         for b in 5..=7 {
             resolve_entries.push(storage_entry(b, false, comp));
@@ -275,6 +327,7 @@ impl PreparedPeel {
             let constants = [
                 ("PEEL", if peel { 1.0 } else { 0.0 }),
                 ("TIEBREAK", if cfg.tiebreak { 1.0 } else { 0.0 }),
+                ("SAMPLES", samples as f64),
             ];
             let opts = wgpu::PipelineCompilationOptions {
                 constants: &constants,
@@ -291,7 +344,7 @@ impl PreparedPeel {
                 },
                 primitive: wgpu::PrimitiveState::default(),
                 depth_stencil: Some(depth_state(scene.reversed_z, true)),
-                multisample: Default::default(),
+                multisample: multisample(samples),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
                     entry_point: Some(var.fs),
@@ -304,7 +357,8 @@ impl PreparedPeel {
         };
         let first = make(false);
         let peel = make(true);
-        let fold_constants = cfg.effect.constants();
+        let mut fold_constants = cfg.effect.constants();
+        fold_constants.push(("SAMPLES", samples as f64));
         let compute = |entry: &str| {
             d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
@@ -323,13 +377,14 @@ impl PreparedPeel {
         let end = compute("fold_end");
 
         let depth_tex = [0, 1].map(|i| {
-            alloc.texture(
+            alloc.texture_ms(
                 gpu,
                 &format!("peel depth {i}"),
                 w,
                 h,
                 wgpu::TextureFormat::Depth32Float,
                 usage,
+                samples,
             )
         });
         let depth_views = [0, 1].map(|i| depth_tex[i].create_view(&Default::default()));
@@ -338,11 +393,27 @@ impl PreparedPeel {
         let mut views: Vec<[wgpu::TextureView; 2]> = Vec::new();
         for &(f, binding) in var.targets {
             let a = alloc
-                .texture(gpu, &format!("peel layer {binding}"), w, h, f, usage)
+                .texture_ms(
+                    gpu,
+                    &format!("peel layer {binding}"),
+                    w,
+                    h,
+                    f,
+                    usage,
+                    samples,
+                )
                 .create_view(&Default::default());
             let b = if cfg.tiebreak && f == ID_FORMAT {
                 alloc
-                    .texture(gpu, &format!("peel layer {binding}'"), w, h, f, usage)
+                    .texture_ms(
+                        gpu,
+                        &format!("peel layer {binding}'"),
+                        w,
+                        h,
+                        f,
+                        usage,
+                        samples,
+                    )
                     .create_view(&Default::default())
             } else {
                 a.clone()
@@ -359,10 +430,15 @@ impl PreparedPeel {
                     depth_or_array_layers: 1,
                 },
                 mip_level_count: 1,
-                sample_count: 1,
+                sample_count: samples,
                 dimension: wgpu::TextureDimension::D2,
                 format: ID_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                // A multisampled texture must be renderable.
+                usage: if ms {
+                    usage
+                } else {
+                    wgpu::TextureUsages::TEXTURE_BINDING
+                },
                 view_formats: &[],
             })
             .create_view(&Default::default());
@@ -373,8 +449,9 @@ impl PreparedPeel {
         let st = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_SRC
             | wgpu::BufferUsages::COPY_DST;
-        let fold = alloc.buffer(gpu, "peel fold state", px * FOLD_STATE_BYTES, st);
-        let counts = alloc.buffer(gpu, "peel counts", px * 4, st);
+        let slots = px * samples as u64;
+        let fold = alloc.buffer(gpu, "peel fold state", slots * FOLD_STATE_BYTES, st);
+        let counts = alloc.buffer(gpu, "peel counts", slots * 4, st);
         let image = alloc.buffer(gpu, "peel image", px * 16 * images as u64, st);
         let peel_bind = [0usize, 1].map(|p| {
             let prev_id = match (cfg.tiebreak, id_target) {
@@ -459,10 +536,13 @@ impl PreparedPeel {
             occ_read,
             cfg,
             reversed: scene.reversed_z,
+            samples,
+            sample_positions: ms.then(|| aa::sample_positions(gpu, samples)),
             alloc,
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn dispatch(
         &self,
         enc: &mut wgpu::CommandEncoder,
@@ -471,6 +551,7 @@ impl PreparedPeel {
         label: &str,
         pipeline: &wgpu::ComputePipeline,
         p: usize,
+        per_sample: bool,
     ) {
         let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(label),
@@ -479,7 +560,8 @@ impl PreparedPeel {
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &self.peel_bind[p], &[]);
         pass.set_bind_group(1, &self.resolve_bind[p], &[]);
-        pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
+        let z = if per_sample { self.samples } else { 1 };
+        pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), z);
     }
 
     /// Encodes peel pass `i` and its resolve into the fold.
@@ -532,7 +614,7 @@ impl PreparedPeel {
                 pass.end_occlusion_query();
             }
         }
-        self.dispatch(enc, scene, timer, "resolve", &self.resolve, p);
+        self.dispatch(enc, scene, timer, "resolve", &self.resolve, p, true);
         if occlusion_stop {
             enc.resolve_query_set(&self.occlusion, 0..1, &self.occ_resolve, 0);
             enc.copy_buffer_to_buffer(&self.occ_resolve, 0, &self.occ_read, 0, 8);
@@ -543,7 +625,7 @@ impl PreparedPeel {
 impl Prepared for PreparedPeel {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        self.dispatch(&mut enc, scene, timer, "fold_begin", &self.begin, 0);
+        self.dispatch(&mut enc, scene, timer, "fold_begin", &self.begin, 0, false);
         let mut stats = FrameStats::default();
         for i in 0..self.cfg.max_layers {
             self.encode_layer(&mut enc, scene, timer, i);
@@ -560,7 +642,7 @@ impl Prepared for PreparedPeel {
             }
             stats.layers += 1;
         }
-        self.dispatch(&mut enc, scene, timer, "fold_end", &self.end, 0);
+        self.dispatch(&mut enc, scene, timer, "fold_end", &self.end, 0, false);
         gpu.queue.submit([enc.finish()]);
         Ok(stats)
     }
@@ -569,12 +651,26 @@ impl Prepared for PreparedPeel {
         let n = scene.pixels();
         let mut cap = Capture::empty();
         cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n * self.images)?);
-        cap.counts = Some(read_vec::<u32>(gpu, &self.counts, n)?);
         cap.expected = Expected::FirstK(self.cfg.max_layers);
+        if self.samples > 1 {
+            // One count per sample: the most layers any sample peeled, in the notes.
+            let c = read_vec::<u32>(gpu, &self.counts, n * self.samples as usize)?;
+            let most = c.iter().max().copied().unwrap_or(0);
+            cap.notes = format!("most layers at one sample: {most}");
+            cap.aa = self.cfg.aa.capture_mode();
+            cap.aa_capture = Some(self.cfg.aa.capture);
+            cap.sample_positions = self.sample_positions.clone();
+        } else {
+            cap.counts = Some(read_vec::<u32>(gpu, &self.counts, n)?);
+        }
         Ok(cap)
     }
 
     fn bytes_allocated(&self) -> u64 {
         self.alloc.bytes
+    }
+
+    fn image_buffer(&self) -> Option<&wgpu::Buffer> {
+        Some(&self.image)
     }
 }

@@ -2,10 +2,17 @@
 //! (additive blending) and an R16F revealage (multiplicative blending), then a compute resolve.
 //! Approximate (`exact() = false`): its error vs the reference is what the rows report. It walks
 //! no fragment list, so the effects fold does not apply (transparency only).
+//!
+//! Antialiasing (`aa`): with MSAA both targets are multisampled and blended per sample
+//! (`aa_capture = coverage`: shaded once per pixel, the hardware writes the covered samples;
+//! `sample`: shaded per sample), and the resolve composites each sample and averages: 8 + 2 B
+//! per sample. `ssaa2x2` renders at twice the width and height and box-filters.
 
-use crate::axes::Point;
+use crate::aa::{self, AaConfig, AaMode, AaSupport};
+use crate::axes::{Axis, Point};
 use crate::gpu_util::{
-    camera_entry, compute_pipeline, read_vec, shader, storage_entry, texture_entry, STORAGE_RW,
+    camera_entry, compute_pipeline, multisample, per_sample_source, read_vec, shader,
+    shader_source, storage_entry, texture_entry, texture_entry_ms, COMMON_WGSL, STORAGE_RW,
 };
 
 use super::{Capture, Expected, FrameStats, Method, Prepared};
@@ -20,6 +27,13 @@ const REVEAL: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
 
 pub struct Wboit;
 
+const AA_SUPPORT: AaSupport = AaSupport {
+    sample: true,
+    coverage: true,
+    ssaa: true,
+    why: "",
+};
+
 impl Method for Wboit {
     fn name(&self) -> &'static str {
         "wboit"
@@ -30,16 +44,27 @@ impl Method for Wboit {
     fn exact(&self) -> bool {
         false
     }
-    fn supports(&self, gpu: &Gpu, _: &Point) -> std::result::Result<(), String> {
+    fn axes(&self) -> Vec<Axis> {
+        vec![aa::AA, aa::AA_CAPTURE]
+    }
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
         for f in [ACCUM, REVEAL] {
             if !gpu.renderable(f) {
                 return Err(format!("{f:?} is not renderable on this adapter"));
             }
         }
-        Ok(())
+        let cfg = AaConfig::from_point(point);
+        AA_SUPPORT.check(self.name(), cfg)?;
+        aa::check_adapter(gpu, cfg, &[ACCUM, REVEAL])
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Point) -> Result<Box<dyn Prepared>> {
-        Ok(Box::new(PreparedWboit::new(gpu, scene)))
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let cfg = AaConfig::from_point(point);
+        if cfg.mode == AaMode::Ssaa2x2 {
+            return super::ssaa::prepare(gpu, scene, |big| {
+                Ok(Box::new(PreparedWboit::new(gpu, big, AaConfig::NONE)))
+            });
+        }
+        Ok(Box::new(PreparedWboit::new(gpu, scene, cfg)))
     }
 }
 
@@ -51,14 +76,23 @@ struct PreparedWboit {
     accum: wgpu::TextureView,
     reveal: wgpu::TextureView,
     image: wgpu::Buffer,
+    aa: AaConfig,
+    sample_positions: Option<String>,
     alloc: AllocCounter,
 }
 
 impl PreparedWboit {
-    fn new(gpu: &Gpu, scene: &GpuScene) -> Self {
+    fn new(gpu: &Gpu, scene: &GpuScene, aa: AaConfig) -> Self {
         let d = &gpu.device;
-        let module = shader(gpu, "wboit", WGSL);
+        let samples = aa.msaa();
+        let module = if samples > 1 && aa.capture == aa::AaCapture::Sample {
+            let src = per_sample_source(&format!("{COMMON_WGSL}\n{WGSL}"));
+            shader_source(gpu, "wboit (per sample)", src)
+        } else {
+            shader(gpu, "wboit", WGSL)
+        };
         let comp = wgpu::ShaderStages::COMPUTE;
+        let ms = samples > 1;
         let cam_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("wboit camera"),
             entries: &[camera_entry(0)],
@@ -68,8 +102,16 @@ impl PreparedWboit {
             label: Some("wboit resolve"),
             entries: &[
                 camera_entry(0),
-                texture_entry(1, float, comp),
-                texture_entry(2, float, comp),
+                if ms {
+                    texture_entry_ms(4, float, comp, true)
+                } else {
+                    texture_entry(1, float, comp)
+                },
+                if ms {
+                    texture_entry_ms(5, float, comp, true)
+                } else {
+                    texture_entry(2, float, comp)
+                },
                 storage_entry(3, false, comp),
             ],
         });
@@ -124,7 +166,7 @@ impl PreparedWboit {
             },
             primitive: wgpu::PrimitiveState::default(),
             depth_stencil: None,
-            multisample: Default::default(),
+            multisample: multisample(samples),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
                 entry_point: Some("fs_accum"),
@@ -139,7 +181,7 @@ impl PreparedWboit {
             "wboit resolve",
             &layout(&res_bgl),
             &module,
-            "resolve",
+            if ms { "resolve_ms" } else { "resolve" },
             &[],
             false,
         );
@@ -147,10 +189,10 @@ impl PreparedWboit {
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
         let (w, h) = (scene.width, scene.height);
         let accum = alloc
-            .texture(gpu, "wboit accum", w, h, ACCUM, usage)
+            .texture_ms(gpu, "wboit accum", w, h, ACCUM, usage, samples)
             .create_view(&Default::default());
         let reveal = alloc
-            .texture(gpu, "wboit revealage", w, h, REVEAL, usage)
+            .texture_ms(gpu, "wboit revealage", w, h, REVEAL, usage, samples)
             .create_view(&Default::default());
         let image = alloc.buffer(gpu, "wboit image", scene.pixels() as u64 * 16, STORAGE_RW);
         let cam_bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -170,11 +212,11 @@ impl PreparedWboit {
                     resource: scene.camera.as_entire_binding(),
                 },
                 wgpu::BindGroupEntry {
-                    binding: 1,
+                    binding: if ms { 4 } else { 1 },
                     resource: wgpu::BindingResource::TextureView(&accum),
                 },
                 wgpu::BindGroupEntry {
-                    binding: 2,
+                    binding: if ms { 5 } else { 2 },
                     resource: wgpu::BindingResource::TextureView(&reveal),
                 },
                 wgpu::BindGroupEntry {
@@ -191,6 +233,8 @@ impl PreparedWboit {
             accum,
             reveal,
             image,
+            aa,
+            sample_positions: ms.then(|| aa::sample_positions(gpu, samples)),
             alloc,
         }
     }
@@ -244,12 +288,25 @@ impl Prepared for PreparedWboit {
         cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, scene.pixels())?);
         cap.expected = Expected::All;
         cap.notes = "approximate: weighted average colour (RGBA16F), revealage R16F".into();
+        // No `aa_capture`: WBOIT's own definition is WBOIT, not an exact per-sample composite.
+        cap.aa = self.aa.capture_mode();
+        cap.sample_positions = self.sample_positions.clone();
         Ok(cap)
     }
 
     fn bytes_allocated(&self) -> u64 {
         self.alloc.bytes
     }
+
+    fn image_buffer(&self) -> Option<&wgpu::Buffer> {
+        Some(&self.image)
+    }
+}
+
+/// The f16 bound of the tests below, for the AA tests.
+#[cfg(test)]
+fn tests_bound(layers: u32) -> f64 {
+    (2 * layers + 2) as f64 * 2f64.powi(-11)
 }
 
 #[cfg(test)]
@@ -300,5 +357,63 @@ mod tests {
             e > f16_bound(n),
             "distinct colours give a real approximation error ({e})"
         );
+    }
+}
+
+#[cfg(test)]
+mod aa_tests {
+    use scenarios::ParamValue::{Int, Str};
+
+    use super::*;
+    use crate::testing::{gpu, max_err_vs, params, point, run_truth, scene};
+
+    /// Every `aa` × `aa_capture` this adapter runs, and the reasons of those it skips.
+    fn modes(s: &scenarios::Scene, bound: f64) -> Vec<String> {
+        let mut ran = Vec::new();
+        for mode in AaMode::NAMES {
+            for capture in ["sample", "coverage"] {
+                let p = params(&[
+                    ("aa", Str(mode.to_string())),
+                    ("aa_capture", Str(capture.into())),
+                ]);
+                if let Err(why) = Wboit.supports(gpu(), &point(&Wboit, &p)) {
+                    assert!(why.contains("multisampled"), "{mode}/{capture}: {why}");
+                    continue;
+                }
+                let (cap, truth) = run_truth(&Wboit, s, 32, 32, &p);
+                let (e, at) = max_err_vs(&cap, &truth);
+                assert!(
+                    e <= bound,
+                    "{} aa={mode} {capture}: error {e} at pixel {at} (bound {bound})",
+                    s.label()
+                );
+                ran.push(format!("{mode}/{capture}"));
+            }
+        }
+        ran
+    }
+
+    #[test]
+    fn one_colour_layers_match_the_multisampled_truth_up_to_f16_in_every_aa_mode() {
+        // Per sample WBOIT is exact for one layer or one colour (see the tests above); its
+        // resolve averages per-sample composites exactly as the truth averages samples, so each
+        // mode is within the same f16 bound, now also at the antialiased edges.
+        let one = scene("quads", &[("depth_complexity", Int(1))]);
+        let ran = modes(&one, super::tests_bound(1));
+        assert!(ran.contains(&"msaa4/sample".to_string()), "{ran:?}");
+        assert!(ran.contains(&"msaa4/coverage".to_string()), "{ran:?}");
+        assert!(ran.contains(&"ssaa2x2/sample".to_string()), "{ran:?}");
+        let mut s = scene("quads", &[("depth_complexity", Int(6))]);
+        for c in s.mesh.colors.iter_mut() {
+            *c = [0.8, 0.3, 0.1, 0.4];
+        }
+        modes(&s, super::tests_bound(6));
+        // The edges are really antialiased: the truth has fractional alpha where one sample
+        // does not.
+        let p = params(&[("aa", Str("msaa4".into()))]);
+        let (cap, truth) = run_truth(&Wboit, &one, 32, 32, &p);
+        assert_eq!(cap.aa, Some(AaMode::Msaa(4)));
+        assert_eq!(cap.sample_positions.as_deref(), Some("standard"));
+        assert!(truth.iter().any(|t| t[3] > 0.05 && t[3] < 0.3));
     }
 }
