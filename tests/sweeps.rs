@@ -425,10 +425,18 @@ fn compare_calls_a_run_same_as_itself_slower_at_1_5x_and_refuses_mixed_schemas()
     let o = mfx(&["compare", s(&a), s(&b), "--fail-on-slower", "5%"]);
     let slow = text(&o);
     assert!(slow.contains("SLOWER"), "{slow}");
-    for other in ["| SAME", "| FASTER", "| UNSURE"] {
+    for other in ["| SAME", "| FASTER"] {
         assert!(
             !slow.contains(other),
             "×1.5 copy has a {other} point:\n{slow}"
+        );
+    }
+    // On a loaded CPU a point's bootstrap CI can be wider than ×1.5: then it is UNSURE, and
+    // only with the noise named (never silently undecided).
+    for line in slow.lines().filter(|l| l.contains("| UNSURE")) {
+        assert!(
+            line.contains("noisy") && line.contains("not significant"),
+            "an UNSURE point without its reason: {line}"
         );
     }
     assert_eq!(

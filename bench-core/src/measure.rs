@@ -612,4 +612,3 @@ pub fn set_timing(row: &mut Row, m: &Measured, mesh: &scenarios::Mesh) {
             .set_f(cols::CLOCK_LIFT_TO_MHZ, after);
     }
 }
-

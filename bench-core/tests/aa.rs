@@ -377,7 +377,11 @@ fn aa_ci_runs_through_the_runner_with_no_failed_rows_and_aa_checks() {
     let problems = bench_core::check::check_suite(&aa);
     assert!(problems.is_empty(), "{problems:?}");
     let groups = bench_core::runner::expand(&aa, false).unwrap();
-    assert_eq!(groups.len(), 10, "four scenes at 1024² in two tables, two for stochastic");
+    assert_eq!(
+        groups.len(),
+        10,
+        "four scenes at 1024² in two tables, two for stochastic"
+    );
 
     let rows = bench_core::runner::run_suite(testing::gpu(), text("aa-ci"), "(built-in) aa-ci")
         .expect("aa-ci runs");
@@ -423,11 +427,20 @@ fn aa_ci_runs_through_the_runner_with_no_failed_rows_and_aa_checks() {
         let what = format!("{} {}", get(r, cols::SCENE_LABEL), get(r, cols::AA));
         match get(r, cols::AA).as_str() {
             "ssaa2x2" => {
-                assert_eq!(get(r, cols::MATCHES_TRUTH), "true", "{what}: {}", get(r, cols::RMSE));
+                assert_eq!(
+                    get(r, cols::MATCHES_TRUTH),
+                    "true",
+                    "{what}: {}",
+                    get(r, cols::RMSE)
+                );
                 assert_eq!(get(r, cols::AA_SAMPLES), "4", "{what}");
             }
             mode => {
-                assert!(num(r, cols::RMSE_VS_K) <= 1e-4, "{what}: {}", get(r, cols::RMSE_VS_K));
+                assert!(
+                    num(r, cols::RMSE_VS_K) <= 1e-4,
+                    "{what}: {}",
+                    get(r, cols::RMSE_VS_K)
+                );
                 assert!(num(r, cols::RMSE) < 1e-2, "{what}: {}", get(r, cols::RMSE));
                 assert_eq!(get(r, cols::AA_SAMPLES), &mode[4..], "{what}");
             }

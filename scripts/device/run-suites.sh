@@ -13,7 +13,7 @@
 #     rows are flushed as they are measured, so a suite cut short still returns every finished row.
 #   COMPARE="A:B C:D": after the jobs, `mfx compare A B` of run folders (markdown + html kept).
 #   REPORT=1 draws reports here too (they are normally drawn on the CPU machine with `mfx report`).
-# Writes $OUT/runs.tgz (every run folder, each with gpu.txt and sweep.log; clocks.csv sampled by
+# Writes $OUT/runs.tgz (every run folder's tables, each with gpu.txt and sweep.log; clocks.csv sampled by
 # nvidia-smi once a second over the whole call; compare-*.md) and $OUT/session.log.
 set -u
 start=$(date +%s)
@@ -79,6 +79,22 @@ for pair in ${COMPARE:-}; do
 done
 kill "$smi" 2>/dev/null
 nvidia-smi --query-gpu=clocks.sm,clocks.mem,temperature.gpu,power.draw --format=csv >> "$r/gpu.txt" 2>&1
-tar czf "$out/runs.tgz" -C "$r" .
+# The device tool brings back files of at most 16 MiB: the tables and logs in runs.tgz (small),
+# images (flip/ and --save-images PNGs) and runs.json in one images-N.tgz per run folder, each
+# left out with a line in session.log when it is still too large.
+tar czf "$out/runs.tgz" -C "$r" --exclude='*.png' --exclude='runs.json' .
+n=0
+for d in "$r"/*/; do
+  n=$((n + 1))
+  name=$(basename "$d")
+  (cd "$r" && find "$name" \( -name '*.png' -o -name runs.json \) -print0 | tar czf "$out/images-$n.tgz" --null -T -)
+  size=$(stat -c %s "$out/images-$n.tgz")
+  if [ "$size" -gt 16000000 ] || [ "$n" -gt 6 ]; then
+    echo "images of $name: $size B, not brought back (16 MiB a file, 8 files a call)"
+    rm -f "$out/images-$n.tgz"
+  else
+    echo "images of $name: images-$n.tgz ($size B)"
+  fi
+done
 echo "done in $(( $(date +%s) - start )) s"
 ls -la "$out"

@@ -173,7 +173,9 @@ impl Method for ComputeAbuffer {
         let aa = AaConfig::from_point(point);
         if aa.mode == AaMode::Ssaa2x2 {
             return super::ssaa::prepare(gpu, scene, |big| {
-                Ok(Box::new(PreparedAbuffer::new(gpu, big, small, &effect, v)?))
+                Ok(Box::new(PreparedAbuffer::new(
+                    gpu, big, small, &effect, v, None,
+                )?))
             });
         }
         let v = Variants {
@@ -326,6 +328,7 @@ impl PreparedAbuffer {
             pretransform: true,
             stepped: true,
             wg_sort: false,
+            aa_samples: 1,
         };
         Self::new(gpu, scene, 256, &EffectConfig::default(), v, Some(replay))
     }
