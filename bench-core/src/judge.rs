@@ -263,6 +263,23 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
             }
             j.vs_k = Some(image_error(&own, img, BAD_PIXEL_TOL));
         }
+        // An exact method's wrong image that nothing above explains (an MSAA capture has no
+        // counts, so this is where its errors show).
+        let explained = [Flag::LostCoplanar, Flag::Precision, Flag::FragmentsDiffer]
+            .iter()
+            .any(|f| j.flags.contains(f));
+        let bad = j
+            .vs_k
+            .as_ref()
+            .or(j.truth.as_ref())
+            .map_or(0.0, |e| e.bad_pixel_frac);
+        if cx.exact && overflow == 0 && !explained && bad > 0.0 {
+            j.flag(Flag::ImageDiffers);
+            j.notes.push(format!(
+                "image differs from its definition at {:.3} % of pixels",
+                100.0 * bad
+            ));
+        }
         if cx.flip {
             j.flip = Some(flip(&truth, img, lists.width, lists.height));
         }
@@ -449,6 +466,27 @@ mod tests {
         let j = run(&cap, &distinct, true);
         assert!(j.flags.contains(&Flag::Precision), "{:?}", j.flags);
         assert!(j.flags.contains(&Flag::FragmentsDiffer));
+    }
+
+    #[test]
+    fn an_exact_capture_without_counts_and_a_wrong_image_is_flagged_image_differs() {
+        // As an MSAA capture: no per-pixel counts, so only the image can show the error.
+        let l = lists(&[3, 2], false);
+        let mut wrong = l.composite();
+        wrong[1] = [0.0; 4];
+        let mut cap = cap_with(wrong, vec![], Expected::All);
+        cap.counts = None;
+        let j = run(&cap, &l, true);
+        assert!(j.flags.contains(&Flag::ImageDiffers), "{:?}", j.flags);
+        // The same image from an approximate method is its error, not a failure.
+        assert!(!run(&cap, &l, false).flags.contains(&Flag::ImageDiffers));
+        // The right image is not flagged.
+        cap.image = Some(l.composite().iter().map(|p| p.map(|v| v as f32)).collect());
+        assert!(run(&cap, &l, true).flags.is_empty());
+        // Nor one whose difference an overflow explains.
+        let cap = cap_with(l.composite_first(1), vec![1, 1], Expected::FirstK(1));
+        let j = run(&cap, &l, true);
+        assert!(!j.flags.contains(&Flag::ImageDiffers), "{:?}", j.flags);
     }
 
     #[test]

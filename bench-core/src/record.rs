@@ -31,6 +31,10 @@ pub enum Flag {
     /// An exact method's fragment set differs from the reference's (fragments missing without
     /// an overflow, or fragments the reference does not have).
     FragmentsDiffer,
+    /// An exact method's image is off its own definition (or, without one, the truth) beyond
+    /// `bad_pixel_tol`, with no overflow, coplanar loss, precision loss or fragment-set
+    /// difference to explain it (e.g. an MSAA capture, which has no per-pixel counts).
+    ImageDiffers,
     /// GPU time far below the wall-clock time of the same frames: the timestamps missed work.
     TimestampsIncomplete,
     /// The stopping rule's noise target was not reached (max samples, max time or drift).
@@ -40,13 +44,14 @@ pub enum Flag {
 }
 
 impl Flag {
-    pub const ALL: [Flag; 9] = [
+    pub const ALL: [Flag; 10] = [
         Flag::Overflow,
         Flag::Hazard,
         Flag::Collision,
         Flag::Precision,
         Flag::LostCoplanar,
         Flag::FragmentsDiffer,
+        Flag::ImageDiffers,
         Flag::TimestampsIncomplete,
         Flag::Noisy,
         Flag::Throttled,
@@ -59,6 +64,7 @@ impl Flag {
             Flag::Precision => "precision",
             Flag::LostCoplanar => "lost_coplanar",
             Flag::FragmentsDiffer => "fragments_differ",
+            Flag::ImageDiffers => "image_differs",
             Flag::TimestampsIncomplete => "timestamps_incomplete",
             Flag::Noisy => "noisy",
             Flag::Throttled => "throttled",

@@ -175,7 +175,7 @@ fn flagged_table(h: &mut String, runs: &Runs) {
         h.push_str("<p class=\"note\">No ok row carries a flag.</p>");
         return;
     }
-    h.push_str("<p class=\"note\">A flag names a known failure mode the harness detected (overflow, hazard, collision, precision, lost_coplanar, fragments_differ, timestamps_incomplete, noisy, throttled); these points are drawn hollow in the charts.</p>\
+    h.push_str("<p class=\"note\">A flag names a known failure mode the harness detected (overflow, hazard, collision, precision, lost_coplanar, fragments_differ, image_differs, timestamps_incomplete, noisy, throttled); these points are drawn hollow in the charts.</p>\
         <table id=\"flagged\"><tr><th>flag</th><th>study</th><th>scene</th><th>resolution</th><th>point</th><th>GPU ms</th><th>RMSE</th><th>notes</th></tr>");
     for r in rows {
         let _ = write!(

@@ -144,7 +144,7 @@ pub mod cols {
     );
     pub const FLAG: Col = Col::new(
         "flag",
-        "known failure modes of this row, |-joined: overflow, hazard, collision, precision, lost_coplanar, fragments_differ, timestamps_incomplete, noisy, throttled (empty if none; each is defined in results/README.md)",
+        "known failure modes of this row, |-joined: overflow, hazard, collision, precision, lost_coplanar, fragments_differ, image_differs, timestamps_incomplete, noisy, throttled (empty if none; each is defined in results/README.md)",
     );
 
     // ---- Sweep axes shared by several methods (empty where an axis does not apply) ----
