@@ -247,3 +247,20 @@ fn every_problem_is_reported_at_once() {
         problem::report(&p)
     );
 }
+
+/// The suite example in ARCHITECTURE.md is a valid suite (docs that drift are refused here), and
+/// the same text with one axis misspelt is not.
+#[test]
+fn the_architecture_suite_example_is_valid() {
+    let doc = include_str!("../../ARCHITECTURE.md");
+    let start = doc
+        .find("```toml\n")
+        .expect("ARCHITECTURE.md has a toml example")
+        + 8;
+    let len = doc[start..].find("```").expect("the example ends");
+    let example = &doc[start..start + len];
+    let p = problems(example);
+    assert!(p.is_empty(), "{}", problem::report(&p));
+    let typo = example.replace("max_layers", "max_layer");
+    assert!(!problems(&typo).is_empty(), "a misspelt axis is refused");
+}
