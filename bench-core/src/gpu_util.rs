@@ -236,3 +236,22 @@ pub fn clear_depth(reversed: bool) -> f32 {
         1.0
     }
 }
+
+/// A timed compute pass of one 8×8-pixel workgroup per screen tile (resolves, composites): the
+/// pass every per-pixel kernel of a method runs after its geometry passes.
+pub fn pixel_pass(
+    enc: &mut wgpu::CommandEncoder,
+    timer: &mut crate::timing::GpuTimer,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    bind: &wgpu::BindGroup,
+    scene: &crate::gpu_scene::GpuScene,
+) {
+    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: timer.compute_pass(label),
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, bind, &[]);
+    pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
+}

@@ -25,8 +25,8 @@ use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
-    camera_entry, check_storage_size, compute_pipeline, read_vec, shader, storage_entry,
-    texture_entry, STORAGE_RW,
+    camera_entry, check_storage_size, compute_pipeline, pixel_pass, read_vec, shader,
+    storage_entry, texture_entry, STORAGE_RW,
 };
 use crate::oit::{self, Order};
 use crate::record::cols;
@@ -286,15 +286,14 @@ impl Prepared for PreparedRace {
             pass.set_bind_group(0, &self.bind_capture, &[]);
             scene.draw(&mut pass, Attrs::ALL);
         }
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("composite"),
-                timestamp_writes: timer.compute_pass("composite"),
-            });
-            pass.set_pipeline(&self.composite);
-            pass.set_bind_group(0, &self.bind_composite, &[]);
-            pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
-        }
+        pixel_pass(
+            &mut enc,
+            timer,
+            "composite",
+            &self.composite,
+            &self.bind_composite,
+            scene,
+        );
         gpu.queue.submit([enc.finish()]);
         Ok(FrameStats {
             geometry_passes: 2,

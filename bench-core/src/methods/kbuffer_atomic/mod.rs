@@ -20,7 +20,7 @@ use crate::axes::{Axis, Point};
 use crate::effects::FOLD_WGSL;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
-use crate::gpu_util::{bind_buffers, compute_pipeline, shader, STORAGE_RW};
+use crate::gpu_util::{bind_buffers, compute_pipeline, pixel_pass, shader, STORAGE_RW};
 use crate::oit::Keep;
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
@@ -208,15 +208,14 @@ impl Prepared for PreparedAtomic {
             pass.set_bind_group(0, &self.bind, &[]);
             scene.draw(&mut pass, Attrs::ALL);
         }
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("resolve"),
-                timestamp_writes: timer.compute_pass("resolve"),
-            });
-            pass.set_pipeline(&self.resolve);
-            pass.set_bind_group(0, self.resolve_bind.as_ref().unwrap_or(&self.bind), &[]);
-            pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
-        }
+        pixel_pass(
+            &mut enc,
+            timer,
+            "resolve",
+            &self.resolve,
+            self.resolve_bind.as_ref().unwrap_or(&self.bind),
+            scene,
+        );
         gpu.queue.submit([enc.finish()]);
         Ok(FrameStats {
             geometry_passes: if self.keys_pass.is_some() { 2 } else { 1 },

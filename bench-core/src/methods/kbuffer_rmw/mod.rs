@@ -27,7 +27,7 @@ use crate::effects::FOLD_WGSL;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::gpu_util::{
-    bind_buffers, camera_entry, check_storage_size, compute_pipeline, read_vec, shader,
+    bind_buffers, camera_entry, check_storage_size, compute_pipeline, pixel_pass, read_vec, shader,
     storage_entry, STORAGE_RW,
 };
 use crate::oit::Keep;
@@ -372,15 +372,14 @@ impl Prepared for PreparedRmw {
                 }
             }
         }
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("resolve"),
-                timestamp_writes: timer.compute_pass("resolve"),
-            });
-            pass.set_pipeline(&self.resolve);
-            pass.set_bind_group(0, self.resolve_bind.as_ref().unwrap_or(&self.bind), &[]);
-            pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
-        }
+        pixel_pass(
+            &mut enc,
+            timer,
+            "resolve",
+            &self.resolve,
+            self.resolve_bind.as_ref().unwrap_or(&self.bind),
+            scene,
+        );
         gpu.queue.submit([enc.finish()]);
         Ok(FrameStats {
             geometry_passes: 1,

@@ -33,7 +33,8 @@ use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
-    camera_entry, check_storage_size, compute_pipeline, read_vec, shader, storage_entry, STORAGE_RW,
+    camera_entry, check_storage_size, compute_pipeline, pixel_pass, read_vec, shader,
+    storage_entry, STORAGE_RW,
 };
 use crate::oit::{self, Keep, Order, TailMode};
 use crate::record::cols;
@@ -322,15 +323,14 @@ impl Prepared for PreparedRace {
             pass.set_bind_group(0, &self.bind_capture, &[]);
             scene.draw(&mut pass, Attrs::ALL);
         }
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("resolve"),
-                timestamp_writes: timer.compute_pass("resolve"),
-            });
-            pass.set_pipeline(&self.resolve);
-            pass.set_bind_group(0, &self.bind_resolve, &[]);
-            pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
-        }
+        pixel_pass(
+            &mut enc,
+            timer,
+            "resolve",
+            &self.resolve,
+            &self.bind_resolve,
+            scene,
+        );
         gpu.queue.submit([enc.finish()]);
         Ok(FrameStats {
             geometry_passes: 1,

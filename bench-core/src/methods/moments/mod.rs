@@ -32,7 +32,8 @@ use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
-    camera_entry, compute_pipeline, read_vec, shader, storage_entry, texture_entry, STORAGE_RW,
+    camera_entry, compute_pipeline, pixel_pass, read_vec, shader, storage_entry, texture_entry,
+    STORAGE_RW,
 };
 use crate::oit::moment_math::wrapping_zone;
 use crate::oit::moments::{bias_vector, default_bias, depth_range_of, quant, B0_MIN};
@@ -604,15 +605,14 @@ impl Prepared for PreparedMoments {
             pass.set_bind_group(0, &self.bind_resolve, &[]);
             scene.draw(&mut pass, Attrs::ALL);
         }
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("composite"),
-                timestamp_writes: timer.compute_pass("composite"),
-            });
-            pass.set_pipeline(&self.composite);
-            pass.set_bind_group(0, &self.bind_composite, &[]);
-            pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
-        }
+        pixel_pass(
+            &mut enc,
+            timer,
+            "composite",
+            &self.composite,
+            &self.bind_composite,
+            scene,
+        );
         gpu.queue.submit([enc.finish()]);
         Ok(FrameStats {
             geometry_passes: 2,

@@ -11,7 +11,7 @@
 use crate::aa::{self, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
 use crate::gpu_util::{
-    camera_entry, compute_pipeline, multisample, per_sample_source, read_vec, shader,
+    camera_entry, compute_pipeline, multisample, per_sample_source, pixel_pass, read_vec, shader,
     shader_source, storage_entry, texture_entry, texture_entry_ms, COMMON_WGSL, STORAGE_RW,
 };
 
@@ -267,15 +267,14 @@ impl Prepared for PreparedWboit {
             pass.set_bind_group(0, &self.cam_bind, &[]);
             scene.draw(&mut pass, Attrs::ALL);
         }
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("resolve"),
-                timestamp_writes: timer.compute_pass("resolve"),
-            });
-            pass.set_pipeline(&self.resolve);
-            pass.set_bind_group(0, &self.res_bind, &[]);
-            pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
-        }
+        pixel_pass(
+            &mut enc,
+            timer,
+            "resolve",
+            &self.resolve,
+            &self.res_bind,
+            scene,
+        );
         gpu.queue.submit([enc.finish()]);
         Ok(FrameStats {
             geometry_passes: 1,
