@@ -75,7 +75,12 @@ fn vs_pi(v: PosIdIn) -> Varyings {
 
 // ---- peel: keep only what lies behind the previous layer ----
 
+// The fragment's depth as the keep test reads it: under MSAA every entry also writes it as
+// frag_depth (`ms_depth_source`), so the depth buffer holds exactly what the next pass compares.
+var<private> FRAG_Z: f32 = 0.0;
+
 fn peel_keep(pos: vec4<f32>, id: u32) -> bool {
+    FRAG_Z = pos.z;
     if !PEEL {
         return true;
     }

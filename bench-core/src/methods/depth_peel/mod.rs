@@ -258,6 +258,7 @@ impl PreparedPeel {
             let body = WGSL
                 .replace("texture_depth_2d", "texture_depth_multisampled_2d")
                 .replace("texture_2d<", "texture_multisampled_2d<");
+            let body = ms_depth_source(&body);
             let src = per_sample_source(&format!("{COMMON_WGSL}\n{FOLD_WGSL}\n{body}"));
             shader_source(gpu, "depth_peel (per sample)", src)
         } else {
@@ -672,5 +673,111 @@ impl Prepared for PreparedPeel {
 
     fn image_buffer(&self) -> Option<&wgpu::Buffer> {
         Some(&self.image)
+    }
+}
+
+/// The MSAA build's fragment entries also write `FRAG_Z` (the `@builtin(position).z` the keep
+/// test compared) as `frag_depth`. Vulkan leaves where FragCoord.z is interpolated open under
+/// sample shading (its x, y are the sample's); the depth test uses each sample's own depth. If
+/// the two differ (the centre's z on a sloped triangle), a pass compares one depth and stores
+/// another, and peels a fragment twice or never. Writing it makes them one value everywhere.
+/// Each `-> @location(0) T` entry returns a `<entry>_Ms { v: T, depth }`, each entry returning a
+/// struct `S(…)` returns `S_Ms(…, depth)`; every `return` of an entry is rewritten.
+fn ms_depth_source(src: &str) -> String {
+    let mut structs = String::new();
+    let mut out = String::with_capacity(src.len() + 1024);
+    let mut rest = src;
+    while let Some(i) = rest.find("@fragment") {
+        let head_end = i + rest[i..].find('{').expect("fragment entry body") + 1;
+        let head = &rest[i..head_end];
+        let name = head["@fragment".len()..]
+            .trim_start()
+            .strip_prefix("fn ")
+            .and_then(|h| h.split('(').next())
+            .expect("fragment entry name")
+            .trim()
+            .to_string();
+        let ret = head[head.rfind("->").expect("fragment entry return type") + 2..head.len() - 1]
+            .trim()
+            .to_string();
+        let body_end = head_end + rest[head_end..].find("\n}").expect("end of entry") + 2;
+        let body = &rest[head_end..body_end];
+        let (new_ret, new_body) = if let Some(t) = ret.strip_prefix("@location(0)") {
+            let ms = format!("{name}_Ms");
+            structs.push_str(&format!(
+                "struct {ms} {{\n    @location(0) v: {},\n    @builtin(frag_depth) depth: f32,\n}};\n",
+                t.trim()
+            ));
+            let b = rewrite_returns(body, |e| format!("{ms}({e}, FRAG_Z)"));
+            (ms, b)
+        } else {
+            let fields = struct_fields(src, &ret);
+            let ms = format!("{ret}_Ms");
+            if !structs.contains(&format!("struct {ms} ")) {
+                structs.push_str(&format!(
+                    "struct {ms} {{\n{fields}    @builtin(frag_depth) depth: f32,\n}};\n"
+                ));
+            }
+            let b = rewrite_returns(body, |e| {
+                let args = e
+                    .strip_prefix(&format!("{ret}("))
+                    .and_then(|a| a.strip_suffix(')'))
+                    .expect("an entry returning a struct returns its constructor");
+                format!("{ms}({args}, FRAG_Z)")
+            });
+            (ms, b)
+        };
+        out.push_str(&rest[..i]);
+        out.push_str(&head[..head.rfind("->").unwrap()]);
+        out.push_str(&format!("-> {new_ret} {{"));
+        out.push_str(&new_body);
+        rest = &rest[body_end..];
+    }
+    out.push_str(rest);
+    format!("{structs}\n{out}")
+}
+
+/// `return EXPR;` → `return f(EXPR);` in one function body.
+fn rewrite_returns(body: &str, f: impl Fn(&str) -> String) -> String {
+    let mut out = String::new();
+    let mut rest = body;
+    while let Some(i) = rest.find("return ") {
+        let end = i + rest[i..].find(';').expect("return ends");
+        out.push_str(&rest[..i]);
+        out.push_str(&format!("return {};", f(rest[i + 7..end].trim())));
+        rest = &rest[end + 1..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// The field lines of `struct NAME { … }` in `src`.
+fn struct_fields(src: &str, name: &str) -> String {
+    let start = src
+        .find(&format!("struct {name} {{"))
+        .unwrap_or_else(|| panic!("struct {name} returned by a fragment entry"));
+    let open = start + src[start..].find('{').unwrap() + 1;
+    let close = open + src[open..].find('}').unwrap();
+    let mut f = String::new();
+    for line in src[open..close].lines().filter(|l| !l.trim().is_empty()) {
+        f.push_str(line.trim_end());
+        f.push('\n');
+    }
+    f
+}
+
+#[cfg(test)]
+mod ms_depth_tests {
+    #[test]
+    fn every_fragment_entry_of_the_msaa_build_writes_the_depth_it_compared() {
+        let src = super::ms_depth_source(super::WGSL);
+        let entries = super::WGSL.matches("@fragment").count();
+        assert_eq!(src.matches("@fragment").count(), entries);
+        assert_eq!(src.matches("@builtin(frag_depth)").count(), entries);
+        // Every return of an entry passes FRAG_Z; the structs keep their own fields.
+        assert_eq!(src.matches(", FRAG_Z)").count(), entries);
+        assert!(src.contains("struct RgbaZOut_Ms {\n    @location(0) color: vec4<f32>,"));
+        assert!(src.contains("-> fs_rgba_Ms {"));
+        // Its validity is tested where it compiles: the MSAA peeling tests (tests/aa.rs).
     }
 }
