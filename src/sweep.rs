@@ -72,6 +72,9 @@ struct Progress<'a> {
     ok: usize,
     failed: Vec<(String, String)>,
     skipped: BTreeMap<String, usize>,
+    /// Seconds of the rows' timed work, prepares, judging and fragment references (where the
+    /// sweep's wall time went; the rest is scene building, floors' references, I/O).
+    spent_s: [f64; 4],
 }
 
 impl Sink for Progress<'_> {
@@ -90,6 +93,20 @@ impl Sink for Progress<'_> {
                 f.width,
                 f.height,
             );
+        }
+        let ms = |c| {
+            row.get(c)
+                .and_then(|v| v.parse::<f64>().ok())
+                .unwrap_or(0.0)
+                / 1e3
+        };
+        for (acc, c) in self.spent_s.iter_mut().zip([
+            cols::MEASURE_MS,
+            cols::PREPARE_MS,
+            cols::JUDGE_MS,
+            cols::FRAGMENT_REFERENCE_MS,
+        ]) {
+            *acc += ms(c);
         }
         match row.get(cols::STATUS) {
             Some("failed") => {
@@ -252,6 +269,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         ok: 0,
         failed: Vec::new(),
         skipped: BTreeMap::new(),
+        spent_s: [0.0; 4],
     };
     let opts = RunOptions {
         run_id,
@@ -308,6 +326,10 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         } else {
             String::new()
         }
+    );
+    let [m, p, j, r] = sink.spent_s;
+    eprintln!(
+        "mfx: time in rows: {m:.1} s timed (warm-up, clock lift, samples), {p:.1} s prepare, {j:.1} s judging, {r:.1} s f64 fragment references"
     );
     for (key, why) in &sink.failed {
         eprintln!("  failed: {key}: {why}");

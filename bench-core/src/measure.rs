@@ -152,6 +152,8 @@ pub struct Measured {
     pub target_reached: bool,
     /// Wall-clock ms of warm-up and samples.
     pub measure_ms: f64,
+    /// Wall-clock ms of the method's prepare.
+    pub prepare_ms: f64,
     pub clocks: PointClocks,
     /// Clock lift before the warm-up: (ms of busy work, SM MHz before, SM MHz after); None when
     /// none was needed or possible.
@@ -225,6 +227,7 @@ pub struct PointTimer<'g> {
     warmup_frames: usize,
     /// Wall time spent on this point's warm-up and samples (its own, when interleaved).
     spent_ms: f64,
+    prepare_ms: f64,
     stopped: Option<StopReason>,
     clock_lift: Option<(f64, f64, f64)>,
 }
@@ -249,7 +252,9 @@ impl<'g> PointTimer<'g> {
         plan: &TimingPlan,
     ) -> Result<PointTimer<'g>> {
         gpu.check_lost()?;
+        let t0 = std::time::Instant::now();
         let prepared = scoped(gpu, "prepare", || method.prepare(gpu, scene, point))?;
+        let prepare_ms = t0.elapsed().as_secs_f64() * 1e3;
         Ok(PointTimer {
             gpu,
             scene,
@@ -266,6 +271,7 @@ impl<'g> PointTimer<'g> {
             sampler: Sampler::new(plan.stop.clone()),
             warmup_frames: 0,
             spent_ms: 0.0,
+            prepare_ms,
             stopped: None,
             clock_lift: None,
         })
@@ -426,6 +432,7 @@ impl<'g> PointTimer<'g> {
             stop_reason,
             samples: self.samples,
             measure_ms: self.spent_ms,
+            prepare_ms: self.prepare_ms,
             clocks: self.clocks,
             clock_lift: self.clock_lift,
         })
@@ -587,6 +594,7 @@ pub fn set_timing(row: &mut Row, m: &Measured, mesh: &scenarios::Mesh) {
         .set(cols::SAMPLES_DISCARDED, m.discarded())
         .set(cols::WARMUP_FRAMES, m.warmup_frames)
         .set_f(cols::MEASURE_MS, m.measure_ms)
+        .set_f(cols::PREPARE_MS, m.prepare_ms)
         .set(cols::TARGET_REACHED, m.target_reached)
         .set(cols::STOP_REASON, m.stop_reason.as_str());
     for (col, v) in m.clocks.to_cells() {

@@ -684,6 +684,18 @@ pub mod cols {
         "measure_ms",
         "wall-clock ms spent on warm-up and samples of this point",
     );
+    pub const PREPARE_MS: Col = Col::new(
+        "prepare_ms",
+        "wall-clock ms of the method's prepare for this point (pipelines compiled, buffers allocated and filled; untimed), so a sweep's wall time can be attributed",
+    );
+    pub const JUDGE_MS: Col = Col::new(
+        "judge_ms",
+        "wall-clock ms of reading this point back and judging it on the CPU (the effect's reference composites, errors, FLIP)",
+    );
+    pub const FRAGMENT_REFERENCE_MS: Col = Col::new(
+        "fragment_reference_ms",
+        "CPU ms of the scene × resolution group's f64 fragment lists, on the one row that first needed them (empty elsewhere: they are cached)",
+    );
     pub const TARGET_REACHED: Col = Col::new(
         "target_reached",
         "true if the stopping rule met its noise target (false: max samples/time or drift; the row is flagged noisy)",
@@ -1111,6 +1123,9 @@ pub const GROUPS: &[Group] = &[
             cols::CLOCK_LIFT_TO_MHZ,
             cols::WARMUP_FRAMES,
             cols::MEASURE_MS,
+            cols::PREPARE_MS,
+            cols::JUDGE_MS,
+            cols::FRAGMENT_REFERENCE_MS,
             cols::TARGET_REACHED,
             cols::STOP_REASON,
             cols::GPU_WALL_RATIO,

@@ -186,6 +186,12 @@ fn finish_point(
         cols::BYTES_PER_PIXEL,
         m.bytes_allocated as f64 / px.max(1.0),
     );
+    if !ctx.has_reference() {
+        let t = std::time::Instant::now();
+        ctx.reference();
+        row.set_f(cols::FRAGMENT_REFERENCE_MS, t.elapsed().as_secs_f64() * 1e3);
+    }
+    let t_judge = std::time::Instant::now();
     let mut cap = match m.prepared.readback(ctx.gpu, ctx.gscene) {
         Ok(c) => c,
         Err(e) => return emit(i, failed_row(row, &format!("readback: {e}"))),
@@ -213,6 +219,8 @@ fn finish_point(
         Err(why) => return emit(i, failed_row(row, &why)),
     };
     j.write(&mut row);
+    // Read-back and judging, the group's fragment lists aside (their own column).
+    row.set_f(cols::JUDGE_MS, t_judge.elapsed().as_secs_f64() * 1e3);
     if let Some(img) = &cap.image {
         ctx.save_image(&mut row, &pt.method, pt.given(), img)?;
     }
