@@ -16,6 +16,7 @@ use super::kbuffer_rmw::{kslots_entries, kslots_layout, KSlots, LAYERS};
 use super::store::{dummy_depth, storage_pass_with, storage_pipeline_with};
 use super::tail::{self, Bounding, TailTargets, RESOLVE_WGSL, TAIL_WGSL};
 use super::{Capture, FrameStats, Method, Prepared};
+use crate::aa::{self, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
 use crate::effects::FOLD_WGSL;
 use crate::gpu::Gpu;
@@ -41,9 +42,10 @@ impl Method for KBufferAtomic {
         true
     }
     fn axes(&self) -> Vec<Axis> {
-        vec![LAYERS, tail::TAIL, tail::KEEP]
+        vec![LAYERS, tail::TAIL, tail::KEEP, aa::AA, aa::AA_CAPTURE]
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        AA_SUPPORT.check(self.name(), AaConfig::from_point(point))?;
         if Bounding::of(point, true).blends() {
             tail::supports(gpu, 0)?;
         }
@@ -51,14 +53,24 @@ impl Method for KBufferAtomic {
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let k = point.int(&LAYERS) as u32;
-        Ok(Box::new(PreparedAtomic::new(
-            gpu,
-            scene,
-            k,
-            Bounding::of(point, true),
-        )?))
+        let bounding = Bounding::of(point, true);
+        if AaConfig::from_point(point).mode == AaMode::Ssaa2x2 {
+            return super::ssaa::prepare(gpu, scene, |big| {
+                Ok(Box::new(PreparedAtomic::new(gpu, big, k, bounding)?))
+            });
+        }
+        Ok(Box::new(PreparedAtomic::new(gpu, scene, k, bounding)?))
     }
 }
+
+/// Supersampling wraps the k-buffer as it is; per-sample slots (k × samples per pixel) are not
+/// built yet: those rows are skipped with this reason.
+const AA_SUPPORT: AaSupport = AaSupport {
+    sample: false,
+    coverage: false,
+    ssaa: true,
+    why: "per-sample and coverage-mask k-buffers are not built yet (ssaa2x2 is)",
+};
 
 pub(crate) struct PreparedAtomic {
     /// The keys pass (`keep = nearest`); `keep = first` has only the claim pass.
@@ -239,6 +251,10 @@ impl Prepared for PreparedAtomic {
         }
         self.bounding.report(cap, reference, self.tailed);
         cap.definition = self.bounding.definition(reference, self.slots.k as usize);
+    }
+
+    fn image_buffer(&self) -> Option<&wgpu::Buffer> {
+        Some(&self.slots.image)
     }
 
     fn bytes_allocated(&self) -> u64 {

@@ -36,6 +36,7 @@ use super::compute_abuffer::VISIBILITY_WGSL;
 use super::store::storage_pass_with;
 use super::tail::{self, TailTargets, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
+use crate::aa::{self, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
 use crate::effects::{self, Effect, EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
 use crate::gpu::Gpu;
@@ -106,12 +107,14 @@ impl Method for LinkedList {
     fn axes(&self) -> Vec<Axis> {
         let mut v = vec![LAYERS, POOL, POOL_SLACK, NODE, tail::TAIL];
         v.extend_from_slice(effects::AXES);
+        v.extend([aa::AA, aa::AA_CAPTURE]);
         v
     }
     fn validate(&self, point: &Point) -> std::result::Result<(), String> {
         EffectConfig::from_point(point).map(|_| ())
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        AA_SUPPORT.check(self.name(), AaConfig::from_point(point))?;
         let c = list_config(point);
         let e = effect_config(point, c.compact)?;
         if c.tail {
@@ -139,9 +142,23 @@ impl Method for LinkedList {
         let layers = point.int(&LAYERS) as u64;
         let c = list_config(point);
         let effect = effect_config(point, c.compact).map_err(CoreError::Param)?;
+        if AaConfig::from_point(point).mode == AaMode::Ssaa2x2 {
+            return super::ssaa::prepare(gpu, scene, |big| {
+                Ok(Box::new(PreparedList::new(gpu, big, layers, c, &effect)?))
+            });
+        }
         Ok(Box::new(PreparedList::new(gpu, scene, layers, c, &effect)?))
     }
 }
+
+/// Supersampling wraps the list as it is; per-sample lists (heads and pools × samples) and
+/// coverage-mask nodes are not built yet: those rows are skipped with this reason.
+const AA_SUPPORT: AaSupport = AaSupport {
+    sample: false,
+    coverage: false,
+    ssaa: true,
+    why: "per-sample and coverage-mask lists are not built yet (ssaa2x2 is)",
+};
 
 /// The pool and node axes (module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -646,6 +663,10 @@ impl Prepared for PreparedList {
         cap.definition = Some(first_arrivals_with_tail(reference, |p| {
             reference.pixel(p).len().saturating_sub(lost[p] as usize)
         }));
+    }
+
+    fn image_buffer(&self) -> Option<&wgpu::Buffer> {
+        Some(&self.image)
     }
 
     fn bytes_allocated(&self) -> u64 {
