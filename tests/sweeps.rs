@@ -379,6 +379,40 @@ fn scaled_copy(from: &Path, to: &Path, k: f64) {
     }
 }
 
+/// A copy of a run folder whose samples are steady: each point's GPU samples become its median
+/// times 1 + 0.2 % × (sample mod 5 − 2), so a comparison of this copy decides on the arithmetic
+/// alone, whatever the CPU's load did to the real samples.
+fn steady_copy(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    std::fs::copy(from.join("runs.csv"), to.join("runs.csv")).unwrap();
+    let mut medians = std::collections::HashMap::new();
+    let mut r = csv::Reader::from_path(from.join("runs.csv")).unwrap();
+    let h = r.headers().unwrap().clone();
+    let col = |name: &str| h.iter().position(|c| c == name).unwrap();
+    let (key, med) = (col("point_key"), col("gpu_ms_median"));
+    for rec in r.records() {
+        let rec = rec.unwrap();
+        if let Ok(m) = rec[med].parse::<f64>() {
+            medians.insert(rec[key].to_string(), m);
+        }
+    }
+    let mut r = csv::Reader::from_path(from.join("samples.csv")).unwrap();
+    let h = r.headers().unwrap().clone();
+    let col = |name: &str| h.iter().position(|c| c == name).unwrap();
+    let (key, sample, gpu) = (col("point_key"), col("sample"), col("gpu_ms"));
+    let mut w = csv::Writer::from_path(to.join("samples.csv")).unwrap();
+    w.write_record(&h).unwrap();
+    for rec in r.records() {
+        let rec = rec.unwrap();
+        let mut cells: Vec<String> = rec.iter().map(str::to_string).collect();
+        if let (Some(m), Ok(i)) = (medians.get(&rec[key]), rec[sample].parse::<u64>()) {
+            cells[gpu] = format!("{}", m * (1.0 + 0.002 * ((i % 5) as f64 - 2.0)));
+        }
+        w.write_record(&cells).unwrap();
+    }
+    w.flush().unwrap();
+}
+
 /// Enough samples per point for the test to decide: lavapipe's 16² frames are noisy enough
 /// that 8 a side do not always separate a 1.5× shift.
 const COMPARE_SUITE: &str = r#"
@@ -431,8 +465,22 @@ fn compare_calls_a_run_same_as_itself_slower_at_1_5x_and_refuses_mixed_schemas()
             "×1.5 copy has a {other} point:\n{slow}"
         );
     }
-    // On a loaded CPU a point's bootstrap CI can be wider than ×1.5: then it is UNSURE, and
-    // only with the noise named (never silently undecided).
+    // With steady samples every point of a ×1.5 copy is SLOWER, as the rule says it must be.
+    let (sa, sb) = (t.join("steady-a"), t.join("steady-b"));
+    steady_copy(&a, &sa);
+    scaled_copy(&sa, &sb, 1.5);
+    let steady = text(&mfx(&["compare", s(&sa), s(&sb)]));
+    let points = steady
+        .lines()
+        .filter(|l| l.starts_with("| methods"))
+        .count();
+    let slower = steady.lines().filter(|l| l.contains("| SLOWER")).count();
+    assert!(
+        points > 0 && slower == points,
+        "{slower} of {points} SLOWER:\n{steady}"
+    );
+    // On real samples from a loaded CPU a point's bootstrap CI can be wider than ×1.5: then it
+    // is UNSURE, and only with the noise named (never silently undecided).
     for line in slow.lines().filter(|l| l.contains("| UNSURE")) {
         assert!(
             line.contains("noisy") && line.contains("not significant"),
