@@ -288,6 +288,20 @@ impl PointClocks {
         self.push_discarded(s);
     }
 
+    /// Folds another part of the same point (a later session) into this one.
+    pub fn merge(&mut self, other: PointClocks) {
+        self.sm.extend(other.sm);
+        self.mem_sum += other.mem_sum;
+        self.mem_n += other.mem_n;
+        self.temp_max = match (self.temp_max, other.temp_max) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
+        self.power_sum += other.power_sum;
+        self.power_n += other.power_n;
+        self.reasons.extend(other.reasons);
+    }
+
     /// A discarded (throttled) sample's reading: only its reasons and temperature count.
     pub fn push_discarded(&mut self, s: &MonitorSample) {
         if let Some(t) = s.temp_c {

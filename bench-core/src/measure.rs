@@ -31,6 +31,11 @@ pub struct TimingPlan {
     /// Busy GPU work allowed per point before its warm-up to lift a lowered SM clock (NVML
     /// adapters only; 0: never). See [`PointTimer::lift_clock`].
     pub clock_lift_ms: f64,
+    /// Independent sessions per point (`[timing] sessions`, default 1): each prepares the method
+    /// afresh (new buffers and pipelines), lifts the clock, warms up and samples under the same
+    /// rule; the samples are pooled and the median's CI widened to cover every session's median
+    /// (`session_spread`). Not with `interleave`.
+    pub sessions: usize,
 }
 
 impl Default for TimingPlan {
@@ -41,6 +46,7 @@ impl Default for TimingPlan {
             seed: 1,
             interleave: false,
             clock_lift_ms: CLOCK_LIFT_MS,
+            sessions: 1,
         }
     }
 }
@@ -68,6 +74,7 @@ impl TimingPlan {
             seed: 1,
             interleave: false,
             clock_lift_ms: 0.0,
+            sessions: 1,
         }
     }
 
@@ -106,19 +113,26 @@ impl TimingPlan {
             warmup.min_frames = warmup.min_frames.min(v as usize);
         }
         stop.validate()?;
+        if spec.sessions.unwrap_or(1) > 1 && spec.interleave == Some(true) {
+            return Err(
+                "sessions > 1 measures each point on its own, one session after another: it cannot be combined with interleave = true"
+                    .into(),
+            );
+        }
         Ok(TimingPlan {
             warmup,
             stop,
             seed: spec.seed.unwrap_or(d.seed),
             interleave: spec.interleave.unwrap_or(false),
             clock_lift_ms: spec.clock_lift_ms.unwrap_or(d.clock_lift_ms),
+            sessions: spec.sessions.map_or(d.sessions, |n| n as usize),
         })
     }
 
     /// The one-line description written to each row (`timing_rule`).
     pub fn describe(&self) -> String {
         let s = &self.stop;
-        format!(
+        let d = format!(
             "clock lift ≤ {} ms; warm-up {}–{} frames until steady; {}–{} samples, stop at ±{:.2} % (95 % CI of the median), ≤ {} ms; drift check every {}",
             self.clock_lift_ms,
             self.warmup.min_frames,
@@ -128,7 +142,15 @@ impl TimingPlan {
             s.max_noise * 100.0,
             s.max_time_ms,
             s.drift_every
-        )
+        );
+        if self.sessions > 1 {
+            format!(
+                "{d}; {} sessions (each prepared afresh), CI widened to cover their medians",
+                self.sessions
+            )
+        } else {
+            d
+        }
     }
 }
 
@@ -154,6 +176,8 @@ pub struct Measured {
     pub measure_ms: f64,
     /// Wall-clock ms of the method's prepare.
     pub prepare_ms: f64,
+    /// `(max − min) / median` of the sessions' medians (`[timing] sessions` > 1).
+    pub session_spread: Option<f64>,
     pub clocks: PointClocks,
     /// Clock lift before the warm-up: (ms of busy work, SM MHz before, SM MHz after); None when
     /// none was needed or possible.
@@ -433,6 +457,7 @@ impl<'g> PointTimer<'g> {
             samples: self.samples,
             measure_ms: self.spent_ms,
             prepare_ms: self.prepare_ms,
+            session_spread: None,
             clocks: self.clocks,
             clock_lift: self.clock_lift,
         })
@@ -447,11 +472,88 @@ pub fn measure(
     point: &Point,
     plan: &TimingPlan,
 ) -> Result<Measured> {
-    let mut t = PointTimer::prepare(gpu, scene, method, point, plan)?;
-    t.lift_clock()?;
-    t.warm_up()?;
-    while t.sample()?.is_none() {}
-    t.finish()
+    let session = || -> Result<Measured> {
+        let mut t = PointTimer::prepare(gpu, scene, method, point, plan)?;
+        t.lift_clock()?;
+        t.warm_up()?;
+        while t.sample()?.is_none() {}
+        t.finish()
+    };
+    let mut m = session()?;
+    if plan.sessions <= 1 {
+        return Ok(m);
+    }
+    let mut parts = vec![m.gpu_median().unwrap_or(m.cpu.median)];
+    for _ in 1..plan.sessions {
+        // The earlier session's GPU objects are dropped before the next is prepared, as a new
+        // run would allocate them.
+        drop(m.prepared);
+        let next = session()?;
+        parts.push(next.gpu_median().unwrap_or(next.cpu.median));
+        m = combine(
+            m.samples,
+            m.clocks,
+            (m.measure_ms, m.prepare_ms),
+            m.target_reached,
+            next,
+        );
+    }
+    widen_to_sessions(&mut m, &parts, plan);
+    Ok(m)
+}
+
+/// `next` with the earlier sessions' samples, clocks, times and target folded in.
+fn combine(
+    samples: Vec<Sample>,
+    clocks: PointClocks,
+    (measure_ms, prepare_ms): (f64, f64),
+    reached: bool,
+    mut next: Measured,
+) -> Measured {
+    let mut all = samples;
+    all.append(&mut next.samples);
+    next.samples = all;
+    let mut c = clocks;
+    c.merge(next.clocks);
+    next.clocks = c;
+    next.measure_ms += measure_ms;
+    next.prepare_ms += prepare_ms;
+    next.target_reached &= reached;
+    next
+}
+
+/// The pooled summary of every session's kept samples, its median's CI widened to cover each
+/// session's median; `session_medians` kept for `session_spread`. A spread wider than the noise
+/// target (as a half-width) means the target was not reached.
+fn widen_to_sessions(m: &mut Measured, parts: &[f64], plan: &TimingPlan) {
+    let kept: Vec<&Sample> = m.samples.iter().filter(|s| !s.discarded).collect();
+    let gpu: Vec<f64> = kept.iter().filter_map(|s| s.gpu_ms).collect();
+    let cpu: Vec<f64> = kept.iter().map(|s| s.cpu_ms).collect();
+    let widen = |mut s: Summary| {
+        let lo = parts.iter().copied().fold(s.median_ci.0, f64::min);
+        let hi = parts.iter().copied().fold(s.median_ci.1, f64::max);
+        s.median_ci = (lo, hi);
+        s.rel_ci = if s.median > 0.0 {
+            0.5 * (hi - lo) / s.median
+        } else {
+            f64::INFINITY
+        };
+        s
+    };
+    if !kept.is_empty() && gpu.len() == kept.len() {
+        m.gpu = Summary::of(&gpu, plan.seed).map(widen);
+    } else if let Some(c) = Summary::of(&cpu, plan.seed) {
+        m.cpu = widen(c);
+    }
+    let (lo, hi) = parts
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+    let mid = m.gpu_median().unwrap_or(m.cpu.median);
+    let spread = if mid > 0.0 { (hi - lo) / mid } else { 0.0 };
+    if 0.5 * spread > plan.stop.max_noise {
+        m.target_reached = false;
+    }
+    m.session_spread = Some(spread);
 }
 
 /// Times several points of one group interleaved (`[timing] interleave = true`): all prepared
@@ -597,6 +699,9 @@ pub fn set_timing(row: &mut Row, m: &Measured, mesh: &scenarios::Mesh) {
         .set_f(cols::PREPARE_MS, m.prepare_ms)
         .set(cols::TARGET_REACHED, m.target_reached)
         .set(cols::STOP_REASON, m.stop_reason.as_str());
+    if let Some(sp) = m.session_spread {
+        row.set_f(cols::SESSION_SPREAD, sp);
+    }
     for (col, v) in m.clocks.to_cells() {
         if !v.is_empty() {
             row.set(col, v);

@@ -264,3 +264,15 @@ fn the_architecture_suite_example_is_valid() {
     let typo = example.replace("max_layers", "max_layer");
     assert!(!problems(&typo).is_empty(), "a misspelt axis is refused");
 }
+
+#[test]
+fn sessions_out_of_range_or_with_interleave_are_refused() {
+    let zero = one(&suite("[timing]\nsessions = 0", PEEL, QUADS), &["sessions"]);
+    assert!(zero.contains('0'), "{zero}");
+    let both = one(
+        &suite("[timing]\nsessions = 3\ninterleave = true", PEEL, QUADS),
+        &["sessions", "interleave"],
+    );
+    assert!(both.contains("[timing]"), "{both}");
+    assert!(problems(&suite("[timing]\nsessions = 3", PEEL, QUADS)).is_empty());
+}

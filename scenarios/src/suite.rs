@@ -200,6 +200,7 @@ pub const SOFTWARE_KEYS: &[&str] = &[
     "interleave",
     "seed",
     "clock_lift_ms",
+    "sessions",
 ];
 /// Keys of the `[timing]` table (also accepted in `[software]`, as overrides).
 pub const TIMING_KEYS: &[&str] = &[
@@ -213,6 +214,7 @@ pub const TIMING_KEYS: &[&str] = &[
     "interleave",
     "seed",
     "clock_lift_ms",
+    "sessions",
 ];
 
 /// How the points of a suite are timed: each unset key takes the harness's default
@@ -240,6 +242,8 @@ pub struct TimingSpec {
     pub clock_lift_ms: Option<f64>,
     /// Seed of the bootstrap and of the interleaved order.
     pub seed: Option<u64>,
+    /// Independent sessions per point (each prepared afresh), the CI widened to cover them.
+    pub sessions: Option<u32>,
 }
 
 impl TimingSpec {
@@ -256,6 +260,7 @@ impl TimingSpec {
             interleave: over.interleave.or(self.interleave),
             seed: over.seed.or(self.seed),
             clock_lift_ms: over.clock_lift_ms.or(self.clock_lift_ms),
+            sessions: over.sessions.or(self.sessions),
         }
     }
 }
@@ -473,6 +478,7 @@ fn timing_spec(cx: &mut Ctx<'_>, t: &toml::Table, tn: &str) -> TimingSpec {
         interleave,
         seed: int(cx, "seed", 0, i64::MAX).map(|i| i as u64),
         clock_lift_ms: float(cx, "clock_lift_ms", 0.0, 60_000.0),
+        sessions: int(cx, "sessions", 1, 100).map(|i| i as u32),
     };
     if let (Some(a), Some(b)) = (spec.min_samples, spec.max_samples) {
         if a > b {

@@ -684,6 +684,10 @@ pub mod cols {
         "measure_ms",
         "wall-clock ms spent on warm-up and samples of this point",
     );
+    pub const SESSION_SPREAD: Col = Col::new(
+        "session_spread",
+        "with [timing] sessions > 1: (max − min) / median of the sessions' GPU medians, each session prepared afresh (new buffers, pipelines, warm-up); the CI columns are widened to cover every session's median, and a spread over twice max_noise makes the row noisy",
+    );
     pub const PREPARE_MS: Col = Col::new(
         "prepare_ms",
         "wall-clock ms of the method's prepare for this point (pipelines compiled, buffers allocated and filled; untimed), so a sweep's wall time can be attributed",
@@ -1124,6 +1128,7 @@ pub const GROUPS: &[Group] = &[
             cols::WARMUP_FRAMES,
             cols::MEASURE_MS,
             cols::PREPARE_MS,
+            cols::SESSION_SPREAD,
             cols::JUDGE_MS,
             cols::FRAGMENT_REFERENCE_MS,
             cols::TARGET_REACHED,

@@ -1,0 +1,67 @@
+//! `[timing] sessions`: a point measured in independent sessions (each prepared afresh) pools
+//! their samples and reports a CI of the median that covers every session's median, with the
+//! spread in `session_spread`; one session is today's single measurement, unchanged.
+
+use bench_core::gpu_scene::GpuScene;
+use bench_core::measure::{measure, TimingPlan};
+use bench_core::methods;
+use bench_core::testing::{gpu, params, point, scene};
+use scenarios::{ParamValue, TimingSpec};
+
+fn plan(sessions: u32) -> TimingPlan {
+    TimingPlan::from_spec(&TimingSpec {
+        min_samples: Some(4),
+        max_samples: Some(4),
+        warmup_frames: Some(1),
+        warmup_max_frames: Some(1),
+        sessions: Some(sessions),
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+#[test]
+fn sessions_pool_their_samples_and_the_ci_covers_every_sessions_median() {
+    let g = gpu();
+    let s = scene("quads", &[("depth_complexity", ParamValue::Int(4))]);
+    let gs = GpuScene::upload(g, &s, 32, 32);
+    let m = methods::get("depth_peel");
+    let p = point(&*m, &params(&[]));
+
+    let one = measure(g, &gs, &*m, &p, &plan(1)).unwrap();
+    assert_eq!(one.samples.len(), 4);
+    assert!(one.session_spread.is_none());
+
+    let three = measure(g, &gs, &*m, &p, &plan(3)).unwrap();
+    assert_eq!(three.samples.len(), 12, "every session's samples are kept");
+    let spread = three.session_spread.expect("a spread with 3 sessions");
+    assert!(spread.is_finite() && spread >= 0.0);
+    let sum = three.gpu.as_ref().unwrap_or(&three.cpu);
+    let (lo, hi) = sum.median_ci;
+    let time = |x: &bench_core::record::Sample| x.gpu_ms.unwrap_or(x.cpu_ms);
+    let mut meds = Vec::new();
+    for chunk in three.samples.chunks(4) {
+        let mut v: Vec<f64> = chunk.iter().filter(|x| !x.discarded).map(time).collect();
+        let med = median(&mut v);
+        assert!(
+            lo <= med && med <= hi,
+            "session median {med} outside [{lo}, {hi}]"
+        );
+        meds.push(med);
+    }
+    let (mn, mx) = meds
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+    assert!((spread - (mx - mn) / sum.median).abs() <= 1e-9 * (1.0 + spread));
+    assert!(plan(3).describe().contains("3 sessions"));
+}
