@@ -15,6 +15,10 @@
 #   REPORT=1 draws reports here too (they are normally drawn on the CPU machine with `mfx report`).
 # Writes $OUT/runs.tgz (every run folder's tables, each with gpu.txt and sweep.log; clocks.csv sampled by
 # nvidia-smi once a second over the whole call; compare-*.md) and $OUT/session.log.
+# Measured with the device tool (2026-12-01): files come back only up to 16 MiB each (8 files), so
+# images go in their own images-N.tgz; a machine still warm (a call within ~30 s of the last)
+# keeps /tmp/r, so a follow-up call can `mfx sweep SUITE --resume --out /tmp/r/SUITE` a suite the
+# budget cut short, or pack what was left behind.
 set -u
 start=$(date +%s)
 budget=${BUDGET:-560}
