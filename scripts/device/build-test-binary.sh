@@ -6,8 +6,9 @@
 #   device command: for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig;
 #     export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json XDG_RUNTIME_DIR=/tmp;
 #     gunzip -c .gpu/bench-core-tests.gz > /tmp/t && chmod +x /tmp/t &&
-#     /tmp/t compute_abuffer::tests --test-threads=1 2>&1 | tee $OUT/tests.log
-#   (carry .gl and .gpu). The tests pick the first Vulkan adapter (testing::gpu).
+#     /tmp/t compute_abuffer::tests::double_f32 compute_abuffer::tests::snaps --test-threads=1 2>&1 | tee $OUT/tests.log
+#   (carry .gl and .gpu). The tests pick the first Vulkan adapter (testing::gpu). Checked here on
+#   lavapipe: the three snapping tests pass from the binary (4.4 MB gzipped, built in ~2 min).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 bin=$(cargo test --release -p bench-core --lib --no-run --message-format=json 2>/dev/null \
