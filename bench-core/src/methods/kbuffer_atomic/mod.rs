@@ -21,7 +21,7 @@ use crate::axes::{Axis, Point};
 use crate::effects::FOLD_WGSL;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
-use crate::gpu_util::{bind_buffers, compute_pipeline, pixel_pass, shader, STORAGE_RW};
+use crate::gpu_util::{bind_buffers, pixel_pass, shader, STORAGE_RW};
 use crate::oit::Keep;
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
@@ -135,34 +135,14 @@ impl PreparedAtomic {
             &kc,
             &targets,
         );
-        let resolve_bgl = blend.then(|| tail::resolve_layout(gpu, kslots_entries(1)));
-        let resolve = match &resolve_bgl {
-            None => compute_pipeline(
-                gpu,
-                "kbuffer_atomic resolve",
-                &layout,
-                &module,
-                "resolve",
-                &rc,
-                false,
-            ),
-            Some(bgl) => {
-                let l = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                    label: Some("kbuffer_atomic tail resolve"),
-                    bind_group_layouts: &[Some(bgl)],
-                    immediate_size: 0,
-                });
-                compute_pipeline(
-                    gpu,
-                    "kbuffer_atomic tail resolve",
-                    &l,
-                    &module,
-                    "resolve_tail",
-                    &rc,
-                    false,
-                )
-            }
-        };
+        let (resolve_bgl, resolve) = tail::resolve_pipeline(
+            gpu,
+            "kbuffer_atomic",
+            &layout,
+            &module,
+            &rc,
+            blend.then(|| kslots_entries(1)),
+        );
         let mut alloc = AllocCounter::default();
         let depth = dummy_depth(gpu, &mut alloc, scene);
         let slots = KSlots::new(gpu, &mut alloc, scene, k)?;

@@ -27,8 +27,8 @@ use crate::effects::FOLD_WGSL;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::gpu_util::{
-    bind_buffers, camera_entry, check_storage_size, compute_pipeline, pixel_pass, read_vec, shader,
-    storage_entry, STORAGE_RW,
+    bind_buffers, camera_entry, check_storage_size, pixel_pass, read_vec, shader, storage_entry,
+    STORAGE_RW,
 };
 use crate::oit::Keep;
 use crate::record::cols;
@@ -252,34 +252,14 @@ impl PreparedRmw {
             &kc,
             &targets,
         );
-        let resolve_bgl = blend.then(|| tail::resolve_layout(gpu, kslots_entries(0)));
-        let resolve = match &resolve_bgl {
-            None => compute_pipeline(
-                gpu,
-                "kbuffer_rmw resolve",
-                &layout,
-                &module,
-                "resolve",
-                &rc,
-                false,
-            ),
-            Some(bgl) => {
-                let l = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                    label: Some("kbuffer_rmw tail resolve"),
-                    bind_group_layouts: &[Some(bgl)],
-                    immediate_size: 0,
-                });
-                compute_pipeline(
-                    gpu,
-                    "kbuffer_rmw tail resolve",
-                    &l,
-                    &module,
-                    "resolve_tail",
-                    &rc,
-                    false,
-                )
-            }
-        };
+        let (resolve_bgl, resolve) = tail::resolve_pipeline(
+            gpu,
+            "kbuffer_rmw",
+            &layout,
+            &module,
+            &rc,
+            blend.then(|| kslots_entries(0)),
+        );
         let mut alloc = AllocCounter::default();
         let depth = dummy_depth(gpu, &mut alloc, scene);
         let slots = KSlots::new(gpu, &mut alloc, scene, k)?;

@@ -13,7 +13,7 @@
 use crate::axes::Axis;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
-use crate::gpu_util::texture_entry;
+use crate::gpu_util::{compute_pipeline, texture_entry};
 use crate::oit::{Keep, TailMode};
 use crate::record::cols;
 
@@ -315,6 +315,35 @@ pub fn resolve_layout(
             label: Some("k-buffer tail resolve"),
             entries: &entries,
         })
+}
+
+/// A k-buffer's resolve pipeline: the `resolve` entry on `layout`, or with `entries` (the
+/// k-buffer's bindings) the `resolve_tail` entry on a layout that adds the tail targets, whose
+/// bind-group layout is returned for [`resolve_bind`].
+pub fn resolve_pipeline(
+    gpu: &Gpu,
+    name: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    constants: &[(&str, f64)],
+    entries: Option<Vec<wgpu::BindGroupLayoutEntry>>,
+) -> (Option<wgpu::BindGroupLayout>, wgpu::ComputePipeline) {
+    let Some(entries) = entries else {
+        let label = format!("{name} resolve");
+        let p = compute_pipeline(gpu, &label, layout, module, "resolve", constants, false);
+        return (None, p);
+    };
+    let bgl = resolve_layout(gpu, entries);
+    let label = format!("{name} tail resolve");
+    let l = gpu
+        .device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(&label),
+            bind_group_layouts: &[Some(&bgl)],
+            immediate_size: 0,
+        });
+    let p = compute_pipeline(gpu, &label, &l, module, "resolve_tail", constants, false);
+    (Some(bgl), p)
 }
 
 /// A bind group of `buffers` at bindings 0, 1, … and the tail textures at 5–7.
