@@ -226,3 +226,29 @@ pub fn assert_matches_reference(
         }
     }
 }
+
+/// Six 1.6-wide grey quads (α 0.3, object ids 0–5) at z 0, 0.5 and `hidden_z` + 0, 0.1, 0.2,
+/// 0.3: with `hidden_z` behind the eye, a scene whose later frames bring four quads into view
+/// (the overflow tests of sized captures).
+pub fn quads_with_four_at(hidden_z: f32) -> scenarios::Mesh {
+    let mut m = scenarios::Mesh::default();
+    let zs = [
+        0.0,
+        0.5,
+        hidden_z,
+        hidden_z + 0.1,
+        hidden_z + 0.2,
+        hidden_z + 0.3,
+    ];
+    for (i, z) in zs.into_iter().enumerate() {
+        let h = 0.8;
+        let c = [
+            glam::Vec3::new(-h, -h, z),
+            glam::Vec3::new(h, -h, z),
+            glam::Vec3::new(h, h, z),
+            glam::Vec3::new(-h, h, z),
+        ];
+        m.push_quad(c, [0.5, 0.5, 0.5, 0.3], i as u32);
+    }
+    m
+}

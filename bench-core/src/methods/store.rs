@@ -47,6 +47,38 @@ pub fn storage_pipeline_with(
     constants: &[(&str, f64)],
     targets: &[Option<wgpu::ColorTargetState>],
 ) -> wgpu::RenderPipeline {
+    let stand_in = wgpu::DepthStencilState {
+        format: wgpu::TextureFormat::Depth32Float,
+        depth_write_enabled: Some(false),
+        depth_compare: Some(wgpu::CompareFunction::Always),
+        stencil: Default::default(),
+        bias: Default::default(),
+    };
+    full_pipeline(
+        gpu,
+        label,
+        layout,
+        module,
+        fs,
+        constants,
+        targets,
+        Some(stand_in),
+    )
+}
+
+/// A raster pipeline over `vs_full` (every attribute), both faces (transparency sees back faces
+/// too, like the reference), with `depth` (or none) and colour `targets`.
+#[allow(clippy::too_many_arguments)]
+pub fn full_pipeline(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    fs: &str,
+    constants: &[(&str, f64)],
+    targets: &[Option<wgpu::ColorTargetState>],
+    depth: Option<wgpu::DepthStencilState>,
+) -> wgpu::RenderPipeline {
     let layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
         .into_iter()
         .map(Some)
@@ -61,15 +93,8 @@ pub fn storage_pipeline_with(
                 compilation_options: Default::default(),
                 buffers: &layouts,
             },
-            // Both faces: transparency sees back faces too (like the reference).
             primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
+            depth_stencil: depth,
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module,

@@ -347,6 +347,27 @@ fn text_style(px_size: f64, h: HPos, v: VPos, c: RGBColor) -> TextStyle<'static>
     font(px_size).color(&c).pos(Pos::new(h, v))
 }
 
+/// The thin grey outline of `r` (plot areas, legend boxes).
+fn draw_frame<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, r: &Rect) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.draw(&Rectangle::new(
+        [(px(r.x), px(r.y)), (px(r.right()), px(r.bottom()))],
+        FRAME.stroke_width(1),
+    ))
+    .map_err(err)
+}
+
+/// An axis title, saying so when the axis is logarithmic.
+fn axis_title(label: &str, log: bool) -> String {
+    if log {
+        format!("{label} (log scale)")
+    } else {
+        label.to_string()
+    }
+}
+
 const GRID: RGBColor = RGBColor(228, 228, 228);
 const FRAME: RGBColor = RGBColor(120, 120, 120);
 const MUTED: RGBColor = RGBColor(110, 110, 110);
@@ -409,11 +430,7 @@ where
         WHITE.filled(),
     ))
     .map_err(err)?;
-    root.draw(&Rectangle::new(
-        [(px(r.x), px(r.y)), (px(r.right()), px(r.bottom()))],
-        FRAME.stroke_width(1),
-    ))
-    .map_err(err)?;
+    draw_frame(root, r)?;
     let mut y = r.y + 7.0 + LEGEND_LINE / 2.0;
     for e in entries {
         let sx = r.x + 18.0;
@@ -816,25 +833,10 @@ impl XY {
             ))
             .map_err(err)?;
         }
-        root.draw(&Rectangle::new(
-            [
-                (px(plot.x), px(plot.y)),
-                (px(plot.right()), px(plot.bottom())),
-            ],
-            FRAME.stroke_width(1),
-        ))
-        .map_err(err)?;
+        draw_frame(root, &plot)?;
         // Axis titles.
-        let xt = if self.log_x {
-            format!("{} (log scale)", self.x_label)
-        } else {
-            self.x_label.clone()
-        };
-        let yt = if self.log_y {
-            format!("{} (log scale)", self.y_label)
-        } else {
-            self.y_label.clone()
-        };
+        let xt = axis_title(&self.x_label, self.log_x);
+        let yt = axis_title(&self.y_label, self.log_y);
         root.draw(&Text::new(
             xt,
             (px(plot.x + plot.w / 2.0), px(plot.bottom() + 30.0)),
@@ -1304,19 +1306,8 @@ impl Bars {
                 .map_err(err)?;
             }
         }
-        root.draw(&Rectangle::new(
-            [
-                (px(plot.x), px(plot.y)),
-                (px(plot.right()), px(plot.bottom())),
-            ],
-            FRAME.stroke_width(1),
-        ))
-        .map_err(err)?;
-        let vt = if p.dots {
-            format!("{} (log scale)", self.y_label)
-        } else {
-            self.y_label.clone()
-        };
+        draw_frame(root, &plot)?;
+        let vt = axis_title(&self.y_label, p.dots);
         root.draw(&Text::new(
             vt,
             (px(plot.x + plot.w / 2.0), px(plot.bottom() + 30.0)),

@@ -18,7 +18,7 @@
 //! image + 4 B stand-in depth.
 
 use super::compute_abuffer::{PreparedAbuffer, Replay};
-use super::mlab::{hazards, HAZARD_TOL};
+use super::mlab::judge_race;
 use super::store::{dummy_depth, storage_pass, storage_pipeline};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
@@ -315,20 +315,7 @@ impl Prepared for PreparedRace {
     }
 
     fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
-        let def = definition(reference, self.k as usize);
-        if let Some(img) = &cap.image {
-            let (n, first) = hazards(img, &def);
-            cap.hazard_pixels = Some(n);
-            if let Some(p) = first {
-                cap.flag.get_or_insert_with(|| "hazard".into());
-                let (x, y) = (p as u32 % reference.width, p as u32 / reference.width);
-                cap.notes = format!(
-                    "{}; {n} pixels differ from the ideal-order twin by more than {HAZARD_TOL:e} (first ({x},{y}))",
-                    cap.notes
-                );
-            }
-        }
-        cap.definition = Some(def);
+        judge_race(cap, definition(reference, self.k as usize), reference.width);
     }
 
     fn bytes_allocated(&self) -> u64 {

@@ -263,27 +263,7 @@ fn a_fragment_beyond_the_allocation_is_counted_not_written() {
     // Prepare on a scene whose 4 far quads lie behind the eye, then (as a dynamic scene would)
     // move them into view with the same buffers: the extra fragments must be reported.
     let quads = |hidden_z: f32| {
-        let mut m = Mesh::default();
-        for (i, z) in [
-            0.0,
-            0.5,
-            hidden_z,
-            hidden_z + 0.1,
-            hidden_z + 0.2,
-            hidden_z + 0.3,
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let h = 0.8;
-            let c = [
-                Vec3::new(-h, -h, z),
-                Vec3::new(h, -h, z),
-                Vec3::new(h, h, z),
-                Vec3::new(-h, h, z),
-            ];
-            m.push_quad(c, [0.5, 0.5, 0.5, 0.3], i as u32);
-        }
+        let m = crate::testing::quads_with_four_at(hidden_z);
         scene_with(m, 5.0, 0.5)
     };
     let (small, big) = (quads(10.0), quads(1.0));

@@ -681,9 +681,9 @@ impl Prepared for PreparedList {
 
 #[cfg(test)]
 mod tests {
-    use glam::{DVec3, Vec3};
+    use glam::DVec3;
     use scenarios::ParamValue::{Int, Str};
-    use scenarios::{Camera, Mesh, Scene, SceneSpec};
+    use scenarios::{Camera, Scene, SceneSpec};
 
     use super::*;
     use crate::reference::rasterize;
@@ -800,27 +800,7 @@ mod tests {
         // those into view with the same buffers: their tiles' sub-pools hold only what prepare
         // counted, so the extra fragments must be reported and the kept ones stay exact.
         let quads = |hidden_z: f32| {
-            let mut m = Mesh::default();
-            for (i, z) in [
-                0.0,
-                0.5,
-                hidden_z,
-                hidden_z + 0.1,
-                hidden_z + 0.2,
-                hidden_z + 0.3,
-            ]
-            .into_iter()
-            .enumerate()
-            {
-                let h = 0.8;
-                let c = [
-                    Vec3::new(-h, -h, z),
-                    Vec3::new(h, -h, z),
-                    Vec3::new(h, h, z),
-                    Vec3::new(-h, h, z),
-                ];
-                m.push_quad(c, [0.5, 0.5, 0.5, 0.3], i as u32);
-            }
+            let m = crate::testing::quads_with_four_at(hidden_z);
             let cam = Camera::look_at(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO, 60.0, 0.5, 100.0);
             Scene::new(SceneSpec::new("test", Params::new()), m, cam)
         };

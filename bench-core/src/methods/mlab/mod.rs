@@ -101,6 +101,24 @@ pub fn hazards(image: &[[f32; 4]], definition: &[[f64; 4]]) -> (u64, Option<usiz
     (n, first)
 }
 
+/// The race build's judgement: its ideal-order twin `def` becomes the capture's definition and
+/// the pixels that differ from it its hazards (flagged, the first named in the notes).
+pub fn judge_race(cap: &mut Capture, def: Vec<[f64; 4]>, width: u32) {
+    if let Some(img) = &cap.image {
+        let (n, first) = hazards(img, &def);
+        cap.hazard_pixels = Some(n);
+        if let Some(p) = first {
+            cap.flag.get_or_insert_with(|| "hazard".into());
+            let (x, y) = (p as u32 % width, p as u32 / width);
+            cap.notes = format!(
+                "{}; {n} pixels differ from the ideal-order twin by more than {HAZARD_TOL:e} (first ({x},{y}))",
+                cap.notes
+            );
+        }
+    }
+    cap.definition = Some(def);
+}
+
 /// Reports fragments beyond k: overflow pixels, and dropped or tailed fragments by rule.
 fn report_overflow(cap: &mut Capture, rule: Option<TailMode>, pixels: u64, beyond: u64) {
     cap.overflow_pixels = Some(pixels);
@@ -354,19 +372,7 @@ impl Prepared for PreparedRace {
     /// The ideal-order twin as the definition; pixels that differ from it are hazards.
     fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
         let def = definition(reference, self.k as usize, self.rule);
-        if let Some(img) = &cap.image {
-            let (n, first) = hazards(img, &def);
-            cap.hazard_pixels = Some(n);
-            if let Some(p) = first {
-                cap.flag.get_or_insert_with(|| "hazard".into());
-                let (x, y) = (p as u32 % reference.width, p as u32 / reference.width);
-                cap.notes = format!(
-                    "{}; {n} pixels differ from the ideal-order twin by more than {HAZARD_TOL:e} (first ({x},{y}))",
-                    cap.notes
-                );
-            }
-        }
-        cap.definition = Some(def);
+        judge_race(cap, def, reference.width);
     }
 
     fn bytes_allocated(&self) -> u64 {

@@ -317,35 +317,7 @@ fn blend_pipeline(
     constants: &[(&str, f64)],
     targets: &[Option<wgpu::ColorTargetState>],
 ) -> wgpu::RenderPipeline {
-    let layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
-        .into_iter()
-        .map(Some)
-        .collect();
-    gpu.device
-        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(label),
-            layout: Some(layout),
-            vertex: wgpu::VertexState {
-                module,
-                entry_point: Some("vs_full"),
-                compilation_options: Default::default(),
-                buffers: &layouts,
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module,
-                entry_point: Some(fs),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants,
-                    zero_initialize_workgroup_memory: false,
-                },
-                targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
+    super::store::full_pipeline(gpu, label, layout, module, fs, constants, targets, None)
 }
 
 impl PreparedMoments {
