@@ -89,8 +89,10 @@ nvidia-smi --query-gpu=clocks.sm,clocks.mem,temperature.gpu,power.draw --format=
 tar czf "$out/runs.tgz" -C "$r" --exclude='*.png' --exclude='runs.json' .
 n=0
 for d in "$r"/*/; do
-  n=$((n + 1))
   name=$(basename "$d")
+  # A folder without images takes none of the 8 files a call brings back.
+  [ -n "$(cd "$r" && find "$name" -name '*.png' -print -quit)" ] || continue
+  n=$((n + 1))
   (cd "$r" && find "$name" \( -name '*.png' -o -name runs.json \) -print0 | tar czf "$out/images-$n.tgz" --null -T -)
   size=$(stat -c %s "$out/images-$n.tgz")
   if [ "$size" -gt 16000000 ] || [ "$n" -gt 6 ]; then
