@@ -506,7 +506,10 @@ fn emit_mask(x: i32, y: i32, depth: f32, prim: u32, front: bool, mask: u32) {
     if FILL {
         let slot = atomicAdd(&offs[p], 1u);
         if slot < sizes.capacity {
-            let tag = prim | (mask << TAG_PRIM_BITS) | select(0u, 0x80000000u, front);
+            // Single-sample tags have no mask bits: a full tile's all-samples mask (1) would land
+            // on bit 31, the front-facing bit (TAG_PRIM_BITS = 31).
+            let m = select(0u, mask, AA_SAMPLES > 1u);
+            let tag = prim | (m << TAG_PRIM_BITS) | select(0u, 0x80000000u, front);
             frags[slot] = vec2<u32>(bitcast<u32>(depth), tag);
         } else {
             atomicAdd(&work[W_LOST], 1u);

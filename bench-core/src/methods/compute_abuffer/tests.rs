@@ -511,3 +511,49 @@ fn snaps_vertices_as_the_f64_reference_does_on_dense_grass() {
         assert_eq!(bad, 0, "{label}: counts differ first at {first:?}");
     }
 }
+
+#[test]
+fn full_tiles_of_big_triangles_keep_each_fragments_facing() {
+    // Effects that read facing (translucency's thickness, CSG's in/out) over triangles that
+    // take the shared path's full tiles: a single-sample full tile's all-samples mask once
+    // landed on the tag's front-facing bit, so every back face there read as front (0.3 % of
+    // pixels off by up to 0.93 here; transparency, which ignores facing, stayed exact). 256²
+    // with small_max 1: two shells' back faces span whole tiles.
+    let shells = scene("shells", &[("count", Int(2)), ("segments", Int(12))]);
+    for (effect, extra) in [
+        ("translucency", ("sigma", scenarios::ParamValue::Float(0.8))),
+        ("csg_sub", ("csg_b", Int(1))),
+    ] {
+        for small in [1, 1 << 20] {
+            let p = params(&[
+                ("small_max", Int(small)),
+                ("effect", Str(effect.into())),
+                extra.clone(),
+            ]);
+            let (cap, lists) = run(&ComputeAbuffer, &shells, 256, 256, &p);
+            if small == 1 {
+                let [_, full, _] = tile_classes(&cap.notes);
+                assert!(full > 0, "full tiles occur: {}", cap.notes);
+            }
+            let fx = crate::effects::EffectConfig::from_point(&crate::testing::point(
+                &ComputeAbuffer,
+                &p,
+            ))
+            .unwrap();
+            let reference = fx.reference(&shells, &lists, cap.expected);
+            let img = cap.image.as_ref().unwrap();
+            let worst = reference
+                .iter()
+                .zip(img)
+                .flat_map(|(r, g)| (0..4).map(move |c| (r[c] - g[c] as f64).abs()))
+                .fold(0.0f64, f64::max);
+            // View depth re-derived in f32 from unsnapped vertices vs the reference's snapped
+            // ones (tests/effects.rs: ≤ 2e-3); a flipped facing is ≥ 0.1.
+            assert!(
+                worst <= 2e-3,
+                "{effect} small_max {small}: max error {worst:.3e}: {}",
+                cap.notes
+            );
+        }
+    }
+}
