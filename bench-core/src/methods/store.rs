@@ -13,14 +13,25 @@ pub const ENTRY_BYTES: u64 = 32;
 
 /// The stand-in depth attachment of a storage-only pass (never tested, never written).
 pub fn dummy_depth(gpu: &Gpu, alloc: &mut AllocCounter, scene: &GpuScene) -> wgpu::TextureView {
+    dummy_depth_ms(gpu, alloc, scene, 1)
+}
+
+/// [`dummy_depth`] with `samples` samples per pixel (the pass of an MSAA storage pipeline).
+pub fn dummy_depth_ms(
+    gpu: &Gpu,
+    alloc: &mut AllocCounter,
+    scene: &GpuScene,
+    samples: u32,
+) -> wgpu::TextureView {
     alloc
-        .texture(
+        .texture_ms(
             gpu,
             "storage pass depth (unused)",
             scene.width,
             scene.height,
             wgpu::TextureFormat::Depth32Float,
             wgpu::TextureUsages::RENDER_ATTACHMENT,
+            samples,
         )
         .create_view(&Default::default())
 }
@@ -47,6 +58,19 @@ pub fn storage_pipeline_with(
     constants: &[(&str, f64)],
     targets: &[Option<wgpu::ColorTargetState>],
 ) -> wgpu::RenderPipeline {
+    storage_pipeline_ms(gpu, label, layout, module, (fs, constants), targets, 1)
+}
+
+/// [`storage_pipeline_with`] rasterising `samples` samples per pixel (MSAA).
+pub fn storage_pipeline_ms(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    (fs, constants): (&str, &[(&str, f64)]),
+    targets: &[Option<wgpu::ColorTargetState>],
+    samples: u32,
+) -> wgpu::RenderPipeline {
     let stand_in = wgpu::DepthStencilState {
         format: wgpu::TextureFormat::Depth32Float,
         depth_write_enabled: Some(false),
@@ -54,15 +78,15 @@ pub fn storage_pipeline_with(
         stencil: Default::default(),
         bias: Default::default(),
     };
-    full_pipeline(
+    full_pipeline_ms(
         gpu,
         label,
         layout,
         module,
-        fs,
-        constants,
+        (fs, constants),
         targets,
         Some(stand_in),
+        samples,
     )
 }
 
@@ -78,6 +102,30 @@ pub fn full_pipeline(
     constants: &[(&str, f64)],
     targets: &[Option<wgpu::ColorTargetState>],
     depth: Option<wgpu::DepthStencilState>,
+) -> wgpu::RenderPipeline {
+    full_pipeline_ms(
+        gpu,
+        label,
+        layout,
+        module,
+        (fs, constants),
+        targets,
+        depth,
+        1,
+    )
+}
+
+/// [`full_pipeline`] rasterising `samples` samples per pixel (MSAA).
+#[allow(clippy::too_many_arguments)]
+pub fn full_pipeline_ms(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    (fs, constants): (&str, &[(&str, f64)]),
+    targets: &[Option<wgpu::ColorTargetState>],
+    depth: Option<wgpu::DepthStencilState>,
+    samples: u32,
 ) -> wgpu::RenderPipeline {
     let layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
         .into_iter()
@@ -95,7 +143,7 @@ pub fn full_pipeline(
             },
             primitive: wgpu::PrimitiveState::default(),
             depth_stencil: depth,
-            multisample: Default::default(),
+            multisample: crate::gpu_util::multisample(samples),
             fragment: Some(wgpu::FragmentState {
                 module,
                 entry_point: Some(fs),

@@ -10,6 +10,10 @@
 // bubbling needs the returned old value; 32-bit atomics work everywhere.
 
 override K: u32 = 8u;
+// MSAA per-sample capture (aa_capture = sample): K slots per sample; every fragment entry runs
+// per sample (gpu_util::per_sample_source sets SAMPLE) and the resolve averages the samples.
+override SAMPLES: u32 = 1u;
+var<private> SAMPLE: i32 = 0;
 
 struct Entry {
     color: vec4<f32>,
@@ -32,7 +36,8 @@ fn near_key(d: f32) -> u32 {
 }
 
 fn slot_base(clip: vec4<f32>) -> u32 {
-    return (u32(clip.y) * u32(camera.viewport.x) + u32(clip.x)) * K;
+    let p = u32(clip.y) * u32(camera.viewport.x) + u32(clip.x);
+    return (p * SAMPLES + select(0u, u32(SAMPLE), SAMPLES > 1u)) * K;
 }
 
 @fragment
@@ -166,7 +171,15 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let p = id.y * w + id.x;
-    out_image[p] = fold_finish(fold_kept(p));
+    if SAMPLES == 1u {
+        out_image[p] = fold_finish(fold_kept(p));
+        return;
+    }
+    var sum = vec4<f32>(0.0);
+    for (var s = 0u; s < SAMPLES; s = s + 1u) {
+        sum = sum + fold_finish(fold_kept(p * SAMPLES + s));
+    }
+    out_image[p] = sum / f32(SAMPLES);
 }
 
 // tail = blend: the kept fragments with the tail behind them (tail/resolve.wgsl).

@@ -11,17 +11,25 @@
 //! fragments to arrive claim the slots (an atomic counter per pixel; which fragments are "first"
 //! is the GPU's order, judged against primitive order); the resolve sorts them. The hazard judge
 //! applies to `keep = nearest` only. `hybrid` is this capture with a mean-alpha tail.
+//!
+//! Antialiasing: `aa = msaa*` with `aa_capture = sample` gives every sample its own k slots
+//! (memory × samples; both passes run per sample) and the resolve averages the samples' folds,
+//! judged against each sample's k nearest; `ssaa2x2` wraps the single-sample k-buffer. A
+//! coverage-mask k-buffer is not offered: it would keep the k nearest fragments of the pixel,
+//! not of each sample, a rule with no per-sample definition to judge it by.
 
 use super::kbuffer_rmw::{kslots_entries, kslots_layout, KSlots, LAYERS};
-use super::store::{dummy_depth, storage_pass_with, storage_pipeline_with};
+use super::store::{dummy_depth_ms, storage_pass_with, storage_pipeline_ms};
 use super::tail::{self, Bounding, TailTargets, RESOLVE_WGSL, TAIL_WGSL};
 use super::{Capture, FrameStats, Method, Prepared};
-use crate::aa::{self, AaConfig, AaMode, AaSupport};
+use crate::aa::{self, AaCapture, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
 use crate::effects::FOLD_WGSL;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
-use crate::gpu_util::{bind_buffers, pixel_pass, shader, STORAGE_RW};
+use crate::gpu_util::{
+    bind_buffers, per_sample_source, pixel_pass, shader_source, COMMON_WGSL, STORAGE_RW,
+};
 use crate::oit::Keep;
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
@@ -45,7 +53,14 @@ impl Method for KBufferAtomic {
         vec![LAYERS, tail::TAIL, tail::KEEP, aa::AA, aa::AA_CAPTURE]
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
-        AA_SUPPORT.check(self.name(), AaConfig::from_point(point))?;
+        let cfg = AaConfig::from_point(point);
+        AA_SUPPORT.check(self.name(), cfg)?;
+        if cfg.msaa() > 1 {
+            if Bounding::of(point, true) != Bounding::DEFAULT {
+                return Err("per-sample k slots keep each sample's k nearest and drop the rest: tail = blend and keep = first are single-sample".into());
+            }
+            aa::check_adapter(gpu, cfg, &[wgpu::TextureFormat::Depth32Float])?;
+        }
         if Bounding::of(point, true).blends() {
             tail::supports(gpu, 0)?;
         }
@@ -54,22 +69,25 @@ impl Method for KBufferAtomic {
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let k = point.int(&LAYERS) as u32;
         let bounding = Bounding::of(point, true);
-        if AaConfig::from_point(point).mode == AaMode::Ssaa2x2 {
+        let cfg = AaConfig::from_point(point);
+        if cfg.mode == AaMode::Ssaa2x2 {
             return super::ssaa::prepare(gpu, scene, |big| {
                 Ok(Box::new(PreparedAtomic::new(gpu, big, k, bounding)?))
             });
         }
-        Ok(Box::new(PreparedAtomic::new(gpu, scene, k, bounding)?))
+        let samples = cfg.msaa();
+        Ok(Box::new(PreparedAtomic::new_ms(
+            gpu, scene, k, bounding, samples,
+        )?))
     }
 }
 
-/// Supersampling wraps the k-buffer as it is; per-sample slots (k × samples per pixel) are not
-/// built yet: those rows are skipped with this reason.
+/// Per-sample slots and supersampling; no coverage masks (module doc).
 const AA_SUPPORT: AaSupport = AaSupport {
-    sample: false,
+    sample: true,
     coverage: false,
     ssaa: true,
-    why: "per-sample and coverage-mask k-buffers are not built yet (ssaa2x2 is)",
+    why: "a coverage-mask k-buffer keeps the k nearest of the pixel, not of each sample: no per-sample rule to judge it by (aa_capture = sample keeps k per sample)",
 };
 
 pub(crate) struct PreparedAtomic {
@@ -85,23 +103,41 @@ pub(crate) struct PreparedAtomic {
     bounding: Bounding,
     tail: Option<TailTargets>,
     tailed: u64,
+    /// MSAA samples (1: none); k slots per sample.
+    samples: u32,
     alloc: AllocCounter,
 }
 
 impl PreparedAtomic {
     pub(crate) fn new(gpu: &Gpu, scene: &GpuScene, k: u32, bounding: Bounding) -> Result<Self> {
+        Self::new_ms(gpu, scene, k, bounding, 1)
+    }
+
+    /// `samples` > 1: k slots per sample, both passes per sample (MSAA, `aa_capture = sample`).
+    fn new_ms(
+        gpu: &Gpu,
+        scene: &GpuScene,
+        k: u32,
+        bounding: Bounding,
+        samples: u32,
+    ) -> Result<Self> {
         let d = &gpu.device;
-        let src = format!("{WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}");
-        let module = shader(gpu, "kbuffer_atomic", &src);
+        let src = format!("{COMMON_WGSL}\n{WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}");
+        let src = if samples > 1 {
+            per_sample_source(&src)
+        } else {
+            src
+        };
+        let module = shader_source(gpu, "kbuffer_atomic", src);
         let bgl = kslots_layout(gpu, 1);
         let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("kbuffer_atomic"),
             bind_group_layouts: &[Some(&bgl)],
             immediate_size: 0,
         });
-        let kc = [("K", k as f64)];
+        let kc = [("K", k as f64), ("SAMPLES", samples as f64)];
         let [keep_first, mean_alpha] = bounding.constants();
-        let rc = [("K", k as f64), ("EFFECT", 0.0), keep_first, mean_alpha];
+        let rc = [kc[0], kc[1], ("EFFECT", 0.0), keep_first, mean_alpha];
         let blend = bounding.blends();
         let targets = if blend {
             TailTargets::color_targets()
@@ -110,14 +146,14 @@ impl PreparedAtomic {
         };
         let nearest = bounding.keep == Keep::Nearest;
         let keys_pass = nearest.then(|| {
-            storage_pipeline_with(
+            storage_pipeline_ms(
                 gpu,
                 "kbuffer_atomic keys",
                 &layout,
                 &module,
-                "fs_keys",
-                &kc,
+                ("fs_keys", &kc),
                 &[],
+                samples,
             )
         });
         let fs = match (nearest, blend) {
@@ -126,14 +162,14 @@ impl PreparedAtomic {
             (false, false) => "fs_first",
             (false, true) => "fs_first_tail",
         };
-        let payload_pass = storage_pipeline_with(
+        let payload_pass = storage_pipeline_ms(
             gpu,
             "kbuffer_atomic payload",
             &layout,
             &module,
-            fs,
-            &kc,
+            (fs, &kc),
             &targets,
+            samples,
         );
         let (resolve_bgl, resolve) = tail::resolve_pipeline(
             gpu,
@@ -144,12 +180,12 @@ impl PreparedAtomic {
             blend.then(|| kslots_entries(1)),
         );
         let mut alloc = AllocCounter::default();
-        let depth = dummy_depth(gpu, &mut alloc, scene);
-        let slots = KSlots::new(gpu, &mut alloc, scene, k)?;
+        let depth = dummy_depth_ms(gpu, &mut alloc, scene, samples);
+        let slots = KSlots::per_sample(gpu, &mut alloc, scene, k, samples)?;
         let claims = alloc.buffer(
             gpu,
             "k-buffer claims",
-            scene.pixels() as u64 * k as u64 * 4,
+            scene.pixels() as u64 * samples as u64 * k as u64 * 4,
             STORAGE_RW,
         );
         let buffers = [
@@ -177,6 +213,7 @@ impl PreparedAtomic {
             bounding,
             tail,
             tailed: 0,
+            samples,
             alloc,
         })
     }
@@ -220,7 +257,17 @@ impl Prepared for PreparedAtomic {
             Some(t) => t.tailed(gpu)?,
             None => 0,
         };
-        self.slots.readback(gpu, scene)
+        let mut cap = self.slots.readback(gpu, scene)?;
+        if self.samples > 1 {
+            // Per-pixel counts and the hazard judge are single-sample by contract: the image is
+            // judged against each sample's k nearest (aa::reference_for).
+            cap.counts = None;
+            self.slots.captured.clear();
+            cap.aa = Some(AaMode::Msaa(self.samples));
+            cap.aa_capture = Some(AaCapture::Sample);
+            cap.sample_positions = Some(aa::sample_positions(gpu, self.samples));
+        }
+        Ok(cap)
     }
 
     fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {

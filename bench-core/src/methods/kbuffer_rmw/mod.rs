@@ -94,8 +94,19 @@ pub struct KSlots {
 
 impl KSlots {
     pub fn new(gpu: &Gpu, alloc: &mut AllocCounter, scene: &GpuScene, k: u32) -> Result<Self> {
+        Self::per_sample(gpu, alloc, scene, k, 1)
+    }
+
+    /// k slots for each of `samples` samples per pixel (MSAA per-sample capture); one image.
+    pub fn per_sample(
+        gpu: &Gpu,
+        alloc: &mut AllocCounter,
+        scene: &GpuScene,
+        k: u32,
+        samples: u32,
+    ) -> Result<Self> {
         let px = scene.pixels() as u64;
-        let slots = px * k as u64;
+        let slots = px * samples as u64 * k as u64;
         check_storage_size(gpu, "k-buffer entries", slots * ENTRY_BYTES)?;
         Ok(KSlots {
             k,
@@ -110,7 +121,7 @@ impl KSlots {
     pub fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let n = scene.pixels();
         let k = self.k as usize;
-        let keys = read_vec::<u32>(gpu, &self.keys, n * k)?;
+        let keys = read_vec::<u32>(gpu, &self.keys, (self.keys.size() / 4) as usize)?;
         self.captured = keys
             .iter()
             .map(|&key| (key != 0).then(|| store::key_depth(key, scene.reversed_z)))

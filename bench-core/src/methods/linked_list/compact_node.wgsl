@@ -29,6 +29,24 @@ fn fs_append(
     push_node(pos, n);
 }
 
+// aa_capture = coverage: one node per pixel-rate fragment, its coverage mask packed into the tag
+// above the primitive (TAG_PRIM_BITS = 23: prim | mask << 23 | front << 31, as compute_abuffer).
+@fragment
+fn fs_append_mask(
+    @builtin(position) pos: vec4<f32>,
+    @builtin(front_facing) ff: bool,
+    @builtin(primitive_index) prim: u32,
+    @builtin(sample_mask) mask: u32,
+) {
+    let n = take_node(pos);
+    if n == NO_NODE {
+        return;
+    }
+    nodes[n * NODE_WORDS] = bitcast<u32>(pos.z);
+    nodes[n * NODE_WORDS + 1u] = prim | ((mask & 0xffu) << TAG_PRIM_BITS) | select(0u, 0x80000000u, ff);
+    push_node(pos, n);
+}
+
 // tail = blend: the full vertex stage, so a fragment that finds its pool full has a colour for
 // the blended tail (tail.wgsl).
 @fragment
@@ -59,7 +77,12 @@ fn list_before(za: f32, ka: u32, zb: f32, kb: u32) -> bool {
     return before(za, ka, zb, kb);
 }
 
+// The coverage mask of a tag (COVERAGE; unused otherwise).
+fn node_mask(tag: u32) -> u32 {
+    return (tag >> TAG_PRIM_BITS) & 0xffu;
+}
+
 fn list_frag(z: f32, tag: u32, ndc: vec2<f32>) -> Frag {
-    let i = tri_indices(tag & 0x7fffffffu);
+    let i = tri_indices(tag_prim(tag));
     return frag_from(z, tag, ndc, i, clip_of(i.x), clip_of(i.y), clip_of(i.z));
 }

@@ -50,6 +50,11 @@ fn list_before(za: f32, ka: u32, zb: f32, kb: u32) -> bool {
     return nearer(za, zb);
 }
 
+// Full nodes carry no coverage mask (aa_capture = coverage needs compact nodes): every sample.
+fn node_mask(ni: u32) -> u32 {
+    return 0xffu;
+}
+
 fn list_frag(z: f32, ni: u32, ndc: vec2<f32>) -> Frag {
     let b = ni * NODE_WORDS;
     let c = vec4<f32>(bitcast<f32>(nodes[b]), bitcast<f32>(nodes[b + 1u]), bitcast<f32>(nodes[b + 2u]), bitcast<f32>(nodes[b + 3u]));

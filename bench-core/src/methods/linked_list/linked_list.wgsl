@@ -13,13 +13,21 @@
 // re-derives attributes from the primitive, as compute_abuffer does).
 
 override TILED: bool = false;
+// MSAA (aa = msaa*): samples per pixel (1: none). COVERAGE: one node per pixel-rate fragment with
+// its coverage mask in the tag (compact nodes, aa_capture = coverage), lists per pixel; else
+// with SAMPLES > 1 every fragment entry runs per sample (gpu_util::per_sample_source sets SAMPLE)
+// and each sample has its own list (aa_capture = sample: heads × SAMPLES).
+override SAMPLES: u32 = 1u;
+override COVERAGE: bool = false;
+var<private> SAMPLE: i32 = 0;
 // Per-pixel sort capacity of the resolve (a register/local array; WGSL needs a constant size).
 const SORT_MAX: u32 = 128u;
 // Side (pixels) of a counted pool's tiles.
 const TILE_SIDE: u32 = 8u;
 const NO_NODE: u32 = 0xffffffffu;
 
-// node index + 1 of the pixel's newest node; 0 = empty list.
+// node index + 1 of the list's newest node; 0 = empty list. One list per pixel, or per pixel and
+// sample (aa_capture = sample).
 @group(0) @binding(1) var<storage, read_write> heads: array<atomic<u32>>;
 // NODE_WORDS words per node (layout in the variant file); word NEXT: next node index + 1, 0 ends.
 @group(0) @binding(2) var<storage, read_write> nodes: array<u32>;
@@ -57,9 +65,15 @@ fn take_node(pos: vec4<f32>) -> u32 {
     return r.x + i;
 }
 
-// Links node `n` (payload written) at the head of its pixel's list.
+// Lists a pixel has: one, or one per sample.
+fn lists_per_pixel() -> u32 {
+    return select(1u, SAMPLES, SAMPLES > 1u && !COVERAGE);
+}
+
+// Links node `n` (payload written) at the head of its pixel's (or sample's) list.
 fn push_node(pos: vec4<f32>, n: u32) {
-    nodes[n * NODE_WORDS + NEXT] = atomicExchange(&heads[pixel_of(pos)], n + 1u);
+    let h = pixel_of(pos) * lists_per_pixel() + select(0u, u32(SAMPLE), lists_per_pixel() > 1u);
+    nodes[n * NODE_WORDS + NEXT] = atomicExchange(&heads[h], n + 1u);
 }
 
 // Prepare-time sizing of counted pools: fragments per tile.
@@ -96,19 +110,15 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }
 
-// Pixel `xy`'s list sorted (the SORT_MAX nearest) and folded; counts written.
-fn resolve_lists(xy: vec2<u32>) -> FoldState {
-    let w = u32(camera.viewport.x);
-    let p = xy.y * w + xy.x;
-    sort_tail_sums = vec4<f32>(0.0);
-    sort_tail_trans = 1.0;
-    sort_tail_count = 0.0;
-    let ndc = vec2<f32>((f32(xy.x) + 0.5) * camera.viewport.z * 2.0 - 1.0, 1.0 - (f32(xy.y) + 0.5) * camera.viewport.w * 2.0);
-    var d: array<f32, SORT_MAX>;
-    var key: array<u32, SORT_MAX>;
+// A list sorted nearest first (its SORT_MAX nearest) in `sort_d`/`sort_key`; what is beyond
+// the capacity is dropped (counted in `sort_dropped`, summed into the tail under TAIL).
+var<private> sort_d: array<f32, SORT_MAX>;
+var<private> sort_key: array<u32, SORT_MAX>;
+var<private> sort_dropped: u32;
+
+fn sort_list(head: u32, ndc: vec2<f32>) -> u32 {
     var n = 0u;
-    var dropped = 0u;
-    var cur = atomicLoad(&heads[p]);
+    var cur = atomicLoad(&heads[head]);
     loop {
         if cur == 0u {
             break;
@@ -118,40 +128,119 @@ fn resolve_lists(xy: vec2<u32>) -> FoldState {
         let k = node_key(ni);
         cur = nodes[ni * NODE_WORDS + NEXT];
         if n == SORT_MAX {
-            dropped = dropped + 1u;
-            if !list_before(z, k, d[n - 1u], key[n - 1u]) {
+            sort_dropped = sort_dropped + 1u;
+            if !list_before(z, k, sort_d[n - 1u], sort_key[n - 1u]) {
                 if TAIL {
                     sort_drops(list_frag(z, k, ndc));
                 }
                 continue;
             }
             if TAIL {
-                sort_drops(list_frag(d[n - 1u], key[n - 1u], ndc));
+                sort_drops(list_frag(sort_d[n - 1u], sort_key[n - 1u], ndc));
             }
             n = n - 1u;
         }
         var j = n;
         loop {
-            if j == 0u || !list_before(z, k, d[j - 1u], key[j - 1u]) {
+            if j == 0u || !list_before(z, k, sort_d[j - 1u], sort_key[j - 1u]) {
                 break;
             }
-            d[j] = d[j - 1u];
-            key[j] = key[j - 1u];
+            sort_d[j] = sort_d[j - 1u];
+            sort_key[j] = sort_key[j - 1u];
             j = j - 1u;
         }
-        d[j] = z;
-        key[j] = k;
+        sort_d[j] = z;
+        sort_key[j] = k;
         n = n + 1u;
     }
-    var s = fold_init_at(vec2<f32>(xy) + 0.5);
-    for (var i = 0u; i < n; i = i + 1u) {
-        fold_step(&s, list_frag(d[i], key[i], ndc));
-    }
+    return n;
+}
+
+fn centre_ndc(xy: vec2<u32>) -> vec2<f32> {
+    return vec2<f32>((f32(xy.x) + 0.5) * camera.viewport.z * 2.0 - 1.0, 1.0 - (f32(xy.y) + 0.5) * camera.viewport.w * 2.0);
+}
+
+// Pixel p's resolved fragments and losses (pool full or over SORT_MAX) into the counters.
+fn count_resolved(p: u32, n: u32) {
     atomicStore(&pix[2u * p + 1u], n);
-    let gone = atomicLoad(&pix[2u * p]) + dropped;
+    let gone = atomicLoad(&pix[2u * p]) + sort_dropped;
     if gone > 0u {
         atomicAdd(&counters[0], 1u);
         atomicAdd(&counters[1], gone);
     }
+}
+
+// Pixel `xy`'s list sorted (the SORT_MAX nearest) and folded; counts written.
+fn resolve_lists(xy: vec2<u32>) -> FoldState {
+    let w = u32(camera.viewport.x);
+    let p = xy.y * w + xy.x;
+    sort_tail_sums = vec4<f32>(0.0);
+    sort_tail_trans = 1.0;
+    sort_tail_count = 0.0;
+    sort_dropped = 0u;
+    let ndc = centre_ndc(xy);
+    let n = sort_list(p, ndc);
+    var s = fold_init_at(vec2<f32>(xy) + 0.5);
+    for (var i = 0u; i < n; i = i + 1u) {
+        fold_step(&s, list_frag(sort_d[i], sort_key[i], ndc));
+    }
+    count_resolved(p, n);
     return s;
+}
+
+// MSAA: the mean over the pixel's samples of each sample's fold: per sample over its own list
+// (aa_capture = sample), or over the pixel's list's fragments whose coverage mask has the
+// sample's bit (COVERAGE); attributes at the pixel centre, as a pixel-rate fragment is shaded.
+@compute @workgroup_size(8, 8)
+fn resolve_ms(@builtin(global_invocation_id) id: vec3<u32>) {
+    let w = u32(camera.viewport.x);
+    let h = u32(camera.viewport.y);
+    if id.x >= w || id.y >= h {
+        return;
+    }
+    let p = id.y * w + id.x;
+    let ndc = centre_ndc(id.xy);
+    sort_dropped = 0u;
+    var acc: array<vec4<f32>, 3>;
+    var total = 0u;
+    if COVERAGE {
+        let n = sort_list(p, ndc);
+        total = n;
+        var ss: array<FoldState, 8>;
+        for (var s = 0u; s < SAMPLES; s = s + 1u) {
+            ss[s] = fold_init_at(vec2<f32>(id.xy) + 0.5);
+        }
+        for (var i = 0u; i < n; i = i + 1u) {
+            let f = list_frag(sort_d[i], sort_key[i], ndc);
+            let mask = node_mask(sort_key[i]);
+            for (var s = 0u; s < SAMPLES; s = s + 1u) {
+                if (mask & (1u << s)) != 0u {
+                    var st = ss[s];
+                    fold_step(&st, f);
+                    ss[s] = st;
+                }
+            }
+        }
+        for (var s = 0u; s < SAMPLES; s = s + 1u) {
+            for (var k = 0u; k < fold_image_count(); k = k + 1u) {
+                acc[k] = acc[k] + fold_finish_image(ss[s], k);
+            }
+        }
+    } else {
+        for (var s = 0u; s < SAMPLES; s = s + 1u) {
+            let n = sort_list(p * SAMPLES + s, ndc);
+            total = total + n;
+            var st = fold_init_at(vec2<f32>(id.xy) + 0.5);
+            for (var i = 0u; i < n; i = i + 1u) {
+                fold_step(&st, list_frag(sort_d[i], sort_key[i], ndc));
+            }
+            for (var k = 0u; k < fold_image_count(); k = k + 1u) {
+                acc[k] = acc[k] + fold_finish_image(st, k);
+            }
+        }
+    }
+    for (var k = 0u; k < fold_image_count(); k = k + 1u) {
+        out_image[k * w * h + p] = acc[k] / f32(SAMPLES);
+    }
+    count_resolved(p, total);
 }

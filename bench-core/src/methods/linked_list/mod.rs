@@ -27,6 +27,14 @@
 //!   composited behind the list. A pool fills in arrival order, so what a pixel keeps is its first
 //!   arrivals (`keep = first` of the twin `oit::tail`); transparency only.
 //!
+//! - `aa = msaa2|msaa4|msaa8` (issue 22): `aa_capture = sample` runs the fragment stage per
+//!   sample (sample shading) and gives each sample its own list (heads × samples, a counted pool
+//!   counts per-sample fragments); `aa_capture = coverage` (compact nodes) appends one node per
+//!   pixel-rate fragment with its coverage mask packed into the tag (12 B still: primitives in
+//!   23 bits), and the resolve folds each sample over the fragments whose mask has its bit.
+//!   Either resolve shades at the pixel centre and averages the samples. `ssaa2x2` wraps the
+//!   single-sample list (`methods::ssaa`). `tail = blend` is single-sample only.
+//!
 //! Memory: `bytes_overhead` is everything but the nodes (heads, per-pixel lost/resolved counts,
 //! output images, the per-tile cursors and ranges, the stand-in depth attachment).
 
@@ -36,14 +44,14 @@ use super::compute_abuffer::VISIBILITY_WGSL;
 use super::store::storage_pass_with;
 use super::tail::{self, TailTargets, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
-use crate::aa::{self, AaConfig, AaMode, AaSupport};
+use crate::aa::{self, AaCapture, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
 use crate::effects::{self, Effect, EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
-    bind_buffers, camera_entry, check_storage_size, compute_pipeline, read_vec, storage_entry,
-    COMMON_WGSL, STORAGE_RW,
+    bind_buffers, camera_entry, check_storage_size, compute_pipeline, multisample,
+    per_sample_source, read_vec, storage_entry, COMMON_WGSL, STORAGE_RW,
 };
 use crate::record::cols;
 use crate::timing::GpuTimer;
@@ -64,6 +72,8 @@ pub const COMPACT_NODE_BYTES: u64 = 12;
 /// Storage buffers bound in the fragment stage (group 0) and in the compact resolve (+ mesh).
 const STORAGE_BUFFERS: u32 = 7;
 const MESH_BUFFERS: u32 = 5;
+/// Primitive bits of a compact tag that carries an 8-bit coverage mask (as compute_abuffer's).
+pub const MASKED_PRIM_BITS: u32 = 23;
 
 pub struct LinkedList;
 
@@ -117,6 +127,15 @@ impl Method for LinkedList {
         AA_SUPPORT.check(self.name(), AaConfig::from_point(point))?;
         let c = list_config(point);
         let e = effect_config(point, c.compact)?;
+        if c.aa.msaa() > 1 {
+            if c.tail {
+                return Err("tail = blend is single-sample: its blend targets are not multisampled (use aa = none or ssaa2x2)".into());
+            }
+            if c.aa.capture == AaCapture::Coverage && !c.compact {
+                return Err("aa_capture = coverage packs the mask into a compact node's tag: needs node = compact".into());
+            }
+            aa::check_adapter(gpu, c.aa, &[wgpu::TextureFormat::Depth32Float])?;
+        }
         if c.tail {
             tail::supports(gpu, 0)?;
             if e.effect != Effect::Transparency {
@@ -142,7 +161,11 @@ impl Method for LinkedList {
         let layers = point.int(&LAYERS) as u64;
         let c = list_config(point);
         let effect = effect_config(point, c.compact).map_err(CoreError::Param)?;
-        if AaConfig::from_point(point).mode == AaMode::Ssaa2x2 {
+        if c.aa.mode == AaMode::Ssaa2x2 {
+            let c = ListConfig {
+                aa: AaConfig::NONE,
+                ..c
+            };
             return super::ssaa::prepare(gpu, scene, |big| {
                 Ok(Box::new(PreparedList::new(gpu, big, layers, c, &effect)?))
             });
@@ -151,17 +174,17 @@ impl Method for LinkedList {
     }
 }
 
-/// Supersampling wraps the list as it is; per-sample lists (heads and pools × samples) and
-/// coverage-mask nodes are not built yet: those rows are skipped with this reason.
+/// Every variant: per-sample lists, coverage-mask nodes (compact only, checked in `supports`)
+/// and supersampling.
 const AA_SUPPORT: AaSupport = AaSupport {
-    sample: false,
-    coverage: false,
+    sample: true,
+    coverage: true,
     ssaa: true,
-    why: "per-sample and coverage-mask lists are not built yet (ssaa2x2 is)",
+    why: "",
 };
 
-/// The pool and node axes (module doc).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+/// The pool, node, tail and aa axes (module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct ListConfig {
     /// `pool = counted`: per-tile sub-pools sized by a prepare-time count.
     counted: bool,
@@ -171,6 +194,19 @@ struct ListConfig {
     compact: bool,
     /// `tail = blend`: what does not fit goes to a blended tail.
     tail: bool,
+    /// `aa`, `aa_capture`: MSAA lists per sample or coverage-mask nodes.
+    aa: AaConfig,
+}
+
+impl ListConfig {
+    /// Lists per pixel: one per sample for per-sample capture, else one.
+    fn lists_per_pixel(&self) -> u64 {
+        if self.aa.msaa() > 1 && self.aa.capture == AaCapture::Sample {
+            self.aa.msaa() as u64
+        } else {
+            1
+        }
+    }
 }
 
 fn list_config(point: &Point) -> ListConfig {
@@ -179,6 +215,7 @@ fn list_config(point: &Point) -> ListConfig {
         slack_pct: point.int(&POOL_SLACK) as u64,
         compact: point.choice(&NODE) == "compact",
         tail: tail::tail_mode(point) == crate::oit::TailMode::Blend,
+        aa: AaConfig::from_point(point),
     }
 }
 
@@ -201,7 +238,7 @@ fn list_pipeline(
     module: &wgpu::ShaderModule,
     (vs, attrs): (&str, Attrs),
     (fs, targets): (&str, &[Option<wgpu::ColorTargetState>]),
-    constants: &[(&str, f64)],
+    (constants, samples): (&[(&str, f64)], u32),
 ) -> wgpu::RenderPipeline {
     let layouts: Vec<_> = GpuScene::layouts(attrs).into_iter().map(Some).collect();
     let options = wgpu::PipelineCompilationOptions {
@@ -227,7 +264,7 @@ fn list_pipeline(
                 stencil: Default::default(),
                 bias: Default::default(),
             }),
-            multisample: Default::default(),
+            multisample: multisample(samples),
             fragment: Some(wgpu::FragmentState {
                 module,
                 entry_point: Some(fs),
@@ -258,6 +295,8 @@ struct PreparedList {
     tail: Option<(TailTargets, wgpu::BindGroup)>,
     /// Per pixel, fragments its pool turned away in the last frame (read back for `judge`).
     pool_lost: Vec<u32>,
+    /// MSAA: the mode and capture the rows report (`None`: single-sample).
+    aa: Option<AaConfig>,
     alloc: AllocCounter,
     #[allow(dead_code)]
     overhead: u64,
@@ -290,6 +329,23 @@ impl PreparedList {
         let src = format!(
             "{enable}{COMMON_WGSL}\n{WGSL}\n{variant}\n{EFFECTS_WGSL}\n{TAIL_WGSL}\n{TAIL_RESOLVE_WGSL}"
         );
+        let samples = c.aa.msaa();
+        let coverage = samples > 1 && c.aa.capture == AaCapture::Coverage;
+        let lists = c.lists_per_pixel();
+        // Per-sample capture: every fragment entry runs per sample (SAMPLE = its index).
+        let src = if lists > 1 {
+            per_sample_source(&src)
+        } else {
+            src
+        };
+        if coverage {
+            let ntri = scene.index_count / 3;
+            if ntri >= 1 << MASKED_PRIM_BITS {
+                return Err(CoreError::Param(format!(
+                    "linked_list with coverage masks tags primitives in {MASKED_PRIM_BITS} bits: {ntri} triangles are too many"
+                )));
+            }
+        }
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("linked_list"),
             source: wgpu::ShaderSource::Wgsl(src.into()),
@@ -330,7 +386,17 @@ impl PreparedList {
             bind_group_layouts: &[Some(&bgl), mesh_bgl.as_ref(), tail_bgl.as_ref()],
             immediate_size: 0,
         });
-        let tiled = [("TILED", if c.counted { 1.0 } else { 0.0 })];
+        let flag = |b: bool| if b { 1.0 } else { 0.0 };
+        // Overrides of the raster stages; the compact tag's primitive bits where a mask is packed.
+        let mut raster_constants = vec![
+            ("TILED", flag(c.counted)),
+            ("SAMPLES", samples as f64),
+            ("COVERAGE", flag(coverage)),
+        ];
+        if c.compact {
+            let bits = if coverage { MASKED_PRIM_BITS } else { 31 };
+            raster_constants.push(("TAG_PRIM_BITS", bits as f64));
+        }
         let (vs, attrs) = if c.compact && !c.tail {
             ("vs_position", Attrs::POSITION_ONLY)
         } else {
@@ -338,6 +404,8 @@ impl PreparedList {
         };
         let (fs, targets) = if c.tail {
             ("fs_append_tail", TailTargets::color_targets())
+        } else if coverage {
+            ("fs_append_mask", Vec::new())
         } else {
             ("fs_append", Vec::new())
         };
@@ -348,11 +416,20 @@ impl PreparedList {
             &module,
             (vs, attrs),
             (fs, &targets),
-            &tiled,
+            (&raster_constants, samples),
         );
         let mut rc = effect.constants();
-        rc.push(("TAIL", if c.tail { 1.0 } else { 0.0 }));
-        let entry = if c.tail { "resolve_tail" } else { "resolve" };
+        rc.push(("TAIL", flag(c.tail)));
+        rc.extend_from_slice(&raster_constants[1..]);
+        if c.compact {
+            // Under MSAA a fragment may cover samples but not the centre it is shaded at.
+            rc.push(("EXTRAPOLATE", flag(samples > 1)));
+        }
+        let entry = match (c.tail, samples > 1) {
+            (true, _) => "resolve_tail",
+            (false, true) => "resolve_ms",
+            (false, false) => "resolve",
+        };
         let resolve = compute_pipeline(
             gpu,
             "linked_list resolve",
@@ -364,8 +441,18 @@ impl PreparedList {
         );
         let images = effect.effect.image_count();
         let mut alloc = AllocCounter::default();
-        let depth = super::store::dummy_depth(gpu, &mut alloc, scene);
-        let heads = alloc.buffer(gpu, "list heads", px * 4, STORAGE_RW);
+        let depth = alloc
+            .texture_ms(
+                gpu,
+                "linked_list depth (unused)",
+                scene.width,
+                scene.height,
+                wgpu::TextureFormat::Depth32Float,
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+                samples,
+            )
+            .create_view(&Default::default());
+        let heads = alloc.buffer(gpu, "list heads", px * lists * 4, STORAGE_RW);
         let image = alloc.buffer(gpu, "list image", px * 16 * images as u64, STORAGE_RW);
         let counters = alloc.buffer(gpu, "list counters", 16, STORAGE_RW);
         let pix = alloc.buffer(gpu, "list lost + resolved counts", px * 8, STORAGE_RW);
@@ -398,8 +485,7 @@ impl PreparedList {
             let counts = count_tiles(
                 gpu,
                 scene,
-                &module,
-                &raster_layout,
+                (&module, &raster_layout, &raster_constants, samples),
                 &depth,
                 &cursors,
                 |n, r| bind_with(n, r),
@@ -415,8 +501,13 @@ impl PreparedList {
                 ]);
                 first += cap;
             }
+            let what = match (samples > 1, coverage) {
+                (false, _) => String::new(),
+                (true, true) => format!(" (pixel-rate, {samples}× coverage masks)"),
+                (true, false) => format!(" ({samples} samples each, a list per sample)"),
+            };
             let note = format!(
-                "counted pool: {true_frags} fragments at prepare in {pools} tiles of {TILE_SIDE}×{TILE_SIDE} px, {} % slack",
+                "counted pool: {true_frags} fragments{what} at prepare in {pools} tiles of {TILE_SIDE}×{TILE_SIDE} px, {} % slack",
                 c.slack_pct
             );
             (r, note)
@@ -488,6 +579,7 @@ impl PreparedList {
             images,
             tail,
             pool_lost: Vec::new(),
+            aa: (samples > 1).then_some(c.aa),
             alloc,
             overhead,
         })
@@ -527,8 +619,12 @@ pub fn first_arrivals_with_tail(
 fn count_tiles(
     gpu: &Gpu,
     scene: &GpuScene,
-    module: &wgpu::ShaderModule,
-    layout: &wgpu::PipelineLayout,
+    (module, layout, constants, samples): (
+        &wgpu::ShaderModule,
+        &wgpu::PipelineLayout,
+        &[(&str, f64)],
+        u32,
+    ),
     depth: &wgpu::TextureView,
     cursors: &wgpu::Buffer,
     bind_with: impl Fn(&wgpu::Buffer, &wgpu::Buffer) -> wgpu::BindGroup,
@@ -540,7 +636,7 @@ fn count_tiles(
         module,
         ("vs_position", Attrs::POSITION_ONLY),
         ("fs_count", &[]),
-        &[("TILED", 1.0)],
+        (constants, samples),
     );
     // The count touches only the cursors: stand-ins for the node pool and ranges.
     let stand_in = |label| {
@@ -626,7 +722,14 @@ impl Prepared for PreparedList {
         let mut cap = Capture::empty();
         cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n * self.images)?);
         let pix = read_vec::<[u32; 2]>(gpu, &self.pix, n)?;
-        cap.counts = Some(pix.iter().map(|p| p[1]).collect());
+        if let Some(aa) = self.aa {
+            // Per-pixel counts are single-sample by contract: an MSAA capture reports none.
+            cap.aa = Some(aa.mode);
+            cap.aa_capture = Some(aa.capture);
+            cap.sample_positions = Some(aa::sample_positions(gpu, aa.msaa()));
+        } else {
+            cap.counts = Some(pix.iter().map(|p| p[1]).collect());
+        }
         self.pool_lost = pix.iter().map(|p| p[0]).collect();
         cap.expected = Expected::All;
         let c = read_vec::<u32>(gpu, &self.counters, 2)?;
