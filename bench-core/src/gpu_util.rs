@@ -206,7 +206,7 @@ pub fn check_storage_size(gpu: &Gpu, what: &str, bytes: u64) -> crate::Result<()
         .max_storage_buffer_binding_size
         .min(gpu.limits.max_buffer_size);
     if bytes > lim {
-        return Err(crate::CoreError::OutOfMemory(format!(
+        return Err(crate::CoreError::Limit(format!(
             "{what} needs {bytes} B, over the adapter's storage binding limit of {lim} B"
         )));
     }

@@ -41,6 +41,10 @@ pub enum CoreError {
     Gpu(String),
     #[error("GPU out of memory: {0}")]
     OutOfMemory(String),
+    /// A limit of the adapter, known before any GPU work, rules the point out (a buffer over
+    /// the largest storage binding): a `skipped` row naming it, not a `failed` one.
+    #[error("adapter limit: {0}")]
+    Limit(String),
     #[error("{0}")]
     DeviceLost(String),
     #[error("bad sweep value: {0}")]

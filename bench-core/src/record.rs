@@ -224,6 +224,15 @@ pub fn failed_row(mut row: Row, why: &str) -> Row {
     row
 }
 
+/// The row of a point whose preparation or run returned `e`: `skipped` when an adapter limit
+/// known before any GPU work ruled it out ([`CoreError::Limit`]), `failed` otherwise.
+pub fn error_row(row: Row, e: &CoreError) -> Row {
+    match e {
+        CoreError::Limit(_) => skipped_row(row, &e.to_string()),
+        _ => failed_row(row, &e.to_string()),
+    }
+}
+
 /// Writes a point's axis values into their columns (each must be a declared column).
 pub fn set_params(row: &mut Row, params: &Params) -> Result<()> {
     for (k, v) in &params.0 {

@@ -10,7 +10,7 @@ use crate::gpu_scene::GpuScene;
 use crate::measure::{measure, set_timing, TimingPlan};
 use crate::methods;
 use crate::record::{cols, Row, Sink, SCHEMA_VERSION};
-pub use crate::record::{failed_row, one_line, set_params, skipped_row};
+pub use crate::record::{error_row, failed_row, one_line, set_params, skipped_row};
 use crate::studies::{self, Group, GroupCtx, PointSpec};
 use crate::{CoreError, Result};
 
@@ -271,7 +271,7 @@ pub fn run(
                     }
                     row
                 }
-                Err(e) => failed_row(row, &e.to_string()),
+                Err(e) => error_row(row, &e),
             };
             if *owed {
                 let mut row = meta(row, f, &Params::new());

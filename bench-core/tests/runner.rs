@@ -135,3 +135,36 @@ fn method_axes_override_the_shared_axes_for_one_method_only() {
     let e = Suite::parse(&bad, "t").unwrap_err().to_string();
     assert!(e.contains("method_axes.wboit"), "{e}");
 }
+
+#[test]
+fn a_buffer_over_the_adapters_storage_binding_is_a_skipped_row_naming_the_limit() {
+    // 64 slots of 40 B for each of 4 samples of 1024² pixels: 10.7 GB of k-buffer entries, over
+    // any adapter's largest storage binding (the H200's is 2 GiB − 4): known before any GPU
+    // work, so the point is skipped with the limit named, never a `failed` row.
+    let text = r#"
+        resolutions = [[1024, 1024]]
+        [timing]
+        min_samples = 1
+        max_samples = 1
+        warmup_frames = 0
+        [[study]]
+        kind = "methods"
+        methods = ["kbuffer_atomic"]
+        axes = { layers = [64], aa = ["msaa4"] }
+        [[study.scenes]]
+        generator = "quads"
+        depth_complexity = 2
+    "#;
+    let rows = run(text);
+    let k: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.get(cols::METHOD) == Some("kbuffer_atomic"))
+        .collect();
+    assert_eq!(k.len(), 1);
+    assert_eq!(k[0].get(cols::STATUS), Some("skipped"), "{:?}", k[0]);
+    let why = k[0].get(cols::REASON).unwrap_or("");
+    assert!(
+        why.contains("storage binding limit") && why.contains("k-buffer entries"),
+        "{why}"
+    );
+}

@@ -27,7 +27,7 @@ use crate::methods::{Capture, Method, Prepared};
 use crate::metrics::{image_error, BAD_PIXEL_TOL};
 use crate::record::cols;
 use crate::record::Row;
-use crate::record::{failed_row, set_params, skipped_row};
+use crate::record::{error_row, failed_row, set_params, skipped_row};
 use crate::shading::cpu_tiled::{self, CpuOptions};
 use crate::shading::gbuffer::GBufferPass;
 use crate::shading::gpu_paths::{self, Deferred, Path};
@@ -347,7 +347,7 @@ impl Study for DeferredStudy {
             let mut meas = match measure(gpu, gscene, &m, &pt.point, &ctx.plan) {
                 Ok(m) => m,
                 Err(e) => {
-                    emit(i, failed_row(row, &e.to_string()))?;
+                    emit(i, error_row(row, &e))?;
                     continue;
                 }
             };

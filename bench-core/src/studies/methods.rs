@@ -9,7 +9,7 @@ use crate::measure::{measure, measure_interleaved, set_timing};
 use crate::method::Method;
 use crate::methods::{self};
 use crate::record::cols;
-use crate::record::{failed_row, set_params, skipped_row};
+use crate::record::{error_row, failed_row, set_params, skipped_row};
 use crate::record::{Flag, Row};
 use crate::Result;
 
@@ -171,7 +171,7 @@ fn finish_point(
     let pt = &ctx.group.points[i];
     let mut m = match measured {
         Ok(m) => m,
-        Err(e) => return emit(i, failed_row(row, &e.to_string())),
+        Err(e) => return emit(i, error_row(row, &e)),
     };
     set_timing(&mut row, &m, &ctx.scene.mesh);
     // This study's frames are GPU work only: a wall time far above the GPU time means the

@@ -46,7 +46,7 @@ use crate::gpu_scene::{AllocCounter, GpuScene};
 
 use crate::record::cols;
 use crate::record::Row;
-use crate::record::{failed_row, one_line, set_params, skipped_row};
+use crate::record::{error_row, one_line, set_params, skipped_row};
 use crate::timing::{GpuTimer, Stats};
 use crate::{CoreError, Result};
 
@@ -872,7 +872,7 @@ impl Study for GeometryStudy {
                     fill_row(&mut row, &spec, &feed, &m, prep_ms, small, ctx.floor_ms);
                     emit(i, row)?;
                 }
-                Err(e) => emit(i, failed_row(row, &e.to_string()))?,
+                Err(e) => emit(i, error_row(row, &e))?,
             }
         }
         Ok(())

@@ -27,7 +27,7 @@ use crate::measure::{measure, set_timing};
 use crate::methods::{Method, Prepared};
 use crate::record::cols;
 use crate::record::Row;
-use crate::record::{failed_row, set_params, skipped_row};
+use crate::record::{error_row, failed_row, set_params, skipped_row};
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 use layered::{Config, LayeredSsm};
@@ -168,7 +168,7 @@ impl Study for ShadowsStudy {
             let mut m = match measure(ctx.gpu, ctx.gscene, &method, &pt.point, &ctx.plan) {
                 Ok(m) => m,
                 Err(e) => {
-                    emit(i, failed_row(row, &e.to_string()))?;
+                    emit(i, error_row(row, &e))?;
                     continue;
                 }
             };
