@@ -1,4 +1,5 @@
-//! SIGINT/SIGTERM: the first signal is recorded for the runner, the second kills. Each case runs
+//! SIGINT/SIGTERM: the first signal is recorded for the runner, a second one kills unless it is
+//! the first delivered twice (within `interrupt::REPEAT_GRACE`, as coreutils `timeout` does). Each case runs
 //! in a child process (this test binary again, one test selected), so no signal reaches the
 //! harness running the other tests.
 
@@ -45,8 +46,21 @@ fn child_two_sigints() {
     interrupt::install().unwrap();
     raise(SIGINT).unwrap();
     println!("first: {:?}", interrupt::requested());
+    std::thread::sleep(interrupt::REPEAT_GRACE * 2);
     raise(SIGINT).unwrap();
     println!("survived second SIGINT");
+}
+
+#[test]
+fn child_sigterm_delivered_twice() {
+    if !in_child() {
+        return;
+    }
+    interrupt::install().unwrap();
+    // `timeout` signals the command, then its process group: two copies within microseconds.
+    raise(SIGTERM).unwrap();
+    raise(SIGTERM).unwrap();
+    println!("survived a doubled SIGTERM: {:?}", interrupt::requested());
 }
 
 #[test]
@@ -82,6 +96,17 @@ fn second_sigint_kills() {
         Some(SIGINT),
         "killed by the default action: {:?}",
         out.status
+    );
+}
+
+#[test]
+fn the_same_sigterm_delivered_twice_is_one_request() {
+    let out = child("child_sigterm_delivered_twice");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout} {:?}", out.status);
+    assert!(
+        stdout.contains("survived a doubled SIGTERM: Some(\"SIGTERM\")"),
+        "{stdout}"
     );
 }
 
