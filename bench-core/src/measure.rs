@@ -251,6 +251,9 @@ pub struct PointTimer<'g> {
     warmup_frames: usize,
     /// Wall time spent on this point's warm-up and samples (its own, when interleaved).
     spent_ms: f64,
+    /// Wall time of the timed frames alone: what the stopping rule's `max_time_ms` caps (the
+    /// clock lift and warm-up before them do not eat the sampling budget).
+    sampling_ms: f64,
     prepare_ms: f64,
     stopped: Option<StopReason>,
     clock_lift: Option<(f64, f64, f64)>,
@@ -295,6 +298,7 @@ impl<'g> PointTimer<'g> {
             sampler: Sampler::new(plan.stop.clone()),
             warmup_frames: 0,
             spent_ms: 0.0,
+            sampling_ms: 0.0,
             prepare_ms,
             stopped: None,
             clock_lift: None,
@@ -381,7 +385,9 @@ impl<'g> PointTimer<'g> {
                 &mut self.frame,
             )
         })?;
-        self.spent_ms += t0.elapsed().as_secs_f64() * 1e3;
+        let frame_ms = t0.elapsed().as_secs_f64() * 1e3;
+        self.spent_ms += frame_ms;
+        self.sampling_ms += frame_ms;
         let gpu_ms = self
             .timer
             .enabled()
@@ -400,7 +406,7 @@ impl<'g> PointTimer<'g> {
         });
         let decision = if discarded {
             self.clocks.push_discarded(&c);
-            self.sampler.push_discarded(self.spent_ms)
+            self.sampler.push_discarded(self.sampling_ms)
         } else {
             self.clocks.push(&c);
             let mut frame_labels: BTreeMap<String, f64> = BTreeMap::new();
@@ -411,7 +417,7 @@ impl<'g> PointTimer<'g> {
                 self.per_label.entry(l).or_default().push(ms);
             }
             // The stopping rule watches the GPU time (the wall time without timestamps).
-            self.sampler.push(gpu_ms.unwrap_or(cpu), self.spent_ms)
+            self.sampler.push(gpu_ms.unwrap_or(cpu), self.sampling_ms)
         };
         if let Decision::Stop(reason) = decision {
             self.stopped = Some(reason);

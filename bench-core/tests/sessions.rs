@@ -65,3 +65,35 @@ fn sessions_pool_their_samples_and_the_ci_covers_every_sessions_median() {
     assert!((spread - (mx - mn) / sum.median).abs() <= 1e-9 * (1.0 + spread));
     assert!(plan(3).describe().contains("3 sessions"));
 }
+
+#[test]
+fn the_time_cap_counts_samples_only_not_the_warm_up_before_them() {
+    // A warm-up of 60 frames takes several times the 15-frame sampling cap: the cap must still
+    // leave room for the 3 samples asked for (before, the warm-up's time was charged to it and
+    // the point stopped at one sample, `noisy`: 51 of the H200 aa run's 62 noisy rows).
+    let g = gpu();
+    let s = scene("quads", &[("depth_complexity", ParamValue::Int(4))]);
+    let gs = GpuScene::upload(g, &s, 32, 32);
+    let m = methods::get("depth_peel");
+    let p = point(&*m, &params(&[]));
+    let frame = {
+        let once = measure(g, &gs, &*m, &p, &plan(1)).unwrap();
+        let mut v: Vec<f64> = once.samples.iter().map(|x| x.cpu_ms).collect();
+        median(&mut v)
+    };
+    let mut long = plan(1);
+    long.warmup.min_frames = 60;
+    long.warmup.max_frames = 60;
+    long.warmup.max_time_ms = 1e6;
+    long.stop.min_samples = 3;
+    long.stop.max_samples = 3;
+    long.stop.max_time_ms = 15.0 * frame;
+    let r = measure(g, &gs, &*m, &p, &long).unwrap();
+    assert_eq!(r.warmup_frames, 60);
+    assert_eq!(
+        r.samples.len(),
+        3,
+        "{:?} after a warm-up of 60 frames of ~{frame:.3} ms",
+        r.stop_reason
+    );
+}

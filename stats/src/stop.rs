@@ -46,8 +46,9 @@ pub struct StopRule {
     pub max_noise: f64,
     /// Hard cap on kept samples: 50 keeps a noisy point's cost bounded (5× the minimum).
     pub max_samples: usize,
-    /// Hard cap on wall time per point (nvbench's `timeout`, 15 s there for µs kernels; 1 s here
-    /// so a suite of a few hundred points stays within minutes even when every point is noisy).
+    /// Hard cap on the wall time of a point's samples (nvbench's `timeout`, 15 s there for µs
+    /// kernels; 1 s here so a suite of a few hundred points stays within minutes even when every
+    /// point is noisy). Counted from the first sample: warm-up and clock lift are not in it.
     pub max_time_ms: f64,
     /// Samples between drift checks.
     pub drift_every: usize,
