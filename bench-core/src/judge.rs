@@ -196,10 +196,16 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
             missing += d.saturating_sub(c) as u64;
             extra += c.saturating_sub(d) as u64;
         }
-        if j.lost_coplanar > 0 {
-            j.flag(Flag::LostCoplanar);
-        } else if j.lost_precision > 0 && overflow == 0 {
-            j.flag(Flag::Precision);
+        // A bucket method's losses are its collisions (flagged `collision` by the method, counted
+        // in `collision_rate`): coplanar or precision loss is flagged only beyond them, so one
+        // lost fragment is never two failures.
+        let collided = cap.collision_fragments.unwrap_or(0);
+        if j.lost_coplanar + j.lost_precision > collided {
+            if j.lost_coplanar > 0 {
+                j.flag(Flag::LostCoplanar);
+            } else if j.lost_precision > 0 && overflow == 0 {
+                j.flag(Flag::Precision);
+            }
         }
         // An exact method is held to the whole fragment set when it keeps everything, or keeps k
         // and no pixel has more (peeling with max_layers ≥ the depth complexity).
@@ -408,6 +414,32 @@ mod tests {
         // Counts equal min(dc, k): no fragment lost within capacity.
         assert_eq!(j.layer_count_accuracy, Some(1.0));
         assert_eq!(j.lost_coplanar + j.lost_precision, 0);
+    }
+
+    #[test]
+    fn a_collision_is_flagged_once_not_also_as_precision_or_coplanar_loss() {
+        // 4 layers per pixel; a bucket method merged one fragment of each pixel into another.
+        for tie in [false, true] {
+            let l = lists(&[4, 4, 4], tie);
+            let mut cap = cap_with(l.composite(), vec![3, 3, 3], Expected::All);
+            cap.collision_fragments = Some(3);
+            let j = run(&cap, &l, false);
+            assert_eq!(j.lost_coplanar + j.lost_precision, 3, "tie {tie}");
+            assert!(
+                !j.flags.contains(&Flag::Precision) && !j.flags.contains(&Flag::LostCoplanar),
+                "tie {tie}: {:?}",
+                j.flags
+            );
+            // Losses beyond the collisions are still named.
+            cap.collision_fragments = Some(1);
+            let j = run(&cap, &l, false);
+            let want = if tie {
+                Flag::LostCoplanar
+            } else {
+                Flag::Precision
+            };
+            assert!(j.flags.contains(&want), "tie {tie}: {:?}", j.flags);
+        }
     }
 
     #[test]
