@@ -34,8 +34,10 @@
 //! work, and `readback`). Nothing assumes a render pass: a compute-only method only has to fill
 //! the same [`Capture`]. Antialiasing (`aa`, `aa_capture`: `crate::aa`) is declared per method:
 //! `depth_peel` (per sample), `wboit` (both), `compute_abuffer` (coverage masks), each of them
-//! also under `ssaa2x2` (`ssaa`), `linked_list` and `kbuffer_atomic` under `ssaa2x2` only (their
-//! per-sample and coverage variants are not built yet), and `stochastic` (MSAA by construction);
+//! also under `ssaa2x2` (`ssaa`), `linked_list` (a list per sample, or coverage-mask compact
+//! nodes, and `ssaa2x2`), `kbuffer_atomic` (k slots per sample, and `ssaa2x2`; no coverage
+//! k-buffer: its k nearest per pixel have no per-sample rule), and `stochastic` (MSAA by
+//! construction);
 //! the rest are `skipped` rows with the reason. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL;
 //! `effects.wgsl` ([`FOLD_WGSL`]) is the effects fold, and `packing` the float colour packing
 //! shared with the bucket methods. The approximate (continuum) methods' per-pixel rules have CPU
