@@ -541,17 +541,12 @@ fn full_tiles_of_big_triangles_keep_each_fragments_facing() {
             ))
             .unwrap();
             let reference = fx.reference(&shells, &lists, cap.expected);
-            let img = cap.image.as_ref().unwrap();
-            let worst = reference
-                .iter()
-                .zip(img)
-                .flat_map(|(r, g)| (0..4).map(move |c| (r[c] - g[c] as f64).abs()))
-                .fold(0.0f64, f64::max);
+            let (worst, at) = crate::testing::max_err_vs(&cap, &reference);
             // View depth re-derived in f32 from unsnapped vertices vs the reference's snapped
             // ones (tests/effects.rs: ≤ 2e-3); a flipped facing is ≥ 0.1.
             assert!(
                 worst <= 2e-3,
-                "{effect} small_max {small}: max error {worst:.3e}: {}",
+                "{effect} small_max {small}: max error {worst:.3e} at pixel {at}: {}",
                 cap.notes
             );
         }
