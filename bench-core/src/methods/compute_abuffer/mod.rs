@@ -103,7 +103,7 @@ const AA_SUPPORT: AaSupport = AaSupport {
     why: "compute_abuffer keeps one fragment per pixel with its coverage mask (aa_capture = coverage)",
 };
 /// Primitive bits of a tag that carries an 8-bit coverage mask.
-const MASKED_PRIM_BITS: u32 = 23;
+pub(crate) const MASKED_PRIM_BITS: u32 = 23;
 
 const SMALL_MAX: Axis = Axis::int(
     cols::SMALL_MAX,

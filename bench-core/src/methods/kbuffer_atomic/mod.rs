@@ -103,8 +103,6 @@ pub(crate) struct PreparedAtomic {
     bounding: Bounding,
     tail: Option<TailTargets>,
     tailed: u64,
-    /// MSAA samples (1: none); k slots per sample.
-    samples: u32,
     alloc: AllocCounter,
 }
 
@@ -213,7 +211,6 @@ impl PreparedAtomic {
             bounding,
             tail,
             tailed: 0,
-            samples,
             alloc,
         })
     }
@@ -258,14 +255,11 @@ impl Prepared for PreparedAtomic {
             None => 0,
         };
         let mut cap = self.slots.readback(gpu, scene)?;
-        if self.samples > 1 {
-            // Per-pixel counts and the hazard judge are single-sample by contract: the image is
-            // judged against each sample's k nearest (aa::reference_for).
-            cap.counts = None;
-            self.slots.captured.clear();
-            cap.aa = Some(AaMode::Msaa(self.samples));
+        let samples = self.slots.samples;
+        if samples > 1 {
+            cap.aa = Some(AaMode::Msaa(samples));
             cap.aa_capture = Some(AaCapture::Sample);
-            cap.sample_positions = Some(aa::sample_positions(gpu, self.samples));
+            cap.sample_positions = Some(aa::sample_positions(gpu, samples));
         }
         Ok(cap)
     }

@@ -85,6 +85,8 @@ impl Method for KBufferRmw {
 /// Per-pixel k slots: keys (u32, larger = nearer, 0 = empty), entries, and the resolved image.
 pub struct KSlots {
     pub k: u32,
+    /// MSAA samples with k slots each (1: single-sample).
+    pub samples: u32,
     pub keys: wgpu::Buffer,
     pub entries: wgpu::Buffer,
     pub image: wgpu::Buffer,
@@ -110,6 +112,7 @@ impl KSlots {
         check_storage_size(gpu, "k-buffer entries", slots * ENTRY_BYTES)?;
         Ok(KSlots {
             k,
+            samples,
             keys: alloc.buffer(gpu, "k-buffer keys", slots * 4, STORAGE_RW),
             entries: alloc.buffer(gpu, "k-buffer entries", slots * ENTRY_BYTES, STORAGE_RW),
             image: alloc.buffer(gpu, "k-buffer image", px * 16, STORAGE_RW),
@@ -117,23 +120,29 @@ impl KSlots {
         })
     }
 
-    /// Image, counts (non-empty slots) and the captured depths (kept for `judge`).
+    /// Image, counts (non-empty slots) and the captured depths (kept for `judge`). Per-sample
+    /// slots read back the image only: per-pixel counts and the hazard judge are single-sample
+    /// by contract (the image is judged against each sample's k nearest).
     pub fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let n = scene.pixels();
         let k = self.k as usize;
-        let keys = read_vec::<u32>(gpu, &self.keys, (self.keys.size() / 4) as usize)?;
+        let mut cap = Capture::empty();
+        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n)?);
+        cap.expected = Expected::FirstK(self.k);
+        if self.samples > 1 {
+            self.captured.clear();
+            return Ok(cap);
+        }
+        let keys = read_vec::<u32>(gpu, &self.keys, n * k)?;
         self.captured = keys
             .iter()
             .map(|&key| (key != 0).then(|| store::key_depth(key, scene.reversed_z)))
             .collect();
-        let mut cap = Capture::empty();
-        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n)?);
         cap.counts = Some(
             keys.chunks(k)
                 .map(|s| s.iter().take_while(|&&x| x != 0).count() as u32)
                 .collect(),
         );
-        cap.expected = Expected::FirstK(self.k);
         Ok(cap)
     }
 
@@ -495,6 +504,7 @@ mod tests {
         captured[victim * k] = captured[victim * k + 1];
         let slots = KSlots {
             k: k as u32,
+            samples: 1,
             keys: dummy(),
             entries: dummy(),
             image: dummy(),

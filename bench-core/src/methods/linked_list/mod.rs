@@ -40,7 +40,7 @@
 
 use wgpu::util::DeviceExt;
 
-use super::compute_abuffer::VISIBILITY_WGSL;
+use super::compute_abuffer::{MASKED_PRIM_BITS, VISIBILITY_WGSL};
 use super::store::storage_pass_with;
 use super::tail::{self, TailTargets, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
@@ -72,8 +72,6 @@ pub const COMPACT_NODE_BYTES: u64 = 12;
 /// Storage buffers bound in the fragment stage (group 0) and in the compact resolve (+ mesh).
 const STORAGE_BUFFERS: u32 = 7;
 const MESH_BUFFERS: u32 = 5;
-/// Primitive bits of a compact tag that carries an 8-bit coverage mask (as compute_abuffer's).
-pub const MASKED_PRIM_BITS: u32 = 23;
 
 pub struct LinkedList;
 
@@ -387,16 +385,15 @@ impl PreparedList {
             immediate_size: 0,
         });
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
-        // Overrides of the raster stages; the compact tag's primitive bits where a mask is packed.
-        let mut raster_constants = vec![
-            ("TILED", flag(c.counted)),
-            ("SAMPLES", samples as f64),
-            ("COVERAGE", flag(coverage)),
-        ];
+        // Overrides the raster stages and the resolve share; the compact tag's primitive bits
+        // where a mask is packed.
+        let mut shared = vec![("SAMPLES", samples as f64), ("COVERAGE", flag(coverage))];
         if c.compact {
             let bits = if coverage { MASKED_PRIM_BITS } else { 31 };
-            raster_constants.push(("TAG_PRIM_BITS", bits as f64));
+            shared.push(("TAG_PRIM_BITS", bits as f64));
         }
+        let mut raster_constants = vec![("TILED", flag(c.counted))];
+        raster_constants.extend_from_slice(&shared);
         let (vs, attrs) = if c.compact && !c.tail {
             ("vs_position", Attrs::POSITION_ONLY)
         } else {
@@ -420,7 +417,7 @@ impl PreparedList {
         );
         let mut rc = effect.constants();
         rc.push(("TAIL", flag(c.tail)));
-        rc.extend_from_slice(&raster_constants[1..]);
+        rc.extend_from_slice(&shared);
         if c.compact {
             // Under MSAA a fragment may cover samples but not the centre it is shaded at.
             rc.push(("EXTRAPOLATE", flag(samples > 1)));
@@ -441,17 +438,7 @@ impl PreparedList {
         );
         let images = effect.effect.image_count();
         let mut alloc = AllocCounter::default();
-        let depth = alloc
-            .texture_ms(
-                gpu,
-                "linked_list depth (unused)",
-                scene.width,
-                scene.height,
-                wgpu::TextureFormat::Depth32Float,
-                wgpu::TextureUsages::RENDER_ATTACHMENT,
-                samples,
-            )
-            .create_view(&Default::default());
+        let depth = super::store::dummy_depth_ms(gpu, &mut alloc, scene, samples);
         let heads = alloc.buffer(gpu, "list heads", px * lists * 4, STORAGE_RW);
         let image = alloc.buffer(gpu, "list image", px * 16 * images as u64, STORAGE_RW);
         let counters = alloc.buffer(gpu, "list counters", 16, STORAGE_RW);
