@@ -157,6 +157,9 @@ pub struct Gpu {
     pub monitor: std::result::Result<crate::clocks::GpuMonitor, String>,
     /// The busy kernel that lifts a lowered SM clock (`measure`), built on first use.
     spin: std::sync::OnceLock<Spin>,
+    /// The fixed kernel timed after each sample (`measure`'s canary rule), built on first use,
+    /// with the fastest time it has taken in this process.
+    canary: std::sync::OnceLock<Mutex<Canary>>,
 }
 
 /// Lists adapters for a backend choice, in enumeration order (the `--adapter-index` order).
@@ -265,6 +268,7 @@ impl Gpu {
             lost,
             monitor,
             spin: std::sync::OnceLock::new(),
+            canary: std::sync::OnceLock::new(),
         })
     }
 
@@ -462,7 +466,105 @@ impl Spin {
     }
 }
 
+/// A fixed amount of mixed work (a streaming read of 16 MiB and a dependent FMA chain per
+/// thread, about 20–40 µs on an H200), timed with its own timestamps: how fast the GPU is right
+/// now, independent of the point being measured. See `mfx_stats::canary`.
+struct Canary {
+    pipeline: wgpu::ComputePipeline,
+    bind: wgpu::BindGroup,
+    timer: crate::timing::GpuTimer,
+    baseline: mfx_stats::CanaryBaseline,
+}
+
+const CANARY_WGSL: &str = "
+@group(0) @binding(0) var<storage, read_write> buf: array<vec4<f32>>;
+@compute @workgroup_size(256)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
+    let n = arrayLength(&buf);
+    let stride = nw.x * 256u;
+    var acc = vec4<f32>(0.0);
+    for (var i = id.x; i < n; i = i + stride) {
+        acc = acc + buf[i];
+    }
+    var x = acc.x + acc.y + acc.z + acc.w + f32(id.x & 255u) * 1e-3;
+    for (var k = 0u; k < 2048u; k = k + 1u) {
+        x = fma(x, 0.9999, 1e-4);
+    }
+    // Never true (the buffer is zeros); keeps both loops alive.
+    if x == 12345.0 {
+        buf[id.x] = vec4<f32>(x);
+    }
+}";
+
+/// Canary size: 16 MiB read by 264 workgroups (two per SM of a 132-SM GPU).
+const CANARY_BYTES: u64 = 16 << 20;
+const CANARY_WORKGROUPS: u32 = 264;
+
+impl Canary {
+    fn new(gpu: &Gpu) -> Canary {
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("canary"),
+            source: wgpu::ShaderSource::Wgsl(CANARY_WGSL.into()),
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("canary"),
+            layout: None,
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let buf = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("canary"),
+            size: CANARY_BYTES,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("canary"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: buf.as_entire_binding(),
+            }],
+        });
+        Canary {
+            pipeline,
+            bind,
+            timer: crate::timing::GpuTimer::new(gpu),
+            baseline: Default::default(),
+        }
+    }
+}
+
 impl Gpu {
+    /// Runs the canary kernel once, waited for: (its GPU ms, its ratio to the fastest canary of
+    /// this process). `None` without timestamp queries.
+    pub fn canary(&self) -> Result<Option<(f64, f64)>> {
+        let c = self.canary.get_or_init(|| Mutex::new(Canary::new(self)));
+        let mut c = c.lock().unwrap();
+        if !c.timer.enabled() {
+            return Ok(None);
+        }
+        let c = &mut *c;
+        c.timer.begin_frame();
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("canary"),
+                timestamp_writes: c.timer.compute_pass("canary"),
+            });
+            pass.set_pipeline(&c.pipeline);
+            pass.set_bind_group(0, &c.bind, &[]);
+            pass.dispatch_workgroups(CANARY_WORKGROUPS, 1, 1);
+        }
+        self.queue.submit([enc.finish()]);
+        self.wait()?;
+        let ms: f64 = c.timer.read(self)?.iter().map(|(_, ms)| ms).sum();
+        Ok(c.baseline.push(ms).map(|r| (ms, r)))
+    }
+
     /// One untimed busy dispatch, waited for.
     pub fn spin(&self) -> Result<()> {
         let spin = self.spin.get_or_init(|| Spin::new(&self.device));

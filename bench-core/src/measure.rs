@@ -36,6 +36,11 @@ pub struct TimingPlan {
     /// rule; the samples are pooled and the median's CI widened to cover every session's median
     /// (`session_spread`). Not with `interleave`.
     pub sessions: usize,
+    /// A sample is discarded when the canary kernel timed right after it took more than this
+    /// many times its baseline (`mfx_stats::canary`; `Some(0)`: no canary). `None`, the
+    /// default: [`mfx_stats::CANARY_MAX_RATIO`] on hardware adapters and no canary on a software
+    /// one (its timestamps say little); set explicitly, it applies to any adapter.
+    pub canary_max_ratio: Option<f64>,
 }
 
 impl Default for TimingPlan {
@@ -47,6 +52,7 @@ impl Default for TimingPlan {
             interleave: false,
             clock_lift_ms: CLOCK_LIFT_MS,
             sessions: 1,
+            canary_max_ratio: None,
         }
     }
 }
@@ -75,6 +81,7 @@ impl TimingPlan {
             interleave: false,
             clock_lift_ms: 0.0,
             sessions: 1,
+            canary_max_ratio: Some(0.0),
         }
     }
 
@@ -126,6 +133,7 @@ impl TimingPlan {
             interleave: spec.interleave.unwrap_or(false),
             clock_lift_ms: spec.clock_lift_ms.unwrap_or(d.clock_lift_ms),
             sessions: spec.sessions.map_or(d.sessions, |n| n as usize),
+            canary_max_ratio: spec.canary_max_ratio.or(d.canary_max_ratio),
         })
     }
 
@@ -143,6 +151,16 @@ impl TimingPlan {
             s.max_time_ms,
             s.drift_every
         );
+        let d = match self.canary_max_ratio {
+            None => format!(
+                "{d}; a sample whose canary ran over {}× its baseline discarded (hardware adapters)",
+                mfx_stats::CANARY_MAX_RATIO
+            ),
+            Some(r) if r > 1.0 => {
+                format!("{d}; a sample whose canary ran over {r}× its baseline discarded")
+            }
+            Some(_) => d,
+        };
         if self.sessions > 1 {
             format!(
                 "{d}; {} sessions (each prepared afresh), CI widened to cover their medians",
@@ -179,6 +197,8 @@ pub struct Measured {
     /// `(max − min) / median` of the sessions' medians (`[timing] sessions` > 1).
     pub session_spread: Option<f64>,
     pub clocks: PointClocks,
+    /// Samples the canary rule discarded, and the largest canary ratio seen (None: no canary).
+    pub canary: Option<(usize, f64)>,
     /// Clock lift before the warm-up: (ms of busy work, SM MHz before, SM MHz after); None when
     /// none was needed or possible.
     pub clock_lift: Option<(f64, f64, f64)>,
@@ -257,6 +277,8 @@ pub struct PointTimer<'g> {
     prepare_ms: f64,
     stopped: Option<StopReason>,
     clock_lift: Option<(f64, f64, f64)>,
+    /// The canary rule's ratio for this adapter (≤ 1: no canary).
+    canary_max: f64,
 }
 
 /// Runs `f` in validation and out-of-memory error scopes; a captured error names `what`.
@@ -302,7 +324,16 @@ impl<'g> PointTimer<'g> {
             prepare_ms,
             stopped: None,
             clock_lift: None,
+            canary_max: match plan.canary_max_ratio {
+                None if !gpu.facts.is_software => mfx_stats::CANARY_MAX_RATIO,
+                None => 0.0,
+                Some(r) => r,
+            },
         })
+    }
+
+    fn canary_on(&self) -> bool {
+        self.canary_max > 1.0 && self.timer.enabled()
     }
 
     /// Lifts an SM clock the driver has lowered. Measured on the H200: within one sweep the SM
@@ -323,14 +354,25 @@ impl<'g> PointTimer<'g> {
         let Some(before) = m.sample().sm_mhz else {
             return Ok(());
         };
-        if before >= target {
+        // A slow canary asks for the lift too: the slow state it sees has no clock reading.
+        let canary_slow = |me: &Self| -> Result<bool> {
+            Ok(me.canary_on()
+                && mfx_stats::canary_discard(
+                    me.gpu.canary()?.map(|(_, r)| r),
+                    me.canary_max,
+                ))
+        };
+        if before >= target && !canary_slow(self)? {
             return Ok(());
         }
         let t0 = std::time::Instant::now();
         let mut now = before;
-        while now < target && t0.elapsed().as_secs_f64() * 1e3 < self.plan.clock_lift_ms {
+        while t0.elapsed().as_secs_f64() * 1e3 < self.plan.clock_lift_ms {
             self.gpu.spin()?;
             now = m.sample().sm_mhz.unwrap_or(now);
+            if now >= target && !canary_slow(self)? {
+                break;
+            }
         }
         let ms = t0.elapsed().as_secs_f64() * 1e3;
         self.spent_ms += ms;
@@ -392,10 +434,18 @@ impl<'g> PointTimer<'g> {
             .timer
             .enabled()
             .then(|| passes.iter().map(|(_, ms)| ms).sum::<f64>());
+        let unix_ms = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64() * 1e3);
+        let canary_ratio = if self.canary_on() {
+            gpu.canary()?.map(|(_, r)| r)
+        } else {
+            None
+        };
         let discarded = match (c.sm_mhz, self.reference_mhz) {
             (Some(sm), Some(r)) => mfx_stats::discard(sm, r),
             _ => false,
-        };
+        } || mfx_stats::canary_discard(canary_ratio, self.canary_max);
         self.samples.push(Sample {
             gpu_ms,
             cpu_ms: cpu,
@@ -403,6 +453,8 @@ impl<'g> PointTimer<'g> {
             mem_mhz: c.mem_mhz,
             discarded,
             seq: FRAMES_TIMED.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            canary_ratio,
+            unix_ms,
         });
         let decision = if discarded {
             self.clocks.push_discarded(&c);
@@ -428,7 +480,28 @@ impl<'g> PointTimer<'g> {
     /// The point's statistics (after the rule stopped it).
     pub fn finish(self) -> Result<Measured> {
         let stop_reason = self.stopped.unwrap_or(StopReason::MaxSamples);
-        let kept: Vec<&Sample> = self.samples.iter().filter(|s| !s.discarded).collect();
+        let mut kept: Vec<&Sample> = self.samples.iter().filter(|s| !s.discarded).collect();
+        // Every sample discarded (a slow state that lasted the whole point): the statistics of
+        // all of them rather than none; the row is flagged throttled and the target not reached.
+        let all_discarded = kept.is_empty();
+        if all_discarded {
+            kept = self.samples.iter().collect();
+        }
+        let canary = self.canary_on().then(|| {
+            let n = self
+                .samples
+                .iter()
+                .filter(|s| {
+                    mfx_stats::canary_discard(s.canary_ratio, self.canary_max)
+                })
+                .count();
+            let max = self
+                .samples
+                .iter()
+                .filter_map(|s| s.canary_ratio)
+                .fold(0.0f64, f64::max);
+            (n, max)
+        });
         let gpu_kept: Vec<f64> = kept.iter().filter_map(|s| s.gpu_ms).collect();
         let cpu_kept: Vec<f64> = kept.iter().map(|s| s.cpu_ms).collect();
         let seed = self.plan.seed;
@@ -458,13 +531,14 @@ impl<'g> PointTimer<'g> {
             bytes_overhead: self.bytes_overhead,
             prepared: self.prepared,
             warmup_frames: self.warmup_frames,
-            target_reached: stop_reason == StopReason::TargetReached,
+            target_reached: stop_reason == StopReason::TargetReached && !all_discarded,
             stop_reason,
             samples: self.samples,
             measure_ms: self.spent_ms,
             prepare_ms: self.prepare_ms,
             session_spread: None,
             clocks: self.clocks,
+            canary,
             clock_lift: self.clock_lift,
         })
     }
@@ -499,6 +573,7 @@ pub fn measure(
         m = combine(
             m.samples,
             m.clocks,
+            m.canary,
             (m.measure_ms, m.prepare_ms),
             m.target_reached,
             next,
@@ -512,6 +587,7 @@ pub fn measure(
 fn combine(
     samples: Vec<Sample>,
     clocks: PointClocks,
+    canary: Option<(usize, f64)>,
     (measure_ms, prepare_ms): (f64, f64),
     reached: bool,
     mut next: Measured,
@@ -522,6 +598,10 @@ fn combine(
     let mut c = clocks;
     c.merge(next.clocks);
     next.clocks = c;
+    next.canary = match (canary, next.canary) {
+        (Some((a, x)), Some((b, y))) => Some((a + b, x.max(y))),
+        (a, b) => a.or(b),
+    };
     next.measure_ms += measure_ms;
     next.prepare_ms += prepare_ms;
     next.target_reached &= reached;
@@ -707,6 +787,12 @@ pub fn set_timing(row: &mut Row, m: &Measured, mesh: &scenarios::Mesh) {
         .set(cols::STOP_REASON, m.stop_reason.as_str());
     if let Some(sp) = m.session_spread {
         row.set_f(cols::SESSION_SPREAD, sp);
+    }
+    if let Some((n, max)) = m.canary {
+        row.set(cols::CANARY_DISCARDED, n);
+        if max > 0.0 {
+            row.set_f(cols::CANARY_RATIO_MAX, max);
+        }
     }
     for (col, v) in m.clocks.to_cells() {
         if !v.is_empty() {

@@ -89,6 +89,10 @@ pub struct Sample {
     /// Position of the frame among all timed frames of this process: the measurement order,
     /// also when a group's points are interleaved.
     pub seq: u64,
+    /// The canary's time after the frame over its baseline (None: no canary).
+    pub canary_ratio: Option<f64>,
+    /// Wall clock when the frame was done, ms since the Unix epoch.
+    pub unix_ms: f64,
 }
 
 /// A row's FLIP comparison with the 8-bit images it was computed from, for the run's gallery of
@@ -445,6 +449,8 @@ impl Sink for SamplesSink {
                     opt(s.mem_mhz),
                     s.discarded.to_string(),
                     s.seq.to_string(),
+                    opt(s.canary_ratio),
+                    format!("{:.1}", s.unix_ms),
                 ])
                 .map_err(|e| CoreError::Io(e.to_string()))?;
         }

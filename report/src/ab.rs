@@ -534,7 +534,8 @@ impl AbReport {
             "Ratio = NEW/BASE median GPU time (> 1: NEW slower), with a bootstrap 95 % CI \
              ({} resamples). SAME: the ratio is within ±{:.1} % (the noise band). SLOWER / \
              FASTER: beyond the band, Mann–Whitney U p < {} and the CI excludes 1. UNSURE: \
-             beyond the band without that evidence, or fewer than {} samples on a side. From \
+             beyond the band without that evidence, or fewer than {} samples on a side \
+             (then SAME only if every NEW/BASE sample ratio is within the band). From \
              summary columns only (no samples.csv), \"significant\" means the two medians' CIs \
              (else min–max ranges) do not overlap. Cycles = time × SM clock. An error column \
              moved when |Δ| > max({:e}, {:.0} % of the larger value).",

@@ -201,6 +201,7 @@ pub const SOFTWARE_KEYS: &[&str] = &[
     "seed",
     "clock_lift_ms",
     "sessions",
+    "canary_max_ratio",
 ];
 /// Keys of the `[timing]` table (also accepted in `[software]`, as overrides).
 pub const TIMING_KEYS: &[&str] = &[
@@ -215,6 +216,7 @@ pub const TIMING_KEYS: &[&str] = &[
     "seed",
     "clock_lift_ms",
     "sessions",
+    "canary_max_ratio",
 ];
 
 /// How the points of a suite are timed: each unset key takes the harness's default
@@ -244,6 +246,9 @@ pub struct TimingSpec {
     pub seed: Option<u64>,
     /// Independent sessions per point (each prepared afresh), the CI widened to cover them.
     pub sessions: Option<u32>,
+    /// A sample is discarded when the canary kernel timed right after it ran this many times
+    /// slower than the fastest canary of the run (0: no canary).
+    pub canary_max_ratio: Option<f64>,
 }
 
 impl TimingSpec {
@@ -261,6 +266,7 @@ impl TimingSpec {
             seed: over.seed.or(self.seed),
             clock_lift_ms: over.clock_lift_ms.or(self.clock_lift_ms),
             sessions: over.sessions.or(self.sessions),
+            canary_max_ratio: over.canary_max_ratio.or(self.canary_max_ratio),
         }
     }
 }
@@ -479,7 +485,14 @@ fn timing_spec(cx: &mut Ctx<'_>, t: &toml::Table, tn: &str) -> TimingSpec {
         seed: int(cx, "seed", 0, i64::MAX).map(|i| i as u64),
         clock_lift_ms: float(cx, "clock_lift_ms", 0.0, 60_000.0),
         sessions: int(cx, "sessions", 1, 100).map(|i| i as u32),
+        canary_max_ratio: float(cx, "canary_max_ratio", 0.0, 100.0),
     };
+    if let Some(r) = spec.canary_max_ratio {
+        if r > 0.0 && r <= 1.0 {
+            cx.push(tn, "canary_max_ratio", "must be 0 (no canary) or above 1: a ratio to the fastest canary of the run")
+                .value = Some(r.to_string());
+        }
+    }
     if let (Some(a), Some(b)) = (spec.min_samples, spec.max_samples) {
         if a > b {
             cx.push(tn, "min_samples", format!("is above max_samples ({b})"))

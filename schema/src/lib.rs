@@ -664,7 +664,15 @@ pub mod cols {
     pub const SAMPLES: Col = Col::new("samples", "timed samples kept (throttled ones excluded)");
     pub const SAMPLES_DISCARDED: Col = Col::new(
         "samples_discarded",
-        "timed samples discarded because the SM clock was below 75 % of the reference clock (nvbench's rule)",
+        "timed samples discarded: the SM clock was below 75 % of the reference clock (nvbench's rule), or the canary timed right after the sample ran over canary_max_ratio × its baseline (canary_discarded of them)",
+    );
+    pub const CANARY_DISCARDED: Col = Col::new(
+        "canary_discarded",
+        "of samples_discarded, those whose canary (a fixed 16 MiB-read + FMA kernel timed right after the sample) took over [timing] canary_max_ratio × the fifth-fastest canary of the process: the GPU as a whole ran slow though its clocks did not say so (empty: no canary, e.g. a software adapter)",
+    );
+    pub const CANARY_RATIO_MAX: Col = Col::new(
+        "canary_ratio_max",
+        "largest canary ratio over the point's samples, discarded ones included (1 = as fast as the run's baseline; empty: no canary)",
     );
     pub const CLOCK_LIFT_MS: Col = Col::new(
         "clock_lift_ms",
@@ -1122,6 +1130,8 @@ pub const GROUPS: &[Group] = &[
             cols::GPU_MS_OUTLIERS,
             cols::SAMPLES,
             cols::SAMPLES_DISCARDED,
+            cols::CANARY_DISCARDED,
+            cols::CANARY_RATIO_MAX,
             cols::CLOCK_LIFT_MS,
             cols::CLOCK_LIFT_FROM_MHZ,
             cols::CLOCK_LIFT_TO_MHZ,
@@ -1216,11 +1226,19 @@ pub mod samples {
     );
     pub const DISCARDED: Col = Col::new(
         "discarded",
-        "true if the sample was dropped (SM clock below 75 % of the reference: throttled)",
+        "true if the sample was dropped: SM clock below 75 % of the reference (throttled), or canary_ratio over [timing] canary_max_ratio",
     );
     pub const ORDER: Col = Col::new(
         "order",
         "position of the frame in the group's measurement order (interleaved runs mix points)",
+    );
+    pub const CANARY_RATIO: Col = Col::new(
+        "canary_ratio",
+        "GPU time of the canary kernel run right after the frame over the process's baseline canary time (empty: no canary)",
+    );
+    pub const UNIX_MS: Col = Col::new(
+        "unix_ms",
+        "wall clock when the frame was done, ms since the Unix epoch (to line samples up with nvidia-smi logs)",
     );
     /// The header of `samples.csv`.
     pub const ALL: &[Col] = &[
@@ -1234,6 +1252,8 @@ pub mod samples {
         MEM_CLOCK_MHZ,
         DISCARDED,
         ORDER,
+        CANARY_RATIO,
+        UNIX_MS,
     ];
 }
 

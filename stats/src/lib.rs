@@ -5,6 +5,8 @@
 //!   half-width of a distribution-free 95 % CI of the median, or a cap, or drift).
 //! - [`warmup`]: when the GPU is warm (frame times and SM clock have stopped moving).
 //! - [`throttle`]: which samples to discard because the clock was throttled (nvbench's 75 % rule).
+//! - [`canary`]: which samples to discard because a fixed kernel timed after them ran slow (a
+//!   GPU state the clocks do not report).
 //! - [`summary`]: what is written per point (median, mean, percentiles, bootstrap CIs, Tukey
 //!   outliers).
 //! - [`mwu`]: the Mann–Whitney U test (scipy's conventions: exact for small untied samples,
@@ -16,6 +18,7 @@
 //! verdicts), criterion.rs (bootstrap CIs, significance *and* a noise band before calling a
 //! change), Google benchmark (random interleaving of repetitions, Mann–Whitney U).
 
+pub mod canary;
 pub mod median_ci;
 pub mod mwu;
 pub mod order;
@@ -25,6 +28,7 @@ pub mod throttle;
 pub mod verdict;
 pub mod warmup;
 
+pub use canary::{canary_discard, CanaryBaseline, CANARY_MAX_RATIO};
 pub use median_ci::{median_ci_order, median_of_sorted};
 pub use mwu::{mann_whitney_u, MwuMethod, MwuResult};
 pub use order::{interleave_order, round_order};

@@ -8,8 +8,10 @@
 //!
 //! The rule, first match wins (criterion.rs calls a change only when it is significant *and*
 //! beyond a noise band; `nvbench_compare` classifies SAME/FAST/SLOW against the noise):
-//! 1. either side has fewer than `min_samples` samples → **Unsure** (too few to decide: with 4
-//!    against 4 the smallest possible exact p is 0.029, and a bootstrap of 4 values is coarse);
+//! 1. either side has fewer than `min_samples` samples → **Same** if every ratio of a NEW sample
+//!    to a BASE sample lies within the noise band (equivalence needs no test then), else
+//!    **Unsure** (too few to decide: with 4 against 4 the smallest possible exact p is 0.029,
+//!    and a bootstrap of 4 values is coarse);
 //! 2. `|ratio − 1| ≤ noise_band` → **Same** — also when significant: a 0.5 % shift that the test
 //!    can resolve is still not a change worth reporting;
 //! 3. `ratio > 1 + noise_band`: **Slower** if `p < alpha` and `ratio_ci.lo > 1`, else **Unsure**;
@@ -170,6 +172,26 @@ pub fn compare_samples(base: &[f64], new: &[f64], o: &VerdictOptions) -> Compari
     let ci = bootstrap_ratio(base, new, o);
     let p = mann_whitney_u(base, new).map(|t| t.p);
     if nb < o.min_samples || nn < o.min_samples {
+        // Too few for a test, but not for equivalence: when even the extreme ratios (NEW's
+        // min over BASE's max, NEW's max over BASE's min) lie inside the band, no resampling
+        // can leave it (a 300 ms point capped at 4 samples a side, all within 0.01 %).
+        let lo = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = |v: &[f64]| v.iter().copied().fold(0.0f64, f64::max);
+        let extremes = (lo(new) / hi(base), hi(new) / lo(base));
+        if extremes.0 >= 1.0 - o.noise_band && extremes.1 <= 1.0 + o.noise_band {
+            return Comparison {
+                verdict: Verdict::Same,
+                ratio,
+                ratio_ci: extremes,
+                p,
+                n_base: nb,
+                n_new: nn,
+                basis: Basis::Samples,
+                why: format!(
+                    "{nb} vs {nn} samples, too few for a test, but every ratio of a NEW sample to a BASE sample is within the noise band"
+                ),
+            };
+        }
         return Comparison {
             ratio,
             ratio_ci: ci,
@@ -338,6 +360,22 @@ mod tests {
         assert_eq!(c.verdict, Verdict::Unsure);
         assert!(c.why.contains("too few"), "{}", c.why);
         assert!((c.ratio - 2.0).abs() < 1e-12, "ratio still reported");
+    }
+
+    #[test]
+    fn too_few_samples_are_same_only_when_every_pairwise_ratio_is_in_the_band() {
+        // The H200's dual_peel on shells(16, 256) at 1024²: 4 samples of ≈ 299 ms a side.
+        let a = [298.91, 298.93, 298.90, 298.92];
+        let b = [298.94, 298.90, 298.91, 298.95];
+        let c = compare_samples(&a, &b, &VerdictOptions::default());
+        assert_eq!(c.verdict, Verdict::Same, "{c:?}");
+        assert!(c.why.contains("too few for a test"), "{}", c.why);
+        assert!(c.ratio_ci.0 >= 0.98 && c.ratio_ci.1 <= 1.02);
+        // One sample 3 % off on one side: an extreme ratio leaves the band → Unsure, not Same.
+        let b2 = [298.94, 298.90, 298.91, 307.9];
+        let c2 = compare_samples(&a, &b2, &VerdictOptions::default());
+        assert_eq!(c2.verdict, Verdict::Unsure, "{c2:?}");
+        assert!(c2.why.contains("too few samples"), "{}", c2.why);
     }
 
     #[test]

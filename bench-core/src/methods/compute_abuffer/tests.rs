@@ -552,3 +552,46 @@ fn full_tiles_of_big_triangles_keep_each_fragments_facing() {
         }
     }
 }
+
+#[test]
+fn lists_in_depth_order_reverse_order_or_shuffled_sort_alike_in_workgroup_memory() {
+    // The workgroup resolve inserts into a ring from the nearer end: lists that arrive front to
+    // back, back to front or shuffled must all come out in depth order. 24 screen-filling
+    // layers (under the 32-entry workgroup capacity) and 40 (over it: the private sort).
+    for layers in [24, 40] {
+        let base = scene("quads", &[("depth_complexity", Int(layers))]);
+        let tris: Vec<[u32; 3]> = base
+            .mesh
+            .indices
+            .chunks(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect();
+        let mut reversed = tris.clone();
+        reversed.reverse();
+        // A fixed interleave of near and far: 0, n−1, 1, n−2, …
+        let mut zigzag = Vec::new();
+        let (mut a, mut b) = (0usize, tris.len());
+        while a < b {
+            zigzag.push(tris[a]);
+            a += 1;
+            if a < b {
+                b -= 1;
+                zigzag.push(tris[b]);
+            }
+        }
+        for (label, order) in [("given", &tris), ("reversed", &reversed), ("zigzag", &zigzag)] {
+            let mut s = base.clone();
+            s.mesh.indices = order.iter().flatten().copied().collect();
+            for small in [1, 1 << 20] {
+                let (_, p) = variant_params(&[], small);
+                check(
+                    &format!("quads({layers}) {label} small_max {small}"),
+                    &s,
+                    48,
+                    40,
+                    &p,
+                );
+            }
+        }
+    }
+}
