@@ -212,10 +212,6 @@ pub mod cols {
         "resolve_sort",
         "compute_abuffer: workgroup (lists of up to 32 fragments sorted in workgroup memory) | private (every list in a per-thread array)",
     );
-    pub const FILL_BATCH: Col = Col::new(
-        "fill_batch",
-        "compute_abuffer's fill: batched (up to four slot atomics of a row, or of a full tile's column, issued before any fragment is stored) | single (atomic, then store, pixel by pixel)",
-    );
     pub const POOL: Col = Col::new(
         "pool",
         "linked_list: counted (one sub-pool per 8×8-pixel tile, sized by a prepare-time count) | fixed (layers × pixels nodes, one cursor)",
@@ -977,7 +973,6 @@ pub const GROUPS: &[Group] = &[
             cols::TRANSFORM,
             cols::COVERAGE,
             cols::RESOLVE_SORT,
-            cols::FILL_BATCH,
             cols::POOL,
             cols::POOL_SLACK,
             cols::NODE,

@@ -27,11 +27,6 @@
 override FILL: bool = false;
 override PRETRANSFORM: bool = true;
 override STEPPED: bool = true;
-// Fill, single-sample (axis `fill_batch = batched`): a thread takes up to four fragments' slots
-// with atomics issued back to back, then stores them, so it waits for one L2 round trip per
-// four fragments instead of one per fragment (a returning atomic's latency is what the fill pays
-// beyond the count pass, whose atomics return nothing).
-override FILL_BATCH: bool = true;
 // MSAA coverage masks (aa = msaa*, aa_capture = coverage): coverage is tested at AA_SAMPLES
 // sample positions (Vulkan's standard locations, `sample_off`) by the same exact integer edge
 // rule; a pixel with any sample covered gets one fragment, depth at the pixel centre, tagged
@@ -511,60 +506,18 @@ fn emit_mask(x: i32, y: i32, depth: f32, prim: u32, front: bool, mask: u32) {
     let p = u32(y) * u32(camera.viewport.x) + u32(x);
     if FILL {
         let slot = atomicAdd(&offs[p], 1u);
-        // Single-sample tags have no mask bits: a full tile's all-samples mask (1) would land
-        // on bit 31, the front-facing bit (TAG_PRIM_BITS = 31).
-        let m = select(0u, mask, AA_SAMPLES > 1u);
-        put(slot, depth, prim | (m << TAG_PRIM_BITS) | select(0u, 0x80000000u, front));
+        if slot < sizes.capacity {
+            // Single-sample tags have no mask bits: a full tile's all-samples mask (1) would land
+            // on bit 31, the front-facing bit (TAG_PRIM_BITS = 31).
+            let m = select(0u, mask, AA_SAMPLES > 1u);
+            let tag = prim | (m << TAG_PRIM_BITS) | select(0u, 0x80000000u, front);
+            frags[slot] = vec2<u32>(bitcast<u32>(depth), tag);
+        } else {
+            atomicAdd(&work[W_LOST], 1u);
+        }
     } else {
         atomicAdd(&offs[p], 1u);
     }
-}
-
-// A fragment of slot `slot` (or a lost one beyond the allocation).
-fn put(slot: u32, depth: f32, tag: u32) {
-    if slot < sizes.capacity {
-        frags[slot] = vec2<u32>(bitcast<u32>(depth), tag);
-    } else {
-        atomicAdd(&work[W_LOST], 1u);
-    }
-}
-
-// `fill_batch = batched`: the covered ones (`cov`) of four pixels (x, y) + k·(dx, dy), k < 4, of
-// triangle `t`: four slot atomics issued before any store.
-fn fill4(t: Tri, x: i32, y: i32, dx: i32, dy: i32, cov: vec4<bool>, prim: u32) {
-    let w = u32(camera.viewport.x);
-    let tag = prim | select(0u, 0x80000000u, t.front);
-    let p = u32(y) * w + u32(x);
-    let step = u32(dy) * w + u32(dx);
-    var s = vec4<u32>(0u);
-    if cov.x {
-        s.x = atomicAdd(&offs[p], 1u);
-    }
-    if cov.y {
-        s.y = atomicAdd(&offs[p + step], 1u);
-    }
-    if cov.z {
-        s.z = atomicAdd(&offs[p + 2u * step], 1u);
-    }
-    if cov.w {
-        s.w = atomicAdd(&offs[p + 3u * step], 1u);
-    }
-    if cov.x {
-        put(s.x, depth_at(t, x, y), tag);
-    }
-    if cov.y {
-        put(s.y, depth_at(t, x + dx, y + dy), tag);
-    }
-    if cov.z {
-        put(s.z, depth_at(t, x + 2 * dx, y + 2 * dy), tag);
-    }
-    if cov.w {
-        put(s.w, depth_at(t, x + 3 * dx, y + 3 * dy), tag);
-    }
-}
-
-fn inside(e: vec3<i32>) -> bool {
-    return (e.x | e.y | e.z) >= 0;
 }
 
 // A covered pixel: the count pass needs no depth.
@@ -603,28 +556,8 @@ fn raster_stepped(t: Tri, bb: vec4<i32>, prim: u32) {
     let sx = vec3<i32>(t.i1.y - t.i2.y, t.i2.y - t.i0.y, t.i0.y - t.i1.y) * 256;
     let sy = vec3<i32>(t.i2.x - t.i1.x, t.i0.x - t.i2.x, t.i1.x - t.i0.x) * 256;
     let so = sample_steps(t);
-    let batch = FILL && FILL_BATCH && AA_SAMPLES == 1u;
     for (var y = bb.y; y <= bb.w; y = y + 1) {
         var e = row;
-        if batch {
-            for (var x = bb.x; x <= bb.z; x = x + 4) {
-                let e1 = e + sx;
-                let e2 = e1 + sx;
-                let e3 = e2 + sx;
-                let cov = vec4<bool>(
-                    inside(e),
-                    x + 1 <= bb.z && inside(e1),
-                    x + 2 <= bb.z && inside(e2),
-                    x + 3 <= bb.z && inside(e3),
-                );
-                if any(cov) {
-                    fill4(t, x, y, 1, 0, cov, prim);
-                }
-                e = e3 + sx;
-            }
-            row = row + sy;
-            continue;
-        }
         for (var x = bb.x; x <= bb.z; x = x + 1) {
             if AA_SAMPLES > 1u {
                 let m = stepped_mask(e, so);
@@ -859,12 +792,7 @@ fn raster_big(
         // No `continue` on a per-thread condition: the next fan triangle's barrier must stay in
         // uniform control flow.
         if !empty && x <= hi.x {
-            if full && FILL && FILL_BATCH && AA_SAMPLES == 1u {
-                for (var y = y0; y <= hi.y; y = y + 4 * dy) {
-                    let cov = vec4<bool>(true, y + dy <= hi.y, y + 2 * dy <= hi.y, y + 3 * dy <= hi.y);
-                    fill4(t, x, y, 0, dy, cov, prim);
-                }
-            } else if full {
+            if full {
                 for (var y = y0; y <= hi.y; y = y + dy) {
                     emit_covered_mask(t, x, y, prim, (1u << AA_SAMPLES) - 1u);
                 }

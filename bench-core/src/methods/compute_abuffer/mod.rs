@@ -26,9 +26,6 @@
 //!   fragments in workgroup memory (16 KiB per 8×8 pixels) — into a ring, from its nearer end,
 //!   so lists that arrive in depth order or reversed cost no moves — longer ones in a per-thread
 //!   array; `private` sorts every list in the per-thread array (the first version).
-//! - `fill_batch = batched|single`: `batched` (default) issues up to four fragments' slot
-//!   atomics (a row of a small triangle, a column of a full big-triangle tile) before storing
-//!   any; `single` takes a slot and stores, pixel by pixel (the first version).
 //!
 //! Antialiasing (`aa`): `aa_capture = coverage` tests coverage at the MSAA sample positions
 //! (Vulkan's standard locations) by the same exact integer rule, in the count and fill passes
@@ -135,25 +132,18 @@ const RESOLVE_SORT: Axis = Axis::choice(
     &["workgroup", "private"],
 );
 
-const FILL_BATCH: Axis = Axis::choice(
-    cols::FILL_BATCH,
-    "batched: a thread issues up to four fragments' slot atomics before it stores any (one L2 round trip per four fragments); single: atomic then store, pixel by pixel",
-    "batched",
-    &["batched", "single"],
-);
-
 impl Method for ComputeAbuffer {
     fn name(&self) -> &'static str {
         "compute_abuffer"
     }
     fn describe(&self) -> &'static str {
-        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup), slot atomics four at a time (fill_batch=batched); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position)"
+        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position)"
     }
     fn exact(&self) -> bool {
         true
     }
     fn axes(&self) -> Vec<Axis> {
-        let mut v = vec![SMALL_MAX, TRANSFORM, COVERAGE, RESOLVE_SORT, FILL_BATCH];
+        let mut v = vec![SMALL_MAX, TRANSFORM, COVERAGE, RESOLVE_SORT];
         v.extend_from_slice(effects::AXES);
         v.extend([aa::AA, aa::AA_CAPTURE]);
         v
@@ -208,8 +198,6 @@ struct Variants {
     stepped: bool,
     /// `resolve_sort = workgroup`: short lists sorted in workgroup memory.
     wg_sort: bool,
-    /// `fill_batch = batched`: slot atomics issued four at a time before the stores.
-    fill_batch: bool,
     /// MSAA coverage-mask samples (1: pixel centres).
     aa_samples: u32,
 }
@@ -219,7 +207,6 @@ fn variants(point: &Point) -> Variants {
         pretransform: point.choice(&TRANSFORM) == "vertex",
         stepped: point.choice(&COVERAGE) == "stepped",
         wg_sort: point.choice(&RESOLVE_SORT) == "workgroup",
-        fill_batch: point.choice(&FILL_BATCH) == "batched",
         aa_samples: 1,
     }
 }
@@ -304,7 +291,6 @@ fn kernels(gpu: &Gpu, l: &Layout, fill: bool, v: Variants) -> Kernels {
         ("FILL", flag(fill)),
         ("PRETRANSFORM", flag(v.pretransform)),
         ("STEPPED", flag(v.stepped)),
-        ("FILL_BATCH", flag(v.fill_batch)),
         aa_n,
         aa_bits,
         aa_x,
@@ -343,7 +329,6 @@ impl PreparedAbuffer {
             pretransform: true,
             stepped: true,
             wg_sort: false,
-            fill_batch: true,
             aa_samples: 1,
         };
         Self::new(gpu, scene, 256, &EffectConfig::default(), v, Some(replay))

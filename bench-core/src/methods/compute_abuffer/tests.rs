@@ -25,7 +25,6 @@ const VARIANTS: &[&[(&str, &str)]] = &[
     &[("transform", "triangle")],
     &[("coverage", "direct")],
     &[("resolve_sort", "private")],
-    &[("fill_batch", "single")],
 ];
 
 fn variant_params(v: &[(&str, &str)], small: i64) -> (String, Params) {
