@@ -64,6 +64,12 @@ fn sessions_pool_their_samples_and_the_ci_covers_every_sessions_median() {
         .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
     assert!((spread - (mx - mn) / sum.median).abs() <= 1e-9 * (1.0 + spread));
     assert!(plan(3).describe().contains("3 sessions"));
+    // Later sessions prepare after a placement pad of a seeded size: in range, and not one size.
+    let pads: Vec<u64> = (1..6)
+        .map(|k| bench_core::measure::placement_pad_mib(1, k))
+        .collect();
+    assert!(pads.iter().all(|&m| (1..=255).contains(&m)), "{pads:?}");
+    assert!(pads.windows(2).any(|w| w[0] != w[1]), "{pads:?}");
 }
 
 #[test]
