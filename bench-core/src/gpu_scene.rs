@@ -7,6 +7,7 @@ use scenarios::Scene;
 use wgpu::util::DeviceExt;
 
 use crate::gpu::Gpu;
+use crate::Result;
 
 /// Matches `struct Camera` in `methods/common.wgsl`.
 #[repr(C)]
@@ -113,6 +114,45 @@ impl GpuScene {
             reversed_z: scene.camera.reversed_z,
             bytes,
         }
+    }
+
+    /// The same scene in new buffers (copied on the GPU), allocated after whatever is alive now:
+    /// a `[timing] sessions` session measures a method on geometry that lies elsewhere in memory.
+    pub fn relocated(&self, gpu: &Gpu) -> Result<GpuScene> {
+        let d = &gpu.device;
+        let mut enc = d.create_command_encoder(&Default::default());
+        let mut copy = |b: &wgpu::Buffer, label: &str, extra: wgpu::BufferUsages| {
+            let n = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: b.size(),
+                usage: b.usage() | extra,
+                mapped_at_creation: false,
+            });
+            enc.copy_buffer_to_buffer(b, 0, &n, 0, b.size());
+            n
+        };
+        let src = wgpu::BufferUsages::COPY_SRC;
+        let positions = copy(&self.positions, "positions", src);
+        let normals = copy(&self.normals, "normals", src);
+        let colors = copy(&self.colors, "colors", src);
+        let object_ids = copy(&self.object_ids, "object_ids", src);
+        let indices = copy(&self.indices, "indices", src);
+        gpu.queue.submit([enc.finish()]);
+        let camera = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("camera"),
+            contents: bytemuck::bytes_of(&self.camera_data),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        gpu.wait()?;
+        Ok(GpuScene {
+            positions,
+            normals,
+            colors,
+            object_ids,
+            indices,
+            camera,
+            ..*self
+        })
     }
 
     pub fn pixels(&self) -> usize {
