@@ -131,7 +131,8 @@ impl GpuScene {
             enc.copy_buffer_to_buffer(b, 0, &n, 0, b.size());
             n
         };
-        let src = wgpu::BufferUsages::COPY_SRC;
+        // COPY_DST to be filled here (the index buffer is not otherwise); COPY_SRC to be read.
+        let src = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let positions = copy(&self.positions, "positions", src);
         let normals = copy(&self.normals, "normals", src);
         let colors = copy(&self.colors, "colors", src);

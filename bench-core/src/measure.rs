@@ -570,7 +570,7 @@ pub fn measure(
             })
         });
         let moved = if k > 0 {
-            Some(scene.relocated(gpu)?)
+            Some(scoped(gpu, "relocate the scene", || scene.relocated(gpu))?)
         } else {
             None
         };

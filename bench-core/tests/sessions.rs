@@ -103,3 +103,39 @@ fn the_time_cap_counts_samples_only_not_the_warm_up_before_them() {
         r.stop_reason
     );
 }
+
+#[test]
+fn a_relocated_scene_holds_the_same_bytes_in_new_buffers() {
+    // Sessions after the first run on a GPU-side copy of the geometry: every buffer must hold
+    // exactly what the original holds (a copy into a buffer without COPY_DST left the index
+    // buffer zero on the H200 and every later session drew nothing).
+    let g = gpu();
+    let s = scene("shells", &[("count", ParamValue::Int(2)), ("segments", ParamValue::Int(8))]);
+    let gs = GpuScene::upload(g, &s, 32, 32);
+    let moved = gs.relocated(g).unwrap();
+    for (a, b) in [
+        (&gs.positions, &moved.positions),
+        (&gs.normals, &moved.normals),
+        (&gs.colors, &moved.colors),
+        (&gs.object_ids, &moved.object_ids),
+        (&gs.indices, &moved.indices),
+    ] {
+        assert_eq!(a.size(), b.size());
+        let (x, y) = (
+            g.read_buffer(a, a.size()).unwrap(),
+            g.read_buffer(b, b.size()).unwrap(),
+        );
+        assert!(x.iter().any(|&v| v != 0), "a scene buffer is not all zero");
+        assert_eq!(x, y);
+    }
+    assert_eq!(moved.index_count, gs.index_count);
+    // And a method measured in sessions renders the same image in its last (relocated) session.
+    let m = methods::get("wboit");
+    let p = point(&*m, &params(&[]));
+    let mut one = measure(g, &gs, &*m, &p, &plan(1)).unwrap();
+    let mut three = measure(g, &gs, &*m, &p, &plan(3)).unwrap();
+    let a = one.prepared.readback(g, &gs).unwrap().image.unwrap();
+    let b = three.prepared.readback(g, &gs).unwrap().image.unwrap();
+    assert!(a.iter().any(|px| px[3] > 0.0), "the scene covers some pixels");
+    assert_eq!(a, b);
+}
