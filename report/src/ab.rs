@@ -137,7 +137,8 @@ fn distinct(rows: &[Rec], f: impl Fn(&Rec) -> String) -> Vec<String> {
     out
 }
 
-/// `runs.csv` of a folder or the path itself, and `samples.csv` beside it when present.
+/// `runs.csv` of a folder or the path itself, and `samples.csv` (or `samples.csv.gz`) beside it
+/// when present.
 fn locate(p: &Path) -> Result<(PathBuf, Option<PathBuf>)> {
     let csv = if p.is_dir() {
         p.join("runs.csv")
@@ -147,8 +148,12 @@ fn locate(p: &Path) -> Result<(PathBuf, Option<PathBuf>)> {
     if !csv.is_file() {
         bail!("{}: no runs.csv there", p.display());
     }
-    let samples = csv.with_file_name("samples.csv");
-    Ok((csv, samples.is_file().then_some(samples)))
+    // Committed reference runs keep their raw samples gzipped (samples.csv.gz).
+    let samples = ["samples.csv", "samples.csv.gz"]
+        .into_iter()
+        .map(|n| csv.with_file_name(n))
+        .find(|p| p.is_file());
+    Ok((csv, samples))
 }
 
 /// Per-sample values of one point of one run.
@@ -162,8 +167,13 @@ struct PointSamples {
 type SampleMap = HashMap<(String, String), PointSamples>;
 
 fn load_samples(path: &Path) -> Result<SampleMap> {
-    let mut rdr =
-        csv::Reader::from_path(path).with_context(|| format!("reading {}", path.display()))?;
+    let file = std::fs::File::open(path).with_context(|| format!("reading {}", path.display()))?;
+    let input: Box<dyn std::io::Read> = if path.extension().is_some_and(|e| e == "gz") {
+        Box::new(flate2::read::GzDecoder::new(file))
+    } else {
+        Box::new(file)
+    };
+    let mut rdr = csv::Reader::from_reader(input);
     let h: Vec<String> = rdr
         .headers()
         .with_context(|| format!("{}: no header", path.display()))?
@@ -519,10 +529,12 @@ impl AbReport {
             s.run_ids.join(", "),
             s.git_revs.join(", "),
             s.platforms.join("; "),
-            if s.samples_csv.is_some() {
-                "raw samples (samples.csv)"
-            } else {
-                "no samples.csv: summary columns only"
+            match &s.samples_csv {
+                Some(p) => format!(
+                    "raw samples ({})",
+                    p.file_name().unwrap_or_default().to_string_lossy()
+                ),
+                None => "no samples.csv: summary columns only".to_string(),
             }
         )
     }

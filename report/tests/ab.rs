@@ -323,3 +323,39 @@ fn fractions_parse() {
     assert!(parse_fraction("five").is_err());
     assert!(parse_fraction("-1%").is_err());
 }
+
+#[test]
+fn gzipped_samples_are_read_like_plain_ones() {
+    // Committed reference runs keep samples.csv.gz: the comparison must still use raw samples.
+    use std::io::Write as _;
+    let a = run("gz-base", Spec::default());
+    let b = run(
+        "gz-slow",
+        Spec {
+            scale: 1.5,
+            ..Spec::default()
+        },
+    );
+    let plain = compare_runs(&a, &b, &AbOptions::default()).unwrap();
+    for d in [&a, &b] {
+        let raw = std::fs::read(d.join("samples.csv")).unwrap();
+        let f = std::fs::File::create(d.join("samples.csv.gz")).unwrap();
+        let mut z = flate2::write::GzEncoder::new(f, flate2::Compression::default());
+        z.write_all(&raw).unwrap();
+        z.finish().unwrap();
+        std::fs::remove_file(d.join("samples.csv")).unwrap();
+    }
+    let gz = compare_runs(&a, &b, &AbOptions::default()).unwrap();
+    assert!(gz
+        .base
+        .samples_csv
+        .as_ref()
+        .unwrap()
+        .ends_with("samples.csv.gz"));
+    for (p, q) in plain.points.iter().zip(&gz.points) {
+        assert_eq!(q.time.verdict, Verdict::Slower);
+        assert!(q.time.p.is_some(), "p from raw samples");
+        assert_eq!(p.time.ratio, q.time.ratio);
+        assert_eq!(p.time.p, q.time.p);
+    }
+}

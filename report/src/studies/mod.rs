@@ -5,6 +5,7 @@ pub mod deferred;
 pub mod geometry;
 pub mod methods;
 pub mod prepass;
+pub mod scaling;
 pub mod shadows;
 pub mod stability;
 
@@ -25,6 +26,12 @@ pub fn all_figures(runs: &Runs, dir: &Path) -> Result<Vec<(String, Vec<Figure>)>
                 .into_iter()
                 .chain(buckets::figures(runs, dir)?)
                 .collect(),
+        ));
+    }
+    if scaling::applies(runs) {
+        out.push((
+            "How cost grows (scaling)".to_string(),
+            scaling::figures(runs, dir)?,
         ));
     }
     if !runs.study("stability").is_empty() || !runs.study("methods").is_empty() {
