@@ -357,10 +357,7 @@ impl<'g> PointTimer<'g> {
         // A slow canary asks for the lift too: the slow state it sees has no clock reading.
         let canary_slow = |me: &Self| -> Result<bool> {
             Ok(me.canary_on()
-                && mfx_stats::canary_discard(
-                    me.gpu.canary()?.map(|(_, r)| r),
-                    me.canary_max,
-                ))
+                && mfx_stats::canary_discard(me.gpu.canary()?.map(|(_, r)| r), me.canary_max))
         };
         if before >= target && !canary_slow(self)? {
             return Ok(());
@@ -491,9 +488,7 @@ impl<'g> PointTimer<'g> {
             let n = self
                 .samples
                 .iter()
-                .filter(|s| {
-                    mfx_stats::canary_discard(s.canary_ratio, self.canary_max)
-                })
+                .filter(|s| mfx_stats::canary_discard(s.canary_ratio, self.canary_max))
                 .count();
             let max = self
                 .samples

@@ -32,7 +32,10 @@ fn the_canary_is_off_by_default_on_a_software_adapter() {
     let r = measure(g, &gs, &*m, &p, &plan(4, None)).unwrap();
     assert!(r.canary.is_none());
     assert!(r.samples.iter().all(|x| x.canary_ratio.is_none()));
-    assert!(r.samples.iter().all(|x| x.unix_ms > 1.6e12), "wall clock per sample");
+    assert!(
+        r.samples.iter().all(|x| x.unix_ms > 1.6e12),
+        "wall clock per sample"
+    );
     assert!(plan(4, None).describe().contains("hardware adapters"));
     // 0 turns it off everywhere; the description says nothing of it then.
     assert!(!plan(4, Some(0.0)).describe().contains("canary"));
@@ -52,7 +55,10 @@ fn a_sample_is_discarded_exactly_when_its_canary_ran_over_the_ratio() {
 
     // A ratio no jitter reaches: every sample has a canary, none is discarded.
     let lax = measure(g, &gs, &*m, &p, &plan(6, Some(1e6))).unwrap();
-    assert!(lax.samples.iter().all(|x| x.canary_ratio.is_some_and(|r| r > 0.0)));
+    assert!(lax
+        .samples
+        .iter()
+        .all(|x| x.canary_ratio.is_some_and(|r| r > 0.0)));
     assert_eq!(lax.discarded(), 0);
     let (n, max) = lax.canary.expect("canary columns");
     assert_eq!(n, 0);
@@ -67,7 +73,10 @@ fn a_sample_is_discarded_exactly_when_its_canary_ran_over_the_ratio() {
     }
     let (n, _) = r.canary.unwrap();
     assert_eq!(n, r.discarded());
-    assert!(n > 0, "24 canaries on a CPU never ran slower than their fifth-fastest?");
+    assert!(
+        n > 0,
+        "24 canaries on a CPU never ran slower than their fifth-fastest?"
+    );
     // Discarded samples are not in the statistics; the rows say how many and why.
     let kept = r.samples.iter().filter(|x| !x.discarded).count();
     let mut row = Row::default();
@@ -75,9 +84,15 @@ fn a_sample_is_discarded_exactly_when_its_canary_ran_over_the_ratio() {
     if kept > 0 {
         assert_eq!(row.get(cols::SAMPLES), Some(kept.to_string().as_str()));
     }
-    assert_eq!(row.get(cols::CANARY_DISCARDED), Some(n.to_string().as_str()));
+    assert_eq!(
+        row.get(cols::CANARY_DISCARDED),
+        Some(n.to_string().as_str())
+    );
     assert!(row.get(cols::CANARY_RATIO_MAX).is_some());
-    assert!(row.get(cols::GPU_MS_MEDIAN).is_some(), "a median even if all were discarded");
+    assert!(
+        row.get(cols::GPU_MS_MEDIAN).is_some(),
+        "a median even if all were discarded"
+    );
     let flags = row.get(cols::FLAG).unwrap_or("");
     assert!(flags.contains("throttled"), "{flags}");
 }

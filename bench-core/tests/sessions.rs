@@ -110,7 +110,13 @@ fn a_relocated_scene_holds_the_same_bytes_in_new_buffers() {
     // exactly what the original holds (a copy into a buffer without COPY_DST left the index
     // buffer zero on the H200 and every later session drew nothing).
     let g = gpu();
-    let s = scene("shells", &[("count", ParamValue::Int(2)), ("segments", ParamValue::Int(8))]);
+    let s = scene(
+        "shells",
+        &[
+            ("count", ParamValue::Int(2)),
+            ("segments", ParamValue::Int(8)),
+        ],
+    );
     let gs = GpuScene::upload(g, &s, 32, 32);
     let moved = gs.relocated(g).unwrap();
     for (a, b) in [
@@ -136,6 +142,9 @@ fn a_relocated_scene_holds_the_same_bytes_in_new_buffers() {
     let mut three = measure(g, &gs, &*m, &p, &plan(3)).unwrap();
     let a = one.prepared.readback(g, &gs).unwrap().image.unwrap();
     let b = three.prepared.readback(g, &gs).unwrap().image.unwrap();
-    assert!(a.iter().any(|px| px[3] > 0.0), "the scene covers some pixels");
+    assert!(
+        a.iter().any(|px| px[3] > 0.0),
+        "the scene covers some pixels"
+    );
     assert_eq!(a, b);
 }

@@ -489,8 +489,12 @@ fn timing_spec(cx: &mut Ctx<'_>, t: &toml::Table, tn: &str) -> TimingSpec {
     };
     if let Some(r) = spec.canary_max_ratio {
         if r > 0.0 && r <= 1.0 {
-            cx.push(tn, "canary_max_ratio", "must be 0 (no canary) or above 1: a ratio to the fastest canary of the run")
-                .value = Some(r.to_string());
+            cx.push(
+                tn,
+                "canary_max_ratio",
+                "must be 0 (no canary) or above 1: a ratio to the fastest canary of the run",
+            )
+            .value = Some(r.to_string());
         }
     }
     if let (Some(a), Some(b)) = (spec.min_samples, spec.max_samples) {

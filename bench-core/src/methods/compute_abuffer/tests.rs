@@ -579,7 +579,11 @@ fn lists_in_depth_order_reverse_order_or_shuffled_sort_alike_in_workgroup_memory
                 zigzag.push(tris[b]);
             }
         }
-        for (label, order) in [("given", &tris), ("reversed", &reversed), ("zigzag", &zigzag)] {
+        for (label, order) in [
+            ("given", &tris),
+            ("reversed", &reversed),
+            ("zigzag", &zigzag),
+        ] {
             let mut s = base.clone();
             s.mesh.indices = order.iter().flatten().copied().collect();
             for small in [1, 1 << 20] {
