@@ -469,10 +469,12 @@ impl Spin {
 /// A fixed amount of mixed work (a streaming read of 16 MiB and a dependent FMA chain per
 /// thread, about 20–40 µs on an H200), timed with its own timestamps: how fast the GPU is right
 /// now, independent of the point being measured. See `mfx_stats::canary`.
+/// Its own two timestamps (not `timing::GpuTimer`: `timing` depends on this module).
 struct Canary {
     pipeline: wgpu::ComputePipeline,
     bind: wgpu::BindGroup,
-    timer: crate::timing::GpuTimer,
+    /// Query set of 2, resolve and read-back buffers; None without timestamp queries.
+    stamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     baseline: mfx_stats::CanaryBaseline,
 }
 
@@ -529,10 +531,34 @@ impl Canary {
                 resource: buf.as_entire_binding(),
             }],
         });
+        let stamps = gpu.has(wgpu::Features::TIMESTAMP_QUERY).then(|| {
+            let set = device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("canary"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            });
+            let buf = |label, usage| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: 16,
+                    usage,
+                    mapped_at_creation: false,
+                })
+            };
+            let resolve = buf(
+                "canary resolve",
+                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            );
+            let read = buf(
+                "canary read-back",
+                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            );
+            (set, resolve, read)
+        });
         Canary {
             pipeline,
             bind,
-            timer: crate::timing::GpuTimer::new(gpu),
+            stamps,
             baseline: Default::default(),
         }
     }
@@ -544,24 +570,34 @@ impl Gpu {
     pub fn canary(&self) -> Result<Option<(f64, f64)>> {
         let c = self.canary.get_or_init(|| Mutex::new(Canary::new(self)));
         let mut c = c.lock().unwrap();
-        if !c.timer.enabled() {
-            return Ok(None);
-        }
         let c = &mut *c;
-        c.timer.begin_frame();
+        let Some((set, resolve, read)) = &c.stamps else {
+            return Ok(None);
+        };
         let mut enc = self.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("canary"),
-                timestamp_writes: c.timer.compute_pass("canary"),
+                timestamp_writes: Some(wgpu::ComputePassTimestampWrites {
+                    query_set: set,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                }),
             });
             pass.set_pipeline(&c.pipeline);
             pass.set_bind_group(0, &c.bind, &[]);
             pass.dispatch_workgroups(CANARY_WORKGROUPS, 1, 1);
         }
+        enc.resolve_query_set(set, 0..2, resolve, 0);
+        enc.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
         self.queue.submit([enc.finish()]);
         self.wait()?;
-        let ms: f64 = c.timer.read(self)?.iter().map(|(_, ms)| ms).sum();
+        let t: Vec<u64> = bytemuck::pod_collect_to_vec(&self.map_read_range(read, 16)?);
+        let ticks = t[1].wrapping_sub(t[0]);
+        if ticks > u64::MAX / 2 {
+            return Ok(None); // a wrapped delta: not timed reliably
+        }
+        let ms = ticks as f64 * self.queue.get_timestamp_period() as f64 * 1e-6;
         Ok(c.baseline.push(ms).map(|r| (ms, r)))
     }
 
