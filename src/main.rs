@@ -740,6 +740,7 @@ fn render(job: &RenderJob) -> Result<()> {
                 effect: &effect,
                 exact: m.exact(),
                 flip: true,
+                truths: None,
             },
         )
         .map_err(|e| anyhow::anyhow!("{method}: {e}"))?;

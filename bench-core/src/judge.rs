@@ -11,6 +11,8 @@
 //!   `bad_pixel_tol` of the ground truth and nothing non-finite.
 //! - **Flags** name each known failure (`record::Flag`); counts behind them are columns.
 
+use std::sync::{Arc, Mutex};
+
 use scenarios::Scene;
 
 use crate::effects::EffectConfig;
@@ -28,6 +30,66 @@ pub struct Context<'a> {
     pub exact: bool,
     /// Compute FLIP (a perceptual error, ~0.1 s per 1024² image on 16 cores).
     pub flip: bool,
+    /// Reference images already composited for this scene's fragment lists (a group's rows
+    /// share them); None: computed for this call only.
+    pub truths: Option<&'a TruthCache>,
+}
+
+/// Reference images of one set of fragment lists by (effect, expected): the default suite
+/// judged every row against a truth composited anew from the same lists (up to ~20 rows a
+/// group at 1024²).
+#[derive(Debug, Default)]
+pub struct TruthCache(Mutex<Vec<(EffectConfig, Expected, Image)>>);
+
+/// A reference image, shared.
+pub type Image = Arc<Vec<[f64; 4]>>;
+
+impl TruthCache {
+    /// The cached image of (`effect`, `expected`), computed by `make` on first use.
+    pub fn get(
+        &self,
+        effect: &EffectConfig,
+        expected: Expected,
+        make: impl FnOnce() -> Vec<[f64; 4]>,
+    ) -> Arc<Vec<[f64; 4]>> {
+        if let Some((_, _, img)) = self
+            .0
+            .lock()
+            .unwrap()
+            .iter()
+            .find(|(e, x, _)| e == effect && *x == expected)
+        {
+            return img.clone();
+        }
+        let img = Arc::new(make());
+        self.0
+            .lock()
+            .unwrap()
+            .push((*effect, expected, img.clone()));
+        img
+    }
+
+    /// Images held.
+    pub fn len(&self) -> usize {
+        self.0.lock().unwrap().len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// `cx`'s reference image of `expected`: from its cache when it has one.
+fn reference_image(
+    cx: &Context<'_>,
+    lists: &FragmentLists,
+    expected: Expected,
+) -> Arc<Vec<[f64; 4]>> {
+    let make = || cx.effect.reference(cx.scene, lists, expected);
+    match cx.truths {
+        Some(c) => c.get(cx.effect, expected, make),
+        None => Arc::new(make()),
+    }
 }
 
 /// FLIP of a row, with the 8-bit images it was computed from (for the worst-points gallery).
@@ -234,8 +296,8 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
 
     if let Some(img) = &cap.image {
         let truth = match &aa {
-            Some(a) => a.truth.clone(),
-            None => cx.effect.reference(cx.scene, lists, Expected::All),
+            Some(a) => Arc::new(a.truth.clone()),
+            None => reference_image(&cx, lists, Expected::All),
         };
         if truth.len() != img.len() {
             return Err(format!(
@@ -255,7 +317,7 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
             _ if aa.is_some() => aa.as_ref().and_then(|a| a.own.clone()),
             (Some(d), _) => Some(d.clone()),
             (None, Expected::FirstK(k)) => {
-                Some(cx.effect.reference(cx.scene, lists, Expected::FirstK(k)))
+                Some(reference_image(&cx, lists, Expected::FirstK(k)).to_vec())
             }
             (None, Expected::All) => None,
         };
@@ -395,6 +457,7 @@ mod tests {
                 effect: &e,
                 exact,
                 flip: false,
+                truths: None,
             },
         )
         .unwrap()
@@ -522,6 +585,42 @@ mod tests {
     }
 
     #[test]
+    fn a_groups_truth_cache_judges_as_a_fresh_truth_and_composites_once() {
+        let l = lists(&[3, 1, 4, 1, 5, 9, 2, 6], false);
+        let s = scene();
+        let e = EffectConfig::default();
+        let cache = TruthCache::default();
+        let cx = |truths| Context {
+            scene: &s,
+            effect: &e,
+            exact: true,
+            flip: true,
+            truths,
+        };
+        for cap in [
+            cap_with(l.composite(), vec![3, 1, 4, 1, 5, 9, 2, 6], Expected::All),
+            cap_with(l.composite_first(2), vec![2, 1, 2, 1, 2, 2, 2, 2], Expected::FirstK(2)),
+            cap_with(l.composite_first(1), vec![1; 8], Expected::FirstK(1)),
+        ] {
+            let fresh = judge(&cap, &l, cx(None)).unwrap();
+            let cached = judge(&cap, &l, cx(Some(&cache))).unwrap();
+            let again = judge(&cap, &l, cx(Some(&cache))).unwrap();
+            for j in [&cached, &again] {
+                assert_eq!(format!("{:?}", j.truth), format!("{:?}", fresh.truth));
+                assert_eq!(format!("{:?}", j.vs_k), format!("{:?}", fresh.vs_k));
+                assert_eq!(j.flags, fresh.flags);
+                assert_eq!(j.matches_truth, fresh.matches_truth);
+                assert_eq!(
+                    j.flip.as_ref().map(|f| f.result.mean),
+                    fresh.flip.as_ref().map(|f| f.result.mean)
+                );
+            }
+        }
+        // The truth (All) and the two truncated definitions (k = 2, 1): three images, each once.
+        assert_eq!(cache.len(), 3);
+    }
+
+    #[test]
     fn a_method_definition_replaces_the_k_truncated_one() {
         let l = lists(&[4, 4], false);
         let mut cap = cap_with(l.composite(), vec![2, 2], Expected::FirstK(2));
@@ -563,6 +662,7 @@ mod tests {
             effect: &e,
             exact: true,
             flip: true,
+            truths: None,
         };
         let good = cap_with(l.composite(), vec![2; 64], Expected::All);
         let j = judge(&good, &l, cx).unwrap();

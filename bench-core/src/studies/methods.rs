@@ -213,6 +213,7 @@ fn finish_point(
         effect: &effect,
         exact: method.exact(),
         flip: ctx.flip,
+        truths: Some(&ctx.truths),
     };
     let j = match judge::judge(&cap, lists, cx) {
         Ok(j) => j,

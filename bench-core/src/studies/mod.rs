@@ -93,6 +93,8 @@ pub struct GroupCtx<'a> {
     /// Where `save_image` writes point images (`mfx sweep --save-images`); none = not saved.
     pub images_dir: Option<std::path::PathBuf>,
     reference: OnceCell<FragmentLists>,
+    /// Reference images of `reference` by effect, shared by the group's rows.
+    pub truths: crate::judge::TruthCache,
 }
 
 impl<'a> GroupCtx<'a> {
@@ -118,6 +120,7 @@ impl<'a> GroupCtx<'a> {
             blend_ms: None,
             images_dir: None,
             reference: OnceCell::new(),
+            truths: Default::default(),
         }
     }
 
