@@ -156,7 +156,7 @@ pub struct Gpu {
     /// (no NVIDIA driver, not an NVIDIA adapter): every point's `clock_source` says which.
     pub monitor: std::result::Result<crate::clocks::GpuMonitor, String>,
     /// The busy kernel that lifts a lowered SM clock (`measure`), built on first use.
-    spin: std::sync::OnceLock<Spin>,
+    spin: std::sync::OnceLock<Kernel>,
     /// The fixed kernel timed after each sample (`measure`'s canary rule), built on first use,
     /// with the fastest time it has taken in this process.
     canary: std::sync::OnceLock<Mutex<Canary>>,
@@ -412,14 +412,15 @@ pub fn read_rgba32f(gpu: &Gpu, tex: &wgpu::Texture) -> Result<Vec<[f32; 4]>> {
     Ok(bytemuck::cast_slice(&b).to_vec())
 }
 
-/// Busy compute work that raises a lowered SM clock (the clock lift of `measure`): every SM
-/// runs dependent FMAs for a few ms (about 2 ms on an H200 at 1980 MHz, by its FMA rate).
-/// Here, not in `measure`, so that `Gpu` can cache it without a module cycle.
-struct Spin {
+/// A compute kernel with one storage buffer: the clock lift's busy work (`SPIN_WGSL`) and the
+/// canary. Here, not in `measure`, so that `Gpu` can cache them without a module cycle.
+struct Kernel {
     pipeline: wgpu::ComputePipeline,
     bind: wgpu::BindGroup,
 }
 
+/// Busy work that raises a lowered SM clock (the clock lift of `measure`): every SM runs
+/// dependent FMAs for a few ms (about 2 ms on an H200 at 1980 MHz, by its FMA rate).
 const SPIN_WGSL: &str = "
 @group(0) @binding(0) var<storage, read_write> sink: array<f32>;
 @compute @workgroup_size(256)
@@ -434,35 +435,53 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }";
 
-impl Spin {
-    fn new(device: &wgpu::Device) -> Spin {
+impl Kernel {
+    /// Entry `main` of `wgsl` with its one storage buffer (`bytes`, zeroed) at group 0, binding 0.
+    fn new(device: &wgpu::Device, label: &str, wgsl: &str, bytes: u64) -> Kernel {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("clock lift"),
-            source: wgpu::ShaderSource::Wgsl(SPIN_WGSL.into()),
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(wgsl.into()),
         });
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("clock lift"),
+            label: Some(label),
             layout: None,
             module: &module,
             entry_point: Some("main"),
             compilation_options: Default::default(),
             cache: None,
         });
-        let sink = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("clock lift sink"),
-            size: 1024,
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: bytes,
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("clock lift"),
+            label: Some(label),
             layout: &pipeline.get_bind_group_layout(0),
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
-                resource: sink.as_entire_binding(),
+                resource: buffer.as_entire_binding(),
             }],
         });
-        Spin { pipeline, bind }
+        Kernel { pipeline, bind }
+    }
+
+    /// Records one dispatch of `workgroups` workgroups, timestamped when `stamps` is given.
+    fn dispatch(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        label: &str,
+        workgroups: u32,
+        stamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: stamps,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind, &[]);
+        pass.dispatch_workgroups(workgroups, 1, 1);
     }
 }
 
@@ -471,8 +490,7 @@ impl Spin {
 /// now, independent of the point being measured. See `mfx_stats::canary`.
 /// Its own two timestamps (not `timing::GpuTimer`: `timing` depends on this module).
 struct Canary {
-    pipeline: wgpu::ComputePipeline,
-    bind: wgpu::BindGroup,
+    kernel: Kernel,
     /// Query set of 2, resolve and read-back buffers; None without timestamp queries.
     stamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     baseline: mfx_stats::CanaryBaseline,
@@ -505,32 +523,7 @@ const CANARY_WORKGROUPS: u32 = 264;
 impl Canary {
     fn new(gpu: &Gpu) -> Canary {
         let device = &gpu.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("canary"),
-            source: wgpu::ShaderSource::Wgsl(CANARY_WGSL.into()),
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("canary"),
-            layout: None,
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let buf = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("canary"),
-            size: CANARY_BYTES,
-            usage: wgpu::BufferUsages::STORAGE,
-            mapped_at_creation: false,
-        });
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("canary"),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: buf.as_entire_binding(),
-            }],
-        });
+        let kernel = Kernel::new(device, "canary", CANARY_WGSL, CANARY_BYTES);
         let stamps = gpu.has(wgpu::Features::TIMESTAMP_QUERY).then(|| {
             let set = device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("canary"),
@@ -556,8 +549,7 @@ impl Canary {
             (set, resolve, read)
         });
         Canary {
-            pipeline,
-            bind,
+            kernel,
             stamps,
             baseline: Default::default(),
         }
@@ -575,19 +567,16 @@ impl Gpu {
             return Ok(None);
         };
         let mut enc = self.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("canary"),
-                timestamp_writes: Some(wgpu::ComputePassTimestampWrites {
-                    query_set: set,
-                    beginning_of_pass_write_index: Some(0),
-                    end_of_pass_write_index: Some(1),
-                }),
-            });
-            pass.set_pipeline(&c.pipeline);
-            pass.set_bind_group(0, &c.bind, &[]);
-            pass.dispatch_workgroups(CANARY_WORKGROUPS, 1, 1);
-        }
+        c.kernel.dispatch(
+            &mut enc,
+            "canary",
+            CANARY_WORKGROUPS,
+            Some(wgpu::ComputePassTimestampWrites {
+                query_set: set,
+                beginning_of_pass_write_index: Some(0),
+                end_of_pass_write_index: Some(1),
+            }),
+        );
         enc.resolve_query_set(set, 0..2, resolve, 0);
         enc.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
         self.queue.submit([enc.finish()]);
@@ -603,18 +592,12 @@ impl Gpu {
 
     /// One untimed busy dispatch, waited for.
     pub fn spin(&self) -> Result<()> {
-        let spin = self.spin.get_or_init(|| Spin::new(&self.device));
+        let spin = self
+            .spin
+            .get_or_init(|| Kernel::new(&self.device, "clock lift", SPIN_WGSL, 1024));
         let mut enc = self.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("clock lift"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&spin.pipeline);
-            pass.set_bind_group(0, &spin.bind, &[]);
-            // 4096 workgroups × 256 threads: every SM of a large GPU busy.
-            pass.dispatch_workgroups(4096, 1, 1);
-        }
+        // 4096 workgroups × 256 threads: every SM of a large GPU busy.
+        spin.dispatch(&mut enc, "clock lift", 4096, None);
         self.queue.submit([enc.finish()]);
         self.wait()
     }

@@ -121,23 +121,23 @@ impl GpuScene {
     pub fn relocated(&self, gpu: &Gpu) -> Result<GpuScene> {
         let d = &gpu.device;
         let mut enc = d.create_command_encoder(&Default::default());
-        let mut copy = |b: &wgpu::Buffer, label: &str, extra: wgpu::BufferUsages| {
+        // The copy keeps the source's usages, plus COPY_DST to be filled here (the index buffer
+        // has none) and COPY_SRC to be read.
+        let mut copy = |b: &wgpu::Buffer, label: &str| {
             let n = d.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size: b.size(),
-                usage: b.usage() | extra,
+                usage: b.usage() | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
             enc.copy_buffer_to_buffer(b, 0, &n, 0, b.size());
             n
         };
-        // COPY_DST to be filled here (the index buffer is not otherwise); COPY_SRC to be read.
-        let src = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        let positions = copy(&self.positions, "positions", src);
-        let normals = copy(&self.normals, "normals", src);
-        let colors = copy(&self.colors, "colors", src);
-        let object_ids = copy(&self.object_ids, "object_ids", src);
-        let indices = copy(&self.indices, "indices", src);
+        let positions = copy(&self.positions, "positions");
+        let normals = copy(&self.normals, "normals");
+        let colors = copy(&self.colors, "colors");
+        let object_ids = copy(&self.object_ids, "object_ids");
+        let indices = copy(&self.indices, "indices");
         gpu.queue.submit([enc.finish()]);
         let camera = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("camera"),

@@ -599,7 +599,11 @@ mod tests {
         };
         for cap in [
             cap_with(l.composite(), vec![3, 1, 4, 1, 5, 9, 2, 6], Expected::All),
-            cap_with(l.composite_first(2), vec![2, 1, 2, 1, 2, 2, 2, 2], Expected::FirstK(2)),
+            cap_with(
+                l.composite_first(2),
+                vec![2, 1, 2, 1, 2, 2, 2, 2],
+                Expected::FirstK(2),
+            ),
             cap_with(l.composite_first(1), vec![1; 8], Expected::FirstK(1)),
         ] {
             let fresh = judge(&cap, &l, cx(None)).unwrap();

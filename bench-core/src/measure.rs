@@ -556,18 +556,18 @@ pub fn measure(
     // second run of a device call, each repeatable; a pad before the method's own buffers alone
     // did not move either. Sessions that land elsewhere turn what they can reach into CI width.
     let session = |k: usize| -> Result<Measured> {
-        let _pad = (k > 0).then(|| {
-            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        // The pad lives until the session ends (`_pad`), so nothing reuses its memory before.
+        let (_pad, moved) = if k > 0 {
+            let pad = gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("placement pad"),
                 size: placement_pad_mib(plan.seed, k) << 20,
                 usage: wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: false,
-            })
-        });
-        let moved = if k > 0 {
-            Some(scoped(gpu, "relocate the scene", || scene.relocated(gpu))?)
+            });
+            let moved = scoped(gpu, "relocate the scene", || scene.relocated(gpu))?;
+            (Some(pad), Some(moved))
         } else {
-            None
+            (None, None)
         };
         let scene = moved.as_ref().unwrap_or(scene);
         let mut t = PointTimer::prepare(gpu, scene, method, point, plan)?;

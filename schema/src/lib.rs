@@ -661,7 +661,10 @@ pub mod cols {
         "gpu_ms_outliers",
         "samples outside Tukey's fences (1.5 IQR beyond the quartiles); kept, counted",
     );
-    pub const SAMPLES: Col = Col::new("samples", "timed samples kept (throttled ones excluded)");
+    pub const SAMPLES: Col = Col::new(
+        "samples",
+        "timed samples kept (discarded ones excluded); 0 beside a median means every sample was discarded and the statistics use them all (the row is then throttled and noisy)",
+    );
     pub const SAMPLES_DISCARDED: Col = Col::new(
         "samples_discarded",
         "timed samples discarded: the SM clock was below 75 % of the reference clock (nvbench's rule), or the canary timed right after the sample ran over canary_max_ratio × its baseline (canary_discarded of them)",

@@ -250,7 +250,9 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
          <th>exponent</th><th>R²</th><th>local exponents (point to point)</th>\
          <th>out of the linear regime</th></tr>",
     );
-    let mut off_rows: Vec<*const Rec> = Vec::new();
+    // Rows out of the linear regime, by (method, scene, resolution): hollow in the charts.
+    let mut off_rows: std::collections::BTreeSet<String> = Default::default();
+    let row_key = |r: &Rec| format!("{}|{}", r.get(cols::METHOD), scene_res(r));
     for m in &methods {
         let mine: Vec<&Rec> = rows
             .iter()
@@ -265,11 +267,10 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                 .filter_map(|r| Some((*r, f_t(r, &frags)?)))
                 .collect();
             let span = |k: fn(&(f64, f64, f64)) -> f64| {
-                let (lo, hi) = timed
+                timed
                     .iter()
                     .map(|(_, v)| k(v))
-                    .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
-                (lo, hi)
+                    .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)))
             };
             let (fl, fh) = span(|v| v.0);
             let (tl, th) = span(|v| v.1);
@@ -295,7 +296,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                             "{}: local exponent {e:.2}",
                             scene_name(w[1].0.get(cols::SCENE_LABEL))
                         ));
-                        off_rows.push(w[1].0 as *const Rec);
+                        off_rows.insert(row_key(w[1].0));
                     }
                 }
             }
@@ -314,7 +315,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                         r.get(cols::WIDTH),
                         r.get(cols::HEIGHT)
                     ));
-                    off_rows.push(*r as *const Rec);
+                    off_rows.insert(row_key(r));
                 }
             }
             let (lo, hi) = if by_t { (tl, th) } else { (fl, fh) };
@@ -345,7 +346,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                 .filter_map(|r| {
                     let v = f_t(r, &frags)?;
                     let (lo, hi) = r.gpu_ci().unzip();
-                    let off = off_rows.contains(&(*r as *const Rec));
+                    let off = off_rows.contains(&row_key(r));
                     Some(Pt::spread(k(&v), v.2, lo, hi).flagged(off))
                 })
                 .collect();
