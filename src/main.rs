@@ -33,6 +33,10 @@ pub(crate) struct GpuArgs {
     /// Use adapter number K of `mfx list adapters` (for one shard per GPU).
     #[arg(long)]
     adapter_index: Option<usize>,
+    /// Render targets' memory: dedicated (an allocation each, the default on Vulkan: their
+    /// times no longer depend on what ran before) or pooled (wgpu's shared blocks).
+    #[arg(long)]
+    texture_memory: Option<bench_core::texture_memory::TextureMemory>,
 }
 
 impl GpuArgs {
@@ -41,6 +45,7 @@ impl GpuArgs {
             backend: self.backend,
             adapter: self.adapter.clone(),
             adapter_index: self.adapter_index,
+            texture_memory: self.texture_memory,
         }
     }
 }

@@ -575,7 +575,7 @@ fn run_probe(gpu: &Gpu, samples: u32) -> Result<Vec<u32>, String> {
             usage: wgpu::BufferUsages::VERTEX,
         },
     );
-    let tex = d.create_texture(&wgpu::TextureDescriptor {
+    let tex = gpu.create_texture(&wgpu::TextureDescriptor {
         label: Some("probe target"),
         size: wgpu::Extent3d {
             width: PROBE_W,

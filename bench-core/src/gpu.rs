@@ -97,6 +97,9 @@ pub struct GpuOptions {
     pub adapter: Option<String>,
     /// Index into `mfx list adapters` (after the backend filter).
     pub adapter_index: Option<usize>,
+    /// Where render targets' memory comes from (None: the backend's default, see
+    /// [`crate::texture_memory::TextureMemory::default_for`]).
+    pub texture_memory: Option<crate::texture_memory::TextureMemory>,
 }
 
 impl Default for GpuOptions {
@@ -105,6 +108,7 @@ impl Default for GpuOptions {
             backend: BackendChoice::Vulkan,
             adapter: None,
             adapter_index: None,
+            texture_memory: None,
         }
     }
 }
@@ -160,6 +164,9 @@ pub struct Gpu {
     /// The fixed kernel timed after each sample (`measure`'s canary rule), built on first use,
     /// with the fastest time it has taken in this process.
     canary: std::sync::OnceLock<Mutex<Canary>>,
+    /// Where render targets' memory comes from (`texture_memory` column); see
+    /// [`crate::texture_memory`]. Set before any method prepares.
+    pub texture_memory: crate::texture_memory::TextureMemory,
 }
 
 /// Lists adapters for a backend choice, in enumeration order (the `--adapter-index` order).
@@ -218,7 +225,11 @@ impl Gpu {
             cands.sort_by_key(|a| type_rank(a.get_info().device_type));
             cands.remove(0)
         };
-        Self::open(adapter)
+        let mut gpu = Self::open(adapter)?;
+        if let Some(m) = opts.texture_memory {
+            gpu.set_texture_memory(m);
+        }
+        Ok(gpu)
     }
 
     pub fn open(adapter: wgpu::Adapter) -> Result<Gpu> {
@@ -269,7 +280,22 @@ impl Gpu {
             monitor,
             spin: std::sync::OnceLock::new(),
             canary: std::sync::OnceLock::new(),
+            texture_memory: crate::texture_memory::TextureMemory::default_for(info.backend),
         })
+    }
+
+    /// A texture, its memory placed as `texture_memory` says (every method's textures go
+    /// through here, so a run's render targets all come from one kind of memory).
+    pub fn create_texture(&self, desc: &wgpu::TextureDescriptor) -> wgpu::Texture {
+        crate::texture_memory::create_texture(self, desc)
+    }
+
+    /// This run's texture memory, where the backend allows it (dedicated needs Vulkan).
+    pub fn set_texture_memory(&mut self, m: crate::texture_memory::TextureMemory) {
+        self.texture_memory = match (m, self.adapter.get_info().backend) {
+            (crate::texture_memory::TextureMemory::Dedicated, wgpu::Backend::Vulkan) => m,
+            _ => crate::texture_memory::TextureMemory::Pooled,
+        };
     }
 
     pub fn has(&self, f: wgpu::Features) -> bool {

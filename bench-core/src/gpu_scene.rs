@@ -319,7 +319,7 @@ impl AllocCounter {
     ) -> wgpu::Texture {
         let bpp = format.block_copy_size(None).unwrap_or(4) as u64;
         self.bytes += w as u64 * h as u64 * bpp * samples as u64;
-        gpu.device.create_texture(&wgpu::TextureDescriptor {
+        gpu.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
             size: wgpu::Extent3d {
                 width: w,

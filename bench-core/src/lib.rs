@@ -28,6 +28,7 @@ pub mod runner;
 pub mod shading;
 pub mod studies;
 pub mod testing;
+pub mod texture_memory;
 pub mod timing;
 
 pub use gpu::{BackendChoice, Gpu, GpuOptions};

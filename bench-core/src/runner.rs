@@ -156,6 +156,7 @@ pub fn run(
                 .set(cols::DRIVER, &f.driver)
                 .set(cols::DRIVER_INFO, &f.driver_info)
                 .set(cols::ADAPTER_FEATURES, &f.features)
+                .set(cols::TEXTURE_MEMORY, gpu.texture_memory.as_str())
                 .set(cols::WIDTH, group.width)
                 .set(cols::HEIGHT, group.height)
                 .set(cols::TIMING_RULE, &timing_rule)

@@ -94,6 +94,10 @@ pub mod cols {
         "adapter_features",
         "optional wgpu features granted, `|`-separated",
     );
+    pub const TEXTURE_MEMORY: Col = Col::new(
+        "texture_memory",
+        "where render targets' memory came from: `dedicated` (a Vulkan allocation each, the default on Vulkan) or `pooled` (wgpu's shared blocks; on the H200 a pooled depth target's time depended on what ran before)",
+    );
     pub const WIDTH: Col = Col::new("width", "render target width in pixels");
     pub const HEIGHT: Col = Col::new("height", "render target height in pixels");
     pub const TIMING_RULE: Col = Col::new(
@@ -931,6 +935,7 @@ pub const GROUPS: &[Group] = &[
             cols::DRIVER,
             cols::DRIVER_INFO,
             cols::ADAPTER_FEATURES,
+            cols::TEXTURE_MEMORY,
             cols::WIDTH,
             cols::HEIGHT,
             cols::TIMING_RULE,

@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine of the device tool (no Rust there), in one call: a release `mfx` built
-# on the CPU machine is carried in ./.gpu (./.gpu/mfx, or gzipped as ./.gpu/mfx.gz), the Vulkan
+# on the CPU machine is carried in ./.gpu (./.gpu/mfx, or packed as ./.gpu/mfx.gz or ./.gpu/mfx.xz), the Vulkan
 # loader debs in ./.gl (../shared/device/prepare-gl.sh), and, for suites that read models,
 # ./models/stanford-bunny.obj (the stacked bunnies are baked here: the 45 MB OBJ is not carried).
 #
 # Usage (as the device command): bash scripts/device/run-suites.sh JOB [JOB...]
 #   JOB = SUITE or SUITE@TAG (a name or a TOML path; the run folder is SUITE or SUITE-TAG), so
-#   one suite can run twice back to back (methods@a methods@b) for run-to-run spread.
+#   one suite can run twice back to back (methods@a methods@b) for run-to-run spread. Extra
+#   `mfx sweep` flags follow after commas: repeat-probe@pooled,--texture-memory=pooled.
 # Environment:
 #   BUDGET (s, default 560): jobs are not started once less than MIN_LEFT (default 30) s is left,
 #     and each runs with `timeout` of the time left, so the call ends within its 10 minutes;
@@ -35,6 +36,12 @@ mfx=./.gpu/mfx
 if [ ! -x "$mfx" ] && [ -f ./.gpu/mfx.gz ]; then
   gunzip -c ./.gpu/mfx.gz > /tmp/mfx && chmod +x /tmp/mfx && mfx=/tmp/mfx
 fi
+# xz packs the binary 30 % smaller than gzip (the tree and carry share 64 MiB); Python's lzma
+# unpacks it where no xz is installed.
+if [ ! -x "$mfx" ] && [ -f ./.gpu/mfx.xz ]; then
+  python3 -c 'import lzma,shutil,sys; shutil.copyfileobj(lzma.open(sys.argv[1]), open("/tmp/mfx","wb"))' ./.gpu/mfx.xz \
+    && chmod +x /tmp/mfx && mfx=/tmp/mfx
+fi
 # The clocks over the whole call: what state each run started in, and whether it moved.
 nvidia-smi --query-gpu=timestamp,clocks.sm,clocks.mem,temperature.gpu,power.draw,clocks_throttle_reasons.active \
   --format=csv -l 1 > "$r/clocks.csv" 2>&1 &
@@ -47,6 +54,7 @@ smi=$!
 cat "$r/gpu.txt"
 need_bunny=0
 for job in "$@"; do
+  job=${job%%,*}
   case "${job%@*}" in perf-abuffer* | *bunny*) need_bunny=1 ;; esac
 done
 if [ "$need_bunny" = 1 ] && [ ! -f models/bunny-stack16.obj ]; then
@@ -54,7 +62,10 @@ if [ "$need_bunny" = 1 ] && [ ! -f models/bunny-stack16.obj ]; then
     || echo "bake failed: the bunny-stack rows will fail with 'file not found'"
 fi
 echo "set-up done in $(( $(date +%s) - start )) s"
-for job in "$@"; do
+for spec in "$@"; do
+  job=${spec%%,*}
+  flags=()
+  [ "$spec" != "$job" ] && IFS=, read -r -a flags <<< "${spec#*,}"
   suite=${job%@*}
   name=$(basename "$suite" .toml)
   [ "$job" != "$suite" ] && name="$name-${job#*@}"
@@ -66,7 +77,7 @@ for job in "$@"; do
   s=$(date +%s)
   extra=(--no-report)
   [ "${REPORT:-0}" = 1 ] && extra=()
-  timeout "$left" "$mfx" sweep "$suite" "${extra[@]}" --out "$r/$name" > "$r/$name.log" 2>&1
+  timeout "$left" "$mfx" sweep "$suite" "${extra[@]}" "${flags[@]}" --out "$r/$name" > "$r/$name.log" 2>&1
   rc=$?
   echo "job $job: exit $rc in $(( $(date +%s) - s )) s; $(grep -m1 -E '^mfx: .* rows' "$r/$name.log" | tail -c 200)"
   mkdir -p "$r/$name"

@@ -173,7 +173,7 @@ impl ShadeInputs {
                 // Light pre-pass: no surface targets; 1×1 stand-ins keep one layout for all
                 // paths (the LIGHT_BUFFER permutations never read them).
                 let t = |f| {
-                    d.create_texture(&wgpu::TextureDescriptor {
+                    gpu.create_texture(&wgpu::TextureDescriptor {
                         label: Some("surface stand-in"),
                         size: wgpu::Extent3d {
                             width: 1,

@@ -622,7 +622,7 @@ impl PreparedBucket {
         let mut make_slots = |label: &str| {
             let layers = cfg.attachments();
             alloc.bytes += px * 16 * layers as u64;
-            let tex = d.create_texture(&wgpu::TextureDescriptor {
+            let tex = gpu.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size: wgpu::Extent3d {
                     width: w,

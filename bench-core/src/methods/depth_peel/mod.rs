@@ -422,7 +422,7 @@ impl PreparedPeel {
             views.push([a, b]);
         }
         let target_views = [0, 1].map(|p| views.iter().map(|v| v[p].clone()).collect::<Vec<_>>());
-        let dummy_id = d
+        let dummy_id = gpu
             .create_texture(&wgpu::TextureDescriptor {
                 label: Some("peel no ids"),
                 size: wgpu::Extent3d {

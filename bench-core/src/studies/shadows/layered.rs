@@ -492,7 +492,7 @@ impl PreparedSsm {
             })
             .collect();
         // Bound where a layer is absent (k < 4, and the first pass's unused "previous" layer).
-        let dummy = d
+        let dummy = gpu
             .create_texture(&wgpu::TextureDescriptor {
                 label: Some("ssm dummy layer"),
                 size: wgpu::Extent3d {
