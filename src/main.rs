@@ -33,8 +33,8 @@ pub(crate) struct GpuArgs {
     /// Use adapter number K of `mfx list adapters` (for one shard per GPU).
     #[arg(long)]
     adapter_index: Option<usize>,
-    /// Render targets' memory: dedicated (an allocation each, the default on Vulkan: their
-    /// times no longer depend on what ran before) or pooled (wgpu's shared blocks).
+    /// Render targets' memory: pooled (wgpu's shared blocks, the default) or dedicated (a Vulkan
+    /// allocation each, as VK_KHR_dedicated_allocation offers for render targets).
     #[arg(long)]
     texture_memory: Option<bench_core::texture_memory::TextureMemory>,
 }

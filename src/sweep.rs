@@ -54,6 +54,10 @@ pub struct SweepArgs {
     /// With --baseline: exit 1 when a point is significantly slower by more than this (5%).
     #[arg(long, requires = "baseline")]
     pub fail_on_slower: Option<String>,
+    /// Override a `[timing]` key of the suite (and of its `[software]` profile), e.g.
+    /// `--timing settle=false --timing max_noise=0.01`; checked like the suite's own keys.
+    #[arg(long = "timing", value_name = "KEY=VALUE")]
+    pub timing: Vec<String>,
     #[command(flatten)]
     pub gpu: GpuArgs,
 }
@@ -130,7 +134,17 @@ impl Sink for Progress<'_> {
 pub fn sweep(a: &SweepArgs) -> Result<()> {
     // Everything that can be refused is refused before the GPU starts and before any file is
     // touched: the suite, the arguments, an occupied run folder.
-    let suite = checked_suite(&a.suite)?;
+    let mut suite = checked_suite(&a.suite)?;
+    if !a.timing.is_empty() {
+        let over = scenarios::suite::timing_overrides(&a.timing, "mfx sweep")
+            .map_err(|e| usage(e.to_string()))?;
+        suite.timing = suite.timing.overlay(&over);
+        if let Some(sw) = &mut suite.software {
+            sw.timing = sw.timing.overlay(&over);
+        }
+        bench_core::measure::TimingPlan::from_spec(&suite.timing_for(false))
+            .map_err(|e| usage(format!("--timing: {e}")))?;
+    }
     let shard = a.shard.unwrap_or((0, 1));
     let fail_frac = a
         .fail_on_slower

@@ -310,6 +310,14 @@ impl Gpu {
             .map_err(|e| CoreError::Gpu(format!("poll failed: {e}")))
     }
 
+    /// Waits until the GPU is idle, so that what earlier work dropped is freed (wgpu destroys a
+    /// dropped resource only once the submissions that used it are known to be done, which a
+    /// poll finds out): the next allocations see the same memory whatever ran before.
+    pub fn settle(&self) -> Result<()> {
+        self.wait()?;
+        self.wait()
+    }
+
     pub fn check_lost(&self) -> Result<()> {
         match self.lost.lock().unwrap().clone() {
             Some(r) => Err(CoreError::DeviceLost(r)),

@@ -41,6 +41,10 @@ pub struct TimingPlan {
     /// default: [`mfx_stats::CANARY_MAX_RATIO`] on hardware adapters and no canary on a software
     /// one (its timestamps say little); set explicitly, it applies to any adapter.
     pub canary_max_ratio: Option<f64>,
+    /// Before each point is prepared, wait until the GPU is idle and what earlier points
+    /// dropped is freed (`[timing] settle`, default true), so a point's buffers and targets are
+    /// made with the memory of earlier points already given back. See [`Gpu::settle`].
+    pub settle: bool,
 }
 
 impl Default for TimingPlan {
@@ -53,6 +57,7 @@ impl Default for TimingPlan {
             clock_lift_ms: CLOCK_LIFT_MS,
             sessions: 1,
             canary_max_ratio: None,
+            settle: true,
         }
     }
 }
@@ -82,6 +87,7 @@ impl TimingPlan {
             clock_lift_ms: 0.0,
             sessions: 1,
             canary_max_ratio: Some(0.0),
+            settle: false,
         }
     }
 
@@ -134,6 +140,7 @@ impl TimingPlan {
             clock_lift_ms: spec.clock_lift_ms.unwrap_or(d.clock_lift_ms),
             sessions: spec.sessions.map_or(d.sessions, |n| n as usize),
             canary_max_ratio: spec.canary_max_ratio.or(d.canary_max_ratio),
+            settle: spec.settle.unwrap_or(d.settle),
         })
     }
 
@@ -160,6 +167,11 @@ impl TimingPlan {
                 format!("{d}; a sample whose canary ran over {r}× its baseline discarded")
             }
             Some(_) => d,
+        };
+        let d = if self.settle {
+            format!("{d}; GPU settled before each point")
+        } else {
+            d
         };
         if self.sessions > 1 {
             format!(
@@ -301,6 +313,9 @@ impl<'g> PointTimer<'g> {
         plan: &TimingPlan,
     ) -> Result<PointTimer<'g>> {
         gpu.check_lost()?;
+        if plan.settle {
+            gpu.settle()?;
+        }
         let t0 = std::time::Instant::now();
         let prepared = scoped(gpu, "prepare", || method.prepare(gpu, scene, point))?;
         let prepare_ms = t0.elapsed().as_secs_f64() * 1e3;

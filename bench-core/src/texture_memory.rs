@@ -4,13 +4,15 @@
 //! (`gpu-allocator`, `GpuAllocatorManaged`). Vulkan's dedicated allocations exist because
 //! "normal device memory allocations must support memory aliasing and sparse binding, which
 //! could interfere with optimizations like framebuffer compression" (VK_NV_dedicated_allocation,
-//! NVIDIA): render targets are the case it names. Measured on the H200: the depth-only floor of
-//! one scene took 1.043 ms in every `methods` run and 1.466 ms in every run of a shorter suite,
-//! same binary, clock and canary, while the opaque floor (same geometry, same depth format, plus
-//! a colour target) did not move — the depth target's memory, placed by what ran before, is the
-//! suspect. With [`TextureMemory::Dedicated`] every 2-D render target gets a `VkDeviceMemory` of
-//! its own, made with `VkMemoryDedicatedAllocateInfo` as the driver prefers, so its placement no
-//! longer depends on the run's history. Other textures, other backends: wgpu's own path.
+//! NVIDIA): render targets are the case it names. With [`TextureMemory::Dedicated`] every 2-D
+//! render target gets a `VkDeviceMemory` of its own, made with `VkMemoryDedicatedAllocateInfo`.
+//!
+//! Measured on the H200 (`results/reference/2026-12-02-h200-settle`): dedicated targets did not
+//! move the depth-only floor's history-dependent time (1.043 ms in `methods`, 1.466 ms in a
+//! shorter suite, pooled or dedicated alike), and two back-to-back `methods` runs agreed worse
+//! with them (SAME 175 of 220 against 208 pooled: the second run's k-buffers 4–18 % slower, as
+//! if fresh allocations landed on worse memory after the first run). So the default stays
+//! wgpu's pool; `dedicated` is kept to repeat that comparison on other GPUs.
 
 use ash::vk;
 use wgpu::hal;
@@ -35,12 +37,9 @@ impl TextureMemory {
             TextureMemory::Dedicated => "dedicated",
         }
     }
-    /// The default for an adapter: dedicated render targets wherever the backend allows it.
-    pub fn default_for(backend: wgpu::Backend) -> TextureMemory {
-        match backend {
-            wgpu::Backend::Vulkan => TextureMemory::Dedicated,
-            _ => TextureMemory::Pooled,
-        }
+    /// The default: wgpu's pool (see the module's measurements).
+    pub fn default_for(_backend: wgpu::Backend) -> TextureMemory {
+        TextureMemory::Pooled
     }
 }
 

@@ -202,6 +202,7 @@ pub const SOFTWARE_KEYS: &[&str] = &[
     "clock_lift_ms",
     "sessions",
     "canary_max_ratio",
+    "settle",
 ];
 /// Keys of the `[timing]` table (also accepted in `[software]`, as overrides).
 pub const TIMING_KEYS: &[&str] = &[
@@ -217,6 +218,7 @@ pub const TIMING_KEYS: &[&str] = &[
     "clock_lift_ms",
     "sessions",
     "canary_max_ratio",
+    "settle",
 ];
 
 /// How the points of a suite are timed: each unset key takes the harness's default
@@ -249,6 +251,9 @@ pub struct TimingSpec {
     /// A sample is discarded when the canary kernel timed right after it ran this many times
     /// slower than the fastest canary of the run (0: no canary).
     pub canary_max_ratio: Option<f64>,
+    /// Wait for the GPU to finish and free what earlier points dropped before each point is
+    /// prepared (default true).
+    pub settle: Option<bool>,
 }
 
 impl TimingSpec {
@@ -267,6 +272,7 @@ impl TimingSpec {
             clock_lift_ms: over.clock_lift_ms.or(self.clock_lift_ms),
             sessions: over.sessions.or(self.sessions),
             canary_max_ratio: over.canary_max_ratio.or(self.canary_max_ratio),
+            settle: over.settle.or(self.settle),
         }
     }
 }
@@ -452,6 +458,39 @@ fn parse_into(text: &str, source: &str, problems: &mut Vec<Problem>) -> Option<S
 }
 
 /// The timing keys of a table (`[timing]`, or the overrides in `[software]`).
+/// `[timing]` keys given as `KEY=VALUE` (values in TOML syntax, e.g. `settle=false`,
+/// `max_noise=0.01`), checked as a suite's `[timing]` is: an unknown key or a bad value is an
+/// error naming every problem, before any GPU work (`mfx sweep --timing`).
+pub fn timing_overrides(pairs: &[String], source: &str) -> Result<TimingSpec> {
+    let mut problems = Vec::new();
+    let tn = "--timing";
+    let mut table = toml::Table::new();
+    for pair in pairs {
+        match pair.split_once('=') {
+            Some((k, v)) => match format!("v = {}", v.trim()).parse::<toml::Table>() {
+                Ok(mut t) => {
+                    table.insert(k.trim().to_string(), t.remove("v").expect("parsed key"));
+                }
+                Err(_) => {
+                    problems.push(Problem::new(source, tn, k.trim(), "not a TOML value").value(v))
+                }
+            },
+            None => problems.push(Problem::new(source, tn, pair, "must be KEY=VALUE")),
+        }
+    }
+    let mut cx = Ctx {
+        file: source,
+        problems: &mut problems,
+    };
+    cx.unknown_keys(&table, tn, TIMING_KEYS);
+    let spec = timing_spec(&mut cx, &table, tn);
+    if problems.is_empty() {
+        Ok(spec)
+    } else {
+        Err(SceneError::Problems(problems))
+    }
+}
+
 fn timing_spec(cx: &mut Ctx<'_>, t: &toml::Table, tn: &str) -> TimingSpec {
     let int = |cx: &mut Ctx<'_>, k: &str, min: i64, max: i64| cx.int(t, tn, k, min, max);
     let float = |cx: &mut Ctx<'_>, k: &str, min: f64, max: f64| match t.get(k) {
@@ -465,14 +504,16 @@ fn timing_spec(cx: &mut Ctx<'_>, t: &toml::Table, tn: &str) -> TimingSpec {
             }
         },
     };
-    let interleave = match t.get("interleave") {
+    let boolean = |cx: &mut Ctx<'_>, k: &str| match t.get(k) {
         None => None,
         Some(toml::Value::Boolean(b)) => Some(*b),
         Some(v) => {
-            cx.push(tn, "interleave", "must be true or false").value = Some(v.to_string());
+            cx.push(tn, k, "must be true or false").value = Some(v.to_string());
             None
         }
     };
+    let interleave = boolean(cx, "interleave");
+    let settle = boolean(cx, "settle");
     let spec = TimingSpec {
         min_samples: int(cx, "min_samples", 1, 1_000_000).map(|i| i as u32),
         max_samples: int(cx, "max_samples", 1, 1_000_000).map(|i| i as u32),
@@ -486,6 +527,7 @@ fn timing_spec(cx: &mut Ctx<'_>, t: &toml::Table, tn: &str) -> TimingSpec {
         clock_lift_ms: float(cx, "clock_lift_ms", 0.0, 60_000.0),
         sessions: int(cx, "sessions", 1, 100).map(|i| i as u32),
         canary_max_ratio: float(cx, "canary_max_ratio", 0.0, 100.0),
+        settle,
     };
     if let Some(r) = spec.canary_max_ratio {
         if r > 0.0 && r <= 1.0 {

@@ -96,7 +96,7 @@ pub mod cols {
     );
     pub const TEXTURE_MEMORY: Col = Col::new(
         "texture_memory",
-        "where render targets' memory came from: `dedicated` (a Vulkan allocation each, the default on Vulkan) or `pooled` (wgpu's shared blocks; on the H200 a pooled depth target's time depended on what ran before)",
+        "where render targets' memory came from: `pooled` (wgpu's shared blocks, the default) or `dedicated` (a Vulkan allocation each, `mfx sweep --texture-memory dedicated`)",
     );
     pub const WIDTH: Col = Col::new("width", "render target width in pixels");
     pub const HEIGHT: Col = Col::new("height", "render target height in pixels");
