@@ -167,6 +167,8 @@ pub struct Gpu {
     /// Where render targets' memory comes from (`texture_memory` column); see
     /// [`crate::texture_memory`]. Set before any method prepares.
     pub texture_memory: crate::texture_memory::TextureMemory,
+    /// Textures made in dedicated allocations so far (tests check the path was taken).
+    pub dedicated_textures: std::sync::atomic::AtomicUsize,
 }
 
 /// Lists adapters for a backend choice, in enumeration order (the `--adapter-index` order).
@@ -281,6 +283,7 @@ impl Gpu {
             spin: std::sync::OnceLock::new(),
             canary: std::sync::OnceLock::new(),
             texture_memory: crate::texture_memory::TextureMemory::default_for(info.backend),
+            dedicated_textures: Default::default(),
         })
     }
 

@@ -42,8 +42,11 @@ pub struct TimingPlan {
     /// one (its timestamps say little); set explicitly, it applies to any adapter.
     pub canary_max_ratio: Option<f64>,
     /// Before each point is prepared, wait until the GPU is idle and what earlier points
-    /// dropped is freed (`[timing] settle`, default true), so a point's buffers and targets are
+    /// dropped is freed (`[timing] settle`, default false), so a point's buffers and targets are
     /// made with the memory of earlier points already given back. See [`Gpu::settle`].
+    /// Measured on the H200 (`results/reference/2026-12-02-h200-floors`): the depth-only
+    /// floor's history-dependent time did not move with it (1.041 / 1.465 ms settled or not),
+    /// so it is off unless asked for.
     pub settle: bool,
 }
 
@@ -57,7 +60,7 @@ impl Default for TimingPlan {
             clock_lift_ms: CLOCK_LIFT_MS,
             sessions: 1,
             canary_max_ratio: None,
-            settle: true,
+            settle: false,
         }
     }
 }

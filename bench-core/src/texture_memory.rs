@@ -104,6 +104,8 @@ pub fn create_texture(gpu: &Gpu, desc: &wgpu::TextureDescriptor) -> wgpu::Textur
         match dedicated(gpu, desc) {
             Ok(Some(t)) => {
                 clear_once(gpu, &t);
+                gpu.dedicated_textures
+                    .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 return t;
             }
             Ok(None) => {}

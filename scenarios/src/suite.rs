@@ -252,7 +252,7 @@ pub struct TimingSpec {
     /// slower than the fastest canary of the run (0: no canary).
     pub canary_max_ratio: Option<f64>,
     /// Wait for the GPU to finish and free what earlier points dropped before each point is
-    /// prepared (default true).
+    /// prepared (default false).
     pub settle: Option<bool>,
 }
 

@@ -3,6 +3,7 @@
 //! | name           | source                         | exact?                     | geometry passes | memory per pixel          |
 //! |----------------|--------------------------------|----------------------------|-----------------|---------------------------|
 //! | `floor_depth`  | the yardstick (issue "Compare GPUs") | — (no image)          | 1               | 4 B depth                 |
+//! | `floor_depth_vs` | the old `floor_depth`: no fragment stage (its time followed the last render pipeline run) | — (no image) | 1         | 4 B depth                 |
 //! | `floor_opaque` | the yardstick, one colour       | — (no image)              | 1               | 4 B depth + 4 B RGBA8     |
 //! | `floor_blend`  | the yardstick of unsorted transparency (LucidRaster's ratio) | — (not judged: primitive order) | 1 | 4 B RGBA8 |
 //! | `depth_peel`   | Everitt 2001, classic front-to-back peeling; every effect via the fold | exact up to `max_layers`; coplanar ties lost (`variant=tiebreak` keeps them) | layers + 1 | 2×4 B depth + 4–36 B layer payload + 64 B fold state + 16 B per output image + 4 B count |
@@ -72,6 +73,7 @@ pub use crate::method::{supports, Capture, Expected, FrameStats, Method, Prepare
 pub fn all() -> Vec<Box<dyn Method>> {
     vec![
         Box::new(floor::FloorDepth),
+        Box::new(floor::FloorDepthVs),
         Box::new(floor::FloorOpaque),
         Box::new(floor::FloorBlend),
         Box::new(depth_peel::DepthPeel),

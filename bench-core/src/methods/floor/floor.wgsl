@@ -1,5 +1,9 @@
 // The floor: the least any method that rasterises the scene once must pay.
-// floor_depth has no fragment stage at all; floor_opaque writes one constant colour.
+// floor_depth runs an empty fragment stage (no outputs); floor_depth_vs has none at all;
+// floor_opaque writes one constant colour.
+
+@fragment
+fn fs_none() {}
 
 @fragment
 fn fs_constant() -> @location(0) vec4<f32> {

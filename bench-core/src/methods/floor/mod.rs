@@ -18,20 +18,53 @@ use crate::Result;
 const WGSL: &str = include_str!("floor.wgsl");
 
 pub struct FloorDepth;
+pub struct FloorDepthVs;
 pub struct FloorOpaque;
+
+/// The three single-pass floors' pipelines.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    /// Depth only, with an empty fragment stage.
+    Depth,
+    /// Depth only, no fragment stage.
+    DepthVs,
+    /// Depth and one constant colour.
+    Opaque,
+}
 
 impl Method for FloorDepth {
     fn name(&self) -> &'static str {
         "floor_depth"
     }
     fn describe(&self) -> &'static str {
-        "yardstick: one depth-only pass (positions only, no fragment shader); no image"
+        "yardstick: one depth-only pass (positions only, an empty fragment shader); no image"
     }
     fn exact(&self) -> bool {
         false
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Point) -> Result<Box<dyn Prepared>> {
-        Ok(Box::new(PreparedFloor::new(gpu, scene, false)))
+        Ok(Box::new(PreparedFloor::new(gpu, scene, Kind::Depth)))
+    }
+}
+
+/// The depth-only pass without a fragment stage: `floor_depth` until 2026-12-02. Measured on
+/// the H200 (`results/reference/2026-12-02-h200-floors`): its time depended on which render
+/// pipeline the process had run last — shells(16, 256) at 1024² took 1.041 ms right after WBOIT
+/// or the compute A-buffer and 1.465 ms right after the RMW k-buffer or ADP, settled or not,
+/// pooled or dedicated memory — as if a pipeline without a fragment stage inherited state the
+/// one before it left. Kept as a method to watch that.
+impl Method for FloorDepthVs {
+    fn name(&self) -> &'static str {
+        "floor_depth_vs"
+    }
+    fn describe(&self) -> &'static str {
+        "yardstick variant: one depth-only pass with no fragment stage at all (the old floor_depth); no image"
+    }
+    fn exact(&self) -> bool {
+        false
+    }
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Point) -> Result<Box<dyn Prepared>> {
+        Ok(Box::new(PreparedFloor::new(gpu, scene, Kind::DepthVs)))
     }
 }
 
@@ -46,7 +79,7 @@ impl Method for FloorOpaque {
         false
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Point) -> Result<Box<dyn Prepared>> {
-        Ok(Box::new(PreparedFloor::new(gpu, scene, true)))
+        Ok(Box::new(PreparedFloor::new(gpu, scene, Kind::Opaque)))
     }
 }
 
@@ -60,7 +93,8 @@ struct PreparedFloor {
 }
 
 impl PreparedFloor {
-    fn new(gpu: &Gpu, scene: &GpuScene, with_color: bool) -> Self {
+    fn new(gpu: &Gpu, scene: &GpuScene, kind: Kind) -> Self {
+        let with_color = kind == Kind::Opaque;
         let d = &gpu.device;
         let module = shader(gpu, "floor", WGSL);
         let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -98,12 +132,21 @@ impl PreparedFloor {
             primitive: wgpu::PrimitiveState::default(),
             depth_stencil: Some(depth_state(scene.reversed_z, true)),
             multisample: Default::default(),
-            fragment: with_color.then(|| wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_constant"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
+            fragment: match kind {
+                Kind::DepthVs => None,
+                Kind::Depth => Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_none"),
+                    compilation_options: Default::default(),
+                    targets: &[],
+                }),
+                Kind::Opaque => Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_constant"),
+                    compilation_options: Default::default(),
+                    targets: &targets,
+                }),
+            },
             multiview_mask: None,
             cache: None,
         });
