@@ -148,3 +148,82 @@ fn builtin_suites_check_clean_and_list_says_what_they_are() {
         text(&o)
     );
 }
+
+#[test]
+fn a_timing_override_is_checked_like_the_suites_own_keys_before_any_gpu_work() {
+    let d = tmp("timing");
+    for (arg, word) in [
+        ("setle=false", "'setle'"),
+        ("settle=maybe", "not a TOML value"),
+        ("settle=3", "must be true or false"),
+        ("max_noise=2", "'max_noise' = 2"),
+        ("sessions", "must be KEY=VALUE"),
+    ] {
+        let out = d.join("out");
+        let o = mfx(&[
+            "sweep",
+            "smoke",
+            "--timing",
+            arg,
+            "--out",
+            out.to_str().unwrap(),
+            "--no-report",
+        ]);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "--timing {arg}\n{t}");
+        assert!(
+            t.contains(word) && t.contains("--timing"),
+            "--timing {arg}:\n{t}"
+        );
+        assert!(
+            !out.exists(),
+            "--timing {arg}: a refused sweep wrote its folder"
+        );
+    }
+    let o = mfx(&[
+        "sweep",
+        "smoke",
+        "--texture-memory",
+        "shared",
+        "--no-report",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("pooled, dedicated"), "{}", text(&o));
+}
+
+#[test]
+fn a_timing_override_reaches_every_row_and_the_texture_memory_is_recorded() {
+    let d = tmp("timing-ok");
+    let out = d.join("run");
+    let o = mfx(&[
+        "sweep",
+        "smoke",
+        "--timing",
+        "settle=true",
+        "--timing",
+        "max_samples=2",
+        "--texture-memory",
+        "dedicated",
+        "--out",
+        out.to_str().unwrap(),
+        "--no-report",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let mut rd = csv::Reader::from_path(out.join("runs.csv")).unwrap();
+    let h = rd.headers().unwrap().clone();
+    let col = |n: &str| h.iter().position(|c| c == n).unwrap();
+    let (rule, mem, samples) = (col("timing_rule"), col("texture_memory"), col("samples"));
+    let mut n = 0;
+    for r in rd.records() {
+        let r = r.unwrap();
+        assert!(
+            r[rule].contains("GPU settled before each point"),
+            "{}",
+            &r[rule]
+        );
+        assert_eq!(&r[mem], "dedicated");
+        assert!(r[samples].parse::<usize>().unwrap() <= 2);
+        n += 1;
+    }
+    assert!(n > 0);
+}

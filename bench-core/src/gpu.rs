@@ -290,7 +290,15 @@ impl Gpu {
     /// A texture, its memory placed as `texture_memory` says (every method's textures go
     /// through here, so a run's render targets all come from one kind of memory).
     pub fn create_texture(&self, desc: &wgpu::TextureDescriptor) -> wgpu::Texture {
-        crate::texture_memory::create_texture(self, desc)
+        use crate::texture_memory::{dedicated_texture, TextureMemory};
+        if self.texture_memory == TextureMemory::Dedicated {
+            if let Some(t) = dedicated_texture(&self.adapter, &self.device, &self.queue, desc) {
+                self.dedicated_textures
+                    .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                return t;
+            }
+        }
+        self.device.create_texture(desc)
     }
 
     /// This run's texture memory, where the backend allows it (dedicated needs Vulkan).

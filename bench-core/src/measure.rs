@@ -567,12 +567,10 @@ pub fn measure(
 ) -> Result<Measured> {
     // Session k > 0 runs elsewhere in memory: a placement pad (a buffer of a seeded size,
     // 1–255 MiB) is allocated first, then the scene's geometry is copied into new buffers and
-    // the method prepared on them. Measured on the H200: one point's time depends on the run's
-    // history — the depth-only floor of shells(16, 256) at 1024² ran 1.043 ms in every `methods`
-    // run and 1.466 ms in every run of a shorter suite (same binary, clock, canary; fresh or
-    // shared shader caches alike), the RMW k-buffer 4–7 % apart between the first and the
-    // second run of a device call, each repeatable; a pad before the method's own buffers alone
-    // did not move either. Sessions that land elsewhere turn what they can reach into CI width.
+    // the method prepared on them. Measured on the H200 (results/reference/2026-12-02-h200-
+    // floors): small-scene k-buffer points sit in one of two or three time states per process
+    // (1.070 or 1.113–1.138 ms), set by where their memory lands; three such sessions showed a
+    // spread over 2 % on 11 of 36 of them, so their CI spans the states one run alone hides.
     let session = |k: usize| -> Result<Measured> {
         // The pad lives until the session ends (`_pad`), so nothing reuses its memory before.
         let (_pad, moved) = if k > 0 {

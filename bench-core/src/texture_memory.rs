@@ -2,22 +2,20 @@
 //!
 //! wgpu (30) sub-allocates every texture from 128–256 MiB blocks shared with other resources
 //! (`gpu-allocator`, `GpuAllocatorManaged`). Vulkan's dedicated allocations exist because
-//! "normal device memory allocations must support memory aliasing and sparse binding, which
-//! could interfere with optimizations like framebuffer compression" (VK_NV_dedicated_allocation,
-//! NVIDIA): render targets are the case it names. With [`TextureMemory::Dedicated`] every 2-D
+//! memory that may be aliased or sparsely bound can stand in the way of framebuffer compression
+//! and efficient page tables (VK_NV_dedicated_allocation's rationale, which names render
+//! targets). With [`TextureMemory::Dedicated`] every 2-D
 //! render target gets a `VkDeviceMemory` of its own, made with `VkMemoryDedicatedAllocateInfo`.
 //!
-//! Measured on the H200 (`results/reference/2026-12-02-h200-settle`): dedicated targets did not
+//! Measured on the H200 (`results/reference/2026-12-02-h200-floors`): dedicated targets did not
 //! move the depth-only floor's history-dependent time (1.043 ms in `methods`, 1.466 ms in a
 //! shorter suite, pooled or dedicated alike), and two back-to-back `methods` runs agreed worse
-//! with them (SAME 175 of 220 against 208 pooled: the second run's k-buffers 4–18 % slower, as
+//! with them (SAME 175 of 220 against 207–208 pooled: the second run's k-buffers 4–18 % slower, as
 //! if fresh allocations landed on worse memory after the first run). So the default stays
 //! wgpu's pool; `dedicated` is kept to repeat that comparison on other GPUs.
 
 use ash::vk;
 use wgpu::hal;
-
-use crate::gpu::Gpu;
 
 /// The `texture_memory` a run uses (`mfx sweep --texture-memory`), recorded on every row.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -75,9 +73,9 @@ fn dedicated_candidate(desc: &wgpu::TextureDescriptor) -> bool {
 
 /// The hal usage wgpu-core gives a texture of `desc` (its `map_texture_usage_for_texture`), so
 /// the Vulkan image carries exactly the usage bits wgpu will use it with.
-fn hal_usage(gpu: &Gpu, desc: &wgpu::TextureDescriptor) -> wgpu::wgt::TextureUses {
+fn hal_usage(adapter: &wgpu::Adapter, desc: &wgpu::TextureDescriptor) -> wgpu::wgt::TextureUses {
     use wgpu::{wgt::TextureUses as U, TextureUsages as T};
-    let flags = gpu.adapter.get_texture_format_features(desc.format).flags;
+    let flags = adapter.get_texture_format_features(desc.format).flags;
     let mut u = U::empty();
     u.set(U::COPY_SRC, desc.usage.contains(T::COPY_SRC));
     u.set(U::COPY_DST, desc.usage.contains(T::COPY_DST));
@@ -96,47 +94,54 @@ fn hal_usage(gpu: &Gpu, desc: &wgpu::TextureDescriptor) -> wgpu::wgt::TextureUse
     u
 }
 
-/// A texture for `desc`: a dedicated allocation when `gpu.texture_memory` asks for it and the
-/// texture qualifies, else wgpu's own. A dedicated texture is cleared to zero once, as wgpu
-/// would have initialised it, so a method sees the same contents on either path.
-pub fn create_texture(gpu: &Gpu, desc: &wgpu::TextureDescriptor) -> wgpu::Texture {
-    if gpu.texture_memory == TextureMemory::Dedicated && dedicated_candidate(desc) {
-        match dedicated(gpu, desc) {
-            Ok(Some(t)) => {
-                clear_once(gpu, &t);
-                gpu.dedicated_textures
-                    .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                return t;
-            }
-            Ok(None) => {}
-            Err(e) => log::warn!(
+/// A texture for `desc` in a dedicated allocation, zeroed once as wgpu would have initialised
+/// it (so a method sees the same contents either way); `None` when the texture does not qualify,
+/// the device is not Vulkan, or the allocation failed (logged): the caller takes the pool.
+pub fn dedicated_texture(
+    adapter: &wgpu::Adapter,
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    desc: &wgpu::TextureDescriptor,
+) -> Option<wgpu::Texture> {
+    if !dedicated_candidate(desc) {
+        return None;
+    }
+    match dedicated(adapter, device, desc) {
+        Ok(Some(t)) => {
+            clear_once(device, queue, &t);
+            Some(t)
+        }
+        Ok(None) => None,
+        Err(e) => {
+            log::warn!(
                 "dedicated allocation for '{}' failed ({e}); taken from the pool",
                 desc.label.unwrap_or("texture")
-            ),
+            );
+            None
         }
     }
-    gpu.device.create_texture(desc)
 }
 
 /// Creates the Vulkan image, its own memory and the wgpu texture over them; `None` when the
 /// device is not Vulkan.
 fn dedicated(
-    gpu: &Gpu,
+    adapter: &wgpu::Adapter,
+    device: &wgpu::Device,
     desc: &wgpu::TextureDescriptor,
 ) -> std::result::Result<Option<wgpu::Texture>, String> {
     // SAFETY: the raw device is used only to create, bind and hand over one image and its
     // memory; wgpu owns both afterwards (TextureMemory::Dedicated is freed with the texture).
-    let Some(dev) = (unsafe { gpu.device.as_hal::<hal::api::Vulkan>() }) else {
+    let Some(dev) = (unsafe { device.as_hal::<hal::api::Vulkan>() }) else {
         return Ok(None);
     };
     let raw = dev.raw_device();
     let instance = dev.shared_instance().raw_instance();
     // SAFETY: read-only use of the adapter's format table.
-    let format = match unsafe { gpu.adapter.as_hal::<hal::api::Vulkan>() } {
+    let format = match unsafe { adapter.as_hal::<hal::api::Vulkan>() } {
         Some(a) => a.texture_format_as_raw(desc.format),
         None => return Ok(None),
     };
-    let usage = hal_usage(gpu, desc);
+    let usage = hal_usage(adapter, desc);
     let info = vk::ImageCreateInfo::default()
         .image_type(vk::ImageType::TYPE_2D)
         .format(format)
@@ -221,7 +226,7 @@ fn dedicated(
     // SAFETY: the hal texture respects `desc` (same size, format, samples, usage); it is
     // initialised by `clear_once` before any method sees it.
     let tex = unsafe {
-        gpu.device.create_texture_from_hal::<hal::api::Vulkan>(
+        device.create_texture_from_hal::<hal::api::Vulkan>(
             hal_tex,
             desc,
             wgpu::wgt::TextureUses::UNINITIALIZED,
@@ -232,7 +237,7 @@ fn dedicated(
 
 /// One render pass that clears `t` to zero (colour 0, depth 0, stencil 0): the contents wgpu's
 /// lazy initialisation gives its own textures.
-fn clear_once(gpu: &Gpu, t: &wgpu::Texture) {
+fn clear_once(device: &wgpu::Device, queue: &wgpu::Queue, t: &wgpu::Texture) {
     let view = t.create_view(&Default::default());
     let format = t.format();
     let is_depth = format.is_depth_stencil_format();
@@ -256,7 +261,7 @@ fn clear_once(gpu: &Gpu, t: &wgpu::Texture) {
             store: wgpu::StoreOp::Store,
         }),
     });
-    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    let mut enc = device.create_command_encoder(&Default::default());
     drop(enc.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some("zero a dedicated render target"),
         color_attachments: if is_depth { &[] } else { &color },
@@ -265,5 +270,5 @@ fn clear_once(gpu: &Gpu, t: &wgpu::Texture) {
         occlusion_query_set: None,
         multiview_mask: None,
     }));
-    gpu.queue.submit([enc.finish()]);
+    queue.submit([enc.finish()]);
 }
