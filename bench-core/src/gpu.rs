@@ -97,8 +97,8 @@ pub struct GpuOptions {
     pub adapter: Option<String>,
     /// Index into `mfx list adapters` (after the backend filter).
     pub adapter_index: Option<usize>,
-    /// Where render targets' memory comes from (None: the backend's default, see
-    /// [`crate::texture_memory::TextureMemory::default_for`]).
+    /// Where render targets' memory comes from (None: wgpu's pool, the default; see
+    /// [`crate::texture_memory`] for what was measured).
     pub texture_memory: Option<crate::texture_memory::TextureMemory>,
 }
 
@@ -282,7 +282,7 @@ impl Gpu {
             monitor,
             spin: std::sync::OnceLock::new(),
             canary: std::sync::OnceLock::new(),
-            texture_memory: crate::texture_memory::TextureMemory::default_for(info.backend),
+            texture_memory: crate::texture_memory::TextureMemory::Pooled,
             dedicated_textures: Default::default(),
         })
     }
@@ -322,11 +322,29 @@ impl Gpu {
     }
 
     /// Waits until the GPU is idle, so that what earlier work dropped is freed (wgpu destroys a
-    /// dropped resource only once the submissions that used it are known to be done, which a
-    /// poll finds out): the next allocations see the same memory whatever ran before.
+    /// dropped resource only once the submissions that used it are known to be done, which the
+    /// waiting poll finds out): the next allocations see the same memory whatever ran before.
     pub fn settle(&self) -> Result<()> {
-        self.wait()?;
         self.wait()
+    }
+
+    /// A 1×1 sampled texture of `format`, bound where a layout declares a texture that a
+    /// pipeline variant never reads.
+    pub fn stand_in_texture(&self, label: &str, format: wgpu::TextureFormat) -> wgpu::Texture {
+        self.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        })
     }
 
     pub fn check_lost(&self) -> Result<()> {

@@ -35,10 +35,6 @@ impl TextureMemory {
             TextureMemory::Dedicated => "dedicated",
         }
     }
-    /// The default: wgpu's pool (see the module's measurements).
-    pub fn default_for(_backend: wgpu::Backend) -> TextureMemory {
-        TextureMemory::Pooled
-    }
 }
 
 impl std::str::FromStr for TextureMemory {

@@ -96,7 +96,7 @@ pub mod cols {
     );
     pub const TEXTURE_MEMORY: Col = Col::new(
         "texture_memory",
-        "where render targets' memory came from: `pooled` (wgpu's shared blocks, the default) or `dedicated` (a Vulkan allocation each, `mfx sweep --texture-memory dedicated`)",
+        "where render targets' memory came from: `pooled` (wgpu's shared blocks, the default) or `dedicated` (`mfx sweep --texture-memory dedicated`: each single-level, single-layer 2-D render target in a Vulkan allocation of its own; other textures, or one whose dedicated allocation failed, logged, stay pooled)",
     );
     pub const WIDTH: Col = Col::new("width", "render target width in pixels");
     pub const HEIGHT: Col = Col::new("height", "render target height in pixels");

@@ -172,22 +172,7 @@ impl ShadeInputs {
             _ => {
                 // Light pre-pass: no surface targets; 1×1 stand-ins keep one layout for all
                 // paths (the LIGHT_BUFFER permutations never read them).
-                let t = |f| {
-                    gpu.create_texture(&wgpu::TextureDescriptor {
-                        label: Some("surface stand-in"),
-                        size: wgpu::Extent3d {
-                            width: 1,
-                            height: 1,
-                            depth_or_array_layers: 1,
-                        },
-                        mip_level_count: 1,
-                        sample_count: 1,
-                        dimension: wgpu::TextureDimension::D2,
-                        format: f,
-                        usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                        view_formats: &[],
-                    })
-                };
+                let t = |f| gpu.stand_in_texture("surface stand-in", f);
                 let (a, s, m) = (
                     t(wgpu::TextureFormat::Rgba8Unorm),
                     t(wgpu::TextureFormat::Rgba8Unorm),

@@ -102,21 +102,8 @@ impl TailTargets {
     /// 1×1 textures for a resolve layout that declares the tail but has none (never read).
     pub fn stand_ins(gpu: &Gpu) -> TailTargets {
         let t = |f| {
-            gpu.create_texture(&wgpu::TextureDescriptor {
-                label: Some("tail (unused)"),
-                size: wgpu::Extent3d {
-                    width: 1,
-                    height: 1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: f,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-            .create_view(&Default::default())
+            gpu.stand_in_texture("tail (unused)", f)
+                .create_view(&Default::default())
         };
         TailTargets {
             sums: t(SUMS),

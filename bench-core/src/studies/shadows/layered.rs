@@ -493,20 +493,7 @@ impl PreparedSsm {
             .collect();
         // Bound where a layer is absent (k < 4, and the first pass's unused "previous" layer).
         let dummy = gpu
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("ssm dummy layer"),
-                size: wgpu::Extent3d {
-                    width: 1,
-                    height: 1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: LAYER_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
+            .stand_in_texture("ssm dummy layer", LAYER_FORMAT)
             .create_view(&Default::default());
         let sm_depth = alloc
             .texture(
