@@ -470,6 +470,7 @@ impl<'g> PointTimer<'g> {
             seq: FRAMES_TIMED.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             canary_ratio,
             unix_ms,
+            session: 0,
         });
         let decision = if discarded {
             self.clocks.push_discarded(&c);
@@ -601,7 +602,10 @@ pub fn measure(
         // The earlier session's GPU objects are dropped before the next is prepared, as a new
         // run would allocate them.
         drop(m.prepared);
-        let next = session(k)?;
+        let mut next = session(k)?;
+        for s in &mut next.samples {
+            s.session = k as u32;
+        }
         parts.push(next.gpu_median().unwrap_or(next.cpu.median));
         m = combine(
             m.samples,

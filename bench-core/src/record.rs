@@ -93,6 +93,8 @@ pub struct Sample {
     pub canary_ratio: Option<f64>,
     /// Wall clock when the frame was done, ms since the Unix epoch.
     pub unix_ms: f64,
+    /// The `[timing] sessions` session that took it (0 when a point has one).
+    pub session: u32,
 }
 
 /// A row's FLIP comparison with the 8-bit images it was computed from, for the run's gallery of
@@ -414,6 +416,27 @@ impl SamplesSink {
     /// Creates `path` with its header, or appends to it (`append`: a resumed run).
     pub fn open(path: &Path, append: bool) -> Result<SamplesSink> {
         let exists = path.is_file();
+        if append && exists {
+            // Rows under another header (a folder an older mfx wrote) would not parse.
+            let mut first = String::new();
+            std::fs::File::open(path)
+                .and_then(|f| {
+                    std::io::BufRead::read_line(&mut std::io::BufReader::new(f), &mut first)
+                })
+                .map_err(|e| CoreError::Io(format!("{}: {e}", path.display())))?;
+            let want = schema::samples::ALL
+                .iter()
+                .map(|c| c.name)
+                .collect::<Vec<_>>()
+                .join(",");
+            let first = first.trim_end();
+            if !first.is_empty() && first != want {
+                return Err(CoreError::Schema(format!(
+                    "{}: its header is '{first}', this mfx writes '{want}': resume with the mfx that wrote it, or sweep into a new folder",
+                    path.display()
+                )));
+            }
+        }
         let file = std::fs::OpenOptions::new()
             .create(true)
             .append(append)
@@ -451,6 +474,7 @@ impl Sink for SamplesSink {
                     s.seq.to_string(),
                     opt(s.canary_ratio),
                     format!("{:.1}", s.unix_ms),
+                    s.session.to_string(),
                 ])
                 .map_err(|e| CoreError::Io(e.to_string()))?;
         }

@@ -44,6 +44,10 @@ fn sessions_pool_their_samples_and_the_ci_covers_every_sessions_median() {
 
     let three = measure(g, &gs, &*m, &p, &plan(3)).unwrap();
     assert_eq!(three.samples.len(), 12, "every session's samples are kept");
+    // Each sample names its session (samples.csv's `session`, what mfx compare resamples).
+    let sessions: Vec<u32> = three.samples.iter().map(|x| x.session).collect();
+    assert_eq!(sessions, [0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2]);
+    assert!(one.samples.iter().all(|x| x.session == 0));
     let spread = three.session_spread.expect("a spread with 3 sessions");
     assert!(spread.is_finite() && spread >= 0.0);
     let sum = three.gpu.as_ref().unwrap_or(&three.cpu);

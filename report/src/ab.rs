@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use mfx_stats::{
-    compare_intervals, compare_samples, cycles_k, Basis, Comparison, Interval, Verdict,
+    compare_intervals, compare_sessions, cycles_k, Basis, Comparison, Interval, Verdict,
     VerdictOptions,
 };
 
@@ -161,6 +161,20 @@ fn locate(p: &Path) -> Result<(PathBuf, Option<PathBuf>)> {
 struct PointSamples {
     gpu_ms: Vec<f64>,
     sm_mhz: Vec<Option<f64>>,
+    /// `[timing] sessions` session of each sample (0 where the file has no `session` column).
+    session: Vec<u32>,
+}
+
+impl PointSamples {
+    /// `values` (one per sample) grouped by session, in session order.
+    fn by_session(&self, values: &[f64]) -> Vec<Vec<f64>> {
+        let n = self.session.iter().max().map_or(0, |&s| s as usize + 1);
+        let mut out = vec![Vec::new(); n.max(1)];
+        for (v, &s) in values.iter().zip(&self.session) {
+            out[s as usize].push(*v);
+        }
+        out
+    }
 }
 
 /// Kept samples by (run_id, point_key), in sample order.
@@ -190,9 +204,11 @@ fn load_samples(path: &Path) -> Result<SampleMap> {
         col(samples::RUN_ID)?,
         col(samples::GPU_MS)?,
     );
-    let (cs, cd) = (
+    let (cs, cd, cn) = (
         h.iter().position(|c| c == samples::SM_CLOCK_MHZ.name),
         h.iter().position(|c| c == samples::DISCARDED.name),
+        // Absent before sessions were recorded: every sample is session 0 then.
+        h.iter().position(|c| c == samples::SESSION.name),
     );
     let mut out: SampleMap = HashMap::new();
     for (i, rec) in rdr.records().enumerate() {
@@ -212,6 +228,8 @@ fn load_samples(path: &Path) -> Result<SampleMap> {
             cs.and_then(|c| get(c).parse::<f64>().ok())
                 .filter(|c| *c > 0.0),
         );
+        e.session
+            .push(cn.and_then(|c| get(c).parse::<u32>().ok()).unwrap_or(0));
     }
     Ok(out)
 }
@@ -382,14 +400,17 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
         };
         let (time, cycles) = match (pick(&bsamp, b), pick(&nsamp, n)) {
             (Some(sb), Some(sn)) => {
-                let time = compare_samples(&sb.gpu_ms, &sn.gpu_ms, o);
+                let time =
+                    compare_sessions(&sb.by_session(&sb.gpu_ms), &sn.by_session(&sn.gpu_ms), o);
                 // Per-sample clocks where every sample has one, else the row's mean clock.
                 let cyc = |s: &PointSamples, mean: Option<f64>| {
                     cycles_k(&s.gpu_ms, &s.sm_mhz)
                         .or_else(|| mean.map(|c| s.gpu_ms.iter().map(|t| t * c).collect()))
                 };
                 let cycles = match (cyc(&sb, bc), cyc(&sn, nc)) {
-                    (Some(x), Some(y)) => Some(compare_samples(&x, &y, o)),
+                    (Some(x), Some(y)) => {
+                        Some(compare_sessions(&sb.by_session(&x), &sn.by_session(&y), o))
+                    }
                     _ => None,
                 };
                 (time, cycles)
@@ -547,7 +568,10 @@ impl AbReport {
              ({} resamples). SAME: the ratio is within ±{:.1} % (the noise band). SLOWER / \
              FASTER: beyond the band, Mann–Whitney U p < {} and the CI excludes 1. UNSURE: \
              beyond the band without that evidence, or fewer than {} samples on a side \
-             (then SAME only if every NEW/BASE sample ratio is within the band). From \
+             (then SAME only if every NEW/BASE sample ratio is within the band). Points \
+             timed in several sessions (`[timing] sessions`, the samples' `session` column): \
+             the CI resamples sessions, then samples within them, and \"significant\" means \
+             that CI excludes 1, so sessions that disagree widen it. From \
              summary columns only (no samples.csv), \"significant\" means the two medians' CIs \
              (else min–max ranges) do not overlap. Cycles = time × SM clock. An error column \
              moved when |Δ| > max({:e}, {:.0} % of the larger value).",

@@ -34,6 +34,9 @@ struct Spec<'a> {
     /// Adds to every rmse.
     rmse_shift: f64,
     samples: bool,
+    /// `[timing] sessions`: one time multiplier per session, N samples each, written with a
+    /// `session` column (empty: one session, no such column, as older runs wrote).
+    states: &'a [f64],
 }
 
 impl Default for Spec<'_> {
@@ -45,6 +48,7 @@ impl Default for Spec<'_> {
             clock: Some(1980.0),
             rmse_shift: 0.0,
             samples: true,
+            states: &[],
         }
     }
 }
@@ -60,13 +64,23 @@ fn write_run(dir: &Path, s: &Spec) {
          sm_clock_mhz_mean,rmse,max_abs_err,matches_truth\n",
     );
     let mut samples = String::from(
-        "point_key,run_id,adapter,sample,gpu_ms,cpu_ms,sm_clock_mhz,mem_clock_mhz,discarded,order\n",
+        "point_key,run_id,adapter,sample,gpu_ms,cpu_ms,sm_clock_mhz,mem_clock_mhz,discarded,order",
     );
+    samples += if s.states.is_empty() {
+        "\n"
+    } else {
+        ",session\n"
+    };
+    let states: &[f64] = if s.states.is_empty() {
+        &[1.0]
+    } else {
+        s.states
+    };
     for p in 0..POINTS {
         let key = format!("methods|shells(count=4)|256x256|m{p}|layers=8");
         let base = 0.5 * (p + 1) as f64;
-        let t: Vec<f64> = (0..N)
-            .map(|i| s.scale * base * (1.0 + 0.01 * pseudo((p * 1000 + i) as u64)))
+        let t: Vec<f64> = (0..N * states.len())
+            .map(|i| s.scale * states[i / N] * base * (1.0 + 0.01 * pseudo((p * 1000 + i) as u64)))
             .collect();
         let m = Summary::of(&t, 1).unwrap();
         let clock = s.clock.map(|c| c.to_string()).unwrap_or_default();
@@ -83,9 +97,14 @@ fn write_run(dir: &Path, s: &Spec) {
             1e-3 * (p + 1) as f64 + s.rmse_shift,
         );
         for (i, x) in t.iter().enumerate() {
+            let session = if s.states.is_empty() {
+                String::new()
+            } else {
+                format!(",{}", i / N)
+            };
             let _ = writeln!(
                 samples,
-                "\"{key}\",r1,{},{i},{x},{},{clock},2619,false,{}",
+                "\"{key}\",r1,{},{i},{x},{},{clock},2619,false,{}{session}",
                 s.adapter,
                 x + 0.1,
                 i * POINTS + p
@@ -94,9 +113,11 @@ fn write_run(dir: &Path, s: &Spec) {
         // A throttled sample, far off, that must be ignored.
         let _ = writeln!(
             samples,
-            "\"{key}\",r1,{},{N},{},0,800,2619,true,0",
+            "\"{key}\",r1,{},{},{},0,800,2619,true,0{}",
             s.adapter,
-            100.0 * base
+            t.len(),
+            100.0 * base,
+            if s.states.is_empty() { "" } else { ",0" }
         );
     }
     std::fs::write(dir.join("runs.csv"), runs).unwrap();
@@ -137,6 +158,48 @@ fn a_run_compared_with_itself_is_same_everywhere() {
     assert!(r.points.iter().all(|p| p.time.verdict == Verdict::Same));
     assert_eq!(r.summary_only(), POINTS);
     assert!(r.markdown().contains("summary columns only"));
+}
+
+#[test]
+fn sessions_in_different_states_are_unsure_not_slower_and_a_real_slowdown_stays_slower() {
+    // Three sessions a point, each in one of two memory states 6 % apart (the H200's k-buffers):
+    // BASE mostly in the fast state, NEW mostly in the slow one.
+    let a = run(
+        "states-a",
+        Spec {
+            states: &[1.0, 1.0, 1.06],
+            ..Spec::default()
+        },
+    );
+    let b = run(
+        "states-b",
+        Spec {
+            states: &[1.06, 1.06, 1.0],
+            ..Spec::default()
+        },
+    );
+    let r = compare_runs(&a, &b, &AbOptions::default()).unwrap();
+    for p in &r.points {
+        assert!(p.time.ratio > 1.03, "{p:?}");
+        assert_eq!(p.time.verdict, Verdict::Unsure, "{p:?}");
+        assert_eq!(p.time.n_base, 3 * N);
+        assert!(p.time.why.contains("3 vs 3 sessions"), "{}", p.time.why);
+    }
+    assert!(r.rule_text().contains("resamples sessions"));
+    // The same states, every time 1.5× on NEW: SLOWER however the sessions are resampled.
+    let c = run(
+        "states-c",
+        Spec {
+            states: &[1.0, 1.0, 1.06],
+            scale: 1.5,
+            ..Spec::default()
+        },
+    );
+    let r = compare_runs(&a, &c, &AbOptions::default()).unwrap();
+    assert!(r.points.iter().all(|p| p.time.verdict == Verdict::Slower));
+    // And a run with sessions against itself: SAME.
+    let r = compare_runs(&a, &a, &AbOptions::default()).unwrap();
+    assert!(r.points.iter().all(|p| p.time.verdict == Verdict::Same));
 }
 
 #[test]

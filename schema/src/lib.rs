@@ -1248,6 +1248,10 @@ pub mod samples {
         "unix_ms",
         "wall clock when the frame was done, ms since the Unix epoch (to line samples up with nvidia-smi logs)",
     );
+    pub const SESSION: Col = Col::new(
+        "session",
+        "the [timing] sessions session that took the sample, from 0 (each prepared afresh elsewhere in memory; mfx compare resamples sessions, not samples, when a point has several)",
+    );
     /// The header of `samples.csv`.
     pub const ALL: &[Col] = &[
         POINT_KEY,
@@ -1262,6 +1266,7 @@ pub mod samples {
         ORDER,
         CANARY_RATIO,
         UNIX_MS,
+        SESSION,
     ];
 }
 

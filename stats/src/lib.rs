@@ -36,7 +36,7 @@ pub use stop::{Decision, Sampler, StopReason, StopRule};
 pub use summary::{Summary, BOOTSTRAP_RESAMPLES};
 pub use throttle::{discard, THROTTLE_FRACTION};
 pub use verdict::{
-    compare_intervals, compare_samples, cycles_k, Basis, Comparison, Interval, Verdict,
-    VerdictOptions,
+    compare_intervals, compare_samples, compare_sessions, cycles_k, Basis, Comparison, Interval,
+    Verdict, VerdictOptions,
 };
 pub use warmup::{Warmup, WarmupDecision, WarmupEnd, WarmupRule};

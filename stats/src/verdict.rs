@@ -218,6 +218,75 @@ pub fn compare_samples(base: &[f64], new: &[f64], o: &VerdictOptions) -> Compari
     }
 }
 
+/// The verdict from samples grouped by session (`[timing] sessions`: each session prepared
+/// afresh, elsewhere in memory). Samples of one session are not independent of each other — on
+/// the H200 a k-buffer point sits in one of two or three time states per preparation, up to
+/// 9.6 % apart — so when either side has more than one session the session is the unit:
+/// - `ratio`: the pooled medians, as [`compare_samples`];
+/// - `ratio_ci`: a two-stage bootstrap (sessions resampled with replacement, then each drawn
+///   session's samples), so the interval is as wide as the sessions disagree;
+/// - significant: that interval excludes 1 (`p`, the Mann–Whitney U of the pooled samples,
+///   is reported but not used: it treats every sample as independent);
+/// - rule 1 (too few) counts sessions on a side with several: fewer than 2 → the
+///   single-session rules on the pooled samples.
+///
+/// With one session on each side this is [`compare_samples`] on them.
+pub fn compare_sessions(base: &[Vec<f64>], new: &[Vec<f64>], o: &VerdictOptions) -> Comparison {
+    let flat = |v: &[Vec<f64>]| v.iter().flatten().copied().collect::<Vec<f64>>();
+    let (fb, fnew) = (flat(base), flat(new));
+    let nonempty = |v: &[Vec<f64>]| v.iter().filter(|s| !s.is_empty()).count();
+    let (sb, sn) = (nonempty(base), nonempty(new));
+    if sb <= 1 && sn <= 1 {
+        return compare_samples(&fb, &fnew, o);
+    }
+    let mut c = compare_samples(&fb, &fnew, o);
+    if c.ratio.is_nan() || fb.len() < o.min_samples || fnew.len() < o.min_samples {
+        return c;
+    }
+    let ci = bootstrap_sessions(base, new, o);
+    let significant = ci.0 > 1.0 || ci.1 < 1.0;
+    let (verdict, why) = classify(c.ratio, ci, significant, o.noise_band);
+    c.verdict = verdict;
+    c.ratio_ci = ci;
+    c.why = format!("{why} ({sb} vs {sn} sessions: the CI resamples sessions)");
+    c
+}
+
+/// Two-stage percentile bootstrap of median(NEW) / median(BASE) over sessions.
+fn bootstrap_sessions(base: &[Vec<f64>], new: &[Vec<f64>], o: &VerdictOptions) -> (f64, f64) {
+    let mut rng = Pcg64::seed_from_u64(o.seed);
+    let keep = |v: &[Vec<f64>]| {
+        v.iter()
+            .filter(|s| !s.is_empty())
+            .cloned()
+            .collect::<Vec<_>>()
+    };
+    let (base, new) = (keep(base), keep(new));
+    let mut draw = |side: &[Vec<f64>], out: &mut Vec<f64>| {
+        out.clear();
+        for _ in 0..side.len() {
+            let s = &side[rng.random_range(0..side.len())];
+            for _ in 0..s.len() {
+                out.push(s[rng.random_range(0..s.len())]);
+            }
+        }
+        median_unsorted(out)
+    };
+    let (mut bb, mut bn) = (Vec::new(), Vec::new());
+    let mut ratios = Vec::with_capacity(o.resamples);
+    for _ in 0..o.resamples.max(1) {
+        let d = draw(&base, &mut bb);
+        let n = draw(&new, &mut bn);
+        if d > 0.0 {
+            ratios.push(n / d);
+        }
+    }
+    if ratios.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    percentile_interval(&mut ratios)
+}
+
 fn bootstrap_ratio(base: &[f64], new: &[f64], o: &VerdictOptions) -> (f64, f64) {
     let mut rng = Pcg64::seed_from_u64(o.seed);
     let (mut bb, mut bn) = (vec![0.0; base.len()], vec![0.0; new.len()]);
@@ -387,6 +456,42 @@ mod tests {
         let c = compare_samples(&a, &b, &VerdictOptions::default());
         assert!(c.p.unwrap() > 0.05, "{c:?}");
         assert_eq!(c.verdict, Verdict::Unsure, "{c:?}");
+    }
+
+    #[test]
+    fn sessions_in_different_states_widen_the_ci_instead_of_calling_a_change() {
+        let o = VerdictOptions::default();
+        // Three sessions a side, each 20 tight samples at 1.00 or 1.06 (two memory states):
+        // BASE in states (1.00, 1.00, 1.06), NEW (1.06, 1.06, 1.00). Pooled, the samples say
+        // 6 % slower with p ≈ 0; by sessions, the states overlap and nothing can be called.
+        let s = |m: f64, off: usize| series(20, m, 0.002, off);
+        let base = vec![s(1.0, 0), s(1.0, 100), s(1.06, 200)];
+        let new = vec![s(1.06, 300), s(1.06, 400), s(1.0, 500)];
+        let flat = |v: &[Vec<f64>]| v.concat();
+        assert_eq!(
+            compare_samples(&flat(&base), &flat(&new), &o).verdict,
+            Verdict::Slower
+        );
+        let c = compare_sessions(&base, &new, &o);
+        assert_eq!(c.verdict, Verdict::Unsure, "{c:?}");
+        assert!(c.ratio_ci.0 <= 1.0 && c.ratio_ci.1 >= 1.05, "{c:?}");
+        assert!(c.why.contains("3 vs 3 sessions"), "{}", c.why);
+        // Every session of NEW 1.5× slower: still SLOWER by sessions.
+        let slow: Vec<Vec<f64>> = base
+            .iter()
+            .map(|v| v.iter().map(|x| x * 1.5).collect())
+            .collect();
+        let c = compare_sessions(&base, &slow, &o);
+        assert_eq!(c.verdict, Verdict::Slower, "{c:?}");
+        assert!(c.ratio_ci.0 > 1.0);
+        // A run against itself: SAME, ratio exactly 1.
+        let c = compare_sessions(&base, &base, &o);
+        assert_eq!((c.verdict, c.ratio), (Verdict::Same, 1.0), "{c:?}");
+        // One session a side: exactly compare_samples.
+        assert_eq!(
+            compare_sessions(&base[..1], &new[..1], &o),
+            compare_samples(&base[0], &new[0], &o)
+        );
     }
 
     #[test]
