@@ -569,7 +569,7 @@ impl AbReport {
              FASTER: beyond the band, Mann–Whitney U p < {} and the CI excludes 1. UNSURE: \
              beyond the band without that evidence, or fewer than {} samples on a side \
              (then SAME only if every NEW/BASE sample ratio is within the band). Points \
-             timed in several sessions (`[timing] sessions`, the samples' `session` column): \
+             timed in several sessions ([timing] sessions; the samples' session column): \
              the CI resamples sessions, then samples within them, and \"significant\" means \
              that CI excludes 1, so sessions that disagree widen it. From \
              summary columns only (no samples.csv), \"significant\" means the two medians' CIs \
