@@ -530,6 +530,31 @@ mod tests {
     use super::*;
 
     #[test]
+    fn resuming_into_samples_written_under_another_header_is_refused() {
+        let d = std::env::temp_dir().join(format!("mfx-samples-hdr-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let p = d.join("samples.csv");
+        // The header before `session` was recorded.
+        std::fs::write(
+            &p,
+            "point_key,run_id,adapter,sample,gpu_ms\n\"k\",r,a,0,1.0\n",
+        )
+        .unwrap();
+        let e = SamplesSink::open(&p, true)
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(e.contains("header") && e.contains("session"), "{e}");
+        // A fresh file, and appending to one with this header, are fine.
+        std::fs::remove_file(&p).unwrap();
+        drop(SamplesSink::open(&p, true).unwrap());
+        drop(SamplesSink::open(&p, true).unwrap());
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert_eq!(text.lines().count(), 1, "one header, written once: {text}");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
     fn flags_are_ordered_and_unique_and_unknown_words_kept() {
         let mut r = Row::new();
         r.add_flag(Flag::Noisy)
