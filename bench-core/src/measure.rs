@@ -591,7 +591,11 @@ pub fn measure(
         t.lift_clock()?;
         t.warm_up()?;
         while t.sample()?.is_none() {}
-        t.finish()
+        let mut m = t.finish()?;
+        for s in &mut m.samples {
+            s.session = k as u32;
+        }
+        Ok(m)
     };
     let mut m = session(0)?;
     if plan.sessions <= 1 {
@@ -602,10 +606,7 @@ pub fn measure(
         // The earlier session's GPU objects are dropped before the next is prepared, as a new
         // run would allocate them.
         drop(m.prepared);
-        let mut next = session(k)?;
-        for s in &mut next.samples {
-            s.session = k as u32;
-        }
+        let next = session(k)?;
         parts.push(next.gpu_median().unwrap_or(next.cpu.median));
         m = combine(
             m.samples,

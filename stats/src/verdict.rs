@@ -225,10 +225,8 @@ pub fn compare_samples(base: &[f64], new: &[f64], o: &VerdictOptions) -> Compari
 /// - `ratio`: the pooled medians, as [`compare_samples`];
 /// - `ratio_ci`: a two-stage bootstrap (sessions resampled with replacement, then each drawn
 ///   session's samples), so the interval is as wide as the sessions disagree;
-/// - significant: that interval excludes 1 (`p`, the Mann–Whitney U of the pooled samples,
-///   is reported but not used: it treats every sample as independent);
-/// - rule 1 (too few) counts sessions on a side with several: fewer than 2 → the
-///   single-session rules on the pooled samples.
+/// - significant: that interval excludes 1;
+/// - rule 1 (too few samples on a side) as in [`compare_samples`], on the pooled samples.
 ///
 /// With one session on each side this is [`compare_samples`] on them.
 pub fn compare_sessions(base: &[Vec<f64>], new: &[Vec<f64>], o: &VerdictOptions) -> Comparison {
@@ -236,11 +234,12 @@ pub fn compare_sessions(base: &[Vec<f64>], new: &[Vec<f64>], o: &VerdictOptions)
     let (fb, fnew) = (flat(base), flat(new));
     let nonempty = |v: &[Vec<f64>]| v.iter().filter(|s| !s.is_empty()).count();
     let (sb, sn) = (nonempty(base), nonempty(new));
-    if sb <= 1 && sn <= 1 {
-        return compare_samples(&fb, &fnew, o);
-    }
     let mut c = compare_samples(&fb, &fnew, o);
-    if c.ratio.is_nan() || fb.len() < o.min_samples || fnew.len() < o.min_samples {
+    if (sb <= 1 && sn <= 1)
+        || c.ratio.is_nan()
+        || fb.len() < o.min_samples
+        || fnew.len() < o.min_samples
+    {
         return c;
     }
     let ci = bootstrap_sessions(base, new, o);
