@@ -571,7 +571,7 @@ impl AbReport {
              (then SAME only if every NEW/BASE sample ratio is within the band). Points \
              timed in several sessions ([timing] sessions; the samples' session column): \
              the CI resamples sessions, then samples within them, and \"significant\" means \
-             that CI excludes 1, so sessions that disagree widen it. From \
+             that CI excludes 1 (no p is shown), so sessions that disagree widen it. From \
              summary columns only (no samples.csv), \"significant\" means the two medians' CIs \
              (else min–max ranges) do not overlap. Cycles = time × SM clock. An error column \
              moved when |Δ| > max({:e}, {:.0} % of the larger value).",

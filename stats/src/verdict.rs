@@ -103,7 +103,7 @@ pub struct Comparison {
     /// NEW / BASE of the medians (> 1: slower).
     pub ratio: f64,
     pub ratio_ci: (f64, f64),
-    /// Two-sided MWU p-value (None from summary columns).
+    /// Two-sided MWU p-value (None from summary columns, and when sessions decide).
     pub p: Option<f64>,
     pub n_base: usize,
     pub n_new: usize,
@@ -225,7 +225,8 @@ pub fn compare_samples(base: &[f64], new: &[f64], o: &VerdictOptions) -> Compari
 /// - `ratio`: the pooled medians, as [`compare_samples`];
 /// - `ratio_ci`: a two-stage bootstrap (sessions resampled with replacement, then each drawn
 ///   session's samples), so the interval is as wide as the sessions disagree;
-/// - significant: that interval excludes 1;
+/// - significant: that interval excludes 1; `p` is None (the Mann–Whitney U of the pooled
+///   samples treats every sample as independent: beside this verdict it would mislead);
 /// - rule 1 (too few samples on a side) as in [`compare_samples`], on the pooled samples.
 ///
 /// With one session on each side this is [`compare_samples`] on them.
@@ -247,6 +248,7 @@ pub fn compare_sessions(base: &[Vec<f64>], new: &[Vec<f64>], o: &VerdictOptions)
     let (verdict, why) = classify(c.ratio, ci, significant, o.noise_band);
     c.verdict = verdict;
     c.ratio_ci = ci;
+    c.p = None;
     c.why = format!("{why} ({sb} vs {sn} sessions: the CI resamples sessions)");
     c
 }
@@ -475,6 +477,7 @@ mod tests {
         assert_eq!(c.verdict, Verdict::Unsure, "{c:?}");
         assert!(c.ratio_ci.0 <= 1.0 && c.ratio_ci.1 >= 1.05, "{c:?}");
         assert!(c.why.contains("3 vs 3 sessions"), "{}", c.why);
+        assert_eq!(c.p, None, "no sample-level p beside a session verdict");
         // Every session of NEW 1.5× slower: still SLOWER by sessions.
         let slow: Vec<Vec<f64>> = base
             .iter()
