@@ -9,6 +9,7 @@
 #   one suite can run twice back to back (methods@a methods@b) for run-to-run spread. Extra
 #   `mfx sweep` flags follow after commas: repeat-probe@pooled,--texture-memory=pooled.
 # Environment:
+#   BIN (default ./.gpu/mfx, also found as .gz or .xz): the mfx binary to run.
 #   BUDGET (s, default 560): jobs are not started once less than MIN_LEFT (default 30) s is left,
 #     and each runs with `timeout` of the time left, so the call ends within its 10 minutes;
 #     rows are flushed as they are measured, so a suite cut short still returns every finished row.
@@ -27,20 +28,25 @@ min_left=${MIN_LEFT:-30}
 out=${OUT:-/tmp/out}
 r=/tmp/r
 mkdir -p "$out" "$r"
-exec > >(tee "$out/session.log") 2>&1
+exec > >(tee -a "$out/session.log") 2>&1
 for f in .gl/*.deb; do dpkg -x "$f" /; done
 ldconfig
 export VK_DRIVER_FILES=${VK_DRIVER_FILES:-/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json}
 export XDG_RUNTIME_DIR=/tmp
-mfx=./.gpu/mfx
-if [ ! -x "$mfx" ] && [ -f ./.gpu/mfx.gz ]; then
-  gunzip -c ./.gpu/mfx.gz > /tmp/mfx && chmod +x /tmp/mfx && mfx=/tmp/mfx
+# BIN names another packed binary (e.g. .gpu/mfx-head.xz), so one call can run two builds.
+bin=${BIN:-./.gpu/mfx}
+bin=${bin%.xz}
+bin=${bin%.gz}
+mfx=$bin
+unpacked=/tmp/$(basename "$bin")
+if [ ! -x "$mfx" ] && [ -f "$bin.gz" ]; then
+  gunzip -c "$bin.gz" > "$unpacked" && chmod +x "$unpacked" && mfx=$unpacked
 fi
 # xz packs the binary 30 % smaller than gzip (the tree and carry share 64 MiB); Python's lzma
 # unpacks it where no xz is installed.
-if [ ! -x "$mfx" ] && [ -f ./.gpu/mfx.xz ]; then
-  python3 -c 'import lzma,shutil,sys; shutil.copyfileobj(lzma.open(sys.argv[1]), open("/tmp/mfx","wb"))' ./.gpu/mfx.xz \
-    && chmod +x /tmp/mfx && mfx=/tmp/mfx
+if [ ! -x "$mfx" ] && [ -f "$bin.xz" ]; then
+  python3 -c 'import lzma,shutil,sys; shutil.copyfileobj(lzma.open(sys.argv[1]), open(sys.argv[2],"wb"))' "$bin.xz" "$unpacked" \
+    && chmod +x "$unpacked" && mfx=$unpacked
 fi
 # The clocks over the whole call: what state each run started in, and whether it moved.
 nvidia-smi --query-gpu=timestamp,clocks.sm,clocks.mem,temperature.gpu,power.draw,clocks_throttle_reasons.active \
