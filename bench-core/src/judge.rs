@@ -336,8 +336,8 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
         // Pixels beyond their capacity (FirstK): their difference is the overflow's. A count of
         // overflowing pixels the method made itself (a pool) does not say which pixels: then
         // every pixel may be one.
-        let counted_elsewhere = cap.overflow_pixels.unwrap_or(0) as usize
-            > dc.iter().filter(|&&d| d > k).count();
+        let counted_elsewhere =
+            cap.overflow_pixels.unwrap_or(0) as usize > dc.iter().filter(|&&d| d > k).count();
         let over = |i: usize| counted_elsewhere || dc[i % px] > k;
         // An image off its own definition (k-truncated composite, CPU twin, or for a method
         // keeping everything the truth) at a pixel within capacity, by more than both
@@ -366,9 +366,7 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
                 .iter()
                 .zip(def)
                 .enumerate()
-                .filter(|&(i, (g, w))| {
-                    !over(i) && pixel_err(g, w) > BAD_PIXEL_TOL.max(bound_of(i))
-                })
+                .filter(|&(i, (g, w))| !over(i) && pixel_err(g, w) > BAD_PIXEL_TOL.max(bound_of(i)))
                 .count();
             if off > 0 {
                 j.flag(Flag::ImageDiffers);
@@ -459,9 +457,10 @@ pub fn exact_bounds(dc: &[u32], lists: Option<&FragmentLists>) -> Vec<f64> {
                         let opacity = 1.0 - run.iter().map(|f| 1.0 - f.color[3]).product::<f64>();
                         let spread = (0..3)
                             .map(|c| {
-                                let (lo, hi) = run.iter().fold((f64::MAX, f64::MIN), |(lo, hi), f| {
-                                    (lo.min(f.color[c]), hi.max(f.color[c]))
-                                });
+                                let (lo, hi) =
+                                    run.iter().fold((f64::MAX, f64::MIN), |(lo, hi), f| {
+                                        (lo.min(f.color[c]), hi.max(f.color[c]))
+                                    });
                                 hi - lo
                             })
                             .fold(0.0, f64::max);
@@ -872,7 +871,11 @@ mod tests {
         rev.frags.reverse();
         let cap = cap_with(rev.composite(), vec![8], Expected::All);
         let j = run(&cap, &l, true);
-        assert!(j.truth.as_ref().unwrap().max_abs > BAD_PIXEL_TOL, "{:?}", j.truth);
+        assert!(
+            j.truth.as_ref().unwrap().max_abs > BAD_PIXEL_TOL,
+            "{:?}",
+            j.truth
+        );
         assert!(!j.flags.contains(Flag::ImageDiffers), "{:?}", j.flags);
         assert_eq!(j.exact, Some(true));
         // The same reversed image of distinct depths is wrong.

@@ -16,9 +16,9 @@ use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
 use crate::method::{FrameStats, Method, Prepared};
 use crate::record::{cols, GpuMsInterval, Row, Sample};
-use schema::MIN_SAMPLES_CI95;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
+use schema::MIN_SAMPLES_CI95;
 
 /// How a point is timed: warm-up and stopping rules, and the seed of its bootstrap.
 #[derive(Clone, Debug, PartialEq)]

@@ -152,12 +152,15 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
             .iter()
             .map(String::from)
             .collect();
-        let schema_col = h.iter().position(|c| c == cols::SCHEMA.name).ok_or_else(|| {
-            CoreError::Schema(format!(
-                "{}: not an mfx runs.csv (no 'schema' column)",
-                f.display()
-            ))
-        })?;
+        let schema_col = h
+            .iter()
+            .position(|c| c == cols::SCHEMA.name)
+            .ok_or_else(|| {
+                CoreError::Schema(format!(
+                    "{}: not an mfx runs.csv (no 'schema' column)",
+                    f.display()
+                ))
+            })?;
         match &header {
             None => header = Some((h.clone(), f.clone())),
             Some((h0, f0)) if *h0 != h => {
@@ -202,7 +205,11 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
     }
     let (header, _) = header.expect("at least one file");
     let col = |name: &str| header.iter().position(|c| c == name);
-    let (kp, ka, kb) = (col(cols::POINT_KEY.name), col(cols::ADAPTER.name), col(cols::BACKEND.name));
+    let (kp, ka, kb) = (
+        col(cols::POINT_KEY.name),
+        col(cols::ADAPTER.name),
+        col(cols::BACKEND.name),
+    );
 
     std::fs::create_dir_all(out).map_err(|e| io(out, e))?;
     let mut w = csv::Writer::from_path(&out_csv).map_err(|e| io(&out_csv, e))?;

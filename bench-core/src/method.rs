@@ -6,8 +6,8 @@
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
-use crate::timing::GpuTimer;
 use crate::record::FlagSet;
+use crate::timing::GpuTimer;
 use crate::Result;
 
 /// Which reference a capture is judged against.

@@ -53,10 +53,7 @@ fn methods_with_every_fragment_are_exact_and_an_overflowing_k_buffer_is_not() {
         "kbuffer_rmw",
         &quads,
         48,
-        &[
-            ("layers", Int(16)),
-            ("heuristics", Bool(false)),
-        ],
+        &[("layers", Int(16)), ("heuristics", Bool(false))],
     );
     assert!(j.overflow_rate > 0.0, "{j:?}");
     assert_eq!(j.exact, Some(false), "{}", j.flags);
@@ -71,6 +68,11 @@ fn the_compute_abuffer_on_a_deep_scene_is_exact_not_image_differs() {
     let j = judged("compute_abuffer", &shells, 64, &[]);
     assert_eq!(j.fragments_missing, Some(0), "{:?}", j.notes);
     assert_eq!(j.fragments_extra, Some(0), "{:?}", j.notes);
-    assert!(!j.flags.contains(Flag::ImageDiffers), "{} {:?}", j.flags, j.notes);
+    assert!(
+        !j.flags.contains(Flag::ImageDiffers),
+        "{} {:?}",
+        j.flags,
+        j.notes
+    );
     assert_eq!(j.exact, Some(true), "{} {:?}", j.flags, j.truth);
 }

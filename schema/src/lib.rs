@@ -9,9 +9,7 @@
 use std::fmt;
 
 mod values;
-pub use values::{
-    Flag, FlagSet, GpuMsInterval, ParseError, PointKey, Status, MIN_SAMPLES_CI95,
-};
+pub use values::{Flag, FlagSet, GpuMsInterval, ParseError, PointKey, Status, MIN_SAMPLES_CI95};
 
 /// Bumped when a column is renamed or changes meaning; `mfx merge` and `mfx compare` refuse to
 /// mix versions (see `results/README.md` for what changed between versions).

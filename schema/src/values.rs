@@ -376,7 +376,11 @@ mod tests {
     fn a_flag_set_only_grows_keeps_order_and_unknown_words() {
         let mut f: FlagSet = "noisy".parse().unwrap();
         f.add(Flag::Precision);
-        assert_eq!(f.to_string(), "precision|noisy", "an earlier flag survives an add");
+        assert_eq!(
+            f.to_string(),
+            "precision|noisy",
+            "an earlier flag survives an add"
+        );
         f.add_all(&"overflow|weird|noisy".parse().unwrap());
         f.add(Flag::Hazard);
         assert_eq!(f.to_string(), "overflow|hazard|precision|noisy|weird");
@@ -397,7 +401,10 @@ mod tests {
         assert_eq!(MIN_SAMPLES_CI95, 6);
         assert!(cover(MIN_SAMPLES_CI95 as i32) >= 0.95);
         assert!(cover(MIN_SAMPLES_CI95 as i32 - 1) < 0.95);
-        assert!((cover(3) - 0.75).abs() < 1e-12, "the software profile's 3 samples");
+        assert!(
+            (cover(3) - 0.75).abs() < 1e-12,
+            "the software profile's 3 samples"
+        );
         for v in [GpuMsInterval::Ci95, GpuMsInterval::Range] {
             assert_eq!(v.to_string().parse::<GpuMsInterval>(), Ok(v));
         }
@@ -415,7 +422,10 @@ mod tests {
         assert_eq!(k.to_string(), s);
         // No axes, and a scene label holding the separator.
         let k: PointKey = "geometry|obj(path=a|b)|64x64|feed|".parse().unwrap();
-        assert_eq!((k.scene.as_str(), k.method.as_str()), ("obj(path=a|b)", "feed"));
+        assert_eq!(
+            (k.scene.as_str(), k.method.as_str()),
+            ("obj(path=a|b)", "feed")
+        );
         assert!(k.axes().is_empty());
         assert!("methods|s|64|m|".parse::<PointKey>().is_err());
         assert!("k1".parse::<PointKey>().is_err());

@@ -25,8 +25,8 @@ use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::measure::{measure, set_timing};
 use crate::methods::{Capture, Method, Prepared};
 use crate::metrics::{image_error, BAD_PIXEL_TOL};
-use crate::record::{cols, Flag};
 use crate::record::Row;
+use crate::record::{cols, Flag};
 use crate::record::{error_row, failed_row, set_params, skipped_row};
 use crate::shading::cpu_tiled::{self, CpuOptions};
 use crate::shading::gbuffer::GBufferPass;
@@ -419,6 +419,10 @@ mod flag_tests {
         let mut row = Row::new();
         row.add_flag(Flag::Noisy);
         set_error(&mut row, &[[0.5; 4]; 2], &[[0.5; 4], [f32::NAN; 4]]);
-        assert!(row.has_flag(Flag::Precision) && row.has_flag(Flag::Noisy), "{}", row.flags());
+        assert!(
+            row.has_flag(Flag::Precision) && row.has_flag(Flag::Noisy),
+            "{}",
+            row.flags()
+        );
     }
 }

@@ -76,9 +76,9 @@ pub(crate) fn tests_wgsl() -> &'static str {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::record::Flag;
     use crate::methods::bucket::testing::{quads, quads_z, quantised_reference, run};
     use crate::methods::bucket::{keyed_color, pack_color, pack_keyed, unpack_color};
+    use crate::record::Flag;
 
     #[test]
     fn bdp_quads4_48px_32_single_buckets_no_shared_bucket_is_exact_up_to_the_packing() {

@@ -17,8 +17,8 @@ use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
     camera_entry, compute_pipeline, read_vec, shader, storage_entry, texture_entry, STORAGE_RW,
 };
-use crate::timing::GpuTimer;
 use crate::record::Flag;
+use crate::timing::GpuTimer;
 use crate::Result;
 
 const WGSL: &str = include_str!("dual_peel.wgsl");
