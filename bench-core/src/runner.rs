@@ -426,7 +426,7 @@ mod tests {
         assert_eq!(untrusted.get(cols::X_BLEND), None);
         set_x_floor(&mut row, Some(10.0), Some(5.0));
         assert_eq!(row.get_bool(cols::GPU_TIME_TRUSTED), Some(true));
-        assert_eq!(row.get_f(cols::X_FLOOR), Some(0.345));
-        assert_eq!(row.get_f(cols::X_BLEND), Some(0.69));
+        assert_eq!(row.get_f(cols::X_FLOOR), Some(3.45 / 10.0));
+        assert_eq!(row.get_f(cols::X_BLEND), Some(3.45 / 5.0));
     }
 }
