@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use bench_core::manifest::{context_block, write_runs_json, AdapterInfo, RunManifest};
-use bench_core::record::{cols, CsvSink, Row, SamplesSink, Sink, SCHEMA_VERSION};
+use bench_core::record::{cols, CsvSink, Row, SamplesSink, Sink, Status, SCHEMA_VERSION};
 use bench_core::runner::{self, RunOptions};
 use bench_core::Gpu;
 use clap::Args;
@@ -112,8 +112,8 @@ impl Sink for Progress<'_> {
         ]) {
             *acc += ms(c);
         }
-        match row.get(cols::STATUS) {
-            Some("failed") => {
+        match row.status() {
+            Some(Status::Failed) => {
                 self.bar.println(format!(
                     "failed: {} — {}",
                     get(cols::POINT_KEY),
@@ -121,7 +121,7 @@ impl Sink for Progress<'_> {
                 ));
                 self.failed.push((get(cols::POINT_KEY), get(cols::REASON)));
             }
-            Some("skipped") => *self.skipped.entry(get(cols::REASON)).or_default() += 1,
+            Some(Status::Skipped) => *self.skipped.entry(get(cols::REASON)).or_default() += 1,
             _ => self.ok += 1,
         }
         self.bar

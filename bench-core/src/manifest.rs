@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 use sha2::{Digest, Sha256};
 
+use crate::record::cols;
 use crate::{CoreError, Result};
 
 /// File names inside a run folder.
@@ -200,13 +201,13 @@ pub fn context_block(manifest: &RunManifest, schema_version: u32, clocks: Option
 /// Cells of these columns stay strings whatever they look like: identities, where a
 /// digits-only git revision or run id read as a number would lose its leading zeros or digits.
 pub const TEXT_COLUMNS: &[&str] = &[
-    "git_rev",
-    "run_id",
-    "point_key",
-    "scene_label",
-    "adapter",
-    "driver",
-    "driver_info",
+    cols::GIT_REV.name,
+    cols::RUN_ID.name,
+    cols::POINT_KEY.name,
+    cols::SCENE_LABEL.name,
+    cols::ADAPTER.name,
+    cols::DRIVER.name,
+    cols::DRIVER_INFO.name,
 ];
 
 /// How one column's cells become JSON, decided over the whole column so a column never mixes

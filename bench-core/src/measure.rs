@@ -15,9 +15,10 @@ use crate::clocks::{MonitorSample, PointClocks};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
 use crate::method::{FrameStats, Method, Prepared};
-use crate::record::{cols, Row, Sample};
+use crate::record::{cols, GpuMsInterval, Row, Sample};
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
+use schema::MIN_SAMPLES_CI95;
 
 /// How a point is timed: warm-up and stopping rules, and the seed of its bootstrap.
 #[derive(Clone, Debug, PartialEq)]
@@ -793,17 +794,31 @@ impl FrameLoop {
     }
 }
 
+/// What `gpu_ms_ci_lo/hi` can honestly be for `g`'s sample count: its 95 % interval of the
+/// median, or, with fewer than [`MIN_SAMPLES_CI95`] samples (where no distribution-free interval
+/// reaches 95 % coverage: [min, max] of 3 samples covers the median 75 % of the time), the
+/// range, called so (`gpu_ms_interval = range`).
+pub fn median_interval(g: &Summary) -> (GpuMsInterval, (f64, f64)) {
+    if g.n >= MIN_SAMPLES_CI95 {
+        (GpuMsInterval::Ci95, g.median_ci)
+    } else {
+        (GpuMsInterval::Range, (g.min, g.max))
+    }
+}
+
 /// Timing, pass, clock and memory columns of a measured point, and the flags a timing earns:
 /// `noisy` (the stopping rule's target was not met) and `throttled` (a sample was discarded
 /// or NVML reported a slowdown).
 pub fn set_timing(row: &mut Row, m: &Measured, mesh: &scenarios::Mesh) {
     if let Some(g) = &m.gpu {
+        let interval = median_interval(g);
         row.set_f(cols::GPU_MS_MEDIAN, g.median)
             .set_f(cols::GPU_MS_MEAN, g.mean)
             .set_f(cols::GPU_MS_MIN, g.min)
             .set_f(cols::GPU_MS_MAX, g.max)
-            .set_f(cols::GPU_MS_CI_LO, g.median_ci.0)
-            .set_f(cols::GPU_MS_CI_HI, g.median_ci.1)
+            .set_f(cols::GPU_MS_CI_LO, interval.1 .0)
+            .set_f(cols::GPU_MS_CI_HI, interval.1 .1)
+            .set(cols::GPU_MS_INTERVAL, interval.0)
             .set_f(cols::GPU_MS_MEAN_CI_LO, g.mean_ci.0)
             .set_f(cols::GPU_MS_MEAN_CI_HI, g.mean_ci.1)
             .set_f(cols::GPU_MS_REL_CI, g.rel_ci)
@@ -862,5 +877,25 @@ pub fn set_timing(row: &mut Row, m: &Measured, mesh: &scenarios::Mesh) {
         row.set_f(cols::CLOCK_LIFT_MS, ms)
             .set_f(cols::CLOCK_LIFT_FROM_MHZ, before)
             .set_f(cols::CLOCK_LIFT_TO_MHZ, after);
+    }
+}
+
+#[cfg(test)]
+mod interval_tests {
+    use super::*;
+
+    #[test]
+    fn too_few_samples_give_the_range_called_range_not_a_95_percent_interval() {
+        // The software profile's 3 samples: [min, max] covers the median 75 % of the time.
+        let three = Summary::of(&[1.52, 1.93, 5.8], 1).unwrap();
+        let (kind, (lo, hi)) = median_interval(&three);
+        assert_eq!((kind, lo, hi), (GpuMsInterval::Range, 1.52, 5.8));
+        // From MIN_SAMPLES_CI95 on, the order-statistic interval exists: it is the CI.
+        let six: Vec<f64> = (0..MIN_SAMPLES_CI95).map(|i| 1.0 + i as f64).collect();
+        let s = Summary::of(&six, 1).unwrap();
+        assert_eq!(median_interval(&s), (GpuMsInterval::Ci95, s.median_ci));
+        // The rule agrees with the stopping rule's own interval (stats::median_ci).
+        assert!(mfx_stats::median_ci::lower_index(MIN_SAMPLES_CI95).is_some());
+        assert!(mfx_stats::median_ci::lower_index(MIN_SAMPLES_CI95 - 1).is_none());
     }
 }

@@ -11,6 +11,7 @@ use std::collections::HashMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use crate::record::cols;
 use crate::{CoreError, Result};
 
 /// A row seen more than once.
@@ -151,12 +152,15 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
             .iter()
             .map(String::from)
             .collect();
-        let schema_col = h.iter().position(|c| c == "schema").ok_or_else(|| {
-            CoreError::Schema(format!(
-                "{}: not an mfx runs.csv (no 'schema' column)",
-                f.display()
-            ))
-        })?;
+        let schema_col = h
+            .iter()
+            .position(|c| c == cols::SCHEMA.name)
+            .ok_or_else(|| {
+                CoreError::Schema(format!(
+                    "{}: not an mfx runs.csv (no 'schema' column)",
+                    f.display()
+                ))
+            })?;
         match &header {
             None => header = Some((h.clone(), f.clone())),
             Some((h0, f0)) if *h0 != h => {
@@ -201,7 +205,11 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
     }
     let (header, _) = header.expect("at least one file");
     let col = |name: &str| header.iter().position(|c| c == name);
-    let (kp, ka, kb) = (col("point_key"), col("adapter"), col("backend"));
+    let (kp, ka, kb) = (
+        col(cols::POINT_KEY.name),
+        col(cols::ADAPTER.name),
+        col(cols::BACKEND.name),
+    );
 
     std::fs::create_dir_all(out).map_err(|e| io(out, e))?;
     let mut w = csv::Writer::from_path(&out_csv).map_err(|e| io(&out_csv, e))?;
@@ -294,7 +302,7 @@ fn copy_images(files: &[PathBuf], out: &Path) -> Result<usize> {
 fn missing_images(csv_path: &Path, out: &Path) -> Result<Vec<String>> {
     let mut rdr = csv::Reader::from_path(csv_path).map_err(|e| io(csv_path, e))?;
     let h = rdr.headers().map_err(|e| io(csv_path, e))?.clone();
-    let Some(i) = h.iter().position(|c| c == "image_file") else {
+    let Some(i) = h.iter().position(|c| c == cols::IMAGE_FILE.name) else {
         return Ok(Vec::new());
     };
     let mut missing = Vec::new();
@@ -314,7 +322,7 @@ pub fn point_keys(csv_path: &Path) -> Result<Vec<String>> {
     let h = rdr.headers().map_err(|e| io(csv_path, e))?.clone();
     let i = h
         .iter()
-        .position(|c| c == "point_key")
+        .position(|c| c == cols::POINT_KEY.name)
         .ok_or_else(|| CoreError::Schema(format!("{}: no point_key column", csv_path.display())))?;
     let mut keys = Vec::new();
     for r in rdr.records() {

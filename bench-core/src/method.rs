@@ -6,6 +6,7 @@
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
+use crate::record::FlagSet;
 use crate::timing::GpuTimer;
 use crate::Result;
 
@@ -33,8 +34,8 @@ pub struct Capture {
     pub collision_fragments: Option<u64>,
     /// Pixels whose captured set differs from the true k nearest (k-buffer RMW hazards).
     pub hazard_pixels: Option<u64>,
-    /// A knowingly-failed mode (overflow, collision, lost_coplanar, precision, hazard).
-    pub flag: Option<String>,
+    /// Knowingly-failed modes (overflow, collision, lost_coplanar, precision, hazard…): only added to.
+    pub flag: FlagSet,
     pub notes: String,
     /// The image the method's own definition gives (its CPU twin run on the reference's
     /// fragments, e.g. k nearest plus a blended tail, or MLAB in primitive order), when that is
@@ -67,7 +68,7 @@ impl Capture {
             overflow_pixels: None,
             collision_fragments: None,
             hazard_pixels: None,
-            flag: None,
+            flag: FlagSet::new(),
             notes: String::new(),
             definition: None,
             dropped_fragments: None,

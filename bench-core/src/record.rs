@@ -10,70 +10,9 @@ use std::io::Write;
 use std::path::Path;
 
 use scenarios::Params;
-pub use schema::{cols, Col, SCHEMA_VERSION};
+pub use schema::{cols, Col, Flag, FlagSet, GpuMsInterval, PointKey, Status, SCHEMA_VERSION};
 
 use crate::{CoreError, Result};
-
-/// A known, reported failure mode of a row (the `flag` column holds them `|`-joined, in this
-/// order). Each is defined in results/README.md.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Flag {
-    /// Fragments exceeded the method's capacity (k, a pool, a sort buffer).
-    Overflow,
-    /// k-buffer read-modify-write races changed the captured set.
-    Hazard,
-    /// Bucket methods merged or lost fragments sharing a bucket.
-    Collision,
-    /// Distinct layers merged in the method's depth precision, or a non-finite output.
-    Precision,
-    /// Fragments at exactly equal depths lost (strict peeling).
-    LostCoplanar,
-    /// An exact method's fragment set differs from the reference's (fragments missing without
-    /// an overflow, or fragments the reference does not have).
-    FragmentsDiffer,
-    /// An exact method's image is off its own definition (or, without one, the truth) beyond
-    /// `bad_pixel_tol`, with no overflow, coplanar loss, precision loss or fragment-set
-    /// difference to explain it (e.g. an MSAA capture, which has no per-pixel counts).
-    ImageDiffers,
-    /// GPU time far below the wall-clock time of the same frames: the timestamps missed work.
-    TimestampsIncomplete,
-    /// The stopping rule's noise target was not reached (max samples, max time or drift).
-    Noisy,
-    /// A sample was taken below 75 % of the reference SM clock, or NVML reported a slowdown.
-    Throttled,
-}
-
-impl Flag {
-    pub const ALL: [Flag; 10] = [
-        Flag::Overflow,
-        Flag::Hazard,
-        Flag::Collision,
-        Flag::Precision,
-        Flag::LostCoplanar,
-        Flag::FragmentsDiffer,
-        Flag::ImageDiffers,
-        Flag::TimestampsIncomplete,
-        Flag::Noisy,
-        Flag::Throttled,
-    ];
-    pub fn name(self) -> &'static str {
-        match self {
-            Flag::Overflow => "overflow",
-            Flag::Hazard => "hazard",
-            Flag::Collision => "collision",
-            Flag::Precision => "precision",
-            Flag::LostCoplanar => "lost_coplanar",
-            Flag::FragmentsDiffer => "fragments_differ",
-            Flag::ImageDiffers => "image_differs",
-            Flag::TimestampsIncomplete => "timestamps_incomplete",
-            Flag::Noisy => "noisy",
-            Flag::Throttled => "throttled",
-        }
-    }
-    pub fn parse(s: &str) -> Option<Flag> {
-        Flag::ALL.iter().copied().find(|f| f.name() == s)
-    }
-}
 
 /// One timed frame of a point (a row of `samples.csv`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -110,9 +49,12 @@ pub struct FlipImages {
 
 /// One CSV row: declared column → cell text; and what travels with it to the sinks without
 /// being a column (the point's samples for `samples.csv`, its FLIP images for the gallery).
+/// The cells are private: `status` is set as a [`Status`], and `flag` only grows, through
+/// [`Row::add_flag`] / [`Row::add_flags`] (a study cannot drop an earlier flag such as `noisy`).
 #[derive(Clone, Debug, Default)]
 pub struct Row {
-    pub cells: BTreeMap<&'static str, String>,
+    cells: BTreeMap<&'static str, String>,
+    flags: FlagSet,
     pub samples: Vec<Sample>,
     pub flip: Option<Box<FlipImages>>,
 }
@@ -122,8 +64,19 @@ impl Row {
         Row::default()
     }
 
+    /// Sets a cell. `status` and `flag` have typed setters ([`Row::set_status`],
+    /// [`Row::add_flag`]); text given here for them is parsed into those (a flag is added, never
+    /// replacing the ones there).
     pub fn set(&mut self, col: Col, v: impl ToString) -> &mut Self {
-        self.cells.insert(col.name, v.to_string());
+        let v = v.to_string();
+        if col == cols::FLAG {
+            let words: FlagSet = v.parse().unwrap_or_default();
+            return self.add_flags(&words);
+        }
+        if col == cols::STATUS {
+            debug_assert!(v.parse::<Status>().is_ok(), "status '{v}'");
+        }
+        self.cells.insert(col.name, v);
         self
     }
 
@@ -136,8 +89,26 @@ impl Row {
 
     /// Sets a float with enough digits to round-trip.
     pub fn set_f(&mut self, col: Col, v: f64) -> &mut Self {
-        self.cells.insert(col.name, fmt_f64(v));
+        self.set(col, fmt_f64(v))
+    }
+
+    /// Sets a `true`/`false` cell.
+    pub fn set_bool(&mut self, col: Col, v: bool) -> &mut Self {
+        self.set(col, v)
+    }
+
+    pub fn set_status(&mut self, s: Status) -> &mut Self {
+        self.cells.insert(cols::STATUS.name, s.to_string());
         self
+    }
+
+    /// The row's status, when set.
+    pub fn status(&self) -> Option<Status> {
+        self.get(cols::STATUS).and_then(|s| s.parse().ok())
+    }
+
+    pub fn is_ok(&self) -> bool {
+        self.status() == Some(Status::Ok)
     }
 
     pub fn get(&self, col: Col) -> Option<&str> {
@@ -149,41 +120,44 @@ impl Row {
         self.get(col).and_then(|s| s.parse().ok())
     }
 
-    /// Adds a flag to the `flag` cell (kept `|`-joined, ordered, without repeats). A method's
-    /// own flag word that is not a known flag is kept too (named, never dropped).
-    pub fn add_flag(&mut self, flag: Flag) -> &mut Self {
-        self.add_flag_word(flag.name())
+    /// The cell as `true`/`false`, when set.
+    pub fn get_bool(&self, col: Col) -> Option<bool> {
+        self.get(col).and_then(|s| s.parse().ok())
     }
 
-    /// `add_flag` for a flag given as text (a method's `Capture.flag`, `|`-joined or not).
-    pub fn add_flag_word(&mut self, words: &str) -> &mut Self {
-        let mut known: Vec<Flag> = Vec::new();
-        let mut other: Vec<String> = Vec::new();
-        let cell = self.get(cols::FLAG).unwrap_or("").to_string();
-        for w in cell.split('|').chain(words.split('|')) {
-            let w = w.trim();
-            if w.is_empty() {
-                continue;
-            }
-            match Flag::parse(w) {
-                Some(f) if !known.contains(&f) => known.push(f),
-                Some(_) => {}
-                None if !other.iter().any(|o| o == w) => other.push(w.to_string()),
-                None => {}
-            }
+    /// Every set cell by column name (read-only).
+    pub fn cells(&self) -> &BTreeMap<&'static str, String> {
+        &self.cells
+    }
+
+    /// Adds a flag to the `flag` cell (kept `|`-joined, ordered, without repeats).
+    pub fn add_flag(&mut self, flag: Flag) -> &mut Self {
+        self.flags.add(flag);
+        self.sync_flags()
+    }
+
+    /// Adds every flag of `flags`; a method's own word that is not a known flag is kept too
+    /// (named, never dropped).
+    pub fn add_flags(&mut self, flags: &FlagSet) -> &mut Self {
+        self.flags.add_all(flags);
+        self.sync_flags()
+    }
+
+    fn sync_flags(&mut self) -> &mut Self {
+        if self.flags.is_empty() {
+            self.cells.remove(cols::FLAG.name);
+        } else {
+            self.cells.insert(cols::FLAG.name, self.flags.to_string());
         }
-        known.sort();
-        let all: Vec<String> = known
-            .iter()
-            .map(|f| f.name().to_string())
-            .chain(other)
-            .collect();
-        self.set(cols::FLAG, all.join("|"))
+        self
+    }
+
+    pub fn flags(&self) -> &FlagSet {
+        &self.flags
     }
 
     pub fn has_flag(&self, flag: Flag) -> bool {
-        self.get(cols::FLAG)
-            .is_some_and(|c| c.split('|').any(|w| w == flag.name()))
+        self.flags.contains(flag)
     }
 
     /// Appends `note` to the `notes` cell (`; `-separated).
@@ -219,13 +193,13 @@ pub fn one_line(s: &str) -> String {
 }
 
 pub fn skipped_row(mut row: Row, why: &str) -> Row {
-    row.set(cols::STATUS, "skipped")
+    row.set_status(Status::Skipped)
         .set(cols::REASON, one_line(why));
     row
 }
 
 pub fn failed_row(mut row: Row, why: &str) -> Row {
-    row.set(cols::STATUS, "failed")
+    row.set_status(Status::Failed)
         .set(cols::REASON, one_line(why));
     row
 }
@@ -558,10 +532,20 @@ mod tests {
     fn flags_are_ordered_and_unique_and_unknown_words_kept() {
         let mut r = Row::new();
         r.add_flag(Flag::Noisy)
-            .add_flag_word("overflow|weird")
+            .add_flags(&"overflow|weird".parse().unwrap())
             .add_flag(Flag::Overflow)
             .add_flag(Flag::Hazard);
         assert_eq!(r.get(cols::FLAG), Some("overflow|hazard|noisy|weird"));
         assert!(r.has_flag(Flag::Hazard) && !r.has_flag(Flag::Collision));
+    }
+
+    #[test]
+    fn setting_the_flag_cell_adds_and_never_drops_an_earlier_flag() {
+        // What studies/deferred.rs and studies/shadows once did after set_timing's `noisy`.
+        let mut r = Row::new();
+        r.add_flag(Flag::Noisy);
+        r.set(cols::FLAG, Flag::Precision);
+        assert_eq!(r.get(cols::FLAG), Some("precision|noisy"));
+        assert_eq!(r.flags().to_string(), "precision|noisy");
     }
 }

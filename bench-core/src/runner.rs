@@ -9,7 +9,7 @@ use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
 use crate::measure::{measure, set_timing, TimingPlan};
 use crate::methods;
-use crate::record::{cols, Row, Sink, SCHEMA_VERSION};
+use crate::record::{cols, Row, Sink, Status, SCHEMA_VERSION};
 pub use crate::record::{error_row, failed_row, one_line, set_params, skipped_row};
 use crate::studies::{self, Group, GroupCtx, PointSpec};
 use crate::{CoreError, Result};
@@ -168,8 +168,8 @@ pub fn run(
             if row.get(cols::METHOD).is_none() {
                 row.set(cols::METHOD, method);
             }
-            if row.get(cols::STATUS).is_none() {
-                row.set(cols::STATUS, "ok");
+            if row.status().is_none() {
+                row.set_status(Status::Ok);
             }
             row
         };
@@ -259,7 +259,7 @@ pub fn run(
         for (f, owed) in FLOORS.iter().zip(&floors_todo) {
             let method = methods::by_name(f).expect("floor methods exist");
             let mut row = Row::new();
-            row.set(cols::METHOD, *f).set(cols::EXACT, false);
+            row.set(cols::METHOD, *f).set(cols::CLAIMS_EXACT, false);
             add_scene(&mut row);
             let row = match measure(gpu, &gscene, method.as_ref(), &Point::empty(), &plan) {
                 Ok(m) => {
@@ -343,12 +343,19 @@ pub fn run(
     Ok(out)
 }
 
-/// `x_floor` and `x_blend`: the row's median GPU time over the group's floors.
+/// `gpu_time_trusted`, and `x_floor` and `x_blend`: the row's median GPU time over the group's
+/// floors, only where the timestamps cover the frame (a row flagged `timestamps_incomplete`
+/// has a GPU time that is not the frame's, so no ratio of it is a result).
 fn set_x_floor(row: &mut Row, floor_ms: Option<f64>, blend_ms: Option<f64>) {
     let Some(g) = row.get_f(cols::GPU_MS_MEDIAN) else {
         return;
     };
-    if row.get(cols::STATUS) != Some("ok") {
+    if !row.is_ok() {
+        return;
+    }
+    let trusted = crate::judge::gpu_time_trusted(row);
+    row.set_bool(cols::GPU_TIME_TRUSTED, trusted);
+    if !trusted {
         return;
     }
     for (col, floor) in [(cols::X_FLOOR, floor_ms), (cols::X_BLEND, blend_ms)] {
@@ -399,4 +406,27 @@ pub fn run_checked(gpu: &Gpu, suite: &Suite) -> Result<Vec<Row>> {
 /// Rows a suite sweeps on a GPU (`software = false`) or a software adapter (for `mfx list`).
 pub fn rows_of(suite: &Suite, software: bool) -> usize {
     expand(suite, software).map(|g| rows_in(&g)).unwrap_or(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::Flag;
+
+    #[test]
+    fn a_row_whose_timestamps_missed_work_gets_no_ratio_to_the_floors() {
+        // lavapipe's compute A-buffer: GPU 3.45 ms for 255 ms of wall time.
+        let mut row = Row::new();
+        row.set_status(Status::Ok).set_f(cols::GPU_MS_MEDIAN, 3.45);
+        let mut untrusted = row.clone();
+        untrusted.add_flag(Flag::TimestampsIncomplete);
+        set_x_floor(&mut untrusted, Some(10.0), Some(5.0));
+        assert_eq!(untrusted.get_bool(cols::GPU_TIME_TRUSTED), Some(false));
+        assert_eq!(untrusted.get(cols::X_FLOOR), None);
+        assert_eq!(untrusted.get(cols::X_BLEND), None);
+        set_x_floor(&mut row, Some(10.0), Some(5.0));
+        assert_eq!(row.get_bool(cols::GPU_TIME_TRUSTED), Some(true));
+        assert_eq!(row.get_f(cols::X_FLOOR), Some(3.45 / 10.0));
+        assert_eq!(row.get_f(cols::X_BLEND), Some(3.45 / 5.0));
+    }
 }

@@ -21,6 +21,7 @@ use bench_core::aa::{self, AaMode};
 use bench_core::effects::EffectConfig;
 use bench_core::method::Method;
 use bench_core::methods;
+use bench_core::record::Flag;
 use bench_core::testing::{self, max_err_vs, params, point, run_truth};
 use scenarios::ParamValue::{self, Int, Str};
 use scenarios::Scene;
@@ -549,11 +550,11 @@ fn a_per_sample_list_counts_each_samples_fragments_and_overflows_per_sample() {
         truth.sample_fragments > 40 * 32,
         "the scene overflows the pool"
     );
-    assert_eq!(cap.flag.as_deref(), Some("overflow"), "{}", cap.notes);
+    assert_eq!(cap.flag, Flag::Overflow.into(), "{}", cap.notes);
     assert!(cap.dropped_fragments.unwrap() >= truth.sample_fragments - 40 * 32);
     let p = params(&[("aa", s("msaa4")), ("pool", s("counted"))]);
     let (cap, _) = run_truth(&*m, &scene, 40, 32, &p);
-    assert!(cap.flag.is_none(), "{:?}: {}", cap.flag, cap.notes);
+    assert!(cap.flag.is_empty(), "{}: {}", cap.flag, cap.notes);
     assert!(
         cap.notes
             .contains(&format!("{} nodes", truth.sample_fragments)),

@@ -56,7 +56,7 @@ triangles = 800
             assert!(r.get(cols::REASON).unwrap().contains("indexed"));
             continue;
         }
-        assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells);
+        assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells());
         let tris: f64 = r.get(cols::TRIANGLES).unwrap().parse().unwrap();
         assert!(r.get(cols::ACMR).is_some());
         if gpu.has(wgpu::Features::PIPELINE_STATISTICS_QUERY) {
@@ -148,12 +148,12 @@ fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
     assert!(rows.len() >= 90, "only {} geometry rows", rows.len());
     let num = |r: &Row, c: Col| -> f64 {
         r.get(c)
-            .unwrap_or_else(|| panic!("{c} missing: {:?}", r.cells))
+            .unwrap_or_else(|| panic!("{c} missing: {:?}", r.cells()))
             .parse()
             .unwrap()
     };
     for r in &rows {
-        assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells);
+        assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells());
         let drawn = match num(r, cols::DRAW_TRIANGLES) {
             0.0 => num(r, cols::TRIANGLES),
             d => d,
@@ -168,7 +168,7 @@ fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
             } else {
                 (drawn / batch_size).ceil()
             };
-            assert_eq!(batches, want, "{:?}", r.cells);
+            assert_eq!(batches, want, "{:?}", r.cells());
         }
         if r.get(cols::INDEX_FORMAT) == Some("uint16") {
             assert!(num(r, cols::BATCH_VERTICES) / batches <= 65_536.0);
@@ -177,9 +177,9 @@ fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
         if gpu.has(wgpu::Features::PIPELINE_STATISTICS_QUERY) {
             let vs = num(r, cols::VS_INVOCATIONS);
             if r.get(cols::INDEXED) == Some("false") {
-                assert_eq!(vs, 3.0 * drawn, "{:?}", r.cells);
+                assert_eq!(vs, 3.0 * drawn, "{:?}", r.cells());
             } else {
-                assert!(vs > 0.0 && vs <= 3.0 * drawn, "{:?}", r.cells);
+                assert!(vs > 0.0 && vs <= 3.0 * drawn, "{:?}", r.cells());
             }
         }
         if gpu.has(wgpu::Features::TIMESTAMP_QUERY) {
@@ -252,7 +252,7 @@ fn geometry_models_without_the_meshes_fails_rows_naming_the_file() {
     assert_eq!(n, bench_core::runner::rows_in(&groups));
     assert_eq!(sink.0.len(), n);
     for r in &sink.0 {
-        assert_eq!(r.get(cols::STATUS), Some("failed"), "{:?}", r.cells);
+        assert_eq!(r.get(cols::STATUS), Some("failed"), "{:?}", r.cells());
         let why = r.get(cols::REASON).unwrap();
         assert!(
             why.contains("file not found") && why.contains("models/"),

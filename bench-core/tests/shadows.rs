@@ -45,18 +45,18 @@ fn shadows_32px_rows_ok_with_errors_and_no_light_scene_skipped() {
         let mode = r.get(cols::BIAS_MODE).unwrap();
         match (scene, mode) {
             ("soft_shadow", "slope") => {
-                assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells);
+                assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells());
                 let rmse: f64 = r.get(cols::VIS_RMSE).unwrap().parse().unwrap();
-                assert!(rmse.is_finite() && rmse < 0.2, "{:?}", r.cells);
+                assert!(rmse.is_finite() && rmse < 0.2, "{:?}", r.cells());
                 assert!(
                     r.get(cols::GPU_MS_MEDIAN).is_some() || r.get(cols::CPU_MS_MEDIAN).is_some()
                 );
             }
             ("soft_shadow", _) => {
-                assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells);
+                assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells());
             }
             _ => {
-                assert_eq!(r.get(cols::STATUS), Some("skipped"), "{:?}", r.cells);
+                assert_eq!(r.get(cols::STATUS), Some("skipped"), "{:?}", r.cells());
                 assert!(r.get(cols::REASON).unwrap().contains("area light"));
             }
         }

@@ -1,6 +1,6 @@
 //! Reading runs.csv: rows as column → text maps, with typed accessors.
 
-use schema::{cols, Col};
+use schema::{cols, Col, FlagSet, Status};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -32,7 +32,7 @@ impl Rec {
         s.parse::<f64>().ok()
     }
     pub fn ok(&self) -> bool {
-        self.get(cols::STATUS) == "ok"
+        self.get(cols::STATUS).parse::<Status>() == Ok(Status::Ok)
     }
     /// The row's flags: `flag` is a `|`-joined list (older CSVs hold one value).
     pub fn flags(&self) -> Vec<&str> {
@@ -40,6 +40,10 @@ impl Rec {
             .split('|')
             .filter(|f| !f.is_empty())
             .collect()
+    }
+    /// The row's flags, typed (unknown words kept).
+    pub fn flag_set(&self) -> FlagSet {
+        self.get(cols::FLAG).parse().unwrap_or_default()
     }
     pub fn flagged(&self) -> bool {
         !self.flags().is_empty()

@@ -186,7 +186,7 @@ fn flagged_table(h: &mut String, runs: &Runs) {
             esc(&scene_name(r.get(cols::SCENE_LABEL))),
             r.get(cols::WIDTH),
             r.get(cols::HEIGHT),
-            esc(r.get(cols::POINT_KEY).rsplit('|').take(2).collect::<Vec<_>>().into_iter().rev().collect::<Vec<_>>().join(" ").as_str()),
+            esc(&point_key_tail(r)),
             time_cell(r),
             short(r.f(cols::RMSE)),
             esc(r.get(cols::NOTES))
@@ -214,7 +214,7 @@ fn rows_table(h: &mut String, runs: &Runs) {
             r.get(cols::WIDTH),
             r.get(cols::HEIGHT),
             esc(r.get(cols::METHOD)),
-            esc(r.get(cols::POINT_KEY).rsplit('|').next().unwrap_or("")),
+            esc(&point_key_axes(r)),
             time_cell(r),
             short(r.f(cols::X_FLOOR)),
             short(r.bytes_per_pixel()),
@@ -234,6 +234,22 @@ fn rows_table(h: &mut String, runs: &Runs) {
         );
     }
     h.push_str("</table>");
+}
+
+/// "method axes" of a row's point key (its raw text if it does not parse).
+fn point_key_tail(r: &Rec) -> String {
+    match r.get(cols::POINT_KEY).parse::<schema::PointKey>() {
+        Ok(k) => format!("{} {}", k.method, k.axes),
+        Err(_) => r.get(cols::POINT_KEY).to_string(),
+    }
+}
+
+/// The axes field of a row's point key (empty if it does not parse).
+fn point_key_axes(r: &Rec) -> String {
+    r.get(cols::POINT_KEY)
+        .parse::<schema::PointKey>()
+        .map(|k| k.axes)
+        .unwrap_or_default()
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 //! generator, its mesh file's stem and the parameters that tell it apart from the chart's other
 //! scenes. Names are never cut: two different things never share a name.
 
-use schema::cols;
+use schema::{cols, PointKey};
 use std::collections::BTreeMap;
 
 use crate::data::Rec;
@@ -11,16 +11,14 @@ use crate::data::Rec;
 /// A row's configuration axes: the `k=v` pairs of its point key's last field (the axes the
 /// method read, as the sweep set them; an axis left at its default is absent).
 pub fn config_axes(r: &Rec) -> Vec<(String, String)> {
-    let key = r.get(cols::POINT_KEY);
-    let last = if key.matches('|').count() >= 4 {
-        key.rsplit('|').next().unwrap_or("")
-    } else {
-        ""
-    };
-    last.split(',')
-        .filter_map(|kv| kv.split_once('='))
-        .map(|(k, v)| (k.to_string(), v.to_string()))
-        .collect()
+    match r.get(cols::POINT_KEY).parse::<PointKey>() {
+        Ok(k) => k
+            .axes()
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect(),
+        Err(_) => Vec::new(),
+    }
 }
 
 /// Identity of a configuration: method and its axes (study, scene and resolution left out).
@@ -245,7 +243,7 @@ mod tests {
     use super::*;
 
     fn rec(key: &str) -> Rec {
-        let method = key.split('|').nth(3).unwrap().to_string();
+        let method = key.parse::<PointKey>().unwrap().method;
         Rec([
             (cols::POINT_KEY.to_string(), key.to_string()),
             (cols::METHOD.to_string(), method),

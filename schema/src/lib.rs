@@ -8,6 +8,9 @@
 
 use std::fmt;
 
+mod values;
+pub use values::{Flag, FlagSet, GpuMsInterval, ParseError, PointKey, Status, MIN_SAMPLES_CI95};
+
 /// Bumped when a column is renamed or changes meaning; `mfx merge` and `mfx compare` refuse to
 /// mix versions (see `results/README.md` for what changed between versions).
 ///
@@ -17,7 +20,10 @@ use std::fmt;
 ///   whole composite) with `*_vs_k` for a method's own definition; `flag` is a `|`-joined set;
 ///   fixed `reps`/`warmup` replaced by a stopping rule (`timing_rule`, `samples`, CIs, clocks);
 ///   the `floor_blend` floor and `x_blend`.
-pub const SCHEMA_VERSION: u32 = 2;
+/// - 3: `exact` is now a verdict on the row (no fragment lost or merged and the image within
+///   `exact_bound` of the truth); the method's claim that was called `exact` is `claims_exact`.
+///   New: `exact_bound`, `gpu_time_trusted`, `gpu_ms_interval`.
+pub const SCHEMA_VERSION: u32 = 3;
 
 /// One declared column: its name in the CSV header and what it means (units in the name).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -133,9 +139,17 @@ pub mod cols {
         "method",
         "method or path name (see `mfx list methods`); floor_depth / floor_opaque are the floors",
     );
+    pub const CLAIMS_EXACT: Col = Col::new(
+        "claims_exact",
+        "true if the method claims to capture every fragment exactly when within capacity (schema ≤ 2 called this `exact`)",
+    );
     pub const EXACT: Col = Col::new(
         "exact",
-        "true if the method captures every fragment exactly when within capacity",
+        "true only when no fragment was lost or merged (no overflow, hazard, collision, precision, lost_coplanar, fragments_differ, image_differs) and the image is within exact_bound of the f64 ground truth at every pixel; empty for rows without a judged image. matches_truth is the weaker within-tolerance label",
+    );
+    pub const EXACT_BOUND: Col = Col::new(
+        "exact_bound",
+        "the max-abs error bound `exact` was judged with: the f32 rounding of the effect's compositing over the pixel's fragments (derived in bench-core/src/judge.rs)",
     );
     pub const EFFECT: Col = Col::new(
         "effect",
@@ -649,6 +663,10 @@ pub mod cols {
         "gpu_ms_ci_hi",
         "upper end of the bootstrap 95 % confidence interval of the median GPU time, ms",
     );
+    pub const GPU_MS_INTERVAL: Col = Col::new(
+        "gpu_ms_interval",
+        "what gpu_ms_ci_lo/hi are: ci95 (a 95 % interval of the median) | range (min and max: fewer samples than an order-statistic interval needs to reach 95 % coverage, see schema::MIN_SAMPLES_CI95)",
+    );
     pub const GPU_MS_MEAN_CI_LO: Col = Col::new(
         "gpu_ms_mean_ci_lo",
         "lower end of the bootstrap 95 % confidence interval of the mean GPU time, ms",
@@ -794,6 +812,10 @@ pub mod cols {
         "bytes_true_fragments",
         "bytes the scene's true fragments need: true_fragments × 8 (RGBA8 + f32 depth)",
     );
+    pub const GPU_TIME_TRUSTED: Col = Col::new(
+        "gpu_time_trusted",
+        "false when the GPU timestamps do not cover the frame (flag timestamps_incomplete): then x_floor, x_blend and speedup_vs_* stay empty",
+    );
     pub const X_FLOOR: Col = Col::new(
         "x_floor",
         "gpu_ms_median over the floor_depth gpu_ms_median of the same scene, resolution and run",
@@ -832,7 +854,7 @@ pub mod cols {
     );
     pub const MATCHES_TRUTH: Col = Col::new(
         "matches_truth",
-        "true when the image equals the ground truth within bad_pixel_tol at every pixel and nothing is non-finite: the only sense in which a row is drawn as exact",
+        "true when the image equals the ground truth within bad_pixel_tol at every pixel and nothing is non-finite: within tolerance, a weaker label than `exact` (a capture that lost fragments can still match)",
     );
     pub const RMSE_VS_K: Col = Col::new(
         "rmse_vs_k",
@@ -954,7 +976,9 @@ pub const GROUPS: &[Group] = &[
             cols::DEPTH_COMPLEXITY_MEAN,
             cols::TRUE_FRAGMENTS,
             cols::METHOD,
+            cols::CLAIMS_EXACT,
             cols::EXACT,
+            cols::EXACT_BOUND,
             cols::EFFECT,
             cols::STATUS,
             cols::REASON,
@@ -1132,6 +1156,7 @@ pub const GROUPS: &[Group] = &[
             cols::GPU_MS_MEAN,
             cols::GPU_MS_CI_LO,
             cols::GPU_MS_CI_HI,
+            cols::GPU_MS_INTERVAL,
             cols::GPU_MS_MEAN_CI_LO,
             cols::GPU_MS_MEAN_CI_HI,
             cols::GPU_MS_REL_CI,
@@ -1171,6 +1196,7 @@ pub const GROUPS: &[Group] = &[
             cols::BYTES_OVERHEAD,
             cols::FRAGMENT_BYTES_RATIO,
             cols::BYTES_TRUE_FRAGMENTS,
+            cols::GPU_TIME_TRUSTED,
             cols::X_FLOOR,
             cols::X_BLEND,
             cols::SPEEDUP_VS_DEPTH_PEEL,

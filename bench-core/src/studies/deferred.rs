@@ -25,8 +25,8 @@ use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::measure::{measure, set_timing};
 use crate::methods::{Capture, Method, Prepared};
 use crate::metrics::{image_error, BAD_PIXEL_TOL};
-use crate::record::cols;
 use crate::record::Row;
+use crate::record::{cols, Flag};
 use crate::record::{error_row, failed_row, set_params, skipped_row};
 use crate::shading::cpu_tiled::{self, CpuOptions};
 use crate::shading::gbuffer::GBufferPass;
@@ -208,7 +208,8 @@ fn set_error(row: &mut Row, reference: &[[f64; 4]], img: &[[f32; 4]]) {
         .set(cols::NON_FINITE, e.non_finite)
         .set_f(cols::REL_ERR_MAX, rel_err_max(reference, img));
     if e.non_finite > 0 {
-        row.set(cols::FLAG, "precision");
+        // Added: set_timing may already have flagged the row noisy or throttled.
+        row.add_flag(Flag::Precision);
     }
 }
 
@@ -249,7 +250,7 @@ impl Study for DeferredStudy {
                 .set(cols::LIGHT_COUNT, scene.lights.len());
             set_params(&mut row, pt.point.values())?;
             let tau = threshold(&pt.point);
-            row.set(cols::EXACT, tau == 0.0);
+            row.set(cols::CLAIMS_EXACT, tau == 0.0);
             let frac = pt.point.float(&DIFFUSE_ONLY_FRAC);
             row.set_f(cols::DIFFUSE_ONLY_FRAC, frac);
             let (setup, reference) = &*references.entry(frac.to_bits()).or_insert_with(|| {
@@ -407,4 +408,21 @@ fn set_tile_stats(row: &mut Row, counts: &[u32]) {
         cols::LIGHTS_PER_TILE_MAX,
         counts.iter().max().copied().unwrap_or(0),
     );
+}
+
+#[cfg(test)]
+mod flag_tests {
+    use super::*;
+
+    #[test]
+    fn a_non_finite_image_adds_precision_and_keeps_an_earlier_noisy() {
+        let mut row = Row::new();
+        row.add_flag(Flag::Noisy);
+        set_error(&mut row, &[[0.5; 4]; 2], &[[0.5; 4], [f32::NAN; 4]]);
+        assert!(
+            row.has_flag(Flag::Precision) && row.has_flag(Flag::Noisy),
+            "{}",
+            row.flags()
+        );
+    }
 }

@@ -91,7 +91,7 @@ pub fn run_methods_group(
         let method = methods::by_name(&pt.method).expect("checked in points()");
         let mut row = Row::new();
         row.set(cols::METHOD, &pt.method)
-            .set(cols::EXACT, method.exact());
+            .set(cols::CLAIMS_EXACT, method.exact());
         set_params(&mut row, pt.point.values())?;
         extra(&mut row, pt);
         let effect = match effect_of(method.as_ref(), &pt.point) {
@@ -225,7 +225,8 @@ fn finish_point(
     if let Some(img) = &cap.image {
         ctx.save_image(&mut row, &pt.method, pt.given(), img)?;
     }
-    if let Some(g) = m.gpu_median() {
+    // No speed-up of (or over) a GPU time that is not the frame's (judge::gpu_time_trusted).
+    if let Some(g) = m.gpu_median().filter(|_| judge::gpu_time_trusted(&row)) {
         if pt.method == BASELINE && peel_ms.is_none() {
             *peel_ms = Some(g);
         }

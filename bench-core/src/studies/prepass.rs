@@ -213,7 +213,7 @@ impl Study for PrepassStudy {
             let mut row = Row::new();
             row.set(cols::METHOD, &pt.method)
                 .set(cols::LIGHT_COUNT, scene.lights.len())
-                .set(cols::EXACT, false);
+                .set(cols::CLAIMS_EXACT, false);
             set_params(&mut row, pt.point.values())?;
             match self.run_point(ctx, &pt.method, &pt.point, &mut row) {
                 Ok(Some((img, is_prepass))) => {

@@ -5,7 +5,7 @@
 //! 3.4), and the raster-stage check. Each `[[study]]` of a suite is told apart by the axes it
 //! sweeps (the point key's last field); every figure has min–max whiskers where times are drawn.
 
-use schema::{cols, Col};
+use schema::{cols, Col, PointKey};
 use std::path::Path;
 
 use anyhow::Result;
@@ -18,16 +18,15 @@ use crate::labels::{file_safe, scene_name};
 const WHISKERS: &str = "Whiskers: 95 % CI of the median GPU time where the CSV has one (none otherwise: min–max is not a spread of the median).";
 
 /// The axes a row's `[[study]]` swept (from its point key).
-fn swept(r: &Rec) -> Vec<&str> {
-    let key = r.get(cols::POINT_KEY);
-    let last = key.rsplit('|').next().unwrap_or("");
-    last.split(',')
-        .filter_map(|kv| kv.split_once('=').map(|(k, _)| k))
-        .collect()
+fn swept(r: &Rec) -> Vec<String> {
+    r.get(cols::POINT_KEY)
+        .parse::<PointKey>()
+        .map(|k| k.axis_names().into_iter().map(String::from).collect())
+        .unwrap_or_default()
 }
 
 fn sweeps(r: &Rec, axis: Col) -> bool {
-    swept(r).contains(&axis.name)
+    swept(r).iter().any(|a| a == axis.name)
 }
 
 /// Triangles drawn per frame: `draw_triangles` (a prefix) or the whole scene.
@@ -332,7 +331,7 @@ fn formats(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result
     let which = |r: &Rec| {
         let s = swept(r);
         AXES.iter()
-            .filter(|(a, _)| s.contains(&a.name))
+            .filter(|(a, _)| s.iter().any(|x| x == a.name))
             .map(|(_, n)| *n)
             .collect::<Vec<_>>()
             .join(" × ")

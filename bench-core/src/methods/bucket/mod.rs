@@ -15,7 +15,7 @@
 use crate::axes::{Axis, Point};
 use crate::effects::FOLD_STATE_BYTES;
 use crate::gpu_util::{camera_entry, read_vec, storage_entry, texture_entry};
-use crate::record::cols;
+use crate::record::{cols, Flag};
 
 use super::{Capture, Expected, FrameStats};
 use crate::gpu::Gpu;
@@ -1004,7 +1004,7 @@ impl super::Prepared for PreparedBucket {
         cap.expected = Expected::All;
         cap.collision_fragments = Some(collisions);
         if collisions > 0 {
-            cap.flag = Some("collision".into());
+            cap.flag.add(Flag::Collision);
         }
         cap.counts = Some(counts);
         cap.notes = format!(

@@ -49,7 +49,7 @@ use crate::gpu_util::{
     bind_buffers, camera_entry, check_storage_size, compute_pipeline, read_vec, shader,
     storage_entry, STORAGE_RW,
 };
-use crate::record::cols;
+use crate::record::{cols, Flag};
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
@@ -677,7 +677,7 @@ impl Prepared for PreparedAbuffer {
         let (empty, full, partial) = (c[7], c[8], c[9]);
         cap.overflow_pixels = Some(ovf_px + short);
         if lost + dropped + big_lost > 0 {
-            cap.flag = Some("overflow".into());
+            cap.flag.add(Flag::Overflow);
         }
         cap.notes = format!(
             "{}; this frame {total} fragments, {lost} beyond the allocation, {dropped} beyond the sort capacity ({SORT_MAX}) in {ovf_px} pixels, {big_lost} big triangles unlisted; big-triangle tiles {empty} empty, {full} full, {partial} partial",

@@ -17,6 +17,7 @@ use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
     camera_entry, compute_pipeline, read_vec, shader, storage_entry, texture_entry, STORAGE_RW,
 };
+use crate::record::Flag;
 use crate::timing::GpuTimer;
 use crate::Result;
 
@@ -392,7 +393,7 @@ impl Prepared for PreparedDual {
         let left = read_vec::<u32>(gpu, &self.remaining, 1)?[0] as u64;
         cap.overflow_pixels = Some(left);
         if left > 0 {
-            cap.flag = Some("overflow".into());
+            cap.flag.add(Flag::Overflow);
             cap.notes = format!(
                 "{left} pixels kept unpeeled middle layers after {} peel passes",
                 self.max_peels
@@ -457,6 +458,6 @@ mod tests {
         let p = params(&[("max_layers", Int(4)), ("occlusion_stop", Bool(false))]);
         let (cap, _) = run(&DualPeel, &s, 32, 32, &p);
         assert!(cap.overflow_pixels.unwrap() > 0);
-        assert_eq!(cap.flag.as_deref(), Some("overflow"));
+        assert_eq!(cap.flag, Flag::Overflow.into());
     }
 }

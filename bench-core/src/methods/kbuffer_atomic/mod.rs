@@ -266,7 +266,8 @@ impl Prepared for PreparedAtomic {
 
     fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
         if self.bounding.keep == Keep::Nearest {
-            self.slots.judge(cap, reference);
+            self.slots
+                .judge(cap, reference, crate::methods::kbuffer_rmw::Races::None);
         } else {
             cap.notes = "keep = first: no k-nearest hazard judge (the first k are the GPU's arrival order, judged against primitive order in *_vs_k)".into();
         }

@@ -31,7 +31,7 @@ use crate::gpu_util::{
     STORAGE_RW,
 };
 use crate::oit::Keep;
-use crate::record::cols;
+use crate::record::{cols, Flag};
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
 use crate::Result;
@@ -150,21 +150,39 @@ impl KSlots {
     /// an RMW race from a raster-coverage disagreement with the reference (a fragment the GPU
     /// did not rasterize: seen on 1 pixel of 128² grass on lavapipe, where depth_peel and
     /// linked_list miss it too), so read it beside depth_peel's `layer_count_accuracy`.
-    pub fn judge(&self, cap: &mut Capture, lists: &FragmentLists) {
+    pub fn judge(&self, cap: &mut Capture, lists: &FragmentLists, races: Races) {
         if self.captured.len() != lists.pixels() * self.k as usize {
             return;
         }
         let m = store::k_nearest_mismatch(&self.captured, self.k as usize, lists);
-        cap.hazard_pixels = Some(m.hazards);
         let mut notes = Vec::new();
-        if let Some(p) = m.first_hazard {
-            cap.flag.get_or_insert_with(|| "hazard".into());
-            let (x, y) = (p as u32 % lists.width, p as u32 / lists.width);
-            notes.push(format!("first hazard pixel ({x},{y})"));
+        match races {
+            Races::Possible => {
+                cap.hazard_pixels = Some(m.hazards);
+                if let Some(p) = m.first_hazard {
+                    cap.flag.add(Flag::Hazard);
+                    let (x, y) = (p as u32 % lists.width, p as u32 / lists.width);
+                    notes.push(format!("first hazard pixel ({x},{y})"));
+                }
+            }
+            Races::None => {
+                // An insertion without read-modify-write races: a pixel off the true k nearest
+                // is the rasteriser's fragment set differing from the reference's (the same
+                // pixels depth_peel and linked_list miss), never a hazard.
+                cap.hazard_pixels = Some(0);
+                if let Some(p) = m.first_hazard {
+                    cap.flag.add(Flag::FragmentsDiffer);
+                    let (x, y) = (p as u32 % lists.width, p as u32 / lists.width);
+                    notes.push(format!(
+                        "{} pixels hold other fragments than the reference's k nearest (raster coverage; first ({x},{y}))",
+                        m.hazards
+                    ));
+                }
+            }
         }
         if let Some(p) = m.first_tie {
             // Not a race: the true k + 1 nearest hold an f32 depth tie the GPU cannot order.
-            cap.flag.get_or_insert_with(|| "lost_coplanar".into());
+            cap.flag.add(Flag::LostCoplanar);
             let (x, y) = (p as u32 % lists.width, p as u32 / lists.width);
             notes.push(format!(
                 "{} pixels differ at f32 depth ties (not counted as hazards; first ({x},{y}))",
@@ -179,6 +197,17 @@ impl KSlots {
             };
         }
     }
+}
+
+/// Whether a k-buffer's insertion can race ([`KSlots::judge`]): what a pixel off the true k
+/// nearest is named.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Races {
+    /// Read-modify-write of the slots (kbuffer_rmw): a wrong pixel is a `hazard`.
+    Possible,
+    /// Atomic insertion (kbuffer_atomic): hazard-free by construction, a wrong pixel is
+    /// `fragments_differ`.
+    None,
 }
 
 /// The insertion rule on the CPU, one fragment at a time: `slots` hold (depth, payload)
@@ -403,7 +432,7 @@ impl Prepared for PreparedRmw {
 
     fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
         if self.bounding.keep == Keep::Nearest {
-            self.slots.judge(cap, reference);
+            self.slots.judge(cap, reference, Races::Possible);
         } else {
             let note = "keep = first: no k-nearest hazard judge (its truth is the k nearest; races show in *_vs_k against primitive order)";
             cap.notes = if cap.notes.is_empty() {
@@ -511,9 +540,21 @@ mod tests {
             captured,
         };
         let mut cap = Capture::empty();
-        slots.judge(&mut cap, &lists);
+        slots.judge(&mut cap, &lists, Races::Possible);
         assert_eq!(cap.hazard_pixels, Some(1));
-        assert_eq!(cap.flag.as_deref(), Some("hazard"));
+        assert!(cap.flag.contains(Flag::Hazard), "{}", cap.flag);
+        assert!(cap.notes.contains("(16,16)"), "{}", cap.notes);
+        // The same wrong pixel from the atomic insertion (kbuffer_atomic), which cannot race: a
+        // fragment set that differs from the reference's, not a hazard (issue 32: it was flagged
+        // `hazard` wherever the rasteriser's set differed by a few fragments).
+        let mut cap = Capture::empty();
+        slots.judge(&mut cap, &lists, Races::None);
+        assert_eq!(cap.hazard_pixels, Some(0));
+        assert!(
+            cap.flag.contains(Flag::FragmentsDiffer) && !cap.flag.contains(Flag::Hazard),
+            "{}",
+            cap.flag
+        );
         assert!(cap.notes.contains("(16,16)"), "{}", cap.notes);
     }
 

@@ -53,7 +53,7 @@ use crate::gpu_util::{
     bind_buffers, camera_entry, check_storage_size, compute_pipeline, multisample,
     per_sample_source, read_vec, storage_entry, COMMON_WGSL, STORAGE_RW,
 };
-use crate::record::cols;
+use crate::record::{cols, Flag};
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
@@ -727,7 +727,7 @@ impl Prepared for PreparedList {
             .sum();
         cap.overflow_pixels = Some(ovf);
         if ovf > 0 {
-            cap.flag = Some("overflow".into());
+            cap.flag.add(Flag::Overflow);
         }
         cap.notes = format!(
             "{}; {arrived} fragments arrived, {ovf} overflowed pixels, {lost} lost fragments",
@@ -807,7 +807,7 @@ mod tests {
                     // mean depth; the counted pool holds exactly their fragments.
                     let (cap, lists) = run(&LinkedList, s, 48, 48, &list_params(pool, node, 16));
                     assert_eq!(cap.overflow_pixels, Some(0), "{name}: {}", cap.notes);
-                    assert!(cap.flag.is_none(), "{name}: {:?}", cap.flag);
+                    assert!(cap.flag.is_empty(), "{name}: {}", cap.flag);
                     let (e, at) = max_err(&cap, &lists);
                     assert!(e <= IMAGE_TOL, "{name}: error {e} at pixel {at}");
                     let (bad, first) = count_mismatch(&cap, &lists, u32::MAX);
@@ -832,7 +832,7 @@ mod tests {
             );
             let ovf = cap.overflow_pixels.expect("reported");
             assert!(ovf > 0, "{node}: overflow must be counted: {}", cap.notes);
-            assert_eq!(cap.flag.as_deref(), Some("overflow"));
+            assert_eq!(cap.flag, Flag::Overflow.into());
             // Pixels that kept every fragment are exact; the captured fragments fill the pool.
             let counts = cap.counts.as_ref().unwrap();
             assert_eq!(counts.iter().map(|&c| c as u64).sum::<u64>(), pool);
@@ -912,12 +912,7 @@ mod tests {
             let mut timer = GpuTimer::new(g);
             prepared.frame(g, &gs_small, &mut timer).unwrap();
             let cap = prepared.readback(g, &gs_small).unwrap();
-            assert_eq!(
-                cap.flag.as_deref(),
-                Some("overflow"),
-                "{node}: {}",
-                cap.notes
-            );
+            assert_eq!(cap.flag, Flag::Overflow.into(), "{node}: {}", cap.notes);
             let counts = cap.counts.as_ref().unwrap();
             let kept: u64 = counts.iter().map(|&c| c as u64).sum();
             assert_eq!(

@@ -37,7 +37,7 @@ use crate::gpu_util::{
     storage_entry, STORAGE_RW,
 };
 use crate::oit::{self, Keep, Order, TailMode};
-use crate::record::cols;
+use crate::record::{cols, Flag};
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
 use crate::Result;
@@ -108,7 +108,7 @@ pub fn judge_race(cap: &mut Capture, def: Vec<[f64; 4]>, width: u32) {
         let (n, first) = hazards(img, &def);
         cap.hazard_pixels = Some(n);
         if let Some(p) = first {
-            cap.flag.get_or_insert_with(|| "hazard".into());
+            cap.flag.add(Flag::Hazard);
             let (x, y) = (p as u32 % width, p as u32 / width);
             cap.notes = format!(
                 "{}; {n} pixels differ from the ideal-order twin by more than {HAZARD_TOL:e} (first ({x},{y}))",

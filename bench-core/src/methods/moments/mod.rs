@@ -38,7 +38,7 @@ use crate::gpu_util::{
 use crate::oit::moment_math::wrapping_zone;
 use crate::oit::moments::{bias_vector, default_bias, depth_range_of, quant, B0_MIN};
 use crate::oit::{self, MomentConfig, MomentKind, MomentStorage};
-use crate::record::cols;
+use crate::record::{cols, Flag};
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
@@ -598,7 +598,7 @@ impl Prepared for PreparedMoments {
         cap.expected = Expected::All;
         let failed = read_vec::<u32>(gpu, &self.failures, 1)?[0];
         if failed > 0 {
-            cap.flag = Some("precision".into());
+            cap.flag.add(Flag::Precision);
         }
         let (near, far) = match self.cfg.warp {
             oit::Warp::Log { near, far } => (near, far),

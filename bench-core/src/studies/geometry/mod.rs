@@ -954,7 +954,7 @@ fn fill_row(
         (true, IndexFormat::Uint32) => 4 * index_count,
     };
     row.set(cols::EFFECT, "none")
-        .set(cols::EXACT, false)
+        .set(cols::CLAIMS_EXACT, false)
         .set(cols::BATCHES, b.batches.len())
         .set(cols::BATCH_VERTICES, b.verts.len())
         .set(cols::INDEX_COUNT, index_count)

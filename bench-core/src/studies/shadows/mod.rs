@@ -25,8 +25,8 @@ use super::{Emit, GroupCtx, Methods, Opt, PointSpec, Study};
 use crate::axes::{Axis, Point};
 use crate::measure::{measure, set_timing};
 use crate::methods::{Method, Prepared};
-use crate::record::cols;
 use crate::record::Row;
+use crate::record::{cols, Flag};
 use crate::record::{error_row, failed_row, set_params, skipped_row};
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
@@ -101,7 +101,7 @@ impl Study for ShadowsStudy {
         let set = settings(ctx.study)?;
         let base_row = |point: &Point| -> Result<Row> {
             let mut row = Row::new();
-            row.set(cols::METHOD, METHOD).set(cols::EXACT, false);
+            row.set(cols::METHOD, METHOD).set(cols::CLAIMS_EXACT, false);
             set_params(&mut row, point.values())?;
             row.set(cols::SHADOW_RAYS, set.rays_per_axis * set.rays_per_axis);
             Ok(row)
@@ -189,12 +189,11 @@ impl Study for ShadowsStudy {
                 .set_f(cols::VIS_BLEED_MEAN, e.bleed)
                 .set_f(cols::VIS_OVERSHADOW_MEAN, e.overshadow);
             if e.unevaluated > 0 || e.non_finite > 0 {
-                row.set(cols::FLAG, "precision").set(cols::NOTES,
-                    format!(
-                        "{} reference pixels the GPU did not evaluate, {} non-finite (counted as error 1)",
-                        e.unevaluated, e.non_finite
-                    ),
-                );
+                // Added, never set: set_timing may already have flagged the row noisy.
+                row.add_flag(Flag::Precision).add_note(&format!(
+                    "{} reference pixels the GPU did not evaluate, {} non-finite (counted as error 1)",
+                    e.unevaluated, e.non_finite
+                ));
             }
             if let Some(dir) = &img_dir {
                 if imaged.contains(&i) {
