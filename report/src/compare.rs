@@ -14,8 +14,9 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 
+use crate::cells::esc;
 use crate::charts::{Bars, Figure, Pt};
-use crate::data::{resolution, Rec, Runs};
+use crate::data::{platform, platforms, resolution, Rec, Runs};
 use crate::labels::{file_safe, scene_name, ConfigLabels};
 
 /// What the comparison adds to the page.
@@ -25,22 +26,6 @@ pub struct Comparison {
     pub html: String,
     /// The largest max-abs image difference between platforms, with its point and platforms.
     pub worst_image_diff: Option<(f64, String, String, String)>,
-}
-
-/// "adapter (backend)": the unit compared.
-pub fn platform(r: &Rec) -> String {
-    format!("{} ({})", r.get(cols::ADAPTER), r.get(cols::BACKEND))
-}
-
-pub fn platforms(runs: &Runs) -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
-    for r in &runs.rows {
-        let p = platform(r);
-        if !out.contains(&p) {
-            out.push(p);
-        }
-    }
-    out
 }
 
 /// The baseline platform: the first whose "adapter (backend)" contains `name` (case-insensitive),
@@ -66,13 +51,6 @@ pub fn baseline(runs: &Runs, name: Option<&str>) -> Result<String> {
             .or_else(|| all.first().cloned())
             .unwrap_or_default()),
     }
-}
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
 
 fn num(v: f64) -> String {
@@ -227,7 +205,7 @@ pub fn compare(
                     .map(|k| {
                         by_point[k]
                             .get(p)
-                            .and_then(|r| crate::studies::methods::time_pt(r, 0.0))
+                            .and_then(|r| crate::points::time_pt(r, 0.0))
                     })
                     .collect();
                 (p.clone(), v)
@@ -247,7 +225,7 @@ pub fn compare(
             &format!(
                 "Median GPU time per frame of each configuration on each platform. {} \
                  floor_depth/floor_opaque are the rasterisation floors of the same scene.",
-                crate::studies::methods::ci_caption(runs)
+                crate::points::ci_caption(runs)
             ),
         )?);
     }

@@ -4,48 +4,10 @@
 use schema::cols;
 use std::fmt::Write;
 
+use crate::cells::{esc, short, time_cell};
 use crate::charts::Figure;
 use crate::data::{Rec, Runs};
 use crate::labels::scene_name;
-use crate::studies::methods::time_cell;
-
-pub fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
-/// A number in three significant digits (no trailing zeros), `e` notation outside
-/// [0.001, 100000); "" when absent.
-pub fn short(v: Option<f64>) -> String {
-    let Some(x) = v else { return String::new() };
-    if x == 0.0 {
-        return "0".into();
-    }
-    if x.is_nan() {
-        return "nan".into();
-    }
-    if x.is_infinite() {
-        return if x > 0.0 { "inf" } else { "-inf" }.into();
-    }
-    let a = x.abs();
-    if !(1e-3..1e5).contains(&a) {
-        let s = format!("{x:.2e}");
-        let (m, e) = s.split_once('e').expect("exponent form");
-        return format!("{}e{e}", trim(m));
-    }
-    let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
-    trim(&format!("{x:.decimals$}"))
-}
-
-fn trim(s: &str) -> String {
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s.to_string()
-    }
-}
 
 const STYLE: &str = "body{font-family:sans-serif;max-width:1400px;margin:2em auto;color:#222;padding:0 1em}\
 table{border-collapse:collapse;margin:1em 0;font-size:13px}td,th{border:1px solid #ccc;padding:3px 7px;text-align:left}\
@@ -234,32 +196,4 @@ fn rows_table(h: &mut String, runs: &Runs) {
         );
     }
     h.push_str("</table>");
-}
-
-#[cfg(test)]
-mod tests {
-    use super::short;
-
-    #[test]
-    fn numbers_keep_three_significant_digits() {
-        let v: Vec<String> = [
-            0.0,
-            10.0,
-            1.0,
-            0.25,
-            12.345,
-            1234.6,
-            5e-4,
-            1.234e-6,
-            2.5e7,
-            f64::INFINITY,
-        ]
-        .iter()
-        .map(|x| short(Some(*x)))
-        .collect();
-        assert_eq!(
-            v,
-            ["0", "10", "1", "0.25", "12.3", "1235", "5e-4", "1.23e-6", "2.5e7", "inf"]
-        );
-    }
 }

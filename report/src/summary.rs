@@ -7,11 +7,9 @@ use schema::{cols, Col};
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
-use crate::compare::{platform, platforms};
-use crate::data::{resolution, Rec, Runs};
-use crate::html::short;
+use crate::cells::{short, time_cell};
+use crate::data::{platform, platforms, resolution, Rec, Runs};
 use crate::labels::{scene_name, ConfigLabels};
-use crate::studies::methods::time_cell;
 
 /// RMSE budgets (vs the ground truth) the summary names the fastest configuration under.
 pub const BUDGETS: [f64; 2] = [1e-3, 1e-2];

@@ -64,7 +64,7 @@ fn rate(r: &Rec, x: f64, amount: f64, scale: f64) -> Option<Pt> {
 }
 
 fn gpu_ms(r: &Rec, x: f64) -> Option<Pt> {
-    super::methods::time_pt(r, x)
+    crate::points::time_pt(r, x)
 }
 
 fn push(series: &mut Vec<Series>, name: String, p: Pt) {

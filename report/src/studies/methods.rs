@@ -12,11 +12,12 @@ use std::path::Path;
 
 use anyhow::Result;
 
+use crate::cells::{esc, short, time_cell};
 use crate::charts::{Bars, Figure, Named, Pt, Series, XY};
 use crate::data::{resolution, Rec, Runs};
-use crate::html::{esc, short};
 use crate::labels::{config_key, file_safe, parse_scene, scene_name, scene_names, ConfigLabels};
 use crate::pareto;
+use crate::points::{ci_caption, time_pt};
 
 /// Flags that make a point's time unusable for the front (its timestamps did not all arrive).
 const UNTIMED: &[&str] = &["timestamps_incomplete"];
@@ -75,30 +76,6 @@ pub fn config_series(
         s.points.sort_by(|a, b| a.x.total_cmp(&b.x));
     }
     out
-}
-
-/// A GPU-time point: y = median, whisker = the 95 % CI of the median when the CSV has one.
-pub fn time_pt(r: &Rec, x: f64) -> Option<Pt> {
-    let (lo, hi) = r.gpu_ci().unzip();
-    Some(Pt::spread(x, r.f(cols::GPU_MS_MEDIAN)?, lo, hi).flagged(r.flagged()))
-}
-
-/// What the time whiskers of a run's charts mean, for captions.
-pub fn ci_caption(runs: &Runs) -> &'static str {
-    if runs.has(cols::GPU_MS_CI_LO) {
-        "Whiskers: 95 % bootstrap CI of the median GPU time."
-    } else {
-        "No whiskers: this CSV has no confidence interval of the median (gpu_ms_ci_lo/hi), and min–max is not one."
-    }
-}
-
-/// `ci_caption` for a set of rows (whether any has a CI).
-pub fn ci_caption_rows(rows: &[&Rec]) -> &'static str {
-    if rows.iter().any(|r| r.gpu_ci().is_some()) {
-        "Whiskers: 95 % bootstrap CI of the median GPU time."
-    } else {
-        "No whiskers: these rows have no confidence interval of the median (gpu_ms_ci_lo/hi), and min–max is not one."
-    }
 }
 
 fn untimed(r: &Rec) -> bool {
@@ -448,19 +425,6 @@ fn scene_table(
         h.push_str("<p class=\"note\">FLIP: not measured in this CSV (no flip_mean column).</p>");
     }
     h
-}
-
-/// "1.23 [1.20, 1.27]" or the median alone.
-pub fn time_cell(r: &Rec) -> String {
-    match (r.f(cols::GPU_MS_MEDIAN), r.gpu_ci()) {
-        (Some(m), Some((lo, hi))) => format!(
-            "{} [{}, {}]",
-            short(Some(m)),
-            short(Some(lo)),
-            short(Some(hi))
-        ),
-        (m, _) => short(m),
-    }
 }
 
 /// Scenes that differ from each other in one parameter only form a family; GPU time against

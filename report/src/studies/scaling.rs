@@ -16,9 +16,9 @@ use std::path::Path;
 
 use anyhow::Result;
 
+use crate::cells::{esc, short};
 use crate::charts::{Figure, Pt, Series, XY};
 use crate::data::{Rec, Runs};
-use crate::html::{esc, short};
 use crate::labels::{parse_scene, scene_name};
 use crate::studies::methods::scene_families;
 

@@ -102,7 +102,7 @@ fn error_vs_time(g: &[&Rec], name: &str, stem: &str, dir: &Path) -> Result<Figur
         &format!("shadows_error_vs_time_{stem}"),
         &format!(
             "One point per configuration of every sweep of the suite (colour: layers k and shadow-map size; marker: the sweep);              the dashed line joins the configurations no other beats on both, each named. The reference is m×m stratified shadow rays per pixel              from the same G-buffer points. {} {}",
-            super::methods::ci_caption_rows(g),
+            crate::points::ci_caption_rows(g),
             labels.fixed_note()
         ),
     )
