@@ -4,7 +4,7 @@
 
 use schema::cols;
 
-use crate::data::Rec;
+use crate::data::{Interval, Rec};
 
 pub fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -44,16 +44,38 @@ fn trim(s: &str) -> String {
     }
 }
 
-/// "1.23 [1.20, 1.27]" or the median alone.
+/// "yes" (exact), "no (within tol.)" (matches_truth but not exact), "no", or "" (no image error).
+pub fn exact_cell(r: &Rec) -> &'static str {
+    match (r.exact_result(), r.within_tolerance()) {
+        (Some(true), _) => "yes",
+        (Some(false), Some(true)) => "no (within tol.)",
+        (Some(false), _) => "no",
+        _ => "",
+    }
+}
+
+/// "1.23 [1.20, 1.27]" (a 95 % CI), "1.23 (range 1.20–1.27, n = 3)" (too few samples for a
+/// CI), the median alone, or "untrusted (3.45)" when the GPU timestamps missed part of the frame.
 pub fn time_cell(r: &Rec) -> String {
-    match (r.f(cols::GPU_MS_MEDIAN), r.gpu_ci()) {
-        (Some(m), Some((lo, hi))) => format!(
+    let m = r.f(cols::GPU_MS_MEDIAN);
+    if m.is_some() && !r.time_trusted() {
+        return format!("untrusted ({})", short(m));
+    }
+    match (m, r.gpu_ci(), r.interval()) {
+        (Some(m), Some((lo, hi)), Interval::Ci95) => format!(
             "{} [{}, {}]",
             short(Some(m)),
             short(Some(lo)),
             short(Some(hi))
         ),
-        (m, _) => short(m),
+        (Some(m), Some((lo, hi)), Interval::Range(n)) => format!(
+            "{} (range {}–{}{})",
+            short(Some(m)),
+            short(Some(lo)),
+            short(Some(hi)),
+            n.map(|n| format!(", n = {n}")).unwrap_or_default()
+        ),
+        (m, _, _) => short(m),
     }
 }
 

@@ -126,7 +126,7 @@ pub fn compare(
     let ok: Vec<&Rec> = runs
         .rows
         .iter()
-        .filter(|r| r.ok() && r.f(cols::GPU_MS_MEDIAN).is_some())
+        .filter(|r| r.ok() && r.trusted_ms().is_some())
         .collect();
     // point_key → platform → row
     let mut by_point: BTreeMap<&str, BTreeMap<String, &Rec>> = BTreeMap::new();
@@ -238,13 +238,13 @@ pub fn compare(
     let mut speed: BTreeMap<String, BTreeMap<String, Vec<f64>>> = BTreeMap::new();
     for k in &order {
         let per = &by_point[k];
-        let Some(b) = per.get(&base).and_then(|r| r.f(cols::GPU_MS_MEDIAN)) else {
+        let Some(b) = per.get(&base).and_then(|r| r.trusted_ms()) else {
             continue;
         };
         let r0 = per.values().next().expect("non-empty");
         let c = labels.get(r0);
         for p in &others {
-            if let Some(t) = per.get(*p).and_then(|r| r.f(cols::GPU_MS_MEDIAN)) {
+            if let Some(t) = per.get(*p).and_then(|r| r.trusted_ms()) {
                 if t > 0.0 && b > 0.0 {
                     if !configs.contains(&c) {
                         configs.push(c.clone());

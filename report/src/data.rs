@@ -334,6 +334,22 @@ impl Runs {
         out
     }
 
+    /// `group_by` over any items (first-seen order of keys).
+    pub fn group_by_owned<'a, T>(
+        items: &'a [T],
+        key: impl Fn(&T) -> String,
+    ) -> Vec<(String, Vec<&'a T>)> {
+        let mut out: Vec<(String, Vec<&'a T>)> = Vec::new();
+        for t in items {
+            let k = key(t);
+            match out.iter_mut().find(|(g, _)| *g == k) {
+                Some((_, v)) => v.push(t),
+                None => out.push((k, vec![t])),
+            }
+        }
+        out
+    }
+
     /// Distinct non-empty values of a column, in first-seen order.
     pub fn distinct<'a>(rows: impl IntoIterator<Item = &'a Rec>, col: Col) -> Vec<String> {
         let mut out: Vec<String> = Vec::new();

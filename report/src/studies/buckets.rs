@@ -71,7 +71,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             series: config_series(&at_res, &labels, &styles, |r| {
                 let (lo, hi) = r.gpu_ci().unzip();
                 Some(Pt {
-                    x: r.f(cols::GPU_MS_MEDIAN)?,
+                    x: r.trusted_ms()?,
                     y: r.f(cols::COLLISION_RATE)?,
                     xlo: lo,
                     xhi: hi,

@@ -12,15 +12,12 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use crate::cells::{esc, short, time_cell};
+use crate::cells::{esc, exact_cell, short, time_cell};
 use crate::charts::{Bars, Figure, Named, Pt, Series, XY};
 use crate::data::{resolution, Rec, Runs};
 use crate::labels::{config_key, file_safe, parse_scene, scene_name, scene_names, ConfigLabels};
 use crate::pareto;
 use crate::points::{ci_caption, time_pt};
-
-/// Flags that make a point's time unusable for the front (its timestamps did not all arrive).
-const UNTIMED: &[&str] = &["timestamps_incomplete"];
 
 /// Colour (configuration) and marker (method family) of every configuration of a set of rows,
 /// fixed across a report's charts so a configuration looks the same everywhere.
@@ -78,10 +75,6 @@ pub fn config_series(
     out
 }
 
-fn untimed(r: &Rec) -> bool {
-    r.flags().iter().any(|f| UNTIMED.contains(f))
-}
-
 /// The rows of one scene at one resolution whose front is drawn; the front's members by key.
 struct Fronts {
     time: Vec<String>,
@@ -125,6 +118,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let styles = Styles::new(methods.iter().copied());
     let mut figs = Vec::new();
     let ci = ci_caption(runs);
+    let ci = ci.as_str();
     for (res, at_res) in Runs::group_by(methods.iter().copied(), resolution) {
         // Errors of different effects are different quantities: one front per scene and effect.
         let effects = Runs::distinct(at_res.iter().copied(), cols::EFFECT).len() > 1;
@@ -201,14 +195,14 @@ fn scene_figures(
     let vlines: Vec<(f64, String)> = floors
         .iter()
         .filter_map(|r| {
-            let ms = r.f(cols::GPU_MS_MEDIAN)?;
+            let ms = r.trusted_ms()?;
             Some((ms, format!("{} {}", r.get(cols::METHOD), short(Some(ms)))))
         })
         .collect();
-    let timed: Vec<&Rec> = g.iter().copied().filter(|r| !untimed(r)).collect();
-    let time_err = |r: &Rec| Some((r.f(cols::GPU_MS_MEDIAN)?, r.f(cols::RMSE)?));
+    let timed: Vec<&Rec> = g.iter().copied().filter(|r| r.time_trusted()).collect();
+    let time_err = |r: &Rec| Some((r.trusted_ms()?, r.f(cols::RMSE)?));
     let mem_err = |r: &Rec| Some((r.bytes_per_pixel()?, r.f(cols::RMSE)?));
-    let mem_time = |r: &Rec| Some((r.bytes_per_pixel()?, r.f(cols::GPU_MS_MEDIAN)?));
+    let mem_time = |r: &Rec| Some((r.bytes_per_pixel()?, r.trusted_ms()?));
     // On the fronts an exact configuration's error is 0: its RMSE is f32 rounding, and ranking
     // exact methods by rounding noise would put a slower one on the front.
     let judged = |r: &Rec, e: f64| {
@@ -227,7 +221,7 @@ fn scene_figures(
     let x_ci = |r: &Rec, y: f64| {
         let (lo, hi) = r.gpu_ci().unzip();
         Some(Pt {
-            x: r.f(cols::GPU_MS_MEDIAN)?,
+            x: r.trusted_ms()?,
             y,
             xlo: lo,
             xhi: hi,
@@ -237,7 +231,7 @@ fn scene_figures(
     };
     let excluded = g.len() - timed.len();
     let untimed_note = if excluded > 0 {
-        format!(" {excluded} point(s) with incomplete timestamps are drawn but left off the front.")
+        format!(" {excluded} point(s) whose GPU timestamps miss part of the frame are left out (their time is not the frame's).")
     } else {
         String::new()
     };
@@ -268,7 +262,7 @@ fn scene_figures(
     )?);
     // 2. FLIP mean vs time, when measured.
     if g.iter().any(|r| r.f(cols::FLIP_MEAN).is_some()) {
-        let flip_time = |r: &Rec| Some((r.f(cols::GPU_MS_MEDIAN)?, r.f(cols::FLIP_MEAN)?));
+        let flip_time = |r: &Rec| Some((r.trusted_ms()?, r.f(cols::FLIP_MEAN)?));
         let f = front_of(&timed, flip_time);
         let xy = XY {
             title: format!("FLIP vs GPU time — {name}, {res}"),
@@ -363,7 +357,7 @@ fn scene_table(
         h,
         "<table class=\"scene\"><caption>{} at {}: every configuration, fastest first. \
          Front: on the Pareto front of RMSE vs time (T) and of RMSE vs memory (M). {}</caption>\
-         <tr><th>method</th><th>configuration</th><th>GPU ms (95 % CI)</th><th>× floor_depth</th><th>bytes/px</th>\
+         <tr><th>method</th><th>configuration</th><th>GPU ms [95 % CI] or (range, n)</th><th>× floor_depth</th><th>bytes/px</th>\
          <th>RMSE</th>{}<th>exact</th><th>flag</th><th>front</th></tr>",
         esc(name),
         esc(res),
@@ -403,7 +397,7 @@ fn scene_table(
             esc(r.get(cols::METHOD)),
             esc(&cfg),
             time_cell(r),
-            short(r.f(cols::X_FLOOR)),
+            short(r.f(cols::X_FLOOR).filter(|_| r.time_trusted())),
             short(r.bytes_per_pixel()),
             short(r.f(cols::RMSE)),
             if flip {
@@ -411,11 +405,7 @@ fn scene_table(
             } else {
                 String::new()
             },
-            match r.exact_result() {
-                Some(true) => "yes",
-                Some(false) => "no",
-                None => "",
-            },
+            exact_cell(r),
             esc(&r.flags().join(", ")),
             on
         );
@@ -631,7 +621,7 @@ fn ratio_bars(at_res: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) ->
         let rows: Vec<&Rec> = at_res
             .iter()
             .copied()
-            .filter(|r| r.f(col).is_some() && Some(r.get(cols::METHOD)) != skip)
+            .filter(|r| r.f(col).is_some() && r.time_trusted() && Some(r.get(cols::METHOD)) != skip)
             .collect();
         let title = format!("{title} — {res}");
         if rows.is_empty() {
