@@ -228,7 +228,8 @@ fn pick_text(labels: &ConfigLabels, p: &Pick, with_error: bool) -> String {
 /// The sentences of one verdict (the text and the table say the same).
 struct Cells {
     exact: String,
-    x_floor: String,
+    /// ("10×", "0.1 ms"): the multiple of floor_depth and the floor's time.
+    x_floor: (String, String),
     budgets: Vec<String>,
     flagged: String,
 }
@@ -270,12 +271,11 @@ fn cells(v: &Verdict, labels: &ConfigLabels) -> Cells {
         ),
     };
     let x_floor = match (&v.fastest_exact, v.floor_ms) {
-        (Some(p), Some(f)) if f > 0.0 => format!(
-            "{}× ({} ms)",
-            short(p.row.trusted_ms().map(|t| t / f)),
-            short(Some(f))
+        (Some(p), Some(f)) if f > 0.0 => (
+            format!("{}×", short(p.row.trusted_ms().map(|t| t / f))),
+            format!("{} ms", short(Some(f))),
         ),
-        _ => String::new(),
+        _ => (String::new(), String::new()),
     };
     let budgets = v
         .budgets
@@ -500,7 +500,11 @@ pub fn summary_html(runs: &Runs) -> String {
                 esc(&scene_title(v)),
                 esc(&v.res),
                 esc(&c.exact),
-                esc(&c.x_floor),
+                if c.x_floor.0.is_empty() {
+                    String::new()
+                } else {
+                    esc(&format!("{} ({})", c.x_floor.0, c.x_floor.1))
+                },
                 c.budgets
                     .iter()
                     .map(|b| format!("<td>{}</td>", esc(b)))
@@ -575,10 +579,10 @@ pub fn summary_text(runs: &Runs) -> String {
                 out,
                 "- Fastest exact: {}{}.",
                 c.exact,
-                if c.x_floor.is_empty() {
+                if c.x_floor.0.is_empty() {
                     String::new()
                 } else {
-                    format!(", {} floor_depth", c.x_floor)
+                    format!(", {} floor_depth ({})", c.x_floor.0, c.x_floor.1)
                 }
             );
             for (b, t) in BUDGETS.iter().zip(&c.budgets) {
@@ -623,36 +627,151 @@ pub fn summary_text(runs: &Runs) -> String {
 mod tests {
     use super::*;
 
-    fn runs(rows: &[&str]) -> Runs {
-        let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,x_floor,rmse,bad_pixel_frac,flag";
-        let d =
-            std::env::temp_dir().join(format!("mfx-summary-{}-{}", rows.len(), std::process::id()));
+    fn runs(name: &str, rows: &[&str]) -> Runs {
+        let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,gpu_ms_ci_lo,gpu_ms_ci_hi,samples,x_floor,rmse,bad_pixel_frac,matches_truth,exact,overflow_rate,flag";
+        let d = std::env::temp_dir().join(format!("mfx-summary-{name}-{}", std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
         let p = d.join("runs.csv");
         std::fs::write(&p, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
         Runs::load(&p).unwrap()
     }
 
+    /// Every winner the verdict names is what the rows say: exact rows for "fastest exact",
+    /// rows within the budget for a budget, trusted times only, nothing faster left out, and
+    /// every tie's interval overlapping the winner's.
+    fn check_against_rows(runs: &Runs) -> usize {
+        let vs = verdicts(runs);
+        for (_, v) in &vs {
+            let timed: Vec<&Rec> = v
+                .rows
+                .iter()
+                .copied()
+                .filter(|r| r.trusted_ms().is_some())
+                .collect();
+            let exact: Vec<&Rec> = timed
+                .iter()
+                .copied()
+                .filter(|r| r.exact_result() == Some(true))
+                .collect();
+            if let Some(p) = &v.fastest_exact {
+                assert_eq!(
+                    p.row.exact_result(),
+                    Some(true),
+                    "{}",
+                    p.row.get(cols::POINT_KEY)
+                );
+                assert!(p.row.time_trusted());
+                let t = p.row.trusted_ms().unwrap();
+                for r in &exact {
+                    assert!(r.trusted_ms().unwrap() >= t, "{}", r.get(cols::POINT_KEY));
+                }
+                for tie in &p.ties {
+                    assert!(overlap(tie, p.row) && tie.exact_result() == Some(true));
+                }
+            } else {
+                assert!(exact.is_empty());
+            }
+            for r in &v.exact_untrusted {
+                assert!(r.exact_result() == Some(true) && !r.time_trusted());
+            }
+            for (b, p) in &v.budgets {
+                let within: Vec<&Rec> = timed
+                    .iter()
+                    .copied()
+                    .filter(|r| r.f(cols::RMSE).is_some_and(|e| e <= *b))
+                    .collect();
+                match p {
+                    Some(p) => {
+                        assert!(p.row.f(cols::RMSE).is_some_and(|e| e <= *b));
+                        let t = p.row.trusted_ms().unwrap();
+                        assert!(within.iter().all(|r| r.trusted_ms().unwrap() >= t));
+                    }
+                    None => assert!(within.is_empty()),
+                }
+            }
+        }
+        vs.len()
+    }
+
     #[test]
-    fn the_summary_names_the_fastest_exact_and_the_budgets() {
-        let r = runs(&[
-            "1,r,methods,q(d=8),64,64,floor_depth,methods|q(d=8)|64x64|floor_depth|,G,vulkan,ok,,0.1,,,,",
-            "1,r,methods,q(d=8),64,64,depth_peel,methods|q(d=8)|64x64|depth_peel|max_layers=64,G,vulkan,ok,,2.0,20,0,0,",
-            "1,r,methods,q(d=8),64,64,linked_list,methods|q(d=8)|64x64|linked_list|layers=8,G,vulkan,ok,,1.0,10,0,0,",
-            "1,r,methods,q(d=8),64,64,kbuffer,methods|q(d=8)|64x64|kbuffer|layers=4,G,vulkan,ok,,0.25,2.5,5e-4,0.01,hazard",
-            "1,r,methods,q(d=8),64,64,wboit,methods|q(d=8)|64x64|wboit|,G,vulkan,ok,,0.2,2,5e-3,0.5,",
-            "1,r,methods,q(d=8),64,64,bdp,methods|q(d=8)|64x64|bdp|,G,vulkan,skipped,needs 8 attachments,,,,,",
-        ]);
-        let s = summary_text(&r);
-        assert!(
-            s.contains("Fastest exact: linked_list at 1 ms, 10× floor_depth (0.1 ms)"),
-            "{s}"
+    fn the_verdict_names_only_exact_trusted_fastest_rows() {
+        let r = runs(
+            "synthetic",
+            &[
+                "1,r,methods,q(d=8),64,64,floor_depth,methods|q(d=8)|64x64|floor_depth|,G,vulkan,ok,,0.1,0.09,0.11,30,,,,,,,",
+                "1,r,methods,q(d=8),64,64,depth_peel,methods|q(d=8)|64x64|depth_peel|max_layers=64,G,vulkan,ok,,2.0,1.9,2.1,30,20,3e-8,0,true,true,,",
+                "1,r,methods,q(d=8),64,64,linked_list,methods|q(d=8)|64x64|linked_list|layers=8,G,vulkan,ok,,1.0,0.9,1.1,30,10,3e-8,0,true,true,,",
+                // Tied with the linked list: its interval overlaps.
+                "1,r,methods,q(d=8),64,64,bdp,methods|q(d=8)|64x64|bdp|,G,vulkan,ok,,1.05,0.95,1.2,30,10.5,3e-8,0,true,true,,",
+                // Fastest of all and exact, but its timestamps missed part of the frame.
+                "1,r,methods,q(d=8),64,64,compute_abuffer,methods|q(d=8)|64x64|compute_abuffer|,G,vulkan,ok,,0.05,0.04,0.06,30,0.5,3e-8,0,true,true,,timestamps_incomplete",
+                // Within tolerance (matches_truth) but overflowed: never exact.
+                "1,r,methods,q(d=8),64,64,kbuffer_rmw,methods|q(d=8)|64x64|kbuffer_rmw|layers=16,G,vulkan,ok,,0.5,0.45,0.55,30,5,3.2e-4,0,true,true,0.271,overflow",
+                "1,r,methods,q(d=8),64,64,wboit,methods|q(d=8)|64x64|wboit|,G,vulkan,ok,,0.2,0.19,0.21,30,2,5e-3,0.5,false,false,,",
+                "1,r,methods,q(d=8),64,64,adp,methods|q(d=8)|64x64|adp|,G,vulkan,skipped,needs 8 attachments,,,,,,,,,,,",
+            ],
         );
-        assert!(s.contains("RMSE ≤ 1e-3: kbuffer at 0.25 ms, RMSE 5e-4, 4× faster than the fastest exact (flagged: hazard)"), "{s}");
-        assert!(s.contains("RMSE ≤ 1e-2: wboit at 0.2 ms"), "{s}");
-        assert!(s.contains("Flagged: 1 of 4 (hazard 1)"), "{s}");
-        assert!(s.contains("1 × bdp (methods): needs 8 attachments"), "{s}");
-        assert!(s.contains("predates the matches_truth column"), "{s}");
-        assert!(s.contains("Not measured in this CSV"), "{s}");
+        assert_eq!(check_against_rows(&r), 1);
+        let (_, v) = &verdicts(&r)[0];
+        let fe = v.fastest_exact.as_ref().unwrap();
+        assert_eq!(fe.row.get(cols::METHOD), "linked_list");
+        assert_eq!(fe.ties.len(), 1);
+        assert_eq!(v.exact_untrusted.len(), 1);
+        assert_eq!(
+            v.budgets[0].1.as_ref().unwrap().row.get(cols::METHOD),
+            "kbuffer_rmw"
+        );
+        assert_eq!(
+            v.budgets[1].1.as_ref().unwrap().row.get(cols::METHOD),
+            "wboit"
+        );
+        let h = summary_html(&r);
+        assert!(!h.contains("<pre"), "{h}");
+        assert!(h.contains("tied with 1: bdp"), "{h}");
+        assert!(h.contains("1 exact but left out: compute_abuffer"), "{h}");
+        assert!(h.contains("10× (0.1 ms)"), "{h}");
+        let t = summary_text(&r);
+        assert!(t.contains("Fastest exact: linked_list"), "{t}");
+        assert!(
+            t.contains("skipped: 1 × adp (methods): needs 8 attachments"),
+            "{t}"
+        );
+    }
+
+    #[test]
+    fn a_three_sample_interval_is_a_range_and_a_run_wide_flag_is_said_once() {
+        let r = runs(
+            "range",
+            &[
+                "1,r,methods,q,64,64,linked_list,k1,lavapipe,vulkan,ok,,1.93,1.52,5.8,3,,3e-8,0,true,true,,noisy",
+                "1,r,methods,q,64,64,depth_peel,k2,lavapipe,vulkan,ok,,1.96,1.71,6.09,3,,3e-8,0,true,true,,noisy",
+            ],
+        );
+        let (_, v) = &verdicts(&r)[0];
+        assert_eq!(v.fastest_exact.as_ref().unwrap().ties.len(), 1);
+        assert!(v.rows.iter().all(|x| !x.flagged()), "noisy covers the run");
+        let h = summary_html(&r);
+        assert!(h.contains("range 1.52–5.8, n = 3"), "{h}");
+        assert!(!h.contains("1.93 [1.52"), "{h}");
+        assert!(
+            h.contains("Every timed row of run r is flagged noisy"),
+            "{h}"
+        );
+    }
+
+    #[test]
+    fn a_committed_run_s_verdict_agrees_with_its_rows() {
+        let csv = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../results/reference/2026-12-02-h200-default/default/runs.csv"
+        );
+        let r = Runs::load(std::path::Path::new(csv)).unwrap();
+        assert!(check_against_rows(&r) > 5);
+        // No row with an overflow is named exact.
+        for (_, v) in verdicts(&r) {
+            if let Some(p) = v.fastest_exact {
+                assert!(p.row.f(cols::OVERFLOW_RATE).is_none_or(|o| o == 0.0));
+            }
+        }
     }
 }
