@@ -383,3 +383,76 @@ pub fn platforms(runs: &Runs) -> Vec<String> {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rec(cells: &[(&str, &str)]) -> Rec {
+        Rec(cells
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect())
+    }
+
+    #[test]
+    fn an_overflowing_capture_within_tolerance_is_not_exact() {
+        // quads(32) at 128²: kbuffer_rmw layers=16 overflows in 27 % of pixels, max_abs_err
+        // under bad_pixel_tol, so matches_truth = true; today's CSV calls the method exact.
+        let k = rec(&[
+            ("matches_truth", "true"),
+            ("exact", "true"),
+            ("overflow_rate", "0.271"),
+            ("rmse", "3.2e-4"),
+            ("flag", "overflow"),
+        ]);
+        assert_eq!(k.within_tolerance(), Some(true));
+        assert_eq!(k.exact_result(), Some(false));
+        // Without the flag the rate alone decides; a clean exact method stays exact.
+        let mut no_flag = k.clone();
+        no_flag.0.insert("flag".into(), String::new());
+        assert_eq!(no_flag.exact_result(), Some(false));
+        let peel = rec(&[
+            ("matches_truth", "true"),
+            ("exact", "true"),
+            ("rmse", "3e-8"),
+        ]);
+        assert_eq!(peel.exact_result(), Some(true));
+        // An approximate method within tolerance is not exact either.
+        let bdp = rec(&[
+            ("matches_truth", "true"),
+            ("exact", "false"),
+            ("rmse", "1.1e-4"),
+        ]);
+        assert_eq!(bdp.exact_result(), Some(false));
+        // With exact_bound (the new judgement) `exact` is read as written.
+        let new = rec(&[
+            ("matches_truth", "true"),
+            ("exact", "false"),
+            ("exact_bound", "1e-6"),
+            ("rmse", "1e-7"),
+        ]);
+        assert_eq!(new.exact_result(), Some(false));
+    }
+
+    #[test]
+    fn untrusted_times_and_small_samples_are_read_with_fallbacks() {
+        let r = rec(&[
+            ("gpu_ms_median", "3.45"),
+            ("flag", "timestamps_incomplete"),
+            ("samples", "3"),
+        ]);
+        assert!(!r.time_trusted() && r.trusted_ms().is_none());
+        assert_eq!(r.interval(), Interval::Range(Some(3)));
+        assert_eq!(r.interval().name(), "range (n = 3)");
+        let r = rec(&[
+            ("gpu_ms_median", "1"),
+            ("gpu_time_trusted", "true"),
+            ("samples", "6"),
+        ]);
+        assert!(r.time_trusted());
+        assert_eq!(r.interval(), Interval::Ci95);
+        let r = rec(&[("gpu_ms_interval", "range"), ("samples", "40")]);
+        assert_eq!(r.interval(), Interval::Range(Some(40)));
+    }
+}

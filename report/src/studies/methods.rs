@@ -13,7 +13,7 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::cells::{esc, exact_cell, short, time_cell};
-use crate::charts::{Bars, Figure, Named, Pt, Series, XY};
+use crate::charts::{Bars, Figure, Named, Pt, Series, MARKERS, PALETTE, XY};
 use crate::data::{resolution, Rec, Runs};
 use crate::labels::{config_key, file_safe, parse_scene, scene_name, scene_names, ConfigLabels};
 use crate::pareto;
@@ -28,15 +28,25 @@ pub struct Styles {
 }
 
 impl Styles {
+    /// Every configuration gets its own (colour, marker) pair from the declared tables
+    /// (`charts::PALETTE` × the markers): the marker names the method, the colour is the next
+    /// one not yet drawn with that marker, so two series look alike only past 32 configurations
+    /// of the same marker.
     pub fn new<'a>(rows: impl IntoIterator<Item = &'a Rec>) -> Styles {
         let mut s = Styles::default();
+        let mut next: BTreeMap<usize, usize> = BTreeMap::new();
         for r in rows {
-            let n = s.colors.len();
-            s.colors.entry(config_key(r)).or_insert(n);
             let n = s.families.len();
-            s.families
+            let fam = *s
+                .families
                 .entry(r.get(cols::METHOD).to_string())
                 .or_insert(n);
+            let key = config_key(r);
+            if !s.colors.contains_key(&key) {
+                let c = next.entry(fam % MARKERS).or_insert(0);
+                s.colors.insert(key, *c);
+                *c += 1;
+            }
         }
         s
     }
@@ -682,6 +692,35 @@ fn ratio_bars(at_res: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_configuration_has_its_own_colour_and_marker() {
+        // 17 methods with 1–4 configurations each (more than 32 configurations, more methods
+        // than markers): today's depth_peel and bdp2 were both blue circles.
+        let mut rows = Vec::new();
+        for m in 0..17 {
+            for k in 0..=(m % 4) {
+                let mut r = Rec::default();
+                r.0.insert("method".into(), format!("m{m}"));
+                r.0.insert(
+                    "point_key".into(),
+                    format!("methods|s|64x64|m{m}|layers={k}"),
+                );
+                rows.push(r);
+            }
+        }
+        let st = Styles::new(rows.iter());
+        let mut seen = std::collections::BTreeSet::new();
+        for r in &rows {
+            let pair = (PALETTE[st.color(r) % PALETTE.len()], st.family(r) % MARKERS);
+            assert!(
+                seen.insert(pair),
+                "{} shares {pair:?}",
+                r.get(cols::POINT_KEY)
+            );
+        }
+        assert!(seen.len() > PALETTE.len());
+    }
 
     #[test]
     fn families_never_join_different_meshes() {
