@@ -13,7 +13,7 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::cells::{esc, exact_cell, short, time_cell};
-use crate::charts::{Bars, Figure, Named, Pt, Series, MARKERS, PALETTE, XY};
+use crate::charts::{Bars, Figure, Named, Pt, Series, MARKERS, XY};
 use crate::data::{resolution, Rec, Runs};
 use crate::labels::{config_key, file_safe, parse_scene, scene_name, scene_names, ConfigLabels};
 use crate::pareto;
@@ -712,14 +712,17 @@ mod tests {
         let st = Styles::new(rows.iter());
         let mut seen = std::collections::BTreeSet::new();
         for r in &rows {
-            let pair = (PALETTE[st.color(r) % PALETTE.len()], st.family(r) % MARKERS);
+            let pair = (
+                crate::charts::PALETTE[st.color(r) % crate::charts::PALETTE.len()],
+                st.family(r) % MARKERS,
+            );
             assert!(
                 seen.insert(pair),
                 "{} shares {pair:?}",
                 r.get(cols::POINT_KEY)
             );
         }
-        assert!(seen.len() > PALETTE.len());
+        assert!(seen.len() > crate::charts::PALETTE.len());
     }
 
     #[test]
