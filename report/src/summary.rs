@@ -433,7 +433,10 @@ fn missing_columns(runs: &Runs) -> Option<String> {
 }
 
 /// Other studies (no image error ranking): per scene, the fastest and the lowest error.
-fn other_studies(runs: &Runs) -> Vec<(String, String, Vec<(String, String, String)>)> {
+/// (scene and resolution, fastest, lowest error) of one scene of another study.
+type OtherLine = (String, String, String);
+
+fn other_studies(runs: &Runs) -> Vec<(String, String, Vec<OtherLine>)> {
     let mut out = Vec::new();
     for p in platforms(runs) {
         let rows: Vec<&Rec> = runs.rows.iter().filter(|r| platform(r) == p).collect();

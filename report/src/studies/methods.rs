@@ -42,9 +42,9 @@ impl Styles {
                 .entry(r.get(cols::METHOD).to_string())
                 .or_insert(n);
             let key = config_key(r);
-            if !s.colors.contains_key(&key) {
+            if let std::collections::btree_map::Entry::Vacant(e) = s.colors.entry(key) {
                 let c = next.entry(fam % MARKERS).or_insert(0);
-                s.colors.insert(key, *c);
+                e.insert(*c);
                 *c += 1;
             }
         }
