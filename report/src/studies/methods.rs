@@ -43,7 +43,9 @@ impl Styles {
                 .or_insert(n);
             let key = config_key(r);
             if let std::collections::btree_map::Entry::Vacant(e) = s.colors.entry(key) {
-                let c = next.entry(fam % MARKERS).or_insert(0);
+                // Each marker starts at its first method's own colour, so one-configuration
+                // methods still differ in colour as well as marker.
+                let c = next.entry(fam % MARKERS).or_insert(fam);
                 e.insert(*c);
                 *c += 1;
             }
