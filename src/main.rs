@@ -75,7 +75,7 @@ enum Cmd {
         /// Exit 1 when a point is significantly slower by more than this (e.g. 5%).
         #[arg(long)]
         fail_on_slower: Option<String>,
-        /// Folder for compare.html (default NEW/report/).
+        /// Write compare.html into this folder (nothing is written without it).
         #[arg(long)]
         html: Option<PathBuf>,
     },

@@ -418,20 +418,13 @@ pub fn compare(
         .map_err(|e| usage(format!("--fail-on-slower: {e}")))?;
     let r = report::ab::compare_runs(base, new, &opts).map_err(|e| usage(format!("{e:#}")))?;
     print!("{}", r.markdown());
-    let dir = match html {
-        Some(d) => d.to_path_buf(),
-        None => {
-            let d = if new.is_dir() {
-                new.to_path_buf()
-            } else {
-                new.parent().map(Path::to_path_buf).unwrap_or_default()
-            };
-            d.join("report")
-        }
-    };
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    let page = r.write_html(&dir)?;
-    eprintln!("mfx: comparison page {}", page.display());
+    // The page is written only where asked: comparing against a committed reference run must
+    // not change the tree it reads.
+    if let Some(dir) = html {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let page = r.write_html(dir)?;
+        eprintln!("mfx: comparison page {}", page.display());
+    }
     if let Some(f) = frac {
         let s = r.slower_beyond(f);
         if !s.is_empty() {

@@ -227,3 +227,56 @@ fn a_timing_override_reaches_every_row_and_the_texture_memory_is_recorded() {
     }
     assert!(n > 0);
 }
+
+/// Every file under a folder, relative, sorted.
+fn tree(d: &std::path::Path) -> Vec<String> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(d).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(
+                tree(&p)
+                    .into_iter()
+                    .map(|s| format!("{}/{s}", p.file_name().unwrap().to_string_lossy())),
+            );
+        } else {
+            out.push(p.file_name().unwrap().to_string_lossy().to_string());
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn compare_writes_only_where_told() {
+    let d = tmp("compare-writes");
+    let reference = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/results/reference/2026-12-02-h200-shadows-bunny/runs.csv"
+    );
+    let (a, b) = (d.join("a"), d.join("b"));
+    for x in [&a, &b] {
+        std::fs::create_dir_all(x).unwrap();
+        std::fs::copy(reference, x.join("runs.csv")).unwrap();
+    }
+    let before = tree(&d);
+    let o = mfx(&["compare", a.to_str().unwrap(), b.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(
+        tree(&d),
+        before,
+        "compare without --html wrote into the runs it read"
+    );
+    let html = d.join("page");
+    let o = mfx(&[
+        "compare",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--html",
+        html.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(html.join("compare.html").is_file());
+    assert_eq!(tree(&a), tree(&d.join("a")));
+    assert!(!b.join("report").exists());
+}

@@ -868,9 +868,12 @@ impl AbReport {
                 }
             }
         }
-        let (lo, hi) = ((lo / 1.05).max(0.25).ln(), (hi * 1.05).min(4.0).ln());
+        let (lo, hi) = (
+            (lo / 1.05).max(RATIO_MIN).ln(),
+            (hi * 1.05).min(RATIO_MAX).ln(),
+        );
         let (label_w, plot_w, row_h, top) = (470.0, 560.0, 14.0, 30.0);
-        let x = |v: f64| label_w + (v.clamp(0.25, 4.0).ln() - lo) / (hi - lo) * plot_w;
+        let x = |v: f64| label_w + (v.clamp(RATIO_MIN, RATIO_MAX).ln() - lo) / (hi - lo) * plot_w;
         let height = top + row_h * pts.len() as f64 + 10.0;
         let mut s = String::new();
         let _ = write!(
@@ -926,18 +929,48 @@ impl AbReport {
                     x(b)
                 );
             }
-            let _ = write!(
-                s,
-                "<circle cx=\"{:.1}\" cy=\"{y:.1}\" r=\"3.5\" fill=\"{colour}\"><title>{} {}</title></circle>",
-                x(p.time.ratio),
-                esc(&p.key),
-                fmt_ratio(&p.time)
-            );
+            let r = p.time.ratio;
+            if (RATIO_MIN..=RATIO_MAX).contains(&r) {
+                let _ = write!(
+                    s,
+                    "<circle cx=\"{:.1}\" cy=\"{y:.1}\" r=\"3.5\" fill=\"{colour}\"><title>{} {}</title></circle>",
+                    x(r),
+                    esc(&p.key),
+                    fmt_ratio(&p.time)
+                );
+            } else {
+                // Off the scale: an arrow at the edge pointing out, and the value written beside
+                // it, never a dot drawn at the edge as if it were the value.
+                let (tip, dir, anchor) = if r > RATIO_MAX {
+                    (x(RATIO_MAX), 1.0, "end")
+                } else {
+                    (x(RATIO_MIN), -1.0, "start")
+                };
+                let _ = write!(
+                    s,
+                    "<path class=\"offscale\" data-value=\"{r}\" d=\"M{:.1},{y:.1} L{:.1},{:.1} L{:.1},{:.1} Z\" fill=\"{colour}\"><title>{} {} (off the scale)</title></path>\
+                     <text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"{anchor}\" fill=\"{colour}\">{}×</text>",
+                    tip,
+                    tip - dir * 8.0,
+                    y - 4.5,
+                    tip - dir * 8.0,
+                    y + 4.5,
+                    esc(&p.key),
+                    fmt_ratio(&p.time),
+                    tip - dir * 11.0,
+                    y + 3.5,
+                    crate::cells::short(Some(r))
+                );
+            }
         }
         s.push_str("</svg>");
         s
     }
 }
+
+/// The ratio chart's scale: ratios outside it are drawn as off-scale arrows with their value.
+pub const RATIO_MIN: f64 = 0.25;
+pub const RATIO_MAX: f64 = 4.0;
 
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;")

@@ -14,8 +14,9 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 
+use crate::cells::esc;
 use crate::charts::{Bars, Figure, Pt};
-use crate::data::{resolution, Rec, Runs};
+use crate::data::{platform, platforms, resolution, Rec, Runs};
 use crate::labels::{file_safe, scene_name, ConfigLabels};
 
 /// What the comparison adds to the page.
@@ -25,22 +26,6 @@ pub struct Comparison {
     pub html: String,
     /// The largest max-abs image difference between platforms, with its point and platforms.
     pub worst_image_diff: Option<(f64, String, String, String)>,
-}
-
-/// "adapter (backend)": the unit compared.
-pub fn platform(r: &Rec) -> String {
-    format!("{} ({})", r.get(cols::ADAPTER), r.get(cols::BACKEND))
-}
-
-pub fn platforms(runs: &Runs) -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
-    for r in &runs.rows {
-        let p = platform(r);
-        if !out.contains(&p) {
-            out.push(p);
-        }
-    }
-    out
 }
 
 /// The baseline platform: the first whose "adapter (backend)" contains `name` (case-insensitive),
@@ -66,13 +51,6 @@ pub fn baseline(runs: &Runs, name: Option<&str>) -> Result<String> {
             .or_else(|| all.first().cloned())
             .unwrap_or_default()),
     }
-}
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
 
 fn num(v: f64) -> String {
@@ -148,7 +126,7 @@ pub fn compare(
     let ok: Vec<&Rec> = runs
         .rows
         .iter()
-        .filter(|r| r.ok() && r.f(cols::GPU_MS_MEDIAN).is_some())
+        .filter(|r| r.ok() && r.trusted_ms().is_some())
         .collect();
     // point_key → platform → row
     let mut by_point: BTreeMap<&str, BTreeMap<String, &Rec>> = BTreeMap::new();
@@ -227,7 +205,7 @@ pub fn compare(
                     .map(|k| {
                         by_point[k]
                             .get(p)
-                            .and_then(|r| crate::studies::methods::time_pt(r, 0.0))
+                            .and_then(|r| crate::points::time_pt(r, 0.0))
                     })
                     .collect();
                 (p.clone(), v)
@@ -247,7 +225,7 @@ pub fn compare(
             &format!(
                 "Median GPU time per frame of each configuration on each platform. {} \
                  floor_depth/floor_opaque are the rasterisation floors of the same scene.",
-                crate::studies::methods::ci_caption(runs)
+                crate::points::ci_caption(runs)
             ),
         )?);
     }
@@ -260,13 +238,13 @@ pub fn compare(
     let mut speed: BTreeMap<String, BTreeMap<String, Vec<f64>>> = BTreeMap::new();
     for k in &order {
         let per = &by_point[k];
-        let Some(b) = per.get(&base).and_then(|r| r.f(cols::GPU_MS_MEDIAN)) else {
+        let Some(b) = per.get(&base).and_then(|r| r.trusted_ms()) else {
             continue;
         };
         let r0 = per.values().next().expect("non-empty");
         let c = labels.get(r0);
         for p in &others {
-            if let Some(t) = per.get(*p).and_then(|r| r.f(cols::GPU_MS_MEDIAN)) {
+            if let Some(t) = per.get(*p).and_then(|r| r.trusted_ms()) {
                 if t > 0.0 && b > 0.0 {
                     if !configs.contains(&c) {
                         configs.push(c.clone());

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 
-use crate::html::{esc, short};
+use crate::cells::{esc, short};
 use crate::labels::scene_name;
 
 /// Columns of `flip/worst.csv` (PNG paths relative to the run folder).

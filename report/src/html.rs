@@ -4,55 +4,17 @@
 use schema::cols;
 use std::fmt::Write;
 
+use crate::cells::{esc, exact_cell, short, time_cell};
 use crate::charts::Figure;
 use crate::data::{Rec, Runs};
 use crate::labels::scene_name;
-use crate::studies::methods::time_cell;
-
-pub fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
-/// A number in three significant digits (no trailing zeros), `e` notation outside
-/// [0.001, 100000); "" when absent.
-pub fn short(v: Option<f64>) -> String {
-    let Some(x) = v else { return String::new() };
-    if x == 0.0 {
-        return "0".into();
-    }
-    if x.is_nan() {
-        return "nan".into();
-    }
-    if x.is_infinite() {
-        return if x > 0.0 { "inf" } else { "-inf" }.into();
-    }
-    let a = x.abs();
-    if !(1e-3..1e5).contains(&a) {
-        let s = format!("{x:.2e}");
-        let (m, e) = s.split_once('e').expect("exponent form");
-        return format!("{}e{e}", trim(m));
-    }
-    let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
-    trim(&format!("{x:.decimals$}"))
-}
-
-fn trim(s: &str) -> String {
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s.to_string()
-    }
-}
 
 const STYLE: &str = "body{font-family:sans-serif;max-width:1400px;margin:2em auto;color:#222;padding:0 1em}\
 table{border-collapse:collapse;margin:1em 0;font-size:13px}td,th{border:1px solid #ccc;padding:3px 7px;text-align:left}\
 th{background:#f3f3f3}caption{text-align:left;color:#555;padding:4px 0}figure{margin:1.5em 0}\
 img{max-width:100%;border:1px solid #ddd}figcaption{color:#555;font-size:13px;max-width:1100px}\
 .failed{color:#b00}.skipped{color:#a60}tr.flagged td{background:#fff6e6}tr.floor td{color:#666;font-style:italic}\
-p.note{color:#555;font-size:14px;margin:.4em 0}pre.summary{white-space:pre-wrap;background:#f7f7f7;border:1px solid #ddd;padding:1em;font-size:13px}\
+p.note{color:#555;font-size:14px;margin:.4em 0}table.verdict td{vertical-align:top;max-width:330px}details{margin:.5em 0}summary{cursor:pointer;color:#245}\
 .flip td{vertical-align:top}.flip img{width:256px;image-rendering:pixelated}";
 
 pub fn page(
@@ -106,12 +68,8 @@ pub fn page(
         );
     }
     h.push_str("</table>");
-    // What the run found: the same text `mfx sweep` prints at its end.
-    let _ = write!(
-        h,
-        "<section id=\"summary\"><pre class=\"summary\">{}</pre></section>",
-        esc(&crate::summary::summary_text(runs))
-    );
+    // What the run found, as a verdict table first (the same verdicts `mfx sweep` prints).
+    h.push_str(&crate::summary::summary_html(runs));
     if !sections.is_empty() {
         h.push_str("<h2>Contents</h2><ul>");
         for (i, (title, _)) in sections.iter().enumerate() {
@@ -120,7 +78,14 @@ pub fn page(
         h.push_str("<li><a href=\"#flip\">FLIP: the worst points</a></li><li><a href=\"#flagged-points\">Flagged points</a></li><li><a href=\"#rows\">Rows</a></li></ul>");
     }
     for (i, (title, figs)) in sections.iter().enumerate() {
-        let _ = write!(h, "<h2 id=\"s{i}\">{}</h2>", esc(title));
+        // Each section folds: the page opens on the verdict, not on 45 000 px of charts.
+        let charts = figs.iter().filter(|f| f.is_chart()).count();
+        let _ = write!(
+            h,
+            "<h2 id=\"s{i}\">{}</h2><details><summary>{charts} chart(s), {} table(s) and note(s)</summary>",
+            esc(title),
+            figs.len() - charts
+        );
         for f in figs {
             if let Some(n) = &f.note {
                 let _ = write!(
@@ -130,7 +95,11 @@ pub fn page(
                     esc(n)
                 );
             } else if let Some(block) = &f.html {
-                let _ = write!(h, "<h3>{}</h3>{block}", esc(&f.title));
+                let _ = write!(
+                    h,
+                    "<details><summary>{}</summary>{block}</details>",
+                    esc(&f.title)
+                );
             } else {
                 // The page shows the SVG (vector, small enough to commit with reference runs);
                 // the PNG beside it is for slides and is not tracked under results/reference/.
@@ -143,6 +112,7 @@ pub fn page(
                 );
             }
         }
+        h.push_str("</details>");
     }
     h.push_str(extra_html);
     h.push_str(flip_html);
@@ -175,7 +145,7 @@ fn flagged_table(h: &mut String, runs: &Runs) {
         h.push_str("<p class=\"note\">No ok row carries a flag.</p>");
         return;
     }
-    h.push_str("<p class=\"note\">A flag names a known failure mode the harness detected (overflow, hazard, collision, precision, lost_coplanar, fragments_differ, image_differs, timestamps_incomplete, noisy, throttled); these points are drawn hollow in the charts.</p>\
+    h.push_str("<details><summary>Every flagged row</summary><p class=\"note\">A flag names a known failure mode the harness detected (overflow, hazard, collision, precision, lost_coplanar, fragments_differ, image_differs, timestamps_incomplete, noisy, throttled); these points are drawn hollow in the charts. A flag that every timed row of a run carries is said once in the verdict and not marked per point.</p>\
         <table id=\"flagged\"><tr><th>flag</th><th>study</th><th>scene</th><th>resolution</th><th>point</th><th>GPU ms</th><th>RMSE</th><th>notes</th></tr>");
     for r in rows {
         let _ = write!(
@@ -192,15 +162,15 @@ fn flagged_table(h: &mut String, runs: &Runs) {
             esc(r.get(cols::NOTES))
         );
     }
-    h.push_str("</table>");
+    h.push_str("</table></details>");
 }
 
 fn rows_table(h: &mut String, runs: &Runs) {
     let flip = runs.has(cols::FLIP_MEAN);
     let _ = write!(
         h,
-        "<h2>Rows</h2><table id=\"rows\"><tr><th>adapter (backend)</th><th>study</th><th>scene</th><th>resolution</th><th>method</th><th>axes</th>\
-         <th>GPU ms (95 % CI)</th><th>× floor</th><th>bytes/px</th><th>RMSE</th>{}<th>max abs err</th><th>exact</th><th>flag</th></tr>",
+        "<h2 id=\"rows-h\">Rows</h2><details><summary>Every ok row</summary><table id=\"rows\"><tr><th>adapter (backend)</th><th>study</th><th>scene</th><th>resolution</th><th>method</th><th>axes</th>\
+         <th>GPU ms [95 % CI] or (range, n)</th><th>× floor</th><th>bytes/px</th><th>RMSE</th>{}<th>max abs err</th><th>exact</th><th>flag</th></tr>",
         if flip { "<th>FLIP mean</th><th>FLIP p99</th>" } else { "" }
     );
     for r in runs.rows.iter().filter(|r| r.ok()) {
@@ -216,7 +186,7 @@ fn rows_table(h: &mut String, runs: &Runs) {
             esc(r.get(cols::METHOD)),
             esc(&point_key_axes(r)),
             time_cell(r),
-            short(r.f(cols::X_FLOOR)),
+            short(r.f(cols::X_FLOOR).filter(|_| r.time_trusted())),
             short(r.bytes_per_pixel()),
             short(r.f(cols::RMSE)),
             if flip {
@@ -225,15 +195,11 @@ fn rows_table(h: &mut String, runs: &Runs) {
                 String::new()
             },
             short(r.f(cols::MAX_ABS_ERR)),
-            match r.exact_result() {
-                Some(true) => "yes",
-                Some(false) => "no",
-                None => "",
-            },
+            exact_cell(r),
             esc(&r.flags().join(", "))
         );
     }
-    h.push_str("</table>");
+    h.push_str("</table></details>");
 }
 
 /// "method axes" of a row's point key (its raw text if it does not parse).
@@ -252,30 +218,3 @@ fn point_key_axes(r: &Rec) -> String {
         .unwrap_or_default()
 }
 
-#[cfg(test)]
-mod tests {
-    use super::short;
-
-    #[test]
-    fn numbers_keep_three_significant_digits() {
-        let v: Vec<String> = [
-            0.0,
-            10.0,
-            1.0,
-            0.25,
-            12.345,
-            1234.6,
-            5e-4,
-            1.234e-6,
-            2.5e7,
-            f64::INFINITY,
-        ]
-        .iter()
-        .map(|x| short(Some(*x)))
-        .collect();
-        assert_eq!(
-            v,
-            ["0", "10", "1", "0.25", "12.3", "1235", "5e-4", "1.23e-6", "2.5e7", "inf"]
-        );
-    }
-}

@@ -5,6 +5,7 @@
 //! `mfx sweep` prints at its end).
 
 pub mod ab;
+pub mod cells;
 pub mod charts;
 pub mod compare;
 pub mod data;
@@ -12,6 +13,7 @@ pub mod flip;
 pub mod html;
 pub mod labels;
 pub mod pareto;
+pub mod points;
 pub mod studies;
 pub mod summary;
 
@@ -31,14 +33,14 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
     clear_charts(&out)?;
     // Each study's figures read one platform's rows: a merged CSV (several adapters or backends)
     // gets one set per platform, in its own subfolder, so no chart mixes two machines' rows.
-    let plats = compare::platforms(&runs);
+    let plats = data::platforms(&runs);
     let mut sections = Vec::new();
     if plats.len() < 2 {
         sections = studies::all_figures(&runs, &out)?;
     } else {
         for (i, p) in plats.iter().enumerate() {
             let mut one = runs.clone();
-            one.rows.retain(|r| compare::platform(r) == *p);
+            one.rows.retain(|r| data::platform(r) == *p);
             let sub = format!("platform{i}");
             let dir = out.join(&sub);
             std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;

@@ -1,17 +1,17 @@
-//! What the run found, written from the rows: per scene the fastest exact configuration and its
-//! multiple of the floor, the fastest under each error budget, the flagged points, and what did
-//! not run. `summary_text` is the text both the report's summary section and the end of
-//! `mfx sweep` show.
+//! What the run found, as a verdict computed from the rows: per scene × resolution the fastest
+//! exact configuration (with the ones statistically tied with it) and its multiple of the floor,
+//! the cheapest within each RMSE budget, what was flagged, and which exact rows were left out
+//! because their GPU time is not trusted. `verdicts` computes it; `summary_html` (the report's
+//! first section) and `summary_text` (the end of `mfx sweep`) only write it down, so the two
+//! cannot disagree with each other or with the CSV.
 
 use schema::{cols, Col};
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
-use crate::compare::{platform, platforms};
-use crate::data::{resolution, Rec, Runs};
-use crate::html::short;
+use crate::cells::{esc, short, time_cell};
+use crate::data::{platform, platforms, resolution, Rec, Runs};
 use crate::labels::{scene_name, ConfigLabels};
-use crate::studies::methods::time_cell;
 
 /// RMSE budgets (vs the ground truth) the summary names the fastest configuration under.
 pub const BUDGETS: [f64; 2] = [1e-3, 1e-2];
@@ -56,252 +56,141 @@ fn count_by<'a>(items: impl IntoIterator<Item = &'a str>) -> String {
         .join(", ")
 }
 
-fn named(labels: &ConfigLabels, r: &Rec) -> String {
-    labels.get(r)
+/// A configuration named by the verdict, with the candidates whose time interval overlaps its
+/// own ("tied with N": the data cannot tell them apart).
+#[derive(Clone, Debug)]
+pub struct Pick<'a> {
+    pub row: &'a Rec,
+    pub ties: Vec<&'a Rec>,
 }
 
-fn timed(r: &Rec) -> bool {
-    r.f(cols::GPU_MS_MEDIAN).is_some() && !r.flags().contains(&"timestamps_incomplete")
+/// The verdict of one scene × resolution (× effect) of an image study.
+#[derive(Clone, Debug)]
+pub struct Verdict<'a> {
+    pub study: String,
+    pub scene: String,
+    pub res: String,
+    pub effect: String,
+    /// The configurations ranked (ok, not floors).
+    pub rows: Vec<&'a Rec>,
+    pub fastest_exact: Option<Pick<'a>>,
+    /// Exact rows left out of the ranking because their GPU time is not trusted.
+    pub exact_untrusted: Vec<&'a Rec>,
+    /// (RMSE budget, the fastest configuration whose RMSE is within it).
+    pub budgets: Vec<(f64, Option<Pick<'a>>)>,
+    pub floor_ms: Option<f64>,
+    /// The row with the smallest RMSE (named when nothing was exact).
+    pub best_error: Option<&'a Rec>,
 }
 
-fn fastest<'a>(rows: impl Iterator<Item = &'a Rec>) -> Option<&'a Rec> {
-    rows.filter(|r| timed(r)).min_by(|a, b| {
-        a.f(cols::GPU_MS_MEDIAN)
-            .unwrap()
-            .total_cmp(&b.f(cols::GPU_MS_MEDIAN).unwrap())
-    })
-}
-
-fn flag_note(r: &Rec) -> String {
-    if r.flagged() {
-        format!(" (flagged: {})", r.flags().join(", "))
-    } else {
-        String::new()
+/// Whether two rows' time intervals overlap (equal medians when either has none).
+fn overlap(a: &Rec, b: &Rec) -> bool {
+    match (a.gpu_ci(), b.gpu_ci()) {
+        (Some((alo, ahi)), Some((blo, bhi))) => alo <= bhi && blo <= ahi,
+        _ => a.trusted_ms() == b.trusted_ms(),
     }
 }
 
-/// One scene of an image study: fastest exact, fastest under each budget, flags.
-fn image_scene(out: &mut String, rows: &[&Rec], floors: &[&Rec], labels: &ConfigLabels) {
-    let exact = fastest(
-        rows.iter()
-            .copied()
-            .filter(|r| r.exact_result() == Some(true)),
-    );
-    let floor = floors.iter().find(|r| r.get(cols::METHOD) == "floor_depth");
-    match exact {
-        Some(r) => {
-            let _ = writeln!(
-                out,
-                "- Fastest exact: {} at {} ms, {}× floor_depth{}.",
-                named(labels, r),
-                time_cell(r),
-                short(r.f(cols::X_FLOOR)),
-                floor
-                    .and_then(|f| f.f(cols::GPU_MS_MEDIAN))
-                    .map(|f| format!(" ({} ms)", short(Some(f))))
-                    .unwrap_or_default()
-            );
-        }
-        None => {
-            let best = rows
+/// The fastest of `rows` by trusted GPU time, with the others tied with it.
+fn fastest<'a>(rows: &[&'a Rec]) -> Option<Pick<'a>> {
+    let timed: Vec<&'a Rec> = rows
+        .iter()
+        .copied()
+        .filter(|r| r.trusted_ms().is_some())
+        .collect();
+    let row = timed
+        .iter()
+        .copied()
+        .min_by(|a, b| a.trusted_ms().unwrap().total_cmp(&b.trusted_ms().unwrap()))?;
+    let ties = timed
+        .into_iter()
+        .filter(|r| !std::ptr::eq(*r, row) && overlap(r, row))
+        .collect();
+    Some(Pick { row, ties })
+}
+
+/// Studies whose verdict ranks configurations by image error.
+fn image_verdict<'a>(
+    study: &str,
+    scene: &str,
+    res: &str,
+    effect: &str,
+    rows: Vec<&'a Rec>,
+    floors: &[&'a Rec],
+) -> Verdict<'a> {
+    let exact: Vec<&Rec> = rows
+        .iter()
+        .copied()
+        .filter(|r| r.exact_result() == Some(true))
+        .collect();
+    let exact_untrusted = exact
+        .iter()
+        .copied()
+        .filter(|r| r.f(cols::GPU_MS_MEDIAN).is_some() && !r.time_trusted())
+        .collect();
+    let budgets = BUDGETS
+        .iter()
+        .map(|&b| {
+            let within: Vec<&Rec> = rows
                 .iter()
-                .filter(|r| r.f(cols::RMSE).is_some())
-                .min_by(|a, b| {
-                    a.f(cols::RMSE)
-                        .unwrap()
-                        .total_cmp(&b.f(cols::RMSE).unwrap())
-                });
-            let _ = writeln!(
-                out,
-                "- No configuration was exact{}.",
-                best.map(|r| format!(
-                    "; the smallest error: {}, RMSE {}{}",
-                    named(labels, r),
-                    short(r.f(cols::RMSE)),
-                    flag_note(r)
-                ))
-                .unwrap_or_default()
-            );
-        }
-    }
-    let exact_ms = exact.and_then(|r| r.f(cols::GPU_MS_MEDIAN));
-    // Budgets whose fastest configuration is the same one share a line.
-    let mut lines: Vec<(Vec<f64>, String)> = Vec::new();
-    for b in BUDGETS {
-        let within = fastest(
-            rows.iter()
                 .copied()
-                .filter(|r| r.f(cols::RMSE).is_some_and(|e| e <= b)),
-        );
-        let text = match within {
-            Some(r) if exact.is_some_and(|e| std::ptr::eq(e, r)) => {
-                "the fastest exact (nothing inexact within it is faster).".to_string()
-            }
-            Some(r) => {
-                let ms = r.f(cols::GPU_MS_MEDIAN).unwrap();
-                let vs = match exact_ms {
-                    Some(e) if ms < e => {
-                        format!(", {}× faster than the fastest exact", short(Some(e / ms)))
-                    }
-                    _ => String::new(),
-                };
-                format!(
-                    "{} at {} ms, RMSE {}{vs}{}.",
-                    named(labels, r),
-                    time_cell(r),
-                    short(r.f(cols::RMSE)),
-                    flag_note(r)
-                )
-            }
-            None => "no configuration.".to_string(),
-        };
-        match lines.iter_mut().find(|(_, t)| *t == text) {
-            Some((bs, _)) => bs.push(b),
-            None => lines.push((vec![b], text)),
-        }
-    }
-    for (bs, text) in lines {
-        let budgets: Vec<String> = bs.iter().map(|b| format!("≤ {b:.0e}")).collect();
-        let _ = writeln!(out, "- RMSE {}: {text}", budgets.join(" and "));
-    }
-    let flagged: Vec<&&Rec> = rows.iter().filter(|r| r.flagged()).collect();
-    if !flagged.is_empty() {
-        let _ = writeln!(
-            out,
-            "- Flagged: {} of {} ({}).",
-            flagged.len(),
-            rows.len(),
-            count_by(flagged.iter().flat_map(|r| r.flags()))
-        );
-    }
-}
-
-/// Which configuration was the fastest exact one how often, over the study's scenes.
-fn overall(out: &mut String, methods: &[&Rec], labels: &ConfigLabels) {
-    let groups = Runs::group_by(methods.iter().copied(), |r| {
-        format!("{}\u{0}{}", r.get(cols::SCENE_LABEL), resolution(r))
-    });
-    if groups.len() < 2 {
-        return;
-    }
-    let mut wins: Vec<String> = Vec::new();
-    let mut none = 0;
-    for (_, g) in &groups {
-        match fastest(g.iter().copied().filter(|r| r.exact_result() == Some(true))) {
-            Some(r) => wins.push(r.get(cols::METHOD).to_string()),
-            None => none += 1,
-        }
-    }
-    let _ = labels;
-    let mut line = format!(
-        "Over {} scene × resolution groups, the fastest exact method: ",
-        groups.len()
-    );
-    let tally = count_by(wins.iter().map(|s| s.as_str()));
-    line.push_str(&if wins.is_empty() {
-        "none".to_string()
-    } else {
-        // "compute_abuffer 6, linked_list 1" → "compute_abuffer in 6, linked_list in 1"
-        tally
-            .split(", ")
-            .map(|t| match t.rsplit_once(' ') {
-                Some((m, n)) => format!("{m} in {n}"),
-                None => t.to_string(),
-            })
-            .collect::<Vec<_>>()
-            .join(", ")
-    });
-    if none > 0 {
-        line.push_str(&format!("; no exact configuration in {none}"));
-    }
-    let _ = writeln!(out, "{line}.\n");
-}
-
-/// One scene of another study: its fastest configuration and, with an error column, its most
-/// accurate one.
-fn other_scene(out: &mut String, study: &str, rows: &[&Rec], labels: &ConfigLabels) {
-    if let Some(r) = fastest(rows.iter().copied()) {
-        let _ = writeln!(
-            out,
-            "- Fastest: {} at {} ms.",
-            named(labels, r),
-            time_cell(r)
-        );
-    }
-    if let Some(col) = error_col(study) {
-        let best = rows
+                .filter(|r| r.f(cols::RMSE).is_some_and(|e| e <= b))
+                .collect();
+            (b, fastest(&within))
+        })
+        .collect();
+    let best_error = rows
+        .iter()
+        .copied()
+        .filter(|r| r.f(cols::RMSE).is_some())
+        .min_by(|a, b| {
+            a.f(cols::RMSE)
+                .unwrap()
+                .total_cmp(&b.f(cols::RMSE).unwrap())
+        });
+    Verdict {
+        study: study.to_string(),
+        scene: scene.to_string(),
+        res: res.to_string(),
+        effect: effect.to_string(),
+        fastest_exact: fastest(&exact),
+        exact_untrusted,
+        budgets,
+        floor_ms: floors
             .iter()
-            .filter(|r| r.f(col).is_some())
-            .min_by(|a, b| a.f(col).unwrap().total_cmp(&b.f(col).unwrap()));
-        if let Some(r) = best {
-            let _ = writeln!(
-                out,
-                "- Lowest {col}: {} ({}) at {} ms.",
-                named(labels, r),
-                short(r.f(col)),
-                time_cell(r)
-            );
-        }
-    }
-    let flagged: Vec<&&Rec> = rows.iter().filter(|r| r.flagged()).collect();
-    if !flagged.is_empty() {
-        let _ = writeln!(
-            out,
-            "- Flagged: {} of {} ({}).",
-            flagged.len(),
-            rows.len(),
-            count_by(flagged.iter().flat_map(|r| r.flags()))
-        );
+            .find(|r| r.get(cols::METHOD) == "floor_depth")
+            .and_then(|r| r.trusted_ms()),
+        best_error,
+        rows,
     }
 }
 
-fn platform_summary(out: &mut String, runs: &Runs, rows: &[&Rec]) {
-    let mut studies: Vec<String> = Vec::new();
-    for r in rows {
-        let s = r.get(cols::STUDY).to_string();
-        if !studies.contains(&s) {
-            studies.push(s);
-        }
-    }
-    for study in studies {
-        let of: Vec<&Rec> = rows
-            .iter()
-            .copied()
-            .filter(|r| r.get(cols::STUDY) == study)
-            .collect();
-        let ok: Vec<&Rec> = of.iter().copied().filter(|r| r.ok()).collect();
-        let methods: Vec<&Rec> = ok.iter().copied().filter(|r| !r.is_floor()).collect();
-        let labels = ConfigLabels::new(methods.iter().copied());
-        let _ = writeln!(out, "\n### {study}\n");
-        if methods.is_empty() {
-            let _ = writeln!(
-                out,
-                "No measured configuration (only floors, or nothing ran)."
-            );
-        }
-        if IMAGE_STUDIES.contains(&study.as_str()) {
-            overall(out, &methods, &labels);
-        }
-        let effects = Runs::distinct(methods.iter().copied(), cols::EFFECT).len() > 1;
-        for (key, g) in Runs::group_by(methods.iter().copied(), |r| {
-            let e = if effects { r.get(cols::EFFECT) } else { "" };
-            format!("{}\u{0}{}\u{0}{e}", r.get(cols::SCENE_LABEL), resolution(r))
-        }) {
-            let mut parts = key.split('\u{0}');
-            let (label, res, effect) = (
-                parts.next().unwrap_or(""),
-                parts.next().unwrap_or(""),
-                parts.next().unwrap_or(""),
-            );
-            let what = if effect.is_empty() {
-                String::new()
-            } else {
-                format!(", {effect}")
-            };
-            let _ = writeln!(out, "\n{}{what}, {res}:", scene_name(label));
-            if IMAGE_STUDIES.contains(&study.as_str())
-                && g.iter().any(|r| r.f(cols::RMSE).is_some())
-            {
+/// Every verdict of the image studies, per platform, study, scene, resolution (and effect).
+pub fn verdicts(runs: &Runs) -> Vec<(String, Verdict<'_>)> {
+    let mut out = Vec::new();
+    for p in platforms(runs) {
+        let rows: Vec<&Rec> = runs.rows.iter().filter(|r| platform(r) == p).collect();
+        for study in IMAGE_STUDIES {
+            let ok: Vec<&Rec> = rows
+                .iter()
+                .copied()
+                .filter(|r| r.get(cols::STUDY) == study && r.ok())
+                .collect();
+            let methods: Vec<&Rec> = ok.iter().copied().filter(|r| !r.is_floor()).collect();
+            let effects = Runs::distinct(methods.iter().copied(), cols::EFFECT).len() > 1;
+            for (key, g) in Runs::group_by(methods.iter().copied(), |r| {
+                let e = if effects { r.get(cols::EFFECT) } else { "" };
+                format!("{}\u{0}{}\u{0}{e}", r.get(cols::SCENE_LABEL), resolution(r))
+            }) {
+                if !g.iter().any(|r| r.f(cols::RMSE).is_some()) {
+                    continue;
+                }
+                let mut parts = key.split('\u{0}');
+                let (label, res, effect) = (
+                    parts.next().unwrap_or(""),
+                    parts.next().unwrap_or(""),
+                    parts.next().unwrap_or(""),
+                );
                 let floors: Vec<&Rec> = ok
                     .iter()
                     .copied()
@@ -309,23 +198,150 @@ fn platform_summary(out: &mut String, runs: &Runs, rows: &[&Rec]) {
                         r.is_floor() && r.get(cols::SCENE_LABEL) == label && resolution(r) == res
                     })
                     .collect();
-                image_scene(out, &g, &floors, &labels);
-            } else {
-                other_scene(out, &study, &g, &labels);
+                out.push((
+                    p.clone(),
+                    image_verdict(study, label, res, effect, g, &floors),
+                ));
             }
         }
-        let fixed = labels.fixed_note();
-        if !fixed.is_empty() {
-            let _ = writeln!(out, "\n{fixed}");
-        }
     }
-    let _ = runs;
+    out
 }
 
-/// The summary of a run (plain text, Markdown-flavoured): what it found, per platform, study and
-/// scene, then what did not run and which columns this CSV does not have.
-pub fn summary_text(runs: &Runs) -> String {
-    let mut out = String::new();
+/// "name 1.2 [1.1, 1.3] ms (tied with 2: a, b)".
+fn pick_text(labels: &ConfigLabels, p: &Pick, with_error: bool) -> String {
+    let mut s = format!("{} at {} ms", labels.get(p.row), time_cell(p.row));
+    if with_error {
+        s.push_str(&format!(", RMSE {}", short(p.row.f(cols::RMSE))));
+    }
+    if !p.ties.is_empty() {
+        let names: Vec<String> = p.ties.iter().map(|r| labels.get(r)).collect();
+        s.push_str(&format!(
+            " (tied with {}: {}; their time intervals overlap)",
+            p.ties.len(),
+            names.join("; ")
+        ));
+    }
+    s
+}
+
+/// The sentences of one verdict (the text and the table say the same).
+struct Cells {
+    exact: String,
+    /// ("10×", "0.1 ms"): the multiple of floor_depth and the floor's time.
+    x_floor: (String, String),
+    budgets: Vec<String>,
+    flagged: String,
+}
+
+fn cells(v: &Verdict, labels: &ConfigLabels) -> Cells {
+    let left_out = if v.exact_untrusted.is_empty() {
+        String::new()
+    } else {
+        let names: Vec<String> = v.exact_untrusted.iter().map(|r| labels.get(r)).collect();
+        format!(
+            "{} exact but left out: {} (GPU timestamps miss part of the frame, gpu_time_trusted false)",
+            names.len(),
+            names.join("; ")
+        )
+    };
+    let exact = match &v.fastest_exact {
+        Some(p) => {
+            let mut s = pick_text(labels, p, false);
+            if !left_out.is_empty() {
+                s.push_str(&format!("; {left_out}"));
+            }
+            s
+        }
+        None if !left_out.is_empty() => format!("none with a trusted time; {left_out}"),
+        None => format!(
+            "none exact{}",
+            v.best_error
+                .map(|r| format!(
+                    "; smallest error {} (RMSE {}{})",
+                    labels.get(r),
+                    short(r.f(cols::RMSE)),
+                    if r.flagged() {
+                        format!(", flagged {}", r.marks().join(", "))
+                    } else {
+                        String::new()
+                    }
+                ))
+                .unwrap_or_default()
+        ),
+    };
+    let x_floor = match (&v.fastest_exact, v.floor_ms) {
+        (Some(p), Some(f)) if f > 0.0 => (
+            format!("{}×", short(p.row.trusted_ms().map(|t| t / f))),
+            format!("{} ms", short(Some(f))),
+        ),
+        _ => (String::new(), String::new()),
+    };
+    let budgets = v
+        .budgets
+        .iter()
+        .map(|(_, p)| match p {
+            Some(p)
+                if v.fastest_exact
+                    .as_ref()
+                    .is_some_and(|e| std::ptr::eq(e.row, p.row)) =>
+            {
+                "the fastest exact".to_string()
+            }
+            Some(p) => {
+                let mut s = pick_text(labels, p, true);
+                if p.row.flagged() {
+                    s.push_str(&format!(" [flagged {}]", p.row.marks().join(", ")));
+                }
+                s
+            }
+            None => "none".to_string(),
+        })
+        .collect();
+    let flagged: Vec<&&Rec> = v.rows.iter().filter(|r| r.flagged()).collect();
+    let flagged = if flagged.is_empty() {
+        "none".to_string()
+    } else {
+        format!(
+            "{} of {}: {}",
+            flagged.len(),
+            v.rows.len(),
+            count_by(flagged.iter().flat_map(|r| r.marks()))
+        )
+    };
+    Cells {
+        exact,
+        x_floor,
+        budgets,
+        flagged,
+    }
+}
+
+fn scene_title(v: &Verdict) -> String {
+    if v.effect.is_empty() {
+        scene_name(&v.scene)
+    } else {
+        format!("{}, {}", scene_name(&v.scene), v.effect)
+    }
+}
+
+/// One scene of another study: its fastest configuration and, with an error column, its most
+/// accurate one.
+fn other_scene(study: &str, rows: &[&Rec], labels: &ConfigLabels) -> (String, String) {
+    let fast = fastest(rows)
+        .map(|p| pick_text(labels, &p, false))
+        .unwrap_or_else(|| "no trusted time".into());
+    let best = error_col(study).and_then(|col| {
+        rows.iter()
+            .filter(|r| r.f(col).is_some())
+            .min_by(|a, b| a.f(col).unwrap().total_cmp(&b.f(col).unwrap()))
+            .map(|r| format!("{col} {}: {}", short(r.f(col)), labels.get(r)))
+    });
+    (fast, best.unwrap_or_default())
+}
+
+/// What the run is, and the flags that cover every row of a run (said once, here).
+fn preamble(runs: &Runs) -> Vec<String> {
     let count = |s: &str| {
         runs.rows
             .iter()
@@ -338,10 +354,7 @@ pub fn summary_text(runs: &Runs) -> String {
             ids.push(r.get(cols::RUN_ID));
         }
     }
-    let plats = platforms(runs);
-    let _ = writeln!(out, "## Summary\n");
-    let _ = writeln!(
-        out,
+    let mut out = vec![format!(
         "{} rows from {} ({}): {} ok, {} skipped, {} failed.",
         runs.rows.len(),
         if ids.len() == 1 {
@@ -349,38 +362,35 @@ pub fn summary_text(runs: &Runs) -> String {
         } else {
             format!("{} runs", ids.len())
         },
-        plats.join("; "),
+        platforms(runs).join("; "),
         count("ok"),
         count("skipped"),
         count("failed")
-    );
+    )];
+    for (id, flags) in runs.run_wide_flags() {
+        out.push(format!(
+            "Every timed row of run {id} is flagged {} (a property of the run, e.g. a software adapter's timer): said here once, not marked per point.",
+            flags.join(", ")
+        ));
+    }
     if runs.rows.iter().any(|r| r.f(cols::RMSE).is_some()) {
-        let _ = writeln!(
-            out,
-            "Errors are RMSE vs the ground truth; {}. Times are median GPU ms per frame [95 % CI when measured]; × floor_depth divides by the depth-only pass of the same scene.",
+        out.push(format!(
+            "Errors are RMSE vs the ground truth; {}. Times are median GPU ms per frame with their interval: [95 % CI] where there are enough samples, else (range of the samples, n). \"Tied with N\": N others whose intervals overlap the winner's. × floor divides by floor_depth (the depth-only pass) of the same scene. Rows whose GPU timestamps miss part of the frame are never ranked by time.",
             runs.exactness_rule()
-        );
+        ));
     }
-    for p in &plats {
-        let rows: Vec<&Rec> = runs.rows.iter().filter(|r| platform(r) == *p).collect();
-        if plats.len() > 1 {
-            let _ = writeln!(out, "\n## {p}");
-        }
-        platform_summary(&mut out, runs, &rows);
-    }
-    let _ = writeln!(out, "\n### Not run\n");
-    let mut any = false;
+    out
+}
+
+/// The skipped and failed points, grouped by reason.
+fn not_run(runs: &Runs) -> Vec<String> {
+    let mut out = Vec::new();
     for status in ["skipped", "failed"] {
         let rows: Vec<&Rec> = runs
             .rows
             .iter()
             .filter(|r| r.get(cols::STATUS) == status)
             .collect();
-        if rows.is_empty() {
-            continue;
-        }
-        any = true;
-        let _ = writeln!(out, "- {status}: {} point(s):", rows.len());
         let mut reasons: Vec<(String, Vec<&Rec>)> = Vec::new();
         for r in &rows {
             let why = r.get(cols::REASON).to_string();
@@ -392,9 +402,8 @@ pub fn summary_text(runs: &Runs) -> String {
         for (why, rs) in reasons {
             let mut methods: Vec<&str> = rs.iter().map(|r| r.get(cols::METHOD)).collect();
             methods.dedup();
-            let _ = writeln!(
-                out,
-                "  - {} × {} ({}): {}",
+            out.push(format!(
+                "{status}: {} × {} ({}): {}",
                 rs.len(),
                 methods.join(", "),
                 rs.first().map(|r| r.get(cols::STUDY)).unwrap_or(""),
@@ -403,23 +412,216 @@ pub fn summary_text(runs: &Runs) -> String {
                 } else {
                     &why
                 }
-            );
+            ));
         }
     }
-    if !any {
-        let _ = writeln!(out, "Every point ran.");
-    }
+    out
+}
+
+fn missing_columns(runs: &Runs) -> Option<String> {
     let missing: Vec<String> = NEWER
         .iter()
         .filter(|(c, _)| !runs.has(*c))
         .map(|(c, what)| format!("{c} ({what})"))
         .collect();
-    if !missing.is_empty() {
-        let _ = writeln!(
-            out,
-            "\nNot measured in this CSV (an older schema): {}.",
+    (!missing.is_empty()).then(|| {
+        format!(
+            "Not measured in this CSV (an older schema): {}.",
             missing.join("; ")
+        )
+    })
+}
+
+/// Other studies (no image error ranking): per scene, the fastest and the lowest error.
+/// (scene and resolution, fastest, lowest error) of one scene of another study.
+type OtherLine = (String, String, String);
+
+fn other_studies(runs: &Runs) -> Vec<(String, String, Vec<OtherLine>)> {
+    let mut out = Vec::new();
+    for p in platforms(runs) {
+        let rows: Vec<&Rec> = runs.rows.iter().filter(|r| platform(r) == p).collect();
+        let studies = Runs::distinct(rows.iter().copied(), cols::STUDY);
+        for study in studies
+            .iter()
+            .filter(|s| !IMAGE_STUDIES.contains(&s.as_str()))
+        {
+            let methods: Vec<&Rec> = rows
+                .iter()
+                .copied()
+                .filter(|r| r.get(cols::STUDY) == study && r.ok() && !r.is_floor())
+                .collect();
+            let labels = ConfigLabels::new(methods.iter().copied());
+            let mut lines = Vec::new();
+            for (key, g) in Runs::group_by(methods.iter().copied(), |r| {
+                format!(
+                    "{}, {}",
+                    scene_name(r.get(cols::SCENE_LABEL)),
+                    resolution(r)
+                )
+            }) {
+                let (fast, best) = other_scene(study, &g, &labels);
+                lines.push((key, fast, best));
+            }
+            out.push((p.clone(), study.clone(), lines));
+        }
+    }
+    out
+}
+
+/// The summary as HTML: the verdict table per study first, then the other studies, what did
+/// not run (folded) and the columns this CSV lacks.
+pub fn summary_html(runs: &Runs) -> String {
+    let mut h = String::from("<section id=\"summary\"><h2>Verdict</h2>");
+    for line in preamble(runs) {
+        let _ = write!(h, "<p class=\"note\">{}</p>", esc(&line));
+    }
+    let plats = platforms(runs).len();
+    let vs = verdicts(runs);
+    for (key, group) in Runs::group_by_owned(&vs, |(p, v)| format!("{p}\u{0}{}", v.study)) {
+        let (p, study) = key.split_once('\u{0}').unwrap_or((&key, ""));
+        let all: Vec<&Rec> = group
+            .iter()
+            .flat_map(|(_, v)| v.rows.iter().copied())
+            .collect();
+        let labels = ConfigLabels::new(all.iter().copied());
+        let _ = write!(
+            h,
+            "<table class=\"verdict\" id=\"verdict-{}\"><caption>{}{}: the winner per scene × resolution</caption><tr><th>scene</th><th>resolution</th><th>fastest exact</th><th>× floor_depth</th>{}<th>flagged (not counting run-wide flags)</th></tr>",
+            esc(study),
+            esc(study),
+            if plats > 1 { format!(" — {}", esc(p)) } else { String::new() },
+            BUDGETS
+                .iter()
+                .map(|b| format!("<th>fastest with RMSE ≤ {b:.0e}</th>"))
+                .collect::<String>()
         );
+        for (_, v) in group {
+            let c = cells(v, &labels);
+            let _ = write!(
+                h,
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td>{}<td>{}</td></tr>",
+                esc(&scene_title(v)),
+                esc(&v.res),
+                esc(&c.exact),
+                if c.x_floor.0.is_empty() {
+                    String::new()
+                } else {
+                    esc(&format!("{} ({})", c.x_floor.0, c.x_floor.1))
+                },
+                c.budgets
+                    .iter()
+                    .map(|b| format!("<td>{}</td>", esc(b)))
+                    .collect::<String>(),
+                esc(&c.flagged)
+            );
+        }
+        h.push_str("</table>");
+        let fixed = labels.fixed_note();
+        if !fixed.is_empty() {
+            let _ = write!(h, "<p class=\"note\">{}</p>", esc(&fixed));
+        }
+    }
+    for (p, study, lines) in other_studies(runs) {
+        let _ = write!(
+            h,
+            "<table class=\"verdict\"><caption>{}{}</caption><tr><th>scene, resolution</th><th>fastest</th><th>lowest error</th></tr>",
+            esc(&study),
+            if plats > 1 { format!(" — {}", esc(&p)) } else { String::new() }
+        );
+        for (k, f, b) in lines {
+            let _ = write!(
+                h,
+                "<tr><td>{}</td><td>{}</td><td>{}</td></tr>",
+                esc(&k),
+                esc(&f),
+                esc(&b)
+            );
+        }
+        h.push_str("</table>");
+    }
+    let nr = not_run(runs);
+    if nr.is_empty() {
+        h.push_str("<p class=\"note\">Every point ran.</p>");
+    } else {
+        let _ = write!(
+            h,
+            "<details><summary>Not run: {} group(s) of points</summary><ul>{}</ul></details>",
+            nr.len(),
+            nr.iter()
+                .map(|l| format!("<li>{}</li>", esc(l)))
+                .collect::<String>()
+        );
+    }
+    if let Some(m) = missing_columns(runs) {
+        let _ = write!(h, "<p class=\"note\">{}</p>", esc(&m));
+    }
+    h.push_str("</section>");
+    h
+}
+
+/// The summary of a run as plain text (what `mfx sweep` prints at its end): the same verdicts as
+/// `summary_html`, one line per scene.
+pub fn summary_text(runs: &Runs) -> String {
+    let mut out = String::from("Summary\n");
+    for line in preamble(runs) {
+        let _ = writeln!(out, "{line}");
+    }
+    let vs = verdicts(runs);
+    for (key, group) in Runs::group_by_owned(&vs, |(p, v)| format!("{p}\u{0}{}", v.study)) {
+        let (p, study) = key.split_once('\u{0}').unwrap_or((&key, ""));
+        let all: Vec<&Rec> = group
+            .iter()
+            .flat_map(|(_, v)| v.rows.iter().copied())
+            .collect();
+        let labels = ConfigLabels::new(all.iter().copied());
+        let _ = writeln!(out, "\n{study} ({p}):");
+        for (_, v) in group {
+            let c = cells(v, &labels);
+            let _ = writeln!(out, "{}, {}:", scene_title(v), v.res);
+            let _ = writeln!(
+                out,
+                "- Fastest exact: {}{}.",
+                c.exact,
+                if c.x_floor.0.is_empty() {
+                    String::new()
+                } else {
+                    format!(", {} floor_depth ({})", c.x_floor.0, c.x_floor.1)
+                }
+            );
+            for (b, t) in BUDGETS.iter().zip(&c.budgets) {
+                let _ = writeln!(out, "- RMSE ≤ {b:.0e}: {t}.");
+            }
+            let _ = writeln!(out, "- Flagged: {}.", c.flagged);
+        }
+        let fixed = labels.fixed_note();
+        if !fixed.is_empty() {
+            let _ = writeln!(out, "{fixed}");
+        }
+    }
+    for (p, study, lines) in other_studies(runs) {
+        let _ = writeln!(out, "\n{study} ({p}):");
+        for (k, f, b) in lines {
+            let _ = writeln!(
+                out,
+                "- {k}: fastest {f}{}",
+                if b.is_empty() {
+                    String::new()
+                } else {
+                    format!("; lowest {b}")
+                }
+            );
+        }
+    }
+    let nr = not_run(runs);
+    let _ = writeln!(out, "\nNot run:");
+    if nr.is_empty() {
+        let _ = writeln!(out, "Every point ran.");
+    }
+    for l in nr {
+        let _ = writeln!(out, "- {l}");
+    }
+    if let Some(m) = missing_columns(runs) {
+        let _ = writeln!(out, "\n{m}");
     }
     out
 }
@@ -428,36 +630,151 @@ pub fn summary_text(runs: &Runs) -> String {
 mod tests {
     use super::*;
 
-    fn runs(rows: &[&str]) -> Runs {
-        let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,x_floor,rmse,bad_pixel_frac,flag";
-        let d =
-            std::env::temp_dir().join(format!("mfx-summary-{}-{}", rows.len(), std::process::id()));
+    fn runs(name: &str, rows: &[&str]) -> Runs {
+        let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,gpu_ms_ci_lo,gpu_ms_ci_hi,samples,x_floor,rmse,bad_pixel_frac,matches_truth,exact,overflow_rate,flag";
+        let d = std::env::temp_dir().join(format!("mfx-summary-{name}-{}", std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
         let p = d.join("runs.csv");
         std::fs::write(&p, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
         Runs::load(&p).unwrap()
     }
 
+    /// Every winner the verdict names is what the rows say: exact rows for "fastest exact",
+    /// rows within the budget for a budget, trusted times only, nothing faster left out, and
+    /// every tie's interval overlapping the winner's.
+    fn check_against_rows(runs: &Runs) -> usize {
+        let vs = verdicts(runs);
+        for (_, v) in &vs {
+            let timed: Vec<&Rec> = v
+                .rows
+                .iter()
+                .copied()
+                .filter(|r| r.trusted_ms().is_some())
+                .collect();
+            let exact: Vec<&Rec> = timed
+                .iter()
+                .copied()
+                .filter(|r| r.exact_result() == Some(true))
+                .collect();
+            if let Some(p) = &v.fastest_exact {
+                assert_eq!(
+                    p.row.exact_result(),
+                    Some(true),
+                    "{}",
+                    p.row.get(cols::POINT_KEY)
+                );
+                assert!(p.row.time_trusted());
+                let t = p.row.trusted_ms().unwrap();
+                for r in &exact {
+                    assert!(r.trusted_ms().unwrap() >= t, "{}", r.get(cols::POINT_KEY));
+                }
+                for tie in &p.ties {
+                    assert!(overlap(tie, p.row) && tie.exact_result() == Some(true));
+                }
+            } else {
+                assert!(exact.is_empty());
+            }
+            for r in &v.exact_untrusted {
+                assert!(r.exact_result() == Some(true) && !r.time_trusted());
+            }
+            for (b, p) in &v.budgets {
+                let within: Vec<&Rec> = timed
+                    .iter()
+                    .copied()
+                    .filter(|r| r.f(cols::RMSE).is_some_and(|e| e <= *b))
+                    .collect();
+                match p {
+                    Some(p) => {
+                        assert!(p.row.f(cols::RMSE).is_some_and(|e| e <= *b));
+                        let t = p.row.trusted_ms().unwrap();
+                        assert!(within.iter().all(|r| r.trusted_ms().unwrap() >= t));
+                    }
+                    None => assert!(within.is_empty()),
+                }
+            }
+        }
+        vs.len()
+    }
+
     #[test]
-    fn the_summary_names_the_fastest_exact_and_the_budgets() {
-        let r = runs(&[
-            "1,r,methods,q(d=8),64,64,floor_depth,methods|q(d=8)|64x64|floor_depth|,G,vulkan,ok,,0.1,,,,",
-            "1,r,methods,q(d=8),64,64,depth_peel,methods|q(d=8)|64x64|depth_peel|max_layers=64,G,vulkan,ok,,2.0,20,0,0,",
-            "1,r,methods,q(d=8),64,64,linked_list,methods|q(d=8)|64x64|linked_list|layers=8,G,vulkan,ok,,1.0,10,0,0,",
-            "1,r,methods,q(d=8),64,64,kbuffer,methods|q(d=8)|64x64|kbuffer|layers=4,G,vulkan,ok,,0.25,2.5,5e-4,0.01,hazard",
-            "1,r,methods,q(d=8),64,64,wboit,methods|q(d=8)|64x64|wboit|,G,vulkan,ok,,0.2,2,5e-3,0.5,",
-            "1,r,methods,q(d=8),64,64,bdp,methods|q(d=8)|64x64|bdp|,G,vulkan,skipped,needs 8 attachments,,,,,",
-        ]);
-        let s = summary_text(&r);
-        assert!(
-            s.contains("Fastest exact: linked_list at 1 ms, 10× floor_depth (0.1 ms)"),
-            "{s}"
+    fn the_verdict_names_only_exact_trusted_fastest_rows() {
+        let r = runs(
+            "synthetic",
+            &[
+                "1,r,methods,q(d=8),64,64,floor_depth,methods|q(d=8)|64x64|floor_depth|,G,vulkan,ok,,0.1,0.09,0.11,30,,,,,,,",
+                "1,r,methods,q(d=8),64,64,depth_peel,methods|q(d=8)|64x64|depth_peel|max_layers=64,G,vulkan,ok,,2.0,1.9,2.1,30,20,3e-8,0,true,true,,",
+                "1,r,methods,q(d=8),64,64,linked_list,methods|q(d=8)|64x64|linked_list|layers=8,G,vulkan,ok,,1.0,0.9,1.1,30,10,3e-8,0,true,true,,",
+                // Tied with the linked list: its interval overlaps.
+                "1,r,methods,q(d=8),64,64,bdp,methods|q(d=8)|64x64|bdp|,G,vulkan,ok,,1.05,0.95,1.2,30,10.5,3e-8,0,true,true,,",
+                // Fastest of all and exact, but its timestamps missed part of the frame.
+                "1,r,methods,q(d=8),64,64,compute_abuffer,methods|q(d=8)|64x64|compute_abuffer|,G,vulkan,ok,,0.05,0.04,0.06,30,0.5,3e-8,0,true,true,,timestamps_incomplete",
+                // Within tolerance (matches_truth) but overflowed: never exact.
+                "1,r,methods,q(d=8),64,64,kbuffer_rmw,methods|q(d=8)|64x64|kbuffer_rmw|layers=16,G,vulkan,ok,,0.5,0.45,0.55,30,5,3.2e-4,0,true,true,0.271,overflow",
+                "1,r,methods,q(d=8),64,64,wboit,methods|q(d=8)|64x64|wboit|,G,vulkan,ok,,0.2,0.19,0.21,30,2,5e-3,0.5,false,false,,",
+                "1,r,methods,q(d=8),64,64,adp,methods|q(d=8)|64x64|adp|,G,vulkan,skipped,needs 8 attachments,,,,,,,,,,,",
+            ],
         );
-        assert!(s.contains("RMSE ≤ 1e-3: kbuffer at 0.25 ms, RMSE 5e-4, 4× faster than the fastest exact (flagged: hazard)"), "{s}");
-        assert!(s.contains("RMSE ≤ 1e-2: wboit at 0.2 ms"), "{s}");
-        assert!(s.contains("Flagged: 1 of 4 (hazard 1)"), "{s}");
-        assert!(s.contains("1 × bdp (methods): needs 8 attachments"), "{s}");
-        assert!(s.contains("predates the matches_truth column"), "{s}");
-        assert!(s.contains("Not measured in this CSV"), "{s}");
+        assert_eq!(check_against_rows(&r), 1);
+        let (_, v) = &verdicts(&r)[0];
+        let fe = v.fastest_exact.as_ref().unwrap();
+        assert_eq!(fe.row.get(cols::METHOD), "linked_list");
+        assert_eq!(fe.ties.len(), 1);
+        assert_eq!(v.exact_untrusted.len(), 1);
+        assert_eq!(
+            v.budgets[0].1.as_ref().unwrap().row.get(cols::METHOD),
+            "kbuffer_rmw"
+        );
+        assert_eq!(
+            v.budgets[1].1.as_ref().unwrap().row.get(cols::METHOD),
+            "wboit"
+        );
+        let h = summary_html(&r);
+        assert!(!h.contains("<pre"), "{h}");
+        assert!(h.contains("tied with 1: bdp"), "{h}");
+        assert!(h.contains("1 exact but left out: compute_abuffer"), "{h}");
+        assert!(h.contains("10× (0.1 ms)"), "{h}");
+        let t = summary_text(&r);
+        assert!(t.contains("Fastest exact: linked_list"), "{t}");
+        assert!(
+            t.contains("skipped: 1 × adp (methods): needs 8 attachments"),
+            "{t}"
+        );
+    }
+
+    #[test]
+    fn a_three_sample_interval_is_a_range_and_a_run_wide_flag_is_said_once() {
+        let r = runs(
+            "range",
+            &[
+                "1,r,methods,q,64,64,linked_list,k1,lavapipe,vulkan,ok,,1.93,1.52,5.8,3,,3e-8,0,true,true,,noisy",
+                "1,r,methods,q,64,64,depth_peel,k2,lavapipe,vulkan,ok,,1.96,1.71,6.09,3,,3e-8,0,true,true,,noisy",
+            ],
+        );
+        let (_, v) = &verdicts(&r)[0];
+        assert_eq!(v.fastest_exact.as_ref().unwrap().ties.len(), 1);
+        assert!(v.rows.iter().all(|x| !x.flagged()), "noisy covers the run");
+        let h = summary_html(&r);
+        assert!(h.contains("range 1.52–5.8, n = 3"), "{h}");
+        assert!(!h.contains("1.93 [1.52"), "{h}");
+        assert!(
+            h.contains("Every timed row of run r is flagged noisy"),
+            "{h}"
+        );
+    }
+
+    #[test]
+    fn a_committed_run_s_verdict_agrees_with_its_rows() {
+        let csv = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../results/reference/2026-12-02-h200-default/default/runs.csv"
+        );
+        let r = Runs::load(std::path::Path::new(csv)).unwrap();
+        assert!(check_against_rows(&r) > 5);
+        // No row with an overflow is named exact.
+        for (_, v) in verdicts(&r) {
+            if let Some(p) = v.fastest_exact {
+                assert!(p.row.f(cols::OVERFLOW_RATE).is_none_or(|o| o == 0.0));
+            }
+        }
     }
 }

@@ -422,3 +422,21 @@ fn gzipped_samples_are_read_like_plain_ones() {
         assert_eq!(p.time.p, q.time.p);
     }
 }
+
+#[test]
+fn ratios_off_the_scale_are_marked_with_their_value_not_clamped() {
+    let a = run("scale-a", Spec::default());
+    for (name, scale, text) in [("scale-hi", 7.49, "7.49×"), ("scale-lo", 0.197, "0.197×")] {
+        let b = run(
+            name,
+            Spec {
+                scale,
+                ..Spec::default()
+            },
+        );
+        let h = compare_runs(&a, &b, &AbOptions::default()).unwrap().html();
+        assert_eq!(h.matches("class=\"offscale\"").count(), POINTS, "{name}");
+        assert!(h.contains(text), "{name}: the value is written");
+        assert!(!h.contains("<circle"), "{name}: no dot at the edge");
+    }
+}

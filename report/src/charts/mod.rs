@@ -79,6 +79,9 @@ pub fn color(i: usize) -> RGBColor {
     RGBColor((c >> 16) as u8, (c >> 8) as u8, c as u8)
 }
 
+/// How many marker shapes there are (`Series::family` is taken modulo this).
+pub const MARKERS: usize = SHAPES.len();
+
 /// Marker shapes, one per method family; all closed, so a hollow (flagged) one reads as such.
 const SHAPES: [(usize, f64); 8] = [
     (0, 0.0),                          // circle

@@ -7,10 +7,11 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use super::methods::{ci_caption, config_series, scene_families, Styles};
+use super::methods::{config_series, scene_families, Styles};
 use crate::charts::{Figure, Pt, XY};
 use crate::data::{resolution, Rec, Runs};
 use crate::labels::{file_safe, scene_names, ConfigLabels};
+use crate::points::ci_caption;
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     // Only rows that report a collision rate: the bucket methods.
@@ -70,7 +71,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             series: config_series(&at_res, &labels, &styles, |r| {
                 let (lo, hi) = r.gpu_ci().unzip();
                 Some(Pt {
-                    x: r.f(cols::GPU_MS_MEDIAN)?,
+                    x: r.trusted_ms()?,
                     y: r.f(cols::COLLISION_RATE)?,
                     xlo: lo,
                     xhi: hi,

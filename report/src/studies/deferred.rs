@@ -61,7 +61,7 @@ fn time_ms(r: &Rec) -> Option<f64> {
     if r.get(cols::METHOD) == "cpu_tiled" {
         r.f(cols::CPU_LIGHT_MS)
     } else {
-        r.f(cols::GPU_MS_MEDIAN)
+        r.trusted_ms()
     }
 }
 

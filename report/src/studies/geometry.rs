@@ -50,7 +50,7 @@ fn vertices_per_draw(r: &Rec) -> Option<f64> {
 
 /// A rate `amount / gpu time`, whiskers from the CI of the median time when measured.
 fn rate(r: &Rec, x: f64, amount: f64, scale: f64) -> Option<Pt> {
-    let ms = r.f(cols::GPU_MS_MEDIAN)?;
+    let ms = r.trusted_ms()?;
     if ms <= 0.0 {
         return None;
     }
@@ -63,7 +63,7 @@ fn rate(r: &Rec, x: f64, amount: f64, scale: f64) -> Option<Pt> {
 }
 
 fn gpu_ms(r: &Rec, x: f64) -> Option<Pt> {
-    super::methods::time_pt(r, x)
+    crate::points::time_pt(r, x)
 }
 
 fn push(series: &mut Vec<Series>, name: String, p: Pt) {
@@ -415,7 +415,7 @@ fn formats(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result
 fn raster_check(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> Result<()> {
     let mut series = Vec::new();
     for r in at {
-        if let (Some(ms), Some(ratio)) = (r.f(cols::GPU_MS_MEDIAN), r.f(cols::RASTER_BOUND_RATIO)) {
+        if let (Some(ms), Some(ratio)) = (r.trusted_ms(), r.f(cols::RASTER_BOUND_RATIO)) {
             push(
                 &mut series,
                 scene_name(r.get(cols::SCENE_LABEL)),

@@ -12,14 +12,12 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use crate::charts::{Bars, Figure, Named, Pt, Series, XY};
+use crate::cells::{esc, exact_cell, short, time_cell};
+use crate::charts::{Bars, Figure, Named, Pt, Series, MARKERS, XY};
 use crate::data::{resolution, Rec, Runs};
-use crate::html::{esc, short};
 use crate::labels::{config_key, file_safe, parse_scene, scene_name, scene_names, ConfigLabels};
 use crate::pareto;
-
-/// Flags that make a point's time unusable for the front (its timestamps did not all arrive).
-const UNTIMED: &[&str] = &["timestamps_incomplete"];
+use crate::points::{ci_caption, time_pt};
 
 /// Colour (configuration) and marker (method family) of every configuration of a set of rows,
 /// fixed across a report's charts so a configuration looks the same everywhere.
@@ -30,15 +28,27 @@ pub struct Styles {
 }
 
 impl Styles {
+    /// Every configuration gets its own (colour, marker) pair from the declared tables
+    /// (`charts::PALETTE` × the markers): the marker names the method, the colour is the next
+    /// one not yet drawn with that marker, so two series look alike only past 32 configurations
+    /// of the same marker.
     pub fn new<'a>(rows: impl IntoIterator<Item = &'a Rec>) -> Styles {
         let mut s = Styles::default();
+        let mut next: BTreeMap<usize, usize> = BTreeMap::new();
         for r in rows {
-            let n = s.colors.len();
-            s.colors.entry(config_key(r)).or_insert(n);
             let n = s.families.len();
-            s.families
+            let fam = *s
+                .families
                 .entry(r.get(cols::METHOD).to_string())
                 .or_insert(n);
+            let key = config_key(r);
+            if let std::collections::btree_map::Entry::Vacant(e) = s.colors.entry(key) {
+                // Each marker starts at its first method's own colour, so one-configuration
+                // methods still differ in colour as well as marker.
+                let c = next.entry(fam % MARKERS).or_insert(fam);
+                e.insert(*c);
+                *c += 1;
+            }
         }
         s
     }
@@ -75,34 +85,6 @@ pub fn config_series(
         s.points.sort_by(|a, b| a.x.total_cmp(&b.x));
     }
     out
-}
-
-/// A GPU-time point: y = median, whisker = the 95 % CI of the median when the CSV has one.
-pub fn time_pt(r: &Rec, x: f64) -> Option<Pt> {
-    let (lo, hi) = r.gpu_ci().unzip();
-    Some(Pt::spread(x, r.f(cols::GPU_MS_MEDIAN)?, lo, hi).flagged(r.flagged()))
-}
-
-/// What the time whiskers of a run's charts mean, for captions.
-pub fn ci_caption(runs: &Runs) -> &'static str {
-    if runs.has(cols::GPU_MS_CI_LO) {
-        "Whiskers: 95 % bootstrap CI of the median GPU time."
-    } else {
-        "No whiskers: this CSV has no confidence interval of the median (gpu_ms_ci_lo/hi), and min–max is not one."
-    }
-}
-
-/// `ci_caption` for a set of rows (whether any has a CI).
-pub fn ci_caption_rows(rows: &[&Rec]) -> &'static str {
-    if rows.iter().any(|r| r.gpu_ci().is_some()) {
-        "Whiskers: 95 % bootstrap CI of the median GPU time."
-    } else {
-        "No whiskers: these rows have no confidence interval of the median (gpu_ms_ci_lo/hi), and min–max is not one."
-    }
-}
-
-fn untimed(r: &Rec) -> bool {
-    r.flags().iter().any(|f| UNTIMED.contains(f))
 }
 
 /// The rows of one scene at one resolution whose front is drawn; the front's members by key.
@@ -148,6 +130,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let styles = Styles::new(methods.iter().copied());
     let mut figs = Vec::new();
     let ci = ci_caption(runs);
+    let ci = ci.as_str();
     for (res, at_res) in Runs::group_by(methods.iter().copied(), resolution) {
         // Errors of different effects are different quantities: one front per scene and effect.
         let effects = Runs::distinct(at_res.iter().copied(), cols::EFFECT).len() > 1;
@@ -224,14 +207,14 @@ fn scene_figures(
     let vlines: Vec<(f64, String)> = floors
         .iter()
         .filter_map(|r| {
-            let ms = r.f(cols::GPU_MS_MEDIAN)?;
+            let ms = r.trusted_ms()?;
             Some((ms, format!("{} {}", r.get(cols::METHOD), short(Some(ms)))))
         })
         .collect();
-    let timed: Vec<&Rec> = g.iter().copied().filter(|r| !untimed(r)).collect();
-    let time_err = |r: &Rec| Some((r.f(cols::GPU_MS_MEDIAN)?, r.f(cols::RMSE)?));
+    let timed: Vec<&Rec> = g.iter().copied().filter(|r| r.time_trusted()).collect();
+    let time_err = |r: &Rec| Some((r.trusted_ms()?, r.f(cols::RMSE)?));
     let mem_err = |r: &Rec| Some((r.bytes_per_pixel()?, r.f(cols::RMSE)?));
-    let mem_time = |r: &Rec| Some((r.bytes_per_pixel()?, r.f(cols::GPU_MS_MEDIAN)?));
+    let mem_time = |r: &Rec| Some((r.bytes_per_pixel()?, r.trusted_ms()?));
     // On the fronts an exact configuration's error is 0: its RMSE is f32 rounding, and ranking
     // exact methods by rounding noise would put a slower one on the front.
     let judged = |r: &Rec, e: f64| {
@@ -250,7 +233,7 @@ fn scene_figures(
     let x_ci = |r: &Rec, y: f64| {
         let (lo, hi) = r.gpu_ci().unzip();
         Some(Pt {
-            x: r.f(cols::GPU_MS_MEDIAN)?,
+            x: r.trusted_ms()?,
             y,
             xlo: lo,
             xhi: hi,
@@ -260,7 +243,7 @@ fn scene_figures(
     };
     let excluded = g.len() - timed.len();
     let untimed_note = if excluded > 0 {
-        format!(" {excluded} point(s) with incomplete timestamps are drawn but left off the front.")
+        format!(" {excluded} point(s) whose GPU timestamps miss part of the frame are left out (their time is not the frame's).")
     } else {
         String::new()
     };
@@ -291,7 +274,7 @@ fn scene_figures(
     )?);
     // 2. FLIP mean vs time, when measured.
     if g.iter().any(|r| r.f(cols::FLIP_MEAN).is_some()) {
-        let flip_time = |r: &Rec| Some((r.f(cols::GPU_MS_MEDIAN)?, r.f(cols::FLIP_MEAN)?));
+        let flip_time = |r: &Rec| Some((r.trusted_ms()?, r.f(cols::FLIP_MEAN)?));
         let f = front_of(&timed, flip_time);
         let xy = XY {
             title: format!("FLIP vs GPU time — {name}, {res}"),
@@ -386,7 +369,7 @@ fn scene_table(
         h,
         "<table class=\"scene\"><caption>{} at {}: every configuration, fastest first. \
          Front: on the Pareto front of RMSE vs time (T) and of RMSE vs memory (M). {}</caption>\
-         <tr><th>method</th><th>configuration</th><th>GPU ms (95 % CI)</th><th>× floor_depth</th><th>bytes/px</th>\
+         <tr><th>method</th><th>configuration</th><th>GPU ms [95 % CI] or (range, n)</th><th>× floor_depth</th><th>bytes/px</th>\
          <th>RMSE</th>{}<th>exact</th><th>flag</th><th>front</th></tr>",
         esc(name),
         esc(res),
@@ -426,7 +409,7 @@ fn scene_table(
             esc(r.get(cols::METHOD)),
             esc(&cfg),
             time_cell(r),
-            short(r.f(cols::X_FLOOR)),
+            short(r.f(cols::X_FLOOR).filter(|_| r.time_trusted())),
             short(r.bytes_per_pixel()),
             short(r.f(cols::RMSE)),
             if flip {
@@ -434,11 +417,7 @@ fn scene_table(
             } else {
                 String::new()
             },
-            match r.exact_result() {
-                Some(true) => "yes",
-                Some(false) => "no",
-                None => "",
-            },
+            exact_cell(r),
             esc(&r.flags().join(", ")),
             on
         );
@@ -448,19 +427,6 @@ fn scene_table(
         h.push_str("<p class=\"note\">FLIP: not measured in this CSV (no flip_mean column).</p>");
     }
     h
-}
-
-/// "1.23 [1.20, 1.27]" or the median alone.
-pub fn time_cell(r: &Rec) -> String {
-    match (r.f(cols::GPU_MS_MEDIAN), r.gpu_ci()) {
-        (Some(m), Some((lo, hi))) => format!(
-            "{} [{}, {}]",
-            short(Some(m)),
-            short(Some(lo)),
-            short(Some(hi))
-        ),
-        (m, _) => short(m),
-    }
 }
 
 /// Scenes that differ from each other in one parameter only form a family; GPU time against
@@ -667,7 +633,7 @@ fn ratio_bars(at_res: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) ->
         let rows: Vec<&Rec> = at_res
             .iter()
             .copied()
-            .filter(|r| r.f(col).is_some() && Some(r.get(cols::METHOD)) != skip)
+            .filter(|r| r.f(col).is_some() && r.time_trusted() && Some(r.get(cols::METHOD)) != skip)
             .collect();
         let title = format!("{title} — {res}");
         if rows.is_empty() {
@@ -728,6 +694,38 @@ fn ratio_bars(at_res: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_configuration_has_its_own_colour_and_marker() {
+        // 17 methods with 1–4 configurations each (more than 32 configurations, more methods
+        // than markers): today's depth_peel and bdp2 were both blue circles.
+        let mut rows = Vec::new();
+        for m in 0..17 {
+            for k in 0..=(m % 4) {
+                let mut r = Rec::default();
+                r.0.insert("method".into(), format!("m{m}"));
+                r.0.insert(
+                    "point_key".into(),
+                    format!("methods|s|64x64|m{m}|layers={k}"),
+                );
+                rows.push(r);
+            }
+        }
+        let st = Styles::new(rows.iter());
+        let mut seen = std::collections::BTreeSet::new();
+        for r in &rows {
+            let pair = (
+                crate::charts::PALETTE[st.color(r) % crate::charts::PALETTE.len()],
+                st.family(r) % MARKERS,
+            );
+            assert!(
+                seen.insert(pair),
+                "{} shares {pair:?}",
+                r.get(cols::POINT_KEY)
+            );
+        }
+        assert!(seen.len() > crate::charts::PALETTE.len());
+    }
 
     #[test]
     fn families_never_join_different_meshes() {

@@ -1,4 +1,6 @@
-//! Figures per study kind. Each module reads only the rows of its study.
+//! Figures per study kind. Each module reads only the rows of its study. `PAGES` is the table of
+//! what a report can hold: a study (or any other section, such as a reproduction of published
+//! figures) adds its row there, and `all_figures` walks the table in order.
 
 pub mod buckets;
 pub mod deferred;
@@ -16,53 +18,73 @@ use anyhow::Result;
 use crate::charts::Figure;
 use crate::data::Runs;
 
-/// (heading, figures) for every study present in the runs.
+/// One section of the report: its heading, whether the runs hold anything for it, and how its
+/// figures are drawn into a folder. A section whose figures come back empty is left out.
+pub struct StudyPage {
+    pub heading: &'static str,
+    pub applies: fn(&Runs) -> bool,
+    pub figures: fn(&Runs, &Path) -> Result<Vec<Figure>>,
+}
+
+fn has(runs: &Runs, study: &str) -> bool {
+    !runs.study(study).is_empty()
+}
+
+/// Every section, in page order.
+pub const PAGES: &[StudyPage] = &[
+    StudyPage {
+        heading: "Multi-fragment methods",
+        applies: |r| has(r, "methods"),
+        figures: |r, d| {
+            Ok(methods::figures(r, d)?
+                .into_iter()
+                .chain(buckets::figures(r, d)?)
+                .collect())
+        },
+    },
+    StudyPage {
+        heading: "How cost grows (scaling)",
+        applies: scaling::applies,
+        figures: scaling::figures,
+    },
+    StudyPage {
+        heading: "Effects and stability",
+        applies: |r| has(r, "stability") || has(r, "methods"),
+        figures: stability::figures,
+    },
+    StudyPage {
+        heading: "Geometry feeding (Bavoil ch. 3)",
+        applies: |r| has(r, "geometry"),
+        figures: geometry::figures,
+    },
+    StudyPage {
+        heading: "Soft shadows (layered shadow maps vs ray tracing)",
+        applies: |r| has(r, "shadows"),
+        figures: shadows::figures,
+    },
+    StudyPage {
+        heading: "Deferred shading (tiles, classification, CPU tiles)",
+        applies: |r| has(r, "deferred"),
+        figures: deferred::figures,
+    },
+    StudyPage {
+        heading: "Light pre-pass (and the light buffer on CPU cores)",
+        applies: |r| has(r, "prepass"),
+        figures: prepass::figures,
+    },
+];
+
+/// (heading, figures) for every section of `PAGES` the runs hold something for.
 pub fn all_figures(runs: &Runs, dir: &Path) -> Result<Vec<(String, Vec<Figure>)>> {
     let mut out = Vec::new();
-    if !runs.study("methods").is_empty() {
-        out.push((
-            "Multi-fragment methods".to_string(),
-            methods::figures(runs, dir)?
-                .into_iter()
-                .chain(buckets::figures(runs, dir)?)
-                .collect(),
-        ));
-    }
-    if scaling::applies(runs) {
-        out.push((
-            "How cost grows (scaling)".to_string(),
-            scaling::figures(runs, dir)?,
-        ));
-    }
-    if !runs.study("stability").is_empty() || !runs.study("methods").is_empty() {
-        let figs = stability::figures(runs, dir)?;
-        if !figs.is_empty() {
-            out.push(("Effects and stability".to_string(), figs));
+    for page in PAGES {
+        if !(page.applies)(runs) {
+            continue;
         }
-    }
-    if !runs.study("geometry").is_empty() {
-        out.push((
-            "Geometry feeding (Bavoil ch. 3)".to_string(),
-            geometry::figures(runs, dir)?,
-        ));
-    }
-    if !runs.study("shadows").is_empty() {
-        out.push((
-            "Soft shadows (layered shadow maps vs ray tracing)".to_string(),
-            shadows::figures(runs, dir)?,
-        ));
-    }
-    if !runs.study("deferred").is_empty() {
-        out.push((
-            "Deferred shading (tiles, classification, CPU tiles)".to_string(),
-            deferred::figures(runs, dir)?,
-        ));
-    }
-    if !runs.study("prepass").is_empty() {
-        out.push((
-            "Light pre-pass (and the light buffer on CPU cores)".to_string(),
-            prepass::figures(runs, dir)?,
-        ));
+        let figs = (page.figures)(runs, dir)?;
+        if !figs.is_empty() {
+            out.push((page.heading.to_string(), figs));
+        }
     }
     Ok(out)
 }

@@ -42,7 +42,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         let s = series(
             &one,
             |r| r.config_label(AXES),
-            |r| Some((r.f(cols::LIGHT_COUNT)?, r.f(cols::GPU_MS_MEDIAN)?)),
+            |r| Some((r.f(cols::LIGHT_COUNT)?, r.trusted_ms()?)),
         );
         if s.iter().any(|s| s.points.len() > 1) {
             figs.push(

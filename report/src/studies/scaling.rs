@@ -16,9 +16,9 @@ use std::path::Path;
 
 use anyhow::Result;
 
+use crate::cells::{esc, short};
 use crate::charts::{Figure, Pt, Series, XY};
 use crate::data::{Rec, Runs};
-use crate::html::{esc, short};
 use crate::labels::{parse_scene, scene_name};
 use crate::studies::methods::scene_families;
 
@@ -120,7 +120,7 @@ fn f_t(r: &Rec, frags: &BTreeMap<String, f64>) -> Option<(f64, f64, f64)> {
         r.f(cols::TRUE_FRAGMENTS)
             .or_else(|| frags.get(&scene_res(r)).copied())?,
         r.f(cols::TRIANGLES)?,
-        r.f(cols::GPU_MS_MEDIAN)?,
+        r.trusted_ms()?,
     ))
 }
 

@@ -32,7 +32,7 @@ fn error_vs_time(g: &[&Rec], name: &str, stem: &str, dir: &Path) -> Result<Figur
     let mut series: Vec<Series> = Vec::new();
     let mut keys: Vec<String> = Vec::new();
     for r in g {
-        let (Some(t), Some(e)) = (r.f(cols::GPU_MS_MEDIAN), r.f(cols::VIS_RMSE)) else {
+        let (Some(t), Some(e)) = (r.trusted_ms(), r.f(cols::VIS_RMSE)) else {
             continue;
         };
         let (family, what) = sweep(r);
@@ -68,7 +68,7 @@ fn error_vs_time(g: &[&Rec], name: &str, stem: &str, dir: &Path) -> Result<Figur
         .iter()
         .map(|r| {
             (
-                r.f(cols::GPU_MS_MEDIAN).unwrap_or(f64::NAN),
+                r.trusted_ms().unwrap_or(f64::NAN),
                 r.f(cols::VIS_RMSE).unwrap_or(f64::NAN),
             )
         })
@@ -102,7 +102,7 @@ fn error_vs_time(g: &[&Rec], name: &str, stem: &str, dir: &Path) -> Result<Figur
         &format!("shadows_error_vs_time_{stem}"),
         &format!(
             "One point per configuration of every sweep of the suite (colour: layers k and shadow-map size; marker: the sweep);              the dashed line joins the configurations no other beats on both, each named. The reference is m×m stratified shadow rays per pixel              from the same G-buffer points. {} {}",
-            super::methods::ci_caption_rows(g),
+            crate::points::ci_caption_rows(g),
             labels.fixed_note()
         ),
     )
@@ -284,7 +284,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         let s = series(
             &h,
             |r| format!("hsm {}, k = {}", r.get(cols::HSM), r.get(cols::LAYERS)),
-            |r| Some((r.f(cols::MAX_NSPP)?, r.f(cols::GPU_MS_MEDIAN)?)),
+            |r| Some((r.f(cols::MAX_NSPP)?, r.trusted_ms()?)),
         );
         if s.iter().any(|s| s.name.starts_with("hsm false")) {
             figs.push(

@@ -146,7 +146,7 @@ fn specialisation(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                                     && r.get(cols::EFFECT) == e
                                     && r.get(cols::SPECIALISATION) == s
                             })
-                            .and_then(|r| r.f(cols::GPU_MS_MEDIAN))
+                            .and_then(|r| r.trusted_ms())
                     };
                     match (find("uber"), find("specialised")) {
                         (Some(u), Some(s)) if s > 0.0 => Some(Pt::new(0.0, u / s)),
