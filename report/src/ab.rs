@@ -752,10 +752,12 @@ impl AbReport {
         };
         let _ = write!(
             t,
-            " Held back: where a side has two frame-time modes (the widest split of its sorted \
-             samples leaves two groups of ≥ {:.0} % of them, medians ≥ {:.1} % apart), or both \
-             sides are noisy and their sessions spread, a FASTER / SLOWER within ±(floor + that \
-             gap or spread) is UNSURE: the point's own instability could explain it.",
+            " Held back (UNSURE, the point's own instability could explain it): a FASTER / \
+             SLOWER where a side has two frame-time modes (the widest split of its sorted \
+             samples leaves two groups of ≥ {:.0} % of them, medians ≥ {:.1} % apart) and a mode \
+             of NEW matches a mode of BASE within the band (low with low, high with high when \
+             both have two; a side with one mode is its median); and, where both sides are \
+             noisy, one within ±(floor + their larger session spread).",
             MODE_MIN_FRAC * 100.0,
             MODE_MIN_SEP * 100.0
         );
