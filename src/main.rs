@@ -78,6 +78,27 @@ enum Cmd {
         /// Write compare.html into this folder (nothing is written without it).
         #[arg(long)]
         html: Option<PathBuf>,
+        /// Bands per point from `mfx calibrate` (calibration.json); --noise-band is their floor.
+        #[arg(long)]
+        band_from: Option<PathBuf>,
+        /// Multiply every NEW time by this (a synthetic change: 1.05 must come out SLOWER).
+        #[arg(long)]
+        scale_new: Option<f64>,
+    },
+    /// A/A calibration: compare two or more runs of one build pair by pair; write each point's
+    /// band (how far its median moved) and the false-alarm rate per method family.
+    Calibrate {
+        #[arg(required = true, num_args = 2..)]
+        runs: Vec<PathBuf>,
+        /// The calibration file to write.
+        #[arg(long, default_value = "calibration.json")]
+        out: PathBuf,
+        /// The floor under every band (default 2%).
+        #[arg(long)]
+        noise_band: Option<String>,
+        /// Each point's band = its largest A/A move × this (default 1).
+        #[arg(long, default_value_t = 1.0)]
+        margin: f64,
     },
     /// Check suites (names or TOML paths) without a GPU: every problem at once; exit 2 if any.
     Check {
@@ -255,14 +276,26 @@ fn run(cli: Cli) -> Result<()> {
             alpha,
             fail_on_slower,
             html,
+            band_from,
+            scale_new,
         } => sweep::compare(
             &base,
             &new,
-            noise_band.as_deref(),
-            alpha,
-            fail_on_slower.as_deref(),
-            html.as_deref(),
+            sweep::CompareArgs {
+                noise_band: noise_band.as_deref(),
+                alpha,
+                fail_on_slower: fail_on_slower.as_deref(),
+                html: html.as_deref(),
+                band_from: band_from.as_deref(),
+                scale_new,
+            },
         ),
+        Cmd::Calibrate {
+            runs,
+            out,
+            noise_band,
+            margin,
+        } => sweep::calibrate(&runs, &out, noise_band.as_deref(), margin),
         Cmd::Check { suites } => {
             let mut bad = 0;
             for name in &suites {

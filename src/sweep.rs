@@ -236,6 +236,18 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
     );
     manifest.points_total = total;
     manifest.resumed_points = done.len();
+    // The cross-GPU calibration set, before any point (a software adapter's time says nothing
+    // of a GPU, and would cost seconds).
+    if !gpu.facts.is_software {
+        let runs = bench_core::manifest::CALIBRATION_RUNS;
+        manifest.calibration =
+            gpu.calibration_ms(runs)?
+                .map(|canary_ms| bench_core::manifest::GpuCalibration {
+                    set: bench_core::manifest::CALIBRATION_SET.into(),
+                    canary_ms,
+                    runs,
+                });
+    }
     manifest.write(&out)?;
     eprintln!(
         "mfx: suite '{}' on {} ({}, {}){}: {} groups, {total} rows{} -> {}",
@@ -393,18 +405,61 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
 }
 
 /// `mfx compare BASE NEW`.
-pub fn compare(
-    base: &Path,
-    new: &Path,
+/// `mfx compare`'s options.
+pub struct CompareArgs<'a> {
+    pub noise_band: Option<&'a str>,
+    pub alpha: Option<f64>,
+    pub fail_on_slower: Option<&'a str>,
+    pub html: Option<&'a Path>,
+    pub band_from: Option<&'a Path>,
+    pub scale_new: Option<f64>,
+}
+
+/// `mfx calibrate`: A/A runs → calibration file (and its summary on stdout).
+pub fn calibrate(
+    runs: &[PathBuf],
+    out: &Path,
     noise_band: Option<&str>,
-    alpha: Option<f64>,
-    fail_on_slower: Option<&str>,
-    html: Option<&Path>,
+    margin: f64,
 ) -> Result<()> {
     let mut opts = report::ab::AbOptions::default();
     if let Some(b) = noise_band {
         opts.verdict.noise_band =
             report::ab::parse_fraction(b).map_err(|e| usage(format!("--noise-band: {e}")))?;
+    }
+    let c =
+        report::calibrate::calibrate(runs, &opts, margin).map_err(|e| usage(format!("{e:#}")))?;
+    print!("{}", c.markdown());
+    c.save(out)?;
+    eprintln!("mfx: calibration {}", out.display());
+    Ok(())
+}
+
+pub fn compare(base: &Path, new: &Path, a: CompareArgs) -> Result<()> {
+    let CompareArgs {
+        noise_band,
+        alpha,
+        fail_on_slower,
+        html,
+        band_from,
+        scale_new,
+    } = a;
+    let mut opts = report::ab::AbOptions::default();
+    if let Some(b) = noise_band {
+        opts.verdict.noise_band =
+            report::ab::parse_fraction(b).map_err(|e| usage(format!("--noise-band: {e}")))?;
+    }
+    if let Some(f) = band_from {
+        opts.calibration = Some(
+            report::calibrate::Calibration::load(f)
+                .map_err(|e| usage(format!("--band-from: {e:#}")))?,
+        );
+    }
+    if let Some(x) = scale_new {
+        if !(x.is_finite() && x > 0.0) {
+            return Err(usage(format!("--scale-new {x} must be a positive number")));
+        }
+        opts.scale_new = x;
     }
     if let Some(a) = alpha {
         if !(a > 0.0 && a < 1.0) {

@@ -625,7 +625,34 @@ impl Gpu {
     pub fn canary(&self) -> Result<Option<(f64, f64)>> {
         let c = self.canary.get_or_init(|| Mutex::new(Canary::new(self)));
         let mut c = c.lock().unwrap();
-        let c = &mut *c;
+        let Some(ms) = self.canary_ms(&c)? else {
+            return Ok(None);
+        };
+        Ok(c.baseline.push(ms).map(|r| (ms, r)))
+    }
+
+    /// The cross-GPU calibration set (issue 33): the canary kernel run `n` times after a clock
+    /// lift, its median GPU ms. The canary's baseline is not touched, so a run's discards are
+    /// the same with or without it. `None` without timestamp queries.
+    pub fn calibration_ms(&self, n: usize) -> Result<Option<f64>> {
+        for _ in 0..4 {
+            self.spin()?;
+        }
+        let c = self.canary.get_or_init(|| Mutex::new(Canary::new(self)));
+        let c = c.lock().unwrap();
+        let mut v = Vec::with_capacity(n);
+        for _ in 0..n.max(1) {
+            match self.canary_ms(&c)? {
+                Some(ms) => v.push(ms),
+                None => return Ok(None),
+            }
+        }
+        v.sort_by(f64::total_cmp);
+        Ok(Some(v[v.len() / 2]))
+    }
+
+    /// One canary dispatch, waited for: its GPU ms.
+    fn canary_ms(&self, c: &Canary) -> Result<Option<f64>> {
         let Some((set, resolve, read)) = &c.stamps else {
             return Ok(None);
         };
@@ -649,8 +676,9 @@ impl Gpu {
         if ticks > u64::MAX / 2 {
             return Ok(None); // a wrapped delta: not timed reliably
         }
-        let ms = ticks as f64 * self.queue.get_timestamp_period() as f64 * 1e-6;
-        Ok(c.baseline.push(ms).map(|r| (ms, r)))
+        Ok(Some(
+            ticks as f64 * self.queue.get_timestamp_period() as f64 * 1e-6,
+        ))
     }
 
     /// One untimed busy dispatch, waited for.

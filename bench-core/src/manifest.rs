@@ -45,6 +45,24 @@ impl AdapterInfo {
     }
 }
 
+/// A fixed kernel timed on a shard's GPU before its points, so a merge of shards from several
+/// GPUs can say how far the GPUs differ (identical GPUs differ by 8 % on average, Sinha et al.,
+/// SC'22).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GpuCalibration {
+    /// What was timed.
+    pub set: String,
+    /// Its median GPU time.
+    pub canary_ms: f64,
+    pub runs: usize,
+}
+
+/// What [`GpuCalibration::set`] says of the set this build measures.
+pub const CALIBRATION_SET: &str =
+    "canary kernel (16 MiB read by 264 workgroups, 2048 FMAs a thread), median of 21 after a clock lift";
+/// Runs of the set.
+pub const CALIBRATION_RUNS: usize = 21;
+
 /// `run.json`: written when the run starts (`finished: false`), rewritten as it ends or is
 /// interrupted. Counts are of this run folder's `runs.csv` rows.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -81,6 +99,10 @@ pub struct RunManifest {
     pub finished: bool,
     /// The signal that stopped the run early (`SIGINT`, `SIGTERM`), if one did.
     pub interrupted: Option<String>,
+    /// The cross-GPU calibration set measured on this GPU before its points (absent in runs
+    /// before issue 33, and on software adapters).
+    #[serde(default)]
+    pub calibration: Option<GpuCalibration>,
     #[serde(skip)]
     clock: Option<Instant>,
 }
@@ -145,6 +167,7 @@ impl RunManifest {
             resumed_points: 0,
             finished: false,
             interrupted: None,
+            calibration: None,
             clock: Some(Instant::now()),
         }
     }

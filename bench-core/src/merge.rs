@@ -6,6 +6,12 @@
 //! (same `point_key`, `adapter` and `backend`) keeps its first row in `runs.csv` and every later
 //! one goes to `duplicates.csv` with the file it came from, and is listed in the summary.
 //! Saved images (`images/`, from `mfx sweep --save-images`) are copied beside the merged CSV.
+//!
+//! Across GPUs (issue 33): each input's `run.json` holds the calibration set measured on its GPU
+//! before its points ([`crate::manifest::GpuCalibration`]). The merge writes each GPU's ratio to
+//! the inputs' median to `gpu_calibration.csv`, and when the GPUs differ it says by how much: a
+//! difference between points measured on different GPUs that lies within that spread may be
+//! the GPUs, not the methods.
 
 use std::collections::HashMap;
 use std::io::Write;
@@ -25,6 +31,17 @@ pub struct Duplicate {
     pub from: PathBuf,
 }
 
+/// One input's GPU on the calibration set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GpuRatio {
+    pub file: PathBuf,
+    pub adapter: String,
+    pub pci_bus_id: String,
+    pub canary_ms: f64,
+    /// `canary_ms` over the median of every input's.
+    pub ratio: f64,
+}
+
 /// What a merge did.
 #[derive(Debug, Default)]
 pub struct Merged {
@@ -36,6 +53,26 @@ pub struct Merged {
     /// `images/`): reported, never silently left dangling.
     pub images_missing: Vec<String>,
     pub out_csv: PathBuf,
+    /// Inputs whose `run.json` holds a calibration set; empty when none does.
+    pub gpus: Vec<GpuRatio>,
+    /// Inputs without one (older runs, software adapters, CSV files without a run folder).
+    pub uncalibrated: usize,
+}
+
+impl Merged {
+    /// The largest `|ratio − 1|` over the calibrated GPUs (0 with fewer than two).
+    pub fn gpu_spread(&self) -> f64 {
+        self.gpus
+            .iter()
+            .map(|g| (g.ratio - 1.0).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// More than one GPU (by PCI bus id, else adapter name) among the calibrated inputs.
+    pub fn several_gpus(&self) -> bool {
+        let id = |g: &GpuRatio| format!("{}|{}", g.adapter, g.pci_bus_id);
+        self.gpus.iter().any(|g| id(g) != id(&self.gpus[0]))
+    }
 }
 
 impl Merged {
@@ -55,6 +92,21 @@ impl Merged {
                 "\n{} rows name an image that no input folder holds (first: {first}); the \
                  report cannot compare those points' images",
                 self.images_missing.len()
+            ));
+        }
+        if self.several_gpus() {
+            s.push_str(&format!(
+                "\nGPUs differ on the calibration set by up to {:.1} % (gpu_calibration.csv): a \
+                 difference between points measured on different GPUs within ±{:.1} % may be the \
+                 GPUs, not the methods",
+                self.gpu_spread() * 100.0,
+                self.gpu_spread() * 100.0
+            ));
+        }
+        if !self.gpus.is_empty() && self.uncalibrated > 0 {
+            s.push_str(&format!(
+                "\n{} inputs have no calibration set in run.json: their GPUs cannot be compared",
+                self.uncalibrated
             ));
         }
         if !self.duplicates.is_empty() {
@@ -259,6 +311,32 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
         }
         w.flush().map_err(|e| io(&dup_csv, e))?;
     }
+    let (gpus, uncalibrated) = gpu_ratios(&files);
+    let cal_csv = out.join("gpu_calibration.csv");
+    if gpus.is_empty() {
+        let _ = std::fs::remove_file(&cal_csv);
+    } else {
+        let mut w = csv::Writer::from_path(&cal_csv).map_err(|e| io(&cal_csv, e))?;
+        w.write_record([
+            "source_file",
+            "adapter",
+            "pci_bus_id",
+            "canary_ms",
+            "ratio_to_median",
+        ])
+        .map_err(|e| io(&cal_csv, e))?;
+        for g in &gpus {
+            w.write_record([
+                g.file.display().to_string(),
+                g.adapter.clone(),
+                g.pci_bus_id.clone(),
+                g.canary_ms.to_string(),
+                g.ratio.to_string(),
+            ])
+            .map_err(|e| io(&cal_csv, e))?;
+        }
+        w.flush().map_err(|e| io(&cal_csv, e))?;
+    }
     let images_copied = copy_images(&files, out)?;
     let images_missing = missing_images(&out_csv, out)?;
     let mut log = std::fs::File::create(out.join("merged_from.txt")).map_err(|e| io(out, e))?;
@@ -272,7 +350,46 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
         images_copied,
         images_missing,
         out_csv,
+        gpus,
+        uncalibrated,
     })
+}
+
+/// Each input's calibration set (from `run.json` beside its `runs.csv`) and its ratio to the
+/// median of all; and how many inputs had none.
+fn gpu_ratios(files: &[PathBuf]) -> (Vec<GpuRatio>, usize) {
+    let mut gpus = Vec::new();
+    let mut none = 0;
+    for f in files {
+        let dir = f.parent().unwrap_or(Path::new("."));
+        match crate::manifest::RunManifest::read(dir)
+            .ok()
+            .and_then(|m| Some((m.calibration?, m.adapter)))
+        {
+            Some((c, a)) if c.canary_ms.is_finite() && c.canary_ms > 0.0 => gpus.push(GpuRatio {
+                file: f.clone(),
+                adapter: a.name,
+                pci_bus_id: a.pci_bus_id,
+                canary_ms: c.canary_ms,
+                ratio: f64::NAN,
+            }),
+            _ => none += 1,
+        }
+    }
+    let mut ms: Vec<f64> = gpus.iter().map(|g| g.canary_ms).collect();
+    ms.sort_by(f64::total_cmp);
+    if let Some(&m) = ms.get(ms.len() / 2) {
+        // The lower median of an even count: a real GPU's time, not a mean of two.
+        let m = if ms.len() % 2 == 0 {
+            ms[ms.len() / 2 - 1]
+        } else {
+            m
+        };
+        for g in &mut gpus {
+            g.ratio = g.canary_ms / m;
+        }
+    }
+    (gpus, none)
 }
 
 /// Copies each input's `images/*` into `out/images/`. Image names hash the point key, adapter
@@ -356,6 +473,70 @@ mod tests {
     }
 
     const H: &str = "schema,point_key,adapter,backend,status\n";
+
+    /// A run.json for `dir` on `adapter` (bus `bus`) whose calibration set took `ms`.
+    fn manifest(dir: &Path, adapter: &str, bus: &str, ms: Option<f64>) {
+        let info = crate::manifest::AdapterInfo {
+            name: adapter.into(),
+            pci_bus_id: bus.into(),
+            ..Default::default()
+        };
+        let mut m = crate::manifest::RunManifest::new(vec![], "s", "s", "", info, (0, 2));
+        m.calibration = ms.map(|canary_ms| crate::manifest::GpuCalibration {
+            set: crate::manifest::CALIBRATION_SET.into(),
+            canary_ms,
+            runs: 21,
+        });
+        m.write(dir).unwrap();
+    }
+
+    #[test]
+    fn shards_on_two_gpus_record_each_gpus_ratio_and_say_how_far_they_differ() {
+        let t = tmp("gpus");
+        let a = write(&t, "a", &format!("{H}1,k1,H200,vulkan,ok\n"));
+        let b = write(&t, "b", &format!("{H}1,k2,H200,vulkan,ok\n"));
+        let c = write(&t, "c", &format!("{H}1,k3,H200,vulkan,ok\n"));
+        manifest(&a, "H200", "0000:01:00.0", Some(1.00));
+        manifest(&b, "H200", "0000:02:00.0", Some(1.08));
+        manifest(&c, "H200", "0000:03:00.0", Some(1.02));
+        let m = merge(&[a, b, c], &t.join("out")).unwrap();
+        let r: Vec<f64> = m.gpus.iter().map(|g| g.ratio).collect();
+        assert_eq!(r.len(), 3);
+        assert!(
+            (r[0] - 1.0 / 1.02).abs() < 1e-12 && (r[2] - 1.0).abs() < 1e-12,
+            "{r:?}"
+        );
+        assert!((m.gpu_spread() - (1.08 / 1.02 - 1.0)).abs() < 1e-12);
+        assert!(m.several_gpus());
+        let s = m.summary();
+        assert!(
+            s.contains("GPUs differ on the calibration set by up to 5.9 %"),
+            "{s}"
+        );
+        let csv = std::fs::read_to_string(t.join("out/gpu_calibration.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 4, "{csv}");
+        // Shards of one GPU: ratios recorded, no cross-GPU warning.
+        let t = tmp("gpu1");
+        let a = write(&t, "a", &format!("{H}1,k1,H200,vulkan,ok\n"));
+        let b = write(&t, "b", &format!("{H}1,k2,H200,vulkan,ok\n"));
+        manifest(&a, "H200", "0000:01:00.0", Some(1.00));
+        manifest(&b, "H200", "0000:01:00.0", Some(1.01));
+        let m = merge(&[a, b], &t.join("out")).unwrap();
+        assert!(!m.several_gpus() && !m.summary().contains("GPUs differ"));
+        // An older run without the set: said, not guessed.
+        let t = tmp("gpu0");
+        let a = write(&t, "a", &format!("{H}1,k1,H200,vulkan,ok\n"));
+        let b = write(&t, "b", &format!("{H}1,k2,H200,vulkan,ok\n"));
+        manifest(&a, "H200", "0000:01:00.0", Some(1.00));
+        manifest(&b, "H200", "0000:02:00.0", None);
+        let m = merge(&[a, b], &t.join("out")).unwrap();
+        assert_eq!(m.uncalibrated, 1);
+        assert!(
+            m.summary().contains("1 inputs have no calibration set"),
+            "{}",
+            m.summary()
+        );
+    }
 
     #[test]
     fn concatenates_and_reports_duplicates_without_dropping_them() {

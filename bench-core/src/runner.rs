@@ -88,10 +88,16 @@ pub fn shard_groups(groups: Vec<Group>, shard: (usize, usize)) -> Vec<Group> {
         .collect()
 }
 
-/// Rows per group: the two floors plus the study's points.
-/// (`floor_blend`: every fragment blended unordered in hardware: what an engine without OIT
-/// pays, the ratio LucidRaster reports.)
-pub const FLOORS: &[&str] = &["floor_depth", "floor_opaque", "floor_blend"];
+/// Rows per group: the floors plus the study's points. (`floor_blend_const`: every fragment
+/// blended unordered in hardware, positions only: what an engine without OIT pays at least, the
+/// ratio LucidRaster reports and `x_blend`'s yardstick; `floor_blend`: the same through the
+/// methods' own vertex stage.)
+pub const FLOORS: &[&str] = &[
+    "floor_depth",
+    "floor_opaque",
+    "floor_blend",
+    "floor_blend_const",
+];
 
 pub fn rows_in(groups: &[Group]) -> usize {
     groups.iter().map(|g| g.points.len() + FLOORS.len()).sum()
@@ -267,7 +273,7 @@ pub fn run(
                     if *f == "floor_depth" {
                         ctx.floor_ms = m.gpu_median();
                     }
-                    if *f == "floor_blend" {
+                    if *f == "floor_blend_const" {
                         ctx.blend_ms = m.gpu_median();
                     }
                     row

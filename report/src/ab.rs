@@ -19,10 +19,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use mfx_stats::{
-    compare_intervals, compare_sessions, cycles_k, Basis, Comparison, Interval, Verdict,
-    VerdictOptions,
+    compare_intervals, compare_sessions, cycles_k, hold_back, modes, Basis, Comparison, Interval,
+    Modes, Verdict, VerdictOptions, MODE_MIN_FRAC, MODE_MIN_SEP,
 };
 
+use crate::calibrate::{BandSource, Calibration};
 use crate::data::{Rec, Runs};
 
 /// Error columns compared, when present on both sides.
@@ -45,6 +46,12 @@ pub struct AbOptions {
     pub err_abs_tol: f64,
     /// 5 %: a relative change of a visible error worth a look.
     pub err_rel_tol: f64,
+    /// Bands measured by `mfx calibrate` (per point, else per class); `verdict.noise_band` is
+    /// then the floor under them.
+    pub calibration: Option<Calibration>,
+    /// Every NEW sample (and summary time) multiplied by this: 1 normally; 1.05 makes the
+    /// synthetic "5 % slower" copy that a calibrated compare must still call SLOWER.
+    pub scale_new: f64,
 }
 
 impl Default for AbOptions {
@@ -53,6 +60,8 @@ impl Default for AbOptions {
             verdict: VerdictOptions::default(),
             err_abs_tol: 1e-4,
             err_rel_tol: 0.05,
+            calibration: None,
+            scale_new: 1.0,
         }
     }
 }
@@ -87,6 +96,27 @@ pub struct PointCmp {
     /// The side's row is flagged `noisy` (or `target_reached = false`).
     pub base_noisy: bool,
     pub new_noisy: bool,
+    /// The noise band this point was judged with, and where it came from.
+    pub band: f64,
+    pub band_source: BandSource,
+    /// Two frame-time modes on a side ([`mode_gap`]: their relative distance), from samples.
+    pub base_modes: Option<f64>,
+    pub new_modes: Option<f64>,
+}
+
+impl PointCmp {
+    /// "band ±3.1 % (calibrated: this point)".
+    pub fn band_note(&self) -> String {
+        format!(
+            "band ±{:.1} % ({})",
+            self.band * 100.0,
+            match self.band_source {
+                BandSource::Point => "calibrated: this point",
+                BandSource::Class => "calibrated: its class",
+                BandSource::Fixed => "fixed",
+            }
+        )
+    }
 }
 
 /// An error column whose value moved beyond the tolerance.
@@ -158,11 +188,14 @@ fn locate(p: &Path) -> Result<(PathBuf, Option<PathBuf>)> {
 
 /// Per-sample values of one point of one run.
 #[derive(Clone, Debug, Default)]
-struct PointSamples {
+pub(crate) struct PointSamples {
     gpu_ms: Vec<f64>,
     sm_mhz: Vec<Option<f64>>,
     /// `[timing] sessions` session of each sample (0 where the file has no `session` column).
     session: Vec<u32>,
+    /// The canary's ratio to its fastest run after each sample, and the sample's wall time
+    /// (`unix_ms`), where written: the drift under load ([`crate::calibrate`]).
+    pub(crate) canary: Vec<(f64, f64)>,
 }
 
 impl PointSamples {
@@ -178,9 +211,9 @@ impl PointSamples {
 }
 
 /// Kept samples by (run_id, point_key), in sample order.
-type SampleMap = HashMap<(String, String), PointSamples>;
+pub(crate) type SampleMap = HashMap<(String, String), PointSamples>;
 
-fn load_samples(path: &Path) -> Result<SampleMap> {
+pub(crate) fn load_samples(path: &Path) -> Result<SampleMap> {
     let file = std::fs::File::open(path).with_context(|| format!("reading {}", path.display()))?;
     let input: Box<dyn std::io::Read> = if path.extension().is_some_and(|e| e == "gz") {
         Box::new(flate2::read::GzDecoder::new(file))
@@ -210,6 +243,10 @@ fn load_samples(path: &Path) -> Result<SampleMap> {
         // Absent before sessions were recorded: every sample is session 0 then.
         h.iter().position(|c| c == samples::SESSION.name),
     );
+    let (cc, cu) = (
+        h.iter().position(|c| c == samples::CANARY_RATIO.name),
+        h.iter().position(|c| c == samples::UNIX_MS.name),
+    );
     let mut out: SampleMap = HashMap::new();
     for (i, rec) in rdr.records().enumerate() {
         let rec = rec.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
@@ -230,11 +267,15 @@ fn load_samples(path: &Path) -> Result<SampleMap> {
         );
         e.session
             .push(cn.and_then(|c| get(c).parse::<u32>().ok()).unwrap_or(0));
+        let num = |c: Option<usize>| c.and_then(|c| get(c).parse::<f64>().ok());
+        if let (Some(r), Some(t)) = (num(cc), num(cu)) {
+            e.canary.push((r, t));
+        }
     }
     Ok(out)
 }
 
-fn load_side(p: &Path) -> Result<(Side, Runs, Option<SampleMap>)> {
+pub(crate) fn load_side(p: &Path) -> Result<(Side, Runs, Option<SampleMap>)> {
     let (csv, samples_csv) = locate(p)?;
     let runs = Runs::load(&csv)?;
     let schemas = distinct(&runs.rows, |r| r.get(cols::SCHEMA).to_string());
@@ -386,6 +427,15 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
             rep.untimed.push(k);
             continue;
         };
+        let nm = nm * opts.scale_new;
+        let (band, band_source) = match &opts.calibration {
+            Some(c) => c.band_for(&k, o.noise_band),
+            None => (o.noise_band, BandSource::Fixed),
+        };
+        let o = &VerdictOptions {
+            noise_band: band,
+            ..o.clone()
+        };
         let (bc, nc) = (b.f(cols::SM_CLOCK_MHZ_MEAN), n.f(cols::SM_CLOCK_MHZ_MEAN));
         let pick = |s: &Option<SampleMap>, r: &Rec| {
             s.as_ref()
@@ -398,7 +448,20 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
                 .filter(|p| !p.gpu_ms.is_empty())
                 .cloned()
         };
-        let (time, cycles) = match (pick(&bsamp, b), pick(&nsamp, n)) {
+        let scaled = |p: Option<PointSamples>| {
+            p.map(|mut p| {
+                p.gpu_ms.iter_mut().for_each(|x| *x *= opts.scale_new);
+                p
+            })
+        };
+        let (bsm, nsm) = (pick(&bsamp, b), scaled(pick(&nsamp, n)));
+        let two = |p: &Option<PointSamples>| {
+            p.as_ref()
+                .and_then(|p| modes(&p.gpu_ms, MODE_MIN_FRAC, MODE_MIN_SEP))
+        };
+        let (bmodes, nmodes) = (two(&bsm), two(&nsm));
+        let (base_modes, new_modes) = (bmodes.map(|m| m.gap), nmodes.map(|m| m.gap));
+        let (time, cycles) = match (bsm, nsm) {
             (Some(sb), Some(sn)) => {
                 let time =
                     compare_sessions(&sb.by_session(&sb.gpu_ms), &sn.by_session(&sn.gpu_ms), o);
@@ -416,18 +479,51 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
                 (time, cycles)
             }
             _ => {
-                let (ib, inew) = (interval(b, 1.0).unwrap(), interval(n, 1.0).unwrap());
+                let s = opts.scale_new;
+                let (ib, inew) = (interval(b, 1.0).unwrap(), interval(n, s).unwrap());
                 let time = compare_intervals(ib, inew, o);
                 let cycles = match (bc, nc) {
                     (Some(x), Some(y)) => Some(compare_intervals(
                         interval(b, x).unwrap(),
-                        interval(n, y).unwrap(),
+                        interval(n, y * s).unwrap(),
                         o,
                     )),
                     _ => None,
                 };
                 (time, cycles)
             }
+        };
+        // A verdict no more confident than the runs. Two frame-time modes on a side: when a
+        // mode of NEW matches a mode of BASE within the band (low with low and high with high
+        // when both have two), the change may be a shift between modes: UNSURE. Noisy on both
+        // sides: within the floor plus their session spread, UNSURE.
+        let (bn, nn) = (noisy(b), noisy(n));
+        let spread = |r: &Rec| r.f(cols::SESSION_SPREAD).filter(|x| x.is_finite());
+        let mut why = Vec::new();
+        let mut inst = 0.0f64;
+        if let Some(m) = mode_match(bmodes, nmodes, &time, bm, nm, band) {
+            why.push(m);
+            inst = f64::INFINITY;
+        }
+        if bn && nn {
+            let s = spread(b).unwrap_or(0.0).max(spread(n).unwrap_or(0.0));
+            if s > 0.0 {
+                inst = inst.max(s);
+                why.push(format!(
+                    "noisy on both sides (session spread up to {:.1} %)",
+                    s * 100.0
+                ));
+            }
+        }
+        let (time, cycles) = if inst > 0.0 {
+            let wide = band.max(opts.verdict.noise_band + inst);
+            let why = why.join("; ");
+            (
+                hold_back(time, wide, &why),
+                cycles.map(|c| hold_back(c, wide, &why)),
+            )
+        } else {
+            (time, cycles)
         };
         rep.points.push(PointCmp {
             key: k,
@@ -439,8 +535,12 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
             cycles,
             base_sm_mhz: bc,
             new_sm_mhz: nc,
-            base_noisy: noisy(b),
-            new_noisy: noisy(n),
+            base_noisy: bn,
+            new_noisy: nn,
+            band,
+            band_source,
+            base_modes,
+            new_modes,
         });
     }
     let rank = |v: Verdict| match v {
@@ -455,6 +555,45 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
             .then(b.time.ratio.total_cmp(&a.time.ratio))
     });
     Ok(rep)
+}
+
+/// Why a FASTER / SLOWER may be a shift between two frame-time modes (see `compare_runs`), or
+/// None. A side with one mode is its median (`bm`, `nm`: the pooled medians, NEW scaled).
+fn mode_match(
+    b: Option<Modes>,
+    n: Option<Modes>,
+    c: &Comparison,
+    bm: f64,
+    nm: f64,
+    band: f64,
+) -> Option<String> {
+    if !matches!(c.verdict, Verdict::Faster | Verdict::Slower) || (b.is_none() && n.is_none()) {
+        return None;
+    }
+    let pts = |m: Option<Modes>, med: f64| match m {
+        Some(m) => vec![m.low, m.high],
+        None => vec![med],
+    };
+    let pairs: Vec<(f64, f64)> = match (b, n) {
+        (Some(x), Some(y)) => vec![(x.low, y.low), (x.high, y.high)],
+        _ => {
+            let (pb, pn) = (pts(b, bm), pts(n, nm));
+            pb.iter()
+                .flat_map(|x| pn.iter().map(move |y| (*x, *y)))
+                .collect()
+        }
+    };
+    let (x, y) = pairs
+        .into_iter()
+        .filter(|(x, _)| *x > 0.0)
+        .find(|(x, y)| (y / x - 1.0).abs() <= band)?;
+    let gap = b.or(n).map_or(0.0, |m| m.gap);
+    Some(format!(
+        "two frame-time modes ({:.1} % apart): NEW's {} ms matches BASE's {} ms within the band, so          the change may be a shift between modes",
+        gap * 100.0,
+        fmt_ms(y),
+        fmt_ms(x)
+    ))
 }
 
 /// "5%", "5 %" or "0.05" → 0.05 (for `--fail-on-slower`).
@@ -574,14 +713,62 @@ impl AbReport {
              that CI excludes 1 (no p is shown), so sessions that disagree widen it. From \
              summary columns only (no samples.csv), \"significant\" means the two medians' CIs \
              (else min–max ranges) do not overlap. Cycles = time × SM clock. An error column \
-             moved when |Δ| > max({:e}, {:.0} % of the larger value).",
+             moved when |Δ| > max({:e}, {:.0} % of the larger value). {}",
             o.resamples,
             o.noise_band * 100.0,
             o.alpha,
             o.min_samples,
             self.opts.err_abs_tol,
-            self.opts.err_rel_tol * 100.0
+            self.opts.err_rel_tol * 100.0,
+            self.band_text()
         )
+    }
+
+    /// How the bands were set, and the hold-back rule (part of [`Self::rule_text`]).
+    fn band_text(&self) -> String {
+        let floor = self.opts.verdict.noise_band * 100.0;
+        let mut t = match &self.opts.calibration {
+            Some(c) => {
+                let n = |s: BandSource| self.points.iter().filter(|p| p.band_source == s).count();
+                let mut bands: Vec<f64> = self.points.iter().map(|p| p.band).collect();
+                bands.sort_by(f64::total_cmp);
+                format!(
+                    "Bands measured by `mfx calibrate` on {} A/A runs ({}), never below ±{floor:.1} %: \
+                     {} points by their own spread, {} by their class (method × scene kind), {} at \
+                     the floor; median band ±{:.1} %, largest ±{:.1} %.",
+                    c.runs.len(),
+                    c.runs.join(", "),
+                    n(BandSource::Point),
+                    n(BandSource::Class),
+                    n(BandSource::Fixed),
+                    bands.get(bands.len() / 2).copied().unwrap_or(0.0) * 100.0,
+                    bands.last().copied().unwrap_or(0.0) * 100.0
+                )
+            }
+            None => format!(
+                "The band is ±{floor:.1} % on every point (fixed, not calibrated: `mfx calibrate` \
+                 measures one per point, `--band-from` uses it)."
+            ),
+        };
+        let _ = write!(
+            t,
+            " Held back (UNSURE, the point's own instability could explain it): a FASTER / \
+             SLOWER where a side has two frame-time modes (the widest split of its sorted \
+             samples leaves two groups of ≥ {:.0} % of them, medians ≥ {:.1} % apart) and a mode \
+             of NEW matches a mode of BASE within the band (low with low, high with high when \
+             both have two; a side with one mode is its median); and, where both sides are \
+             noisy, one within ±(floor + their larger session spread).",
+            MODE_MIN_FRAC * 100.0,
+            MODE_MIN_SEP * 100.0
+        );
+        if self.opts.scale_new != 1.0 {
+            let _ = write!(
+                t,
+                " SYNTHETIC: every NEW time was multiplied by {} (--scale-new).",
+                self.opts.scale_new
+            );
+        }
+        t
     }
 
     fn headline(&self) -> Vec<String> {
@@ -666,6 +853,9 @@ impl AbReport {
             }
             if p.time.verdict == Verdict::Unsure {
                 note.push(p.time.why.clone());
+            }
+            if p.band_source != BandSource::Fixed {
+                note.push(p.band_note());
             }
             let _ = writeln!(
                 m,
@@ -788,7 +978,7 @@ impl AbReport {
                     .map(|c| format!("{} ({})", c.verdict, fmt_ratio(c)))
                     .unwrap_or_default(),
                 p.time.basis,
-                esc(&p.time.why),
+                esc(&format!("{}; {}", p.time.why, p.band_note())),
                 v = p.time.verdict,
             );
         }

@@ -822,7 +822,7 @@ pub mod cols {
     );
     pub const X_BLEND: Col = Col::new(
         "x_blend",
-        "gpu_ms_median over the floor_blend gpu_ms_median (unordered hardware blending of every fragment) of the same scene, resolution and run",
+        "gpu_ms_median over the floor_blend_const gpu_ms_median (unordered hardware blending of every fragment, positions only and one constant colour: the cheapest) of the same scene, resolution and run (before issue 33: over floor_blend, which reads colour too)",
     );
     pub const SPEEDUP_VS_DEPTH_PEEL: Col = Col::new(
         "speedup_vs_depth_peel",

@@ -310,6 +310,96 @@ fn bootstrap_ratio(base: &[f64], new: &[f64], o: &VerdictOptions) -> (f64, f64) 
     percentile_interval(&mut ratios)
 }
 
+/// Two frame-time modes in one side's samples: the relative distance between the medians of
+/// the two groups either side of the widest split of the sorted samples, when each group holds
+/// at least `min_frac` of them (and 3), the groups' medians lie `min_sep` or more apart and the
+/// split itself is an empty stretch of at least a third of that. `None`: one mode, or too few
+/// samples (under 6) to tell. The H200's compute A-buffer on quads(32) has frames at 1.61–1.62
+/// and at 1.70–1.71 ms within one session (0.055): its median sits in whichever mode holds
+/// more frames, so two runs of one build can differ by the whole gap.
+pub fn mode_gap(samples: &[f64], min_frac: f64, min_sep: f64) -> Option<f64> {
+    modes(samples, min_frac, min_sep).map(|m| m.gap)
+}
+
+/// Two frame-time modes of one side ([`modes`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Modes {
+    /// Medians of the faster and the slower group.
+    pub low: f64,
+    pub high: f64,
+    /// `(high − low) / median of all`.
+    pub gap: f64,
+}
+
+/// The two modes behind [`mode_gap`], when there are two.
+pub fn modes(samples: &[f64], min_frac: f64, min_sep: f64) -> Option<Modes> {
+    let mut xs: Vec<f64> = samples.iter().copied().filter(|x| x.is_finite()).collect();
+    let n = xs.len();
+    if n < 6 {
+        return None;
+    }
+    xs.sort_by(f64::total_cmp);
+    let m = median_of(&xs);
+    if m <= 0.0 {
+        return None;
+    }
+    let lo = ((min_frac * n as f64).ceil() as usize).max(3);
+    let mut best: Option<Modes> = None;
+    // Split after index i: [0, i] and [i + 1, n).
+    for i in lo.saturating_sub(1)..n.saturating_sub(lo) {
+        let (a, b) = xs.split_at(i + 1);
+        let (low, high) = (median_of(a), median_of(b));
+        let sep = (high - low) / m;
+        let gap = (xs[i + 1] - xs[i]) / m;
+        if sep >= min_sep && gap >= min_sep / 3.0 && best.is_none_or(|s| sep > s.gap) {
+            best = Some(Modes {
+                low,
+                high,
+                gap: sep,
+            });
+        }
+    }
+    best
+}
+
+/// Defaults of [`mode_gap`] for a verdict: each mode a fifth of the samples, 1.5 % apart (below
+/// the 2 % band, so a gap that can flip a verdict is always seen).
+pub const MODE_MIN_FRAC: f64 = 0.2;
+pub const MODE_MIN_SEP: f64 = 0.015;
+
+fn median_of(sorted: &[f64]) -> f64 {
+    let n = sorted.len();
+    if n % 2 == 1 {
+        sorted[n / 2]
+    } else {
+        0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
+    }
+}
+
+/// Holds back a FASTER / SLOWER verdict that the point's own instability could explain: when
+/// `|ratio − 1|` is within `wide` (the band widened by a mode gap or a noisy session spread of
+/// either side; infinite: whatever the ratio), the verdict becomes **Unsure** and `why` says which instability. A verdict is
+/// then never more confident than the runs it compares.
+pub fn hold_back(mut c: Comparison, wide: f64, why: &str) -> Comparison {
+    if matches!(c.verdict, Verdict::Faster | Verdict::Slower) && (c.ratio - 1.0).abs() <= wide {
+        let dir = if c.verdict == Verdict::Slower {
+            "slower"
+        } else {
+            "faster"
+        };
+        c.why = if wide.is_finite() {
+            format!(
+                "{dir} beyond the band, but within ±{:.1} %: {why}",
+                wide * 100.0
+            )
+        } else {
+            format!("{dir} beyond the band, but {why}")
+        };
+        c.verdict = Verdict::Unsure;
+    }
+    c
+}
+
 /// A side known only by its summary columns.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Interval {
@@ -534,6 +624,41 @@ mod tests {
             compare_intervals(bare(1.0), bare(1.5), &o).verdict,
             Verdict::Unsure
         );
+    }
+
+    #[test]
+    fn two_frame_time_modes_are_found_and_one_is_not() {
+        // 20 frames at 1.615 ms and 10 at 1.705 (the H200's compute A-buffer, quads(32) 1024²).
+        let mut v = series(20, 1.615, 0.002, 0);
+        v.extend(series(10, 1.705, 0.002, 50));
+        let g = mode_gap(&v, MODE_MIN_FRAC, MODE_MIN_SEP).unwrap();
+        assert!((g - 0.055).abs() < 0.005, "{g}");
+        // One mode with ±1 % noise: no gap.
+        let one = series(30, 1.0, 0.01, 0);
+        assert_eq!(mode_gap(&one, MODE_MIN_FRAC, MODE_MIN_SEP), None);
+        // A single outlier is not a mode (each mode needs a fifth of the samples).
+        let mut out = series(29, 1.0, 0.001, 0);
+        out.push(1.3);
+        assert_eq!(mode_gap(&out, MODE_MIN_FRAC, MODE_MIN_SEP), None);
+        assert_eq!(
+            mode_gap(&v[..5], MODE_MIN_FRAC, MODE_MIN_SEP),
+            None,
+            "too few"
+        );
+    }
+
+    #[test]
+    fn a_change_within_a_mode_gap_is_held_back_and_one_beyond_it_is_not() {
+        let a = series(30, 1.0, 0.002, 0);
+        let b: Vec<f64> = a.iter().map(|x| x * 1.061).collect();
+        let c = compare_samples(&a, &b, &VerdictOptions::default());
+        assert_eq!(c.verdict, Verdict::Slower);
+        let h = hold_back(c.clone(), 0.075, "BASE has two modes 5.5 % apart");
+        assert_eq!(h.verdict, Verdict::Unsure, "{h:?}");
+        assert!(h.why.contains("two modes"), "{}", h.why);
+        assert_eq!(hold_back(c.clone(), 0.05, "x").verdict, Verdict::Slower);
+        let same = compare_samples(&a, &a, &VerdictOptions::default());
+        assert_eq!(hold_back(same, 0.5, "x").verdict, Verdict::Same);
     }
 
     #[test]

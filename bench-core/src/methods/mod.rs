@@ -5,7 +5,8 @@
 //! | `floor_depth`  | the yardstick (issue "Compare GPUs") | — (no image)          | 1               | 4 B depth                 |
 //! | `floor_depth_vs` | the old `floor_depth`: no fragment stage (its time followed the last render pipeline run) | — (no image) | 1         | 4 B depth                 |
 //! | `floor_opaque` | the yardstick, one colour       | — (no image)              | 1               | 4 B depth + 4 B RGBA8     |
-//! | `floor_blend`  | the yardstick of unsorted transparency (LucidRaster's ratio) | — (not judged: primitive order) | 1 | 4 B RGBA8 |
+//! | `floor_blend`  | unsorted transparency through the methods' own vertex stage (every attribute, each fragment's colour) | — (not judged: primitive order) | 1 | 4 B RGBA8 |
+//! | `floor_blend_const` | the yardstick of `x_blend` (LucidRaster's ratio): the cheapest unsorted blend, positions only and one colour | — (not judged) | 1 | 4 B RGBA8 |
 //! | `depth_peel`   | Everitt 2001, classic front-to-back peeling; every effect via the fold | exact up to `max_layers`; coplanar ties lost (`variant=tiebreak` keeps them) | layers + 1 | 2×4 B depth + 4–36 B layer payload + 64 B fold state + 16 B per output image + 4 B count |
 //! | `dual_peel`    | Bavoil & Myers 2008, dual depth peeling (MAX blending, nearest + farthest per pass) | exact up to `max_layers`; coplanar ties merged | ⌈layers/2⌉ + 1 | 2×8 B depth + 2×16 B layers + 2×16 B accumulation + 16 B image + 4 B count |
 //! | `kbuffer_rmw`  | Bavoil 2007 ch. 4, k-buffer by non-atomic read-modify-write insertion | k nearest, but RMW hazards (measured: `hazard_rate`) | 1 (+ resolve) | k × (4 B key + 32 B entry) + 16 B image |
@@ -76,6 +77,7 @@ pub fn all() -> Vec<Box<dyn Method>> {
         Box::new(floor::FloorDepthVs),
         Box::new(floor::FloorOpaque),
         Box::new(floor::FloorBlend),
+        Box::new(floor::FloorBlendConst),
         Box::new(depth_peel::DepthPeel),
         Box::new(dual_peel::DualPeel),
         Box::new(kbuffer_rmw::KBufferRmw),

@@ -88,7 +88,7 @@ pub struct GroupCtx<'a> {
     pub flip: bool,
     /// floor_depth median GPU ms of this group, when measured.
     pub floor_ms: Option<f64>,
-    /// floor_blend median GPU ms of this group, when measured.
+    /// floor_blend_const median GPU ms of this group, when measured (the `x_blend` yardstick).
     pub blend_ms: Option<f64>,
     /// Where `save_image` writes point images (`mfx sweep --save-images`); none = not saved.
     pub images_dir: Option<std::path::PathBuf>,

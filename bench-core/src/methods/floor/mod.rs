@@ -1,10 +1,10 @@
 //! The floor rows: one depth-only pass (`floor_depth`), one opaque single-colour pass
-//! (`floor_opaque`) and one unsorted alpha-blended pass (`floor_blend`, in `blend.rs`) over
-//! exactly the scene's geometry and resolution. Every method's `x_floor` is its time over
-//! `floor_depth` of the same scene in the same run (`x_blend`: over `floor_blend`).
+//! (`floor_opaque`) and two unsorted alpha-blended passes (`floor_blend`, `floor_blend_const`,
+//! in `blend.rs`) over exactly the scene's geometry and resolution. Every method's `x_floor` is its time over
+//! `floor_depth` of the same scene in the same run (`x_blend`: over `floor_blend_const`).
 
 mod blend;
-pub use blend::FloorBlend;
+pub use blend::{FloorBlend, FloorBlendConst, CONST_PREMUL};
 
 use crate::axes::Point;
 use crate::gpu_util::{camera_entry, clear_depth, depth_state, shader};
