@@ -117,7 +117,7 @@ impl PreparedBlend {
     }
 }
 
-impl Prepared for PreparedBlend {
+impl crate::timed::Timed for PreparedBlend {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         {
@@ -148,6 +148,12 @@ impl Prepared for PreparedBlend {
         })
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+impl Prepared for PreparedBlend {
     fn readback(&mut self, gpu: &Gpu, _: &GpuScene) -> Result<Capture> {
         let bytes = read_texture(gpu, &self.target, 4, wgpu::TextureAspect::All)?;
         let mut cap = Capture::empty();
@@ -160,10 +166,6 @@ impl Prepared for PreparedBlend {
         cap.expected = Expected::All;
         cap.notes = "floor: blended in primitive order, unsorted (a yardstick, not judged)".into();
         Ok(cap)
-    }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
     }
 }
 
