@@ -12,7 +12,7 @@ fn rows(text: &str) -> Vec<Row> {
 
 fn f(r: &Row, c: bench_core::record::Col) -> f64 {
     r.get_f(c)
-        .unwrap_or_else(|| panic!("{} empty in {:?}", c.name(), r.cells))
+        .unwrap_or_else(|| panic!("{} empty in {:?}", c.name, r.cells))
 }
 
 /// The timing columns `measure` writes, and their relations.
@@ -34,7 +34,10 @@ fn assert_timed(r: &Row, samples: usize) {
         f(r, cols::GPU_MS_MAX),
     );
     assert_eq!(p50, med);
-    assert!(p50 <= p95 && p95 <= p99 && p99 <= max, "{p50} {p95} {p99} {max}");
+    assert!(
+        p50 <= p95 && p95 <= p99 && p99 <= max,
+        "{p50} {p95} {p99} {max}"
+    );
     assert!(f(r, cols::BYTES_PER_S) > 0.0);
     // lavapipe has no NVML: the peak is unknown, so the fraction is empty, not guessed.
     assert_eq!(r.get(cols::PEAK_BANDWIDTH_FRAC), None);
