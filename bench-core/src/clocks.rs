@@ -100,6 +100,16 @@ pub struct GpuMonitor {
     driver: String,
     default_sm_mhz: Option<f64>,
     max_sm_mhz: Option<f64>,
+    /// Peak memory bandwidth in bytes/s ([`peak_bandwidth`]).
+    peak_bandwidth: Option<f64>,
+}
+
+/// Peak memory bandwidth in bytes/s from NVML's memory bus width (bits) and maximum memory
+/// clock (MHz): width / 8 × clock × 2, two transfers per clock (DDR; NVML's HBM clock counts
+/// the same way: an H200's 6144-bit bus at 3201 MHz gives 4.92 TB/s, its data sheet's 4.8).
+pub fn peak_bandwidth(bus_width_bits: u32, max_mem_mhz: u32) -> Option<f64> {
+    (bus_width_bits > 0 && max_mem_mhz > 0)
+        .then(|| bus_width_bits as f64 / 8.0 * max_mem_mhz as f64 * 1e6 * 2.0)
 }
 
 impl std::fmt::Debug for GpuMonitor {
@@ -163,6 +173,10 @@ impl GpuMonitor {
         let name = d.name().unwrap_or_default();
         let default_sm_mhz = d.default_applications_clock(Clock::SM).ok().map(f64::from);
         let max_sm_mhz = d.max_clock_info(Clock::SM).ok().map(f64::from);
+        let peak_bandwidth = match (d.memory_bus_width(), d.max_clock_info(Clock::Memory)) {
+            (Ok(w), Ok(mhz)) => peak_bandwidth(w, mhz),
+            _ => None,
+        };
         let driver = nvml.sys_driver_version().unwrap_or_default();
         Ok(GpuMonitor {
             nvml,
@@ -172,6 +186,7 @@ impl GpuMonitor {
             driver,
             default_sm_mhz,
             max_sm_mhz,
+            peak_bandwidth,
         })
     }
 
@@ -206,6 +221,10 @@ impl GpuMonitor {
     pub fn max_sm_mhz(&self) -> Option<f64> {
         self.max_sm_mhz
     }
+    /// Peak memory bandwidth in bytes/s, where NVML gives the bus width and memory clock.
+    pub fn peak_bandwidth(&self) -> Option<f64> {
+        self.peak_bandwidth
+    }
     /// The throttle rule's reference: the default SM clock, else the maximum.
     pub fn reference_sm_mhz(&self) -> Option<f64> {
         self.default_sm_mhz.or(self.max_sm_mhz)
@@ -225,6 +244,7 @@ impl GpuMonitor {
             ("nvml_driver_version", self.driver.clone()),
             ("sm_clock_mhz_default", f(self.default_sm_mhz)),
             ("sm_clock_mhz_max", f(self.max_sm_mhz)),
+            ("peak_bandwidth_bytes_per_s", f(self.peak_bandwidth)),
         ]
     }
 }
@@ -435,5 +455,14 @@ mod tests {
         }
         assert!(!p.slowdown());
         assert_eq!(p.sm_mean(), None);
+    }
+
+    #[test]
+    fn peak_bandwidth_is_bus_bytes_times_double_clock() {
+        // H200: 6144-bit HBM3e at 3201 MHz → 4.917 TB/s.
+        let b = peak_bandwidth(6144, 3201).unwrap();
+        assert!((b - 4.917e12).abs() < 1e9, "{b}");
+        assert_eq!(peak_bandwidth(0, 3201), None);
+        assert_eq!(peak_bandwidth(6144, 0), None);
     }
 }

@@ -29,6 +29,7 @@ pub mod shading;
 pub mod studies;
 pub mod testing;
 pub mod texture_memory;
+pub mod timed;
 pub mod timing;
 
 pub use gpu::{BackendChoice, Gpu, GpuOptions};

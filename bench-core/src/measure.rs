@@ -1,4 +1,5 @@
-//! Timing one prepared method on one scene: untimed preparation, a warm-up until frame times and
+//! Timing one [`Timed`] frame on one scene — a multi-fragment method's, a deferred shading
+//! path's, a geometry feed's, the light pre-pass's, the shadow mapper's: untimed preparation, a warm-up until frame times and
 //! the SM clock are steady, then timed frames until the stopping rule is met (mfx-stats: a
 //! target on the 95 % CI of the median, caps on samples and time, a drift check), the SM clock
 //! read after every frame where NVML is present (throttled samples discarded: nvbench's 75 %
@@ -16,6 +17,7 @@ use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
 use crate::method::{FrameStats, Method, Prepared};
 use crate::record::{cols, GpuMsInterval, Row, Sample};
+use crate::timed::Timed;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 use schema::MIN_SAMPLES_CI95;
@@ -188,8 +190,9 @@ impl TimingPlan {
     }
 }
 
-/// The result of timing one method on one scene.
-pub struct Measured {
+/// The result of timing one frame kind on one scene (by default a multi-fragment method's
+/// [`Prepared`], whose capture the caller reads back).
+pub struct Measured<T: ?Sized = dyn Prepared> {
     /// GPU time per frame over the kept samples (None without timestamp queries).
     pub gpu: Option<Summary>,
     /// Wall-clock time per frame over the kept samples.
@@ -200,7 +203,13 @@ pub struct Measured {
     pub frame: FrameStats,
     pub bytes_allocated: u64,
     pub bytes_overhead: Option<u64>,
-    pub prepared: Box<dyn Prepared>,
+    /// [`Timed::bytes_moved`] of one frame (`bytes_per_s`).
+    pub bytes_moved: u64,
+    /// The adapter's peak memory bandwidth in bytes/s (NVML), where known.
+    pub peak_bandwidth: Option<f64>,
+    /// The frame's own parts ([`Timed::parts`]) per kept sample, in sample order.
+    pub parts: BTreeMap<&'static str, Vec<f64>>,
+    pub prepared: Box<T>,
     /// Every timed frame in order, discarded ones included (`samples.csv`).
     pub samples: Vec<Sample>,
     pub warmup_frames: usize,
@@ -220,9 +229,26 @@ pub struct Measured {
     pub clock_lift: Option<(f64, f64, f64)>,
 }
 
-impl Measured {
+impl<T: ?Sized> Measured<T> {
     pub fn gpu_median(&self) -> Option<f64> {
         self.gpu.as_ref().map(|s| s.median)
+    }
+    /// The median of a part the frame reported ([`Timed::parts`]) over the kept samples.
+    pub fn part_median(&self, name: &str) -> Option<f64> {
+        let mut v = self.parts.get(name)?.clone();
+        v.sort_by(f64::total_cmp);
+        (!v.is_empty()).then(|| mfx_stats::median_of_sorted(&v))
+    }
+    /// Median of wall minus GPU time over the kept samples (`gpu_idle_ms`), with timestamps.
+    pub fn idle_median(&self) -> Option<f64> {
+        let mut v: Vec<f64> = self
+            .samples
+            .iter()
+            .filter(|s| !s.discarded)
+            .filter_map(|s| s.gpu_ms.map(|g| (s.cpu_ms - g).max(0.0)))
+            .collect();
+        v.sort_by(f64::total_cmp);
+        (!v.is_empty()).then(|| mfx_stats::median_of_sorted(&v))
     }
     pub fn discarded(&self) -> usize {
         self.samples.iter().filter(|s| s.discarded).count()
@@ -239,15 +265,20 @@ fn scope_error(e: Option<wgpu::Error>, what: &str) -> Result<()> {
     }
 }
 
-/// What one frame gave: the GPU passes' ms (empty without timestamps), the wall ms, and the
-/// clocks right after it.
-type FrameTimes = (Vec<(String, f64)>, f64, MonitorSample);
+/// What one frame gave: the GPU passes' ms (empty without timestamps), the wall ms, the
+/// clocks right after it, and the frame's own parts ([`Timed::parts`]).
+type FrameTimes = (
+    Vec<(String, f64)>,
+    f64,
+    MonitorSample,
+    Vec<(&'static str, f64)>,
+);
 
 /// One frame: encode, submit, wait.
-fn one_frame(
+fn one_frame<T: Timed + ?Sized>(
     gpu: &Gpu,
     scene: &GpuScene,
-    prepared: &mut dyn Prepared,
+    prepared: &mut T,
     timer: &mut GpuTimer,
     frame: &mut FrameStats,
 ) -> Result<FrameTimes> {
@@ -256,13 +287,15 @@ fn one_frame(
     *frame = prepared.frame(gpu, scene, timer)?;
     gpu.wait()?;
     let cpu = t0.elapsed().as_secs_f64() * 1e3;
-    let passes = timer.read(gpu)?;
+    let spans = timer.read_spans(gpu)?;
     gpu.check_lost()?;
     let clocks = match &gpu.monitor {
         Ok(m) => m.sample(),
         Err(_) => MonitorSample::default(),
     };
-    Ok((passes, cpu, clocks))
+    let parts = prepared.parts(&spans);
+    let passes = spans.into_iter().map(|(l, a, b)| (l, b - a)).collect();
+    Ok((passes, cpu, clocks, parts))
 }
 
 /// Timed frames of this process so far: each sample's `seq`, the measurement order.
@@ -270,13 +303,14 @@ static FRAMES_TIMED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64
 
 /// One point being timed, in stages (so a group's points can be sampled interleaved): prepared,
 /// warmed up, sampled one frame at a time, finished into a [`Measured`].
-pub struct PointTimer<'g> {
+pub struct PointTimer<'g, T: ?Sized = dyn Prepared> {
     gpu: &'g Gpu,
     scene: &'g GpuScene,
     plan: TimingPlan,
-    prepared: Box<dyn Prepared>,
+    prepared: Box<T>,
     bytes_allocated: u64,
     bytes_overhead: Option<u64>,
+    parts: BTreeMap<&'static str, Vec<f64>>,
     timer: GpuTimer,
     reference_mhz: Option<f64>,
     clocks: PointClocks,
@@ -298,7 +332,7 @@ pub struct PointTimer<'g> {
 }
 
 /// Runs `f` in validation and out-of-memory error scopes; a captured error names `what`.
-fn scoped<T>(gpu: &Gpu, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+pub fn scoped<T>(gpu: &Gpu, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
     let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
     let r = f();
@@ -316,12 +350,27 @@ impl<'g> PointTimer<'g> {
         point: &Point,
         plan: &TimingPlan,
     ) -> Result<PointTimer<'g>> {
+        PointTimer::prepare_with(gpu, scene, &|s| method.prepare(gpu, s, point), plan)
+    }
+}
+
+/// Makes one [`Timed`] frame kind's GPU objects on a scene (called once per session).
+pub type Make<'a, T> = &'a dyn Fn(&GpuScene) -> Result<Box<T>>;
+
+impl<'g, T: Timed + ?Sized> PointTimer<'g, T> {
+    /// Prepares a frame with `make` (untimed: every GPU object is created here).
+    pub fn prepare_with(
+        gpu: &'g Gpu,
+        scene: &'g GpuScene,
+        make: Make<'_, T>,
+        plan: &TimingPlan,
+    ) -> Result<PointTimer<'g, T>> {
         gpu.check_lost()?;
         if plan.settle {
             gpu.settle()?;
         }
         let t0 = std::time::Instant::now();
-        let prepared = scoped(gpu, "prepare", || method.prepare(gpu, scene, point))?;
+        let prepared = scoped(gpu, "prepare", || make(scene))?;
         let prepare_ms = t0.elapsed().as_secs_f64() * 1e3;
         Ok(PointTimer {
             gpu,
@@ -329,6 +378,7 @@ impl<'g> PointTimer<'g> {
             plan: plan.clone(),
             bytes_allocated: prepared.bytes_allocated(),
             bytes_overhead: prepared.bytes_overhead(),
+            parts: BTreeMap::new(),
             prepared,
             timer: GpuTimer::new(gpu),
             reference_mhz: gpu.monitor.as_ref().ok().and_then(|m| m.reference_sm_mhz()),
@@ -405,7 +455,7 @@ impl<'g> PointTimer<'g> {
         let w0 = std::time::Instant::now();
         let (gpu, scene) = (self.gpu, self.scene);
         scoped(gpu, "warm-up", || loop {
-            let (passes, cpu, c) = one_frame(
+            let (passes, cpu, c, _) = one_frame(
                 gpu,
                 scene,
                 self.prepared.as_mut(),
@@ -434,7 +484,7 @@ impl<'g> PointTimer<'g> {
         }
         let t0 = std::time::Instant::now();
         let (gpu, scene) = (self.gpu, self.scene);
-        let (passes, cpu, c) = scoped(gpu, "frame", || {
+        let (passes, cpu, c, parts) = scoped(gpu, "frame", || {
             one_frame(
                 gpu,
                 scene,
@@ -478,6 +528,9 @@ impl<'g> PointTimer<'g> {
             self.sampler.push_discarded(self.sampling_ms)
         } else {
             self.clocks.push(&c);
+            for (name, ms) in parts {
+                self.parts.entry(name).or_default().push(ms);
+            }
             let mut frame_labels: BTreeMap<String, f64> = BTreeMap::new();
             for (l, ms) in passes {
                 *frame_labels.entry(l).or_default() += ms;
@@ -495,7 +548,7 @@ impl<'g> PointTimer<'g> {
     }
 
     /// The point's statistics (after the rule stopped it).
-    pub fn finish(self) -> Result<Measured> {
+    pub fn finish(self) -> Result<Measured<T>> {
         let stop_reason = self.stopped.unwrap_or(StopReason::MaxSamples);
         let mut kept: Vec<&Sample> = self.samples.iter().filter(|s| !s.discarded).collect();
         // Every sample discarded (a slow state that lasted the whole point): the statistics of
@@ -544,6 +597,14 @@ impl<'g> PointTimer<'g> {
             frame: self.frame,
             bytes_allocated: self.bytes_allocated,
             bytes_overhead: self.bytes_overhead,
+            bytes_moved: self.prepared.bytes_moved(),
+            peak_bandwidth: self
+                .gpu
+                .monitor
+                .as_ref()
+                .ok()
+                .and_then(|m| m.peak_bandwidth()),
+            parts: self.parts,
             prepared: self.prepared,
             warmup_frames: self.warmup_frames,
             target_reached: stop_reason == StopReason::TargetReached && !all_discarded,
@@ -567,13 +628,25 @@ pub fn measure(
     point: &Point,
     plan: &TimingPlan,
 ) -> Result<Measured> {
+    measure_timed(gpu, scene, &|s| method.prepare(gpu, s, point), plan)
+}
+
+/// Times any [`Timed`] frame under `plan`: each session prepares it afresh with `make`
+/// (untimed), lifts the clock, warms up, then samples frames until the stopping rule ends it
+/// (canary, clock and throttle checks on every sample). Every study's rows are timed here.
+pub fn measure_timed<T: Timed + ?Sized>(
+    gpu: &Gpu,
+    scene: &GpuScene,
+    make: Make<'_, T>,
+    plan: &TimingPlan,
+) -> Result<Measured<T>> {
     // Session k > 0 runs elsewhere in memory: a placement pad (a buffer of a seeded size,
     // 1–255 MiB) is allocated first, then the scene's geometry is copied into new buffers and
     // the method prepared on them. Measured on the H200 (results/reference/2026-12-02-h200-
     // floors): small-scene k-buffer points sit in one of two or three time states per process
     // (1.070 or 1.113–1.138 ms), set by where their memory lands; three such sessions showed a
     // spread over 2 % on 11 of 36 of them, so their CI spans the states one run alone hides.
-    let session = |k: usize| -> Result<Measured> {
+    let session = |k: usize| -> Result<Measured<T>> {
         // The pad lives until the session ends (`_pad`), so nothing reuses its memory before.
         let (_pad, moved) = if k > 0 {
             let pad = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -588,7 +661,7 @@ pub fn measure(
             (None, None)
         };
         let scene = moved.as_ref().unwrap_or(scene);
-        let mut t = PointTimer::prepare(gpu, scene, method, point, plan)?;
+        let mut t = PointTimer::prepare_with(gpu, scene, make, plan)?;
         t.lift_clock()?;
         t.warm_up()?;
         while t.sample()?.is_none() {}
@@ -615,6 +688,7 @@ pub fn measure(
             m.canary,
             (m.measure_ms, m.prepare_ms),
             m.target_reached,
+            m.parts,
             next,
         );
     }
@@ -631,15 +705,21 @@ pub fn placement_pad_mib(seed: u64, k: usize) -> u64 {
     1 + z % 255
 }
 
-/// `next` with the earlier sessions' samples, clocks, times and target folded in.
-fn combine(
+/// `next` with the earlier sessions' samples, clocks, times, target and parts folded in.
+fn combine<T: ?Sized>(
     samples: Vec<Sample>,
     clocks: PointClocks,
     canary: Option<(usize, f64)>,
     (measure_ms, prepare_ms): (f64, f64),
     reached: bool,
-    mut next: Measured,
-) -> Measured {
+    parts: BTreeMap<&'static str, Vec<f64>>,
+    mut next: Measured<T>,
+) -> Measured<T> {
+    for (name, mut v) in parts {
+        let later = next.parts.remove(name).unwrap_or_default();
+        v.extend(later);
+        next.parts.insert(name, v);
+    }
     let mut all = samples;
     all.append(&mut next.samples);
     next.samples = all;
@@ -659,7 +739,7 @@ fn combine(
 /// The pooled summary of every session's kept samples, its median's CI widened to cover each
 /// session's median; `session_medians` kept for `session_spread`. A spread wider than the noise
 /// target (as a half-width) means the target was not reached.
-fn widen_to_sessions(m: &mut Measured, parts: &[f64], plan: &TimingPlan) {
+fn widen_to_sessions<T: ?Sized>(m: &mut Measured<T>, parts: &[f64], plan: &TimingPlan) {
     let kept: Vec<&Sample> = m.samples.iter().filter(|s| !s.discarded).collect();
     let gpu: Vec<f64> = kept.iter().filter_map(|s| s.gpu_ms).collect();
     let cpu: Vec<f64> = kept.iter().map(|s| s.cpu_ms).collect();
@@ -739,58 +819,11 @@ pub fn measure_interleaved<'g>(
         .collect()
 }
 
-/// What [`FrameLoop::push`] made of a frame.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Step {
-    /// An untimed warm-up frame.
-    Warmup,
-    /// A timed sample; `last`: the stopping rule ends the point with it.
-    Sample { last: bool },
-}
-
-/// The warm-up and stopping rules for studies that run their own frames (geometry feeding, the
-/// light pre-pass): feed each frame's time, keep the frames it calls samples, stop when told.
-pub struct FrameLoop {
-    warmup: Option<Warmup>,
-    sampler: Sampler,
-    start: std::time::Instant,
-    warmup_frames: usize,
-}
-
-impl FrameLoop {
-    pub fn new(plan: &TimingPlan) -> FrameLoop {
-        FrameLoop {
-            warmup: (plan.warmup.max_frames > 0).then(|| Warmup::new(plan.warmup.clone())),
-            sampler: Sampler::new(plan.stop.clone()),
-            start: std::time::Instant::now(),
-            warmup_frames: 0,
-        }
-    }
-
-    /// Feeds one frame's time in ms (GPU time, or wall time without timestamps).
-    pub fn push(&mut self, ms: f64) -> Step {
-        let elapsed = self.start.elapsed().as_secs_f64() * 1e3;
-        if let Some(w) = &mut self.warmup {
-            match w.push(ms, None, elapsed) {
-                WarmupDecision::Continue => return Step::Warmup,
-                WarmupDecision::Done(_) => {
-                    self.warmup_frames = w.frames();
-                    self.warmup = None;
-                    self.start = std::time::Instant::now();
-                    return Step::Warmup;
-                }
-            }
-        }
-        let elapsed = self.start.elapsed().as_secs_f64() * 1e3;
-        let last = matches!(self.sampler.push(ms, elapsed), Decision::Stop(_));
-        Step::Sample { last }
-    }
-
-    pub fn warmup_frames(&self) -> usize {
-        self.warmup_frames
-    }
-    pub fn target_reached(&self) -> bool {
-        self.sampler.target_reached()
+/// `fragments_per_s`: a frame's true fragment total (the CPU reference's) over the row's
+/// median GPU time, where both are known.
+pub fn set_fragment_rate(row: &mut Row, true_fragments: u64) {
+    if let Some(g) = row.get_f(cols::GPU_MS_MEDIAN).filter(|g| *g > 0.0) {
+        row.set_f(cols::FRAGMENTS_PER_S, true_fragments as f64 / (g * 1e-3));
     }
 }
 
@@ -809,13 +842,16 @@ pub fn median_interval(g: &Summary) -> (GpuMsInterval, (f64, f64)) {
 /// Timing, pass, clock and memory columns of a measured point, and the flags a timing earns:
 /// `noisy` (the stopping rule's target was not met) and `throttled` (a sample was discarded
 /// or NVML reported a slowdown).
-pub fn set_timing(row: &mut Row, m: &Measured, mesh: &scenarios::Mesh) {
+pub fn set_timing<T: ?Sized>(row: &mut Row, m: &Measured<T>, mesh: &scenarios::Mesh) {
     if let Some(g) = &m.gpu {
         let interval = median_interval(g);
         row.set_f(cols::GPU_MS_MEDIAN, g.median)
             .set_f(cols::GPU_MS_MEAN, g.mean)
             .set_f(cols::GPU_MS_MIN, g.min)
             .set_f(cols::GPU_MS_MAX, g.max)
+            .set_f(cols::GPU_MS_P50, g.median)
+            .set_f(cols::GPU_MS_P95, g.p95)
+            .set_f(cols::GPU_MS_P99, g.p99)
             .set_f(cols::GPU_MS_CI_LO, interval.1 .0)
             .set_f(cols::GPU_MS_CI_HI, interval.1 .1)
             .set(cols::GPU_MS_INTERVAL, interval.0)
@@ -824,6 +860,13 @@ pub fn set_timing(row: &mut Row, m: &Measured, mesh: &scenarios::Mesh) {
             .set_f(cols::GPU_MS_REL_CI, g.rel_ci)
             .set_f(cols::GPU_MS_REL_NOISE, g.rel_noise)
             .set(cols::GPU_MS_OUTLIERS, g.outliers);
+        if g.median > 0.0 && m.bytes_moved > 0 {
+            let bps = m.bytes_moved as f64 / (g.median * 1e-3);
+            row.set_f(cols::BYTES_PER_S, bps);
+            if let Some(peak) = m.peak_bandwidth.filter(|p| *p > 0.0) {
+                row.set_f(cols::PEAK_BANDWIDTH_FRAC, bps / peak);
+            }
+        }
         if g.median > 0.0 {
             let secs = g.median * 1e-3 / m.frame.geometry_passes.max(1) as f64;
             row.set_f(cols::TRIANGLES_PER_S, mesh.triangle_count() as f64 / secs)

@@ -7,7 +7,7 @@ use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
 use crate::record::FlagSet;
-use crate::timing::GpuTimer;
+pub use crate::timed::{FrameStats, Timed};
 use crate::Result;
 
 /// Which reference a capture is judged against.
@@ -80,15 +80,6 @@ impl Capture {
     }
 }
 
-/// What one frame did.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct FrameStats {
-    /// Times the scene's geometry was submitted.
-    pub geometry_passes: u32,
-    /// Layers (or passes of capture) that produced fragments.
-    pub layers: u32,
-}
-
 /// A multi-fragment method (or a floor): description, declared axes, requirements, preparation.
 pub trait Method: Send + Sync {
     fn name(&self) -> &'static str;
@@ -136,19 +127,11 @@ pub fn supports(method: &dyn Method, gpu: &Gpu, point: &Point) -> std::result::R
     method.supports(gpu, point)
 }
 
-/// A method ready to run on one scene at one resolution.
-pub trait Prepared {
-    /// One frame's work: encode, submit (as often as it needs), timestamp each pass with `timer`.
-    fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats>;
+/// A multi-fragment method ready to run on one scene at one resolution: a [`Timed`] frame
+/// whose capture can be read back and judged.
+pub trait Prepared: Timed {
     /// Reads the last frame's output.
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture>;
-    /// Bytes of buffers and textures this method allocated.
-    fn bytes_allocated(&self) -> u64;
-    /// Of those, the per-pixel structures (heads, offsets, counters, output image), when the
-    /// method knows them; the rest holds fragments.
-    fn bytes_overhead(&self) -> Option<u64> {
-        None
-    }
     /// The storage buffer the frame's output image is written to (premultiplied RGBA as
     /// `vec4<f32>` per pixel, every effect image one after another), for methods that keep it
     /// in one: the 2×2 supersampling wrapper box-filters it on the GPU.

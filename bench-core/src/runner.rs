@@ -165,7 +165,6 @@ pub fn run(
                 .set(cols::TEXTURE_MEMORY, gpu.texture_memory.as_str())
                 .set(cols::WIDTH, group.width)
                 .set(cols::HEIGHT, group.height)
-                .set(cols::TIMING_RULE, &timing_rule)
                 .set(cols::SCENE, &group.scene.generator)
                 .set(cols::SCENE_LABEL, group.scene.label());
             if plan.interleave {
@@ -173,6 +172,11 @@ pub fn run(
             }
             if row.get(cols::METHOD).is_none() {
                 row.set(cols::METHOD, method);
+            }
+            // Every GPU frame is timed by `measure` under this plan; a row timed otherwise
+            // (CPU-only work) says how in its own `timing_rule`.
+            if row.get(cols::TIMING_RULE).is_none() {
+                row.set(cols::TIMING_RULE, &timing_rule);
             }
             if row.status().is_none() {
                 row.set_status(Status::Ok);

@@ -83,7 +83,7 @@ impl Method for Burn {
     }
 }
 
-impl Prepared for BurnPrepared {
+impl bench_core::timed::Timed for BurnPrepared {
     fn frame(&mut self, gpu: &Gpu, _: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         for (label, groups, timed) in [("burn", 64, self.timed), ("tiny", 1, true)] {
@@ -103,11 +103,15 @@ impl Prepared for BurnPrepared {
         gpu.queue.submit([enc.finish()]);
         Ok(FrameStats::default())
     }
-    fn readback(&mut self, _: &Gpu, _: &GpuScene) -> Result<Capture> {
-        Ok(Capture::empty())
-    }
+
     fn bytes_allocated(&self) -> u64 {
         64 * 64 * 4
+    }
+}
+
+impl Prepared for BurnPrepared {
+    fn readback(&mut self, _: &Gpu, _: &GpuScene) -> Result<Capture> {
+        Ok(Capture::empty())
     }
 }
 

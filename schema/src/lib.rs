@@ -647,6 +647,30 @@ pub mod cols {
         "gpu_ms_max",
         "maximum GPU time per frame over the kept samples, ms",
     );
+    pub const GPU_MS_P50: Col = Col::new(
+        "gpu_ms_p50",
+        "50th percentile of per-sample GPU time over the kept samples, ms (the median: equal to gpu_ms_median)",
+    );
+    pub const GPU_MS_P95: Col = Col::new(
+        "gpu_ms_p95",
+        "95th percentile of per-sample GPU time over the kept samples, ms (nearest rank: s[round((n−1)·0.95)] of the sorted samples; with under 20 samples it is one of the top two)",
+    );
+    pub const GPU_MS_P99: Col = Col::new(
+        "gpu_ms_p99",
+        "99th percentile of per-sample GPU time over the kept samples, ms (nearest rank, as gpu_ms_p95; with under 50 samples it is the max or next to it)",
+    );
+    pub const FRAGMENTS_PER_S: Col = Col::new(
+        "fragments_per_s",
+        "true_fragments (the CPU reference's fragment total of the frame) / gpu_ms_median: fragments resolved per second of GPU time, however many passes a method takes over them; empty where the study has no fragment reference",
+    );
+    pub const BYTES_PER_S: Col = Col::new(
+        "bytes_per_s",
+        "an estimate of bytes moved per second of GPU time: the frame's declared traffic / gpu_ms_median. Declared traffic (Timed::bytes_moved): by default bytes_allocated written once and read once (2 × bytes_allocated); the light pre-pass (bytes_rt_written + bytes_rt_read) and the deferred shading paths (G-buffer written and read once, HDR colour written: pixels × (2 × 24 + 16)) declare their render-target bytes. Not a measured count: a declared scale for peak_bandwidth_frac",
+    );
+    pub const PEAK_BANDWIDTH_FRAC: Col = Col::new(
+        "peak_bandwidth_frac",
+        "bytes_per_s / the adapter's peak memory bandwidth (NVML: memory bus width × max memory clock × 2, DDR); empty where NVML does not give both",
+    );
     pub const GPU_MS_REL_NOISE: Col = Col::new(
         "gpu_ms_rel_noise",
         "within-run spread of GPU time: (p90 − p10) / median of the kept samples (it says nothing of run-to-run spread: see gpu_ms_rel_ci and mfx compare)",
@@ -1152,6 +1176,12 @@ pub const GROUPS: &[Group] = &[
             cols::GPU_MS_MEDIAN,
             cols::GPU_MS_MIN,
             cols::GPU_MS_MAX,
+            cols::GPU_MS_P50,
+            cols::GPU_MS_P95,
+            cols::GPU_MS_P99,
+            cols::FRAGMENTS_PER_S,
+            cols::BYTES_PER_S,
+            cols::PEAK_BANDWIDTH_FRAC,
             cols::GPU_MS_REL_NOISE,
             cols::GPU_MS_MEAN,
             cols::GPU_MS_CI_LO,

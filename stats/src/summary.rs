@@ -3,6 +3,8 @@
 //! - `median`, `mean`, `min`, `max`;
 //! - `p10`, `p90`, `q1`, `q3`: nearest-rank percentiles `s[round((n−1)·p)]` of the sorted
 //!   samples — the definition `gpu_ms_rel_noise` has always used, so old and new runs agree;
+//! - `p95`, `p99`: the tail, nearest-rank as above (`gpu_ms_p95`, `gpu_ms_p99`; the p50 column
+//!   is the median, so it agrees with `gpu_ms_median` on every row);
 //! - `rel_noise = (p90 − p10) / median` (kept column);
 //! - `median_ci`, `mean_ci`: percentile-bootstrap 95 % CIs (criterion.rs's method): resample the
 //!   samples with replacement [`BOOTSTRAP_RESAMPLES`] times from a PCG stream seeded with
@@ -30,6 +32,8 @@ pub struct Summary {
     pub max: f64,
     pub p10: f64,
     pub p90: f64,
+    pub p95: f64,
+    pub p99: f64,
     pub q1: f64,
     pub q3: f64,
     pub rel_noise: f64,
@@ -97,6 +101,8 @@ impl Summary {
             max: s[n - 1],
             p10,
             p90,
+            p95: percentile(&s, 0.95),
+            p99: percentile(&s, 0.99),
             q1,
             q3,
             rel_noise: rel(p90 - p10, median),
@@ -171,6 +177,23 @@ mod tests {
         assert!(m.median_ci.0 <= 3.0 && m.median_ci.1 >= 3.0);
         assert!(m.mean_ci.0 < 3.0 && m.mean_ci.1 > 3.0);
         assert!(Summary::of(&[], 1).is_none());
+    }
+
+    #[test]
+    fn the_tail_is_nearest_rank_on_known_samples() {
+        // 1..=100 in reverse: p95 = s[round(94.05)] = s[94] = 95, p99 = s[round(98.01)] = 99.
+        let s: Vec<f64> = (1..=100).rev().map(f64::from).collect();
+        let m = Summary::of(&s, 1).unwrap();
+        assert_eq!((m.median, m.p95, m.p99, m.max), (50.5, 95.0, 99.0, 100.0));
+        // One spike in 20 samples: p95 = s[round(18.05)] = s[18] stays at the body, p99 =
+        // s[round(18.81)] = s[19] is the spike.
+        let mut s = vec![1.0; 19];
+        s.push(9.0);
+        let m = Summary::of(&s, 1).unwrap();
+        assert_eq!((m.median, m.p95, m.p99), (1.0, 1.0, 9.0));
+        // A single sample is every percentile.
+        let m = Summary::of(&[2.0], 1).unwrap();
+        assert_eq!((m.p95, m.p99), (2.0, 2.0));
     }
 
     #[test]

@@ -68,7 +68,7 @@ pub mod store;
 pub mod tail;
 pub mod wboit;
 
-pub use crate::method::{supports, Capture, Expected, FrameStats, Method, Prepared};
+pub use crate::method::{supports, Capture, Expected, FrameStats, Method, Prepared, Timed};
 
 /// Every method, in listing order.
 pub fn all() -> Vec<Box<dyn Method>> {

@@ -110,7 +110,7 @@ pub fn prepare(
     }))
 }
 
-impl Prepared for Supersampled {
+impl crate::timed::Timed for Supersampled {
     fn frame(&mut self, gpu: &Gpu, _: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let stats = self.inner.frame(gpu, &self.big, timer)?;
         let mut enc = gpu.device.create_command_encoder(&Default::default());
@@ -128,6 +128,16 @@ impl Prepared for Supersampled {
         Ok(stats)
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.inner.bytes_allocated() + self.alloc.bytes
+    }
+
+    fn bytes_overhead(&self) -> Option<u64> {
+        self.inner.bytes_overhead().map(|b| b + self.alloc.bytes)
+    }
+}
+
+impl Prepared for Supersampled {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let mut cap = self.inner.readback(gpu, &self.big)?;
         cap.image = Some(read_vec::<[f32; 4]>(
@@ -149,14 +159,6 @@ impl Prepared for Supersampled {
             cap.overflow_pixels = Some(o.div_ceil(4).min(scene.pixels() as u64));
         }
         Ok(cap)
-    }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.inner.bytes_allocated() + self.alloc.bytes
-    }
-
-    fn bytes_overhead(&self) -> Option<u64> {
-        self.inner.bytes_overhead().map(|b| b + self.alloc.bytes)
     }
 
     fn image_buffer(&self) -> Option<&wgpu::Buffer> {

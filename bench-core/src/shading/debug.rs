@@ -10,7 +10,7 @@ use super::gpu_paths::{Deferred, Path};
 use super::{class, ShadeSetup};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
-use crate::methods::Prepared;
+use crate::timed::Timed;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 

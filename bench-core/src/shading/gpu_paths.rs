@@ -21,7 +21,7 @@ use super::gbuffer::{read_rgba32f, GBufferPass};
 use super::{class, GBuffer, ShadeSetup, LIGHT_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
-use crate::methods::{Capture, FrameStats, Prepared};
+use crate::timed::{FrameStats, Timed};
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
@@ -821,7 +821,7 @@ impl Deferred {
     }
 }
 
-impl Prepared for Deferred {
+impl Timed for Deferred {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         self.gbuf.encode(&mut enc, scene, timer, "gbuffer");
@@ -833,14 +833,15 @@ impl Prepared for Deferred {
         })
     }
 
-    fn readback(&mut self, gpu: &Gpu, _: &GpuScene) -> Result<Capture> {
-        let mut c = Capture::empty();
-        c.image = Some(self.read_image(gpu)?);
-        Ok(c)
-    }
-
     fn bytes_allocated(&self) -> u64 {
         self.alloc.bytes
+    }
+
+    /// Render-target traffic, one touch per pixel (as the prepass study's `bytes_rt_*`): the
+    /// G-buffer written and read once, the HDR colour written.
+    fn bytes_moved(&self) -> u64 {
+        let px = self.hdr.width() as u64 * self.hdr.height() as u64;
+        px * (2 * super::gbuffer::FULL_BYTES_PER_PIXEL + 16)
     }
 }
 

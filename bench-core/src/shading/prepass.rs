@@ -36,6 +36,7 @@ use super::{GBuffer, ShadeSetup, SKY, SKY_MATERIAL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 
+use crate::timed::{FrameStats, PassSpan, Timed};
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
@@ -573,8 +574,117 @@ impl PrePass {
         }
     }
 
-    /// One frame; the runner-style caller waits for the GPU afterwards.
-    pub fn frame(&mut self, gpu: &Gpu, gscene: &GpuScene, timer: &mut GpuTimer) -> Result<()> {
+    pub fn read_image(&self, gpu: &Gpu) -> Result<Vec<[f32; 4]>> {
+        read_rgba32f(gpu, &self.hdr)
+    }
+
+    /// The light buffer decoded to f32 (light units: the format's scale undone).
+    pub fn read_light_buffer(&self, gpu: &Gpu) -> Result<Vec<[f32; 4]>> {
+        use super::gbuffer::read_texture;
+        let all = wgpu::TextureAspect::All;
+        let inv = 1.0 / self.format.scale();
+        Ok(match self.format {
+            LbFormat::Rgba8 => read_texture(gpu, &self.lb0, 4, all)?
+                .chunks(4)
+                .map(|c| std::array::from_fn(|i| c[i] as f32 / 255.0 * inv))
+                .collect(),
+            LbFormat::Rgba16F => {
+                let b = read_texture(gpu, &self.lb0, 8, all)?;
+                let hs: &[u16] = bytemuck::cast_slice(&b);
+                hs.chunks(4)
+                    .map(|c| std::array::from_fn(|i| half::f16::from_bits(c[i]).to_f32()))
+                    .collect()
+            }
+            LbFormat::Rg11b10 => {
+                let b = read_texture(gpu, &self.lb0, 4, all)?;
+                let spec = read_texture(
+                    gpu,
+                    self.lb1.as_ref().expect("rg11b10 has a specular target"),
+                    2,
+                    all,
+                )?;
+                let hs: &[u16] = bytemuck::cast_slice(&spec);
+                bytemuck::cast_slice::<u8, u32>(&b)
+                    .iter()
+                    .zip(hs)
+                    .map(|(&p, &a)| {
+                        let c = unpack_rg11b10(p);
+                        [c[0], c[1], c[2], half::f16::from_bits(a).to_f32()]
+                    })
+                    .collect()
+            }
+        })
+    }
+
+    /// Render-target bytes per frame of the main view, one touch per pixel (overdraw and the
+    /// independent view not counted): (written, read).
+    pub fn rt_bytes(&self, pixels: u64) -> (u64, u64) {
+        let lb = self.format.bytes_per_pixel();
+        let pre = super::gbuffer::PREPASS_BYTES_PER_PIXEL;
+        // pre-pass writes depth+normal; lighting reads them, writes LB; second pass reads LB +
+        // depth (test), writes the HDR colour.
+        (pixels * (pre + lb + 16), pixels * (pre + lb + 4))
+    }
+}
+
+impl Timed for PrePass {
+    /// One frame; the caller (`measure`) waits for the GPU afterwards. With CPU lighting it
+    /// waits for the pre-pass's depth and normals itself, mid-frame.
+    fn frame(&mut self, gpu: &Gpu, gscene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
+        self.run_frame(gpu, gscene, timer)?;
+        Ok(FrameStats {
+            geometry_passes: if self.view2.is_some() { 3 } else { 2 },
+            layers: 1,
+        })
+    }
+
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+
+    /// The render-target traffic of [`PrePass::rt_bytes`] (written + read).
+    fn bytes_moved(&self) -> u64 {
+        let (w, r) = self.rt_bytes(self.hdr.width() as u64 * self.hdr.height() as u64);
+        w + r
+    }
+
+    /// The wall-clock parts of the frame just run (CPU lighting, the wait for the pre-pass's
+    /// maps, the main view's latency) and the pre-pass → material gap on the GPU clock.
+    fn parts(&self, spans: &[PassSpan]) -> Vec<(&'static str, f64)> {
+        let mut v = Vec::new();
+        if let Some(f) = self.samples.last() {
+            v.push(("latency_ms", f.latency_ms));
+            if matches!(self.accum, Accum::Cpu { .. }) {
+                v.extend([
+                    ("cpu_light_ms", f.cpu_light_ms),
+                    ("map_wait_ms", f.map_wait_ms),
+                    ("cpu_total_ms", f.cpu_total_ms),
+                ]);
+            }
+        }
+        if let Some((gap, busy)) = gap_of(spans) {
+            v.extend([("gpu_gap_ms", gap), ("gpu_busy_in_gap_ms", busy)]);
+        }
+        v
+    }
+}
+
+/// GPU clock from the end of the pre-pass to the start of the material pass, and the timed
+/// pass time inside that interval (the lights pass, or the independent view's passes).
+pub fn gap_of(spans: &[PassSpan]) -> Option<(f64, f64)> {
+    let a = spans.iter().find(|s| s.0 == "prepass")?.2;
+    let b = spans.iter().find(|s| s.0 == "material")?.1;
+    let busy = spans
+        .iter()
+        .filter(|s| s.0 != "prepass" && s.0 != "material")
+        .map(|s| (s.2.min(b) - s.1.max(a)).max(0.0))
+        .sum();
+    Some(((b - a).max(0.0), busy))
+}
+
+impl PrePass {
+    /// One frame's work, without the wait for the GPU at its end.
+    fn run_frame(&mut self, gpu: &Gpu, gscene: &GpuScene, timer: &mut GpuTimer) -> Result<()> {
         let t0 = Instant::now();
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         self.gbuf.encode(&mut enc, gscene, timer, "prepass");
@@ -690,66 +800,9 @@ impl PrePass {
         }
         Ok(())
     }
-
-    pub fn read_image(&self, gpu: &Gpu) -> Result<Vec<[f32; 4]>> {
-        read_rgba32f(gpu, &self.hdr)
-    }
-
-    /// The light buffer decoded to f32 (light units: the format's scale undone).
-    pub fn read_light_buffer(&self, gpu: &Gpu) -> Result<Vec<[f32; 4]>> {
-        use super::gbuffer::read_texture;
-        let all = wgpu::TextureAspect::All;
-        let inv = 1.0 / self.format.scale();
-        Ok(match self.format {
-            LbFormat::Rgba8 => read_texture(gpu, &self.lb0, 4, all)?
-                .chunks(4)
-                .map(|c| std::array::from_fn(|i| c[i] as f32 / 255.0 * inv))
-                .collect(),
-            LbFormat::Rgba16F => {
-                let b = read_texture(gpu, &self.lb0, 8, all)?;
-                let hs: &[u16] = bytemuck::cast_slice(&b);
-                hs.chunks(4)
-                    .map(|c| std::array::from_fn(|i| half::f16::from_bits(c[i]).to_f32()))
-                    .collect()
-            }
-            LbFormat::Rg11b10 => {
-                let b = read_texture(gpu, &self.lb0, 4, all)?;
-                let spec = read_texture(
-                    gpu,
-                    self.lb1.as_ref().expect("rg11b10 has a specular target"),
-                    2,
-                    all,
-                )?;
-                let hs: &[u16] = bytemuck::cast_slice(&spec);
-                bytemuck::cast_slice::<u8, u32>(&b)
-                    .iter()
-                    .zip(hs)
-                    .map(|(&p, &a)| {
-                        let c = unpack_rg11b10(p);
-                        [c[0], c[1], c[2], half::f16::from_bits(a).to_f32()]
-                    })
-                    .collect()
-            }
-        })
-    }
-
-    pub fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
-    }
-
-    /// Render-target bytes per frame of the main view, one touch per pixel (overdraw and the
-    /// independent view not counted): (written, read).
-    pub fn rt_bytes(&self, pixels: u64) -> (u64, u64) {
-        let lb = self.format.bytes_per_pixel();
-        let pre = super::gbuffer::PREPASS_BYTES_PER_PIXEL;
-        // pre-pass writes depth+normal; lighting reads them, writes LB; second pass reads LB +
-        // depth (test), writes the HDR colour.
-        (pixels * (pre + lb + 16), pixels * (pre + lb + 4))
-    }
 }
 
 fn d2_bytes(d: &Deferred) -> u64 {
-    use crate::methods::Prepared;
     d.bytes_allocated()
 }
 

@@ -13,7 +13,7 @@ use super::reference::{self, intensity_att, surface};
 use super::{class, pixel_class, GBuffer, ShadeSetup};
 use crate::gpu::{Gpu, GpuOptions};
 use crate::gpu_scene::GpuScene;
-use crate::methods::Prepared;
+use crate::timed::Timed;
 use crate::timing::GpuTimer;
 
 pub(crate) fn gpu() -> &'static Gpu {

@@ -22,8 +22,7 @@ use super::{Emit, GroupCtx, Methods, Opt, Study};
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
-use crate::measure::{measure, set_timing};
-use crate::methods::{Capture, Method, Prepared};
+use crate::measure::{measure_timed, set_timing};
 use crate::metrics::{image_error, BAD_PIXEL_TOL};
 use crate::record::Row;
 use crate::record::{cols, Flag};
@@ -140,37 +139,6 @@ fn gpu_path(name: &str, point: &Point) -> std::result::Result<Path, String> {
         },
         other => return Err(format!("'{other}' is not a GPU shading path")),
     })
-}
-
-/// A GPU path as a [`Method`], so the runner's `measure` times it like any other method.
-struct PathMethod<'a> {
-    scene: &'a Scene,
-    path: Path,
-    tau: f64,
-    diffuse_only: f64,
-}
-
-impl Method for PathMethod<'_> {
-    fn name(&self) -> &'static str {
-        self.path.name()
-    }
-    fn describe(&self) -> &'static str {
-        "a deferred shading path (shading::gpu_paths)"
-    }
-    fn exact(&self) -> bool {
-        self.tau == 0.0
-    }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Point) -> Result<Box<dyn Prepared>> {
-        Ok(Box::new(Deferred::new_with(
-            gpu,
-            self.scene,
-            scene,
-            self.path,
-            self.tau,
-            false,
-            self.diffuse_only,
-        )?))
-    }
 }
 
 /// Renders the G-buffer once (untimed) and reads it back: the input of the reference and of
@@ -295,7 +263,17 @@ impl Study for DeferredStudy {
                 }
                 let r = last.expect("at least one frame");
                 let st = Stats::of(&samples).unwrap_or_default();
-                row.set_f(cols::CPU_LIGHT_MS, st.median);
+                // No GPU frame to time: CPU lighting of a G-buffer read back once, timed by its
+                // own fixed count (a single-thread 4K frame takes seconds, too long for the
+                // stopping rule's samples), so the row says that instead of the plan's rule.
+                row.set_f(cols::CPU_LIGHT_MS, st.median)
+                    .set(cols::SAMPLES, samples.len())
+                    .set(
+                        cols::TIMING_RULE,
+                        format!(
+                            "CPU only: 1 untimed then {cpu_reps} timed frames (cpu_reps), median wall clock; no GPU work, so no stopping rule, canary or clock lift"
+                        ),
+                    );
                 let pairs = (r.quad_skips + r.quad_evals).max(1);
                 row.set_f(cols::QUAD_SKIP_FRAC, r.quad_skips as f64 / pairs as f64)
                     .set_f(
@@ -339,13 +317,12 @@ impl Study for DeferredStudy {
                 emit(i, skipped_row(row, &why))?;
                 continue;
             }
-            let m = PathMethod {
-                scene,
-                path,
-                tau,
-                diffuse_only: frac,
+            let make = |gs: &GpuScene| -> Result<Box<Deferred>> {
+                Ok(Box::new(Deferred::new_with(
+                    gpu, scene, gs, path, tau, false, frac,
+                )?))
             };
-            let mut meas = match measure(gpu, gscene, &m, &pt.point, &ctx.plan) {
+            let meas = match measure_timed(gpu, gscene, &make, &ctx.plan) {
                 Ok(m) => m,
                 Err(e) => {
                     emit(i, error_row(row, &e))?;
@@ -365,23 +342,15 @@ impl Study for DeferredStudy {
                     row.set_f(cols::SPEEDUP_VS_NAIVE, n / g);
                 }
             }
-            let cap: Capture = match meas.prepared.readback(gpu, gscene) {
-                Ok(c) => c,
+            // The last timed frame's output and path-specific facts.
+            let dd = &meas.prepared;
+            match dd.read_image(gpu) {
+                Ok(img) => set_error(&mut row, reference, &img),
                 Err(e) => {
                     emit(i, failed_row(row, &format!("readback: {e}")))?;
                     continue;
                 }
-            };
-            if let Some(img) = &cap.image {
-                set_error(&mut row, reference, img);
             }
-            // Path-specific facts need the concrete type: one more (untimed) prepared copy.
-            let d = Deferred::new_with(gpu, scene, gscene, path, tau, false, frac)?;
-            let mut timer = GpuTimer::new(gpu);
-            timer.begin_frame();
-            let mut dd = d;
-            dd.frame(gpu, gscene, &mut timer)?;
-            gpu.wait()?;
             row.set(cols::PERMUTATIONS, dd.permutations);
             if let Some(c) = dd.tile_counts(gpu)? {
                 set_tile_stats(&mut row, &c);

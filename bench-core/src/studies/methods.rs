@@ -199,6 +199,7 @@ fn finish_point(
     let lists = ctx.reference();
     m.prepared.judge(&mut cap, lists);
     set_reference_columns(&mut row, lists);
+    crate::measure::set_fragment_rate(&mut row, lists.total_fragments());
     if let (Some(o), true) = (m.bytes_overhead, lists.total_fragments() > 0) {
         let frag = m.bytes_allocated.saturating_sub(o) as f64;
         row.set_f(

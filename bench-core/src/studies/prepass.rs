@@ -8,13 +8,11 @@
 //! `thread_count`, `overlap`; always with the independent view). Compare `prepass_cpu` with
 //! `prepass(second_view=true)`: the same two views, lit on the GPU.
 
-use std::collections::BTreeMap;
-use std::time::Instant;
-
 use super::deferred::{gbuffer_of, rel_err_max};
 use super::{Emit, GroupCtx, Methods, Study};
 use crate::axes::{Axis, Point};
-use crate::methods::Prepared;
+use crate::gpu_scene::GpuScene;
+use crate::measure::{measure_timed, set_timing, Measured};
 use crate::metrics::{image_error, BAD_PIXEL_TOL};
 use crate::record::cols;
 use crate::record::Row;
@@ -23,7 +21,6 @@ use crate::shading::gbuffer::FULL_BYTES_PER_PIXEL;
 use crate::shading::gpu_paths::{Deferred, Path};
 use crate::shading::prepass::{self, Accum, LbFormat, PrePass};
 use crate::shading::{reference, ShadeSetup};
-use crate::timing::{GpuTimer, Stats};
 use crate::{CoreError, Result};
 const METHODS: &[&str] = &["deferred", "prepass", "prepass_cpu"];
 
@@ -67,115 +64,23 @@ fn axes_of(m: &str) -> Vec<Axis> {
 
 pub struct PrepassStudy;
 
-struct Timed {
-    /// Untimed frames before the samples (the stopping rule's warm-up).
-    warmup_frames: usize,
-    gpu: Option<Stats>,
-    wall: Stats,
-    idle: Stats,
-    pass: BTreeMap<String, f64>,
-    /// (gap, busy in gap) medians on the GPU clock, where the frame has both passes.
-    gap: Option<(f64, f64)>,
-}
-
-/// GPU clock from the end of the pre-pass to the start of the material pass, and the timed
-/// pass time inside that interval (the lights pass, or the independent view's passes).
-fn gap_of(spans: &[(String, f64, f64)]) -> Option<(f64, f64)> {
-    let a = spans.iter().find(|s| s.0 == "prepass")?.2;
-    let b = spans.iter().find(|s| s.0 == "material")?.1;
-    let busy = spans
-        .iter()
-        .filter(|s| s.0 != "prepass" && s.0 != "material")
-        .map(|s| (s.2.min(b) - s.1.max(a)).max(0.0))
-        .sum();
-    Some(((b - a).max(0.0), busy))
-}
-
-/// Warm-up + timed frames of `frame`, each followed by a full GPU wait.
-fn time_frames(
-    ctx: &GroupCtx<'_>,
-    mut frame: impl FnMut(&mut GpuTimer) -> Result<()>,
-) -> Result<Timed> {
-    let gpu = ctx.gpu;
-    let mut timer = GpuTimer::new(gpu);
-    let (mut g, mut w, mut idle) = (vec![], vec![], vec![]);
-    let (mut gap, mut busy) = (vec![], vec![]);
-    let mut per: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-    let mut lp = crate::measure::FrameLoop::new(&ctx.plan);
-    loop {
-        timer.begin_frame();
-        let t0 = Instant::now();
-        frame(&mut timer)?;
-        gpu.wait()?;
-        let wall = t0.elapsed().as_secs_f64() * 1e3;
-        let spans = timer.read_spans(gpu)?;
-        let passes: Vec<(String, f64)> = spans.iter().map(|s| (s.0.clone(), s.2 - s.1)).collect();
-        gpu.check_lost()?;
-        let ms = if timer.enabled() {
-            passes.iter().map(|(_, ms)| ms).sum()
-        } else {
-            wall
-        };
-        let step = lp.push(ms);
-        if let crate::measure::Step::Sample { .. } = step {
-            if let Some((a, b)) = gap_of(&spans) {
-                gap.push(a);
-                busy.push(b);
-            }
-            w.push(wall);
-            if timer.enabled() {
-                let sum: f64 = passes.iter().map(|(_, ms)| ms).sum();
-                g.push(sum);
-                idle.push((wall - sum).max(0.0));
-                for (l, ms) in prepass::sum_passes(&passes) {
-                    per.entry(l).or_default().push(ms);
-                }
-            }
-        }
-        if step == (crate::measure::Step::Sample { last: true }) {
-            break;
-        }
+/// The columns a pre-pass or deferred frame's timing gives beyond `set_timing`'s: the frame's
+/// wall time, the wall time the GPU was not busy, and the parts the frame reported.
+fn set_times<T: ?Sized>(row: &mut Row, m: &Measured<T>) {
+    row.set_f(cols::FRAME_MS, m.cpu.median);
+    if let Some(idle) = m.idle_median() {
+        row.set_f(cols::GPU_IDLE_MS, idle);
     }
-    Ok(Timed {
-        warmup_frames: lp.warmup_frames(),
-        gpu: Stats::of(&g),
-        wall: Stats::of(&w).unwrap_or_default(),
-        idle: Stats::of(&idle).unwrap_or_default(),
-        pass: per
-            .into_iter()
-            .map(|(l, v)| (l, Stats::of(&v).map(|s| s.median).unwrap_or(0.0)))
-            .collect(),
-        gap: Stats::of(&gap)
-            .zip(Stats::of(&busy))
-            .map(|(a, b)| (a.median, b.median)),
-    })
-}
-
-fn set_times(row: &mut Row, t: &Timed) {
-    if let Some(g) = t.gpu {
-        row.set_f(cols::GPU_MS_MEDIAN, g.median)
-            .set_f(cols::GPU_MS_MIN, g.min)
-            .set_f(cols::GPU_MS_MAX, g.max)
-            .set_f(cols::GPU_MS_REL_NOISE, g.rel_noise)
-            .set_f(cols::GPU_IDLE_MS, t.idle.median);
-    }
-    if let Some((gap, busy)) = t.gap {
+    if let (Some(gap), Some(busy)) = (
+        m.part_median("gpu_gap_ms"),
+        m.part_median("gpu_busy_in_gap_ms"),
+    ) {
         row.set_f(cols::GPU_GAP_MS, gap)
             .set_f(cols::GPU_BUSY_IN_GAP_MS, busy);
     }
-    row.set_f(cols::CPU_MS_MEDIAN, t.wall.median)
-        .set_f(cols::CPU_MS_MIN, t.wall.min)
-        .set_f(cols::CPU_MS_MAX, t.wall.max)
-        .set_f(cols::FRAME_MS, t.wall.median)
-        .set(
-            cols::PASS_MS,
-            serde_json::to_string(&t.pass).unwrap_or_default(),
-        );
-}
-
-fn median(v: impl Iterator<Item = f64>) -> f64 {
-    let v: Vec<f64> = v.collect();
-    Stats::of(&v).map(|s| s.median).unwrap_or(0.0)
+    if let Some(l) = m.part_median("latency_ms") {
+        row.set_f(cols::LATENCY_MS, l);
+    }
 }
 
 impl Study for PrepassStudy {
@@ -280,12 +185,13 @@ impl PrepassStudy {
             } else {
                 Path::Naive
             };
-            let mut d = Deferred::new(gpu, scene, gscene, path, 0.0, false)?;
-            let t = time_frames(ctx, |timer| d.frame(gpu, gscene, timer).map(|_| ()))?;
-            set_times(row, &t);
-            row.set(cols::BYTES_ALLOCATED, d.bytes_allocated())
-                .set(cols::GEOMETRY_PASSES, 1);
-            return Ok(Some((d.read_image(gpu)?, false)));
+            let make = |gs: &GpuScene| -> Result<Box<Deferred>> {
+                Ok(Box::new(Deferred::new(gpu, scene, gs, path, 0.0, false)?))
+            };
+            let m = measure_timed(gpu, gscene, &make, &ctx.plan)?;
+            set_timing(row, &m, &scene.mesh);
+            set_times(row, &m);
+            return Ok(Some((m.prepared.read_image(gpu)?, false)));
         }
         let fmt = LbFormat::parse(&p.choice(&LIGHT_BUFFER_FORMAT)).map_err(Skip)?;
         row.set(cols::LIGHT_BUFFER_FORMAT, fmt.name());
@@ -311,28 +217,35 @@ impl PrepassStudy {
             )
         };
         prepass::supports(gpu, fmt, accum).map_err(Skip)?;
-        let mut pp = PrePass::new(gpu, scene, gscene, fmt, accum, 0.0, view2)?;
-        let t = time_frames(ctx, |timer| pp.frame(gpu, gscene, timer))?;
-        set_times(row, &t);
-        let (wr, rd) = pp.rt_bytes(gscene.pixels() as u64);
+        // CPU lighting runs inside the frame `measure` times (its wall clock is the frame's):
+        // the stopping rule, canary and clock lift apply to the whole frame, and the CPU parts
+        // the frame reports are the medians of the same kept samples.
+        let make = |gs: &GpuScene| -> Result<Box<PrePass>> {
+            Ok(Box::new(PrePass::new(
+                gpu, scene, gs, fmt, accum, 0.0, view2,
+            )?))
+        };
+        let m = measure_timed(gpu, gscene, &make, &ctx.plan)?;
+        set_timing(row, &m, &scene.mesh);
+        set_times(row, &m);
+        let (wr, rd) = m.prepared.rt_bytes(gscene.pixels() as u64);
         row.set(cols::BYTES_RT_WRITTEN, wr)
-            .set(cols::BYTES_RT_READ, rd)
-            .set(cols::BYTES_ALLOCATED, pp.bytes_allocated())
-            .set(cols::GEOMETRY_PASSES, if view2 { 3 } else { 2 });
-        let s = &pp.samples[t.warmup_frames.min(pp.samples.len())..];
-        if !s.is_empty() {
-            row.set_f(cols::LATENCY_MS, median(s.iter().map(|f| f.latency_ms)));
-            if matches!(accum, Accum::Cpu { .. }) {
-                row.set_f(cols::CPU_LIGHT_MS, median(s.iter().map(|f| f.cpu_light_ms)))
-                    .set_f(cols::MAP_WAIT_MS, median(s.iter().map(|f| f.map_wait_ms)))
+            .set(cols::BYTES_RT_READ, rd);
+        if matches!(accum, Accum::Cpu { .. }) {
+            if let (Some(light), Some(wait), Some(total)) = (
+                m.part_median("cpu_light_ms"),
+                m.part_median("map_wait_ms"),
+                m.part_median("cpu_total_ms"),
+            ) {
+                row.set_f(cols::CPU_LIGHT_MS, light)
+                    .set_f(cols::MAP_WAIT_MS, wait)
                     .set(cols::NOTES,
                         format!(
-                            "measured: frame_ms = wall clock from the pre-pass submit to both views done; cpu_light_ms = lighting only, decode+light+pack+upload median {:.3} ms; gpu_gap_ms/gpu_busy_in_gap_ms on the GPU clock (busy > 0 = the second view ran while the CPU lit); readiness = map_async callback + blocking poll(Wait) on the pre-pass submission (no spin); one frame in flight, nothing pipelined across frames",
-                            median(s.iter().map(|f| f.cpu_total_ms))
+                            "measured: frame_ms = wall clock from the pre-pass submit to both views done; cpu_light_ms = lighting only, decode+light+pack+upload median {total:.3} ms; gpu_gap_ms/gpu_busy_in_gap_ms on the GPU clock (busy > 0 = the second view ran while the CPU lit); readiness = map_async callback + blocking poll(Wait) on the pre-pass submission (no spin); one frame in flight, nothing pipelined across frames; medians of the kept samples",
                         ),
                     );
             }
         }
-        Ok(Some((pp.read_image(gpu)?, true)))
+        Ok(Some((m.prepared.read_image(gpu)?, true)))
     }
 }

@@ -267,7 +267,7 @@ impl PreparedRace {
     }
 }
 
-impl Prepared for PreparedRace {
+impl crate::timed::Timed for PreparedRace {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.arrived, 0, None);
@@ -301,6 +301,12 @@ impl Prepared for PreparedRace {
         })
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+impl Prepared for PreparedRace {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let mut cap = Capture::empty();
         cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, scene.pixels())?);
@@ -317,10 +323,6 @@ impl Prepared for PreparedRace {
     fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
         judge_race(cap, definition(reference, self.k as usize), reference.width);
     }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
-    }
 }
 
 struct PreparedIdeal {
@@ -328,13 +330,23 @@ struct PreparedIdeal {
     k: u32,
 }
 
-impl Prepared for PreparedIdeal {
+impl crate::timed::Timed for PreparedIdeal {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut f = self.inner.frame(gpu, scene, timer)?;
         f.layers = self.k;
         Ok(f)
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.inner.bytes_allocated()
+    }
+
+    fn bytes_overhead(&self) -> Option<u64> {
+        self.inner.bytes_overhead()
+    }
+}
+
+impl Prepared for PreparedIdeal {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let mut cap = self.inner.readback(gpu, scene)?;
         cap.counts = None;
@@ -350,14 +362,6 @@ impl Prepared for PreparedIdeal {
 
     fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
         cap.definition = Some(definition(reference, self.k as usize));
-    }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.inner.bytes_allocated()
-    }
-
-    fn bytes_overhead(&self) -> Option<u64> {
-        self.inner.bytes_overhead()
     }
 }
 

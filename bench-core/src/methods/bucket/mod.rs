@@ -921,7 +921,7 @@ impl PreparedBucket {
     }
 }
 
-impl super::Prepared for PreparedBucket {
+impl crate::timed::Timed for PreparedBucket {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         let mut stats = FrameStats::default();
@@ -990,6 +990,12 @@ impl super::Prepared for PreparedBucket {
         Ok(stats)
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+impl super::Prepared for PreparedBucket {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let n = scene.pixels();
         let mut cap = Capture::empty();
@@ -1012,10 +1018,6 @@ impl super::Prepared for PreparedBucket {
             self.last_passes
         );
         Ok(cap)
-    }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
     }
 }
 

@@ -6,7 +6,7 @@ use scenarios::{Camera, Mesh, ParamValue, Params, Scene, SceneSpec};
 
 use super::{captured_in_pixel, route_pixel, Config, PreparedBucket};
 use crate::gpu_scene::GpuScene;
-use crate::methods::{Capture, Prepared};
+use crate::methods::{Capture, Prepared, Timed};
 use crate::reference::{self, FragmentLists};
 use crate::timing::GpuTimer;
 

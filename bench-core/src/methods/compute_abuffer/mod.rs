@@ -592,7 +592,7 @@ impl PreparedAbuffer {
     }
 }
 
-impl Prepared for PreparedAbuffer {
+impl crate::timed::Timed for PreparedAbuffer {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.offs, 0, None);
@@ -639,6 +639,18 @@ impl Prepared for PreparedAbuffer {
         })
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+
+    /// The per-pixel structures (offsets or heads, counters, output images): everything but
+    /// the fragments (or nodes) and what holds them.
+    fn bytes_overhead(&self) -> Option<u64> {
+        Some(self.overhead)
+    }
+}
+
+impl Prepared for PreparedAbuffer {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let n = scene.pixels();
         let mut cap = Capture::empty();
@@ -684,15 +696,6 @@ impl Prepared for PreparedAbuffer {
             self.prep_note
         );
         Ok(cap)
-    }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
-    }
-    /// The per-pixel structures (offsets or heads, counters, output images): everything but
-    /// the fragments (or nodes) and what holds them.
-    fn bytes_overhead(&self) -> Option<u64> {
-        Some(self.overhead)
     }
 
     fn image_buffer(&self) -> Option<&wgpu::Buffer> {

@@ -1,3 +1,4 @@
+use crate::methods::Timed;
 use glam::{DVec3, Vec3};
 use scenarios::ParamValue::{Int, Str};
 use scenarios::{Camera, Mesh, Params, Scene, SceneSpec};

@@ -623,7 +623,7 @@ impl PreparedPeel {
     }
 }
 
-impl Prepared for PreparedPeel {
+impl crate::timed::Timed for PreparedPeel {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         self.dispatch(&mut enc, scene, timer, "fold_begin", &self.begin, 0, false);
@@ -648,6 +648,12 @@ impl Prepared for PreparedPeel {
         Ok(stats)
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+impl Prepared for PreparedPeel {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let n = scene.pixels();
         let mut cap = Capture::empty();
@@ -665,10 +671,6 @@ impl Prepared for PreparedPeel {
             cap.counts = Some(read_vec::<u32>(gpu, &self.counts, n)?);
         }
         Ok(cap)
-    }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
     }
 
     fn image_buffer(&self) -> Option<&wgpu::Buffer> {

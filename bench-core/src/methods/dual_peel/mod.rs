@@ -317,7 +317,7 @@ impl PreparedDual {
     }
 }
 
-impl Prepared for PreparedDual {
+impl crate::timed::Timed for PreparedDual {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.front_acc, 0, None);
@@ -384,6 +384,12 @@ impl Prepared for PreparedDual {
         Ok(stats)
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+impl Prepared for PreparedDual {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let n = scene.pixels();
         let mut cap = Capture::empty();
@@ -400,10 +406,6 @@ impl Prepared for PreparedDual {
             );
         }
         Ok(cap)
-    }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
     }
 }
 

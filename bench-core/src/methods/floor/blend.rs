@@ -148,7 +148,7 @@ impl PreparedBlend {
     }
 }
 
-impl Prepared for PreparedBlend {
+impl crate::timed::Timed for PreparedBlend {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         {
@@ -179,6 +179,12 @@ impl Prepared for PreparedBlend {
         })
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+impl Prepared for PreparedBlend {
     fn readback(&mut self, gpu: &Gpu, _: &GpuScene) -> Result<Capture> {
         let bytes = read_texture(gpu, &self.target, 4, wgpu::TextureAspect::All)?;
         let mut cap = Capture::empty();
@@ -191,10 +197,6 @@ impl Prepared for PreparedBlend {
         cap.expected = Expected::All;
         cap.notes = "floor: blended in primitive order, unsorted (a yardstick, not judged)".into();
         Ok(cap)
-    }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
     }
 }
 

@@ -184,7 +184,7 @@ impl PreparedFloor {
     }
 }
 
-impl Prepared for PreparedFloor {
+impl crate::timed::Timed for PreparedFloor {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         {
@@ -229,11 +229,13 @@ impl Prepared for PreparedFloor {
         })
     }
 
-    fn readback(&mut self, _: &Gpu, _: &GpuScene) -> Result<Capture> {
-        Ok(Capture::empty())
-    }
-
     fn bytes_allocated(&self) -> u64 {
         self.alloc.bytes
+    }
+}
+
+impl Prepared for PreparedFloor {
+    fn readback(&mut self, _: &Gpu, _: &GpuScene) -> Result<Capture> {
+        Ok(Capture::empty())
     }
 }

@@ -216,7 +216,7 @@ impl PreparedAtomic {
     }
 }
 
-impl Prepared for PreparedAtomic {
+impl crate::timed::Timed for PreparedAtomic {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.slots.keys, 0, None);
@@ -249,6 +249,12 @@ impl Prepared for PreparedAtomic {
         })
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+impl Prepared for PreparedAtomic {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         self.tailed = match &self.tail {
             Some(t) => t.tailed(gpu)?,
@@ -277,10 +283,6 @@ impl Prepared for PreparedAtomic {
 
     fn image_buffer(&self) -> Option<&wgpu::Buffer> {
         Some(&self.slots.image)
-    }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
     }
 }
 

@@ -378,7 +378,7 @@ fn bind_all_attrs<'p>(pass: &mut wgpu::RenderPass<'p>, scene: &GpuScene, indices
     pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
 }
 
-impl Prepared for PreparedRmw {
+impl crate::timed::Timed for PreparedRmw {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.slots.keys, 0, None);
@@ -416,6 +416,12 @@ impl Prepared for PreparedRmw {
         })
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+impl Prepared for PreparedRmw {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         self.tailed = match &self.tail {
             Some(t) => t.tailed(gpu)?,
@@ -443,10 +449,6 @@ impl Prepared for PreparedRmw {
         }
         self.bounding.report(cap, reference, self.tailed);
         cap.definition = self.bounding.definition(reference, self.slots.k as usize);
-    }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
     }
 }
 

@@ -665,7 +665,7 @@ fn count_tiles(
     read_vec::<u32>(gpu, cursors, n)
 }
 
-impl Prepared for PreparedList {
+impl crate::timed::Timed for PreparedList {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.heads, 0, None);
@@ -704,6 +704,18 @@ impl Prepared for PreparedList {
         })
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+
+    /// The per-pixel structures (offsets or heads, counters, output images): everything but
+    /// the fragments (or nodes) and what holds them.
+    fn bytes_overhead(&self) -> Option<u64> {
+        Some(self.overhead)
+    }
+}
+
+impl Prepared for PreparedList {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let n = scene.pixels();
         let mut cap = Capture::empty();
@@ -758,19 +770,11 @@ impl Prepared for PreparedList {
     fn image_buffer(&self) -> Option<&wgpu::Buffer> {
         Some(&self.image)
     }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
-    }
-    /// The per-pixel structures (offsets or heads, counters, output images): everything but
-    /// the fragments (or nodes) and what holds them.
-    fn bytes_overhead(&self) -> Option<u64> {
-        Some(self.overhead)
-    }
 }
 
 #[cfg(test)]
 mod tests {
+    use crate::methods::Timed;
     use glam::DVec3;
     use scenarios::ParamValue::{Int, Str};
     use scenarios::{Camera, Scene, SceneSpec};

@@ -535,7 +535,7 @@ impl PreparedMoments {
     }
 }
 
-impl Prepared for PreparedMoments {
+impl crate::timed::Timed for PreparedMoments {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         let zero = wgpu::Color::TRANSPARENT;
@@ -592,6 +592,12 @@ impl Prepared for PreparedMoments {
         })
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+impl Prepared for PreparedMoments {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let mut cap = Capture::empty();
         cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, scene.pixels())?);
@@ -624,10 +630,6 @@ impl Prepared for PreparedMoments {
     fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
         let cfg = self.cfg;
         cap.definition = Some(oit::image(reference, true, |l| oit::moments(l, &cfg)));
-    }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
     }
 }
 

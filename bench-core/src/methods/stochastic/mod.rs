@@ -405,7 +405,7 @@ impl PreparedSt {
     }
 }
 
-impl Prepared for PreparedSt {
+impl crate::timed::Timed for PreparedSt {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.sum, 0, None);
@@ -474,6 +474,16 @@ impl Prepared for PreparedSt {
         Ok(stats)
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+
+    fn bytes_overhead(&self) -> Option<u64> {
+        Some(self.overhead)
+    }
+}
+
+impl Prepared for PreparedSt {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let mut cap = Capture::empty();
         cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, scene.pixels())?);
@@ -493,14 +503,6 @@ impl Prepared for PreparedSt {
             }
         );
         Ok(cap)
-    }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
-    }
-
-    fn bytes_overhead(&self) -> Option<u64> {
-        Some(self.overhead)
     }
 
     fn image_buffer(&self) -> Option<&wgpu::Buffer> {

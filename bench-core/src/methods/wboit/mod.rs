@@ -240,7 +240,7 @@ impl PreparedWboit {
     }
 }
 
-impl Prepared for PreparedWboit {
+impl crate::timed::Timed for PreparedWboit {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         {
@@ -282,6 +282,12 @@ impl Prepared for PreparedWboit {
         })
     }
 
+    fn bytes_allocated(&self) -> u64 {
+        self.alloc.bytes
+    }
+}
+
+impl Prepared for PreparedWboit {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let mut cap = Capture::empty();
         cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, scene.pixels())?);
@@ -291,10 +297,6 @@ impl Prepared for PreparedWboit {
         cap.aa = self.aa.capture_mode();
         cap.sample_positions = self.sample_positions.clone();
         Ok(cap)
-    }
-
-    fn bytes_allocated(&self) -> u64 {
-        self.alloc.bytes
     }
 
     fn image_buffer(&self) -> Option<&wgpu::Buffer> {

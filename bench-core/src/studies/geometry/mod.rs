@@ -30,7 +30,7 @@ pub mod prep;
 mod tests;
 
 use crate::gpu_util::{camera_entry, clear_depth, depth_state, shader};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 
 use scenarios::Mesh;
 use wgpu::util::DeviceExt;
@@ -44,11 +44,13 @@ use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 
+use crate::measure::{measure_timed, set_timing, Measured};
 use crate::record::cols;
 use crate::record::Row;
 use crate::record::{error_row, one_line, set_params, skipped_row};
-use crate::timing::{GpuTimer, Stats};
-use crate::{CoreError, Result};
+use crate::timed::{FrameStats, Timed};
+use crate::timing::GpuTimer;
+use crate::Result;
 
 const WGSL: &str = include_str!("geometry.wgsl");
 
@@ -755,60 +757,27 @@ impl FeedGpu {
     }
 }
 
-fn scope_error(e: Option<wgpu::Error>, what: &str) -> Result<()> {
-    match e {
-        None => Ok(()),
-        Some(wgpu::Error::OutOfMemory { .. }) => Err(CoreError::OutOfMemory(format!(
-            "{what}: the GPU ran out of memory"
-        ))),
-        Some(e) => Err(CoreError::Gpu(format!("{what}: {e}"))),
-    }
+/// Validation and out-of-memory error scopes around untimed GPU work (the harness's own).
+pub use crate::measure::scoped;
+
+/// One feed drawn into one of its targets (0: the suite's viewport, 1: the raster check's
+/// small one): the frame `measure` times for a geometry point.
+pub struct FeedFrame {
+    pub feed: FeedGpu,
+    pub target: usize,
 }
 
-/// Runs `f` inside validation and out-of-memory error scopes, so a GPU error is this point's.
-pub fn scoped<T>(gpu: &Gpu, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
-    gpu.check_lost()?;
-    let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let r = f();
-    scope_error(pollster::block_on(oom.pop()), what)?;
-    scope_error(pollster::block_on(validation.pop()), what)?;
-    gpu.check_lost()?;
-    r
-}
-
-/// GPU and wall-clock ms of `reps` frames into target `t` after `warmup` (as `runner::measure`).
-/// Frames of one feed until the suite's stopping rule ends them (warm-up untimed).
-fn time_frames(
-    gpu: &Gpu,
-    feed: &FeedGpu,
-    t: usize,
-    plan: &crate::measure::TimingPlan,
-) -> Result<(Option<Stats>, Stats)> {
-    let mut timer = GpuTimer::new(gpu);
-    let mut lp = crate::measure::FrameLoop::new(plan);
-    let mut g = Vec::new();
-    let mut c = Vec::new();
-    loop {
-        timer.begin_frame();
-        let t0 = std::time::Instant::now();
-        feed.frame(gpu, t, Some(&mut timer), false);
-        gpu.wait()?;
-        let cpu = t0.elapsed().as_secs_f64() * 1e3;
-        let passes = timer.read(gpu)?;
-        let gms: f64 = passes.iter().map(|(_, ms)| ms).sum();
-        let ms = if timer.enabled() { gms } else { cpu };
-        if let crate::measure::Step::Sample { last } = lp.push(ms) {
-            c.push(cpu);
-            if timer.enabled() {
-                g.push(gms);
-            }
-            if last {
-                break;
-            }
-        }
+impl Timed for FeedFrame {
+    fn frame(&mut self, gpu: &Gpu, _: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
+        self.feed.frame(gpu, self.target, Some(timer), false);
+        Ok(FrameStats {
+            geometry_passes: 1,
+            layers: 1,
+        })
     }
-    Ok((Stats::of(&g), Stats::of(&c).unwrap_or_default()))
+    fn bytes_allocated(&self) -> u64 {
+        self.feed.alloc.bytes
+    }
 }
 
 pub struct GeometryStudy;
@@ -869,6 +838,7 @@ impl Study for GeometryStudy {
             let prep_ms = t0.elapsed().as_secs_f64() * 1e3;
             match measure_feed(ctx, &spec, &feed, raster_check.then_some(small)) {
                 Ok(m) => {
+                    set_timing(&mut row, &m.main, mesh);
                     fill_row(&mut row, &spec, &feed, &m, prep_ms, small, ctx.floor_ms);
                     emit(i, row)?;
                 }
@@ -879,13 +849,12 @@ impl Study for GeometryStudy {
     }
 }
 
-/// What one point measured on the GPU.
+/// What one point measured on the GPU: the feed at the suite's viewport and, for the raster
+/// check, at the small one (both timed by `measure`, each under the suite's plan).
 pub struct FeedMeasured {
-    pub gpu_ms: Option<Stats>,
-    pub cpu_ms: Stats,
-    pub gpu_ms_small: Option<Stats>,
+    pub main: Measured<FeedFrame>,
+    pub small: Option<Measured<FeedFrame>>,
     pub invocations: Option<(u64, u64)>,
-    pub bytes_allocated: u64,
 }
 
 fn measure_feed(
@@ -897,32 +866,35 @@ fn measure_feed(
     let gpu = ctx.gpu;
     let mut sizes = vec![(ctx.group.width, ctx.group.height)];
     sizes.extend(small);
-    let fg = scoped(gpu, "prepare", || {
-        Ok(FeedGpu::new(
-            gpu,
-            ctx.gscene,
-            spec,
-            &feed.batched,
-            &feed.streams,
-            Mode::Bench,
-            &sizes,
-            None,
-        ))
+    // Both targets are made for either timing, so bytes_allocated is the point's as before.
+    let make_for = |target: usize| {
+        let sizes = &sizes;
+        move |gs: &GpuScene| -> Result<Box<FeedFrame>> {
+            let feed = FeedGpu::new(
+                gpu,
+                gs,
+                spec,
+                &feed.batched,
+                &feed.streams,
+                Mode::Bench,
+                sizes,
+                None,
+            );
+            Ok(Box::new(FeedFrame { feed, target }))
+        }
+    };
+    let main = measure_timed(gpu, ctx.gscene, &make_for(0), &ctx.plan)?;
+    let small = match small {
+        Some(_) => Some(measure_timed(gpu, ctx.gscene, &make_for(1), &ctx.plan)?),
+        None => None,
+    };
+    let invocations = scoped(gpu, "statistics frame", || {
+        main.prepared.feed.invocations(gpu)
     })?;
-    scoped(gpu, "frame", || {
-        let (gpu_ms, cpu_ms) = time_frames(gpu, &fg, 0, &ctx.plan)?;
-        let gpu_ms_small = match small {
-            Some(_) => time_frames(gpu, &fg, 1, &ctx.plan)?.0,
-            None => None,
-        };
-        let invocations = fg.invocations(gpu)?;
-        Ok(FeedMeasured {
-            gpu_ms,
-            cpu_ms,
-            gpu_ms_small,
-            invocations,
-            bytes_allocated: fg.alloc.bytes,
-        })
+    Ok(FeedMeasured {
+        main,
+        small,
+        invocations,
     })
 }
 
@@ -964,31 +936,20 @@ fn fill_row(
         )
         .set(cols::VERTEX_BYTES, feed.streams.bytes())
         .set(cols::INDEX_BYTES, index_bytes)
-        .set_f(cols::PREP_MS, prep_ms)
-        .set(cols::GEOMETRY_PASSES, 1)
-        .set(cols::BYTES_ALLOCATED, m.bytes_allocated)
-        .set_f(cols::CPU_MS_MEDIAN, m.cpu_ms.median)
-        .set_f(cols::CPU_MS_MIN, m.cpu_ms.min)
-        .set_f(cols::CPU_MS_MAX, m.cpu_ms.max);
+        .set_f(cols::PREP_MS, prep_ms);
     if let Some(s) = &b.cache {
         row.set_f(cols::ACMR, s.acmr as f64)
             .set_f(cols::ATVR, s.atvr as f64);
     }
-    if let Some(g) = m.gpu_ms {
-        row.set_f(cols::GPU_MS_MEDIAN, g.median)
-            .set_f(cols::GPU_MS_MIN, g.min)
-            .set_f(cols::GPU_MS_MAX, g.max)
-            .set_f(cols::GPU_MS_REL_NOISE, g.rel_noise)
-            .set(
-                cols::PASS_MS,
-                serde_json::to_string(&BTreeMap::from([("feed", g.median)])).unwrap_or_default(),
-            );
+    // The timing columns are `set_timing`'s; the rates count what this point drew (a prefix
+    // of the mesh, corners or indices), not the scene's whole mesh.
+    if let Some(g) = &m.main.gpu {
         if g.median > 0.0 {
             let secs = g.median * 1e-3;
             row.set_f(cols::TRIANGLES_PER_S, tris / secs)
                 .set_f(cols::VERTICES_PER_S, submitted / secs);
         }
-        if let Some(s) = m.gpu_ms_small {
+        if let Some(s) = m.small.as_ref().and_then(|s| s.gpu.as_ref()) {
             row.set(cols::SMALL_VIEWPORT, format!("{}x{}", small.0, small.1))
                 .set_f(cols::GPU_MS_SMALL_VIEWPORT, s.median);
             if s.median > 0.0 {
@@ -1008,7 +969,7 @@ fn fill_row(
         }
     }
     let mut notes = Vec::new();
-    if m.gpu_ms.is_none() {
+    if m.main.gpu.is_none() {
         notes.push("no TIMESTAMP_QUERY: only wall-clock times".to_string());
     }
     if m.invocations.is_none() {

@@ -1,5 +1,6 @@
-//! The GPU side: layered soft shadow maps as a [`Method`], so the runner's `measure` times it
-//! like any other (its `prepare` builds everything, its `frame` only encodes and submits).
+//! The GPU side: layered soft shadow maps as a [`Timed`] frame, so `measure` times it like
+//! every other study's (its `prepare_ssm` builds everything, its `frame` only encodes and
+//! submits). Not a [`crate::methods::Method`]: it captures no fragments.
 //!
 //! Passes per frame (labels in `pass_ms`): `sm_peel` ×k (depth peeling from the light's centre,
 //! one geometry pass per layer), `sm_pack` (k layers → one RGBA32F texel, plus slopes and the
@@ -22,8 +23,8 @@ use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, CameraUniform, GpuScene};
 
 use crate::axes::{Axis, Point};
-use crate::methods::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::record::cols;
+use crate::timed::{FrameStats, Timed};
 use crate::timing::GpuTimer;
 use crate::Result;
 
@@ -154,20 +155,15 @@ pub struct LayeredSsm {
     pipelines: Mutex<Option<Arc<Pipelines>>>,
 }
 
-impl Method for LayeredSsm {
-    fn name(&self) -> &'static str {
-        "layered_ssm"
-    }
-    fn describe(&self) -> &'static str {
-        "Bavoil 2007 ch. 5: k depth-peeled light layers, HSM search region, backprojection; approximate"
-    }
-    fn exact(&self) -> bool {
-        false
-    }
-    fn axes(&self) -> Vec<Axis> {
+/// Bavoil 2007 ch. 5: k depth-peeled light layers, HSM search region, backprojection;
+/// approximate.
+impl LayeredSsm {
+    /// The declared axes of a configuration.
+    pub fn axes(&self) -> Vec<Axis> {
         AXES.to_vec()
     }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    /// Whether this configuration can run on this adapter; `Err(reason)`: a `skipped` row.
+    pub fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
         let c = Config::from_point(point);
         let max = gpu.limits.max_texture_dimension_2d;
         if c.shadow_map_res > max {
@@ -199,9 +195,6 @@ impl Method for LayeredSsm {
         }
         Ok(())
     }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
-        Ok(Box::new(self.prepare_ssm(gpu, scene, point)?))
-    }
 }
 
 impl LayeredSsm {
@@ -212,7 +205,7 @@ impl LayeredSsm {
         }
     }
 
-    /// `prepare`, keeping the concrete type (the study reads the G-buffer points from it).
+    /// Creates every GPU object of one configuration (never inside a timed region).
     pub fn prepare_ssm(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<PreparedSsm> {
         let cfg = Config::from_point(point);
         let pipes = {
@@ -731,7 +724,7 @@ impl PreparedSsm {
     }
 }
 
-impl Prepared for PreparedSsm {
+impl Timed for PreparedSsm {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let r = self.cfg.shadow_map_res;
         let mut enc = gpu.device.create_command_encoder(&Default::default());
@@ -836,15 +829,6 @@ impl Prepared for PreparedSsm {
             geometry_passes: self.cfg.layers + 1,
             layers: self.cfg.layers,
         })
-    }
-
-    fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
-        let vis = self.read_visibility(gpu, scene)?;
-        let mut cap = Capture::empty();
-        // Visibility as grey; −1 (not evaluated) stays −1 in every channel for the study to mask.
-        cap.image = Some(vis.iter().map(|&v| [v, v, v, 1.0]).collect());
-        cap.expected = Expected::All;
-        Ok(cap)
     }
 
     fn bytes_allocated(&self) -> u64 {

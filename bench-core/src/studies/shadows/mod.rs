@@ -23,11 +23,11 @@ use scenarios::{ParamValue, Params, StudySpec};
 
 use super::{Emit, GroupCtx, Methods, Opt, PointSpec, Study};
 use crate::axes::{Axis, Point};
-use crate::measure::{measure, set_timing};
-use crate::methods::{Method, Prepared};
+use crate::measure::{measure_timed, set_timing};
 use crate::record::Row;
 use crate::record::{cols, Flag};
 use crate::record::{error_row, failed_row, set_params, skipped_row};
+use crate::timed::Timed;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 use layered::{Config, LayeredSsm};
@@ -161,11 +161,14 @@ impl Study for ShadowsStudy {
         for (i, pt) in ctx.group.points.iter().enumerate() {
             let mut row = base_row(&pt.point)?;
             row.set_f(cols::REFERENCE_MS, reference.ms);
-            if let Err(why) = crate::methods::supports(&method, ctx.gpu, &pt.point) {
+            if let Err(why) = method.supports(ctx.gpu, &pt.point) {
                 emit(i, skipped_row(row, &why))?;
                 continue;
             }
-            let mut m = match measure(ctx.gpu, ctx.gscene, &method, &pt.point, &ctx.plan) {
+            let make = |gs: &crate::gpu_scene::GpuScene| -> Result<Box<layered::PreparedSsm>> {
+                Ok(Box::new(method.prepare_ssm(ctx.gpu, gs, &pt.point)?))
+            };
+            let m = match measure_timed(ctx.gpu, ctx.gscene, &make, &ctx.plan) {
                 Ok(m) => m,
                 Err(e) => {
                     emit(i, error_row(row, &e))?;
@@ -173,14 +176,14 @@ impl Study for ShadowsStudy {
                 }
             };
             set_timing(&mut row, &m, &ctx.scene.mesh);
-            let got = match m.prepared.readback(ctx.gpu, ctx.gscene) {
-                Ok(cap) => cap.image.unwrap_or_default(),
+            // Visibility of the last timed frame; −1 where not evaluated, masked by `compare`.
+            let got: Vec<f32> = match m.prepared.read_visibility(ctx.gpu, ctx.gscene) {
+                Ok(v) => v,
                 Err(e) => {
                     emit(i, failed_row(row, &format!("readback: {e}")))?;
                     continue;
                 }
             };
-            let got: Vec<f32> = got.iter().map(|p| p[0]).collect();
             let e = compare(&reference.vis, &got);
             row.set(cols::SHADOW_PIXELS, e.evaluated)
                 .set_f(cols::VIS_RMSE, e.rmse)

@@ -5,9 +5,22 @@ use scenarios::{ParamValue, Params, SceneSpec};
 
 use super::layered::LayeredSsm;
 use super::{compare, gbuffer_points, reference, VisError};
+use crate::axes::Point;
 use crate::gpu_scene::GpuScene;
-use crate::measure::measure;
+use crate::measure::{measure_timed, TimingPlan};
 use crate::testing;
+
+/// A configuration's point, through the declared axes.
+fn point(method: &LayeredSsm, p: &Params) -> Point {
+    Point::resolve(&method.axes(), p).unwrap_or_else(|e| panic!("{}", e.join("; ")))
+}
+
+/// The visibility of one timed frame (`measure_timed` under the one-frame plan).
+fn visibility(gpu: &crate::gpu::Gpu, gs: &GpuScene, method: &LayeredSsm, pt: &Point) -> Vec<f32> {
+    let make = |s: &GpuScene| Ok(Box::new(method.prepare_ssm(gpu, s, pt)?));
+    let m = measure_timed(gpu, gs, &make, &TimingPlan::once()).unwrap();
+    m.prepared.read_visibility(gpu, gs).unwrap()
+}
 
 const W: u32 = 64;
 const M: u32 = 16;
@@ -49,23 +62,7 @@ fn errors_where(
     configs
         .iter()
         .map(|p| {
-            let mut m = measure(
-                gpu,
-                &gs,
-                &method,
-                &crate::testing::point(&method, p),
-                &crate::measure::TimingPlan::once(),
-            )
-            .unwrap();
-            let vis: Vec<f32> = m
-                .prepared
-                .readback(gpu, &gs)
-                .unwrap()
-                .image
-                .unwrap()
-                .iter()
-                .map(|p| p[0])
-                .collect();
+            let vis = visibility(gpu, &gs, &method, &point(&method, p));
             compare(&r.vis, &vis)
         })
         .collect()
@@ -124,12 +121,10 @@ fn cpu_twin_matches_gpu_shading_on_every_case() {
         let gs = GpuScene::upload(gpu, &scene, W, W);
         let method = LayeredSsm::new(scene.area_light.clone().unwrap());
         for p in &configs {
-            let mut prep = method
-                .prepare_ssm(gpu, &gs, &crate::testing::point(&method, p))
-                .unwrap();
+            let mut prep = method.prepare_ssm(gpu, &gs, &point(&method, p)).unwrap();
             let mut timer = crate::timing::GpuTimer::new(gpu);
             timer.begin_frame();
-            crate::methods::Prepared::frame(&mut prep, gpu, &gs, &mut timer).unwrap();
+            crate::timed::Timed::frame(&mut prep, gpu, &gs, &mut timer).unwrap();
             gpu.wait().unwrap();
             let vis = prep.read_visibility(gpu, &gs).unwrap();
             let maps = prep.read_maps(gpu).unwrap();
@@ -215,21 +210,13 @@ fn hsm_never_drops_an_occluder_at_stride_one() {
             let p = cfg(64, 3)
                 .with("max_nspp", ParamValue::Int(65536))
                 .with("hsm", ParamValue::Bool(hsm));
-            let mut m = measure(
-                gpu,
-                &gs,
-                &method,
-                &crate::testing::point(&method, &p),
-                &crate::measure::TimingPlan::once(),
-            )
-            .unwrap();
-            m.prepared.readback(gpu, &gs).unwrap().image.unwrap()
+            visibility(gpu, &gs, &method, &point(&method, &p))
         };
         let (on, off) = (vis(true), vis(false));
         let worst = on
             .iter()
             .zip(&off)
-            .map(|(a, b)| (a[0] - b[0]).abs())
+            .map(|(a, b)| (a - b).abs())
             .fold(0.0f32, f32::max);
         // f32 rounding of region edges only.
         assert!(worst <= 1e-4, "{case}: HSM on/off differ by {worst}");
