@@ -168,6 +168,13 @@ enum Cmd {
         #[command(flatten)]
         gpu: GpuArgs,
     },
+    /// Load model files (OBJ, PLY, .ply.gz) as a scene would and print their triangle and vertex
+    /// counts; no GPU. A model a script fetches names the script when it is missing.
+    Model {
+        /// Model files, e.g. models/dragon_vrip.ply.gz
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+    },
 }
 
 pub(crate) fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String> {
@@ -362,6 +369,18 @@ fn run(cli: Cli) -> Result<()> {
                 reference_out,
                 gpu,
             })
+        }
+        Cmd::Model { paths } => {
+            for p in &paths {
+                let m = scenarios::obj::load(p)?;
+                println!(
+                    "{}: {} triangles, {} vertices",
+                    p.display(),
+                    m.triangle_count(),
+                    m.vertex_count()
+                );
+            }
+            Ok(())
         }
         Cmd::ShadingViews {
             scene,

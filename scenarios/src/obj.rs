@@ -275,7 +275,7 @@ fn instance_grid_raw(mesh: &Mesh, n: u32) -> Mesh {
 }
 
 /// The `obj` generator: `path` (required; an OBJ or PLY file), `instances` (grid), `alpha`
-/// (opacity, multiplied by the MTL material's where the OBJ has one).
+/// (opacity, multiplied by the MTL material's where the OBJ has one), `stand_in` (a name only).
 pub fn build(spec: &SceneSpec) -> Result<Scene> {
     let label = spec.label();
     let mut r = spec.params.reader(&label);
@@ -290,6 +290,9 @@ pub fn build(spec: &SceneSpec) -> Result<Scene> {
     }
     let instances = r.int("instances", 1, 1, 4096)? as u32;
     let alpha = r.float("alpha", 0.4, 0.0, 1.0)? as f32;
+    // The published scene this one stands in for (e.g. "powerplant-12.7M" for the Dragon ×15):
+    // it only names the scene, so the rows' label says what they stand in for.
+    r.opt_string("stand_in")?;
     r.finish()?;
     let path = path.unwrap_or_default();
     let mut mesh = load(Path::new(&path))?;

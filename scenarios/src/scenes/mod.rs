@@ -332,7 +332,7 @@ pub fn describe(generator: &str) -> &'static str {
         "shells" => "count, shape=sphere|box, segments, alpha, seed: nested closed shells, max depth complexity 2·count",
         "quads" => "depth_complexity=d, alpha, tilt, seed: d quads over the centre at distinct depths",
         "mesh" => "triangles=N, shape=sphere|grid, alpha: a procedural large mesh with shared vertices (geometry study)",
-        "obj" => "path, instances, alpha: an OBJ file via tobj or a PLY file (.ply, .ply.gz; ASCII or binary) via ply-rs-bw, normalised, instanced on a grid; alpha × the MTL dissolve (d, or 1 − Tr) where the file has materials",
+        "obj" => "path, instances, alpha, stand_in (the published scene it stands in for; a name only): an OBJ file via tobj or a PLY file (.ply, .ply.gz; ASCII or binary) via ply-rs-bw, normalised, instanced on a grid; alpha × the MTL dissolve (d, or 1 − Tr) where the file has materials",
         "city" => "lights=N, blocks, room, sun, kinds=mixed|point|spot|line, range, seed: box city (or closed room) with N finite-range lights and materials",
         "slabs" => "count, tiles, distance, wall, alpha, reversed_z, seed: tiles² stacks of count nested thin closed boxes far away (thickness cancellation)",
         "csg_pair" => "offset, segments, shape=sphere|box, alpha: two overlapping closed solids, ids 0 (A) and 1 (B)",
