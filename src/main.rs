@@ -525,6 +525,8 @@ fn models_line(suite: &Suite) -> String {
         .map(|p| {
             if std::path::Path::new(&p).is_file() {
                 p
+            } else if let Some(cmd) = scenarios::obj::fetch_command(&p) {
+                format!("{p} (missing here: fetch it with `{cmd}`)")
             } else {
                 format!("{p} (missing here: copy it from ../shared/models)")
             }
