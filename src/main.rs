@@ -288,6 +288,20 @@ fn run(cli: Cli) -> Result<()> {
                     }
                 }
             }
+            // The papers files point into the suites: checked on every `mfx check`.
+            let papers = bench_core::papers::check_builtin();
+            if papers.is_empty() {
+                println!(
+                    "ok: papers ({} files in scenarios/papers)",
+                    scenarios::papers::BUILTIN.len()
+                );
+            } else {
+                println!("{}", scenarios::problem::report(&papers));
+                return Err(usage(format!(
+                    "the papers files have {} problems",
+                    papers.len()
+                )));
+            }
             if bad > 0 {
                 return Err(usage(format!(
                     "{bad} of {} suites have problems",

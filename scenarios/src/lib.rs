@@ -5,6 +5,7 @@
 
 pub mod camera;
 pub mod obj;
+pub mod papers;
 pub mod params;
 pub mod ply;
 pub mod problem;
