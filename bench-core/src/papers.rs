@@ -110,7 +110,13 @@ fn check_point(pt: &PointRef) -> Result<(), String> {
             continue;
         }
         let mut bad = None;
+        let declared = study.axes(&pt.method);
         for (k, v) in &pt.axes {
+            // An axis the method does not read leaves its cell empty: no row would match.
+            if !declared.iter().any(|a| a.name() == k) {
+                bad = Some(format!("method '{}' does not read axis '{k}'", pt.method));
+                break;
+            }
             let Some(v) = ParamValue::from_toml(v) else {
                 bad = Some(format!("axis '{k}': {v} is not a scalar"));
                 break;
