@@ -191,7 +191,7 @@ mod tests {
         assert!(all(&p).contains("but not 12"), "{}", all(&p));
         let p = first_figure_with(text, "bucket_count = 16", "bucket_cnt = 16");
         assert!(
-            all(&p).contains("does not sweep axis 'bucket_cnt'"),
+            all(&p).contains("does not read axis 'bucket_cnt'"),
             "{}",
             all(&p)
         );
