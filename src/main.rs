@@ -189,6 +189,13 @@ enum Cmd {
         #[command(flatten)]
         gpu: GpuArgs,
     },
+    /// Load model files (OBJ, PLY, .ply.gz) as a scene would and print their triangle and vertex
+    /// counts; no GPU. A model a script fetches names the script when it is missing.
+    Model {
+        /// Model files, e.g. models/dragon_vrip.ply.gz
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+    },
 }
 
 pub(crate) fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String> {
@@ -314,6 +321,20 @@ fn run(cli: Cli) -> Result<()> {
                     }
                 }
             }
+            // The papers files point into the suites: checked on every `mfx check`.
+            let papers = bench_core::papers::check_builtin();
+            if papers.is_empty() {
+                println!(
+                    "ok: papers ({} files in scenarios/papers)",
+                    scenarios::papers::BUILTIN.len()
+                );
+            } else {
+                println!("{}", scenarios::problem::report(&papers));
+                return Err(usage(format!(
+                    "the papers files have {} problems",
+                    papers.len()
+                )));
+            }
             if bad > 0 {
                 return Err(usage(format!(
                     "{bad} of {} suites have problems",
@@ -395,6 +416,18 @@ fn run(cli: Cli) -> Result<()> {
                 reference_out,
                 gpu,
             })
+        }
+        Cmd::Model { paths } => {
+            for p in &paths {
+                let m = scenarios::obj::load(p)?;
+                println!(
+                    "{}: {} triangles, {} vertices",
+                    p.display(),
+                    m.triangle_count(),
+                    m.vertex_count()
+                );
+            }
+            Ok(())
         }
         Cmd::ShadingViews {
             scene,
@@ -539,6 +572,8 @@ fn models_line(suite: &Suite) -> String {
         .map(|p| {
             if std::path::Path::new(&p).is_file() {
                 p
+            } else if let Some(cmd) = scenarios::obj::fetch_command(&p) {
+                format!("{p} (missing here: fetch it with `{cmd}`)")
             } else {
                 format!("{p} (missing here: copy it from ../shared/models)")
             }

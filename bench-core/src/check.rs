@@ -290,8 +290,11 @@ fn scene_problems(file: &str, table: &str, e: SceneError) -> Vec<Problem> {
                 .known(known.split(", ").filter(|s| !s.is_empty()))]
         }
         SceneError::Obj { path, why } => {
-            vec![Problem::new(file, table, "path", format!("OBJ file: {why}")).value(path)]
+            vec![Problem::new(file, table, "path", format!("model file: {why}")).value(path)]
         }
+        // A model a script fetches is not a suite problem: until it is fetched, its rows are
+        // skipped with the command to run (`runner`).
+        SceneError::ModelMissing { .. } => Vec::new(),
         other => vec![Problem::new(file, table, "", other.to_string())],
     }
 }

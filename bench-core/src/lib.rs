@@ -22,6 +22,7 @@ pub mod method;
 pub mod methods;
 pub mod metrics;
 pub mod oit;
+pub mod papers;
 pub mod record;
 pub mod reference;
 pub mod runner;

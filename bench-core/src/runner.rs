@@ -234,6 +234,12 @@ pub fn run(
             };
         let scene: Scene = match group.scene.build() {
             Ok(s) => s,
+            // Not fetched yet: what the adapter cannot run is skipped; this is what the checkout
+            // lacks, and the reason says the command that fetches it.
+            Err(e @ scenarios::SceneError::ModelMissing { .. }) => {
+                fail_all(sink, &mut out, &format!("scene: {e}"), true)?;
+                continue;
+            }
             Err(e) => {
                 fail_all(sink, &mut out, &format!("scene: {e}"), false)?;
                 continue;

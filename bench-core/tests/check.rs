@@ -276,3 +276,35 @@ fn sessions_out_of_range_or_with_interleave_are_refused() {
     assert!(both.contains("[timing]"), "{both}");
     assert!(problems(&suite("[timing]\nsessions = 3", PEEL, QUADS)).is_empty());
 }
+
+#[test]
+fn the_seeds_suites_check_without_their_models_and_skip_naming_the_fetch_script() {
+    // Tests run in bench-core/, where models/ is absent: the Dragon is "not fetched", which is
+    // not a suite problem (its rows are skipped naming the script).
+    let seeds: Vec<&str> = scenarios::suite::BUILTIN
+        .iter()
+        .map(|(n, _)| *n)
+        .filter(|n| n.starts_with("seeds-"))
+        .collect();
+    assert_eq!(seeds.len(), 6, "one seeds suite per source setup");
+    for name in seeds {
+        let s = Suite::load(name).unwrap();
+        let p = check_suite(&s);
+        assert!(p.is_empty(), "{name}:\n{}", problem::report(&p));
+        assert!(
+            s.software.is_some(),
+            "{name} has a [software] profile for CI"
+        );
+    }
+    let e = scenarios::SceneSpec::new(
+        "obj",
+        scenarios::Params::new().with(
+            "path",
+            scenarios::ParamValue::Str("models/dragon_vrip.ply.gz".into()),
+        ),
+    )
+    .build()
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("bash scripts/fetch-dragon.sh"), "{e}");
+}

@@ -15,6 +15,7 @@ pub mod html;
 pub mod labels;
 pub mod pareto;
 pub mod points;
+pub mod reproduction;
 pub mod studies;
 pub mod summary;
 
@@ -66,6 +67,8 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
         sections.push(("Adapters and backends".to_string(), c.figures));
         extra = c.html;
     }
+    // The sources' published figures beside ours (empty unless a seeds-* suite ran).
+    extra.push_str(&reproduction::section(&runs));
     let flip = flip::section(dir, &out)?;
     let page = html::page(&runs, &sections, &extra, &flip);
     let path = out.join("index.html");

@@ -1,11 +1,13 @@
-//! Scenes as data and generators, OBJ loading, and sweep suites as files.
+//! Scenes as data and generators, OBJ and PLY loading, and sweep suites as files.
 //!
 //! Nothing here touches a GPU: a scene is plain vertex data plus a camera, built the same way
 //! on every machine from its [`SceneSpec`] (generator name, parameters, seed).
 
 pub mod camera;
 pub mod obj;
+pub mod papers;
 pub mod params;
+pub mod ply;
 pub mod problem;
 pub mod scenes;
 pub mod suite;
@@ -40,8 +42,13 @@ pub enum SceneError {
         param: String,
         known: String,
     },
-    #[error("OBJ file '{path}': {why}")]
+    /// A model file (OBJ or PLY) that cannot be used.
+    #[error("model file '{path}': {why}")]
     Obj { path: String, why: String },
+    /// A model file that is not here but that a script of this repository fetches: the suite is
+    /// valid, and its rows are skipped with this reason until the file is fetched.
+    #[error("model file '{path}' not found: fetch it with `{fetch}`")]
+    ModelMissing { path: String, fetch: String },
     #[error("suite file '{path}': {why}")]
     Suite { path: String, why: String },
     /// Every problem found in a suite, one per line.

@@ -1,5 +1,6 @@
-//! OBJ loading through tobj: validated, normalised into the unit sphere, optionally instanced on
-//! a grid to reach millions of triangles. Bad files are errors naming the file and the problem.
+//! Model loading: OBJ through tobj, PLY (`.ply`, `.ply.gz`) through [`crate::ply`]; validated,
+//! normalised into the unit sphere, optionally instanced on a grid to reach millions of
+//! triangles. Bad files are errors naming the file and the problem.
 
 use std::path::Path;
 
@@ -8,19 +9,44 @@ use glam::{DMat4, DVec3, Vec3};
 use crate::scenes::{frame_sphere, Mesh, ObjectInfo, Scene, SceneSpec};
 use crate::{Result, SceneError};
 
-/// Loads one OBJ file into a single mesh (all models merged), computing normals where missing.
-/// Vertex alpha is the opacity of the face's MTL material ([`material_alpha`]), 1 where the OBJ
-/// names no material or its MTL file is absent.
+/// Model files this repository's scripts fetch (they are not committed): a path starting with
+/// the prefix, when missing, is [`SceneError::ModelMissing`] naming the command.
+pub const FETCHABLE: &[(&str, &str)] = &[("models/dragon_vrip", "bash scripts/fetch-dragon.sh")];
+
+/// The command that fetches `path`, if a script of this repository provides it.
+pub fn fetch_command(path: &str) -> Option<&'static str> {
+    let p = path.trim_start_matches("./");
+    FETCHABLE
+        .iter()
+        .find(|(prefix, _)| p.starts_with(prefix))
+        .map(|(_, cmd)| *cmd)
+}
+
+/// Loads one model file into a single mesh: a PLY file (`.ply`, `.ply.gz`) through
+/// [`crate::ply`], anything else as OBJ.
+///
+/// OBJ: all models merged, normals computed where missing; vertex alpha is the opacity of the
+/// face's MTL material ([`material_alpha`]), 1 where the OBJ names no material or its MTL file is
+/// absent.
 pub fn load(path: &Path) -> Result<Mesh> {
     let err = |why: String| SceneError::Obj {
         path: path.display().to_string(),
         why,
     };
     if !path.exists() {
+        if let Some(fetch) = fetch_command(&path.to_string_lossy()) {
+            return Err(SceneError::ModelMissing {
+                path: path.display().to_string(),
+                fetch: fetch.into(),
+            });
+        }
         return Err(err("file not found".into()));
     }
     if path.is_dir() {
-        return Err(err("is a directory, not an OBJ file".into()));
+        return Err(err("is a directory, not a model file".into()));
+    }
+    if crate::ply::is_ply(&path.to_string_lossy()) {
+        return crate::ply::load(path).map_err(err);
     }
     scan_faces(path).map_err(err)?;
     let opts = tobj::LoadOptions {
@@ -248,8 +274,8 @@ fn instance_grid_raw(mesh: &Mesh, n: u32) -> Mesh {
     out
 }
 
-/// The `obj` generator: `path` (required), `instances` (grid), `alpha` (opacity, multiplied by
-/// the MTL material's where the OBJ has one).
+/// The `obj` generator: `path` (required; an OBJ or PLY file), `instances` (grid), `alpha`
+/// (opacity, multiplied by the MTL material's where the OBJ has one), `stand_in` (a name only).
 pub fn build(spec: &SceneSpec) -> Result<Scene> {
     let label = spec.label();
     let mut r = spec.params.reader(&label);
@@ -259,11 +285,14 @@ pub fn build(spec: &SceneSpec) -> Result<Scene> {
             scene: label.clone(),
             param: "path".into(),
             value: String::new(),
-            why: "the obj generator needs path = \"file.obj\"".into(),
+            why: "the obj generator needs path = \"file.obj\" (or .ply, .ply.gz)".into(),
         })?;
     }
     let instances = r.int("instances", 1, 1, 4096)? as u32;
     let alpha = r.float("alpha", 0.4, 0.0, 1.0)? as f32;
+    // The published scene this one stands in for (e.g. "powerplant-12.7M" for the Dragon ×15):
+    // it only names the scene, so the rows' label says what they stand in for.
+    r.opt_string("stand_in")?;
     r.finish()?;
     let path = path.unwrap_or_default();
     let mut mesh = load(Path::new(&path))?;

@@ -53,6 +53,31 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("continuum-ci", include_str!("../suites/continuum-ci.toml")),
     ("aa", include_str!("../suites/aa.toml")),
     ("aa-ci", include_str!("../suites/aa-ci.toml")),
+    // The sources' own setups (issue 30), one per source; scenarios/papers/*.toml points here.
+    (
+        "seeds-buckets",
+        include_str!("../suites/seeds-buckets.toml"),
+    ),
+    (
+        "seeds-kbuffer",
+        include_str!("../suites/seeds-kbuffer.toml"),
+    ),
+    (
+        "seeds-geometry",
+        include_str!("../suites/seeds-geometry.toml"),
+    ),
+    (
+        "seeds-shadows",
+        include_str!("../suites/seeds-shadows.toml"),
+    ),
+    (
+        "seeds-deferred",
+        include_str!("../suites/seeds-deferred.toml"),
+    ),
+    (
+        "seeds-prepass",
+        include_str!("../suites/seeds-prepass.toml"),
+    ),
 ];
 
 #[derive(Clone, Debug)]

@@ -8,7 +8,7 @@
 //! | `shells` | nested closed spheres or boxes around the view axis         | max depth complexity 2n |
 //! | `quads`  | d overlapping screen-parallel quads at distinct depths      | max depth complexity d  |
 //! | `mesh`   | a procedural large mesh (bumpy sphere or wavy grid), shared vertices | —     |
-//! | `obj`    | an OBJ file (tobj), normalised into view, grid-instanced    | —                       |
+//! | `obj`    | an OBJ (tobj) or PLY (ply-rs-bw, .ply.gz too) file, normalised into view, grid-instanced | — |
 //! | `city`   | ground + box buildings (or a closed room) with many lights  | — (shading studies)     |
 //! | `slabs`  | tiles² stacks of nested thin closed boxes far away (stiff)  | max depth complexity 2n |
 //! | `csg_pair` | two overlapping closed solids, ids 0 and 1 (CSG operands) | ≤ 4 per pixel           |
@@ -332,7 +332,7 @@ pub fn describe(generator: &str) -> &'static str {
         "shells" => "count, shape=sphere|box, segments, alpha, seed: nested closed shells, max depth complexity 2·count",
         "quads" => "depth_complexity=d, alpha, tilt, seed: d quads over the centre at distinct depths",
         "mesh" => "triangles=N, shape=sphere|grid, alpha: a procedural large mesh with shared vertices (geometry study)",
-        "obj" => "path, instances, alpha: an OBJ file via tobj, normalised, instanced on a grid; alpha × the MTL dissolve (d, or 1 − Tr) where the file has materials",
+        "obj" => "path, instances, alpha, stand_in (the published scene it stands in for; a name only): an OBJ file via tobj or a PLY file (.ply, .ply.gz; ASCII or binary) via ply-rs-bw, normalised, instanced on a grid; alpha × the MTL dissolve (d, or 1 − Tr) where the file has materials",
         "city" => "lights=N, blocks, room, sun, kinds=mixed|point|spot|line, range, seed: box city (or closed room) with N finite-range lights and materials",
         "slabs" => "count, tiles, distance, wall, alpha, reversed_z, seed: tiles² stacks of count nested thin closed boxes far away (thickness cancellation)",
         "csg_pair" => "offset, segments, shape=sphere|box, alpha: two overlapping closed solids, ids 0 (A) and 1 (B)",

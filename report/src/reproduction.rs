@@ -1,0 +1,271 @@
+//! "Reproduction": the sources' published figures (`scenarios/papers/*.toml`) beside ours, read
+//! from the rows the papers files point to. One table per source: figure, paper value, the
+//! paper's ratio, ours (the measured ratio r = baseline / ours of the rule's column), and whether
+//! it holds by the declared rule; a figure that cannot be reproduced says why. Empty when the run
+//! holds no suite a papers file points to.
+
+use std::fmt::Write;
+
+use scenarios::papers::{self, Figure, PointRef};
+
+use crate::data::{Rec, Runs};
+use crate::html::esc;
+
+/// The row a point names: same suite, method, scene label, resolution and axis values; an ok row
+/// first (a point measured twice, e.g. by two studies, reads the first ok one).
+fn find<'a>(runs: &'a Runs, p: &PointRef) -> Option<&'a Rec> {
+    let res = [p.resolution[0].to_string(), p.resolution[1].to_string()];
+    let matches = |r: &&Rec| {
+        r.get_name("suite") == p.suite
+            && r.get_name("method") == p.method
+            && r.get_name("scene_label") == p.scene
+            && r.get_name("width") == res[0]
+            && r.get_name("height") == res[1]
+            && p.axes.iter().all(|(k, v)| same(r.get_name(k), v))
+    };
+    let mut hits = runs.rows.iter().filter(matches);
+    let first = hits.clone().next();
+    hits.find(|r| r.ok()).or(first)
+}
+
+/// A CSV cell equals a TOML value (numbers compared as numbers: "1" is 1.0).
+fn same(cell: &str, v: &toml::Value) -> bool {
+    match v {
+        toml::Value::String(s) => cell == s,
+        toml::Value::Boolean(b) => cell == b.to_string(),
+        toml::Value::Integer(i) => cell.parse::<f64>().ok() == Some(*i as f64),
+        toml::Value::Float(x) => cell.parse::<f64>().ok() == Some(*x),
+        _ => false,
+    }
+}
+
+fn num(x: f64) -> String {
+    if x.is_infinite() {
+        "∞".into()
+    } else if x.abs() >= 100.0 {
+        format!("{x:.0}")
+    } else if x.abs() >= 0.1 {
+        format!("{x:.2}")
+    } else {
+        format!("{x:.3}")
+    }
+}
+
+/// What the run says for one figure: (ours, verdict).
+fn ours(runs: &Runs, f: &Figure) -> (String, String) {
+    if !f.reproducible {
+        return (
+            "—".into(),
+            format!("not reproducible: {}", f.reason.as_deref().unwrap_or("")),
+        );
+    }
+    let (Some(o), Some(b), Some(rule)) = (&f.ours, &f.baseline, &f.holds) else {
+        return ("—".into(), "no point declared".into());
+    };
+    let (ro, rb) = match (find(runs, o), find(runs, b)) {
+        (Some(ro), Some(rb)) => (ro, rb),
+        _ => return ("—".into(), format!("not in this run (suite {})", o.suite)),
+    };
+    for r in [ro, rb] {
+        if !r.ok() {
+            return (
+                "—".into(),
+                format!("{}: {}", r.get_name("status"), r.get_name("reason")),
+            );
+        }
+    }
+    let (Some(vo), Some(vb)) = (ro.f_name(rule.column()), rb.f_name(rule.baseline_column())) else {
+        return ("—".into(), format!("no {} in the rows", rule.column()));
+    };
+    let r = vb / vo;
+    let verdict = match rule.holds(r, f.ratio) {
+        Some(true) => "holds",
+        Some(false) => "differs",
+        None => "undecided",
+    };
+    (
+        format!("r = {}", num(r)),
+        format!("{verdict} ({})", rule.describe(f.ratio)),
+    )
+}
+
+/// The section's HTML, or "" when no row of `runs` is from a suite a papers file points to.
+pub fn section(runs: &Runs) -> String {
+    let files: Vec<(&str, papers::PapersFile)> = papers::BUILTIN
+        .iter()
+        .filter_map(|(n, t)| papers::parse(t).ok().map(|f| (*n, f)))
+        .collect();
+    let suites: Vec<&str> = files
+        .iter()
+        .flat_map(|(_, f)| f.figures.iter())
+        .flat_map(|f| f.ours.iter().chain(f.baseline.iter()))
+        .map(|p| p.suite.as_str())
+        .collect();
+    if !runs
+        .rows
+        .iter()
+        .any(|r| suites.contains(&r.get_name("suite")))
+    {
+        return String::new();
+    }
+    let mut h = String::from(
+        "<h2 id=\"reproduction\">Reproduction: the sources' published figures beside ours</h2>\
+         <p class=\"note\">r = baseline ÷ ours of the rule's column (for times, ours' speed-up); \
+         the rule is declared in scenarios/papers/*.toml.</p>",
+    );
+    for (name, f) in &files {
+        let _ = write!(
+            h,
+            "<h3>{} — {} ({})</h3><table class=\"repro\" id=\"repro-{}\"><tr><th>row</th><th>figure</th><th>setup</th><th>paper</th><th>paper ratio</th><th>ours</th><th>holds / differs</th></tr>",
+            esc(&f.source.title),
+            esc(&f.source.authors),
+            esc(&f.source.venue),
+            esc(name)
+        );
+        for fig in &f.figures {
+            let paper = match (fig.value, &fig.against, &fig.claim) {
+                (Some(v), Some(a), _) => format!("{} {} vs {}", num(v), fig.metric, a),
+                (Some(v), None, _) => format!("{} {}", num(v), fig.metric),
+                (None, _, Some(c)) => c.clone(),
+                _ => fig.metric.clone(),
+            };
+            let s = &fig.setup;
+            let setup = format!(
+                "{}{}, {}{}{}",
+                s.gpu,
+                s.resolution
+                    .map(|r| format!(", {}×{}", r[0], r[1]))
+                    .unwrap_or_default(),
+                s.scene,
+                s.triangles
+                    .map(|t| format!(" ({t} triangles)"))
+                    .unwrap_or_default(),
+                s.layers
+                    .as_ref()
+                    .map(|l| format!(", {l}"))
+                    .unwrap_or_default()
+            );
+            let (o, verdict) = ours(runs, fig);
+            let _ = write!(
+                h,
+                "<tr><td>{}</td><td>{} {} ({})</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                fig.row,
+                esc(&fig.table),
+                esc(&fig.section),
+                esc(&fig.id),
+                esc(&setup),
+                esc(&paper),
+                fig.ratio.map(num).unwrap_or_else(|| "—".into()),
+                esc(&o),
+                esc(&verdict)
+            );
+        }
+        h.push_str("</table>");
+    }
+    h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const D: &str = "obj(path=models/dragon_vrip.ply.gz)";
+
+    fn rec(method: &str, axes: &[(&str, &str)], ms: &str, status: &str) -> Rec {
+        let mut m = std::collections::BTreeMap::new();
+        for (k, v) in [
+            ("suite", "seeds-buckets"),
+            ("method", method),
+            ("scene_label", D),
+            ("width", "512"),
+            ("height", "512"),
+            ("status", status),
+            ("gpu_ms_median", ms),
+            (
+                "reason",
+                if status == "ok" {
+                    ""
+                } else {
+                    "scene: model file 'models/dragon_vrip.ply.gz' not found: fetch it with `bash scripts/fetch-dragon.sh`"
+                },
+            ),
+        ] {
+            m.insert(k.to_string(), v.to_string());
+        }
+        for (k, v) in axes {
+            m.insert(k.to_string(), v.to_string());
+        }
+        Rec(m)
+    }
+
+    fn runs(rows: Vec<Rec>) -> Runs {
+        Runs {
+            header: Vec::new(),
+            rows,
+            sources: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn each_figure_gets_ours_the_ratio_and_the_verdict_of_its_rule() {
+        let r = runs(vec![
+            rec("depth_peel", &[("max_layers", "256")], "40.0", "ok"),
+            // 40 / 5 = 8: within 2× of 10.7 (holds).
+            rec(
+                "bdp",
+                &[("bucket_count", "16"), ("bucket_pairing", "paired")],
+                "5.0",
+                "ok",
+            ),
+            // 40 / 20 = 2: not within 2× of 5.3 (differs).
+            rec("bdp2", &[("bucket_count", "32")], "20.0", "ok"),
+        ]);
+        let h = section(&r);
+        let row = |id: &str| {
+            let i = h
+                .find(&format!("({id})"))
+                .unwrap_or_else(|| panic!("{id} in {h}"));
+            h[i..].split("</tr>").next().unwrap().to_string()
+        };
+        assert!(
+            row("fig1.2-bdp").contains("r = 8.00") && row("fig1.2-bdp").contains("holds"),
+            "{}",
+            row("fig1.2-bdp")
+        );
+        assert!(row("fig1.2-bdp2").contains("r = 2.00") && row("fig1.2-bdp2").contains("differs"));
+        // bdp over bdp2: 20 / 5 = 4 > 1.
+        assert!(
+            row("fig1.2-bdp-over-bdp2").contains("r = 4.00")
+                && row("fig1.2-bdp-over-bdp2").contains("holds")
+        );
+        assert!(row("fig1.2-adp").contains("not in this run"));
+        assert!(row("fig1.4-adp-fresnel").contains("not reproducible: An image only"));
+        // Every source has its table, every figure its row.
+        for (name, text) in papers::BUILTIN {
+            assert!(h.contains(&format!("id=\"repro-{name}\"")), "{name}");
+            for fig in papers::parse(text).unwrap().figures {
+                assert!(h.contains(&format!("({})", fig.id)), "{}", fig.id);
+            }
+        }
+    }
+
+    #[test]
+    fn a_skipped_point_shows_its_reason_and_a_run_of_other_suites_has_no_section() {
+        let r = runs(vec![
+            rec("depth_peel", &[("max_layers", "256")], "", "skipped"),
+            rec(
+                "bdp",
+                &[("bucket_count", "16"), ("bucket_pairing", "paired")],
+                "",
+                "skipped",
+            ),
+        ]);
+        assert!(
+            section(&r).contains("skipped: scene: model file"),
+            "fetch reason shown"
+        );
+        let mut other = rec("bdp", &[], "1.0", "ok");
+        other.0.insert("suite".into(), "buckets".into());
+        assert_eq!(section(&runs(vec![other])), "");
+    }
+}
