@@ -356,7 +356,10 @@ fn bucket_translucency_and_fresnel_48px_match_reference_where_nothing_collided()
             .with("bucket_count", ParamValue::Int(16));
         let judged = bucket_err(method, &shells(), &p, 2e-3);
         // 3 shells, ≤ 6 layers in 16 buckets (adp: 1024 bins): most pixels collide nowhere.
-        assert!(judged >= 0.5, "{method} {effect}: only {judged} of covered pixels judged");
+        assert!(
+            judged >= 0.5,
+            "{method} {effect}: only {judged} of covered pixels judged"
+        );
     }
 }
 

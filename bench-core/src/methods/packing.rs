@@ -44,7 +44,11 @@ pub fn unpack_rgba_f32(bits: u32) -> [f32; 4] {
 /// the chapter's 4-byte normal). Angular error ≤ ~1e-4 rad; a zero normal decodes to +z.
 pub fn pack_normal_oct(n: [f32; 3]) -> u32 {
     let l1 = n[0].abs() + n[1].abs() + n[2].abs();
-    let (mut x, mut y) = if l1 > 0.0 { (n[0] / l1, n[1] / l1) } else { (0.0, 0.0) };
+    let (mut x, mut y) = if l1 > 0.0 {
+        (n[0] / l1, n[1] / l1)
+    } else {
+        (0.0, 0.0)
+    };
     if n[2] < 0.0 {
         let s = |v: f32| if v >= 0.0 { 1.0 } else { -1.0 };
         (x, y) = ((1.0 - y.abs()) * s(x), (1.0 - x.abs()) * s(y));

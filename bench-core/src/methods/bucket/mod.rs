@@ -20,8 +20,8 @@
 
 use crate::axes::{Axis, Point};
 use crate::effects::{Effect, EffectConfig, FOLD_STATE_BYTES};
-use crate::methods::packing::PACKING_WGSL;
 use crate::gpu_util::{camera_entry, read_vec, storage_entry, texture_entry};
+use crate::methods::packing::PACKING_WGSL;
 use crate::record::cols;
 
 use super::{Capture, Expected, FrameStats};

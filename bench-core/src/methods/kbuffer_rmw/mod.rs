@@ -32,20 +32,20 @@ use super::tail::{self, Bounding, TailTargets, RESOLVE_WGSL, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::effects::{self, FOLD_WGSL};
-use crate::methods::packing::PACKING_WGSL;
-use entry::SlotConfig;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::gpu_util::{
     bind_buffers, camera_entry, check_storage_size, pixel_pass, read_vec, shader, storage_entry,
     STORAGE_RW,
 };
-use crate::oit::Keep;
 use crate::methods::depth_peel::SPECIALISATION;
+use crate::methods::packing::PACKING_WGSL;
+use crate::oit::Keep;
 use crate::record::cols;
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
 use crate::Result;
+use entry::SlotConfig;
 
 const WGSL: &str = include_str!("kbuffer_rmw.wgsl");
 /// Triangles per draw in the `heuristics` variant (the thesis's batch size).
