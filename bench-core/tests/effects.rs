@@ -48,7 +48,7 @@ fn err(method: &str, spec: &SceneSpec, params: &Params) -> (f64, f64) {
 /// primitive: every effect) and the linked list (one pass; its default compact nodes re-derive
 /// attributes from the primitive too). The k-buffers (specialised and uber slots, default
 /// k = 8 ≥ these scenes' 6 layers, so the k nearest are all: judged like the exact methods; their
-/// normal is packed in 4 bytes, ≤ ~1e-4 rad, so Fresnel's Schlick term moves by ≤ 5e-4 < 2e-3).
+/// normal is packed in 4 bytes, < 2e-4 rad, so Fresnel's Schlick term moves by < 1e-3 < 2e-3).
 const RUNS: &[(&str, Option<&str>)] = &[
     ("depth_peel", Some("specialised")),
     ("depth_peel", Some("uber")),
@@ -341,7 +341,7 @@ fn bucket_err(method: &str, spec: &SceneSpec, params: &Params, tol: f64) -> f64 
 fn bucket_translucency_and_fresnel_48px_match_reference_where_nothing_collided() {
     // Tolerance 2e-3 as for the exact methods' interpolated view depth (header); the depth
     // channel is the f32 view depth with the facing in its last bit (1 ulp), and the normal is
-    // packed in 4 bytes (octahedral 15:15, ≤ ~1e-4 rad: Schlick moves ≤ 5e-4).
+    // packed in 4 bytes (octahedral 15:15, < 2e-4 rad: Schlick moves < 1e-3).
     let runs: &[(&str, &str)] = &[
         ("bdp", "translucency"),
         ("bdp", "fresnel"),

@@ -35,7 +35,7 @@ fn unpack_rgba_f32(f: f32) -> vec4<f32> {
 // A unit normal in 4 bytes (the chapter's pack_4byte, GPU Pro ch. 1 §1.6.3): octahedral
 // coordinates, 15 bits each, so the 30-bit code offset by PACK_NORMAL_OFFSET is again a positive
 // normal finite float (a MAX-blended bucket channel keeps it) and a plain u32 elsewhere. Angular
-// error ≤ ~1e-4 rad (a code step is 2/32767 of the octahedron), where 8 bits per component would
+// error < 2e-4 rad (a code step is 2/32767 of the octahedron), where 8 bits per component would
 // give ~4e-3. CPU twin: packing.rs `pack_normal_oct`. A zero normal decodes to +z.
 fn pack_normal_oct(n: vec3<f32>) -> u32 {
     let l1 = abs(n.x) + abs(n.y) + abs(n.z);
