@@ -46,10 +46,16 @@ fn err(method: &str, spec: &SceneSpec, params: &Params) -> (f64, f64) {
 
 /// Depth peeling (specialised and uber), the compute A-buffer (attributes re-derived from the
 /// primitive: every effect) and the linked list (one pass; its default compact nodes re-derive
-/// attributes from the primitive too).
+/// attributes from the primitive too). The k-buffers (specialised and uber slots, default
+/// k = 8 ≥ these scenes' 6 layers, so the k nearest are all: judged like the exact methods; their
+/// normal is packed in 4 bytes, < 2e-4 rad, so Fresnel's Schlick term moves by < 1e-3 < 2e-3).
 const RUNS: &[(&str, Option<&str>)] = &[
     ("depth_peel", Some("specialised")),
     ("depth_peel", Some("uber")),
+    ("kbuffer_rmw", Some("specialised")),
+    ("kbuffer_rmw", Some("uber")),
+    ("kbuffer_atomic", Some("specialised")),
+    ("kbuffer_atomic", Some("uber")),
     ("compute_abuffer", None),
     ("linked_list", None),
 ];
@@ -282,4 +288,97 @@ fn an_unknown_effect_in_a_suite_is_an_error_naming_it() {
     )
     .unwrap_err();
     assert!(err.to_string().contains("glow"), "{err}");
+}
+
+// ---- bucket methods: translucency and fresnel on (depth, normal) pairs ----
+
+/// Renders `method` and compares it with the reference only where it captured every fragment
+/// (counts = true depth complexity): elsewhere fragments collided, which the row reports
+/// (`collision_fragments`, flag `collision`) and this checks. Returns the fraction of covered
+/// pixels judged, so a test cannot pass on an empty set.
+fn bucket_err(method: &str, spec: &SceneSpec, params: &Params, tol: f64) -> f64 {
+    let gpu = testing::gpu();
+    let scene = spec.build().unwrap();
+    let m = methods::get(method);
+    let params = &testing::declared(&*m, params);
+    let (cap, _) = testing::render(gpu, &scene, &*m, params, W, W);
+    let lists = rasterize(&scene, W, W);
+    let cfg = EffectConfig::from_point(&testing::point(&*m, params)).unwrap();
+    let reference = cfg.reference(&scene, &lists, cap.expected);
+    let img = cap.image.as_ref().unwrap();
+    let counts = cap.counts.as_ref().unwrap();
+    let dc = lists.depth_complexity();
+    let (mut judged, mut covered, mut lost) = (0usize, 0usize, 0u64);
+    for p in 0..lists.pixels() {
+        if dc[p] == 0 {
+            continue;
+        }
+        covered += 1;
+        lost += dc[p].saturating_sub(counts[p]) as u64;
+        if counts[p] != dc[p] {
+            continue;
+        }
+        judged += 1;
+        for c in 0..4 {
+            let e = (reference[p][c] - img[p][c] as f64).abs();
+            assert!(
+                e <= tol,
+                "{method} {}: pixel {p} (nothing collided) error {e} > {tol}",
+                params.label()
+            );
+        }
+    }
+    assert_eq!(
+        cap.collision_fragments,
+        Some(lost),
+        "{method}: reported collisions"
+    );
+    assert_eq!(cap.flag.is_some(), lost > 0, "{method}: collision flag");
+    judged as f64 / covered as f64
+}
+
+#[test]
+fn bucket_translucency_and_fresnel_48px_match_reference_where_nothing_collided() {
+    // Tolerance 2e-3 as for the exact methods' interpolated view depth (header); the depth
+    // channel is the f32 view depth with the facing in its last bit (1 ulp), and the normal is
+    // packed in 4 bytes (octahedral 15:15, < 2e-4 rad: Schlick moves < 1e-3).
+    let runs: &[(&str, &str)] = &[
+        ("bdp", "translucency"),
+        ("bdp", "fresnel"),
+        ("bdp2", "translucency"),
+        ("adp", "translucency"),
+        ("adp", "fresnel"),
+    ];
+    for &(method, effect) in runs {
+        let p = Params::new()
+            .with("effect", s(effect))
+            .with("sigma", ParamValue::Float(0.8))
+            .with("bucket_count", ParamValue::Int(16));
+        let judged = bucket_err(method, &shells(), &p, 2e-3);
+        // 3 shells, ≤ 6 layers in 16 buckets (adp: 1024 bins): most pixels collide nowhere.
+        assert!(
+            judged >= 0.5,
+            "{method} {effect}: only {judged} of covered pixels judged"
+        );
+    }
+}
+
+#[test]
+fn bucket_effects_they_cannot_keep_are_skipped_with_the_reason() {
+    let gpu = testing::gpu();
+    let why = |method: &str, p: Params| {
+        let m = methods::get(method);
+        m.supports(gpu, &testing::point(&*m, &p)).unwrap_err()
+    };
+    let e = why("adp", Params::new().with("effect", s("csg_and")));
+    assert!(e.contains("csg_and"), "{e}");
+    let e = why(
+        "bdp",
+        Params::new()
+            .with("effect", s("translucency"))
+            .with("bucket_count", ParamValue::Int(32)),
+    );
+    assert!(e.contains("64 float channels"), "{e}");
+    let e = why("bdp2", Params::new().with("effect", s("fresnel")));
+    assert!(e.contains("fresnel"), "{e}");
 }

@@ -9,8 +9,8 @@
 //! | `floor_blend_const` | the yardstick of `x_blend` (LucidRaster's ratio): the cheapest unsorted blend, positions only and one colour | — (not judged) | 1 | 4 B RGBA8 |
 //! | `depth_peel`   | Everitt 2001, classic front-to-back peeling; every effect via the fold | exact up to `max_layers`; coplanar ties lost (`variant=tiebreak` keeps them) | layers + 1 | 2×4 B depth + 4–36 B layer payload + 64 B fold state + 16 B per output image + 4 B count |
 //! | `dual_peel`    | Bavoil & Myers 2008, dual depth peeling (MAX blending, nearest + farthest per pass) | exact up to `max_layers`; coplanar ties merged | ⌈layers/2⌉ + 1 | 2×8 B depth + 2×16 B layers + 2×16 B accumulation + 16 B image + 4 B count |
-//! | `kbuffer_rmw`  | Bavoil 2007 ch. 4, k-buffer by non-atomic read-modify-write insertion | k nearest, but RMW hazards (measured: `hazard_rate`) | 1 (+ resolve) | k × (4 B key + 32 B entry) + 16 B image |
-//! | `kbuffer_atomic` | hazard-free k-buffer: 32-bit atomicMax bubbling of depth keys, then a payload pass | exact k nearest (ties get their own slots) | 2 (+ resolve) | k × (4 B key + 4 B claim + 32 B entry) + 16 B image |
+//! | `kbuffer_rmw`  | Bavoil 2007 ch. 4, k-buffer by non-atomic read-modify-write insertion; every effect via the fold | k nearest, but RMW hazards (measured: `hazard_rate`) | 1 (+ resolve) | k × (4 B key + 4–32 B entry: the effect's payload, or all with `specialisation = uber`) + 16 B per output image |
+//! | `kbuffer_atomic` | hazard-free k-buffer: 32-bit atomicMax bubbling of depth keys, then a payload pass; every effect via the fold | exact k nearest (ties get their own slots) | 2 (+ resolve) | k × (4 B key + 4 B claim + 4–32 B entry) + 16 B per output image |
 //!
 //! The bounded captures `kbuffer_rmw`, `kbuffer_atomic` and `linked_list` also take `tail =
 //! drop|blend` (what does not fit is dropped, or blended out of order into a tail composited
@@ -27,7 +27,7 @@
 //! | `adaptive_ideal` | adaptive transparency replayed in primitive order from compute_abuffer's capture | approximate (exact for n ≤ k) | compute_abuffer's | 8 B per fragment + compute_abuffer's |
 //! | `hybrid`       | Maule et al. 2013, hybrid transparency: the atomic k-buffer's k nearest exact + a mean-alpha weighted tail behind them | approximate (exact for n ≤ k), order-independent | 2 (+ resolve) | k × 40 B + 16 B image + 24 B tail |
 //! | `stochastic`   | Enderton et al. 2010 stochastic transparency (random α·S sample masks, MSAA depth test, passes averaged, alpha correction) | approximate: unbiased without the correction, noise ∝ 1/√(S·passes); judged vs the S-sample truth | 2 per pass (+1 for the correction) | S × (4 B depth + 16 B RGBA32F + 4 B R32F) + 32 B |
-//! | `bdp`          | Liu et al., GPU Pro ch. 1, uniform bucket depth peeling | approximate: exact iff ≤1 fragment per bucket (2 if paired); collisions counted | 2 | 8 B range + 4 B × channels (≤32) + 68 B resolve |
+//! | `bdp`          | Liu et al., GPU Pro ch. 1, uniform bucket depth peeling; transparency, and translucency / fresnel on (depth, normal) bucket pairs | approximate: exact iff ≤1 fragment per bucket (2 if paired); collisions counted | 2 | 8 B range + 4 B × channels (≤32) + 68 B resolve |
 //! | `bdp2`         | Liu et al., GPU Pro ch. 1, two-pass BDP | approximate: 2 fragments per bucket; collisions counted | 3 | 8 B range + 2 × 4 B × K + 68 B resolve |
 //! | `adp`          | Liu et al., GPU Pro ch. 1, adaptive (histogram-equalised) BDP | approximate: fragments sharing a histogram bin collide | 2 + ⌈occupied bins / K⌉ | hist_bins/8 B + 8 B × K + 8 B range + 68 B resolve |
 //!

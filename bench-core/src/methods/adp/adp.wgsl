@@ -54,7 +54,7 @@ fn equalise(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 @fragment
-fn fs_route(in: Varyings) -> BucketOut {
+fn fs_route(in: Varyings, @builtin(front_facing) ff: bool) -> BucketOut {
     let zr = depth_range(vec2<i32>(in.clip.xy));
     let bin = adp_bin(rel_position(in.clip.z, zr));
     let base = pixel_index(in.clip.xy) * K;
@@ -71,6 +71,9 @@ fn fs_route(in: Varyings) -> BucketOut {
     // Bins of earlier or later passes have no bucket in this one.
     if lo >= K || adp_bounds[base + lo] != bin {
         discard;
+    }
+    if FX {
+        return fx_emit(lo, in, ff);
     }
     return emit(lo, pack_color(in.color), NO_CHANNEL, 0.0);
 }

@@ -12,6 +12,7 @@
 use super::bucket::{self, Config, Kind, PreparedBucket};
 use super::{Method, Prepared};
 use crate::axes::{Axis, Point};
+use crate::effects;
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
 use crate::record::cols;
@@ -44,8 +45,13 @@ pub fn config(point: &Point) -> std::result::Result<Config, String> {
     }
     Ok(Config {
         kind: Kind::Adaptive { hist_bins },
-        buckets: bucket::buckets(point, false)?,
+        buckets: bucket::buckets_fx(point, false)?.0,
     })
+}
+
+/// The point's effect (translucency and fresnel on (depth, normal) bucket pairs).
+fn fx(point: &Point) -> std::result::Result<bucket::Fx, String> {
+    bucket::Fx::read(point)
 }
 
 impl Method for Adp {
@@ -59,7 +65,9 @@ impl Method for Adp {
         false
     }
     fn axes(&self) -> Vec<Axis> {
-        vec![bucket::BUCKET_COUNT, HIST_BINS, MODE]
+        let mut v = vec![bucket::BUCKET_COUNT, HIST_BINS, MODE];
+        v.extend_from_slice(effects::AXES);
+        v
     }
     fn validate(&self, point: &Point) -> std::result::Result<(), String> {
         let bins = point.int(&HIST_BINS);
@@ -74,11 +82,13 @@ impl Method for Adp {
         wgpu::Features::FLOAT32_BLENDABLE
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
-        bucket::supports_targets(gpu, &config(point)?)
+        let fx = fx(point)?;
+        bucket::supports_targets_fx(gpu, &config(point)?, fx.pairs)
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let cfg = config(point).map_err(CoreError::Param)?;
-        Ok(Box::new(PreparedBucket::new(gpu, scene, cfg, WGSL)?))
+        let fx = fx(point).map_err(CoreError::Param)?;
+        Ok(Box::new(PreparedBucket::new_fx(gpu, scene, cfg, WGSL, fx)?))
     }
 }
 

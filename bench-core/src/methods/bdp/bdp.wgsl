@@ -9,10 +9,13 @@
 override PAIRED: bool = false;
 
 @fragment
-fn fs_route(in: Varyings) -> BucketOut {
+fn fs_route(in: Varyings, @builtin(front_facing) ff: bool) -> BucketOut {
     let zr = depth_range(vec2<i32>(in.clip.xy));
     let t = rel_position(in.clip.z, zr);
     let b = uniform_bucket(t);
+    if FX {
+        return fx_emit(b, in, ff);
+    }
     if PAIRED {
         let k = bucket_key(t, b);
         return emit(2u * b, pack_keyed(126u - k, in.color), 2u * b + 1u, pack_keyed(k, in.color));

@@ -10,6 +10,7 @@
 use super::bucket::{self, Config, Kind, PreparedBucket};
 use super::{Method, Prepared};
 use crate::axes::{Axis, Point};
+use crate::effects;
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
 use crate::record::cols;
@@ -35,11 +36,16 @@ const PAIRING: Axis = Axis::choice(
 /// The configuration a point asks for, or the reason it cannot run.
 pub fn config(point: &Point) -> std::result::Result<Config, String> {
     let paired = point.choice(&PAIRING) == "paired";
-    let buckets = bucket::buckets(point, paired)?;
+    let buckets = bucket::buckets_fx(point, paired)?.0;
     Ok(Config {
         kind: Kind::Uniform { paired },
         buckets,
     })
+}
+
+/// The point's effect (translucency and fresnel on (depth, normal) bucket pairs).
+fn fx(point: &Point) -> std::result::Result<bucket::Fx, String> {
+    bucket::Fx::read(point)
 }
 
 impl Method for Bdp {
@@ -53,17 +59,21 @@ impl Method for Bdp {
         false
     }
     fn axes(&self) -> Vec<Axis> {
-        vec![bucket::BUCKET_COUNT, PAIRING, MODE]
+        let mut v = vec![bucket::BUCKET_COUNT, PAIRING, MODE];
+        v.extend_from_slice(effects::AXES);
+        v
     }
     fn required_features(&self) -> wgpu::Features {
         wgpu::Features::FLOAT32_BLENDABLE
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
-        bucket::supports_targets(gpu, &config(point)?)
+        let fx = fx(point)?;
+        bucket::supports_targets_fx(gpu, &config(point)?, fx.pairs)
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let cfg = config(point).map_err(CoreError::Param)?;
-        Ok(Box::new(PreparedBucket::new(gpu, scene, cfg, WGSL)?))
+        let fx = fx(point).map_err(CoreError::Param)?;
+        Ok(Box::new(PreparedBucket::new_fx(gpu, scene, cfg, WGSL, fx)?))
     }
 }
 

@@ -7,6 +7,7 @@
 use super::bucket::{self, Config, Kind, PreparedBucket};
 use super::{Method, Prepared};
 use crate::axes::{Axis, Point};
+use crate::effects;
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
 use crate::record::cols;
@@ -26,8 +27,19 @@ const MODE: Axis = Axis::choice(
 pub fn config(point: &Point) -> std::result::Result<Config, String> {
     Ok(Config {
         kind: Kind::TwoPass,
-        buckets: bucket::buckets(point, false)?,
+        buckets: bucket::buckets_fx(point, false)?.0,
     })
+}
+
+/// The point's effect: translucency on (depth, normal) pairs, not fresnel: a bucket here holds
+/// two fragments by design, and a MAX-blended normal channel cannot follow the farther one's
+/// depth (the chapter shows Fresnel by ADP only).
+fn fx(point: &Point) -> std::result::Result<bucket::Fx, String> {
+    let fx = bucket::Fx::read(point)?;
+    if fx.effect.effect == effects::Effect::Fresnel {
+        return Err("bdp2 keeps two fragments per bucket, and a MAX-blended normal channel cannot follow the farther one's depth: fresnel is offered on bdp (single) and adp, as in the chapter".into());
+    }
+    Ok(fx)
 }
 
 impl Method for Bdp2 {
@@ -41,17 +53,21 @@ impl Method for Bdp2 {
         false
     }
     fn axes(&self) -> Vec<Axis> {
-        vec![bucket::BUCKET_COUNT, MODE]
+        let mut v = vec![bucket::BUCKET_COUNT, MODE];
+        v.extend_from_slice(effects::AXES);
+        v
     }
     fn required_features(&self) -> wgpu::Features {
         wgpu::Features::FLOAT32_BLENDABLE
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
-        bucket::supports_targets(gpu, &config(point)?)
+        let fx = fx(point)?;
+        bucket::supports_targets_fx(gpu, &config(point)?, fx.pairs)
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let cfg = config(point).map_err(CoreError::Param)?;
-        Ok(Box::new(PreparedBucket::new(gpu, scene, cfg, WGSL)?))
+        let fx = fx(point).map_err(CoreError::Param)?;
+        Ok(Box::new(PreparedBucket::new_fx(gpu, scene, cfg, WGSL, fx)?))
     }
 }
 

@@ -14,6 +14,9 @@ override K: u32 = 8u;
 // 3 = one pack_color per bucket, bucket j holding occupied histogram bin adp_bounds[j] (adp).
 override MODE: u32 = 0u;
 override HIST_BINS: u32 = 1024u;
+// Effects on (depth, normal) bucket pairs (translucency, fresnel; GPU Pro ch. 1 §1.6.2–1.6.3):
+// bucket b owns channels 2b (pack_viewz_facing) and 2b + 1 (pack_normal_f32), MAX-blended.
+override FX: bool = false;
 
 const NO_CHANNEL: u32 = 0xffffffffu;
 // Smallest positive normal f32's bit pattern: every packed value is offset by it.
@@ -129,6 +132,18 @@ fn keyed_color(v: f32) -> vec4<f32> {
     ) / 63.0;
 }
 
+// FX: the fragment's pair for bucket b.
+fn fx_emit(b: u32, in: Varyings, ff: bool) -> BucketOut {
+    return emit(2u * b, pack_viewz_facing(in.view_z, ff), 2u * b + 1u, pack_normal_f32(in.normal));
+}
+
+// FX: the fold's fragment from a pair (depth channel v, normal channel nv); window depth and
+// colour are not stored (translucency and fresnel read neither).
+fn fx_frag(v: f32, nv: f32) -> Frag {
+    let n = select(vec3<f32>(0.0), unpack_normal_f32(nv), nv != 0.0);
+    return Frag(0.0, v, vec4<f32>(0.0), n, 0u, viewz_front(v));
+}
+
 // ---- the untimed fragment counter (readback): true fragments per pixel ----------------------
 
 @fragment
@@ -167,7 +182,7 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let px = vec2<i32>(id.xy);
     let i = id.y * w + id.x;
-    var s = fold_init();
+    var s = fold_init_at(vec2<f32>(id.xy) + 0.5);
     var n = 0u;
     // Passes after the first (adp with more occupied bins than buckets) continue the fold.
     if pass_info.index > 0u {
@@ -175,7 +190,23 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
         n = counts[i];
     }
     let zr = depth_range(px);
-    if zr.y >= zr.x {
+    if FX && zr.y >= zr.x {
+        // Pairs nearest first; bdp2's second pass (slots_b) holds the nearer of its bucket's two.
+        for (var b = 0u; b < K; b++) {
+            if MODE == 2u {
+                let v2 = slot_b(px, 2u * b);
+                if v2 != 0.0 {
+                    fold_step(&s, fx_frag(v2, slot_b(px, 2u * b + 1u)));
+                    n += 1u;
+                }
+            }
+            let v = slot_a(px, 2u * b);
+            if v != 0.0 {
+                fold_step(&s, fx_frag(v, slot_a(px, 2u * b + 1u)));
+                n += 1u;
+            }
+        }
+    } else if zr.y >= zr.x {
         for (var b = 0u; b < K; b++) {
             let tb = (f32(b) + 0.5) / f32(K);
             if MODE == 0u {

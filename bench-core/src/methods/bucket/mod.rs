@@ -7,14 +7,21 @@
 //! equalisation] → routing pass(es) into K buckets on up to 8 RGBA32F attachments with MAX
 //! blending → a compute resolve that walks the buckets nearest first through the effects fold.
 //!
+//! Effects (GPU Pro ch. 1 §1.6.2–1.6.3): for translucency and Fresnel ([`Fx`]) the buckets are
+//! bound into pairs, as the chapter does: one channel keeps the linear view depth with the
+//! facing in its lowest bit, the other the normal packed in 4 bytes (`packing.wgsl`,
+//! octahedral 15:15), both MAX-blended, so where two fragments share a bucket (a collision,
+//! counted as for colour) the pair may mix them: reported, not hidden.
+//!
 //! Collisions are counted exactly, per pixel, as (true fragments) − (fragments captured): the
 //! captured count comes from the resolve, the true count from an untimed fragment-counter pass
 //! (one atomicAdd per fragment) run in `readback`, so the timed frame carries no counter. Tests
 //! check this GPU count against the CPU twin routing the reference fragment lists.
 
 use crate::axes::{Axis, Point};
-use crate::effects::FOLD_STATE_BYTES;
+use crate::effects::{Effect, EffectConfig, FOLD_STATE_BYTES};
 use crate::gpu_util::{camera_entry, read_vec, storage_entry, texture_entry};
+use crate::methods::packing::PACKING_WGSL;
 use crate::record::{cols, Flag};
 
 use super::{Capture, Expected, FrameStats};
@@ -63,6 +70,17 @@ impl Config {
     pub fn attachments(&self) -> u32 {
         self.channels().div_ceil(4)
     }
+    /// Channels per pass when the buckets hold (depth, normal) pairs for effects.
+    fn channels_fx(&self, fx: bool) -> u32 {
+        if fx {
+            2 * self.buckets
+        } else {
+            self.channels()
+        }
+    }
+    fn attachments_fx(&self, fx: bool) -> u32 {
+        self.channels_fx(fx).div_ceil(4)
+    }
     fn mode(&self) -> u32 {
         match self.kind {
             Kind::Uniform { paired: false } => 0,
@@ -108,8 +126,57 @@ pub fn buckets(point: &Point, paired: bool) -> std::result::Result<u32, String> 
     Ok(k)
 }
 
+/// Which effect a bucket method computes: transparency on packed colour, or translucency /
+/// Fresnel on (depth, normal) bucket pairs (`pairs`); csg and dof are not offered.
+#[derive(Clone, Copy, Debug)]
+pub struct Fx {
+    pub effect: EffectConfig,
+    pub pairs: bool,
+}
+
+impl Fx {
+    /// The point's effect, or why a bucket method cannot compute it.
+    pub fn read(point: &Point) -> std::result::Result<Fx, String> {
+        let effect = EffectConfig::from_point(point)?;
+        let pairs = match effect.effect {
+            Effect::Transparency => false,
+            Effect::Translucency | Effect::Fresnel => true,
+            e => {
+                return Err(format!(
+                    "bucket methods fold transparency, translucency and fresnel (the chapter's effects): {} needs an object id or colour beside the depth, which a MAX-blended bucket pair cannot keep together",
+                    e.name()
+                ))
+            }
+        };
+        Ok(Fx { effect, pairs })
+    }
+}
+
+/// `bucket_count` for a point's effect: (depth, normal) pairs take two channels per bucket.
+pub fn buckets_fx(point: &Point, paired: bool) -> std::result::Result<(u32, Fx), String> {
+    let fx = Fx::read(point)?;
+    if fx.pairs && paired {
+        return Err("bucket_pairing = paired keeps near and far colour in a bucket's two channels; translucency and fresnel use them for (depth, normal)".into());
+    }
+    let k = point.int(&BUCKET_COUNT) as u32;
+    if fx.pairs && 2 * k > MAX_CHANNELS {
+        return Err(format!(
+            "bucket_count = {k} with {} needs {} float channels ((depth, normal) per bucket); one pass has {MAX_CHANNELS} (8 attachments × 4)",
+            fx.effect.effect.name(),
+            2 * k
+        ));
+    }
+    let k = buckets(point, paired)?;
+    Ok((k, fx))
+}
+
 /// What every bucket method checks: blendable RGBA32F/RG32F and enough attachments.
 pub fn supports_targets(gpu: &Gpu, cfg: &Config) -> std::result::Result<(), String> {
+    supports_targets_fx(gpu, cfg, false)
+}
+
+/// As [`supports_targets`], for (depth, normal) pairs when `fx`.
+pub fn supports_targets_fx(gpu: &Gpu, cfg: &Config, fx: bool) -> std::result::Result<(), String> {
     if !gpu.has(wgpu::Features::FLOAT32_BLENDABLE) {
         return Err("adapter lacks FLOAT32_BLENDABLE (MAX blending on RGBA32F/RG32F)".into());
     }
@@ -118,7 +185,7 @@ pub fn supports_targets(gpu: &Gpu, cfg: &Config) -> std::result::Result<(), Stri
             return Err(format!("{f:?} is not renderable on this adapter"));
         }
     }
-    let n = cfg.attachments();
+    let n = cfg.attachments_fx(fx);
     if n > gpu.limits.max_color_attachments {
         return Err(format!(
             "{n} colour attachments needed, adapter allows {}",
@@ -395,12 +462,28 @@ impl PreparedBucket {
         cfg: Config,
         method_wgsl: &str,
     ) -> Result<PreparedBucket> {
+        let fx = Fx {
+            effect: EffectConfig::default(),
+            pairs: false,
+        };
+        Self::new_fx(gpu, scene, cfg, method_wgsl, fx)
+    }
+
+    /// As [`PreparedBucket::new`], folding `fx`'s effect (pairs: (depth, normal) per bucket).
+    pub fn new_fx(
+        gpu: &Gpu,
+        scene: &GpuScene,
+        cfg: Config,
+        method_wgsl: &str,
+        fx: Fx,
+    ) -> Result<PreparedBucket> {
         let d = &gpu.device;
         let (w, h) = (scene.width, scene.height);
         let px = w as u64 * h as u64;
+        let attachments = cfg.attachments_fx(fx.pairs);
         let body = format!(
-            "{FOLD_WGSL}\n{WGSL}\n{}\n{method_wgsl}",
-            outputs_wgsl(cfg.attachments())
+            "{PACKING_WGSL}\n{FOLD_WGSL}\n{WGSL}\n{}\n{method_wgsl}",
+            outputs_wgsl(attachments)
         );
         let module = crate::gpu_util::shader(gpu, "bucket", &body);
         let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
@@ -467,11 +550,13 @@ impl PreparedBucket {
                     0.0
                 },
             ),
-            ("EFFECT", 0.0),
+            ("FX", if fx.pairs { 1.0 } else { 0.0 }),
         ];
+        let effect = fx.effect.constants();
         // Every override a stage can see must be known to it; pass only those the module declares.
         let declared: Vec<(&str, f64)> = constants
             .iter()
+            .chain(&effect)
             .copied()
             .filter(|(n, _)| body.contains(&format!("override {n}")))
             .collect();
@@ -487,7 +572,7 @@ impl PreparedBucket {
             .into_iter()
             .map(Some)
             .collect();
-        let slot_targets: Vec<Option<wgpu::ColorTargetState>> = (0..cfg.attachments())
+        let slot_targets: Vec<Option<wgpu::ColorTargetState>> = (0..attachments)
             .map(|_| {
                 Some(wgpu::ColorTargetState {
                     format: SLOT_FORMAT,
@@ -620,7 +705,7 @@ impl PreparedBucket {
             .texture(gpu, "bucket depth range", w, h, RANGE_FORMAT, usage)
             .create_view(&Default::default());
         let mut make_slots = |label: &str| {
-            let layers = cfg.attachments();
+            let layers = attachments;
             alloc.bytes += px * 16 * layers as u64;
             let tex = gpu.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),

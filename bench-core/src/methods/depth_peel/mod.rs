@@ -52,7 +52,7 @@ pub const OCCLUSION_STOP: Axis = Axis::bool(
     "stop at the first pass an occlusion query finds empty (a CPU round trip per pass)",
     true,
 );
-const SPECIALISATION: Axis = Axis::choice(
+pub const SPECIALISATION: Axis = Axis::choice(
     cols::SPECIALISATION,
     "specialised: only the effect's payload is fetched, stored and read; uber: everything",
     "specialised",

@@ -15,14 +15,7 @@ override K: u32 = 8u;
 override SAMPLES: u32 = 1u;
 var<private> SAMPLE: i32 = 0;
 
-struct Entry {
-    color: vec4<f32>,
-    depth: f32,
-    view_z: f32,
-    object_id: u32,
-    // bit 0: front facing
-    flags: u32,
-};
+// `Entry` (what a slot keeps for the effects fold) is generated for the point: kbuffer_rmw/entry.rs.
 
 @group(0) @binding(1) var<storage, read_write> keys: array<atomic<u32>>;
 @group(0) @binding(2) var<storage, read_write> entries: array<Entry>;
@@ -69,7 +62,7 @@ fn payload(in: Varyings, ff: bool) -> bool {
             return false;
         }
         if s == key && atomicAdd(&claims[base + i], 1u) == 0u {
-            entries[base + i] = Entry(in.color, in.clip.z, in.view_z, in.object_id, select(0u, 1u, ff));
+            entries[base + i] = make_entry(in, ff);
             return true;
         }
     }
@@ -99,7 +92,7 @@ fn keep_first(in: Varyings, ff: bool) -> bool {
         return false;
     }
     atomicStore(&keys[base + i], near_key(in.clip.z));
-    entries[base + i] = Entry(in.color, in.clip.z, in.view_z, in.object_id, select(0u, 1u, ff));
+    entries[base + i] = make_entry(in, ff);
     return true;
 }
 
@@ -123,17 +116,17 @@ override KEEP_FIRST: bool = false;
 // Largest K the resolve sorts (kbuffer_rmw's MAX_K).
 const KMAX: u32 = 64u;
 
-fn fold_kept(p: u32) -> FoldState {
+fn fold_kept(p: u32, pixel: vec2<f32>) -> FoldState {
     let base = p * K;
-    var s = fold_init();
+    var s = fold_init_at(pixel);
     if !KEEP_FIRST {
         // keep = nearest: the slots are sorted nearest first.
         for (var i = 0u; i < K; i = i + 1u) {
-            if atomicLoad(&keys[base + i]) == 0u {
+            let key = atomicLoad(&keys[base + i]);
+            if key == 0u {
                 break;
             }
-            let e = entries[base + i];
-            fold_step(&s, Frag(e.depth, e.view_z, e.color, vec3<f32>(0.0), e.object_id, (e.flags & 1u) != 0u));
+            fold_step(&s, entry_frag(entries[base + i], key));
         }
         return s;
     }
@@ -157,8 +150,8 @@ fn fold_kept(p: u32) -> FoldState {
         n = n + 1u;
     }
     for (var i = 0u; i < n; i = i + 1u) {
-        let e = entries[base + order[i]];
-        fold_step(&s, Frag(e.depth, e.view_z, e.color, vec3<f32>(0.0), e.object_id, (e.flags & 1u) != 0u));
+        let j = base + order[i];
+        fold_step(&s, entry_frag(entries[j], atomicLoad(&keys[j])));
     }
     return s;
 }
@@ -171,13 +164,19 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let p = id.y * w + id.x;
+    let pixel = vec2<f32>(id.xy) + 0.5;
     if SAMPLES == 1u {
-        out_image[p] = fold_finish(fold_kept(p));
+        // Every image the effect outputs (dof: 3, one after another).
+        let s = fold_kept(p, pixel);
+        for (var i = 0u; i < fold_image_count(); i = i + 1u) {
+            out_image[i * w * h + p] = fold_finish_image(s, i);
+        }
         return;
     }
+    // Per-sample slots (transparency only): the samples' folds averaged.
     var sum = vec4<f32>(0.0);
     for (var s = 0u; s < SAMPLES; s = s + 1u) {
-        sum = sum + fold_finish(fold_kept(p * SAMPLES + s));
+        sum = sum + fold_finish(fold_kept(p * SAMPLES + s, pixel));
     }
     out_image[p] = sum / f32(SAMPLES);
 }
@@ -191,5 +190,5 @@ fn resolve_tail(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let p = id.y * w + id.x;
-    out_image[p] = with_tail(id.xy, fold_finish(fold_kept(p)));
+    out_image[p] = with_tail(id.xy, fold_finish(fold_kept(p, vec2<f32>(id.xy) + 0.5)));
 }

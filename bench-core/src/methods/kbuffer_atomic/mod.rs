@@ -17,19 +17,26 @@
 //! judged against each sample's k nearest; `ssaa2x2` wraps the single-sample k-buffer. A
 //! coverage-mask k-buffer is not offered: it would keep the k nearest fragments of the pixel,
 //! not of each sample, a rule with no per-sample definition to judge it by.
+//!
+//! Effects: every effect of the fold, on slots of the effect's payload or everything
+//! (`specialisation`), as `kbuffer_rmw` (`kbuffer_rmw::entry`); antialiasing is offered for
+//! transparency only (an averaged per-sample fold of another effect has no judged truth here).
 
+use super::kbuffer_rmw::entry::SlotConfig;
 use super::kbuffer_rmw::{kslots_entries, kslots_layout, KSlots, LAYERS};
 use super::store::{dummy_depth_ms, storage_pass_with, storage_pipeline_ms};
 use super::tail::{self, Bounding, TailTargets, RESOLVE_WGSL, TAIL_WGSL};
 use super::{Capture, FrameStats, Method, Prepared};
 use crate::aa::{self, AaCapture, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
-use crate::effects::FOLD_WGSL;
+use crate::effects::{self, Effect, FOLD_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
     bind_buffers, per_sample_source, pixel_pass, shader_source, COMMON_WGSL, STORAGE_RW,
 };
+use crate::methods::depth_peel::SPECIALISATION;
+use crate::methods::packing::PACKING_WGSL;
 use crate::oit::Keep;
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
@@ -50,11 +57,28 @@ impl Method for KBufferAtomic {
         true
     }
     fn axes(&self) -> Vec<Axis> {
-        vec![LAYERS, tail::TAIL, tail::KEEP, aa::AA, aa::AA_CAPTURE]
+        let mut v = vec![LAYERS, tail::TAIL, tail::KEEP, aa::AA, aa::AA_CAPTURE];
+        v.push(SPECIALISATION);
+        v.extend_from_slice(effects::AXES);
+        v
+    }
+    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+        SlotConfig::read(point).map(|_| ())
+    }
+    fn payload(&self, point: &Point) -> Option<&'static str> {
+        SlotConfig::read(point).ok().map(|c| c.payload.name())
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
         let cfg = AaConfig::from_point(point);
         AA_SUPPORT.check(self.name(), cfg)?;
+        let slot = SlotConfig::read(point)?;
+        slot.check(Bounding::of(point, true).blends())?;
+        if cfg.mode != AaMode::None && slot.effect.effect != Effect::Transparency {
+            return Err(format!(
+                "antialiasing is offered for transparency only: an averaged per-sample {} fold has no judged truth",
+                slot.effect.effect.name()
+            ));
+        }
         if cfg.msaa() > 1 {
             if Bounding::of(point, true) != Bounding::DEFAULT {
                 return Err("per-sample k slots keep each sample's k nearest and drop the rest: tail = blend and keep = first are single-sample".into());
@@ -69,6 +93,7 @@ impl Method for KBufferAtomic {
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let k = point.int(&LAYERS) as u32;
         let bounding = Bounding::of(point, true);
+        let slot = SlotConfig::read(point).map_err(crate::CoreError::Param)?;
         let cfg = AaConfig::from_point(point);
         if cfg.mode == AaMode::Ssaa2x2 {
             return super::ssaa::prepare(gpu, scene, |big| {
@@ -77,7 +102,11 @@ impl Method for KBufferAtomic {
         }
         let samples = cfg.msaa();
         Ok(Box::new(PreparedAtomic::new_ms(
-            gpu, scene, k, bounding, samples,
+            gpu,
+            scene,
+            (k, slot),
+            bounding,
+            samples,
         )?))
     }
 }
@@ -107,20 +136,24 @@ pub(crate) struct PreparedAtomic {
 }
 
 impl PreparedAtomic {
+    /// Transparency (colour slots), single-sample: `hybrid` and `ssaa2x2`.
     pub(crate) fn new(gpu: &Gpu, scene: &GpuScene, k: u32, bounding: Bounding) -> Result<Self> {
-        Self::new_ms(gpu, scene, k, bounding, 1)
+        Self::new_ms(gpu, scene, (k, SlotConfig::transparency()), bounding, 1)
     }
 
     /// `samples` > 1: k slots per sample, both passes per sample (MSAA, `aa_capture = sample`).
     fn new_ms(
         gpu: &Gpu,
         scene: &GpuScene,
-        k: u32,
+        (k, slot): (u32, SlotConfig),
         bounding: Bounding,
         samples: u32,
     ) -> Result<Self> {
         let d = &gpu.device;
-        let src = format!("{COMMON_WGSL}\n{WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}");
+        let src = format!(
+            "{COMMON_WGSL}\n{WGSL}\n{}\n{PACKING_WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}",
+            slot.wgsl()
+        );
         let src = if samples > 1 {
             per_sample_source(&src)
         } else {
@@ -135,7 +168,8 @@ impl PreparedAtomic {
         });
         let kc = [("K", k as f64), ("SAMPLES", samples as f64)];
         let [keep_first, mean_alpha] = bounding.constants();
-        let rc = [kc[0], kc[1], ("EFFECT", 0.0), keep_first, mean_alpha];
+        let mut rc = slot.effect.constants();
+        rc.extend([kc[0], kc[1], keep_first, mean_alpha]);
         let blend = bounding.blends();
         let targets = if blend {
             TailTargets::color_targets()
@@ -179,7 +213,7 @@ impl PreparedAtomic {
         );
         let mut alloc = AllocCounter::default();
         let depth = dummy_depth_ms(gpu, &mut alloc, scene, samples);
-        let slots = KSlots::per_sample(gpu, &mut alloc, scene, k, samples)?;
+        let slots = KSlots::per_sample(gpu, &mut alloc, scene, (k, &slot), samples)?;
         let claims = alloc.buffer(
             gpu,
             "k-buffer claims",

@@ -6,15 +6,7 @@
 
 override K: u32 = 8u;
 
-// What a slot keeps for the effects fold (32 B).
-struct Entry {
-    color: vec4<f32>,
-    depth: f32,
-    view_z: f32,
-    object_id: u32,
-    // bit 0: front facing
-    flags: u32,
-};
+// `Entry` (what a slot keeps for the effects fold) is generated for the point: entry.rs.
 
 // Per pixel K keys, larger = nearer, 0 = empty (so a cleared buffer is an empty k-buffer).
 @group(0) @binding(1) var<storage, read_write> keys: array<u32>;
@@ -42,8 +34,8 @@ fn insert(in: Varyings, ff: bool) -> vec4<f32> {
     }
     var out = vec4<f32>(0.0, 0.0, 0.0, -1.0);
     if last != 0u {
-        let e = entries[base + K - 1u];
-        out = vec4<f32>(e.color.rgb * e.color.a, e.color.a);
+        let c = entry_color(entries[base + K - 1u]);
+        out = vec4<f32>(c.rgb * c.a, c.a);
     }
     // Start at the first empty slot (or the last one when full).
     var j = K - 1u;
@@ -67,7 +59,7 @@ fn insert(in: Varyings, ff: bool) -> vec4<f32> {
         j = j - 1u;
     }
     keys[base + j] = key;
-    entries[base + j] = Entry(in.color, in.clip.z, in.view_z, in.object_id, select(0u, 1u, ff));
+    entries[base + j] = make_entry(in, ff);
     return out;
 }
 
@@ -88,6 +80,14 @@ fn fs_insert_tail(in: Varyings, @builtin(front_facing) ff: bool) -> TailOut {
 
 // ---- resolve: walk each pixel's slots nearest first through the effects fold ----
 
+// Writes image i of pixel p for every image the effect outputs (dof: 3, one after another).
+fn write_images(p: u32, s: FoldState) {
+    let n = u32(camera.viewport.x) * u32(camera.viewport.y);
+    for (var i = 0u; i < fold_image_count(); i = i + 1u) {
+        out_image[i * n + p] = fold_finish_image(s, i);
+    }
+}
+
 @compute @workgroup_size(8, 8)
 fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = u32(camera.viewport.x);
@@ -96,23 +96,22 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let p = id.y * w + id.x;
-    let base = p * K;
-    out_image[p] = fold_finish(fold_kept(base));
+    write_images(p, fold_kept(p * K, vec2<f32>(id.xy) + 0.5));
 }
 
-fn fold_kept(base: u32) -> FoldState {
-    var s = fold_init();
+fn fold_kept(base: u32, pixel: vec2<f32>) -> FoldState {
+    var s = fold_init_at(pixel);
     for (var i = 0u; i < K; i = i + 1u) {
-        if keys[base + i] == 0u {
+        let key = keys[base + i];
+        if key == 0u {
             break;
         }
-        let e = entries[base + i];
-        fold_step(&s, Frag(e.depth, e.view_z, e.color, vec3<f32>(0.0), e.object_id, (e.flags & 1u) != 0u));
+        fold_step(&s, entry_frag(entries[base + i], key));
     }
     return s;
 }
 
-// tail = blend: the kept fragments with the tail behind them (tail/resolve.wgsl).
+// tail = blend (transparency only): the kept fragments with the tail behind them (tail/resolve.wgsl).
 @compute @workgroup_size(8, 8)
 fn resolve_tail(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = u32(camera.viewport.x);
@@ -121,5 +120,5 @@ fn resolve_tail(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let p = id.y * w + id.x;
-    out_image[p] = with_tail(id.xy, fold_finish(fold_kept(p * K)));
+    out_image[p] = with_tail(id.xy, fold_finish(fold_kept(p * K, vec2<f32>(id.xy) + 0.5)));
 }

@@ -18,23 +18,34 @@
 //! farthest kept one evicted by a nearer one) is returned to the blended tail (methods/tail).
 //! `keep = first` (default `nearest`): a full pixel takes no more fragments, so the first k to
 //! arrive stay (the hazard judge then does not apply: its truth is the k nearest).
+//!
+//! Effects: every effect of the fold (`effects::AXES`), on slots that store the effect's payload
+//! (`specialisation = specialised`) or everything (`uber`): see [`entry`]. `specialised`
+//! translucency keeps 4 B per slot besides the key (linear depth and facing): the thesis's "Z"
+//! k-buffer of Table 6.1, beside transparency's colour ("RGBZ"). The thesis's multipass
+//! peeling of k layers (MP) is `depth_peel` with `max_layers = k`.
 
-use super::store::{self, dummy_depth, storage_pass_with, storage_pipeline_with, ENTRY_BYTES};
+pub mod entry;
+
+use super::store::{self, dummy_depth, storage_pass_with, storage_pipeline_with};
 use super::tail::{self, Bounding, TailTargets, RESOLVE_WGSL, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
-use crate::effects::FOLD_WGSL;
+use crate::effects::{self, FOLD_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::gpu_util::{
     bind_buffers, camera_entry, check_storage_size, pixel_pass, read_vec, shader, storage_entry,
     STORAGE_RW,
 };
+use crate::methods::depth_peel::SPECIALISATION;
+use crate::methods::packing::PACKING_WGSL;
 use crate::oit::Keep;
 use crate::record::{cols, Flag};
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
 use crate::Result;
+use entry::SlotConfig;
 
 const WGSL: &str = include_str!("kbuffer_rmw.wgsl");
 /// Triangles per draw in the `heuristics` variant (the thesis's batch size).
@@ -62,20 +73,31 @@ impl Method for KBufferRmw {
         false
     }
     fn axes(&self) -> Vec<Axis> {
-        vec![LAYERS, HEURISTICS, tail::TAIL, tail::KEEP]
+        let mut v = vec![LAYERS, HEURISTICS, tail::TAIL, tail::KEEP, SPECIALISATION];
+        v.extend_from_slice(effects::AXES);
+        v
+    }
+    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+        SlotConfig::read(point).map(|_| ())
+    }
+    fn payload(&self, point: &Point) -> Option<&'static str> {
+        SlotConfig::read(point).ok().map(|c| c.payload.name())
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
-        if Bounding::of(point, true).blends() {
+        let blends = Bounding::of(point, true).blends();
+        SlotConfig::read(point)?.check(blends)?;
+        if blends {
             tail::supports(gpu, 0)?;
         }
         Ok(())
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let k = point.int(&LAYERS) as u32;
+        let slot = SlotConfig::read(point).map_err(crate::CoreError::Param)?;
         Ok(Box::new(PreparedRmw::new(
             gpu,
             scene,
-            k,
+            (k, slot),
             point.bool(&HEURISTICS),
             Bounding::of(point, true),
         )?))
@@ -85,6 +107,8 @@ impl Method for KBufferRmw {
 /// Per-pixel k slots: keys (u32, larger = nearer, 0 = empty), entries, and the resolved image.
 pub struct KSlots {
     pub k: u32,
+    /// Output images (dof: 3).
+    pub images: u64,
     /// MSAA samples with k slots each (1: single-sample).
     pub samples: u32,
     pub keys: wgpu::Buffer,
@@ -95,27 +119,37 @@ pub struct KSlots {
 }
 
 impl KSlots {
-    pub fn new(gpu: &Gpu, alloc: &mut AllocCounter, scene: &GpuScene, k: u32) -> Result<Self> {
-        Self::per_sample(gpu, alloc, scene, k, 1)
-    }
-
-    /// k slots for each of `samples` samples per pixel (MSAA per-sample capture); one image.
-    pub fn per_sample(
+    pub fn new(
         gpu: &Gpu,
         alloc: &mut AllocCounter,
         scene: &GpuScene,
         k: u32,
+        slot: &SlotConfig,
+    ) -> Result<Self> {
+        Self::per_sample(gpu, alloc, scene, (k, slot), 1)
+    }
+
+    /// k slots of `slot`'s entries for each of `samples` samples per pixel (MSAA per-sample
+    /// capture); the effect's images.
+    pub fn per_sample(
+        gpu: &Gpu,
+        alloc: &mut AllocCounter,
+        scene: &GpuScene,
+        (k, slot): (u32, &SlotConfig),
         samples: u32,
     ) -> Result<Self> {
         let px = scene.pixels() as u64;
         let slots = px * samples as u64 * k as u64;
-        check_storage_size(gpu, "k-buffer entries", slots * ENTRY_BYTES)?;
+        let entry = slot.entry_bytes();
+        check_storage_size(gpu, "k-buffer entries", slots * entry)?;
+        let images = slot.images();
         Ok(KSlots {
             k,
+            images,
             samples,
             keys: alloc.buffer(gpu, "k-buffer keys", slots * 4, STORAGE_RW),
-            entries: alloc.buffer(gpu, "k-buffer entries", slots * ENTRY_BYTES, STORAGE_RW),
-            image: alloc.buffer(gpu, "k-buffer image", px * 16, STORAGE_RW),
+            entries: alloc.buffer(gpu, "k-buffer entries", slots * entry, STORAGE_RW),
+            image: alloc.buffer(gpu, "k-buffer image", px * 16 * images, STORAGE_RW),
             captured: vec![],
         })
     }
@@ -127,7 +161,8 @@ impl KSlots {
         let n = scene.pixels();
         let k = self.k as usize;
         let mut cap = Capture::empty();
-        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n)?);
+        let images = n * self.images as usize;
+        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, images)?);
         cap.expected = Expected::FirstK(self.k);
         if self.samples > 1 {
             self.captured.clear();
@@ -270,12 +305,15 @@ impl PreparedRmw {
     fn new(
         gpu: &Gpu,
         scene: &GpuScene,
-        k: u32,
+        (k, slot): (u32, SlotConfig),
         heuristics: bool,
         bounding: Bounding,
     ) -> Result<Self> {
         let d = &gpu.device;
-        let src = format!("{WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}");
+        let src = format!(
+            "{WGSL}\n{}\n{PACKING_WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}",
+            slot.wgsl()
+        );
         let module = shader(gpu, "kbuffer_rmw", &src);
         let bgl = kslots_layout(gpu, 0);
         let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -285,7 +323,8 @@ impl PreparedRmw {
         });
         let [keep_first, mean_alpha] = bounding.constants();
         let kc = [("K", k as f64), keep_first];
-        let rc = [("K", k as f64), ("EFFECT", 0.0), mean_alpha];
+        let mut rc = slot.effect.constants();
+        rc.extend([("K", k as f64), mean_alpha]);
         let blend = bounding.blends();
         let (fs, targets) = if blend {
             ("fs_insert_tail", TailTargets::color_targets())
@@ -311,7 +350,7 @@ impl PreparedRmw {
         );
         let mut alloc = AllocCounter::default();
         let depth = dummy_depth(gpu, &mut alloc, scene);
-        let slots = KSlots::new(gpu, &mut alloc, scene, k)?;
+        let slots = KSlots::new(gpu, &mut alloc, scene, k, &slot)?;
         let buffers = [&scene.camera, &slots.keys, &slots.entries, &slots.image];
         let bind = bind_buffers(gpu, "kbuffer_rmw", &bgl, &buffers);
         let tail = blend.then(|| TailTargets::new(gpu, &mut alloc, scene));
@@ -535,6 +574,7 @@ mod tests {
         captured[victim * k] = captured[victim * k + 1];
         let slots = KSlots {
             k: k as u32,
+            images: 1,
             samples: 1,
             keys: dummy(),
             entries: dummy(),
