@@ -38,10 +38,45 @@ fn main() {
             }
         },
     };
+    // The toolchain and wgpu this binary was built with, for run.json (a run on another
+    // machine or months later says what compiled it).
+    println!("cargo:rerun-if-env-changed=RUSTC");
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let rustc_version = std::process::Command::new(&rustc)
+        .arg("--version")
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_else(|| "unknown".into());
+    println!("cargo:rustc-env=MFX_BUILD_RUSTC={rustc_version}");
+    let lock = root.join("Cargo.lock");
+    println!("cargo:rerun-if-changed={}", lock.display());
+    let wgpu = std::fs::read_to_string(&lock)
+        .ok()
+        .and_then(|t| locked_version(&t, "wgpu"))
+        .unwrap_or_else(|| "unknown".into());
+    println!("cargo:rustc-env=MFX_BUILD_WGPU={wgpu}");
+    let profile = std::env::var("PROFILE").unwrap_or_else(|_| "unknown".into());
+    let opt = std::env::var("OPT_LEVEL").unwrap_or_else(|_| "?".into());
+    println!("cargo:rustc-env=MFX_BUILD_PROFILE={profile} (opt-level {opt})");
     println!("cargo:rustc-env=MFX_BUILD_GIT_COMMIT={commit}");
     println!("cargo:rustc-env=MFX_BUILD_GIT_DIRTY={dirty}");
     println!(
         "cargo:rustc-env=MFX_BUILD_GIT_SOURCE={}",
         source.replace('\n', " ")
     );
+}
+
+/// The version of package `name` in a Cargo.lock (the first entry of that name).
+fn locked_version(lock: &str, name: &str) -> Option<String> {
+    let want = format!("name = \"{name}\"");
+    let mut lines = lock.lines();
+    while let Some(l) = lines.next() {
+        if l.trim() == want {
+            let v = lines.next()?.trim().strip_prefix("version = \"")?;
+            return Some(v.trim_end_matches('"').to_string());
+        }
+    }
+    None
 }

@@ -56,6 +56,9 @@ enum Cmd {
     List {
         /// scenes | methods | studies | suites | adapters | columns (all when omitted)
         what: Option<String>,
+        /// Print one JSON object (a key per list) instead of text.
+        #[arg(long)]
+        json: bool,
         #[command(flatten)]
         gpu: GpuArgs,
     },
@@ -84,6 +87,9 @@ enum Cmd {
         /// Multiply every NEW time by this (a synthetic change: 1.05 must come out SLOWER).
         #[arg(long)]
         scale_new: Option<f64>,
+        /// Print the comparison as JSON on stdout instead of Markdown.
+        #[arg(long)]
+        json: bool,
     },
     /// A/A calibration: compare two or more runs of one build pair by pair; write each point's
     /// band (how far its median moved) and the false-alarm rate per method family.
@@ -213,7 +219,7 @@ pub(crate) fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String
 }
 
 /// `k=v` into a typed value: integers, floats, booleans, else strings.
-fn parse_kv(s: &str) -> Result<(String, ParamValue)> {
+pub(crate) fn parse_kv(s: &str) -> Result<(String, ParamValue)> {
     let (k, v) = s
         .split_once('=')
         .with_context(|| format!("'{s}' is not key=value"))?;
@@ -274,7 +280,13 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.cmd {
-        Cmd::List { what, gpu } => list(what.as_deref(), &gpu),
+        Cmd::List { what, gpu, json } => {
+            if json {
+                list_json(what.as_deref(), &gpu)
+            } else {
+                list(what.as_deref(), &gpu)
+            }
+        }
         Cmd::Sweep(a) => sweep::sweep(&a),
         Cmd::Compare {
             base,
@@ -285,6 +297,7 @@ fn run(cli: Cli) -> Result<()> {
             html,
             band_from,
             scale_new,
+            json,
         } => sweep::compare(
             &base,
             &new,
@@ -295,6 +308,7 @@ fn run(cli: Cli) -> Result<()> {
                 html: html.as_deref(),
                 band_from: band_from.as_deref(),
                 scale_new,
+                json,
             },
         ),
         Cmd::Calibrate {
@@ -464,18 +478,152 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
+const LISTS: &[&str] = &[
+    "scenes", "methods", "studies", "suites", "adapters", "columns",
+];
+
+fn check_list(what: Option<&str>) -> Result<()> {
+    match what {
+        Some(w) if !LISTS.contains(&w) => {
+            Err(usage(format!("unknown list '{w}' ({})", LISTS.join(", "))))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Every suite name: the built-in ones, then the files of scenarios/suites/ that are not
+/// built in (a file of a built-in's name wins when loaded, as `Suite::load` says).
+fn suite_names() -> Vec<(String, bool)> {
+    let mut names: Vec<(String, bool)> = scenarios::suite::BUILTIN
+        .iter()
+        .map(|(n, _)| (n.to_string(), true))
+        .collect();
+    let mut files: Vec<String> = std::fs::read_dir("scenarios/suites")
+        .map(|rd| {
+            rd.filter_map(|e| e.ok())
+                .filter_map(|e| {
+                    let p = e.path();
+                    (p.extension()? == "toml")
+                        .then(|| p.file_stem()?.to_str().map(str::to_string))?
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    files.sort();
+    for f in files {
+        if !names.iter().any(|(n, _)| *n == f) {
+            names.push((f, false));
+        }
+    }
+    names
+}
+
+/// Adapters of the chosen backend, as `list adapters` prints them.
+fn adapter_rows(gpu: &GpuArgs) -> Vec<serde_json::Value> {
+    bench_core::gpu::list_adapters(gpu.backend)
+        .iter()
+        .enumerate()
+        .map(|(i, a)| {
+            let info = a.get_info();
+            let facts = bench_core::gpu::AdapterFacts::of(
+                &info,
+                a.features() & bench_core::gpu::wanted_features(),
+            );
+            let l = a.limits();
+            serde_json::json!({
+                "index": i,
+                "name": facts.name,
+                "backend": facts.backend,
+                "device_type": facts.device_type,
+                "driver": facts.driver,
+                "driver_info": facts.driver_info,
+                "pci_bus_id": info.device_pci_bus_id,
+                "features": facts.features,
+                "max_color_attachments": l.max_color_attachments,
+                "max_color_attachment_bytes_per_sample": l.max_color_attachment_bytes_per_sample,
+                "max_storage_buffer_binding_size": l.max_storage_buffer_binding_size,
+            })
+        })
+        .collect()
+}
+
+/// `mfx list --json`: one object, a key per list asked for.
+fn list_json(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
+    use serde_json::json;
+    check_list(what)?;
+    let is = |w: &str| what.is_none() || what == Some(w);
+    let mut o = serde_json::Map::new();
+    if is("scenes") {
+        let v: Vec<_> = scenarios::scenes::GENERATORS
+            .iter()
+            .map(|g| json!({"name": g, "describe": scenarios::scenes::describe(g)}))
+            .collect();
+        o.insert("scenes".into(), v.into());
+    }
+    if is("methods") {
+        let v: Vec<_> = methods::all()
+            .iter()
+            .map(|m| {
+                let axes: Vec<_> = m
+                    .axes()
+                    .iter()
+                    .map(|a| json!({"name": a.name(), "summary": a.summary(), "doc": a.doc}))
+                    .collect();
+                json!({"name": m.name(), "exact": m.exact(), "describe": m.describe(), "axes": axes})
+            })
+            .collect();
+        o.insert("methods".into(), v.into());
+    }
+    if is("studies") {
+        let v: Vec<_> = bench_core::studies::all()
+            .iter()
+            .map(|s| json!({"kind": s.kind(), "describe": s.describe()}))
+            .collect();
+        o.insert("studies".into(), v.into());
+    }
+    if is("suites") {
+        let v: Vec<_> = suite_names()
+            .into_iter()
+            .map(|(name, builtin)| match bench_core::check::load(&name) {
+                Ok(suite) => json!({
+                    "name": name,
+                    "built_in": builtin,
+                    "source": suite.source,
+                    "description": suite.description,
+                    "rows_gpu": bench_core::runner::rows_of(&suite, false),
+                    "rows_software": bench_core::runner::rows_of(&suite, true),
+                    "models": bench_core::check::models_needed(&suite),
+                }),
+                Err(p) => json!({
+                    "name": name,
+                    "built_in": builtin,
+                    "problems": p.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
+                }),
+            })
+            .collect();
+        o.insert("suites".into(), v.into());
+    }
+    if is("columns") {
+        let v: Vec<_> = schema::all()
+            .map(|c| json!({"name": c.name, "doc": c.doc}))
+            .collect();
+        o.insert("columns".into(), v.into());
+        o.insert(
+            "schema_version".into(),
+            bench_core::record::SCHEMA_VERSION.into(),
+        );
+    }
+    if is("adapters") {
+        o.insert("adapters".into(), adapter_rows(gpu).into());
+    }
+    println!("{}", serde_json::to_string_pretty(&o)?);
+    Ok(())
+}
+
 fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
     let all = what.is_none();
     let is = |w: &str| all || what == Some(w);
-    if let Some(w) = what {
-        if ![
-            "scenes", "methods", "studies", "suites", "adapters", "columns",
-        ]
-        .contains(&w)
-        {
-            bail!("unknown list '{w}' (scenes, methods, studies, suites, adapters, columns)");
-        }
-    }
+    check_list(what)?;
     if is("scenes") {
         println!("scenes:");
         for g in scenarios::scenes::GENERATORS {
@@ -502,11 +650,12 @@ fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
         }
     }
     if is("suites") {
-        println!("suites (built in; a file scenarios/suites/NAME.toml or any path wins):");
-        for (name, _) in scenarios::suite::BUILTIN {
-            match Suite::load(name) {
+        println!("suites (built in, then files of scenarios/suites/ only; a file scenarios/suites/NAME.toml or any path wins):");
+        for (name, builtin) in suite_names() {
+            match Suite::load(&name) {
                 Ok(suite) => println!(
-                    "  {name:<16} {} rows on a GPU, {} on a software adapter{}\n  {:<16} {}",
+                    "  {name:<16} {}{} rows on a GPU, {} on a software adapter{}\n  {:<16} {}",
+                    if builtin { "" } else { "(file only) " },
                     bench_core::runner::rows_of(&suite, false),
                     bench_core::runner::rows_of(&suite, true),
                     models_line(&suite),

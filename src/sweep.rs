@@ -9,6 +9,7 @@ use anyhow::{bail, Context, Result};
 use bench_core::manifest::{context_block, write_runs_json, AdapterInfo, RunManifest};
 use bench_core::record::{cols, CsvSink, Row, SamplesSink, Sink, Status, SCHEMA_VERSION};
 use bench_core::runner::{self, RunOptions};
+use bench_core::studies::Group;
 use bench_core::Gpu;
 use clap::Args;
 
@@ -58,6 +59,18 @@ pub struct SweepArgs {
     /// `--timing settle=false --timing max_noise=0.01`; checked like the suite's own keys.
     #[arg(long = "timing", value_name = "KEY=VALUE")]
     pub timing: Vec<String>,
+    /// Run only the points whose method, scene (generator or label) or point key matches this
+    /// glob (`*`, `?`, `[…]`); repeatable: a point runs when any filter matches. The floors of
+    /// a group run with its points (they are the yardstick of x_floor and the speedups).
+    #[arg(long, value_name = "GLOB")]
+    pub filter: Vec<String>,
+    /// Override an axis of the suite's studies, e.g. `--set max_layers=4,8`: replaces that
+    /// axis in every study whose methods declare it; checked like the suite's own values.
+    #[arg(long = "set", value_name = "AXIS=V1,V2")]
+    pub set: Vec<String>,
+    /// Print the points the sweep would run (after --filter, --set, --shard) and exit.
+    #[arg(long)]
+    pub dry_run: bool,
     #[command(flatten)]
     pub gpu: GpuArgs,
 }
@@ -67,8 +80,162 @@ pub fn baselines_root() -> PathBuf {
     PathBuf::from("results").join("baselines")
 }
 
+/// `--set AXIS=V1,V2`: replaces the axis in every study whose methods declare it (and in
+/// their per-method tables); an axis no study uses is refused. The caller re-checks the suite.
+fn apply_sets(suite: &mut scenarios::Suite, sets: &[String]) -> Result<()> {
+    for s in sets {
+        let (axis, vals) = s
+            .split_once('=')
+            .ok_or_else(|| usage(format!("--set '{s}': must be AXIS=V1,V2,…")))?;
+        let axis = axis.trim();
+        let mut values = Vec::new();
+        for v in vals.split(',').map(str::trim) {
+            if v.is_empty() {
+                return Err(usage(format!("--set '{s}': an empty value")));
+            }
+            values.push(crate::parse_kv(&format!("{axis}={v}"))?.1);
+        }
+        let mut used = false;
+        let mut known = std::collections::BTreeSet::new();
+        for spec in &mut suite.studies {
+            let declared = spec.methods.iter().any(|m| {
+                bench_core::methods::by_name(m).is_some_and(|m| {
+                    m.axes().iter().any(|a| {
+                        known.insert(a.name().to_string());
+                        a.name() == axis
+                    })
+                })
+            });
+            if declared || spec.axes.contains_key(axis) {
+                spec.axes.insert(axis.to_string(), values.clone());
+                for t in spec.method_axes.values_mut() {
+                    if let Some(v) = t.get_mut(axis) {
+                        *v = values.clone();
+                    }
+                }
+                used = true;
+            }
+        }
+        if !used {
+            return Err(usage(format!(
+                "--set '{s}': no study of suite '{}' has a method with axis '{axis}' (axes of its methods: {})",
+                suite.name,
+                known.into_iter().collect::<Vec<_>>().join(", ")
+            )));
+        }
+    }
+    let problems = bench_core::check::check_suite(suite);
+    if !problems.is_empty() {
+        return Err(usage(format!(
+            "--set {}: {}",
+            sets.join(" --set "),
+            scenarios::problem::report(&problems)
+        )));
+    }
+    Ok(())
+}
+
+/// `--filter` globs, compiled (a bad pattern is a usage error).
+fn filters(globs: &[String]) -> Result<Vec<glob::Pattern>> {
+    globs
+        .iter()
+        .map(|g| glob::Pattern::new(g).map_err(|e| usage(format!("--filter '{g}': {e}"))))
+        .collect()
+}
+
+/// The groups cut to the points a filter matches (by method, scene generator or label, or
+/// point key); groups left with nothing are dropped. No filter keeps everything.
+fn filter_groups(groups: Vec<Group>, pats: &[glob::Pattern]) -> Vec<Group> {
+    if pats.is_empty() {
+        return groups;
+    }
+    let any = |s: &str| pats.iter().any(|p| p.matches(s));
+    groups
+        .into_iter()
+        .filter_map(|mut g| {
+            if any(&g.scene.generator) || any(&g.scene.label()) {
+                return Some(g);
+            }
+            let floor_matches = runner::FLOORS
+                .iter()
+                .any(|f| any(f) || any(&g.point_key(f, bench_core::axes::Point::empty().given())));
+            let keys: Vec<bool> = g
+                .points
+                .iter()
+                .map(|p| any(&p.method) || any(&g.point_key(&p.method, p.given())))
+                .collect();
+            let mut keep = keys.into_iter();
+            g.points.retain(|_| keep.next().unwrap_or(false));
+            (floor_matches || !g.points.is_empty()).then_some(g)
+        })
+        .collect()
+}
+
+/// The groups of this sweep on an adapter of this kind: expanded, sharded, filtered.
+fn groups_for(
+    suite: &scenarios::Suite,
+    software: bool,
+    shard: (usize, usize),
+    pats: &[glob::Pattern],
+) -> Result<Vec<Group>> {
+    let groups = runner::expand(suite, software)?;
+    Ok(filter_groups(runner::shard_groups(groups, shard), pats))
+}
+
+/// Rows a group still owes: its points and floors without a row in `done`.
+fn owed(g: &Group, done: &std::collections::HashSet<String>) -> usize {
+    let empty = bench_core::axes::Point::empty();
+    g.points
+        .iter()
+        .filter(|p| !done.contains(&g.point_key(&p.method, p.given())))
+        .count()
+        + runner::FLOORS
+            .iter()
+            .filter(|f| !done.contains(&g.point_key(f, empty.given())))
+            .count()
+}
+
+/// Where the sweep stands, for a log without a terminal: one line per finished group.
+struct GroupLines {
+    /// Rows owed by each group still to come, in run order.
+    owed: Vec<usize>,
+    next: usize,
+    in_group: usize,
+    rows_done: usize,
+    rows_total: usize,
+    started: std::time::Instant,
+    /// Print the lines (no terminal to draw the bar on).
+    print: bool,
+}
+
+impl GroupLines {
+    fn row_done(&mut self) {
+        self.rows_done += 1;
+        self.in_group += 1;
+        while self.next < self.owed.len() && self.in_group >= self.owed[self.next] {
+            self.in_group -= self.owed[self.next];
+            self.next += 1;
+            if self.print {
+                let el = self.started.elapsed();
+                let left = self.rows_total.saturating_sub(self.rows_done);
+                let eta = el.mul_f64(left as f64 / self.rows_done.max(1) as f64);
+                eprintln!(
+                    "mfx: group {}/{} done: {}/{} rows, elapsed {}, ETA {}",
+                    self.next,
+                    self.owed.len(),
+                    self.rows_done,
+                    self.rows_total,
+                    indicatif::FormattedDuration(el),
+                    indicatif::FormattedDuration(eta)
+                );
+            }
+        }
+    }
+}
+
 /// Counts and reasons of the rows a sweep writes; the CSV, samples and FLIP sinks behind it.
 struct Progress<'a> {
+    lines: GroupLines,
     csv: CsvSink,
     samples: SamplesSink,
     flip: mfx_flip::WorstKeeper,
@@ -127,6 +294,7 @@ impl Sink for Progress<'_> {
         self.bar
             .set_message(format!("{} {}", get(cols::SCENE_LABEL), get(cols::METHOD)));
         self.bar.inc(1);
+        self.lines.row_done();
         Ok(())
     }
 }
@@ -145,7 +313,27 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         bench_core::measure::TimingPlan::from_spec(&suite.timing_for(false))
             .map_err(|e| usage(format!("--timing: {e}")))?;
     }
+    if !a.set.is_empty() {
+        apply_sets(&mut suite, &a.set)?;
+    }
+    let pats = filters(&a.filter)?;
     let shard = a.shard.unwrap_or((0, 1));
+    // The points on either kind of adapter (the `[software]` profile may change resolutions):
+    // a filter that matches nothing on both is a typo, refused now.
+    let on_gpu = groups_for(&suite, false, shard, &pats).map_err(|e| usage(e.to_string()))?;
+    let on_software = groups_for(&suite, true, shard, &pats).map_err(|e| usage(e.to_string()))?;
+    if !pats.is_empty() && on_gpu.is_empty() && on_software.is_empty() {
+        return Err(usage(format!(
+            "--filter {}: matches no method, scene or point key of suite '{}'{} (`--dry-run` without --filter lists them)",
+            a.filter.join(" --filter "),
+            suite.name,
+            if shard.1 > 1 { format!(" in shard {}/{}", shard.0, shard.1) } else { String::new() }
+        )));
+    }
+    if a.dry_run {
+        print_points(&suite, &on_gpu, &on_software);
+        return Ok(());
+    }
     let fail_frac = a
         .fail_on_slower
         .as_deref()
@@ -159,6 +347,11 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
             )));
         }
     }
+    // The baseline to compare with must exist now, not after the whole sweep.
+    if let Some(name) = &a.baseline {
+        report::ab::baseline_dir(&baselines_root(), name)
+            .map_err(|e| usage(format!("--baseline: {e:#}")))?;
+    }
     let stamp = crate::chrono_stamp();
     let mut run_id = if shard.1 > 1 {
         format!("{stamp}-{}-shard{}of{}", suite.name, shard.0, shard.1)
@@ -171,6 +364,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         .unwrap_or_else(|| PathBuf::from("results").join(&run_id));
     let csv_path = out.join("runs.csv");
     let mut done = std::collections::HashSet::new();
+    let mut earlier: Option<RunManifest> = None;
     if csv_path.is_file() {
         if a.resume {
             let cut = bench_core::record::drop_partial_tail(&csv_path)?;
@@ -185,6 +379,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
             .with_context(|| format!("reading {}", csv_path.display()))?;
         if a.resume {
             if let Ok(m) = RunManifest::read(&out) {
+                earlier = Some(m.clone());
                 if m.suite_sha256 != bench_core::manifest::sha256_hex(&suite.text) {
                     return Err(usage(format!(
                         "{} was run with another suite text ({} from {}); resuming it with {} would mix two suites: use a new --out",
@@ -220,8 +415,23 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
 
     bench_core::interrupt::install()?;
     let gpu = Gpu::new(&a.gpu.options())?;
-    let groups = runner::expand(&suite, gpu.facts.is_software)?;
-    let groups = runner::shard_groups(groups, shard);
+    let groups = if gpu.facts.is_software {
+        on_software
+    } else {
+        on_gpu
+    };
+    if groups.is_empty() {
+        return Err(usage(format!(
+            "--filter {}: matches no point on {} (a {} adapter); see --dry-run",
+            a.filter.join(" --filter "),
+            gpu.facts.name,
+            if gpu.facts.is_software {
+                "software"
+            } else {
+                "GPU"
+            }
+        )));
+    }
     let total = runner::rows_in(&groups);
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     // Studies that write images (shadows) put them beside the CSV.
@@ -234,6 +444,10 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         AdapterInfo::of(&gpu.adapter.get_info()),
         shard,
     );
+    if let Some(old) = &earlier {
+        manifest.continue_from(old);
+    }
+    manifest.software_profile = gpu.facts.is_software && suite.software.is_some();
     manifest.points_total = total;
     manifest.resumed_points = done.len();
     // The cross-GPU calibration set, before any point (a software adapter's time says nothing
@@ -277,13 +491,33 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
     }
     let bar = indicatif::ProgressBar::new((total - done.len().min(total)) as u64);
     bar.set_style(
-        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} [{elapsed}] {msg}").unwrap(),
+        indicatif::ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} [{elapsed} elapsed, ETA {eta}] {msg}",
+        )
+        .unwrap(),
     );
-    if std::env::var_os("CI").is_some() {
+    // Without a terminal (a log, CI) the bar draws nothing: a line per finished group instead.
+    let terminal =
+        std::io::IsTerminal::is_terminal(&std::io::stderr()) && std::env::var_os("CI").is_none();
+    if !terminal {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
+    let owed_rows: Vec<usize> = groups
+        .iter()
+        .map(|g| owed(g, &done))
+        .filter(|&n| n > 0)
+        .collect();
     let resume = !done.is_empty() || a.resume;
     let mut sink = Progress {
+        lines: GroupLines {
+            rows_total: owed_rows.iter().sum(),
+            owed: owed_rows,
+            next: 0,
+            in_group: 0,
+            rows_done: 0,
+            started: std::time::Instant::now(),
+            print: !terminal,
+        },
         csv: if resume {
             CsvSink::append(&csv_path)?
         } else {
@@ -404,6 +638,34 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
     Ok(())
 }
 
+/// `--dry-run`: the points, one line each, as the sweep would run them.
+fn print_points(suite: &scenarios::Suite, on_gpu: &[Group], on_software: &[Group]) {
+    for g in on_gpu {
+        println!("{} {} {}x{}", g.kind, g.scene.label(), g.width, g.height);
+        let empty = bench_core::axes::Point::empty();
+        for f in runner::FLOORS {
+            println!("  {}", g.point_key(f, empty.given()));
+        }
+        for p in &g.points {
+            println!("  {}", g.point_key(&p.method, p.given()));
+        }
+    }
+    println!(
+        "dry run: {} groups, {} rows on a GPU{}; nothing was run",
+        on_gpu.len(),
+        runner::rows_in(on_gpu),
+        if suite.software.is_some() {
+            format!(
+                " ({} groups, {} rows on a software adapter, with the [software] profile)",
+                on_software.len(),
+                runner::rows_in(on_software)
+            )
+        } else {
+            String::new()
+        }
+    );
+}
+
 /// `mfx compare BASE NEW`.
 /// `mfx compare`'s options.
 pub struct CompareArgs<'a> {
@@ -413,6 +675,7 @@ pub struct CompareArgs<'a> {
     pub html: Option<&'a Path>,
     pub band_from: Option<&'a Path>,
     pub scale_new: Option<f64>,
+    pub json: bool,
 }
 
 /// `mfx calibrate`: A/A runs → calibration file (and its summary on stdout).
@@ -443,6 +706,7 @@ pub fn compare(base: &Path, new: &Path, a: CompareArgs) -> Result<()> {
         html,
         band_from,
         scale_new,
+        json,
     } = a;
     let mut opts = report::ab::AbOptions::default();
     if let Some(b) = noise_band {
@@ -472,7 +736,11 @@ pub fn compare(base: &Path, new: &Path, a: CompareArgs) -> Result<()> {
         .transpose()
         .map_err(|e| usage(format!("--fail-on-slower: {e}")))?;
     let r = report::ab::compare_runs(base, new, &opts).map_err(|e| usage(format!("{e:#}")))?;
-    print!("{}", r.markdown());
+    if json {
+        println!("{}", serde_json::to_string_pretty(&compare_json(&r))?);
+    } else {
+        print!("{}", r.markdown());
+    }
     // The page is written only where asked: comparing against a committed reference run must
     // not change the tree it reads.
     if let Some(dir) = html {
@@ -491,4 +759,67 @@ pub fn compare(base: &Path, new: &Path, a: CompareArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// `mfx compare --json`: the comparison's points, verdicts and moves as one object (the same
+/// content as the Markdown, for scripts).
+fn compare_json(r: &report::ab::AbReport) -> serde_json::Value {
+    use serde_json::json;
+    let side = |s: &report::ab::Side| {
+        json!({
+            "runs_csv": s.runs_csv.display().to_string(),
+            "samples_csv": s.samples_csv.as_ref().map(|p| p.display().to_string()),
+            "schema": s.schema,
+            "platforms": s.platforms,
+            "run_ids": s.run_ids,
+            "git_revs": s.git_revs,
+        })
+    };
+    let verdict = |c: &mfx_stats::Comparison| {
+        json!({
+            "verdict": c.verdict.to_string(),
+            "ratio": c.ratio,
+            "ratio_ci": [c.ratio_ci.0, c.ratio_ci.1],
+            "p": c.p,
+            "n_base": c.n_base,
+            "n_new": c.n_new,
+            "basis": format!("{:?}", c.basis),
+            "why": c.why,
+        })
+    };
+    let points: Vec<_> = r
+        .points
+        .iter()
+        .map(|p| {
+            json!({
+                "point_key": p.key,
+                "platform_base": p.platform_base,
+                "platform_new": p.platform_new,
+                "base_median_ms": p.base_median_ms,
+                "new_median_ms": p.new_median_ms,
+                "time": verdict(&p.time),
+                "cycles": p.cycles.as_ref().map(verdict),
+                "base_sm_mhz": p.base_sm_mhz,
+                "new_sm_mhz": p.new_sm_mhz,
+                "base_noisy": p.base_noisy,
+                "new_noisy": p.new_noisy,
+            })
+        })
+        .collect();
+    json!({
+        "base": side(&r.base),
+        "new": side(&r.new),
+        "noise_band": r.opts.verdict.noise_band,
+        "alpha": r.opts.verdict.alpha,
+        "points": points,
+        "only_base": r.only_base,
+        "only_new": r.only_new,
+        "untimed": r.untimed,
+        "errors": r.errors.iter().map(|e| json!({
+            "point_key": e.key, "column": e.column.name, "base": e.base, "new": e.new,
+        })).collect::<Vec<_>>(),
+        "status_changes": r.status_changes.iter().map(|c| json!({
+            "point_key": c.key, "base": c.base, "new": c.new, "reason": c.reason,
+        })).collect::<Vec<_>>(),
+    })
 }

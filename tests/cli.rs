@@ -279,4 +279,223 @@ fn compare_writes_only_where_told() {
     assert!(html.join("compare.html").is_file());
     assert_eq!(tree(&a), tree(&d.join("a")));
     assert!(!b.join("report").exists());
+
+/// Methods of the rows of a runs.csv.
+fn methods_of(csv_path: &std::path::Path) -> Vec<(String, String)> {
+    let mut rd = csv::Reader::from_path(csv_path).unwrap();
+    let h = rd.headers().unwrap().clone();
+    let col = |n: &str| h.iter().position(|c| c == n).unwrap();
+    let (m, k) = (col("method"), col("point_key"));
+    rd.records()
+        .map(|r| {
+            let r = r.unwrap();
+            (r[m].to_string(), r[k].to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn a_filter_runs_exactly_the_matching_points_the_dry_run_lists() {
+    let d = tmp("filter");
+    // The dry run lists the points and runs nothing.
+    let out = d.join("dry");
+    let o = mfx(&[
+        "sweep",
+        "smoke",
+        "--filter",
+        "wboit",
+        "--filter",
+        "*shells*",
+        "--dry-run",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(!out.exists(), "a dry run wrote its folder");
+    let listed: Vec<&str> = t
+        .lines()
+        .filter_map(|l| l.strip_prefix("  "))
+        .filter(|k| !k.contains("|floor_"))
+        .collect();
+    // wboit on every scene, and every method on shells.
+    assert!(listed.iter().any(|k| k.contains("|wboit|")), "{t}");
+    assert!(
+        listed
+            .iter()
+            .any(|k| k.contains("shells") && k.contains("|depth_peel|")),
+        "{t}"
+    );
+    assert!(
+        !listed
+            .iter()
+            .any(|k| !k.contains("shells") && !k.contains("|wboit|")),
+        "{t}"
+    );
+    assert!(t.contains("nothing was run"), "{t}");
+
+    // The sweep runs exactly those points (plus the floors of their groups).
+    let out = d.join("run");
+    let o = mfx(&[
+        "sweep",
+        "smoke",
+        "--filter",
+        "wboit",
+        "--filter",
+        "*shells*",
+        "--timing",
+        "max_samples=1",
+        "--timing",
+        "min_samples=1",
+        "--no-flip",
+        "--no-report",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(
+        t.contains("mfx: group 1/"),
+        "a line per group without a terminal:\n{t}"
+    );
+    assert!(t.contains("ETA"), "{t}");
+    let rows = methods_of(&out.join("runs.csv"));
+    let mut ran: Vec<&str> = rows
+        .iter()
+        .filter(|(m, _)| !m.starts_with("floor_"))
+        .map(|(_, k)| k.as_str())
+        .collect();
+    let mut want = listed.clone();
+    ran.sort();
+    want.sort();
+    assert_eq!(ran, want, "the rows are the listed points");
+
+    // run.json says where and how it ran, and keeps every call of a resumed run.
+    let o = mfx(&[
+        "sweep",
+        "smoke",
+        "--filter",
+        "wboit",
+        "--filter",
+        "*shells*",
+        "--resume",
+        "--no-report",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+    assert!(j["host"]["cpu_cores"].as_u64().unwrap() > 0, "{j}");
+    assert!(
+        j["build"]["rustc"].as_str().unwrap().starts_with("rustc"),
+        "{j}"
+    );
+    assert!(j["build"]["wgpu"].as_str().unwrap().contains('.'), "{j}");
+    assert_eq!(
+        j["software_profile"],
+        serde_json::Value::Bool(false),
+        "smoke has no [software]"
+    );
+    let calls = j["calls"].as_array().unwrap();
+    assert_eq!(calls.len(), 2, "{j}");
+    assert!(calls[1]["command_line"].to_string().contains("--resume"));
+
+    // compare --json of the run with itself parses, every point SAME.
+    let o = mfx(&[
+        "compare",
+        out.to_str().unwrap(),
+        out.to_str().unwrap(),
+        "--json",
+        "--html",
+        d.join("cmp").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let c: serde_json::Value = serde_json::from_slice(&o.stdout).expect("compare --json parses");
+    let pts = c["points"].as_array().unwrap();
+    assert!(!pts.is_empty());
+    assert!(pts.iter().all(|p| p["time"]["verdict"] == "SAME"), "{c}");
+}
+
+#[test]
+fn set_overrides_a_declared_axis_and_a_bad_one_is_refused() {
+    let o = mfx(&["sweep", "smoke", "--set", "layers=2,8", "--dry-run"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(t.contains("layers=2") && t.contains("layers=8"), "{t}");
+    assert!(
+        !t.contains("layers=4"),
+        "the suite's own value is replaced:\n{t}"
+    );
+    let d = tmp("set");
+    for (arg, word) in [
+        ("max_layers=0", "'max_layers' = 0"),
+        ("no_such_axis=3", "'no_such_axis'"),
+        ("layers", "AXIS=V1,V2"),
+        ("layers=4,", "empty value"),
+    ] {
+        let out = d.join("out");
+        let o = mfx(&[
+            "sweep",
+            "smoke",
+            "--set",
+            arg,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "--set {arg}\n{t}");
+        assert!(t.contains(word) && t.contains("--set"), "--set {arg}:\n{t}");
+        assert!(!out.exists());
+    }
+    let o = mfx(&["sweep", "smoke", "--filter", "no_such_method*", "--dry-run"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("matches no method"), "{}", text(&o));
+}
+
+#[test]
+fn a_bad_baseline_is_refused_before_any_gpu_work() {
+    let d = tmp("baseline");
+    let out = d.join("out");
+    let o = mfx(&[
+        "sweep",
+        "smoke",
+        "--baseline",
+        "no-such-baseline-here",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{t}");
+    assert!(
+        t.contains("no-such-baseline-here") && t.contains("--baseline"),
+        "{t}"
+    );
+    assert!(!t.contains("mfx: suite"), "no GPU was opened:\n{t}");
+    assert!(!out.exists());
+}
+
+#[test]
+fn list_json_parses_and_names_the_file_only_suites() {
+    let o = mfx(&["list", "methods", "--json"]);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("list --json parses");
+    let m = j["methods"].as_array().unwrap();
+    assert!(
+        m.iter()
+            .any(|m| m["name"] == "depth_peel" && m["exact"] == true),
+        "{j}"
+    );
+    let o = mfx(&["list", "suites", "--json"]);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("list --json parses");
+    let names: Vec<&str> = j["suites"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    for n in ["smoke", "scaling", "perf-abuffer"] {
+        assert!(names.contains(&n), "{n} in {names:?}");
+    }
+    let t = text(&mfx(&["list", "suites"]));
+    assert!(t.contains("scaling") && t.contains("(file only)"), "{t}");
 }

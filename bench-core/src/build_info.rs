@@ -20,6 +20,15 @@ pub const GIT_SOURCE: &str = env!("MFX_BUILD_GIT_SOURCE");
 /// mfx's version (the workspace's).
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
+/// `rustc --version` of the compiler that built mfx.
+pub const RUSTC: &str = env!("MFX_BUILD_RUSTC");
+
+/// wgpu's version, from the workspace's Cargo.lock.
+pub const WGPU: &str = env!("MFX_BUILD_WGPU");
+
+/// Cargo profile and opt-level of bench-core (e.g. `release (opt-level 3)`).
+pub const PROFILE: &str = env!("MFX_BUILD_PROFILE");
+
 /// The `git_rev` column: 12 hex digits, `+dirty` when the tree had changes; `MFX_GIT_REV`
 /// verbatim when that was set; `unknown (built outside a git checkout)` otherwise.
 pub fn git_rev() -> String {

@@ -63,6 +63,84 @@ pub const CALIBRATION_SET: &str =
 /// Runs of the set.
 pub const CALIBRATION_RUNS: usize = 21;
 
+/// The machine a run ran on, beyond the adapter: lavapipe's speed is the CPU's, and a driver's
+/// behaviour can be the kernel's.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct HostInfo {
+    /// `model name` of /proc/cpuinfo's first CPU (empty where unreadable).
+    pub cpu_model: String,
+    /// Logical CPUs this process may use (`std::thread::available_parallelism`).
+    pub cpu_cores: usize,
+    /// `linux`, `windows`, … and the distribution's PRETTY_NAME where /etc/os-release has one.
+    pub os: String,
+    /// Kernel release (/proc/sys/kernel/osrelease; empty elsewhere).
+    pub kernel: String,
+}
+
+impl HostInfo {
+    /// This machine, now.
+    pub fn here() -> Self {
+        let read = |p: &str| std::fs::read_to_string(p).unwrap_or_default();
+        let cpu_model = read("/proc/cpuinfo")
+            .lines()
+            .find_map(|l| {
+                let (k, v) = l.split_once(':')?;
+                (k.trim() == "model name").then(|| v.trim().to_string())
+            })
+            .unwrap_or_default();
+        let distro = read("/etc/os-release")
+            .lines()
+            .find_map(|l| l.strip_prefix("PRETTY_NAME="))
+            .map(|v| v.trim_matches('"').to_string());
+        HostInfo {
+            cpu_model,
+            cpu_cores: std::thread::available_parallelism()
+                .map(|n| n.get())
+                .unwrap_or(0),
+            os: match distro {
+                Some(d) => format!("{} ({d})", std::env::consts::OS),
+                None => std::env::consts::OS.to_string(),
+            },
+            kernel: read("/proc/sys/kernel/osrelease").trim().to_string(),
+        }
+    }
+}
+
+/// How the binary was built (fixed at compile time, `build_info`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct BuildInfo {
+    /// `rustc --version`.
+    pub rustc: String,
+    /// wgpu's version from Cargo.lock.
+    pub wgpu: String,
+    /// Cargo profile and opt-level, e.g. `release (opt-level 3)`: a debug build times slower
+    /// CPU work (judging, references), never the GPU's.
+    pub profile: String,
+}
+
+impl BuildInfo {
+    pub fn this() -> Self {
+        BuildInfo {
+            rustc: crate::build_info::RUSTC.to_string(),
+            wgpu: crate::build_info::WGPU.to_string(),
+            profile: crate::build_info::PROFILE.to_string(),
+        }
+    }
+}
+
+/// One invocation of `mfx sweep` on a run folder: the first, and one per `--resume`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Call {
+    pub command_line: Vec<String>,
+    pub git_rev: String,
+    pub started_utc: String,
+    pub ended_utc: Option<String>,
+    pub elapsed_s: Option<f64>,
+    /// Rows this call wrote.
+    pub rows_written: usize,
+    pub interrupted: Option<String>,
+}
+
 /// `run.json`: written when the run starts (`finished: false`), rewritten as it ends or is
 /// interrupted. Counts are of this run folder's `runs.csv` rows.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -103,6 +181,19 @@ pub struct RunManifest {
     /// before issue 33, and on software adapters).
     #[serde(default)]
     pub calibration: Option<GpuCalibration>,
+    /// The machine of the latest call (absent in run.json files older than this field).
+    #[serde(default)]
+    pub host: HostInfo,
+    /// How the binary of the latest call was built.
+    #[serde(default)]
+    pub build: BuildInfo,
+    /// The suite's `[software]` profile applied (a software adapter and a suite that has one).
+    #[serde(default)]
+    pub software_profile: bool,
+    /// Every call on this run folder, oldest first; the last is this one. The top-level
+    /// command line, times and counts are the latest call's (counts: of the whole folder).
+    #[serde(default)]
+    pub calls: Vec<Call>,
     #[serde(skip)]
     clock: Option<Instant>,
 }
@@ -146,6 +237,13 @@ impl RunManifest {
         adapter: AdapterInfo,
         shard: (usize, usize),
     ) -> Self {
+        let started = now_utc();
+        let call = Call {
+            command_line: command_line.clone(),
+            git_rev: crate::build_info::git_rev(),
+            started_utc: started.clone(),
+            ..Call::default()
+        };
         RunManifest {
             mfx_version: crate::build_info::VERSION.to_string(),
             git_rev: crate::build_info::git_rev(),
@@ -156,7 +254,7 @@ impl RunManifest {
             suite_sha256: sha256_hex(suite_text),
             adapter,
             shard,
-            started_utc: now_utc(),
+            started_utc: started,
             ended_utc: None,
             elapsed_s: None,
             rows_written: 0,
@@ -168,8 +266,32 @@ impl RunManifest {
             finished: false,
             interrupted: None,
             calibration: None,
+            host: HostInfo::here(),
+            build: BuildInfo::this(),
+            software_profile: false,
+            calls: vec![call],
             clock: Some(Instant::now()),
         }
+    }
+
+    /// A resumed run: the calls of the folder's earlier `run.json` come before this one (an
+    /// older file without `calls` counts as one call, from its top-level fields).
+    pub fn continue_from(&mut self, old: &RunManifest) {
+        let mut calls = if old.calls.is_empty() {
+            vec![Call {
+                command_line: old.command_line.clone(),
+                git_rev: old.git_rev.clone(),
+                started_utc: old.started_utc.clone(),
+                ended_utc: old.ended_utc.clone(),
+                elapsed_s: old.elapsed_s,
+                rows_written: old.rows_written,
+                interrupted: old.interrupted.clone(),
+            }]
+        } else {
+            old.calls.clone()
+        };
+        calls.append(&mut self.calls);
+        self.calls = calls;
     }
 
     /// Stamps the end: `ended_utc`, `elapsed_s`, and `interrupted` (the signal, if any).
@@ -178,6 +300,12 @@ impl RunManifest {
         self.ended_utc = Some(now_utc());
         self.elapsed_s = self.clock.map(|c| c.elapsed().as_secs_f64());
         self.interrupted = interrupted.map(str::to_string);
+        if let Some(c) = self.calls.last_mut() {
+            c.ended_utc = self.ended_utc.clone();
+            c.elapsed_s = self.elapsed_s;
+            c.interrupted = self.interrupted.clone();
+            c.rows_written = self.rows_written;
+        }
     }
 
     /// Writes `dir/run.json` atomically.
@@ -209,6 +337,9 @@ pub fn context_block(manifest: &RunManifest, schema_version: u32, clocks: Option
             "sha256": m.suite_sha256,
         },
         "adapter": m.adapter,
+        "host": m.host,
+        "build": m.build,
+        "software_profile": m.software_profile,
         "shard": format!("{}/{}", m.shard.0, m.shard.1),
         "started_utc": m.started_utc,
         "ended_utc": m.ended_utc,
@@ -369,6 +500,47 @@ mod tests {
         m.points_total = 9;
         m.resumed_points = 2;
         m
+    }
+
+    #[test]
+    fn a_resumed_run_keeps_every_call_and_says_where_it_ran() {
+        let mut first = sample();
+        first.finish(Some("SIGINT"));
+        // A run.json from before `calls` existed reads, and counts as one call.
+        let mut old: serde_json::Value = serde_json::to_value(&first).unwrap();
+        for k in ["calls", "host", "build", "software_profile"] {
+            old.as_object_mut().unwrap().remove(k);
+        }
+        let old: RunManifest = serde_json::from_value(old).unwrap();
+        assert!(old.calls.is_empty());
+        let mut second = sample();
+        second.command_line.push("--resume".into());
+        second.calls[0].command_line.push("--resume".into());
+        second.continue_from(&old);
+        second.rows_written = 2;
+        second.finish(None);
+        assert_eq!(second.calls.len(), 2);
+        assert_eq!(second.calls[0].interrupted.as_deref(), Some("SIGINT"));
+        assert_eq!(second.calls[0].rows_written, 7);
+        assert_eq!(second.calls[1].rows_written, 2);
+        assert!(second.calls[1]
+            .command_line
+            .contains(&"--resume".to_string()));
+        let mut third = sample();
+        third.continue_from(&second);
+        assert_eq!(third.calls.len(), 3, "a third call keeps both earlier ones");
+        assert!(second.host.cpu_cores > 0);
+        assert!(
+            second.build.rustc.starts_with("rustc "),
+            "{}",
+            second.build.rustc
+        );
+        assert_eq!(
+            second.build.wgpu.split('.').count(),
+            3,
+            "{}",
+            second.build.wgpu
+        );
     }
 
     #[test]
