@@ -11,7 +11,15 @@ fn root() -> &'static Path {
 /// Candidate paths of one token: as written, and under each crate folder.
 fn exists(token: &str) -> bool {
     let t = token.trim_end_matches([',', '.', ':', ')']);
-    let bases = ["", "bench-core", "report", "scenarios", "schema", "stats", "flip"];
+    let bases = [
+        "",
+        "bench-core",
+        "report",
+        "scenarios",
+        "schema",
+        "stats",
+        "flip",
+    ];
     // `packing.rs/.wgsl` names two files.
     let names: Vec<String> = match t.split_once("/.") {
         Some((a, ext)) if !a.contains('/') || a.ends_with(".rs") => {
@@ -22,9 +30,14 @@ fn exists(token: &str) -> bool {
     };
     names.iter().all(|n| {
         bases.iter().any(|b| root().join(b).join(n).exists())
-            || ["bench-core/src", "bench-core/src/methods", "report/src", "scenarios/src"]
-                .iter()
-                .any(|b| root().join(b).join(n).exists())
+            || [
+                "bench-core/src",
+                "bench-core/src/methods",
+                "report/src",
+                "scenarios/src",
+            ]
+            .iter()
+            .any(|b| root().join(b).join(n).exists())
     })
 }
 
@@ -38,7 +51,9 @@ fn is_path(t: &str) -> bool {
             || [".rs", ".wgsl", ".toml", ".sh", ".md"]
                 .iter()
                 .any(|e| t.ends_with(e)))
-        && t.chars().next().is_some_and(|c| c.is_ascii_alphanumeric() || c == '.')
+        && t.chars()
+            .next()
+            .is_some_and(|c| c.is_ascii_alphanumeric() || c == '.')
 }
 
 #[test]
@@ -63,5 +78,8 @@ fn every_path_architecture_md_names_exists() {
     }
     assert!(tokens.len() > 20, "too few paths found: {tokens:?}");
     let missing: Vec<&String> = tokens.iter().filter(|t| !exists(t)).collect();
-    assert!(missing.is_empty(), "ARCHITECTURE.md names paths that do not exist: {missing:?}");
+    assert!(
+        missing.is_empty(),
+        "ARCHITECTURE.md names paths that do not exist: {missing:?}"
+    );
 }

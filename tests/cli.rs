@@ -134,7 +134,8 @@ fn render_refuses_a_misspelt_axis_and_an_unknown_scene_parameter() {
 fn builtin_suites_check_clean_and_list_says_what_they_are() {
     let o = mfx(&["check", "smoke", "default", "effects", "stability_ci"]);
     assert!(o.status.success(), "{}", text(&o));
-    assert_eq!(text(&o).matches("ok: ").count(), 4, "{}", text(&o));
+    // Four suites and the papers files (checked with every `mfx check`).
+    assert_eq!(text(&o).matches("ok: ").count(), 5, "{}", text(&o));
     let o = mfx(&["list", "suites"]);
     let t = text(&o);
     for name in ["geometry-models", "shadows-bunny", "smoke"] {
@@ -279,6 +280,7 @@ fn compare_writes_only_where_told() {
     assert!(html.join("compare.html").is_file());
     assert_eq!(tree(&a), tree(&d.join("a")));
     assert!(!b.join("report").exists());
+}
 
 /// Methods of the rows of a runs.csv.
 fn methods_of(csv_path: &std::path::Path) -> Vec<(String, String)> {

@@ -86,7 +86,7 @@ fn a_scene_that_cannot_be_built_fails_every_row_of_its_group_with_the_reason() {
     };
     runner::run(testing::gpu(), &suite, &groups, &opts, &mut sink).unwrap();
     let rows = sink.0;
-    assert_eq!(rows.len(), 4, "three floors and the point");
+    assert_eq!(rows.len(), 5, "four floors and the point");
     for r in &rows {
         assert_eq!(r.get(cols::STATUS), Some("failed"));
         assert!(

@@ -12,14 +12,14 @@ fn rows(text: &str) -> Vec<Row> {
 
 fn f(r: &Row, c: bench_core::record::Col) -> f64 {
     r.get_f(c)
-        .unwrap_or_else(|| panic!("{} empty in {:?}", c.name, r.cells))
+        .unwrap_or_else(|| panic!("{} empty in {:?}", c.name, r))
 }
 
 /// The timing columns `measure` writes, and their relations.
 fn assert_timed(r: &Row, samples: usize) {
-    assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells);
+    assert_eq!(r.status(), Some(bench_core::record::Status::Ok), "{:?}", r);
     assert_eq!(r.get(cols::SAMPLES), Some(samples.to_string().as_str()));
-    assert!(r.get(cols::TARGET_REACHED).is_some(), "{:?}", r.cells);
+    assert!(r.get(cols::TARGET_REACHED).is_some(), "{:?}", r);
     assert!(r.get(cols::STOP_REASON).is_some());
     let (med, lo, hi) = (
         f(r, cols::GPU_MS_MEDIAN),

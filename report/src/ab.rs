@@ -23,7 +23,7 @@ use mfx_stats::{
     Modes, Verdict, VerdictOptions, MODE_MIN_FRAC, MODE_MIN_SEP,
 };
 
-use crate::calibrate::{BandSource, Calibration};
+use crate::bands::{BandSource, Calibration};
 use crate::data::{Rec, Runs};
 
 /// Error columns compared, when present on both sides.

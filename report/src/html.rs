@@ -217,4 +217,3 @@ fn point_key_axes(r: &Rec) -> String {
         .map(|k| k.axes)
         .unwrap_or_default()
 }
-

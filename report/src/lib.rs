@@ -5,6 +5,7 @@
 //! `mfx sweep` prints at its end).
 
 pub mod ab;
+pub mod bands;
 pub mod calibrate;
 pub mod cells;
 pub mod charts;

@@ -8,8 +8,8 @@ use std::fmt::Write;
 
 use scenarios::papers::{self, Figure, PointRef};
 
+use crate::cells::esc;
 use crate::data::{Rec, Runs};
-use crate::html::esc;
 
 /// The row a point names: same suite, method, scene label, resolution and axis values; an ok row
 /// first (a point measured twice, e.g. by two studies, reads the first ok one).
