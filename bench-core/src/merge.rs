@@ -380,7 +380,7 @@ fn gpu_ratios(files: &[PathBuf]) -> (Vec<GpuRatio>, usize) {
     ms.sort_by(f64::total_cmp);
     if let Some(&m) = ms.get(ms.len() / 2) {
         // The lower median of an even count: a real GPU's time, not a mean of two.
-        let m = if ms.len() % 2 == 0 {
+        let m = if ms.len().is_multiple_of(2) {
             ms[ms.len() / 2 - 1]
         } else {
             m
