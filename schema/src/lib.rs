@@ -507,7 +507,7 @@ pub mod cols {
     );
     pub const CPU_CULL_MS: Col = Col::new(
         "cpu_cull_ms",
-        "CPU tile path, one extra frame with phase clocks: ms summed over worker threads culling lights (tile and sub-tile frusta, normal cone); BF3 gives 1–4 ms of a 40 ms budget",
+        "CPU tile path, one extra frame with phase clocks (wall clock per worker thread, so time a thread is descheduled counts: run with thread_count ≤ free cores): ms summed over worker threads culling lights (tile and sub-tile frusta, normal cone); BF3 gives 1–4 ms of a 40 ms budget",
     );
     pub const CPU_UNPACK_MS: Col = Col::new(
         "cpu_unpack_ms",
