@@ -292,6 +292,9 @@ fn scene_problems(file: &str, table: &str, e: SceneError) -> Vec<Problem> {
         SceneError::Obj { path, why } => {
             vec![Problem::new(file, table, "path", format!("model file: {why}")).value(path)]
         }
+        SceneError::ModelLine { path, line, why } => {
+            vec![Problem::new(file, table, "path", format!("{path}:{line}: {why}"))]
+        }
         // A model a script fetches is not a suite problem: until it is fetched, its rows are
         // skipped with the command to run (`runner`).
         SceneError::ModelMissing { .. } => Vec::new(),

@@ -204,7 +204,7 @@ fn model_files_are_checked_missing_directory_no_faces_short_faces() {
     let short = obj("short.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n");
     one(
         &suite("", PEEL, &scene(&short)),
-        &["'path'", "line 5", "face with 2 vertices"],
+        &["'path'", "short.obj:5: ", "face with 2 vertices"],
     );
     let ok = obj("ok.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     assert!(problems(&suite("", PEEL, &scene(&ok))).is_empty());
