@@ -31,20 +31,32 @@ pub fn check_suite(suite: &Suite) -> Vec<Problem> {
     out
 }
 
-/// Loads a suite and checks it: `Err` holds every problem (structure and meaning).
+/// Loads a suite and checks it: `Err` holds every problem (structure and meaning) of every
+/// table.
 pub fn load(name_or_path: &str) -> Result<Suite, Vec<Problem>> {
-    match Suite::load(name_or_path) {
-        Ok(s) => {
-            let p = check_suite(&s);
-            if p.is_empty() {
-                Ok(s)
-            } else {
-                Err(p)
-            }
-        }
-        Err(SceneError::Problems(p)) => Err(p),
-        Err(e) => Err(vec![Problem::new(name_or_path, "suite", "", e.to_string())]),
+    let (text, source) = Suite::read(name_or_path)
+        .map_err(|e| vec![Problem::new(name_or_path, "suite", "", e.to_string())])?;
+    match check_text(&text, &source) {
+        (Some(suite), problems) if problems.is_empty() => Ok(suite),
+        (_, problems) => Err(problems),
     }
+}
+
+/// Parses and checks a suite's text: every problem of every table at once. A structural problem
+/// (`Suite::parse_partial`) leaves its value at the default, and the rest is still checked.
+pub fn check_text(text: &str, source: &str) -> (Option<Suite>, Vec<Problem>) {
+    let (suite, mut problems) = Suite::parse_partial(text, source);
+    if let Some(suite) = &suite {
+        // A timing table's own problems are already named by the parse: its plan's check would
+        // only say the same again.
+        let parsed = problems.clone();
+        problems.extend(check_suite(suite).into_iter().filter(|p| {
+            !(p.key.is_empty()
+                && ["[timing]", "[software]"].contains(&p.table.as_str())
+                && parsed.iter().any(|q| q.table == p.table))
+        }));
+    }
+    (suite, problems)
 }
 
 fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
@@ -293,7 +305,12 @@ fn scene_problems(file: &str, table: &str, e: SceneError) -> Vec<Problem> {
             vec![Problem::new(file, table, "path", format!("model file: {why}")).value(path)]
         }
         SceneError::ModelLine { path, line, why } => {
-            vec![Problem::new(file, table, "path", format!("{path}:{line}: {why}"))]
+            vec![Problem::new(
+                file,
+                table,
+                "path",
+                format!("{path}:{line}: {why}"),
+            )]
         }
         // A model a script fetches is not a suite problem: until it is fetched, its rows are
         // skipped with the command to run (`runner`).

@@ -3,7 +3,7 @@
 //! passes. (The CLI's exit code 2 and "nothing written" are tested in the root `tests/cli.rs`.)
 
 use bench_core::check::check_suite;
-use scenarios::{problem, Problem, SceneError, Suite};
+use scenarios::{problem, Problem, Suite};
 
 /// A one-study methods suite around `study` lines and `scene` lines.
 fn suite(top: &str, study: &str, scene: &str) -> String {
@@ -12,13 +12,9 @@ fn suite(top: &str, study: &str, scene: &str) -> String {
     )
 }
 
-/// All problems of a suite text: the parse's, else the check's.
+/// All problems of a suite text: the parse's and the check's.
 fn problems(text: &str) -> Vec<Problem> {
-    match Suite::parse(text, "typo.toml") {
-        Ok(s) => check_suite(&s),
-        Err(SceneError::Problems(p)) => p,
-        Err(e) => panic!("not a problem list: {e}"),
-    }
+    bench_core::check::check_text(text, "typo.toml").1
 }
 
 /// Asserts exactly one problem mentions every word of `words`, and returns its text.
@@ -234,8 +230,12 @@ fn unknown_study_kind_and_option_typos_are_named() {
 fn every_problem_is_reported_at_once() {
     let text = "name = \"t\"\nbogus = 1\n[software]\nmax_triangle = 1\n[[study]]\nkind = \"methods\"\nmethods = [\"nope\"]\naxes = { max_layer = [1] }\n[[study.scenes]]\ngenerator = \"quadz\"\n";
     let p = problems(text);
-    // The parse reports the structural ones; the rest need a parsed suite.
-    assert!(p.len() >= 2, "{}", problem::report(&p));
+    assert_eq!(
+        p.len(),
+        5,
+        "unknown top-level key, unknown [software] key, and the study's three:\n{}",
+        problem::report(&p)
+    );
     let text = text
         .replace("bogus = 1\n", "")
         .replace("[software]\nmax_triangle = 1\n", "");
@@ -246,6 +246,29 @@ fn every_problem_is_reported_at_once() {
         "unknown method, unknown axis, unknown generator:\n{}",
         problem::report(&p)
     );
+}
+
+/// A problem in `[timing]`, `[software]` or the top level does not hide the study's and the
+/// scene's: every table's problems come at once, each once.
+#[test]
+fn problems_in_timing_software_and_top_level_do_not_hide_the_studies() {
+    let text = "name = \"t\"\nresolutions = [[0, 64]]\n[timing]\nmin_samples = 10\nmax_samples = 5\n[software]\nmax_noise = 2.0\n[[study]]\nkind = \"methods\"\nmethods = [\"depth_pel\"]\n[[study.scenes]]\ngenerator = \"quads\"\ndepth_complexity = 0\n";
+    let p = problems(text);
+    let all = problem::report(&p);
+    for (table, key) in [
+        ("top level", "resolutions"),
+        ("[timing]", "min_samples"),
+        ("[software]", "max_noise"),
+        ("study 0 (methods)", "methods"),
+        ("study 0 (methods) › scene 0 (quads)", "depth_complexity"),
+    ] {
+        let n = p
+            .iter()
+            .filter(|x| x.table == table && x.key == key)
+            .count();
+        assert_eq!(n, 1, "{table} '{key}' once in:\n{all}");
+    }
+    assert_eq!(p.len(), 5, "{all}");
 }
 
 /// The suite example in ARCHITECTURE.md is a valid suite (docs that drift are refused here), and
