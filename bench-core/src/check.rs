@@ -236,10 +236,13 @@ fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
     }
     // Cross-axis rules of every point, once the values themselves are right.
     if out.len() == before {
-        if let Err(msgs) = studies::points(study, spec) {
-            for m in msgs {
-                out.push(Problem::new(file, &table, "", m));
+        match studies::points(study, spec) {
+            Err(msgs) => {
+                for m in msgs {
+                    out.push(Problem::new(file, &table, "", m));
+                }
             }
+            Ok(points) => ignored_axes(file, &table, spec, study, &points, out),
         }
     }
 
@@ -265,6 +268,60 @@ fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
                     out.push(p);
                 }
             }
+        }
+    }
+}
+
+/// An axis swept (two values or more) for a method where the method does not read it (its
+/// declaration says when it does: [`Axis::only_when`]): its points would repeat one
+/// configuration, and their noise would read as the axis's effect.
+fn ignored_axes(
+    file: &str,
+    table: &str,
+    spec: &StudySpec,
+    study: &dyn Study,
+    points: &[studies::PointSpec],
+    out: &mut Vec<Problem>,
+) {
+    let mut said = BTreeSet::new();
+    for p in points {
+        let swept = scenarios::suite::axes_for_method(spec, &p.method);
+        for a in study.axes(&p.method) {
+            if swept.get(a.name()).is_none_or(|v| v.len() < 2) {
+                continue;
+            }
+            let Some(with) = a.ignored_at(&p.point) else {
+                continue;
+            };
+            if !said.insert((p.method.clone(), a.name(), with.clone())) {
+                continue;
+            }
+            let w = a.when.expect("ignored_at needs a condition");
+            let own = spec
+                .method_axes
+                .get(&p.method)
+                .is_some_and(|o| o.contains_key(a.name()));
+            let tn = if own {
+                format!("{table} › method_axes.{}", p.method)
+            } else {
+                format!("{table} › axes")
+            };
+            out.push(Problem::new(
+                file,
+                &tn,
+                a.name(),
+                format!(
+                    "axis {} has no effect on method {} (with {with}): it is read only with {} = {}, so its values would repeat one configuration; sweep it where it is read (method_axes.{} with {} = {}) or give {} one value",
+                    a.name(),
+                    p.method,
+                    w.axis,
+                    w.values.join(" | "),
+                    p.method,
+                    w.axis,
+                    w.values.join(" | "),
+                    p.method,
+                ),
+            ));
         }
     }
 }

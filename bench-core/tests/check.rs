@@ -248,6 +248,66 @@ fn every_problem_is_reported_at_once() {
     );
 }
 
+/// An axis swept where a method does not read it (its declaration says when it does) would
+/// present noise as the axis's effect: refused, naming the method and the setting.
+#[test]
+fn an_axis_swept_where_a_method_ignores_it_is_a_problem() {
+    let list = "methods = [\"kbuffer_rmw\", \"linked_list\"]";
+    let m = one(
+        &suite("", &format!("{list}\naxes = {{ layers = [4, 8] }}"), QUADS),
+        &[
+            "'layers'",
+            "no effect on method linked_list (with pool=counted)",
+        ],
+    );
+    assert!(m.contains("study 0 (methods) › axes"), "{m}");
+    // Where the method reads it, or with one value, it is fine.
+    for axes in [
+        "axes = { layers = [4, 8] }\nmethod_axes = { linked_list = { pool = [\"fixed\"] } }",
+        "axes = { layers = [4, 8] }\nmethod_axes = { linked_list = { layers = [16] } }",
+        "axes = { layers = [8] }",
+    ] {
+        let p = problems(&suite("", &format!("{list}\n{axes}"), QUADS));
+        assert!(p.is_empty(), "{axes}:\n{}", problem::report(&p));
+    }
+    // Both pools swept: layers is ignored by the counted half only, and said once.
+    let m = one(
+        &suite(
+            "",
+            "methods = [\"linked_list\"]\naxes = { pool = [\"counted\", \"fixed\"], layers = [4, 8], pool_slack = [0, 50] }",
+            QUADS,
+        ),
+        &["'layers'", "with pool=counted"],
+    );
+    assert!(m.contains("pool = fixed"), "{m}");
+    one(
+        &suite(
+            "",
+            "methods = [\"linked_list\"]\naxes = { pool = [\"counted\", \"fixed\"], layers = [4, 8], pool_slack = [0, 50] }",
+            QUADS,
+        ),
+        &["'pool_slack'", "with pool=fixed"],
+    );
+    // The effects' own parameters: sigma is read by translucency and fresnel only.
+    one(
+        &suite(
+            "",
+            &format!("{PEEL}\naxes = {{ effect = [\"transparency\", \"translucency\"], sigma = [0.5, 2.0] }}"),
+            QUADS,
+        ),
+        &["'sigma'", "depth_peel (with effect=transparency)"],
+    );
+    // The MSAA capture mode is not read without MSAA.
+    one(
+        &suite(
+            "",
+            "methods = [\"linked_list\"]\naxes = { aa = [\"none\", \"msaa4\"], aa_capture = [\"sample\", \"coverage\"] }",
+            QUADS,
+        ),
+        &["'aa_capture'", "with aa=none"],
+    );
+}
+
 /// A problem in `[timing]`, `[software]` or the top level does not hide the study's and the
 /// scene's: every table's problems come at once, each once.
 #[test]
