@@ -206,6 +206,41 @@ fn a_mesh_that_covers_no_pixel_is_a_warning_not_silence() {
 }
 
 #[test]
+fn a_mesh_at_1e38_is_placed_in_view_not_collapsed() {
+    // The file: in f32 the normalising scale underflowed to 0, world_from_object was
+    // all zeros and every image was empty, "matching" an empty truth.
+    let d = tmp("huge");
+    let obj = d.join("huge.obj");
+    std::fs::write(
+        &obj,
+        "v -1e38 -1e38 0\nv 1e38 -1e38 0\nv 0 1e38 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let cam = d.join("cam.json");
+    let o = mfx(&[
+        "render",
+        "--obj",
+        obj.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--camera-out",
+        cam.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(!text(&o).contains("covers no pixel"), "{}", text(&o));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&cam).unwrap()).unwrap();
+    let m = &json["world_from_object"][0];
+    let scale = m[0][0].as_f64().unwrap();
+    assert!(
+        (scale * 1e38 - 1.0 / 2f64.sqrt()).abs() < 1e-6,
+        "x scale 1/radius (radius √2 · 1e38): {m}"
+    );
+}
+
+#[test]
 fn check_reports_the_problems_of_every_table_at_once() {
     let d = tmp("every-table");
     let file = d.join("three.toml");

@@ -103,7 +103,15 @@ impl Axis {
             .default_value()
             .map(|v| v.to_string())
             .unwrap_or_else(|| "none".into());
-        format!("{} (default {d}; {})", self.name(), self.kind.expected())
+        let when = self
+            .when
+            .map(|w| format!("; read only with {} = {}", w.axis, w.values.join(" | ")))
+            .unwrap_or_default();
+        format!(
+            "{} (default {d}; {}{when})",
+            self.name(),
+            self.kind.expected()
+        )
     }
 }
 
