@@ -548,9 +548,9 @@ const ZERO_BAND: f64 = 30.0;
 /// A front with more members is numbered on the chart and named in the caption.
 const FRONT_NAMED_MAX: usize = 6;
 /// Markers of different series closer than this (px) are spread sideways so each shows.
-const DODGE_PX: f64 = 6.0;
+const DODGE_PX: f64 = 9.0;
 /// The sideways step between spread markers (px): a marker's width less a little.
-const DODGE_STEP: f64 = 9.0;
+const DODGE_STEP: f64 = 10.0;
 const FLOOR_PX: f64 = 11.0;
 const FLOOR_ROW: f64 = 15.0;
 const FRONT_PX: f64 = 12.0;
@@ -1817,5 +1817,101 @@ mod tests {
         let l = read_layout(&d, "d");
         assert!(l.kind == "dots" && l.x.log);
         assert_eq!(layout::check(&l), Ok(()));
+    }
+
+    #[test]
+    fn look_alike_series_fail_the_check() {
+        // Two configurations given the same colour and marker: the reader cannot tell them apart.
+        let d = tmp("alike");
+        let s = |name: &str, y: f64| Series {
+            name: name.into(),
+            family: 1,
+            color: Some(3),
+            points: vec![Pt::new(1.0, y), Pt::new(2.0, y * 2.0)],
+        };
+        let xy = XY {
+            title: "t".into(),
+            series: vec![s("a", 1.0), s("b", 5.0)],
+            ..Default::default()
+        };
+        xy.draw(&d, "alike", "").unwrap();
+        let e = layout::check(&read_layout(&d, "alike")).unwrap_err();
+        assert!(e.iter().any(|m| m.contains("looks like")), "{e:?}");
+    }
+
+    #[test]
+    fn equal_points_are_spread_and_the_check_sees_them_hidden_otherwise() {
+        // k=4 and k=8 with the same hazard rate at the same complexity: one used to hide the other.
+        let d = tmp("equal");
+        let s = |name: &str, c: usize| Series {
+            name: name.into(),
+            family: 2,
+            color: Some(c),
+            points: vec![Pt::new(8.0, 0.0), Pt::new(32.0, 0.1 * c as f64)],
+        };
+        let xy = XY {
+            title: "hazard".into(),
+            series: vec![s("k=4", 1), s("k=8", 2)],
+            ..Default::default()
+        };
+        let f = xy.draw(&d, "eq", "").unwrap();
+        assert!(f.caption.contains("spread sideways"), "{}", f.caption);
+        let mut l = read_layout(&d, "eq");
+        assert_eq!(layout::check(&l), Ok(()));
+        let (a, b) = (l.marks[0].rect, l.marks[2].rect);
+        assert!((a.x - b.x).abs() >= DODGE_PX && a.y == b.y, "{a:?} {b:?}");
+        // The same chart without the spreading fails.
+        l.marks[2].rect = a;
+        let e = layout::check(&l).unwrap_err();
+        assert!(e.iter().any(|m| m.contains("same spot")), "{e:?}");
+    }
+
+    #[test]
+    fn close_floors_and_front_names_keep_clear_and_the_check_sees_an_overlap() {
+        // floor_depth 0.494 and floor_opaque 0.581: rotated names used to cross each other.
+        let d = tmp("floors");
+        let series: Vec<Series> = (0..6)
+            .map(|i| Series {
+                name: format!("method {i}"),
+                family: i,
+                color: Some(i),
+                points: vec![Pt::new(0.6 + 0.05 * i as f64, 1e-3 / (1.0 + i as f64))],
+            })
+            .collect();
+        let xy = XY {
+            title: "Error vs time".into(),
+            log_x: true,
+            log_y: true,
+            series,
+            front: (0..6)
+                .map(|i| Named {
+                    x: 0.6 + 0.05 * i as f64,
+                    y: 1e-3 / (1.0 + i as f64),
+                    text: format!("method {i} with a long name"),
+                })
+                .collect(),
+            front_name: "front".into(),
+            vlines: vec![
+                (0.494, "floor_depth 0.494".into()),
+                (0.581, "floor_opaque 0.581".into()),
+                (0.6, "floor_blend 0.6".into()),
+            ],
+            ..Default::default()
+        };
+        xy.draw(&d, "fl", "").unwrap();
+        let mut l = read_layout(&d, "fl");
+        assert_eq!(layout::check(&l), Ok(()));
+        assert!(l.labels.len() >= 3, "{:?}", l.labels);
+        // Floor names sit above the plot, never over a marker.
+        assert!(l.labels[..3].iter().all(|t| t.rect.bottom() <= l.plot.y));
+        // Put the second floor's name where the first one is: caught.
+        l.labels[1].rect = l.labels[0].rect;
+        let e = layout::check(&l).unwrap_err();
+        assert!(e.iter().any(|m| m.contains("overlaps label")), "{e:?}");
+        // A name over a marker: caught.
+        let mut l = read_layout(&d, "fl");
+        l.labels[0].rect = l.marks[0].rect;
+        let e = layout::check(&l).unwrap_err();
+        assert!(e.iter().any(|m| m.contains("covers a marker")), "{e:?}");
     }
 }
