@@ -185,8 +185,10 @@ pub struct XY {
     /// Points joined by a dashed line and named (a Pareto front), with the line's legend name.
     pub front: Vec<Named>,
     pub front_name: String,
-    /// Vertical reference lines (x, name), e.g. the floors on a time axis.
+    /// Vertical reference lines (x, name), e.g. the floors on a time axis, and their legend
+    /// entry (default "floors (named above the plot)").
     pub vlines: Vec<(f64, String)>,
+    pub vlines_name: String,
     /// Name of the band under a log y axis where y = 0 is drawn (default "0").
     pub zero_label: String,
     /// Other configurations drawn as thin grey lines behind the series (small multiples: the
@@ -758,7 +760,11 @@ impl XY {
                     color: MUTED,
                     dashed: true,
                 },
-                "floors (named above the plot)",
+                if self.vlines_name.is_empty() {
+                    "floors (named above the plot)"
+                } else {
+                    &self.vlines_name
+                },
             ));
         }
         let left = 16.0 + AXIS_PX + 12.0 + ytw + 10.0;
