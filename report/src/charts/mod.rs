@@ -549,7 +549,7 @@ const PLOT_H: f64 = 440.0;
 const ZERO_BAND: f64 = 30.0;
 /// A front with more members is numbered on the chart and named in the caption.
 const FRONT_NAMED_MAX: usize = 6;
-/// Markers of different series closer than this (px) are spread sideways so each shows.
+/// Markers of different series closer than this (px) are moved apart so each shows.
 const DODGE_PX: f64 = 9.0;
 /// The sideways step between spread markers (px): a marker's width less a little.
 const DODGE_STEP: f64 = 10.0;
@@ -598,30 +598,42 @@ fn style_key(c: RGBColor, family: usize) -> String {
 }
 
 /// Moves a marker that would sit on (nearly) the same spot as an earlier one of another series
-/// sideways, alternately right and left by `DODGE_STEP`, to the nearest free spot (a horizontal
-/// beeswarm), so none hides another; returns how many were moved.
-fn dodge(pos: &mut [Vec<Option<(f64, f64)>>]) -> usize {
+/// to the nearest free spot of a `DODGE_STEP` grid around it (sideways first), inside the plot
+/// (`inside`, for marker centres), so none hides another and each stays by its value; returns how many moved.
+fn dodge(pos: &mut [Vec<Option<(f64, f64)>>], inside: Rect) -> usize {
+    let mut grid: Vec<(f64, f64)> = (-8..=8)
+        .flat_map(|i| (-8..=8).map(move |j| (f64::from(i), f64::from(j))))
+        .collect();
+    grid.sort_by(|a, b| {
+        a.0.hypot(a.1)
+            .total_cmp(&b.0.hypot(b.1))
+            .then(a.1.abs().total_cmp(&b.1.abs()))
+    });
     let mut placed: Vec<(usize, f64, f64)> = Vec::new();
     let mut moved = 0;
     for (i, s) in pos.iter_mut().enumerate() {
         for p in s.iter_mut() {
             let Some((x, y)) = *p else { continue };
-            let clash = |cx: f64| {
+            let clash = |cx: f64, cy: f64| {
                 placed
                     .iter()
-                    .any(|(k, ox, oy)| *k != i && (cx - ox).hypot(y - oy) < DODGE_PX)
+                    .any(|(k, ox, oy)| *k != i && (cx - ox).hypot(cy - oy) < DODGE_PX)
             };
-            let nx = (0..)
-                .map(|k: i32| {
-                    x + f64::from((k + 1) / 2 * if k % 2 == 1 { 1 } else { -1 }) * DODGE_STEP
+            let (nx, ny) = grid
+                .iter()
+                .map(|(a, b)| (x + a * DODGE_STEP, y + b * DODGE_STEP))
+                .filter(|(cx, cy)| {
+                    (*cx, *cy) == (x, y)
+                        || (inside.x..=inside.right()).contains(cx)
+                            && (inside.y..=inside.bottom()).contains(cy)
                 })
-                .find(|cx| !clash(*cx))
-                .unwrap_or(x);
-            if nx != x {
+                .find(|(cx, cy)| !clash(*cx, *cy))
+                .unwrap_or((x, y));
+            if (nx, ny) != (x, y) {
                 moved += 1;
-                *p = Some((nx, y));
+                *p = Some((nx, ny));
             }
-            placed.push((i, nx, y));
+            placed.push((i, nx, ny));
         }
     }
     moved
@@ -853,7 +865,10 @@ impl XY {
                     .collect()
             })
             .collect();
-        let dodged = dodge(&mut pos);
+        let dodged = dodge(
+            &mut pos,
+            Rect::new(plot.x + 6.0, plot.y + 6.0, plot.w - 12.0, plot.h - 12.0),
+        );
         let marks: Vec<Mark> = pos
             .iter()
             .enumerate()
@@ -1025,7 +1040,7 @@ impl XY {
         }
         if plan.dodged > 0 {
             caption.push_str(&format!(
-                " {} markers of different configurations at the same spot are spread sideways ({} px apart) so each shows.",
+                " {} markers of different configurations at the same spot are moved apart ({} px steps, to the nearest free spot) so each shows.",
                 plan.dodged, DODGE_STEP
             ));
         }
@@ -1861,7 +1876,7 @@ mod tests {
             ..Default::default()
         };
         let f = xy.draw(&d, "eq", "").unwrap();
-        assert!(f.caption.contains("spread sideways"), "{}", f.caption);
+        assert!(f.caption.contains("moved apart"), "{}", f.caption);
         let mut l = read_layout(&d, "eq");
         assert_eq!(layout::check(&l), Ok(()));
         let (a, b) = (l.marks[0].rect, l.marks[2].rect);
