@@ -156,3 +156,41 @@ fn bound_table(rows: &[&Rec]) -> Option<String> {
     h.push_str("</table></details>");
     Some(h)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::charts::layout;
+
+    #[test]
+    fn the_tail_chart_and_the_throughput_table_are_drawn_from_the_columns() {
+        let d = std::env::temp_dir().join(format!("mfx-tail-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let p = d.join("runs.csv");
+        let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,gpu_ms_p50,gpu_ms_p95,gpu_ms_p99,gpu_ms_max,fragments_per_s,bytes_per_s,peak_bandwidth_frac,samples,flag";
+        let rows = [
+            "1,r,methods,quads(depth_complexity=8),64,64,linked_list,a,gpu,vulkan,ok,,1.0,1.0,1.2,1.35,1.5,2e9,1e11,0.021,30,",
+            "1,r,methods,quads(depth_complexity=8),64,64,depth_peel,b,gpu,vulkan,ok,,2.0,2.0,2.01,2.02,2.1,1e9,5e10,0.0104,30,",
+            "1,r,methods,quads(depth_complexity=32),64,64,depth_peel,c,gpu,vulkan,ok,,4.0,4.0,4.1,4.2,4.4,2e9,6e10,0.0125,30,",
+        ];
+        std::fs::write(&p, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
+        let runs = Runs::load(&p).unwrap();
+        assert!(applies(&runs));
+        let figs = figures(&runs, &d).unwrap();
+        let chart = figs.iter().find(|f| f.is_chart()).expect("a tail chart");
+        assert!(chart.caption.contains("(1 here)"), "{}", chart.caption);
+        let l: layout::Layout = serde_json::from_str(
+            &std::fs::read_to_string(d.join(format!("{}.layout.json", chart.stem))).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(layout::check(&l), Ok(()));
+        // One series per scene; p99 / median on x.
+        assert_eq!(l.series, 2);
+        assert!(l.x.data.unwrap()[1] >= 1.35 - 1e-9);
+        let table = figs.iter().find_map(|f| f.html.clone()).expect("a table");
+        assert!(
+            table.contains("2.1 %") && table.contains("1.350"),
+            "{table}"
+        );
+    }
+}
