@@ -12,6 +12,7 @@ use std::fmt::Write;
 use crate::cells::{esc, short, time_cell};
 use crate::data::{platform, platforms, resolution, Rec, Runs};
 use crate::labels::{scene_name, ConfigLabels};
+use crate::points::TAIL_RATIO;
 
 /// RMSE budgets (vs the ground truth) the summary names the fastest configuration under.
 pub const BUDGETS: [f64; 2] = [1e-3, 1e-2];
@@ -467,9 +468,6 @@ fn other_studies(runs: &Runs) -> Vec<(String, String, Vec<OtherLine>)> {
     }
     out
 }
-
-/// A row's p99 GPU time above this multiple of its median is a tail worth a line.
-pub const TAIL_RATIO: f64 = 1.2;
 
 /// The rows whose per-sample GPU time has a tail (p99 > `TAIL_RATIO` × p50), worst first:
 /// "tail: METHOD on SCENE, RES p99 = X ms, R× median (M ms)". Rows whose timestamps miss part of

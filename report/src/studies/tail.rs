@@ -12,7 +12,7 @@ use crate::cells::{esc, short};
 use crate::charts::{Figure, Pt, Series, XY};
 use crate::data::{resolution, Rec, Runs};
 use crate::labels::{file_safe, scene_name, ConfigLabels};
-use crate::summary::TAIL_RATIO;
+use crate::points::TAIL_RATIO;
 
 /// Whether any row carries the tail columns (CSVs before them have none).
 pub fn applies(runs: &Runs) -> bool {
