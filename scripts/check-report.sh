@@ -4,8 +4,11 @@
 # layout record (<stem>.layout.json beside its SVG) passes the reader's rules of
 # report/src/charts/layout.rs `check`: the legend box does not overlap the plot area; each
 # numeric axis contains its data and reaches at most a decade beyond it (log: ≤ 10× padding on
-# each side; linear: axis span ≤ 10 × max(data span, a tenth of the data's magnitude)); no tick
-# label repeats (category names included).
+# each side; linear: axis span ≤ 10 × max(data span, a tenth of the data's magnitude)), or data
+# outside the axis has an off-scale mark (`off_scale` > 0); no tick label repeats (category names
+# included); no text drawn on the chart (floor and front names) overlaps another or a marker; no
+# two markers of different series sit within 3 px of each other (one hiding the other); no two
+# series share a colour and a marker.
 #
 #   scripts/check-report.sh DIR      DIR = a run folder (DIR/report/index.html), a report folder,
 #                                    or the index.html itself
@@ -86,7 +89,9 @@ window.addEventListener("load", function () {
       if (a.categorical || !a.data) return;
       var r0 = a.range[0], r1 = a.range[1], d0 = a.data[0], d1 = a.data[1];
       var tol = Math.abs(r1 - r0) * 1e-9;
-      if (d0 < r0 - tol || d1 > r1 + tol) layout.push(l.stem + ": " + n + " data outside the axis");
+      if ((d0 < r0 - tol || d1 > r1 + tol) && !a.off_scale)
+        layout.push(l.stem + ": " + n + " data outside the axis with no off-scale mark");
+      if (a.off_scale) return;
       if (a.log) {
         if (d0 <= 0 || r0 <= 0 || d0 / r0 > 10 * (1 + 1e-9) || r1 / d1 > 10 * (1 + 1e-9))
           layout.push(l.stem + ": " + n + " log axis " + r0 + ".." + r1 + " reaches more than a decade beyond its data " + d0 + ".." + d1);
@@ -95,6 +100,28 @@ window.addEventListener("load", function () {
         if (span > 0 && (r1 - r0) > 10 * span * (1 + 1e-9))
           layout.push(l.stem + ": " + n + " axis " + r0 + ".." + r1 + " is more than ten times its data's span " + d0 + ".." + d1);
       }
+    });
+    var hit = function (a, b) {
+      return a.x < b.x + b.w && b.x < a.x + a.w && a.y < b.y + b.h && b.y < a.y + a.h;
+    };
+    var labels = l.labels || [], marks = l.marks || [], styles = l.styles || [];
+    labels.forEach(function (t, k) {
+      labels.slice(0, k).forEach(function (o) {
+        if (hit(t.rect, o.rect)) layout.push(l.stem + ": label '" + t.text + "' overlaps label '" + o.text + "'");
+      });
+      if (marks.some(function (m) { return hit(m.rect, t.rect); }))
+        layout.push(l.stem + ": label '" + t.text + "' covers a marker");
+    });
+    var hidden = marks.some(function (m, k) {
+      return marks.slice(0, k).some(function (o) {
+        return o.series !== m.series &&
+          Math.hypot(m.rect.x + m.rect.w / 2 - o.rect.x - o.rect.w / 2,
+                     m.rect.y + m.rect.h / 2 - o.rect.y - o.rect.h / 2) < 3;
+      });
+    });
+    if (hidden) layout.push(l.stem + ": markers of two series sit on the same spot");
+    styles.forEach(function (st, k) {
+      if (st && styles.indexOf(st) < k) layout.push(l.stem + ": series " + k + " looks like an earlier one (" + st + ")");
     });
   });
   var pre = document.createElement("pre");

@@ -66,3 +66,7 @@ fn whiskers(rows: &[&Rec]) -> String {
     }
     s
 }
+
+/// A row's p99 GPU time above this multiple of its median is a tail: the summary names it and
+/// the tail chart draws the line.
+pub const TAIL_RATIO: f64 = 1.2;

@@ -12,6 +12,7 @@ use std::fmt::Write;
 use crate::cells::{esc, short, time_cell};
 use crate::data::{platform, platforms, resolution, Rec, Runs};
 use crate::labels::{scene_name, ConfigLabels};
+use crate::points::TAIL_RATIO;
 
 /// RMSE budgets (vs the ground truth) the summary names the fastest configuration under.
 pub const BUDGETS: [f64; 2] = [1e-3, 1e-2];
@@ -468,6 +469,38 @@ fn other_studies(runs: &Runs) -> Vec<(String, String, Vec<OtherLine>)> {
     out
 }
 
+/// The rows whose per-sample GPU time has a tail (p99 > `TAIL_RATIO` × p50), worst first:
+/// "tail: METHOD on SCENE, RES p99 = X ms, R× median (M ms)". Rows whose timestamps miss part of
+/// the frame are left out (their times are not the frame's).
+pub fn tail_lines(runs: &Runs) -> Vec<String> {
+    let ok: Vec<&Rec> = runs.rows.iter().filter(|r| r.ok()).collect();
+    let labels = ConfigLabels::new(ok.iter().copied());
+    let mut tails: Vec<(f64, String)> = ok
+        .iter()
+        .filter(|r| r.trusted_ms().is_some())
+        .filter_map(|r| {
+            let (p50, p99) = (r.f(cols::GPU_MS_P50)?, r.f(cols::GPU_MS_P99)?);
+            let ratio = p99 / p50;
+            (p50 > 0.0 && ratio > TAIL_RATIO).then(|| {
+                (
+                    ratio,
+                    format!(
+                        "tail: {} on {}, {} p99 = {} ms, {:.2}× median ({} ms)",
+                        labels.get(r),
+                        scene_name(r.get(cols::SCENE_LABEL)),
+                        resolution(r),
+                        short(Some(p99)),
+                        ratio,
+                        short(Some(p50))
+                    ),
+                )
+            })
+        })
+        .collect();
+    tails.sort_by(|a, b| b.0.total_cmp(&a.0));
+    tails.into_iter().map(|(_, l)| l).collect()
+}
+
 /// The summary as HTML: the verdict table per study first, then the other studies, what did
 /// not run (folded) and the columns this CSV lacks.
 pub fn summary_html(runs: &Runs) -> String {
@@ -538,6 +571,19 @@ pub fn summary_html(runs: &Runs) -> String {
             );
         }
         h.push_str("</table>");
+    }
+    let tails = tail_lines(runs);
+    if !tails.is_empty() {
+        let _ = write!(
+            h,
+            "<details id=\"tails\"{}><summary>Frame-time tails: {} row(s) with p99 &gt; {TAIL_RATIO}× median</summary><ul>{}</ul></details>",
+            if tails.len() <= 10 { " open" } else { "" },
+            tails.len(),
+            tails
+                .iter()
+                .map(|l| format!("<li>{}</li>", esc(l)))
+                .collect::<String>()
+        );
     }
     let nr = not_run(runs);
     if nr.is_empty() {
@@ -610,6 +656,13 @@ pub fn summary_text(runs: &Runs) -> String {
                     format!("; lowest {b}")
                 }
             );
+        }
+    }
+    let tails = tail_lines(runs);
+    if !tails.is_empty() {
+        let _ = writeln!(out, "\nFrame-time tails (p99 > {TAIL_RATIO}× median):");
+        for l in tails {
+            let _ = writeln!(out, "- {l}");
         }
     }
     let nr = not_run(runs);
@@ -776,5 +829,38 @@ mod tests {
                 assert!(p.row.f(cols::OVERFLOW_RATE).is_none_or(|o| o == 0.0));
             }
         }
+    }
+
+    #[test]
+    fn a_tail_is_said_when_p99_exceeds_the_median_by_a_fifth_and_not_otherwise() {
+        let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,gpu_ms_p50,gpu_ms_p95,gpu_ms_p99,samples,flag";
+        let d = std::env::temp_dir().join(format!("mfx-summary-tail-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let p = d.join("runs.csv");
+        let rows = [
+            "1,r,methods,quads(depth_complexity=8),64,64,linked_list,a,gpu,vulkan,ok,,1.0,1.0,1.2,1.35,30,",
+            "1,r,methods,quads(depth_complexity=8),64,64,depth_peel,b,gpu,vulkan,ok,,2.0,2.0,2.2,2.39,30,",
+            "1,r,methods,quads(depth_complexity=8),64,64,wboit,c,gpu,vulkan,ok,,3.0,3.0,3.1,3.6,30,",
+        ];
+        std::fs::write(&p, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
+        let r = Runs::load(&p).unwrap();
+        let t = tail_lines(&r);
+        // 1.35× is a tail; 1.195× and exactly 1.2× are not.
+        assert_eq!(t.len(), 1, "{t:?}");
+        assert!(
+            t[0].starts_with("tail: linked_list on quads")
+                && t[0].contains("p99 = 1.35 ms, 1.35× median"),
+            "{t:?}"
+        );
+        assert!(summary_text(&r).contains(&t[0]));
+        assert!(summary_html(&r).contains("id=\"tails\""));
+        // No p99 column (an older CSV): no tail line.
+        let p0 = d.join("old.csv");
+        std::fs::write(
+            &p0,
+            "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,samples,flag\n1,r,methods,quads(depth_complexity=8),64,64,linked_list,a,gpu,vulkan,ok,,1.0,30,\n",
+        )
+        .unwrap();
+        assert!(tail_lines(&Runs::load(&p0).unwrap()).is_empty());
     }
 }

@@ -1,7 +1,9 @@
 //! The layout record every chart writes beside its PNG/SVG (`<stem>.layout.json`), and the checks
 //! a reader's eye would make: the legend never covers the plot, each axis shows its data with at
-//! most a decade to spare, tick labels are distinct. `scripts/check-report.sh` runs the same
-//! rules in the browser over every chart of a page; `check` is their definition.
+//! most a decade to spare (or marks what lies off its scale), tick labels are distinct, no text
+//! drawn on the chart covers another text or a marker, no two markers of different series sit on
+//! the same spot, and no two series share a colour and a marker. `scripts/check-report.sh` runs
+//! the same rules in the browser over every chart of a page; `check` is their definition.
 
 use serde::{Deserialize, Serialize};
 
@@ -49,6 +51,24 @@ pub struct AxisRecord {
     /// [min, max] shown by the axis.
     pub range: [f64; 2],
     pub ticks: Vec<String>,
+    /// Values drawn clamped to the axis's edge with an off-scale mark (an arrow and the value):
+    /// data may lie outside `range` only when this is > 0.
+    #[serde(default)]
+    pub off_scale: usize,
+}
+
+/// A text drawn on the chart (a front member's name, a floor's name), with its box.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TextBox {
+    pub text: String,
+    pub rect: Rect,
+}
+
+/// A data marker as drawn: its series (index into `styles`) and its box.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Mark {
+    pub series: usize,
+    pub rect: Rect,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -68,7 +88,20 @@ pub struct Layout {
     pub series: usize,
     /// Height in pixels of the band below a log y axis where y = 0 points are drawn (0: none).
     pub zero_band: f64,
+    /// Per series, what tells it apart: "colour marker" (e.g. "#1f77b4 circle"); "" for a series
+    /// without a legend entry (grey context lines).
+    #[serde(default)]
+    pub styles: Vec<String>,
+    /// The texts drawn in or around the plot (not the axes' tick labels or the legend).
+    #[serde(default)]
+    pub labels: Vec<TextBox>,
+    /// Every data marker drawn.
+    #[serde(default)]
+    pub marks: Vec<Mark>,
 }
+
+/// Markers of different series whose centres are closer than this (px) hide each other.
+pub const HIDDEN_PX: f64 = 3.0;
 
 /// How far an axis may reach beyond its data. Log axes: at most one decade of padding on each
 /// side. Linear axes: the axis span at most ten times the data span (a constant gets a window of
@@ -100,11 +133,15 @@ pub fn check(l: &Layout) -> Result<(), Vec<String>> {
         }
         let Some([d0, d1]) = a.data else { continue };
         let tol = (r1 - r0).abs() * 1e-9;
-        if d0 < r0 - tol || d1 > r1 + tol {
+        if (d0 < r0 - tol || d1 > r1 + tol) && a.off_scale == 0 {
             bad.push(format!(
-                "{}: {name} data {d0}..{d1} lies outside the axis {r0}..{r1}",
+                "{}: {name} data {d0}..{d1} lies outside the axis {r0}..{r1} with no off-scale mark",
                 l.stem
             ));
+        }
+        if a.off_scale > 0 {
+            // Clamped values: the padding rules below are about the axis's own data.
+            continue;
         }
         if a.log {
             if d0 <= 0.0 || r0 <= 0.0 {
@@ -126,6 +163,44 @@ pub fn check(l: &Layout) -> Result<(), Vec<String>> {
                     l.stem
                 ));
             }
+        }
+    }
+    for (i, t) in l.labels.iter().enumerate() {
+        for o in &l.labels[..i] {
+            if t.rect.intersects(&o.rect) {
+                bad.push(format!(
+                    "{}: label {:?} overlaps label {:?}",
+                    l.stem, t.text, o.text
+                ));
+            }
+        }
+        if let Some(m) = l.marks.iter().find(|m| m.rect.intersects(&t.rect)) {
+            bad.push(format!(
+                "{}: label {:?} covers a marker of series {}",
+                l.stem, t.text, m.series
+            ));
+        }
+    }
+    let centre = |r: &Rect| (r.x + r.w / 2.0, r.y + r.h / 2.0);
+    'hidden: for (i, m) in l.marks.iter().enumerate() {
+        let (x, y) = centre(&m.rect);
+        for o in &l.marks[..i] {
+            let (ox, oy) = centre(&o.rect);
+            if o.series != m.series && (x - ox).hypot(y - oy) < HIDDEN_PX {
+                bad.push(format!(
+                    "{}: markers of series {} and {} sit on the same spot ({x:.0}, {y:.0})",
+                    l.stem, o.series, m.series
+                ));
+                break 'hidden;
+            }
+        }
+    }
+    for (i, s) in l.styles.iter().enumerate() {
+        if !s.is_empty() && l.styles[..i].contains(s) {
+            bad.push(format!(
+                "{}: series {i} looks like an earlier one ({s})",
+                l.stem
+            ));
         }
     }
     if bad.is_empty() {
@@ -162,6 +237,25 @@ mod tests {
             },
             series: 3,
             zero_band: 0.0,
+            styles: vec![
+                "#1f77b4 circle".into(),
+                "#ff7f0e circle".into(),
+                "#1f77b4 square".into(),
+            ],
+            labels: vec![TextBox {
+                text: "a".into(),
+                rect: Rect::new(100.0, 50.0, 40.0, 15.0),
+            }],
+            marks: vec![
+                Mark {
+                    series: 0,
+                    rect: Rect::new(150.0, 50.0, 12.0, 12.0),
+                },
+                Mark {
+                    series: 1,
+                    rect: Rect::new(150.0, 62.0, 12.0, 12.0),
+                },
+            ],
         }
     }
 
@@ -200,5 +294,45 @@ mod tests {
         let e = check(&l).unwrap_err();
         assert!(e.iter().any(|m| m.contains("outside the axis")), "{e:?}");
         assert!(e.iter().any(|m| m.contains("repeats")), "{e:?}");
+    }
+
+    #[test]
+    fn labels_over_labels_or_markers_fail() {
+        let mut l = good();
+        l.labels.push(TextBox {
+            text: "b".into(),
+            rect: Rect::new(130.0, 55.0, 40.0, 15.0),
+        });
+        let e = check(&l).unwrap_err();
+        assert!(e.iter().any(|m| m.contains("overlaps label")), "{e:?}");
+        assert!(e.iter().any(|m| m.contains("covers a marker")), "{e:?}");
+    }
+
+    #[test]
+    fn coincident_markers_and_look_alike_series_fail() {
+        let mut l = good();
+        l.marks[1].rect = Rect::new(151.0, 51.0, 12.0, 12.0);
+        l.styles[2] = "#1f77b4 circle".into();
+        let e = check(&l).unwrap_err();
+        assert!(e.iter().any(|m| m.contains("same spot")), "{e:?}");
+        assert!(e.iter().any(|m| m.contains("looks like")), "{e:?}");
+        // One series' own points may touch (a line of them).
+        let mut l = good();
+        l.marks[1] = Mark {
+            series: 0,
+            rect: Rect::new(151.0, 51.0, 12.0, 12.0),
+        };
+        assert_eq!(check(&l), Ok(()));
+    }
+
+    #[test]
+    fn data_off_the_scale_needs_its_mark() {
+        let mut l = good();
+        l.x.data = Some([2.0, 7.49]);
+        l.x.range = [0.25, 4.0];
+        let e = check(&l).unwrap_err();
+        assert!(e[0].contains("no off-scale mark"), "{e:?}");
+        l.x.off_scale = 1;
+        assert_eq!(check(&l), Ok(()));
     }
 }

@@ -17,7 +17,7 @@ use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-pub use layout::{AxisRecord, Layout, Rect};
+pub use layout::{AxisRecord, Layout, Mark, Rect, TextBox};
 
 static FONT: Once = Once::new();
 
@@ -92,6 +92,16 @@ const SHAPES: [(usize, f64); 8] = [
     (6, 0.0),                          // hexagon
     (5, -std::f64::consts::FRAC_PI_2), // pentagon
     (3, 0.0),                          // triangle right
+];
+const SHAPE_NAMES: [&str; 8] = [
+    "circle",
+    "square",
+    "triangle-up",
+    "diamond",
+    "triangle-down",
+    "hexagon",
+    "pentagon",
+    "triangle-right",
 ];
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -175,10 +185,16 @@ pub struct XY {
     /// Points joined by a dashed line and named (a Pareto front), with the line's legend name.
     pub front: Vec<Named>,
     pub front_name: String,
-    /// Vertical reference lines (x, name), e.g. the floors on a time axis.
+    /// Vertical reference lines (x, name), e.g. the floors on a time axis, and their legend
+    /// entry (default "floors (named above the plot)").
     pub vlines: Vec<(f64, String)>,
+    pub vlines_name: String,
     /// Name of the band under a log y axis where y = 0 is drawn (default "0").
     pub zero_label: String,
+    /// Other configurations drawn as thin grey lines behind the series (small multiples: the
+    /// rest of the field), with their one legend name.
+    pub context: Vec<Vec<Pt>>,
+    pub context_name: String,
 }
 
 fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
@@ -327,6 +343,7 @@ impl Axis {
             data,
             range: [self.lo, self.hi],
             ticks: self.labels.clone(),
+            off_scale: 0,
         }
     }
 }
@@ -374,6 +391,7 @@ fn axis_title(label: &str, log: bool) -> String {
 const GRID: RGBColor = RGBColor(228, 228, 228);
 const FRAME: RGBColor = RGBColor(120, 120, 120);
 const MUTED: RGBColor = RGBColor(110, 110, 110);
+const CONTEXT: RGBColor = RGBColor(200, 200, 200);
 
 fn draw_marker<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
@@ -531,6 +549,20 @@ const PLOT_H: f64 = 440.0;
 const ZERO_BAND: f64 = 30.0;
 /// A front with more members is numbered on the chart and named in the caption.
 const FRONT_NAMED_MAX: usize = 6;
+/// Markers of different series closer than this (px) are moved apart so each shows.
+const DODGE_PX: f64 = 9.0;
+/// The sideways step between spread markers (px): a marker's width less a little.
+const DODGE_STEP: f64 = 10.0;
+const FLOOR_PX: f64 = 11.0;
+const FLOOR_ROW: f64 = 15.0;
+const FRONT_PX: f64 = 12.0;
+
+/// A front member as placed: where its point is, and its label with an optional leader line.
+struct FrontPlace {
+    at: (f64, f64),
+    label: Option<TextBox>,
+    leader: bool,
+}
 
 /// Everything an XY chart needs to draw, computed before any drawing.
 struct XyPlan {
@@ -543,6 +575,86 @@ struct XyPlan {
     entries: Vec<Entry>,
     /// Points not drawable on the axes (≤ 0 on a log axis, not finite).
     dropped: usize,
+    /// Per series, per point: where its marker goes (after spreading coincident ones).
+    pos: Vec<Vec<Option<(f64, f64)>>>,
+    /// Markers moved sideways because another series' marker sat on the same spot.
+    dodged: usize,
+    /// The reference lines: pixel x and their label (above the plot).
+    floors: Vec<(f64, TextBox)>,
+    front: Vec<FrontPlace>,
+    /// Front members without room for their name on the chart (named in the caption).
+    unnamed: Vec<String>,
+}
+
+/// What tells a series apart in the layout record: its colour and marker.
+fn style_key(c: RGBColor, family: usize) -> String {
+    format!(
+        "#{:02x}{:02x}{:02x} {}",
+        c.0,
+        c.1,
+        c.2,
+        SHAPE_NAMES[family % SHAPE_NAMES.len()]
+    )
+}
+
+/// Moves a marker that would sit on (nearly) the same spot as an earlier one of another series
+/// to the nearest free spot of a `DODGE_STEP` grid around it (sideways first), inside the plot
+/// (`inside`, for marker centres), so none hides another and each stays by its value; returns how many moved.
+fn dodge(pos: &mut [Vec<Option<(f64, f64)>>], inside: Rect) -> usize {
+    let mut grid: Vec<(f64, f64)> = (-8..=8)
+        .flat_map(|i| (-8..=8).map(move |j| (f64::from(i), f64::from(j))))
+        .collect();
+    grid.sort_by(|a, b| {
+        a.0.hypot(a.1)
+            .total_cmp(&b.0.hypot(b.1))
+            .then(a.1.abs().total_cmp(&b.1.abs()))
+    });
+    let mut placed: Vec<(usize, f64, f64)> = Vec::new();
+    let mut moved = 0;
+    for (i, s) in pos.iter_mut().enumerate() {
+        for p in s.iter_mut() {
+            let Some((x, y)) = *p else { continue };
+            let clash = |cx: f64, cy: f64| {
+                placed
+                    .iter()
+                    .any(|(k, ox, oy)| *k != i && (cx - ox).hypot(cy - oy) < DODGE_PX)
+            };
+            let (nx, ny) = grid
+                .iter()
+                .map(|(a, b)| (x + a * DODGE_STEP, y + b * DODGE_STEP))
+                .filter(|(cx, cy)| {
+                    (*cx, *cy) == (x, y)
+                        || (inside.x..=inside.right()).contains(cx)
+                            && (inside.y..=inside.bottom()).contains(cy)
+                })
+                .find(|(cx, cy)| !clash(*cx, *cy))
+                .unwrap_or((x, y));
+            if (nx, ny) != (x, y) {
+                moved += 1;
+                *p = Some((nx, ny));
+            }
+            placed.push((i, nx, ny));
+        }
+    }
+    moved
+}
+
+/// Whether a leader line from `at` to the label `r` crosses no marker or front ring but the
+/// one at `at`.
+fn leader_clear(at: (f64, f64), r: &Rect, marks: &[Mark], rings: &[Rect]) -> bool {
+    let (cx, cy) = (at.0.clamp(r.x, r.right()), at.1.clamp(r.y, r.bottom()));
+    let len = (cx - at.0).hypot(cy - at.1);
+    let own = |o: &Rect| o.x <= at.0 && at.0 <= o.right() && o.y <= at.1 && at.1 <= o.bottom();
+    let n = (len / 2.0).ceil().max(1.0) as usize;
+    (0..=n).all(|k| {
+        let t = k as f64 / n as f64;
+        let p = Rect::new(at.0 + (cx - at.0) * t, at.1 + (cy - at.1) * t, 0.1, 0.1);
+        marks
+            .iter()
+            .map(|m| &m.rect)
+            .chain(rings)
+            .all(|o| own(o) || !o.intersects(&p))
+    })
 }
 
 impl XY {
@@ -564,15 +676,13 @@ impl XY {
 
     fn plan(&self, stem: &str) -> Option<XyPlan> {
         let pts: Vec<&Pt> = self.series.iter().flat_map(|s| s.points.iter()).collect();
-        let drawn: Vec<&Pt> = pts
-            .iter()
-            .copied()
-            .filter(|p| self.x_ok(p.x) && self.y_place(p.y).is_some())
-            .collect();
+        let ok = |p: &Pt| self.x_ok(p.x) && self.y_place(p.y).is_some();
+        let drawn: Vec<&Pt> = pts.iter().copied().filter(|p| ok(p)).collect();
         let dropped = pts.len() - drawn.len();
         if drawn.len() < 2 {
             return None;
         }
+        let context: Vec<&Pt> = self.context.iter().flatten().filter(|p| ok(p)).collect();
         let front: Vec<&Named> = self
             .front
             .iter()
@@ -583,6 +693,7 @@ impl XY {
             .flat_map(|p| [Some(p.x), p.xlo, p.xhi])
             .flatten()
             .filter(|x| self.x_ok(*x))
+            .chain(context.iter().map(|p| p.x))
             .chain(front.iter().map(|n| n.x))
             .chain(self.vlines.iter().map(|v| v.0).filter(|x| self.x_ok(*x)));
         let x_data = minmax(xs)?;
@@ -591,10 +702,11 @@ impl XY {
             .iter()
             .flat_map(|p| [Some(p.y), p.lo, p.hi])
             .flatten()
+            .chain(context.iter().map(|p| p.y))
             .chain(front.iter().map(|n| n.y))
             .filter(|y| on_axis(*y));
         let y_data = minmax(ys);
-        let zero = self.log_y && drawn.iter().any(|p| p.y == 0.0);
+        let zero = self.log_y && drawn.iter().chain(&context).any(|p| p.y == 0.0);
         let x = Axis::new(
             ticks::axis_range(x_data[0], x_data[1], self.log_x),
             self.log_x,
@@ -626,6 +738,15 @@ impl XY {
                 )
             })
             .collect();
+        if !context.is_empty() {
+            entries.push(entry(
+                Swatch::Line {
+                    color: CONTEXT,
+                    dashed: false,
+                },
+                &self.context_name,
+            ));
+        }
         if drawn.iter().any(|p| p.flagged) {
             entries.push(entry(
                 Swatch::Marker {
@@ -651,7 +772,11 @@ impl XY {
                     color: MUTED,
                     dashed: true,
                 },
-                "floors (named at the top)",
+                if self.vlines_name.is_empty() {
+                    "floors (named above the plot)"
+                } else {
+                    &self.vlines_name
+                },
             ));
         }
         let left = 16.0 + AXIS_PX + 12.0 + ytw + 10.0;
@@ -668,7 +793,49 @@ impl XY {
             legend_x + lw + 14.0
         };
         let title = title_lines(&self.title, width - 24.0);
-        let top = 12.0 + title.len() as f64 * 26.0 + 12.0;
+        // The floors' names, level above the plot, each over its line; names that would touch
+        // go to the next row up (no rotated text crossing its neighbour or a marker).
+        let label_top = 12.0 + title.len() as f64 * 26.0 + 4.0;
+        let mut vl: Vec<(f64, String)> = self
+            .vlines
+            .iter()
+            .filter(|(v, _)| self.x_ok(*v))
+            .map(|(v, n)| (left + x.frac(*v) * PLOT_W, n.clone()))
+            .collect();
+        vl.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut rows: Vec<Vec<Rect>> = Vec::new();
+        let mut floors_at: Vec<(f64, String, Rect, usize)> = Vec::new();
+        for (xp, name) in vl {
+            let w = text_width(&name, FLOOR_PX) + 4.0;
+            let rx = (xp - w / 2.0).clamp(2.0, width - w - 2.0);
+            let r = Rect::new(rx - 3.0, 0.0, w + 6.0, FLOOR_ROW - 1.0);
+            let row = match rows
+                .iter()
+                .position(|row| !row.iter().any(|o| o.intersects(&r)))
+            {
+                Some(k) => k,
+                None => {
+                    rows.push(Vec::new());
+                    rows.len() - 1
+                }
+            };
+            rows[row].push(r);
+            floors_at.push((xp, name, Rect::new(rx, 0.0, w, FLOOR_ROW - 1.0), row));
+        }
+        let nrows = rows.len() as f64;
+        // Row 0 sits just above the plot; later rows stack upwards.
+        let top = if rows.is_empty() {
+            12.0 + title.len() as f64 * 26.0 + 12.0
+        } else {
+            label_top + nrows * FLOOR_ROW + 6.0
+        };
+        let floors: Vec<(f64, TextBox)> = floors_at
+            .into_iter()
+            .map(|(xp, text, mut r, row)| {
+                r.y = top - 6.0 - (row as f64 + 1.0) * FLOOR_ROW;
+                (xp, TextBox { text, rect: r })
+            })
+            .collect();
         // A long legend gets a taller plot beside it rather than white space.
         let plot_h = lh.clamp(PLOT_H, 1.5 * PLOT_H);
         let plot = Rect::new(left, top, PLOT_W, plot_h);
@@ -679,6 +846,116 @@ impl XY {
         } else {
             plot
         };
+        let fx = |v: f64| plot.x + x.frac(v) * plot.w;
+        let zero_y = plot.bottom() - ZERO_BAND / 2.0 + 2.0;
+        let fy = |v: f64| {
+            if self.log_y && v == 0.0 {
+                zero_y
+            } else {
+                main.bottom() - y.frac(v) * main.h
+            }
+        };
+        let mut pos: Vec<Vec<Option<(f64, f64)>>> = self
+            .series
+            .iter()
+            .map(|s| {
+                s.points
+                    .iter()
+                    .map(|q| ok(q).then(|| (fx(q.x), fy(q.y))))
+                    .collect()
+            })
+            .collect();
+        let dodged = dodge(
+            &mut pos,
+            Rect::new(plot.x + 6.0, plot.y + 6.0, plot.w - 12.0, plot.h - 12.0),
+        );
+        let marks: Vec<Mark> = pos
+            .iter()
+            .enumerate()
+            .flat_map(|(i, s)| {
+                s.iter().flatten().map(move |(mx, my)| Mark {
+                    series: i,
+                    rect: Rect::new(mx - 6.0, my - 6.0, 12.0, 12.0),
+                })
+            })
+            .collect();
+        // The front: each member named where its name covers no marker, no front ring and no
+        // other name, nearest first (a leader line when not beside its point); else in the
+        // caption.
+        let mut fr: Vec<(f64, f64, &str)> = front
+            .iter()
+            .map(|n| (fx(n.x), fy(n.y), n.text.as_str()))
+            .collect();
+        fr.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let numbered = fr.len() > FRONT_NAMED_MAX;
+        let rings: Vec<Rect> = fr
+            .iter()
+            .map(|(a, b, _)| Rect::new(a - 9.0, b - 9.0, 18.0, 18.0))
+            .collect();
+        let mut placed: Vec<Rect> = Vec::new();
+        let mut front_places = Vec::new();
+        let mut unnamed = Vec::new();
+        for (i, (fxp, fyp, text)) in fr.iter().enumerate() {
+            let text = if numbered {
+                (i + 1).to_string()
+            } else {
+                text.to_string()
+            };
+            let (w, h) = (text_width(&text, FRONT_PX) + 4.0, 15.0);
+            // Nearest first: rings 8 px apart, 16 directions each (right and left first).
+            let spot = (0..20).map(|k| 10.0 + 8.0 * k as f64).find_map(|d| {
+                [0, 8, 14, 2, 10, 6, 12, 4, 15, 1, 9, 7, 13, 3, 11, 5]
+                    .iter()
+                    .map(|k| {
+                        let a = *k as f64 * std::f64::consts::TAU / 16.0;
+                        let (cx, cy) =
+                            (fxp + a.cos() * (d + w / 2.0), fyp + a.sin() * (d + h / 2.0));
+                        Rect::new(cx - w / 2.0, cy - h / 2.0, w, h)
+                    })
+                    .find(|r| {
+                        plot.contains(r)
+                            && !placed.iter().any(|o| o.intersects(r))
+                            && !marks.iter().any(|m| m.rect.intersects(r))
+                            && !rings.iter().any(|o| o.intersects(r))
+                            && (d <= 10.0 || leader_clear((*fxp, *fyp), r, &marks, &rings))
+                    })
+                    .map(|r| (r, d > 10.0))
+            });
+            match spot {
+                Some((r, leader)) => {
+                    placed.push(r);
+                    front_places.push(FrontPlace {
+                        at: (*fxp, *fyp),
+                        label: Some(TextBox { text, rect: r }),
+                        leader,
+                    });
+                }
+                None => {
+                    if !numbered {
+                        unnamed.push(text);
+                    }
+                    front_places.push(FrontPlace {
+                        at: (*fxp, *fyp),
+                        label: None,
+                        leader: false,
+                    });
+                }
+            }
+        }
+        let mut labels: Vec<TextBox> = floors.iter().map(|(_, t)| t.clone()).collect();
+        labels.extend(front_places.iter().filter_map(|f| f.label.clone()));
+        let styles = self
+            .series
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                if s.name.is_empty() {
+                    String::new()
+                } else {
+                    style_key(color(s.color.unwrap_or(i)), s.family)
+                }
+            })
+            .collect();
         let layout = Layout {
             stem: stem.to_string(),
             kind: "xy".into(),
@@ -690,6 +967,9 @@ impl XY {
             y: y.record(&self.y_label, y_data),
             series: self.series.len(),
             zero_band: if zero { ZERO_BAND } else { 0.0 },
+            styles,
+            labels,
+            marks,
         };
         Some(XyPlan {
             layout,
@@ -699,6 +979,11 @@ impl XY {
             main,
             entries,
             dropped,
+            pos,
+            dodged,
+            floors,
+            front: front_places,
+            unnamed,
         })
     }
 
@@ -746,6 +1031,18 @@ impl XY {
                 .map(|(i, n)| format!("{} {}", i + 1, n.text))
                 .collect();
             caption.push_str(&format!(" Front, left to right: {}.", names.join("; ")));
+        }
+        if !plan.unnamed.is_empty() {
+            caption.push_str(&format!(
+                " Front members without room for their name on the chart: {}.",
+                plan.unnamed.join("; ")
+            ));
+        }
+        if plan.dodged > 0 {
+            caption.push_str(&format!(
+                " {} markers of different configurations at the same spot are moved apart ({} px steps, to the nearest free spot) so each shows.",
+                plan.dodged, DODGE_STEP
+            ));
         }
         if plan.dropped > 0 {
             caption.push_str(&format!(
@@ -855,58 +1152,55 @@ impl XY {
                 .pos(Pos::new(HPos::Center, VPos::Top)),
         ))
         .map_err(err)?;
-        // Reference lines.
-        // Lines closer than a label's height share one label.
-        let mut vl: Vec<(f64, String)> = self
-            .vlines
-            .iter()
-            .filter(|(x, _)| self.x_ok(*x))
-            .map(|(x, n)| (fx(*x), n.clone()))
-            .collect();
-        vl.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut merged: Vec<(f64, String)> = Vec::new();
-        for (xp, n) in vl {
+        // Reference lines, each continued up (dotted) to its name above the plot.
+        for (xp, t) in &p.floors {
             root.draw(&DashedPathElement::new(
-                vec![(px(xp), px(plot.y)), (px(xp), px(plot.bottom()))],
+                vec![(px(*xp), px(plot.y)), (px(*xp), px(plot.bottom()))],
                 5,
                 4,
                 MUTED.stroke_width(1),
             ))
             .map_err(err)?;
-            match merged.last_mut() {
-                Some((x0, names)) if xp - *x0 < 14.0 => *names = format!("{names} / {n}"),
-                _ => merged.push((xp, n)),
-            }
-        }
-        for (xp, name) in &merged {
-            let xp = *xp;
+            root.draw(&DashedPathElement::new(
+                vec![(px(*xp), px(t.rect.bottom())), (px(*xp), px(plot.y))],
+                1,
+                2,
+                MUTED.stroke_width(1),
+            ))
+            .map_err(err)?;
             root.draw(&Text::new(
-                name.clone(),
-                (px(xp + 14.0), px(plot.y + 4.0)),
-                font(11.0)
-                    .transform(FontTransform::Rotate90)
-                    .color(&MUTED)
-                    .pos(Pos::new(HPos::Left, VPos::Top)),
+                t.text.clone(),
+                (px(t.rect.x + 2.0), px(t.rect.y + t.rect.h / 2.0)),
+                text_style(FLOOR_PX, HPos::Left, VPos::Center, MUTED),
             ))
             .map_err(err)?;
         }
-        let place = |q: &Pt| -> Option<(f64, f64)> {
-            (self.x_ok(q.x) && self.y_place(q.y).is_some()).then(|| (fx(q.x), fy(q.y)))
-        };
+        // Other configurations, for context: thin grey lines under everything.
+        for c in &self.context {
+            let mut line: Vec<(f64, f64)> = c
+                .iter()
+                .filter(|q| self.x_ok(q.x) && self.y_place(q.y).is_some())
+                .map(|q| (fx(q.x), fy(q.y)))
+                .collect();
+            line.sort_by(|a, b| a.0.total_cmp(&b.0));
+            for w in line.windows(2) {
+                root.draw(&PathElement::new(
+                    vec![(px(w[0].0), px(w[0].1)), (px(w[1].0), px(w[1].1))],
+                    CONTEXT.stroke_width(1),
+                ))
+                .map_err(err)?;
+            }
+        }
         // Lines, whiskers, then markers on top.
         for (i, s) in self.series.iter().enumerate() {
             let c = color(s.color.unwrap_or(i));
-            let mut line: Vec<(f64, (f64, f64))> = s
-                .points
-                .iter()
-                .filter_map(|q| Some((q.x, place(q)?)))
-                .collect();
+            let mut line: Vec<(f64, f64)> = p.pos[i].iter().flatten().copied().collect();
             line.sort_by(|a, b| a.0.total_cmp(&b.0));
             if self.lines {
                 // Segment by segment: a 2 px polyline's miter join at a sharp turn draws a long
                 // spike out of the plot in the bitmap backend.
                 for w in line.windows(2) {
-                    let (a, b) = (w[0].1, w[1].1);
+                    let (a, b) = (w[0], w[1]);
                     root.draw(&PathElement::new(
                         vec![(px(a.0), px(a.1)), (px(b.0), px(b.1))],
                         c.mix(0.8).stroke_width(2),
@@ -914,8 +1208,8 @@ impl XY {
                     .map_err(err)?;
                 }
             }
-            for q in &s.points {
-                let Some((x, y)) = place(q) else { continue };
+            for (q, at) in s.points.iter().zip(&p.pos[i]) {
+                let Some((x, y)) = *at else { continue };
                 if let (Some(lo), Some(hi)) = (q.xlo, q.xhi) {
                     if self.x_ok(lo) && self.x_ok(hi) {
                         let (a, b) = (fx(lo), fx(hi));
@@ -944,10 +1238,9 @@ impl XY {
                 }
             }
         }
-        let mut markers: Vec<Rect> = Vec::new();
         for (i, s) in self.series.iter().enumerate() {
-            for q in &s.points {
-                let Some(at) = place(q) else { continue };
+            for (q, at) in s.points.iter().zip(&p.pos[i]) {
+                let Some(at) = *at else { continue };
                 draw_marker(
                     root,
                     at,
@@ -956,22 +1249,14 @@ impl XY {
                     q.flagged,
                     5.0,
                 )?;
-                markers.push(Rect::new(at.0 - 6.0, at.1 - 6.0, 12.0, 12.0));
             }
         }
         // The front: a dashed line through its members, each named where there is room.
-        let mut front: Vec<(f64, f64, &str)> = self
-            .front
-            .iter()
-            .filter(|n| self.x_ok(n.x) && self.y_place(n.y).is_some())
-            .map(|n| (fx(n.x), fy(n.y), n.text.as_str()))
-            .collect();
-        front.sort_by(|a, b| a.0.total_cmp(&b.0));
-        if front.len() > 1 {
+        if p.front.len() > 1 {
             root.draw(&DashedPathElement::new(
-                front
+                p.front
                     .iter()
-                    .map(|(x, y, _)| (px(*x), px(*y)))
+                    .map(|f| (px(f.at.0), px(f.at.1)))
                     .collect::<Vec<_>>(),
                 6,
                 4,
@@ -979,58 +1264,36 @@ impl XY {
             ))
             .map_err(err)?;
         }
-        let mut placed: Vec<Rect> = Vec::new();
-        let numbered = front.len() > FRONT_NAMED_MAX;
-        for (i, (x, y, text)) in front.iter().enumerate() {
-            root.draw(&Circle::new((px(*x), px(*y)), 8, BLACK.stroke_width(1)))
+        for f in &p.front {
+            let (x, y) = f.at;
+            root.draw(&Circle::new((px(x), px(y)), 8, BLACK.stroke_width(1)))
                 .map_err(err)?;
-            let text = if numbered {
-                (i + 1).to_string()
-            } else {
-                text.to_string()
-            };
-            let text = text.as_str();
-            let w = text_width(text, 12.0) + 4.0;
-            let h = 15.0;
-            let cands = [
-                (x + 10.0, y - h / 2.0),
-                (x - 10.0 - w, y - h / 2.0),
-                (x + 8.0, y - h - 6.0),
-                (x + 8.0, y + 6.0),
-                (x - w - 8.0, y - h - 6.0),
-                (x - w - 8.0, y + 6.0),
-                (x - w / 2.0, y - h - 10.0),
-                (x - w / 2.0, y + 10.0),
-            ];
-            let fits = |r: &Rect, avoid_markers: bool| {
-                plot.contains(r)
-                    && !placed.iter().any(|o| o.intersects(r))
-                    && (!avoid_markers || !markers.iter().any(|m| m.intersects(r)))
-            };
-            let spot = cands
-                .iter()
-                .map(|(a, b)| Rect::new(*a, *b, w, h))
-                .find(|r| fits(r, true))
-                .or_else(|| {
-                    cands
-                        .iter()
-                        .map(|(a, b)| Rect::new(*a, *b, w, h))
-                        .find(|r| fits(r, false))
-                });
-            if let Some(r) = spot {
-                root.draw(&Rectangle::new(
-                    [(px(r.x), px(r.y)), (px(r.right()), px(r.bottom()))],
-                    WHITE.mix(0.6).filled(),
+            let Some(t) = &f.label else { continue };
+            let r = t.rect;
+            if f.leader {
+                let cx = x.clamp(r.x, r.right());
+                let cy = y.clamp(r.y, r.bottom());
+                let d = (cx - x).hypot(cy - y).max(1.0);
+                root.draw(&PathElement::new(
+                    vec![
+                        (px(x + (cx - x) * 9.0 / d), px(y + (cy - y) * 9.0 / d)),
+                        (px(cx), px(cy)),
+                    ],
+                    MUTED.stroke_width(1),
                 ))
                 .map_err(err)?;
-                root.draw(&Text::new(
-                    text.to_string(),
-                    (px(r.x + 2.0), px(r.y + h / 2.0)),
-                    text_style(12.0, HPos::Left, VPos::Center, BLACK),
-                ))
-                .map_err(err)?;
-                placed.push(r);
             }
+            root.draw(&Rectangle::new(
+                [(px(r.x), px(r.y)), (px(r.right()), px(r.bottom()))],
+                WHITE.mix(0.6).filled(),
+            ))
+            .map_err(err)?;
+            root.draw(&Text::new(
+                t.text.clone(),
+                (px(r.x + 2.0), px(r.y + r.h / 2.0)),
+                text_style(FRONT_PX, HPos::Left, VPos::Center, BLACK),
+            ))
+            .map_err(err)?;
         }
         if let Some(g) = &l.legend {
             draw_legend(root, g, &p.entries)?;
@@ -1193,9 +1456,22 @@ impl Bars {
                 data: None,
                 range: [0.0, self.categories.len() as f64],
                 ticks: self.categories.clone(),
+                off_scale: 0,
             },
             series: self.series.len(),
             zero_band: 0.0,
+            styles: (0..self.series.len())
+                .map(|i| {
+                    if dots {
+                        style_key(color(i), 0)
+                    } else {
+                        let c = color(i);
+                        format!("#{:02x}{:02x}{:02x} bar", c.0, c.1, c.2)
+                    }
+                })
+                .collect(),
+            labels: Vec::new(),
+            marks: Vec::new(),
         };
         Some(BarPlan {
             layout,
@@ -1562,5 +1838,101 @@ mod tests {
         let l = read_layout(&d, "d");
         assert!(l.kind == "dots" && l.x.log);
         assert_eq!(layout::check(&l), Ok(()));
+    }
+
+    #[test]
+    fn look_alike_series_fail_the_check() {
+        // Two configurations given the same colour and marker: the reader cannot tell them apart.
+        let d = tmp("alike");
+        let s = |name: &str, y: f64| Series {
+            name: name.into(),
+            family: 1,
+            color: Some(3),
+            points: vec![Pt::new(1.0, y), Pt::new(2.0, y * 2.0)],
+        };
+        let xy = XY {
+            title: "t".into(),
+            series: vec![s("a", 1.0), s("b", 5.0)],
+            ..Default::default()
+        };
+        xy.draw(&d, "alike", "").unwrap();
+        let e = layout::check(&read_layout(&d, "alike")).unwrap_err();
+        assert!(e.iter().any(|m| m.contains("looks like")), "{e:?}");
+    }
+
+    #[test]
+    fn equal_points_are_spread_and_the_check_sees_them_hidden_otherwise() {
+        // k=4 and k=8 with the same hazard rate at the same complexity: one used to hide the other.
+        let d = tmp("equal");
+        let s = |name: &str, c: usize| Series {
+            name: name.into(),
+            family: 2,
+            color: Some(c),
+            points: vec![Pt::new(8.0, 0.0), Pt::new(32.0, 0.1 * c as f64)],
+        };
+        let xy = XY {
+            title: "hazard".into(),
+            series: vec![s("k=4", 1), s("k=8", 2)],
+            ..Default::default()
+        };
+        let f = xy.draw(&d, "eq", "").unwrap();
+        assert!(f.caption.contains("moved apart"), "{}", f.caption);
+        let mut l = read_layout(&d, "eq");
+        assert_eq!(layout::check(&l), Ok(()));
+        let (a, b) = (l.marks[0].rect, l.marks[2].rect);
+        assert!((a.x - b.x).abs() >= DODGE_PX && a.y == b.y, "{a:?} {b:?}");
+        // The same chart without the spreading fails.
+        l.marks[2].rect = a;
+        let e = layout::check(&l).unwrap_err();
+        assert!(e.iter().any(|m| m.contains("same spot")), "{e:?}");
+    }
+
+    #[test]
+    fn close_floors_and_front_names_keep_clear_and_the_check_sees_an_overlap() {
+        // floor_depth 0.494 and floor_opaque 0.581: rotated names used to cross each other.
+        let d = tmp("floors");
+        let series: Vec<Series> = (0..6)
+            .map(|i| Series {
+                name: format!("method {i}"),
+                family: i,
+                color: Some(i),
+                points: vec![Pt::new(0.6 + 0.05 * i as f64, 1e-3 / (1.0 + i as f64))],
+            })
+            .collect();
+        let xy = XY {
+            title: "Error vs time".into(),
+            log_x: true,
+            log_y: true,
+            series,
+            front: (0..6)
+                .map(|i| Named {
+                    x: 0.6 + 0.05 * i as f64,
+                    y: 1e-3 / (1.0 + i as f64),
+                    text: format!("method {i} with a long name"),
+                })
+                .collect(),
+            front_name: "front".into(),
+            vlines: vec![
+                (0.494, "floor_depth 0.494".into()),
+                (0.581, "floor_opaque 0.581".into()),
+                (0.6, "floor_blend 0.6".into()),
+            ],
+            ..Default::default()
+        };
+        xy.draw(&d, "fl", "").unwrap();
+        let mut l = read_layout(&d, "fl");
+        assert_eq!(layout::check(&l), Ok(()));
+        assert!(l.labels.len() >= 3, "{:?}", l.labels);
+        // Floor names sit above the plot, never over a marker.
+        assert!(l.labels[..3].iter().all(|t| t.rect.bottom() <= l.plot.y));
+        // Put the second floor's name where the first one is: caught.
+        l.labels[1].rect = l.labels[0].rect;
+        let e = layout::check(&l).unwrap_err();
+        assert!(e.iter().any(|m| m.contains("overlaps label")), "{e:?}");
+        // A name over a marker: caught.
+        let mut l = read_layout(&d, "fl");
+        l.labels[0].rect = l.marks[0].rect;
+        let e = layout::check(&l).unwrap_err();
+        assert!(e.iter().any(|m| m.contains("covers a marker")), "{e:?}");
     }
 }

@@ -1,6 +1,6 @@
 //! Figures of the bucket methods (bdp, bdp2, adp) in the `methods` study: collision rate vs
-//! depth complexity (per family of scenes), and collision rate vs GPU time (what each bucket
-//! configuration buys).
+//! depth complexity (per family of scenes), and collision rate vs GPU time per scene (what each
+//! bucket configuration buys).
 
 use schema::cols;
 use std::path::Path;
@@ -10,7 +10,7 @@ use anyhow::Result;
 use super::methods::{config_series, scene_families, Styles};
 use crate::charts::{Figure, Pt, XY};
 use crate::data::{resolution, Rec, Runs};
-use crate::labels::{file_safe, scene_names, ConfigLabels};
+use crate::labels::{file_safe, scene_name, scene_names, ConfigLabels};
 use crate::points::ci_caption;
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
@@ -62,34 +62,46 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                 ),
             )?);
         }
-        let labels = ConfigLabels::new(at_res.iter().copied());
-        let xy = XY {
-            title: format!("Bucket collisions vs GPU time — all scenes, {res}"),
-            x_label: "GPU time per frame [ms]".into(),
-            y_label: "collision rate".into(),
-            log_x: true,
-            series: config_series(&at_res, &labels, &styles, |r| {
-                let (lo, hi) = r.gpu_ci().unzip();
-                Some(Pt {
-                    x: r.trusted_ms()?,
-                    y: r.f(cols::COLLISION_RATE)?,
-                    xlo: lo,
-                    xhi: hi,
-                    flagged: r.flagged(),
-                    ..Default::default()
-                })
-            }),
-            ..Default::default()
-        };
-        figs.push(xy.draw(
-            dir,
-            &format!("buckets_collisions_vs_time_{res}"),
-            &format!(
-                "One point per bucket configuration and scene: lower-left is better. {} {}",
-                ci_caption(runs),
-                labels.fixed_note()
-            ),
-        )?);
+        // One chart per scene: a collision rate is a property of a scene, so points of
+        // different scenes on one chart would read as one configuration's trade-off.
+        for scene in Runs::distinct(at_res.iter().copied(), cols::SCENE_LABEL) {
+            let g: Vec<&Rec> = at_res
+                .iter()
+                .copied()
+                .filter(|r| r.get(cols::SCENE_LABEL) == scene)
+                .collect();
+            let labels = ConfigLabels::new(g.iter().copied());
+            let xy = XY {
+                title: format!(
+                    "Bucket collisions vs GPU time — {}, {res}",
+                    scene_name(&scene)
+                ),
+                x_label: "GPU time per frame [ms]".into(),
+                y_label: "collision rate".into(),
+                log_x: true,
+                series: config_series(&g, &labels, &styles, |r| {
+                    let (lo, hi) = r.gpu_ci().unzip();
+                    Some(Pt {
+                        x: r.trusted_ms()?,
+                        y: r.f(cols::COLLISION_RATE)?,
+                        xlo: lo,
+                        xhi: hi,
+                        flagged: r.flagged(),
+                        ..Default::default()
+                    })
+                }),
+                ..Default::default()
+            };
+            figs.push(xy.draw(
+                dir,
+                &format!("buckets_collisions_vs_time_{}_{res}", file_safe(&scene)),
+                &format!(
+                    "One point per bucket configuration on this scene: lower-left is better. {} {}",
+                    ci_caption(runs),
+                    labels.fixed_note()
+                ),
+            )?);
+        }
     }
     Ok(figs)
 }

@@ -463,27 +463,70 @@ fn time_vs_complexity(
             continue;
         }
         let labels = ConfigLabels::new(g.iter().copied());
-        let xy = XY {
-            title,
-            x_label: "true max fragments per pixel".into(),
-            y_label: "GPU time per frame [ms]".into(),
-            log_x: true,
-            log_y: true,
-            lines: true,
-            series: config_series(&g, &labels, styles, |r| {
-                time_pt(r, r.f(cols::DEPTH_COMPLEXITY_MAX)?)
-            }),
-            ..Default::default()
-        };
-        figs.push(xy.draw(
-            dir,
-            &format!("methods_time_vs_complexity_{}_{res}", file_safe(&family)),
-            &format!(
-                "Scenes: {}. x: the scene's true maximum depth complexity (CPU reference). {ci} {}",
-                scene_names(&scenes).join("; "),
-                labels.fixed_note()
-            ),
-        )?);
+        let all = config_series(&g, &labels, styles, |r| {
+            time_pt(r, r.f(cols::DEPTH_COMPLEXITY_MAX)?)
+        });
+        let caption = format!(
+            "Scenes: {}. x: the scene's true maximum depth complexity (CPU reference). {ci} {}",
+            scene_names(&scenes).join("; "),
+            labels.fixed_note()
+        );
+        // Up to six lines read in one panel; more become one panel per method (small
+        // multiples on one shared scale), the other methods' lines in grey behind.
+        if all.len() <= 6 {
+            let xy = XY {
+                title,
+                x_label: "true max fragments per pixel".into(),
+                y_label: "GPU time per frame [ms]".into(),
+                log_x: true,
+                log_y: true,
+                lines: true,
+                series: all,
+                ..Default::default()
+            };
+            figs.push(xy.draw(
+                dir,
+                &format!("methods_time_vs_complexity_{}_{res}", file_safe(&family)),
+                &caption,
+            )?);
+            continue;
+        }
+        let methods = Runs::distinct(g.iter().copied(), cols::METHOD);
+        for m in &methods {
+            let mine: Vec<&Rec> = g
+                .iter()
+                .copied()
+                .filter(|r| r.get(cols::METHOD) == m)
+                .collect();
+            let (series, others): (Vec<Series>, Vec<Series>) = all
+                .iter()
+                .cloned()
+                .partition(|s| mine.iter().any(|r| labels.get(r) == s.name));
+            let xy = XY {
+                title: format!("GPU time vs depth complexity — {m}; {family}, {res}"),
+                x_label: "true max fragments per pixel".into(),
+                y_label: "GPU time per frame [ms]".into(),
+                log_x: true,
+                log_y: true,
+                lines: true,
+                series,
+                context: others.into_iter().map(|s| s.points).collect(),
+                context_name: "other methods (their own panels)".into(),
+                ..Default::default()
+            };
+            figs.push(xy.draw(
+                dir,
+                &format!(
+                    "methods_time_vs_complexity_{}_{}_{res}",
+                    file_safe(&family),
+                    file_safe(m)
+                ),
+                &format!(
+                    "One panel per method ({} panels on the same axes); {caption}",
+                    methods.len()
+                ),
+            )?);
+        }
     }
     Ok(())
 }

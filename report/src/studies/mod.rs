@@ -10,6 +10,7 @@ pub mod prepass;
 pub mod scaling;
 pub mod shadows;
 pub mod stability;
+pub mod tail;
 
 use std::path::Path;
 
@@ -71,6 +72,11 @@ pub const PAGES: &[StudyPage] = &[
         heading: "Light pre-pass (and the light buffer on CPU cores)",
         applies: |r| has(r, "prepass"),
         figures: prepass::figures,
+    },
+    StudyPage {
+        heading: "Frame-time tail and throughput (every study)",
+        applies: tail::applies,
+        figures: tail::figures,
     },
 ];
 
