@@ -50,22 +50,18 @@ pub mod adaptive;
 pub mod adp;
 pub mod bdp;
 pub mod bdp2;
-pub mod bucket;
 pub mod compute_abuffer;
 pub mod depth_peel;
 pub mod dual_peel;
-pub mod floor;
+pub mod floors;
 pub mod hybrid;
 pub mod kbuffer_atomic;
 pub mod kbuffer_rmw;
 pub mod linked_list;
 pub mod mlab;
 pub mod moments;
-pub mod packing;
-pub mod ssaa;
+pub mod shared;
 pub mod stochastic;
-pub mod store;
-pub mod tail;
 pub mod wboit;
 
 pub use crate::method::{supports, Capture, Expected, FrameStats, Method, Prepared, Timed};
@@ -73,11 +69,11 @@ pub use crate::method::{supports, Capture, Expected, FrameStats, Method, Prepare
 /// Every method, in listing order.
 pub fn all() -> Vec<Box<dyn Method>> {
     vec![
-        Box::new(floor::FloorDepth),
-        Box::new(floor::FloorDepthVs),
-        Box::new(floor::FloorOpaque),
-        Box::new(floor::FloorBlend),
-        Box::new(floor::FloorBlendConst),
+        Box::new(floors::FloorDepth),
+        Box::new(floors::FloorDepthVs),
+        Box::new(floors::FloorOpaque),
+        Box::new(floors::FloorBlend),
+        Box::new(floors::FloorBlendConst),
         Box::new(depth_peel::DepthPeel),
         Box::new(dual_peel::DualPeel),
         Box::new(kbuffer_rmw::KBufferRmw),
@@ -114,4 +110,37 @@ pub fn get(name: &str) -> Box<dyn Method> {
                 .join(", ")
         )
     })
+}
+
+/// Tests that hold one method against another on the same scene: the registry sees every
+/// method, a method folder sees none but its own.
+#[cfg(test)]
+mod tests {
+    use super::shared::bucket::testing::{quads_at, run};
+    use super::shared::bucket::{Config, Kind};
+    use super::{adp, bdp};
+
+    #[test]
+    fn adp_beats_bdp_on_clustered_depths_48px() {
+        // Six layers within 0.25 world units, one far in front and one far behind: uniform
+        // buckets put the cluster in one or two buckets, equalised ones give each its own.
+        let scene = quads_at(&[3.0, 0.25, 0.2, 0.15, 0.1, 0.05, 0.0, -3.0], 0.4);
+        let cfg = Config {
+            kind: Kind::Adaptive { hist_bins: 1024 },
+            buckets: 8,
+        };
+        let a = run(cfg, adp::tests_wgsl(), &scene, 48);
+        let adp_lost = a.assert_counts_match_twin(&cfg);
+        let uniform = Config {
+            kind: Kind::Uniform { paired: false },
+            buckets: 8,
+        };
+        let b = run(uniform, bdp::tests_wgsl(), &scene, 48);
+        let bdp_lost = b.assert_counts_match_twin(&uniform);
+        assert!(
+            bdp_lost > 0,
+            "precondition: the cluster collides in uniform buckets"
+        );
+        assert!(adp_lost < bdp_lost, "adp lost {adp_lost}, bdp {bdp_lost}");
+    }
 }

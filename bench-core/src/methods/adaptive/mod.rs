@@ -17,9 +17,9 @@
 //! Memory per pixel (race build): k × 8 B nodes + 4 B arrival count + 16 B resolve sum + 16 B
 //! image + 4 B stand-in depth.
 
-use super::compute_abuffer::{PreparedAbuffer, Replay};
-use super::mlab::judge_race;
-use super::store::{dummy_depth, storage_pass, storage_pipeline};
+use super::shared::counted_capture::{PreparedAbuffer, Replay};
+use super::shared::race::judge_race;
+use super::shared::store::{dummy_depth, storage_pass, storage_pipeline};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
@@ -182,7 +182,7 @@ impl PreparedRace {
             dst_factor: wgpu::BlendFactor::One,
             operation: wgpu::BlendOperation::Add,
         };
-        let shade = super::store::storage_pipeline_with(
+        let shade = super::shared::store::storage_pipeline_with(
             gpu,
             "adaptive shade",
             &capture_layout,
@@ -280,8 +280,13 @@ impl crate::timed::Timed for PreparedRace {
         }
         {
             let colors = [crate::gpu::cleared(&self.accum, wgpu::Color::TRANSPARENT)];
-            let mut pass =
-                super::store::storage_pass_with(&mut enc, &self.depth, &colors, timer, "shade");
+            let mut pass = super::shared::store::storage_pass_with(
+                &mut enc,
+                &self.depth,
+                &colors,
+                timer,
+                "shade",
+            );
             pass.set_pipeline(&self.shade);
             pass.set_bind_group(0, &self.bind_capture, &[]);
             scene.draw(&mut pass, Attrs::ALL);

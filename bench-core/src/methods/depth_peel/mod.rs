@@ -18,6 +18,7 @@
 //! samples) and its end averages the samples' images. `ssaa2x2` peels at twice the width and
 //! height and box-filters.
 
+use super::shared::axes::{MAX_LAYERS, OCCLUSION_STOP, SPECIALISATION};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::aa::{self, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
@@ -40,24 +41,6 @@ const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 pub struct DepthPeel;
 
-pub const MAX_LAYERS: Axis = Axis::int(
-    cols::MAX_LAYERS,
-    "peeling passes at most (occlusion_stop may end sooner)",
-    64,
-    1,
-    4096,
-);
-pub const OCCLUSION_STOP: Axis = Axis::bool(
-    cols::OCCLUSION_STOP,
-    "stop at the first pass an occlusion query finds empty (a CPU round trip per pass)",
-    true,
-);
-pub const SPECIALISATION: Axis = Axis::choice(
-    cols::SPECIALISATION,
-    "specialised: only the effect's payload is fetched, stored and read; uber: everything",
-    "specialised",
-    &["specialised", "uber"],
-);
 const TIEBREAK: Axis = Axis::bool(
     cols::TIEBREAK,
     "peel (depth, object id) pairs so coplanar fragments of distinct objects are kept",
@@ -151,7 +134,7 @@ impl Method for DepthPeel {
                 aa: AaConfig::NONE,
                 ..cfg
             };
-            return super::ssaa::prepare(gpu, scene, |big| {
+            return super::shared::ssaa::prepare(gpu, scene, |big| {
                 Ok(Box::new(PreparedPeel::new(gpu, big, inner)))
             });
         }

@@ -9,7 +9,7 @@
 //! exactly ⌈max_layers/2⌉ peel passes in one submission). Exact except coplanar ties. The
 //! resolve is front-to-back and back-to-front at once, so it does not use the effects fold.
 
-use super::depth_peel::{MAX_LAYERS, OCCLUSION_STOP};
+use super::shared::axes::{MAX_LAYERS, OCCLUSION_STOP};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;

@@ -12,9 +12,9 @@
 //!
 //! Memory per pixel: k × 40 B (key, claim, entry) + 16 B image + 24 B tail + 4 B stand-in depth.
 
-use super::kbuffer_atomic::PreparedAtomic;
-use super::kbuffer_rmw::LAYERS;
-use super::tail::{self, Bounding};
+use super::shared::kslots::atomic::PreparedAtomic;
+use super::shared::kslots::LAYERS;
+use super::shared::tail::{self, Bounding};
 use super::{Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;

@@ -40,9 +40,9 @@
 
 use wgpu::util::DeviceExt;
 
-use super::compute_abuffer::{MASKED_PRIM_BITS, VISIBILITY_WGSL};
-use super::store::storage_pass_with;
-use super::tail::{self, TailTargets, TAIL_WGSL};
+use super::shared::counted_capture::{MASKED_PRIM_BITS, VISIBILITY_WGSL};
+use super::shared::store::storage_pass_with;
+use super::shared::tail::{self, TailTargets, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::aa::{self, AaCapture, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
@@ -164,7 +164,7 @@ impl Method for LinkedList {
                 aa: AaConfig::NONE,
                 ..c
             };
-            return super::ssaa::prepare(gpu, scene, |big| {
+            return super::shared::ssaa::prepare(gpu, scene, |big| {
                 Ok(Box::new(PreparedList::new(gpu, big, layers, c, &effect)?))
             });
         }
@@ -438,7 +438,7 @@ impl PreparedList {
         );
         let images = effect.effect.image_count();
         let mut alloc = AllocCounter::default();
-        let depth = super::store::dummy_depth_ms(gpu, &mut alloc, scene, samples);
+        let depth = super::shared::store::dummy_depth_ms(gpu, &mut alloc, scene, samples);
         let heads = alloc.buffer(gpu, "list heads", px * lists * 4, STORAGE_RW);
         let image = alloc.buffer(gpu, "list image", px * 16 * images as u64, STORAGE_RW);
         let counters = alloc.buffer(gpu, "list counters", 16, STORAGE_RW);

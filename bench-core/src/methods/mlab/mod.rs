@@ -25,9 +25,10 @@
 //! Memory per pixel (race build): k × 20 B layers + 4 B arrival count + 16 B image + 4 B stand-in
 //! depth (+ 24 B tail targets with `tail = blend`).
 
-use super::compute_abuffer::{PreparedAbuffer, Replay};
-use super::store::{dummy_depth, storage_pass_with, storage_pipeline_with};
-use super::tail::{self, TailTargets, TAIL_WGSL};
+use super::shared::counted_capture::{PreparedAbuffer, Replay};
+use super::shared::race::judge_race;
+use super::shared::store::{dummy_depth, storage_pass_with, storage_pipeline_with};
+use super::shared::tail::{self, TailTargets, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
@@ -37,7 +38,7 @@ use crate::gpu_util::{
     storage_entry, STORAGE_RW,
 };
 use crate::oit::{self, Keep, Order, TailMode};
-use crate::record::{cols, Flag};
+use crate::record::cols;
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
 use crate::Result;
@@ -49,11 +50,6 @@ const IDEAL_WGSL: &str = include_str!("ideal.wgsl");
 pub const MAX_K: i64 = 16;
 /// Bytes of one layer in storage (depth, premultiplied RGB, transmittance).
 const LAYER_BYTES: u64 = 20;
-/// A pixel whose image differs from the ideal-order twin by more than this is a hazard: ten
-/// times what f32 arithmetic alone gives over 300 fragments (the twin's `mlab_f32_twin_follows_
-/// f64_to_1e5`), plus the GPU's f32 attribute interpolation.
-pub const HAZARD_TOL: f64 = 1e-4;
-
 const LAYERS: Axis = Axis::int(cols::LAYERS, "k: blend layers per pixel", 4, 1, MAX_K);
 const TAIL: Axis = Axis::choice(
     cols::TAIL,
@@ -82,41 +78,6 @@ pub fn definition(lists: &FragmentLists, k: usize, rule: Option<TailMode>) -> Ve
         None => oit::mlab::mlab_pixel(list, k, Order::Arrival).0,
         Some(mode) => oit::tail_blend(list, k, Keep::Nearest, mode).rgba,
     })
-}
-
-/// Pixels whose image differs from `definition` by more than [`HAZARD_TOL`] in some channel,
-/// and the first one.
-pub fn hazards(image: &[[f32; 4]], definition: &[[f64; 4]]) -> (u64, Option<usize>) {
-    let mut n = 0;
-    let mut first = None;
-    for (p, (g, d)) in image.iter().zip(definition).enumerate() {
-        if (0..4).any(|c| {
-            let e = (g[c] as f64 - d[c]).abs();
-            e.is_nan() || e > HAZARD_TOL
-        }) {
-            n += 1;
-            first.get_or_insert(p);
-        }
-    }
-    (n, first)
-}
-
-/// The race build's judgement: its ideal-order twin `def` becomes the capture's definition and
-/// the pixels that differ from it its hazards (flagged, the first named in the notes).
-pub fn judge_race(cap: &mut Capture, def: Vec<[f64; 4]>, width: u32) {
-    if let Some(img) = &cap.image {
-        let (n, first) = hazards(img, &def);
-        cap.hazard_pixels = Some(n);
-        if let Some(p) = first {
-            cap.flag.add(Flag::Hazard);
-            let (x, y) = (p as u32 % width, p as u32 / width);
-            cap.notes = format!(
-                "{}; {n} pixels differ from the ideal-order twin by more than {HAZARD_TOL:e} (first ({x},{y}))",
-                cap.notes
-            );
-        }
-    }
-    cap.definition = Some(def);
 }
 
 /// Reports fragments beyond k: overflow pixels, and dropped or tailed fragments by rule.

@@ -26,7 +26,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::store::{dummy_depth, storage_pass, storage_pipeline};
+use super::shared::store::{dummy_depth, storage_pass, storage_pipeline};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
@@ -317,7 +317,7 @@ fn blend_pipeline(
     constants: &[(&str, f64)],
     targets: &[Option<wgpu::ColorTargetState>],
 ) -> wgpu::RenderPipeline {
-    super::store::full_pipeline(gpu, label, layout, module, fs, constants, targets, None)
+    super::shared::store::full_pipeline(gpu, label, layout, module, fs, constants, targets, None)
 }
 
 impl PreparedMoments {

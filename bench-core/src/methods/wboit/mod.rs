@@ -60,7 +60,7 @@ impl Method for Wboit {
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let cfg = AaConfig::from_point(point);
         if cfg.mode == AaMode::Ssaa2x2 {
-            return super::ssaa::prepare(gpu, scene, |big| {
+            return super::shared::ssaa::prepare(gpu, scene, |big| {
                 Ok(Box::new(PreparedWboit::new(gpu, big, AaConfig::NONE)))
             });
         }

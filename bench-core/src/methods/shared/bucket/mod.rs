@@ -21,18 +21,18 @@
 use crate::axes::{Axis, Point};
 use crate::effects::{Effect, EffectConfig, FOLD_STATE_BYTES};
 use crate::gpu_util::{camera_entry, read_vec, storage_entry, texture_entry};
-use crate::methods::packing::PACKING_WGSL;
+use crate::methods::shared::packing::PACKING_WGSL;
 use crate::record::{cols, Flag};
 
-use super::{Capture, Expected, FrameStats};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::methods::{Capture, Expected, FrameStats};
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
 use crate::Result;
 
 const WGSL: &str = include_str!("bucket.wgsl");
-const FOLD_WGSL: &str = include_str!("../../effects/fold.wgsl");
+const FOLD_WGSL: &str = include_str!("../../../effects/fold.wgsl");
 const SLOT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const RANGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 /// Float channels one routing pass can write: 8 attachments × 4 channels.
@@ -1080,7 +1080,7 @@ impl crate::timed::Timed for PreparedBucket {
     }
 }
 
-impl super::Prepared for PreparedBucket {
+impl crate::methods::Prepared for PreparedBucket {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let n = scene.pixels();
         let mut cap = Capture::empty();

@@ -39,17 +39,16 @@
 //! images); the rest is the fragments (8 B each), the clip buffer (24 B per vertex with
 //! `transform = vertex`) and the big-triangle list (2 words per big triangle + 1 per tile).
 
-use super::{Capture, Expected, FrameStats, Method, Prepared};
-use crate::aa::{self, AaCapture, AaConfig, AaMode, AaSupport};
-use crate::axes::{Axis, Point};
-use crate::effects::{self, EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
+use crate::aa::{AaCapture, AaMode};
+use crate::effects::{EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::gpu_util::{
     bind_buffers, camera_entry, check_storage_size, compute_pipeline, read_vec, shader,
     storage_entry, STORAGE_RW,
 };
-use crate::record::{cols, Flag};
+use crate::methods::{Capture, Expected, FrameStats, Prepared};
+use crate::record::Flag;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
@@ -78,137 +77,37 @@ pub const SORT_MAX: u32 = 128;
 /// Bytes per stored fragment: f32 window depth + u32 primitive id (bit 31: front facing).
 pub const FRAG_BYTES: u64 = 8;
 /// Words of counters at the head of the `work` buffer (`W_BLOCKS` in the WGSL).
-const COUNTERS: u64 = 16;
+pub(crate) const COUNTERS: u64 = 16;
 /// Pixels per scan block (256 threads × 4).
-const SCAN_BLOCK: u64 = 1024;
+pub(crate) const SCAN_BLOCK: u64 = 1024;
 /// Largest dispatch dimension wgpu guarantees.
 const MAX_GROUPS: u32 = 65_535;
 /// Pixels of a shared triangle's tiles, and their widest width (`TILE_PIXELS`, `TILE_W` in the
 /// WGSL; a narrower box gets narrower, taller tiles, so no tile is under 32 px tall).
 const TILE_PIXELS: u32 = 1024;
-const TILE_W: u32 = 32;
+pub(crate) const TILE_W: u32 = 32;
 /// Storage buffers the kernels bind.
-const STORAGE_BUFFERS: u32 = 10;
+pub(crate) const STORAGE_BUFFERS: u32 = 10;
 /// Workgroup memory of the resolve's `resolve_sort = workgroup` (2 × 2048 words).
-const WG_SORT_BYTES: u32 = 16 * 1024;
+pub(crate) const WG_SORT_BYTES: u32 = 16 * 1024;
 /// Bytes per vertex of the clip buffer (`transform = vertex`): clip position and snapped screen
 /// position.
-const CLIP_BYTES: u64 = 24;
+pub(crate) const CLIP_BYTES: u64 = 24;
 
-pub struct ComputeAbuffer;
-
-const AA_SUPPORT: AaSupport = AaSupport {
-    sample: false,
-    coverage: true,
-    ssaa: true,
-    why: "compute_abuffer keeps one fragment per pixel with its coverage mask (aa_capture = coverage)",
-};
 /// Primitive bits of a tag that carries an 8-bit coverage mask.
 pub(crate) const MASKED_PRIM_BITS: u32 = 23;
 
-const SMALL_MAX: Axis = Axis::int(
-    cols::SMALL_MAX,
-    "largest triangle bounding box (pixels) one thread rasterises; larger ones are shared",
-    256,
-    1,
-    1 << 20,
-);
-const TRANSFORM: Axis = Axis::choice(
-    cols::TRANSFORM,
-    "vertex: each vertex transformed once into a clip buffer; triangle: per triangle in every kernel",
-    "vertex",
-    &["vertex", "triangle"],
-);
-const COVERAGE: Axis = Axis::choice(
-    cols::COVERAGE,
-    "stepped: integer edge functions stepped, big triangles' tiles classified; direct: 64-bit products per pixel",
-    "stepped",
-    &["stepped", "direct"],
-);
-const RESOLVE_SORT: Axis = Axis::choice(
-    cols::RESOLVE_SORT,
-    "workgroup: short lists sorted in workgroup memory; private: every list in a per-thread array",
-    "workgroup",
-    &["workgroup", "private"],
-);
-
-impl Method for ComputeAbuffer {
-    fn name(&self) -> &'static str {
-        "compute_abuffer"
-    }
-    fn describe(&self) -> &'static str {
-        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position)"
-    }
-    fn exact(&self) -> bool {
-        true
-    }
-    fn axes(&self) -> Vec<Axis> {
-        let mut v = vec![SMALL_MAX, TRANSFORM, COVERAGE, RESOLVE_SORT];
-        v.extend_from_slice(effects::AXES);
-        v.extend([aa::AA, aa::AA_CAPTURE]);
-        v
-    }
-    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
-        EffectConfig::from_point(point).map(|_| ())
-    }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
-        let have = gpu.limits.max_storage_buffers_per_shader_stage;
-        if have < STORAGE_BUFFERS {
-            return Err(format!(
-                "needs {STORAGE_BUFFERS} storage buffers per shader stage, the adapter allows {have}"
-            ));
-        }
-        let v = variants(point);
-        let wg = gpu.limits.max_compute_workgroup_storage_size;
-        if v.wg_sort && wg < WG_SORT_BYTES {
-            return Err(format!(
-                "resolve_sort = workgroup needs {WG_SORT_BYTES} B of workgroup memory, the adapter allows {wg}"
-            ));
-        }
-        AA_SUPPORT.check(self.name(), AaConfig::from_point(point))
-    }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
-        let small = point.int(&SMALL_MAX) as u32;
-        let effect = EffectConfig::from_point(point).map_err(CoreError::Param)?;
-        let v = variants(point);
-        let aa = AaConfig::from_point(point);
-        if aa.mode == AaMode::Ssaa2x2 {
-            return super::ssaa::prepare(gpu, scene, |big| {
-                Ok(Box::new(PreparedAbuffer::new(
-                    gpu, big, small, &effect, v, None,
-                )?))
-            });
-        }
-        let v = Variants {
-            aa_samples: aa.msaa(),
-            ..v
-        };
-        Ok(Box::new(PreparedAbuffer::new(
-            gpu, scene, small, &effect, v, None,
-        )?))
-    }
-}
-
 /// The speed axes (module doc): each choice is exact, they trade work against memory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-struct Variants {
+pub(crate) struct Variants {
     /// `transform = vertex`: one clip-space transform per vertex, into a buffer.
-    pretransform: bool,
+    pub pretransform: bool,
     /// `coverage = stepped`: edge functions stepped, big triangles' tiles classified.
-    stepped: bool,
+    pub stepped: bool,
     /// `resolve_sort = workgroup`: short lists sorted in workgroup memory.
-    wg_sort: bool,
+    pub wg_sort: bool,
     /// MSAA coverage-mask samples (1: pixel centres).
-    aa_samples: u32,
-}
-
-fn variants(point: &Point) -> Variants {
-    Variants {
-        pretransform: point.choice(&TRANSFORM) == "vertex",
-        stepped: point.choice(&COVERAGE) == "stepped",
-        wg_sort: point.choice(&RESOLVE_SORT) == "workgroup",
-        aa_samples: 1,
-    }
+    pub aa_samples: u32,
 }
 
 impl Variants {
@@ -271,7 +170,7 @@ pub(crate) struct PreparedAbuffer {
     scan_groups: [(u32, u32); 3],
     images: usize,
     prep_note: String,
-    aa_samples: u32,
+    pub aa_samples: u32,
     _sizes: wgpu::Buffer,
     _clipv: wgpu::Buffer,
     alloc: AllocCounter,
@@ -340,7 +239,7 @@ impl PreparedAbuffer {
         Ok(std::array::from_fn(|i| c[W_REPLAY + i]))
     }
 
-    fn new(
+    pub(crate) fn new(
         gpu: &Gpu,
         scene: &GpuScene,
         small_max: u32,
@@ -702,6 +601,3 @@ impl Prepared for PreparedAbuffer {
         Some(&self.image)
     }
 }
-
-#[cfg(test)]
-mod tests;

@@ -1,123 +1,28 @@
-//! A hazard-free k-buffer: the k nearest fragments per pixel via 32-bit atomicMax bubbling of
-//! depth keys (pass 1), then a payload pass in which each captured fragment claims its slot
-//! (pass 2), then the same resolve as `kbuffer_rmw` (effects fold, nearest first). Its hazard
-//! rate is judged exactly like `kbuffer_rmw`'s and is 0 by construction (tested). Why not one
-//! pass of 64-bit atomicMin of (depth, payload): see the WGSL header (naga allows 64-bit min/max
-//! only without a return value, and the insertion needs it).
-//!
-//! `tail = blend` (default `drop`): the payload pass returns every fragment that was not
-//! captured to the blended tail (methods/tail), composited behind the k in the resolve.
-//! `keep = first` (default `nearest`): one pass instead of keys + payload, in which the first k
-//! fragments to arrive claim the slots (an atomic counter per pixel; which fragments are "first"
-//! is the GPU's order, judged against primitive order); the resolve sorts them. The hazard judge
-//! applies to `keep = nearest` only. `hybrid` is this capture with a mean-alpha tail.
-//!
-//! Antialiasing: `aa = msaa*` with `aa_capture = sample` gives every sample its own k slots
-//! (memory × samples; both passes run per sample) and the resolve averages the samples' folds,
-//! judged against each sample's k nearest; `ssaa2x2` wraps the single-sample k-buffer. A
-//! coverage-mask k-buffer is not offered: it would keep the k nearest fragments of the pixel,
-//! not of each sample, a rule with no per-sample definition to judge it by.
-//!
-//! Effects: every effect of the fold, on slots of the effect's payload or everything
-//! (`specialisation`), as `kbuffer_rmw` (`kbuffer_rmw::entry`); antialiasing is offered for
-//! transparency only (an averaged per-sample fold of another effect has no judged truth here).
+//! The hazard-free atomic k-slot capture behind `kbuffer_atomic` and `hybrid`: 32-bit
+//! atomicMax bubbling of depth keys (keys pass), a payload pass in which each captured fragment
+//! claims its slot, then the k-slot resolve; `keep = first` claims in arrival order in one pass;
+//! `tail = blend` returns what was not captured to the tail targets. See `kbuffer_atomic` for
+//! the method and the WGSL header for why not 64-bit atomicMin.
 
-use super::kbuffer_rmw::entry::SlotConfig;
-use super::kbuffer_rmw::{kslots_entries, kslots_layout, KSlots, LAYERS};
-use super::store::{dummy_depth_ms, storage_pass_with, storage_pipeline_ms};
-use super::tail::{self, Bounding, TailTargets, RESOLVE_WGSL, TAIL_WGSL};
-use super::{Capture, FrameStats, Method, Prepared};
-use crate::aa::{self, AaCapture, AaConfig, AaMode, AaSupport};
-use crate::axes::{Axis, Point};
-use crate::effects::{self, Effect, FOLD_WGSL};
+use super::entry::SlotConfig;
+use super::{kslots_entries, kslots_layout, KSlots, Races};
+use crate::aa::{self, AaCapture, AaMode};
+use crate::effects::FOLD_WGSL;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
     bind_buffers, per_sample_source, pixel_pass, shader_source, COMMON_WGSL, STORAGE_RW,
 };
-use crate::methods::depth_peel::SPECIALISATION;
-use crate::methods::packing::PACKING_WGSL;
+use crate::methods::shared::packing::PACKING_WGSL;
+use crate::methods::shared::store::{dummy_depth_ms, storage_pass_with, storage_pipeline_ms};
+use crate::methods::shared::tail::{self, Bounding, TailTargets, RESOLVE_WGSL, TAIL_WGSL};
+use crate::methods::{Capture, FrameStats, Prepared};
 use crate::oit::Keep;
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
 use crate::Result;
 
 const WGSL: &str = include_str!("kbuffer_atomic.wgsl");
-
-pub struct KBufferAtomic;
-
-impl Method for KBufferAtomic {
-    fn name(&self) -> &'static str {
-        "kbuffer_atomic"
-    }
-    fn describe(&self) -> &'static str {
-        "hazard-free k-buffer: 32-bit atomicMax bubbling of depth keys + payload claim pass; exact k nearest; 2 geometry passes + resolve; k × 40 B + 16 B per pixel"
-    }
-    fn exact(&self) -> bool {
-        true
-    }
-    fn axes(&self) -> Vec<Axis> {
-        let mut v = vec![LAYERS, tail::TAIL, tail::KEEP, aa::AA, aa::AA_CAPTURE];
-        v.push(SPECIALISATION);
-        v.extend_from_slice(effects::AXES);
-        v
-    }
-    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
-        SlotConfig::read(point).map(|_| ())
-    }
-    fn payload(&self, point: &Point) -> Option<&'static str> {
-        SlotConfig::read(point).ok().map(|c| c.payload.name())
-    }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
-        let cfg = AaConfig::from_point(point);
-        AA_SUPPORT.check(self.name(), cfg)?;
-        let slot = SlotConfig::read(point)?;
-        slot.check(Bounding::of(point, true).blends())?;
-        if cfg.mode != AaMode::None && slot.effect.effect != Effect::Transparency {
-            return Err(format!(
-                "antialiasing is offered for transparency only: an averaged per-sample {} fold has no judged truth",
-                slot.effect.effect.name()
-            ));
-        }
-        if cfg.msaa() > 1 {
-            if Bounding::of(point, true) != Bounding::DEFAULT {
-                return Err("per-sample k slots keep each sample's k nearest and drop the rest: tail = blend and keep = first are single-sample".into());
-            }
-            aa::check_adapter(gpu, cfg, &[wgpu::TextureFormat::Depth32Float])?;
-        }
-        if Bounding::of(point, true).blends() {
-            tail::supports(gpu, 0)?;
-        }
-        Ok(())
-    }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
-        let k = point.int(&LAYERS) as u32;
-        let bounding = Bounding::of(point, true);
-        let slot = SlotConfig::read(point).map_err(crate::CoreError::Param)?;
-        let cfg = AaConfig::from_point(point);
-        if cfg.mode == AaMode::Ssaa2x2 {
-            return super::ssaa::prepare(gpu, scene, |big| {
-                Ok(Box::new(PreparedAtomic::new(gpu, big, k, bounding)?))
-            });
-        }
-        let samples = cfg.msaa();
-        Ok(Box::new(PreparedAtomic::new_ms(
-            gpu,
-            scene,
-            (k, slot),
-            bounding,
-            samples,
-        )?))
-    }
-}
-
-/// Per-sample slots and supersampling; no coverage masks (module doc).
-const AA_SUPPORT: AaSupport = AaSupport {
-    sample: true,
-    coverage: false,
-    ssaa: true,
-    why: "a coverage-mask k-buffer keeps the k nearest of the pixel, not of each sample: no per-sample rule to judge it by (aa_capture = sample keeps k per sample)",
-};
 
 pub(crate) struct PreparedAtomic {
     /// The keys pass (`keep = nearest`); `keep = first` has only the claim pass.
@@ -142,7 +47,7 @@ impl PreparedAtomic {
     }
 
     /// `samples` > 1: k slots per sample, both passes per sample (MSAA, `aa_capture = sample`).
-    fn new_ms(
+    pub(crate) fn new_ms(
         gpu: &Gpu,
         scene: &GpuScene,
         (k, slot): (u32, SlotConfig),
@@ -306,8 +211,7 @@ impl Prepared for PreparedAtomic {
 
     fn judge(&mut self, cap: &mut Capture, reference: &FragmentLists) {
         if self.bounding.keep == Keep::Nearest {
-            self.slots
-                .judge(cap, reference, crate::methods::kbuffer_rmw::Races::None);
+            self.slots.judge(cap, reference, Races::None);
         } else {
             cap.notes = "keep = first: no k-nearest hazard judge (the first k are the GPU's arrival order, judged against primitive order in *_vs_k)".into();
         }
@@ -317,39 +221,5 @@ impl Prepared for PreparedAtomic {
 
     fn image_buffer(&self) -> Option<&wgpu::Buffer> {
         Some(&self.slots.image)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use scenarios::ParamValue::Int;
-
-    use super::*;
-    use crate::testing::{count_mismatch, max_err, params, run, scene};
-
-    /// Composite of up to 16 layers in f32 vs f64: a few f32 ulps per step.
-    const IMAGE_TOL: f64 = 2e-5;
-
-    #[test]
-    fn captures_the_true_k_nearest_with_no_hazard() {
-        let shells = scene("shells", &[("count", Int(4)), ("segments", Int(12))]);
-        let quads = scene("quads", &[("depth_complexity", Int(9))]);
-        let grass = scene("grass", &[("blades", Int(200))]);
-        for (name, s) in [("shells", &shells), ("quads", &quads), ("grass", &grass)] {
-            for k in [1, 3, 8, 16] {
-                let (cap, lists) = run(&KBufferAtomic, s, 40, 40, &params(&[("layers", Int(k))]));
-                assert_eq!(cap.hazard_pixels, Some(0), "{name} k={k}: {}", cap.notes);
-                let (e, at) = max_err(&cap, &lists);
-                assert!(e <= IMAGE_TOL, "{name} k={k}: error {e} at pixel {at}");
-                let (bad, first) = count_mismatch(&cap, &lists, k as u32);
-                assert_eq!(bad, 0, "{name} k={k}: counts differ first at {first:?}");
-            }
-        }
-    }
-
-    #[test]
-    fn tail_and_keep_modes_equal_their_definition_and_count_what_did_not_fit() {
-        // Up to 8 kept layers composited in f32, plus f32 tail sums (≤ 30 terms here).
-        crate::methods::tail::check_tail_and_keep(&KBufferAtomic, 2.0 * IMAGE_TOL);
     }
 }

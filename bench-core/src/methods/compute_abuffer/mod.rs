@@ -1,0 +1,120 @@
+//! `compute_abuffer`: the exact A-buffer rasterised in compute (Maule et al. 2012's dynamic
+//! fragment buffer, count → scan → fill → sort and fold). The capture itself is
+//! `shared::counted_capture` (its doc and `PERF.md` say how and what the speed axes trade),
+//! which `mlab_ideal` and `adaptive_ideal` replay; this module is the method: its axes, what it
+//! needs of the adapter, and `prepare`.
+
+use super::shared::counted_capture::{PreparedAbuffer, Variants, STORAGE_BUFFERS, WG_SORT_BYTES};
+use super::shared::ssaa;
+use super::{Method, Prepared};
+use crate::aa::{self, AaConfig, AaMode, AaSupport};
+use crate::axes::{Axis, Point};
+use crate::effects::{self, EffectConfig};
+use crate::gpu::Gpu;
+use crate::gpu_scene::GpuScene;
+use crate::record::cols;
+use crate::{CoreError, Result};
+
+pub struct ComputeAbuffer;
+
+const AA_SUPPORT: AaSupport = AaSupport {
+    sample: false,
+    coverage: true,
+    ssaa: true,
+    why: "compute_abuffer keeps one fragment per pixel with its coverage mask (aa_capture = coverage)",
+};
+
+const SMALL_MAX: Axis = Axis::int(
+    cols::SMALL_MAX,
+    "largest triangle bounding box (pixels) one thread rasterises; larger ones are shared",
+    256,
+    1,
+    1 << 20,
+);
+const TRANSFORM: Axis = Axis::choice(
+    cols::TRANSFORM,
+    "vertex: each vertex transformed once into a clip buffer; triangle: per triangle in every kernel",
+    "vertex",
+    &["vertex", "triangle"],
+);
+const COVERAGE: Axis = Axis::choice(
+    cols::COVERAGE,
+    "stepped: integer edge functions stepped, big triangles' tiles classified; direct: 64-bit products per pixel",
+    "stepped",
+    &["stepped", "direct"],
+);
+const RESOLVE_SORT: Axis = Axis::choice(
+    cols::RESOLVE_SORT,
+    "workgroup: short lists sorted in workgroup memory; private: every list in a per-thread array",
+    "workgroup",
+    &["workgroup", "private"],
+);
+
+impl Method for ComputeAbuffer {
+    fn name(&self) -> &'static str {
+        "compute_abuffer"
+    }
+    fn describe(&self) -> &'static str {
+        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position)"
+    }
+    fn exact(&self) -> bool {
+        true
+    }
+    fn axes(&self) -> Vec<Axis> {
+        let mut v = vec![SMALL_MAX, TRANSFORM, COVERAGE, RESOLVE_SORT];
+        v.extend_from_slice(effects::AXES);
+        v.extend([aa::AA, aa::AA_CAPTURE]);
+        v
+    }
+    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+        EffectConfig::from_point(point).map(|_| ())
+    }
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        let have = gpu.limits.max_storage_buffers_per_shader_stage;
+        if have < STORAGE_BUFFERS {
+            return Err(format!(
+                "needs {STORAGE_BUFFERS} storage buffers per shader stage, the adapter allows {have}"
+            ));
+        }
+        let v = variants(point);
+        let wg = gpu.limits.max_compute_workgroup_storage_size;
+        if v.wg_sort && wg < WG_SORT_BYTES {
+            return Err(format!(
+                "resolve_sort = workgroup needs {WG_SORT_BYTES} B of workgroup memory, the adapter allows {wg}"
+            ));
+        }
+        AA_SUPPORT.check(self.name(), AaConfig::from_point(point))
+    }
+    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
+        let small = point.int(&SMALL_MAX) as u32;
+        let effect = EffectConfig::from_point(point).map_err(CoreError::Param)?;
+        let v = variants(point);
+        let aa = AaConfig::from_point(point);
+        if aa.mode == AaMode::Ssaa2x2 {
+            return ssaa::prepare(gpu, scene, |big| {
+                Ok(Box::new(PreparedAbuffer::new(
+                    gpu, big, small, &effect, v, None,
+                )?))
+            });
+        }
+        let v = Variants {
+            aa_samples: aa.msaa(),
+            ..v
+        };
+        Ok(Box::new(PreparedAbuffer::new(
+            gpu, scene, small, &effect, v, None,
+        )?))
+    }
+}
+
+fn variants(point: &Point) -> Variants {
+    Variants {
+        pretransform: point.choice(&TRANSFORM) == "vertex",
+        stepped: point.choice(&COVERAGE) == "stepped",
+        wg_sort: point.choice(&RESOLVE_SORT) == "workgroup",
+        aa_samples: 1,
+    }
+}
+
+#[cfg(test)]
+mod tests;
