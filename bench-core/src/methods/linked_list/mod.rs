@@ -40,6 +40,7 @@
 
 use wgpu::util::DeviceExt;
 
+use super::shared::bind::{pipeline_layout, Bindings, Kind as B, Res, FC};
 use super::shared::counted_capture::{MASKED_PRIM_BITS, VISIBILITY_WGSL};
 use super::shared::store::storage_pass_with;
 use super::shared::tail::{self, TailTargets, TAIL_WGSL};
@@ -50,8 +51,8 @@ use crate::effects::{self, Effect, EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
-    bind_buffers, camera_entry, check_storage_size, compute_pipeline, multisample,
-    per_sample_source, read_vec, storage_entry, COMMON_WGSL, STORAGE_RW,
+    check_storage_size, compute_pipeline, multisample, per_sample_source, read_vec, shader_source,
+    COMMON_WGSL, STORAGE_RW,
 };
 use crate::record::{cols, Flag};
 use crate::timing::GpuTimer;
@@ -300,6 +301,47 @@ struct PreparedList {
     overhead: u64,
 }
 
+/// The module's source: the list, the node variant (compact nodes re-derive attributes from
+/// the primitive), the fold and the tail; per sample when a list is kept per sample.
+fn list_source(c: &ListConfig) -> String {
+    let variant = if c.compact {
+        format!("{COMPACT_WGSL}\n{VISIBILITY_WGSL}")
+    } else {
+        FULL_WGSL.to_string()
+    };
+    // `enable` directives must open the module, before the common vertex stage.
+    let enable = if c.compact {
+        "enable primitive_index;\n"
+    } else {
+        ""
+    };
+    let src = format!(
+        "{enable}{COMMON_WGSL}\n{WGSL}\n{variant}\n{EFFECTS_WGSL}\n{TAIL_WGSL}\n{TAIL_RESOLVE_WGSL}"
+    );
+    // Per-sample capture: every fragment entry runs per sample (SAMPLE = its index).
+    if c.lists_per_pixel() > 1 {
+        per_sample_source(&src)
+    } else {
+        src
+    }
+}
+
+/// Counted pools laid end to end: (first node, nodes) per tile, each its count plus
+/// `slack_pct` percent.
+fn counted_ranges(counts: &[u32], slack_pct: u64) -> Vec<[u32; 2]> {
+    let mut first = 0u64;
+    let mut r = Vec::with_capacity(counts.len());
+    for &n in counts {
+        let cap = n as u64 + (n as u64 * slack_pct).div_ceil(100);
+        r.push([
+            first.min(u32::MAX as u64) as u32,
+            cap.min(u32::MAX as u64) as u32,
+        ]);
+        first += cap;
+    }
+    r
+}
+
 impl PreparedList {
     fn new(
         gpu: &Gpu,
@@ -310,32 +352,14 @@ impl PreparedList {
     ) -> Result<Self> {
         let d = &gpu.device;
         let px = scene.pixels() as u64;
-        let (node_bytes, variant) = if c.compact {
-            (
-                COMPACT_NODE_BYTES,
-                format!("{COMPACT_WGSL}\n{VISIBILITY_WGSL}"),
-            )
+        let node_bytes = if c.compact {
+            COMPACT_NODE_BYTES
         } else {
-            (FULL_NODE_BYTES, FULL_WGSL.to_string())
+            FULL_NODE_BYTES
         };
-        // `enable` directives must open the module, before the common vertex stage.
-        let enable = if c.compact {
-            "enable primitive_index;\n"
-        } else {
-            ""
-        };
-        let src = format!(
-            "{enable}{COMMON_WGSL}\n{WGSL}\n{variant}\n{EFFECTS_WGSL}\n{TAIL_WGSL}\n{TAIL_RESOLVE_WGSL}"
-        );
         let samples = c.aa.msaa();
         let coverage = samples > 1 && c.aa.capture == AaCapture::Coverage;
         let lists = c.lists_per_pixel();
-        // Per-sample capture: every fragment entry runs per sample (SAMPLE = its index).
-        let src = if lists > 1 {
-            per_sample_source(&src)
-        } else {
-            src
-        };
         if coverage {
             let ntri = scene.index_count / 3;
             if ntri >= 1 << MASKED_PRIM_BITS {
@@ -344,33 +368,20 @@ impl PreparedList {
                 )));
             }
         }
-        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("linked_list"),
-            source: wgpu::ShaderSource::Wgsl(src.into()),
-        });
-        let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
-        let mut entries = vec![camera_entry(0)];
-        entries.extend((1..7).map(|b| storage_entry(b, false, fc)));
-        entries.push(storage_entry(7, true, fc));
-        let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("linked_list"),
-            entries: &entries,
-        });
-        let mesh_bgl = c.compact.then(|| {
-            let cs = wgpu::ShaderStages::COMPUTE;
-            let e: Vec<_> = (0..MESH_BUFFERS)
-                .map(|b| storage_entry(b, true, cs))
-                .collect();
-            d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("linked_list mesh"),
-                entries: &e,
-            })
-        });
-        let raster_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("linked_list append"),
-            bind_group_layouts: &[Some(&bgl)],
-            immediate_size: 0,
-        });
+        let module = shader_source(gpu, "linked_list", list_source(&c));
+        // Group 0: camera, heads, nodes, image, counters, lost + resolved counts, pool cursors,
+        // pool ranges (read only).
+        let mut rows = vec![B::Camera];
+        rows.extend([B::Storage; 6]);
+        rows.push(B::StorageRo);
+        let table = Bindings::seq(gpu, "linked_list", FC, &rows);
+        // Group 1 of the compact resolve: the mesh, to re-derive attributes.
+        let mesh_rows = [B::StorageRo; MESH_BUFFERS as usize];
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let mesh_table = c
+            .compact
+            .then(|| Bindings::seq(gpu, "linked_list mesh", cs, &mesh_rows));
+        let raster_layout = pipeline_layout(gpu, "linked_list append", &[&table.layout]);
         // tail = blend: the tail textures as group 2 of the resolve only (the append pass
         // renders into them).
         let tail_bgl = c.tail.then(|| {
@@ -379,9 +390,14 @@ impl PreparedList {
                 entries: &TailTargets::layout_entries(0, wgpu::ShaderStages::COMPUTE),
             })
         });
+        let groups: Vec<Option<&wgpu::BindGroupLayout>> = vec![
+            Some(&table.layout),
+            mesh_table.as_ref().map(|t| &t.layout),
+            tail_bgl.as_ref(),
+        ];
         let resolve_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("linked_list resolve"),
-            bind_group_layouts: &[Some(&bgl), mesh_bgl.as_ref(), tail_bgl.as_ref()],
+            bind_group_layouts: &groups,
             immediate_size: 0,
         });
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
@@ -451,21 +467,17 @@ impl PreparedList {
         };
         let cursors = alloc.buffer(gpu, "list pool cursors", pools as u64 * 4, STORAGE_RW);
         let bind_with = |nodes: &wgpu::Buffer, ranges: &wgpu::Buffer| {
-            bind_buffers(
-                gpu,
-                "linked_list",
-                &bgl,
-                &[
-                    &scene.camera,
-                    &heads,
-                    nodes,
-                    &image,
-                    &counters,
-                    &pix,
-                    &cursors,
-                    ranges,
-                ],
-            )
+            let bufs = [
+                &scene.camera,
+                &heads,
+                nodes,
+                &image,
+                &counters,
+                &pix,
+                &cursors,
+                ranges,
+            ];
+            table.group(gpu, &bufs.map(Res::Buf))
         };
         // Pool ranges: (first node, nodes) per pool.
         let (ranges, pool_note): (Vec<[u32; 2]>, String) = if c.counted {
@@ -478,16 +490,7 @@ impl PreparedList {
                 |n, r| bind_with(n, r),
             )?;
             let true_frags: u64 = counts.iter().map(|&n| n as u64).sum();
-            let mut first = 0u64;
-            let mut r = Vec::with_capacity(pools);
-            for &n in &counts {
-                let cap = n as u64 + (n as u64 * c.slack_pct).div_ceil(100);
-                r.push([
-                    first.min(u32::MAX as u64) as u32,
-                    cap.min(u32::MAX as u64) as u32,
-                ]);
-                first += cap;
-            }
+            let r = counted_ranges(&counts, c.slack_pct);
             let what = match (samples > 1, coverage) {
                 (false, _) => String::new(),
                 (true, true) => format!(" (pixel-rate, {samples}× coverage masks)"),
@@ -525,19 +528,16 @@ impl PreparedList {
             usage: wgpu::BufferUsages::STORAGE,
         });
         let bind = bind_with(&nodes, &ranges_buf);
-        let mesh_bind = mesh_bgl.as_ref().map(|l| {
-            bind_buffers(
-                gpu,
-                "linked_list mesh",
-                l,
-                &[
-                    &scene.positions,
-                    &scene.normals,
-                    &scene.colors,
-                    &scene.object_ids,
-                    &scene.indices,
-                ],
-            )
+        let mesh_bind = mesh_table.as_ref().map(|t| {
+            let s = scene;
+            let bufs = [
+                &s.positions,
+                &s.normals,
+                &s.colors,
+                &s.object_ids,
+                &s.indices,
+            ];
+            t.group(gpu, &bufs.map(Res::Buf))
         });
         let tail = tail_bgl.as_ref().map(|l| {
             let t = TailTargets::new(gpu, &mut alloc, scene);
