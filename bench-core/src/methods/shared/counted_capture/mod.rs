@@ -43,10 +43,8 @@ use crate::aa::{AaCapture, AaMode};
 use crate::effects::{EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
-use crate::gpu_util::{
-    bind_buffers, camera_entry, check_storage_size, compute_pipeline, read_vec, shader,
-    storage_entry, STORAGE_RW,
-};
+use crate::gpu_util::{check_storage_size, compute_pipeline, read_vec, shader, STORAGE_RW};
+use crate::methods::shared::bind::{pipeline_layout, Bindings, Kind as B, Res};
 use crate::methods::{Capture, Expected, FrameStats, Prepared};
 use crate::record::Flag;
 use crate::timing::GpuTimer;
@@ -180,8 +178,44 @@ pub(crate) struct PreparedAbuffer {
 
 struct Layout {
     module: wgpu::ShaderModule,
-    bgl: wgpu::BindGroupLayout,
+    table: Bindings,
     pipeline: wgpu::PipelineLayout,
+}
+
+/// The resolve, or a replay kernel in its place (the ideal-order twins). A replay runs
+/// single-sample, so the override defaults (one sample, 31 primitive bits) are its tag layout.
+fn resolve_kernel(
+    gpu: &Gpu,
+    l: &Layout,
+    effect: &EffectConfig,
+    v: Variants,
+    replay: Option<&Replay>,
+) -> wgpu::ComputePipeline {
+    let (entry, rc) = match replay {
+        None => {
+            let mut rc = effect.constants();
+            rc.push(("PRETRANSFORM", flag(v.pretransform)));
+            rc.push(("WG_SORT", flag(v.wg_sort)));
+            rc.extend(v.aa_constants());
+            ("resolve", rc)
+        }
+        Some(r) => {
+            let mut c = r.constants.clone();
+            c.push(("PRETRANSFORM", flag(v.pretransform)));
+            (r.entry, c)
+        }
+    };
+    compute_pipeline(gpu, entry, &l.pipeline, &l.module, entry, &rc, false)
+}
+
+/// Workgroups (x, y) for `n` one-dimensional jobs within the dispatch limit; none for 0.
+fn groups_2d(n: u32) -> (u32, u32) {
+    let x = n.min(MAX_GROUPS);
+    if x == 0 {
+        (0, 0)
+    } else {
+        (x, n.div_ceil(x))
+    }
 }
 
 fn kernels(gpu: &Gpu, l: &Layout, fill: bool, v: Variants) -> Kernels {
@@ -266,26 +300,17 @@ impl PreparedAbuffer {
         let extra = replay.map_or(String::new(), |r| format!("{REPLAY_WGSL}\n{}", r.wgsl));
         let src = format!("{WGSL}\n{DF32_WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}\n{extra}");
         let module = shader(gpu, "compute_abuffer", &src);
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let mut entries = vec![camera_entry(0)];
-        entries.extend((1..6).map(|b| storage_entry(b, true, cs)));
-        entries.extend((6..10).map(|b| storage_entry(b, false, cs)));
-        let mut uniform = camera_entry(10);
-        uniform.visibility = cs;
-        entries.push(uniform);
-        entries.push(storage_entry(11, false, cs));
-        let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("compute_abuffer"),
-            entries: &entries,
-        });
-        let pipeline = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("compute_abuffer"),
-            bind_group_layouts: &[Some(&bgl)],
-            immediate_size: 0,
-        });
+        // Camera; the mesh (positions, normals, colours, object ids, indices); offsets,
+        // fragments, work, image; sizes; clip buffer.
+        let mut rows = vec![B::Camera];
+        rows.extend([B::StorageRo; 5]);
+        rows.extend([B::Storage; 4]);
+        rows.extend([B::Uniform, B::Storage]);
+        let table = Bindings::seq(gpu, "compute_abuffer", wgpu::ShaderStages::COMPUTE, &rows);
+        let pipeline = pipeline_layout(gpu, "compute_abuffer", &[&table.layout]);
         let l = Layout {
             module,
-            bgl,
+            table,
             pipeline,
         };
         let sizes = |capacity: u64, big_cap: u64, chunk_cap: u64| Sizes {
@@ -323,15 +348,8 @@ impl PreparedAbuffer {
         check_storage_size(gpu, "compute_abuffer clip buffer", clip_bytes)?;
         let clipv = alloc.buffer(gpu, "abuffer clip positions", clip_bytes, STORAGE_RW);
         let transform = v.pretransform.then(|| {
-            let p = compute_pipeline(
-                gpu,
-                "transform",
-                &l.pipeline,
-                &l.module,
-                "transform",
-                &[],
-                false,
-            );
+            let (pl, m) = (&l.pipeline, &l.module);
+            let p = compute_pipeline(gpu, "transform", pl, m, "transform", &[], false);
             (p, (nvert.div_ceil(256).clamp(1, MAX_GROUPS), 1))
         });
         let pre: Vec<(&wgpu::ComputePipeline, (u32, u32))> =
@@ -357,25 +375,19 @@ impl PreparedAbuffer {
         let image_bytes = px * 16 * images as u64;
         let dummy_image = scratch.buffer(gpu, "abuffer image (sizing)", 16, STORAGE_RW);
         let bind_with = |frags: &wgpu::Buffer, work: &wgpu::Buffer, image: &wgpu::Buffer| {
-            bind_buffers(
-                gpu,
-                "compute_abuffer",
-                &l.bgl,
-                &[
-                    &scene.camera,
-                    &scene.positions,
-                    &scene.normals,
-                    &scene.colors,
-                    &scene.object_ids,
-                    &scene.indices,
-                    &offs,
-                    frags,
-                    work,
-                    image,
-                    &sizes_buf,
-                    &clipv,
-                ],
-            )
+            let s = scene;
+            let mesh = [
+                &s.positions,
+                &s.normals,
+                &s.colors,
+                &s.object_ids,
+                &s.indices,
+            ];
+            let mut bufs = vec![&s.camera];
+            bufs.extend(mesh);
+            bufs.extend([&offs, frags, work, image, &sizes_buf, &clipv]);
+            let res: Vec<Res> = bufs.into_iter().map(Res::Buf).collect();
+            l.table.group(gpu, &res)
         };
         set_sizes(sizes(0, ntri as u64, 0));
         let listing_bind = bind_with(&dummy, &listing, &dummy_image);
@@ -402,12 +414,7 @@ impl PreparedAbuffer {
         let work = alloc.buffer(gpu, "abuffer work", work_bytes, STORAGE_RW);
         let (big_cap, chunk_cap) = (nbig.max(1), nchunks.max(1));
         set_sizes(sizes(0, big_cap, chunk_cap));
-        let x = (nchunks as u32).min(MAX_GROUPS);
-        let big_groups = if x == 0 {
-            (0, 0)
-        } else {
-            (x, (nchunks as u32).div_ceil(x))
-        };
+        let big_groups = groups_2d(nchunks as u32);
         let sizing_bind = bind_with(&dummy, &work, &dummy_image);
         let mut enc = d.create_command_encoder(&Default::default());
         enc.clear_buffer(&offs, 0, None);
@@ -445,21 +452,7 @@ impl PreparedAbuffer {
         let bind = bind_with(&frags, &work, &image);
         set_sizes(sizes(capacity, big_cap, chunk_cap));
         let fill = kernels(gpu, &l, true, v);
-        let mut rc = effect.constants();
-        rc.push(("PRETRANSFORM", flag(v.pretransform)));
-        rc.push(("WG_SORT", flag(v.wg_sort)));
-        rc.extend(v.aa_constants());
-        // A replay kernel (the ideal-order twins) replaces the resolve; it runs single-sample,
-        // so the override defaults (one sample, 31 primitive bits) are its tag layout.
-        let (entry, rc) = match replay {
-            None => ("resolve", rc),
-            Some(r) => {
-                let mut c = r.constants.clone();
-                c.push(("PRETRANSFORM", flag(v.pretransform)));
-                (r.entry, c)
-            }
-        };
-        let resolve = compute_pipeline(gpu, entry, &l.pipeline, &l.module, entry, &rc, false);
+        let resolve = resolve_kernel(gpu, &l, effect, v, replay);
         let prep_note = format!(
             "sized by prepare-time counts: {total} fragments, {nbig} shared (big or clipped) triangles in {nchunks} tiles of {TILE_PIXELS} px (≤ {TILE_W} wide), {} B of sizing scratch freed",
             scratch.bytes - px * 4
