@@ -204,12 +204,34 @@ pub fn pipeline_layout(
     groups: &[&wgpu::BindGroupLayout],
 ) -> wgpu::PipelineLayout {
     let g: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().map(|g| Some(*g)).collect();
+    pipeline_layout_gaps(gpu, label, &g)
+}
+
+/// A pipeline layout whose groups may be absent (a variant that binds no group there).
+pub fn pipeline_layout_gaps(
+    gpu: &Gpu,
+    label: &str,
+    groups: &[Option<&wgpu::BindGroupLayout>],
+) -> wgpu::PipelineLayout {
     gpu.device
         .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(label),
-            bind_group_layouts: &g,
+            bind_group_layouts: groups,
             immediate_size: 0,
         })
+}
+
+/// The mesh buffers in the order the visibility kernels bind them: positions, normals,
+/// colours, object ids, indices.
+pub fn mesh_buffers(scene: &crate::gpu_scene::GpuScene) -> [&wgpu::Buffer; 5] {
+    let s = scene;
+    [
+        &s.positions,
+        &s.normals,
+        &s.colors,
+        &s.object_ids,
+        &s.indices,
+    ]
 }
 
 /// What a render pipeline draws with: module, entry points, vertex buffers, targets.
@@ -257,4 +279,30 @@ pub fn render_pipeline(
             multiview_mask: None,
             cache: None,
         })
+}
+
+/// Additive blending (sums: weighted colour, counts, moments).
+pub const ADD: wgpu::BlendComponent = wgpu::BlendComponent {
+    src_factor: wgpu::BlendFactor::One,
+    dst_factor: wgpu::BlendFactor::One,
+    operation: wgpu::BlendOperation::Add,
+};
+
+/// dst · (1 − src): the revealage (transmittance) product.
+pub const TRANSMIT: wgpu::BlendComponent = wgpu::BlendComponent {
+    src_factor: wgpu::BlendFactor::Zero,
+    dst_factor: wgpu::BlendFactor::OneMinusSrc,
+    operation: wgpu::BlendOperation::Add,
+};
+
+/// A colour target of `format` blended by `c` in colour and alpha alike.
+pub fn blended(
+    format: wgpu::TextureFormat,
+    c: wgpu::BlendComponent,
+) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format,
+        blend: Some(wgpu::BlendState { color: c, alpha: c }),
+        write_mask: wgpu::ColorWrites::ALL,
+    })
 }
