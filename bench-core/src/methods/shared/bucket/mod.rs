@@ -505,96 +505,17 @@ impl PreparedBucket {
             &[&main.layout, &arr.layout, &arr.layout],
         );
 
+        let layouts = [&cam_layout, &main_layout, &second_layout, &resolve_layout];
         let declared = declared_constants(&cfg, &fx, &body);
-        let all_layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
-            .into_iter()
-            .map(Some)
-            .collect();
-        let pos_layouts: Vec<_> = GpuScene::layouts(Attrs::POSITION_ONLY)
-            .into_iter()
-            .map(Some)
-            .collect();
-        let slot_targets: Vec<_> = (0..attachments).map(|_| target(SLOT_FORMAT)).collect();
-        let render = |label: &str,
-                      pl: &wgpu::PipelineLayout,
-                      vs: &str,
-                      fs: &str,
-                      targets: &[Option<wgpu::ColorTargetState>]| {
-            let buffers = if vs == "vs_position" {
-                &pos_layouts
-            } else {
-                &all_layouts
-            };
-            let constants = &declared;
-            let (module, depth, samples) = (&module, None, 1);
-            let r = Raster {
-                module,
-                vs,
-                buffers,
-                fs,
-                targets,
-                constants,
-                depth,
-                samples,
-            };
-            render_pipeline(gpu, label, pl, r)
-        };
-        // Passes that only touch storage still need a target; nothing is written to it.
-        let silent = [Some(wgpu::ColorTargetState {
-            format: SLOT_FORMAT,
-            blend: None,
-            write_mask: wgpu::ColorWrites::empty(),
-        })];
-        let (full, slots) = ("vs_full", &slot_targets[..]);
-        let bounds = render(
-            "bucket depth range",
-            &cam_layout,
-            "vs_position",
-            "fs_bounds",
-            &[target(RANGE_FORMAT)],
-        );
-        let count = render(
-            "bucket count",
-            &main_layout,
-            "vs_position",
-            "fs_count",
-            &silent,
-        );
-        let (route, second, hist_pass) = match cfg.kind {
-            Kind::Uniform { .. } => (
-                render("bdp route", &main_layout, full, "fs_route", slots),
-                None,
-                None,
-            ),
-            Kind::TwoPass => (
-                render("bdp2 first", &main_layout, full, "fs_first", slots),
-                Some(render(
-                    "bdp2 second",
-                    &second_layout,
-                    full,
-                    "fs_second",
-                    slots,
-                )),
-                None,
-            ),
-            Kind::Adaptive { .. } => (
-                render("adp route", &main_layout, full, "fs_route", slots),
-                None,
-                Some(render(
-                    "adp histogram",
-                    &main_layout,
-                    full,
-                    "fs_hist",
-                    &silent,
-                )),
-            ),
-        };
-        let compute = |label: &str, pl: &wgpu::PipelineLayout, entry: &str| {
-            compute_pipeline(gpu, label, pl, &module, entry, &declared, false)
-        };
-        let resolve = compute("bucket resolve", &resolve_layout, "resolve");
-        let equalise = matches!(cfg.kind, Kind::Adaptive { .. })
-            .then(|| compute("adp equalise", &main_layout, "equalise"));
+        let Passes {
+            bounds,
+            count,
+            route,
+            second,
+            hist_pass,
+            equalise,
+            resolve,
+        } = Passes::new(gpu, &module, &declared, cfg, attachments, layouts);
 
         let mut alloc = AllocCounter::default();
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
@@ -903,6 +824,129 @@ impl crate::methods::Prepared for PreparedBucket {
             self.last_passes
         );
         Ok(cap)
+    }
+}
+
+/// The frame's pipelines: depth range, fragment count, routing (bdp2: two passes; adp: the
+/// histogram and equalisation too) and the resolve.
+struct Passes {
+    bounds: wgpu::RenderPipeline,
+    count: wgpu::RenderPipeline,
+    route: wgpu::RenderPipeline,
+    second: Option<wgpu::RenderPipeline>,
+    hist_pass: Option<wgpu::RenderPipeline>,
+    equalise: Option<wgpu::ComputePipeline>,
+    resolve: wgpu::ComputePipeline,
+}
+
+impl Passes {
+    /// `layouts`: depth range, main, second (+ slots), resolve (+ both slot arrays).
+    fn new(
+        gpu: &Gpu,
+        module: &wgpu::ShaderModule,
+        declared: &[(&str, f64)],
+        cfg: Config,
+        attachments: u32,
+        [cam_layout, main_layout, second_layout, resolve_layout]: [&wgpu::PipelineLayout; 4],
+    ) -> Passes {
+        let all_layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
+            .into_iter()
+            .map(Some)
+            .collect();
+        let pos_layouts: Vec<_> = GpuScene::layouts(Attrs::POSITION_ONLY)
+            .into_iter()
+            .map(Some)
+            .collect();
+        let slot_targets: Vec<_> = (0..attachments).map(|_| target(SLOT_FORMAT)).collect();
+        let render = |label: &str,
+                      pl: &wgpu::PipelineLayout,
+                      vs: &str,
+                      fs: &str,
+                      targets: &[Option<wgpu::ColorTargetState>]| {
+            let buffers = if vs == "vs_position" {
+                &pos_layouts
+            } else {
+                &all_layouts
+            };
+            let constants = declared;
+            let (module, depth, samples) = (module, None, 1);
+            let r = Raster {
+                module,
+                vs,
+                buffers,
+                fs,
+                targets,
+                constants,
+                depth,
+                samples,
+            };
+            render_pipeline(gpu, label, pl, r)
+        };
+        // Passes that only touch storage still need a target; nothing is written to it.
+        let silent = [Some(wgpu::ColorTargetState {
+            format: SLOT_FORMAT,
+            blend: None,
+            write_mask: wgpu::ColorWrites::empty(),
+        })];
+        let (full, slots) = ("vs_full", &slot_targets[..]);
+        let bounds = render(
+            "bucket depth range",
+            cam_layout,
+            "vs_position",
+            "fs_bounds",
+            &[target(RANGE_FORMAT)],
+        );
+        let count = render(
+            "bucket count",
+            main_layout,
+            "vs_position",
+            "fs_count",
+            &silent,
+        );
+        let (route, second, hist_pass) = match cfg.kind {
+            Kind::Uniform { .. } => (
+                render("bdp route", main_layout, full, "fs_route", slots),
+                None,
+                None,
+            ),
+            Kind::TwoPass => (
+                render("bdp2 first", main_layout, full, "fs_first", slots),
+                Some(render(
+                    "bdp2 second",
+                    second_layout,
+                    full,
+                    "fs_second",
+                    slots,
+                )),
+                None,
+            ),
+            Kind::Adaptive { .. } => (
+                render("adp route", main_layout, full, "fs_route", slots),
+                None,
+                Some(render(
+                    "adp histogram",
+                    main_layout,
+                    full,
+                    "fs_hist",
+                    &silent,
+                )),
+            ),
+        };
+        let compute = |label: &str, pl: &wgpu::PipelineLayout, entry: &str| {
+            compute_pipeline(gpu, label, pl, module, entry, declared, false)
+        };
+        let resolve = compute("bucket resolve", resolve_layout, "resolve");
+        let equalise = matches!(cfg.kind, Kind::Adaptive { .. })
+            .then(|| compute("adp equalise", main_layout, "equalise"));
+        Passes {
+            bounds,
+            count,
+            route,
+            second,
+            hist_pass,
+            equalise,
+            resolve,
+        }
     }
 }
 
