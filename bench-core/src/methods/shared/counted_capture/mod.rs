@@ -44,7 +44,7 @@ use crate::effects::{EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::gpu_util::{check_storage_size, compute_pipeline, read_vec, shader, STORAGE_RW};
-use crate::methods::shared::bind::{pipeline_layout, Bindings, Kind as B, Res};
+use crate::methods::shared::bind::{mesh_buffers, pipeline_layout, Bindings, Kind as B, Res};
 use crate::methods::{Capture, Expected, FrameStats, Prepared};
 use crate::record::Flag;
 use crate::timing::GpuTimer;
@@ -182,6 +182,81 @@ struct Layout {
     pipeline: wgpu::PipelineLayout,
 }
 
+/// Scenes the capture cannot take: more pixels than one scan dispatch, or more triangles than
+/// a coverage-mask tag can name. Ok: the scan blocks.
+fn check_scene(scene: &GpuScene, v: Variants) -> Result<u64> {
+    let px = scene.pixels() as u64;
+    let nblocks = px.div_ceil(SCAN_BLOCK);
+    if nblocks > MAX_GROUPS as u64 {
+        return Err(CoreError::Param(format!(
+            "compute_abuffer scans at most {} pixels, not {px}",
+            MAX_GROUPS as u64 * SCAN_BLOCK
+        )));
+    }
+    let ntri = scene.index_count / 3;
+    if v.aa_samples > 1 && ntri >= 1 << MASKED_PRIM_BITS {
+        return Err(CoreError::Param(format!(
+            "compute_abuffer with coverage masks tags primitives in {MASKED_PRIM_BITS} bits: {ntri} triangles are too many"
+        )));
+    }
+    Ok(nblocks)
+}
+
+impl Layout {
+    /// The module (with `replay`'s kernel), its one bind group's table and pipeline layout.
+    fn new(gpu: &Gpu, replay: Option<&Replay>) -> Layout {
+        let extra = replay.map_or(String::new(), |r| format!("{REPLAY_WGSL}\n{}", r.wgsl));
+        let src = format!("{WGSL}\n{DF32_WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}\n{extra}");
+        let module = shader(gpu, "compute_abuffer", &src);
+        // Camera; the mesh (positions, normals, colours, object ids, indices); offsets,
+        // fragments, work, image; sizes; clip buffer.
+        let mut rows = vec![B::Camera];
+        rows.extend([B::StorageRo; 5]);
+        rows.extend([B::Storage; 4]);
+        rows.extend([B::Uniform, B::Storage]);
+        let table = Bindings::seq(gpu, "compute_abuffer", wgpu::ShaderStages::COMPUTE, &rows);
+        let pipeline = pipeline_layout(gpu, "compute_abuffer", &[&table.layout]);
+        Layout {
+            module,
+            table,
+            pipeline,
+        }
+    }
+}
+
+/// A prepare-time count: clears the offsets and `counted`, runs `jobs` (label, dispatches),
+/// waits, and reads back the counters at the head of `counted`.
+fn sizing_count(
+    gpu: &Gpu,
+    bind: &wgpu::BindGroup,
+    [offs, counted]: [&wgpu::Buffer; 2],
+    jobs: &[(&str, &[(&wgpu::ComputePipeline, (u32, u32))])],
+) -> Result<Vec<u32>> {
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    enc.clear_buffer(offs, 0, None);
+    enc.clear_buffer(counted, 0, None);
+    for (label, job) in jobs {
+        dispatch(&mut enc, None, label, bind, job);
+    }
+    gpu.queue.submit([enc.finish()]);
+    read_vec::<u32>(gpu, counted, COUNTERS as usize)
+}
+
+/// The fragment array for `total` counted fragments: (capacity, buffer); Err where the slot
+/// indices or the adapter's binding limit cannot hold it.
+fn fragment_buffer(gpu: &Gpu, alloc: &mut AllocCounter, total: u64) -> Result<(u64, wgpu::Buffer)> {
+    let capacity = total.max(1);
+    if capacity >= u32::MAX as u64 {
+        return Err(CoreError::OutOfMemory(format!(
+            "compute_abuffer: {total} fragments do not fit 32-bit slot indices"
+        )));
+    }
+    check_storage_size(gpu, "compute_abuffer fragments", capacity * FRAG_BYTES)?;
+    let usage = wgpu::BufferUsages::STORAGE;
+    let frags = alloc.buffer(gpu, "abuffer fragments", capacity * FRAG_BYTES, usage);
+    Ok((capacity, frags))
+}
+
 /// The resolve, or a replay kernel in its place (the ideal-order twins). A replay runs
 /// single-sample, so the override defaults (one sample, 31 primitive bits) are its tag layout.
 fn resolve_kernel(
@@ -283,36 +358,10 @@ impl PreparedAbuffer {
     ) -> Result<Self> {
         let d = &gpu.device;
         let px = scene.pixels() as u64;
-        let nblocks = px.div_ceil(SCAN_BLOCK);
-        if nblocks > MAX_GROUPS as u64 {
-            return Err(CoreError::Param(format!(
-                "compute_abuffer scans at most {} pixels, not {px}",
-                MAX_GROUPS as u64 * SCAN_BLOCK
-            )));
-        }
+        let nblocks = check_scene(scene, v)?;
         let ntri = scene.index_count / 3;
-        if v.aa_samples > 1 && ntri >= 1 << MASKED_PRIM_BITS {
-            return Err(CoreError::Param(format!(
-                "compute_abuffer with coverage masks tags primitives in {MASKED_PRIM_BITS} bits: {ntri} triangles are too many"
-            )));
-        }
         let nvert = (scene.positions.size() / 12) as u32;
-        let extra = replay.map_or(String::new(), |r| format!("{REPLAY_WGSL}\n{}", r.wgsl));
-        let src = format!("{WGSL}\n{DF32_WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}\n{extra}");
-        let module = shader(gpu, "compute_abuffer", &src);
-        // Camera; the mesh (positions, normals, colours, object ids, indices); offsets,
-        // fragments, work, image; sizes; clip buffer.
-        let mut rows = vec![B::Camera];
-        rows.extend([B::StorageRo; 5]);
-        rows.extend([B::Storage; 4]);
-        rows.extend([B::Uniform, B::Storage]);
-        let table = Bindings::seq(gpu, "compute_abuffer", wgpu::ShaderStages::COMPUTE, &rows);
-        let pipeline = pipeline_layout(gpu, "compute_abuffer", &[&table.layout]);
-        let l = Layout {
-            module,
-            table,
-            pipeline,
-        };
+        let l = Layout::new(gpu, replay);
         let sizes = |capacity: u64, big_cap: u64, chunk_cap: u64| Sizes {
             ntri,
             npix: px as u32,
@@ -364,46 +413,24 @@ impl PreparedAbuffer {
             |big: u64, chunks: u64| COUNTERS + nblocks + 2 * big.max(1) + chunks.max(1);
         let listing_bytes = work_words(ntri as u64, 0) * 4;
         check_storage_size(gpu, "compute_abuffer work", listing_bytes)?;
-        let listing = scratch.buffer(
-            gpu,
-            "abuffer big-triangle listing (sizing)",
-            listing_bytes,
-            STORAGE_RW,
-        );
+        let label = "abuffer big-triangle listing (sizing)";
+        let listing = scratch.buffer(gpu, label, listing_bytes, STORAGE_RW);
         let dummy = scratch.buffer(gpu, "abuffer fragments (sizing)", 8, STORAGE_RW);
         let images = effect.effect.image_count();
         let image_bytes = px * 16 * images as u64;
         let dummy_image = scratch.buffer(gpu, "abuffer image (sizing)", 16, STORAGE_RW);
         let bind_with = |frags: &wgpu::Buffer, work: &wgpu::Buffer, image: &wgpu::Buffer| {
-            let s = scene;
-            let mesh = [
-                &s.positions,
-                &s.normals,
-                &s.colors,
-                &s.object_ids,
-                &s.indices,
-            ];
-            let mut bufs = vec![&s.camera];
-            bufs.extend(mesh);
+            let mut bufs = vec![&scene.camera];
+            bufs.extend(mesh_buffers(scene));
             bufs.extend([&offs, frags, work, image, &sizes_buf, &clipv]);
             let res: Vec<Res> = bufs.into_iter().map(Res::Buf).collect();
             l.table.group(gpu, &res)
         };
         set_sizes(sizes(0, ntri as u64, 0));
         let listing_bind = bind_with(&dummy, &listing, &dummy_image);
-        let mut enc = d.create_command_encoder(&Default::default());
-        enc.clear_buffer(&offs, 0, None);
-        enc.clear_buffer(&listing, 0, None);
-        dispatch(&mut enc, None, "sizing: transform", &listing_bind, &pre);
-        dispatch(
-            &mut enc,
-            None,
-            "sizing: list",
-            &listing_bind,
-            &[(&count.small, small_groups)],
-        );
-        gpu.queue.submit([enc.finish()]);
-        let c = read_vec::<u32>(gpu, &listing, COUNTERS as usize)?;
+        let small = [(&count.small, small_groups)];
+        let jobs = [("sizing: transform", &pre[..]), ("sizing: list", &small)];
+        let c = sizing_count(gpu, &listing_bind, [&offs, &listing], &jobs)?;
         let (nbig, nchunks) = (c[0] as u64, c[6] as u64);
         drop(listing_bind);
         drop(listing);
@@ -416,38 +443,19 @@ impl PreparedAbuffer {
         set_sizes(sizes(0, big_cap, chunk_cap));
         let big_groups = groups_2d(nchunks as u32);
         let sizing_bind = bind_with(&dummy, &work, &dummy_image);
-        let mut enc = d.create_command_encoder(&Default::default());
-        enc.clear_buffer(&offs, 0, None);
-        enc.clear_buffer(&work, 0, None);
-        dispatch(&mut enc, None, "sizing: transform", &sizing_bind, &pre);
-        dispatch(
-            &mut enc,
-            None,
-            "sizing: count",
-            &sizing_bind,
-            &[(&count.small, small_groups), (&count.big, big_groups)],
-        );
+        let counts = [(&count.small, small_groups), (&count.big, big_groups)];
         let scan_jobs: Vec<_> = scan.iter().zip(scan_groups).collect();
-        dispatch(&mut enc, None, "sizing: scan", &sizing_bind, &scan_jobs);
-        gpu.queue.submit([enc.finish()]);
-        let c = read_vec::<u32>(gpu, &work, COUNTERS as usize)?;
+        let jobs = [
+            ("sizing: transform", &pre[..]),
+            ("sizing: count", &counts),
+            ("sizing: scan", &scan_jobs),
+        ];
+        let c = sizing_count(gpu, &sizing_bind, [&offs, &work], &jobs)?;
         let total = c[4] as u64;
         drop(sizing_bind);
         drop((dummy, dummy_image));
 
-        let capacity = total.max(1);
-        if capacity >= u32::MAX as u64 {
-            return Err(CoreError::OutOfMemory(format!(
-                "compute_abuffer: {total} fragments do not fit 32-bit slot indices"
-            )));
-        }
-        check_storage_size(gpu, "compute_abuffer fragments", capacity * FRAG_BYTES)?;
-        let frags = alloc.buffer(
-            gpu,
-            "abuffer fragments",
-            capacity * FRAG_BYTES,
-            wgpu::BufferUsages::STORAGE,
-        );
+        let (capacity, frags) = fragment_buffer(gpu, &mut alloc, total)?;
         let image = alloc.buffer(gpu, "abuffer image", image_bytes, STORAGE_RW);
         let bind = bind_with(&frags, &work, &image);
         set_sizes(sizes(capacity, big_cap, chunk_cap));
