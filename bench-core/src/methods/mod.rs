@@ -36,13 +36,15 @@
 //! work, and `readback`). Nothing assumes a render pass: a compute-only method only has to fill
 //! the same [`Capture`]. Antialiasing (`aa`, `aa_capture`: `crate::aa`) is declared per method:
 //! `depth_peel` (per sample), `wboit` (both), `compute_abuffer` (coverage masks), each of them
-//! also under `ssaa2x2` (`ssaa`), `linked_list` (a list per sample, or coverage-mask compact
+//! also under `ssaa2x2` (`shared::ssaa`), `linked_list` (a list per sample, or coverage-mask compact
 //! nodes, and `ssaa2x2`), `kbuffer_atomic` (k slots per sample, and `ssaa2x2`; no coverage
 //! k-buffer: its k nearest per pixel have no per-sample rule), and `stochastic` (MSAA by
 //! construction);
 //! the rest are `skipped` rows with the reason. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL;
-//! `effects.wgsl` ([`FOLD_WGSL`]) is the effects fold, and `packing` the float colour packing
-//! shared with the bucket methods. The approximate (continuum) methods' per-pixel rules have CPU
+//! `effects.wgsl` ([`FOLD_WGSL`]) is the effects fold. Pieces several methods build on (k slots,
+//! the counted capture, tails, buckets, packing, the bind table) live in [`shared`], named for
+//! what they are; no method folder imports another (tested: `tests/method_graph.rs`), and the
+//! yardsticks are [`floors`]. The approximate (continuum) methods' per-pixel rules have CPU
 //! twins in [`crate::oit`], which `Prepared::judge` runs on the reference fragments to fill
 //! `Capture.definition` (judged into `*_vs_k`).
 

@@ -5,7 +5,7 @@
 //! the effects fold. Exact (up to the colour packing) when no two fragments share a bucket;
 //! otherwise fragments collide and are counted (`collision_rate`, flag `collision`).
 //! `bucket_pairing = paired` keeps the nearest and the farthest fragment of each bucket (two
-//! channels per bucket, so at most 16 buckets). Shared machinery and CPU twins: `methods::bucket`.
+//! channels per bucket, so at most 16 buckets). Shared machinery and CPU twins: `methods::shared::bucket`.
 
 use super::shared::bucket::{self, Config, Kind, PreparedBucket};
 use super::{Method, Prepared};

@@ -6,7 +6,7 @@
 //! only without a return value, and the insertion needs it).
 //!
 //! `tail = blend` (default `drop`): the payload pass returns every fragment that was not
-//! captured to the blended tail (methods/tail), composited behind the k in the resolve.
+//! captured to the blended tail (methods/shared/tail), composited behind the k in the resolve.
 //! `keep = first` (default `nearest`): one pass instead of keys + payload, in which the first k
 //! fragments to arrive claim the slots (an atomic counter per pixel; which fragments are "first"
 //! is the GPU's order, judged against primitive order); the resolve sorts them. The hazard judge
@@ -19,7 +19,7 @@
 //! not of each sample, a rule with no per-sample definition to judge it by.
 //!
 //! Effects: every effect of the fold, on slots of the effect's payload or everything
-//! (`specialisation`), as `kbuffer_rmw` (`kbuffer_rmw::entry`); antialiasing is offered for
+//! (`specialisation`), as `kbuffer_rmw` (`shared::kslots::entry`); antialiasing is offered for
 //! transparency only (an averaged per-sample fold of another effect has no judged truth here).
 
 use super::shared::axes::SPECIALISATION;

@@ -15,7 +15,7 @@
 //! the insertion rule on the CPU, applied one fragment at a time (what a hazard-free run keeps).
 //!
 //! `tail = blend` (default `drop`): the fragment that falls out of a pixel (rejected, or the
-//! farthest kept one evicted by a nearer one) is returned to the blended tail (methods/tail).
+//! farthest kept one evicted by a nearer one) is returned to the blended tail (methods/shared/tail).
 //! `keep = first` (default `nearest`): a full pixel takes no more fragments, so the first k to
 //! arrive stay (the hazard judge then does not apply: its truth is the k nearest).
 //!

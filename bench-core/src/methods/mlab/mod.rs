@@ -18,7 +18,7 @@
 //!
 //! Axes: `layers` = k (1–16); `tail = merge | drop | blend`: `merge` is MLAB (default); `drop` and
 //! `blend` replace the merge by dropping the farthest layer or blending it into an out-of-order
-//! tail (methods/tail), which keeps the k nearest (the twin `oit::tail_blend`, keep = nearest).
+//! tail (methods/shared/tail), which keeps the k nearest (the twin `oit::tail_blend`, keep = nearest).
 //! Fragments beyond k per pixel are reported: `overflow_pixels`, and `fragments_dropped` /
 //! `fragments_tailed` (merges are counted in the notes).
 //!
