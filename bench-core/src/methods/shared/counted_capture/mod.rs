@@ -224,13 +224,16 @@ impl Layout {
     }
 }
 
+/// A kernel and its workgroups (x, y).
+type Job<'a> = (&'a wgpu::ComputePipeline, (u32, u32));
+
 /// A prepare-time count: clears the offsets and `counted`, runs `jobs` (label, dispatches),
 /// waits, and reads back the counters at the head of `counted`.
 fn sizing_count(
     gpu: &Gpu,
     bind: &wgpu::BindGroup,
     [offs, counted]: [&wgpu::Buffer; 2],
-    jobs: &[(&str, &[(&wgpu::ComputePipeline, (u32, u32))])],
+    jobs: &[(&str, &[Job])],
 ) -> Result<Vec<u32>> {
     let mut enc = gpu.device.create_command_encoder(&Default::default());
     enc.clear_buffer(offs, 0, None);
