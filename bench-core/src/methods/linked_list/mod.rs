@@ -41,7 +41,7 @@
 use wgpu::util::DeviceExt;
 
 use super::shared::bind::{
-    mesh_buffers, pipeline_layout, pipeline_layout_gaps, Bindings, Kind as B, Res, FC,
+    mesh_buffers, pipeline_layout, pipeline_layout_gaps, Bindings, Kind as B, Res, FC, FLOAT,
 };
 use super::shared::counted_capture::{MASKED_PRIM_BITS, VISIBILITY_WGSL};
 use super::shared::store::storage_pass_with;
@@ -512,14 +512,13 @@ impl PreparedList {
         let raster_layout = pipeline_layout(gpu, "linked_list append", &[&table.layout]);
         // tail = blend: the tail textures as group 2 of the resolve only (the append pass
         // renders into them).
-        let tail_bgl = c.tail.then(|| {
-            d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("linked_list tail"),
-                entries: &TailTargets::layout_entries(0, wgpu::ShaderStages::COMPUTE),
-            })
-        });
+        let tail_rows = TailTargets::rows(0, B::Texture(FLOAT));
+        let tail_table = c
+            .tail
+            .then(|| Bindings::new(gpu, "linked_list tail", cs, &tail_rows));
         let mesh_layout = mesh_table.as_ref().map(|t| &t.layout);
-        let groups = [Some(&table.layout), mesh_layout, tail_bgl.as_ref()];
+        let tail_layout = tail_table.as_ref().map(|t| &t.layout);
+        let groups = [Some(&table.layout), mesh_layout, tail_layout];
         let resolve_layout = pipeline_layout_gaps(gpu, "linked_list resolve", &groups);
         let shared = shared_constants(&c, coverage);
         let mut raster_constants = vec![("TILED", flag(c.counted))];
@@ -583,13 +582,9 @@ impl PreparedList {
         let mesh_bind = mesh_table
             .as_ref()
             .map(|t| t.group(gpu, &mesh_buffers(scene).map(Res::Buf)));
-        let tail = tail_bgl.as_ref().map(|l| {
+        let tail = tail_table.as_ref().map(|table| {
             let t = TailTargets::new(gpu, &mut alloc, scene);
-            let b = d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("linked_list tail"),
-                layout: l,
-                entries: &t.bind_entries(0),
-            });
+            let b = table.group(gpu, &t.views());
             (t, b)
         });
         let overhead = alloc.bytes - node_buffer_bytes;
