@@ -779,11 +779,27 @@ struct RenderJob {
     gpu: GpuArgs,
 }
 
+/// A render's width or height, checked against the limit suites have
+/// (`scenarios::suite::MAX_SIDE`): a usage error naming the option, before any GPU work.
+fn check_side(what: &str, side: Option<u32>) -> Result<()> {
+    let max = scenarios::suite::MAX_SIDE;
+    match side {
+        Some(s) if !(1..=max).contains(&s) => Err(usage(format!(
+            "{what} {s} is out of range 1..={max} (the largest side a suite accepts)"
+        ))),
+        _ => Ok(()),
+    }
+}
+
 fn render(job: &RenderJob) -> Result<()> {
     use bench_core::image_io;
     use scenarios::camera::CameraFile;
-    // Everything that can be checked without a GPU is, first: the scene's parameters and file,
-    // the methods, and each method's axes (a misspelt axis is an error, not a silent default).
+    // Everything that can be checked without a GPU is, first: the sizes, the scene's parameters
+    // and file, the methods, and each method's axes (a misspelt axis is an error, not a silent
+    // default).
+    for (what, given) in [("--width", job.width), ("--height", job.height)] {
+        check_side(what, given)?;
+    }
     let scene_problems = job.spec.check();
     if !scene_problems.is_empty() {
         let lines: Vec<String> = scene_problems.iter().map(|e| e.to_string()).collect();
@@ -818,6 +834,9 @@ fn render(job: &RenderJob) -> Result<()> {
             std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
         let cam: CameraFile = serde_json::from_str(&text)
             .with_context(|| format!("{}: not a camera JSON", path.display()))?;
+        for (what, side) in [("width", cam.width), ("height", cam.height)] {
+            check_side(&format!("{}: {what}", path.display()), Some(side))?;
+        }
         cam.apply(&mut scene.camera)
             .map_err(|why| anyhow::anyhow!("{}: {why}", path.display()))?;
         // The matrix holds the aspect ratio: a different size would stretch the image.
@@ -834,9 +853,6 @@ fn render(job: &RenderJob) -> Result<()> {
             }
         }
         (w, h) = (cam.width, cam.height);
-    }
-    if w == 0 || h == 0 {
-        bail!("width and height must be at least 1 (got {w}x{h})");
     }
     let world_from_object = if job.spec.generator == "obj" {
         scenarios::obj::world_from_file(&job.spec)?
@@ -858,6 +874,14 @@ fn render(job: &RenderJob) -> Result<()> {
     }
     let need_gpu = job.png.is_some() || job.reference_out.is_some();
     let lists = Some(bench_core::reference::rasterize(&scene, w, h));
+    if lists.as_ref().is_some_and(|l| l.total_fragments() == 0) {
+        // Not an error (an empty view is a valid question), but never silent: every image of
+        // it is the background, and every method "matches" it.
+        eprintln!(
+            "mfx: warning: scene {} covers no pixel at {w}x{h} from this camera: every image is the background",
+            job.spec.label()
+        );
+    }
     if let (Some(dir), Some(lists)) = (&job.reference_out, &lists) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         std::fs::write(dir.join("camera.json"), &cam_json)?;

@@ -131,6 +131,133 @@ fn render_refuses_a_misspelt_axis_and_an_unknown_scene_parameter() {
 }
 
 #[test]
+fn render_sizes_are_checked_like_a_suites_and_exit_2_before_any_gpu_work() {
+    let d = tmp("render-size");
+    let png = d.join("x.png");
+    let png = png.to_str().unwrap();
+    let max = scenarios::suite::MAX_SIDE;
+    for (opt, v) in [
+        ("--width", (max + 1).to_string()),
+        ("--width", "0".to_string()),
+        ("--height", "100000".to_string()),
+    ] {
+        let o = mfx(&["render", "--scene", "quads", opt, &v, "--png", png]);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{opt} {v}: {t}");
+        assert!(
+            t.contains(&format!("{opt} {v}")) && t.contains(&format!("1..={max}")),
+            "names the option and the limit: {t}"
+        );
+    }
+    // A camera file's size is held to the same limit.
+    let cam = d.join("cam.json");
+    let o = mfx(&[
+        "render",
+        "--scene",
+        "quads",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--camera-out",
+        cam.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let json = std::fs::read_to_string(&cam).unwrap();
+    std::fs::write(&cam, json.replace("\"width\": 8", "\"width\": 0")).unwrap();
+    let o = mfx(&[
+        "render",
+        "--scene",
+        "quads",
+        "--camera-in",
+        cam.to_str().unwrap(),
+        "--png",
+        png,
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("width 0 is out of range"), "{}", text(&o));
+    assert!(!std::path::Path::new(png).exists());
+}
+
+#[test]
+fn a_mesh_that_covers_no_pixel_is_a_warning_not_silence() {
+    // Three collinear vertices: a finite extent (normalisable) and a triangle of no area.
+    let d = tmp("no-pixel");
+    let obj = d.join("line.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n").unwrap();
+    let cam = d.join("cam.json");
+    let o = mfx(&[
+        "render",
+        "--obj",
+        obj.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--camera-out",
+        cam.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("warning") && err.contains("covers no pixel"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_mesh_at_1e38_is_placed_in_view_not_collapsed() {
+    // The file: in f32 the normalising scale underflowed to 0, world_from_object was
+    // all zeros and every image was empty, "matching" an empty truth.
+    let d = tmp("huge");
+    let obj = d.join("huge.obj");
+    std::fs::write(
+        &obj,
+        "v -1e38 -1e38 0\nv 1e38 -1e38 0\nv 0 1e38 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let cam = d.join("cam.json");
+    let o = mfx(&[
+        "render",
+        "--obj",
+        obj.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--camera-out",
+        cam.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(!text(&o).contains("covers no pixel"), "{}", text(&o));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&cam).unwrap()).unwrap();
+    let m = &json["world_from_object"][0];
+    let scale = m[0][0].as_f64().unwrap();
+    assert!(
+        (scale * 1e38 - 1.0 / 2f64.sqrt()).abs() < 1e-6,
+        "x scale 1/radius (radius √2 · 1e38): {m}"
+    );
+}
+
+#[test]
+fn check_reports_the_problems_of_every_table_at_once() {
+    let d = tmp("every-table");
+    let file = d.join("three.toml");
+    std::fs::write(
+        &file,
+        "name = \"three\"\nbogus = 1\n[timing]\nmax_noise = 5\n[[study]]\nkind = \"methods\"\nmethods = [\"depth_pel\"]\n[[study.scenes]]\ngenerator = \"quadz\"\n",
+    )
+    .unwrap();
+    let o = mfx(&["check", file.to_str().unwrap()]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{t}");
+    for word in ["'bogus'", "[timing]: 'max_noise'", "= depth_pel", "= quadz"] {
+        assert!(t.contains(word), "{word} in:\n{t}");
+    }
+}
+
+#[test]
 fn builtin_suites_check_clean_and_list_says_what_they_are() {
     let o = mfx(&["check", "smoke", "default", "effects", "stability_ci"]);
     assert!(o.status.success(), "{}", text(&o));

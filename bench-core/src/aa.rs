@@ -43,7 +43,8 @@ pub const AA_CAPTURE: Axis = Axis::choice(
     "MSAA capture: sample (sample shading, one fragment per covered sample) | coverage (one fragment per pixel with its coverage mask, resolved per sample)",
     "sample",
     &["sample", "coverage"],
-);
+)
+.only_when(&AA, &["msaa2", "msaa4", "msaa8"]);
 
 /// A point's antialiasing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

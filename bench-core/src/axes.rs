@@ -18,6 +18,17 @@ pub struct Axis {
     /// What this axis means for the method or study that declares it.
     pub doc: &'static str,
     pub kind: ValueKind,
+    /// When the declarer reads this axis only for some values of another ([`Axis::only_when`]);
+    /// `None`: always.
+    pub when: Option<When>,
+}
+
+/// The condition under which an axis is read: another axis of the same declarer has one of
+/// `values` (as written in a suite).
+#[derive(Clone, Copy, Debug)]
+pub struct When {
+    pub axis: &'static str,
+    pub values: &'static [&'static str],
 }
 
 impl Axis {
@@ -26,6 +37,7 @@ impl Axis {
             col,
             doc,
             kind: ValueKind::Int { default, min, max },
+            when: None,
         }
     }
     pub const fn float(col: Col, doc: &'static str, default: f64, min: f64, max: f64) -> Axis {
@@ -33,6 +45,7 @@ impl Axis {
             col,
             doc,
             kind: ValueKind::Float { default, min, max },
+            when: None,
         }
     }
     pub const fn bool(col: Col, doc: &'static str, default: bool) -> Axis {
@@ -40,6 +53,7 @@ impl Axis {
             col,
             doc,
             kind: ValueKind::Bool { default },
+            when: None,
         }
     }
     pub const fn choice(
@@ -52,7 +66,32 @@ impl Axis {
             col,
             doc,
             kind: ValueKind::Choice { default, choices },
+            when: None,
         }
+    }
+    /// Free text (`default` or none), checked by its declarer's `validate`.
+    pub const fn text(col: Col, doc: &'static str, default: Option<&'static str>) -> Axis {
+        Axis {
+            col,
+            doc,
+            kind: ValueKind::Text { default },
+            when: None,
+        }
+    }
+    /// This axis is read only when `other` (declared by the same method or study) has one of
+    /// `values`: elsewhere its values would repeat one configuration, which `check` reports.
+    pub const fn only_when(mut self, other: &Axis, values: &'static [&'static str]) -> Axis {
+        self.when = Some(When {
+            axis: other.col.name,
+            values,
+        });
+        self
+    }
+    /// Where `point` leaves this axis unread: the other axis's setting (`pool=counted`).
+    pub fn ignored_at(&self, point: &Point) -> Option<String> {
+        let w = self.when?;
+        let v = point.values().get(w.axis)?.to_string();
+        (!w.values.contains(&v.as_str())).then(|| format!("{}={v}", w.axis))
     }
     pub fn name(&self) -> &'static str {
         self.col.name
@@ -64,7 +103,15 @@ impl Axis {
             .default_value()
             .map(|v| v.to_string())
             .unwrap_or_else(|| "none".into());
-        format!("{} (default {d}; {})", self.name(), self.kind.expected())
+        let when = self
+            .when
+            .map(|w| format!("; read only with {} = {}", w.axis, w.values.join(" | ")))
+            .unwrap_or_default();
+        format!(
+            "{} (default {d}; {}{when})",
+            self.name(),
+            self.kind.expected()
+        )
     }
 }
 
@@ -211,6 +258,26 @@ mod tests {
         assert!(e
             .iter()
             .any(|m| m.contains("fast") && m.contains("adaptive")));
+    }
+
+    #[test]
+    fn an_axis_read_only_with_some_values_of_another_says_where_it_is_ignored() {
+        const K: Axis = Axis::int(cols::LAYERS, "k", 8, 1, 64).only_when(&MODE, &["adaptive"]);
+        let at = |mode: Option<&str>| {
+            let mut given = Params::new();
+            if let Some(m) = mode {
+                given.set("bucket_mode", ParamValue::Str(m.into()));
+            }
+            K.ignored_at(&Point::resolve(&[K, MODE], &given).unwrap())
+        };
+        assert_eq!(at(Some("adaptive")), None);
+        assert_eq!(at(Some("uniform")).as_deref(), Some("bucket_mode=uniform"));
+        // The default counts: an unset mode is `uniform`, which ignores k.
+        assert_eq!(at(None).as_deref(), Some("bucket_mode=uniform"));
+        assert_eq!(
+            LAYERS.ignored_at(&Point::resolve(&[LAYERS], &Params::new()).unwrap()),
+            None
+        );
     }
 
     #[test]

@@ -31,20 +31,32 @@ pub fn check_suite(suite: &Suite) -> Vec<Problem> {
     out
 }
 
-/// Loads a suite and checks it: `Err` holds every problem (structure and meaning).
+/// Loads a suite and checks it: `Err` holds every problem (structure and meaning) of every
+/// table.
 pub fn load(name_or_path: &str) -> Result<Suite, Vec<Problem>> {
-    match Suite::load(name_or_path) {
-        Ok(s) => {
-            let p = check_suite(&s);
-            if p.is_empty() {
-                Ok(s)
-            } else {
-                Err(p)
-            }
-        }
-        Err(SceneError::Problems(p)) => Err(p),
-        Err(e) => Err(vec![Problem::new(name_or_path, "suite", "", e.to_string())]),
+    let (text, source) = Suite::read(name_or_path)
+        .map_err(|e| vec![Problem::new(name_or_path, "suite", "", e.to_string())])?;
+    match check_text(&text, &source) {
+        (Some(suite), problems) if problems.is_empty() => Ok(suite),
+        (_, problems) => Err(problems),
     }
+}
+
+/// Parses and checks a suite's text: every problem of every table at once. A structural problem
+/// (`Suite::parse_partial`) leaves its value at the default, and the rest is still checked.
+pub fn check_text(text: &str, source: &str) -> (Option<Suite>, Vec<Problem>) {
+    let (suite, mut problems) = Suite::parse_partial(text, source);
+    if let Some(suite) = &suite {
+        // A timing table's own problems are already named by the parse: its plan's check would
+        // only say the same again.
+        let parsed = problems.clone();
+        problems.extend(check_suite(suite).into_iter().filter(|p| {
+            !(p.key.is_empty()
+                && ["[timing]", "[software]"].contains(&p.table.as_str())
+                && parsed.iter().any(|q| q.table == p.table))
+        }));
+    }
+    (suite, problems)
 }
 
 fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
@@ -224,10 +236,13 @@ fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
     }
     // Cross-axis rules of every point, once the values themselves are right.
     if out.len() == before {
-        if let Err(msgs) = studies::points(study, spec) {
-            for m in msgs {
-                out.push(Problem::new(file, &table, "", m));
+        match studies::points(study, spec) {
+            Err(msgs) => {
+                for m in msgs {
+                    out.push(Problem::new(file, &table, "", m));
+                }
             }
+            Ok(points) => ignored_axes(file, &table, spec, study, &points, out),
         }
     }
 
@@ -253,6 +268,60 @@ fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
                     out.push(p);
                 }
             }
+        }
+    }
+}
+
+/// An axis swept (two values or more) for a method where the method does not read it (its
+/// declaration says when it does: [`Axis::only_when`]): its points would repeat one
+/// configuration, and their noise would read as the axis's effect.
+fn ignored_axes(
+    file: &str,
+    table: &str,
+    spec: &StudySpec,
+    study: &dyn Study,
+    points: &[studies::PointSpec],
+    out: &mut Vec<Problem>,
+) {
+    let mut said = BTreeSet::new();
+    for p in points {
+        let swept = scenarios::suite::axes_for_method(spec, &p.method);
+        for a in study.axes(&p.method) {
+            if swept.get(a.name()).is_none_or(|v| v.len() < 2) {
+                continue;
+            }
+            let Some(with) = a.ignored_at(&p.point) else {
+                continue;
+            };
+            if !said.insert((p.method.clone(), a.name(), with.clone())) {
+                continue;
+            }
+            let w = a.when.expect("ignored_at needs a condition");
+            let own = spec
+                .method_axes
+                .get(&p.method)
+                .is_some_and(|o| o.contains_key(a.name()));
+            let tn = if own {
+                format!("{table} › method_axes.{}", p.method)
+            } else {
+                format!("{table} › axes")
+            };
+            out.push(Problem::new(
+                file,
+                &tn,
+                a.name(),
+                format!(
+                    "axis {} has no effect on method {} (with {with}): it is read only with {} = {}, so its values would repeat one configuration; sweep it where it is read (method_axes.{} with {} = {}) or give {} one value",
+                    a.name(),
+                    p.method,
+                    w.axis,
+                    w.values.join(" | "),
+                    p.method,
+                    w.axis,
+                    w.values.join(" | "),
+                    p.method,
+                ),
+            ));
         }
     }
 }
@@ -291,6 +360,14 @@ fn scene_problems(file: &str, table: &str, e: SceneError) -> Vec<Problem> {
         }
         SceneError::Obj { path, why } => {
             vec![Problem::new(file, table, "path", format!("model file: {why}")).value(path)]
+        }
+        SceneError::ModelLine { path, line, why } => {
+            vec![Problem::new(
+                file,
+                table,
+                "path",
+                format!("{path}:{line}: {why}"),
+            )]
         }
         // A model a script fetches is not a suite problem: until it is fetched, its rows are
         // skipped with the command to run (`runner`).

@@ -3,7 +3,7 @@
 //! passes. (The CLI's exit code 2 and "nothing written" are tested in the root `tests/cli.rs`.)
 
 use bench_core::check::check_suite;
-use scenarios::{problem, Problem, SceneError, Suite};
+use scenarios::{problem, Problem, Suite};
 
 /// A one-study methods suite around `study` lines and `scene` lines.
 fn suite(top: &str, study: &str, scene: &str) -> String {
@@ -12,13 +12,9 @@ fn suite(top: &str, study: &str, scene: &str) -> String {
     )
 }
 
-/// All problems of a suite text: the parse's, else the check's.
+/// All problems of a suite text: the parse's and the check's.
 fn problems(text: &str) -> Vec<Problem> {
-    match Suite::parse(text, "typo.toml") {
-        Ok(s) => check_suite(&s),
-        Err(SceneError::Problems(p)) => p,
-        Err(e) => panic!("not a problem list: {e}"),
-    }
+    bench_core::check::check_text(text, "typo.toml").1
 }
 
 /// Asserts exactly one problem mentions every word of `words`, and returns its text.
@@ -204,7 +200,7 @@ fn model_files_are_checked_missing_directory_no_faces_short_faces() {
     let short = obj("short.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n");
     one(
         &suite("", PEEL, &scene(&short)),
-        &["'path'", "line 5", "face with 2 vertices"],
+        &["'path'", "short.obj:5: ", "face with 2 vertices"],
     );
     let ok = obj("ok.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     assert!(problems(&suite("", PEEL, &scene(&ok))).is_empty());
@@ -234,8 +230,12 @@ fn unknown_study_kind_and_option_typos_are_named() {
 fn every_problem_is_reported_at_once() {
     let text = "name = \"t\"\nbogus = 1\n[software]\nmax_triangle = 1\n[[study]]\nkind = \"methods\"\nmethods = [\"nope\"]\naxes = { max_layer = [1] }\n[[study.scenes]]\ngenerator = \"quadz\"\n";
     let p = problems(text);
-    // The parse reports the structural ones; the rest need a parsed suite.
-    assert!(p.len() >= 2, "{}", problem::report(&p));
+    assert_eq!(
+        p.len(),
+        5,
+        "unknown top-level key, unknown [software] key, and the study's three:\n{}",
+        problem::report(&p)
+    );
     let text = text
         .replace("bogus = 1\n", "")
         .replace("[software]\nmax_triangle = 1\n", "");
@@ -246,6 +246,89 @@ fn every_problem_is_reported_at_once() {
         "unknown method, unknown axis, unknown generator:\n{}",
         problem::report(&p)
     );
+}
+
+/// An axis swept where a method does not read it (its declaration says when it does) would
+/// present noise as the axis's effect: refused, naming the method and the setting.
+#[test]
+fn an_axis_swept_where_a_method_ignores_it_is_a_problem() {
+    let list = "methods = [\"kbuffer_rmw\", \"linked_list\"]";
+    let m = one(
+        &suite("", &format!("{list}\naxes = {{ layers = [4, 8] }}"), QUADS),
+        &[
+            "'layers'",
+            "no effect on method linked_list (with pool=counted)",
+        ],
+    );
+    assert!(m.contains("study 0 (methods) › axes"), "{m}");
+    // Where the method reads it, or with one value, it is fine.
+    for axes in [
+        "axes = { layers = [4, 8] }\nmethod_axes = { linked_list = { pool = [\"fixed\"] } }",
+        "axes = { layers = [4, 8] }\nmethod_axes = { linked_list = { layers = [16] } }",
+        "axes = { layers = [8] }",
+    ] {
+        let p = problems(&suite("", &format!("{list}\n{axes}"), QUADS));
+        assert!(p.is_empty(), "{axes}:\n{}", problem::report(&p));
+    }
+    // Both pools swept: layers is ignored by the counted half only, and said once.
+    let m = one(
+        &suite(
+            "",
+            "methods = [\"linked_list\"]\naxes = { pool = [\"counted\", \"fixed\"], layers = [4, 8], pool_slack = [0, 50] }",
+            QUADS,
+        ),
+        &["'layers'", "with pool=counted"],
+    );
+    assert!(m.contains("pool = fixed"), "{m}");
+    one(
+        &suite(
+            "",
+            "methods = [\"linked_list\"]\naxes = { pool = [\"counted\", \"fixed\"], layers = [4, 8], pool_slack = [0, 50] }",
+            QUADS,
+        ),
+        &["'pool_slack'", "with pool=fixed"],
+    );
+    // The effects' own parameters: sigma is read by translucency and fresnel only.
+    one(
+        &suite(
+            "",
+            &format!("{PEEL}\naxes = {{ effect = [\"transparency\", \"translucency\"], sigma = [0.5, 2.0] }}"),
+            QUADS,
+        ),
+        &["'sigma'", "depth_peel (with effect=transparency)"],
+    );
+    // The MSAA capture mode is not read without MSAA.
+    one(
+        &suite(
+            "",
+            "methods = [\"linked_list\"]\naxes = { aa = [\"none\", \"msaa4\"], aa_capture = [\"sample\", \"coverage\"] }",
+            QUADS,
+        ),
+        &["'aa_capture'", "with aa=none"],
+    );
+}
+
+/// A problem in `[timing]`, `[software]` or the top level does not hide the study's and the
+/// scene's: every table's problems come at once, each once.
+#[test]
+fn problems_in_timing_software_and_top_level_do_not_hide_the_studies() {
+    let text = "name = \"t\"\nresolutions = [[0, 64]]\n[timing]\nmin_samples = 10\nmax_samples = 5\n[software]\nmax_noise = 2.0\n[[study]]\nkind = \"methods\"\nmethods = [\"depth_pel\"]\n[[study.scenes]]\ngenerator = \"quads\"\ndepth_complexity = 0\n";
+    let p = problems(text);
+    let all = problem::report(&p);
+    for (table, key) in [
+        ("top level", "resolutions"),
+        ("[timing]", "min_samples"),
+        ("[software]", "max_noise"),
+        ("study 0 (methods)", "methods"),
+        ("study 0 (methods) › scene 0 (quads)", "depth_complexity"),
+    ] {
+        let n = p
+            .iter()
+            .filter(|x| x.table == table && x.key == key)
+            .count();
+        assert_eq!(n, 1, "{table} '{key}' once in:\n{all}");
+    }
+    assert_eq!(p.len(), 5, "{all}");
 }
 
 /// The suite example in ARCHITECTURE.md is a valid suite (docs that drift are refused here), and

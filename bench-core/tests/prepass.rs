@@ -70,6 +70,12 @@ fn prepass_rows_are_complete_and_impossible_points_are_skipped() {
             }
             if m == "prepass_cpu" {
                 assert!(!get(r, cols::CPU_LIGHT_MS).is_empty());
+                // The chapter's "no added frame of latency", measured per sample: the light
+                // buffer is ready before the main view that reads it is done, within the frame.
+                let ready: f64 = get(r, cols::LIGHT_READY_MS).parse().unwrap();
+                let latency: f64 = get(r, cols::LATENCY_MS).parse().unwrap();
+                assert!(ready > 0.0 && ready <= latency, "{ready} vs {latency}");
+                assert_eq!(get(r, cols::LIT_WITHIN_FRAME), "true");
             }
             ok += 1;
         }

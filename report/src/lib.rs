@@ -6,6 +6,7 @@
 
 pub mod ab;
 pub mod bands;
+pub mod bounds;
 pub mod calibrate;
 pub mod cells;
 pub mod charts;
@@ -70,6 +71,13 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
     }
     // The sources' published figures beside ours (empty unless a seeds-* suite ran).
     extra.push_str(&reproduction::section(&runs));
+    // What bounds each point (slowest pass, floor, bandwidth): also as markdown for RUN.md.
+    extra.push_str(&bounds::section(&runs));
+    let md = bounds::markdown(&runs);
+    if !md.is_empty() {
+        let p = out.join("bounds.md");
+        std::fs::write(&p, md).with_context(|| format!("writing {}", p.display()))?;
+    }
     let flip = flip::section(dir, &out)?;
     let page = html::page(&runs, &sections, &extra, &flip);
     let path = out.join("index.html");

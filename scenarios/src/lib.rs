@@ -45,6 +45,13 @@ pub enum SceneError {
     /// A model file (OBJ or PLY) that cannot be used.
     #[error("model file '{path}': {why}")]
     Obj { path: String, why: String },
+    /// A model file with a problem on one line (`file:line: what is wrong`).
+    #[error("{path}:{line}: {why}")]
+    ModelLine {
+        path: String,
+        line: usize,
+        why: String,
+    },
     /// A model file that is not here but that a script of this repository fetches: the suite is
     /// valid, and its rows are skipped with this reason until the file is fetched.
     #[error("model file '{path}' not found: fetch it with `{fetch}`")]

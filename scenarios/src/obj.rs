@@ -23,20 +23,38 @@ pub fn fetch_command(path: &str) -> Option<&'static str> {
 }
 
 /// Loads one model file into a single mesh: a PLY file (`.ply`, `.ply.gz`) through
-/// [`crate::ply`], anything else as OBJ.
+/// [`crate::ply`], anything else as OBJ. Warnings ([`load_with_warnings`]) go to stderr, once
+/// per file and message.
 ///
 /// OBJ: all models merged, normals computed where missing; vertex alpha is the opacity of the
 /// face's MTL material ([`material_alpha`]), 1 where the OBJ names no material or its MTL file is
-/// absent.
+/// absent (a warning).
 pub fn load(path: &Path) -> Result<Mesh> {
+    let (mesh, warnings) = load_with_warnings(path)?;
+    // A suite checks, builds and places the same file several times: say each thing once.
+    static SAID: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    let mut said = SAID.lock().unwrap_or_else(|e| e.into_inner());
+    for w in warnings {
+        if !said.contains(&w) {
+            eprintln!("warning: {w}");
+            said.push(w);
+        }
+    }
+    Ok(mesh)
+}
+
+/// [`load`], returning its warnings (`file:line: what`) instead of printing them: a missing MTL
+/// file (every face opaque).
+pub fn load_with_warnings(path: &Path) -> Result<(Mesh, Vec<String>)> {
+    let name = path.display().to_string();
     let err = |why: String| SceneError::Obj {
-        path: path.display().to_string(),
+        path: name.clone(),
         why,
     };
     if !path.exists() {
         if let Some(fetch) = fetch_command(&path.to_string_lossy()) {
             return Err(SceneError::ModelMissing {
-                path: path.display().to_string(),
+                path: name.clone(),
                 fetch: fetch.into(),
             });
         }
@@ -46,9 +64,16 @@ pub fn load(path: &Path) -> Result<Mesh> {
         return Err(err("is a directory, not a model file".into()));
     }
     if crate::ply::is_ply(&path.to_string_lossy()) {
-        return crate::ply::load(path).map_err(err);
+        let mesh = crate::ply::load(path).map_err(err)?;
+        check_extent(&mesh).map_err(err)?;
+        return Ok((mesh, Vec::new()));
     }
-    scan_faces(path).map_err(err)?;
+    let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
+    let scanned = scan(&text).map_err(|(line, why)| SceneError::ModelLine {
+        path: name.clone(),
+        line,
+        why,
+    })?;
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -56,13 +81,24 @@ pub fn load(path: &Path) -> Result<Mesh> {
     };
     let (models, materials) =
         tobj::load_obj(path, &opts).map_err(|e| err(format!("malformed OBJ: {e}")))?;
+    let mut warnings = Vec::new();
     let alphas = match materials {
         Ok(materials) => materials
             .iter()
             .map(|m| material_alpha(m).map_err(|why| err(format!("material '{}': {why}", m.name))))
             .collect::<Result<Vec<f32>>>()?,
         // No MTL file next to the OBJ: every face is opaque (alpha 1), as without materials.
-        Err(tobj::LoadError::OpenFileFailed) => Vec::new(),
+        Err(tobj::LoadError::OpenFileFailed) => {
+            let dir = path.parent().unwrap_or(Path::new(""));
+            for (line, lib) in &scanned.mtllibs {
+                if !dir.join(lib).is_file() {
+                    warnings.push(format!(
+                        "{name}:{line}: material library '{lib}' not found: its materials' opacity is not applied (every face opaque)"
+                    ));
+                }
+            }
+            Vec::new()
+        }
         Err(e) => return Err(err(format!("malformed MTL: {e}"))),
     };
     let mut mesh = Mesh::default();
@@ -119,37 +155,183 @@ pub fn load(path: &Path) -> Result<Mesh> {
     if mesh.indices.is_empty() {
         return Err(err("no triangles (no faces found)".into()));
     }
-    Ok(mesh)
+    check_extent(&mesh).map_err(err)?;
+    Ok((mesh, warnings))
 }
 
-/// Reads the file's `f`, `l` and `p` statements before tobj does: a face of fewer than three
-/// vertices is malformed (tobj would drop or mis-triangulate it), and a file with lines or points
-/// but no faces has no triangle to render. Names the line.
-fn scan_faces(path: &Path) -> std::result::Result<(), String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+/// What [`scan`] learns besides the file being well formed: the material libraries it names.
+struct Scanned {
+    /// (line, file name) of each `mtllib`.
+    mtllibs: Vec<(usize, String)>,
+}
+
+/// Reads the file's statements before tobj does, which names no line: numbers that are not
+/// numbers (or overflow the f32 that tobj and the GPU hold), face indices out of range or not
+/// indices, faces of fewer than three vertices (tobj would drop or mis-triangulate them), and a
+/// file with lines or points but no faces (no triangle to render). `Err` is (line, what).
+fn scan(text: &str) -> std::result::Result<Scanned, (usize, String)> {
+    // Totals first: tobj resolves positive indices against the whole file's vertices.
+    let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
+    for line in text.lines() {
+        match line.split_whitespace().next() {
+            Some("v") => nv += 1,
+            Some("vt") => nvt += 1,
+            Some("vn") => nvn += 1,
+            _ => {}
+        }
+    }
+    let number = |t: &str, what: &str| -> std::result::Result<f64, String> {
+        let x: f64 = t
+            .parse()
+            .map_err(|_| format!("{what} '{t}' is not a number"))?;
+        if x.is_finite() && x.abs() > f32::MAX as f64 {
+            return Err(format!(
+                "{what} {t} is outside the f32 range (±{:e}) that the mesh is held in",
+                f32::MAX
+            ));
+        }
+        Ok(x)
+    };
+    let (mut sv, mut svt, mut svn) = (0usize, 0usize, 0usize);
     let (mut faces, mut lines, mut points) = (0usize, 0usize, 0usize);
+    let mut mtllibs = Vec::new();
     for (n, line) in text.lines().enumerate() {
+        let at = |why: String| (n + 1, format!("{why}: '{}'", line.trim()));
         let mut it = line.split_whitespace();
-        match it.next() {
-            Some("f") => {
-                let verts = it.take_while(|t| !t.starts_with('#')).count();
-                if verts < 3 {
-                    return Err(format!(
-                        "line {}: face with {verts} vertices (a face needs at least 3): '{}'",
-                        n + 1,
-                        line.trim()
-                    ));
+        let Some(head) = it.next() else { continue };
+        let rest: Vec<&str> = it.collect();
+        match head {
+            "v" | "vt" | "vn" => {
+                let need = if head == "vt" { 2 } else { 3 };
+                if rest.len() < need {
+                    return Err(at(format!(
+                        "'{head}' needs {need} numbers, has {}",
+                        rest.len()
+                    )));
                 }
-                faces += 1;
+                for t in &rest[..need] {
+                    number(t, "coordinate").map_err(at)?;
+                }
+                if head == "v" {
+                    // tobj reads x y z, then w (a divisor) or r g b.
+                    match rest.len() - 3 {
+                        0 => {}
+                        1 => {
+                            if number(rest[3], "w").map_err(at)? == 0.0 {
+                                return Err(
+                                    at("w is 0 (the coordinates are divided by it)".into()),
+                                );
+                            }
+                        }
+                        3 => {
+                            for t in &rest[3..] {
+                                number(t, "colour").map_err(at)?;
+                            }
+                        }
+                        k => {
+                            return Err(at(format!(
+                                "'v' takes x y z and then w or r g b, not {k} more values"
+                            )))
+                        }
+                    }
+                }
+                match head {
+                    "v" => sv += 1,
+                    "vt" => svt += 1,
+                    _ => svn += 1,
+                }
             }
-            Some("l") => lines += 1,
-            Some("p") => points += 1,
+            "f" | "l" | "p" => {
+                if head == "f" && rest.len() < 3 {
+                    return Err(at(format!(
+                        "face with {} vertices (a face needs at least 3)",
+                        rest.len()
+                    )));
+                }
+                if head != "p" {
+                    for r in &rest {
+                        face_vertex(
+                            r,
+                            [
+                                (nv, sv, "vertex"),
+                                (nvt, svt, "texture coordinate"),
+                                (nvn, svn, "normal"),
+                            ],
+                        )
+                        .map_err(at)?;
+                    }
+                }
+                match head {
+                    "f" => faces += 1,
+                    "l" => lines += 1,
+                    _ => points += 1,
+                }
+            }
+            "mtllib" => {
+                // tobj takes the rest of the line as one file name (names may hold spaces).
+                let lib = line
+                    .trim()
+                    .split_once(char::is_whitespace)
+                    .map(|(_, l)| l.trim());
+                if let Some(lib) = lib.filter(|l| !l.is_empty()) {
+                    mtllibs.push((n + 1, lib.to_string()));
+                }
+            }
             _ => {}
         }
     }
     if faces == 0 {
+        return Err((
+            0,
+            format!(
+                "no triangles: no faces ('f' lines) found ({lines} line and {points} point elements, which have no area)"
+            ),
+        ));
+    }
+    Ok(Scanned { mtllibs })
+}
+
+/// One `v[/vt[/vn]]` of a face: each given index an integer, not 0, within the file's elements
+/// of its kind (`(total in the file, defined so far, name)`; a negative index counts back from
+/// the last one defined so far).
+fn face_vertex(r: &str, kinds: [(usize, usize, &str); 3]) -> std::result::Result<(), String> {
+    let parts: Vec<&str> = r.split('/').collect();
+    if parts.len() > 3 {
+        return Err(format!("face vertex '{r}' has more than v/vt/vn"));
+    }
+    for (i, t) in parts.iter().enumerate() {
+        let (total, so_far, what) = kinds[i];
+        if t.is_empty() {
+            if i == 0 {
+                return Err(format!("face vertex '{r}' has no vertex index"));
+            }
+            continue;
+        }
+        let x: i64 = t
+            .parse()
+            .map_err(|_| format!("{what} index '{t}' is not an integer"))?;
+        let ok = match x {
+            0 => false,
+            x if x > 0 => x as u64 <= total as u64,
+            x => x.unsigned_abs() <= so_far as u64,
+        };
+        if !ok {
+            return Err(if x < 0 {
+                format!("{what} index {x} out of range (-{so_far}..=-1 counts back over the {so_far} defined before this line)")
+            } else {
+                format!("{what} index {x} out of range (1..={total}: the file has {total})")
+            });
+        }
+    }
+    Ok(())
+}
+
+/// What normalising needs: a finite extent above zero (the loaders refuse non-finite values).
+fn check_extent(mesh: &Mesh) -> std::result::Result<(), String> {
+    let first = mesh.positions.first().copied().unwrap_or_default();
+    if mesh.positions.iter().all(|p| *p == first) {
         return Err(format!(
-            "no triangles: no faces ('f' lines) found ({lines} line and {points} point elements, which have no area)"
+            "zero extent: every vertex is at {first:?}, so the mesh cannot be scaled into view"
         ));
     }
     Ok(())
@@ -191,29 +373,41 @@ pub fn face_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
         .collect()
 }
 
-/// Centres the mesh at the origin and scales it into the unit sphere.
+/// Centres the mesh at the origin and scales it into the unit sphere. Computed in f64: a mesh
+/// at ±1e38 has a radius whose square overflows f32 (its scale would round to 0).
 pub fn normalise(mesh: &mut Mesh) {
     let (centre, s) = normalisation(mesh);
     for p in &mut mesh.positions {
-        *p = ((Vec3::from(*p) - centre) * s).into();
+        *p = ((Vec3::from(*p).as_dvec3() - centre) * s).as_vec3().into();
     }
 }
 
-/// The centre and scale `normalise` applies: p' = (p − centre) · scale.
-fn normalisation(mesh: &Mesh) -> (Vec3, f32) {
-    let (lo, hi) = mesh.bounds();
+/// The centre and scale `normalise` applies: p' = (p − centre) · scale, in f64. A mesh of one
+/// point (refused by the loaders) keeps scale 1.
+fn normalisation(mesh: &Mesh) -> (DVec3, f64) {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for p in &mesh.positions {
+        let p = Vec3::from(*p).as_dvec3();
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
     let centre = (lo + hi) * 0.5;
     let radius = mesh
         .positions
         .iter()
-        .map(|p| (Vec3::from(*p) - centre).length())
-        .fold(0.0f32, f32::max);
-    let s = if radius > 0.0 { 1.0 / radius } else { 1.0 };
+        .map(|p| (Vec3::from(*p).as_dvec3() - centre).length())
+        .fold(0.0f64, f64::max);
+    let s = if radius > 0.0 && radius.is_finite() {
+        1.0 / radius
+    } else {
+        1.0
+    };
     (centre, s)
 }
 
-fn affine(centre: Vec3, s: f32) -> DMat4 {
-    DMat4::from_scale(DVec3::splat(s as f64)) * DMat4::from_translation(-centre.as_dvec3())
+fn affine(centre: DVec3, s: f64) -> DMat4 {
+    DMat4::from_scale(DVec3::splat(s)) * DMat4::from_translation(-centre)
 }
 
 /// Grid offset of instance `k` of `n` in `instance_grid`.
@@ -317,4 +511,164 @@ pub fn build(spec: &SceneSpec) -> Result<Scene> {
     let mut scene = Scene::new(spec.clone(), mesh, frame_sphere(1.0, 45.0));
     scene.objects = objects;
     Ok(scene)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{ParamValue, Params};
+
+    /// Writes `text` as `name` in a fresh directory of this test (`tag`) and returns its path.
+    fn file(tag: &str, name: &str, text: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("mfx-objunit-{}-{tag}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    fn spec(path: &Path) -> SceneSpec {
+        SceneSpec::new(
+            "obj",
+            Params::new().with("path", ParamValue::Str(path.display().to_string())),
+        )
+    }
+
+    fn load_err(tag: &str, text: &str) -> (String, String) {
+        let p = file(tag, "m.obj", text);
+        let e = load(&p).map(|_| ()).unwrap_err().to_string();
+        (p.display().to_string(), e)
+    }
+
+    #[test]
+    fn a_mesh_at_1e38_is_normalised_in_f64_not_collapsed_to_a_point() {
+        // In f32 the radius's square overflows, the scale rounds to 0 and every vertex lands on
+        // the origin (an empty image that "matches").
+        let p = file(
+            "huge",
+            "m.obj",
+            "v -1e38 -1e38 0\nv 1e38 -1e38 0\nv 0 1e38 0\nv 0 0 1e38\nf 1 2 3\nf 1 2 4\n",
+        );
+        let scene = spec(&p).build().unwrap();
+        let r = scene
+            .mesh
+            .positions
+            .iter()
+            .map(|p| Vec3::from(*p).length())
+            .fold(0.0f32, f32::max);
+        assert!((r - 1.0).abs() < 1e-5, "normalised radius {r}");
+        let w = world_from_file(&spec(&p)).unwrap();
+        let m = w[0];
+        assert!(
+            m.determinant().abs() > 0.0,
+            "world_from_object is singular: {m}"
+        );
+        // The matrix takes the file's vertex to the built one (f32 rounding apart).
+        let got = m.transform_point3(DVec3::new(0.0, 1e38, 0.0));
+        let want = Vec3::from(scene.mesh.positions[2]).as_dvec3();
+        assert!((got - want).length() < 1e-6, "{got} vs {want}");
+    }
+
+    #[test]
+    fn what_cannot_be_normalised_is_refused_with_the_reason() {
+        let (p, e) = load_err("point", "v 2 2 2\nv 2 2 2\nv 2 2 2\nf 1 2 3\n");
+        assert!(e.contains(&p) && e.contains("zero extent"), "{e}");
+        let (p, e) = load_err("f32", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n");
+        assert!(
+            e.contains(&format!("{p}:2: ")) && e.contains("f32 range"),
+            "{e}"
+        );
+        let (p, e) = load_err("inf", "v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n");
+        assert!(e.contains(&p), "{e}");
+    }
+
+    #[test]
+    fn obj_errors_name_the_file_and_line() {
+        let cases = [
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n",
+                4,
+                "vertex index 7 out of range",
+            ),
+            (
+                "v 0 0 0\nv 1 x 0\nv 0 1 0\nf 1 2 3\n",
+                2,
+                "coordinate 'x' is not a number",
+            ),
+            (
+                "v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n",
+                2,
+                "needs 3 numbers, has 2",
+            ),
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 a\n",
+                4,
+                "vertex index 'a' is not an integer",
+            ),
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n",
+                4,
+                "vertex index 0 out of range",
+            ),
+            (
+                "v 0 0 0\nf -1 -2 -3\nv 1 0 0\nv 0 1 0\n",
+                2,
+                "vertex index -2 out of range (-1..=-1",
+            ),
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//2 3//1\n",
+                5,
+                "normal index 2 out of range",
+            ),
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n",
+                5,
+                "face with 2 vertices",
+            ),
+        ];
+        for (i, (text, line, what)) in cases.into_iter().enumerate() {
+            let (p, e) = load_err(&format!("line{i}"), text);
+            assert!(
+                e.starts_with(&format!("{p}:{line}: ")) && e.contains(what),
+                "case {i}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_missing_mtl_file_is_a_warning_naming_the_line() {
+        let text =
+            "# a triangle\nmtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n";
+        let p = file("mtl", "m.obj", text);
+        let (mesh, w) = load_with_warnings(&p).unwrap();
+        assert_eq!(mesh.triangle_count(), 1);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].starts_with(&format!("{}:2: ", p.display())) && w[0].contains("gone.mtl"),
+            "{w:?}"
+        );
+        // With its MTL file there, nothing to say.
+        std::fs::write(p.with_file_name("gone.mtl"), "newmtl red\nd 0.5\n").unwrap();
+        let (_, w) = load_with_warnings(&p).unwrap();
+        assert!(w.is_empty(), "{w:?}");
+    }
+
+    #[test]
+    fn ply_coordinates_beyond_f32_are_refused_and_1e38_is_normalised() {
+        let ply = |x: &str| {
+            format!("ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n{x} 0 0\n0 {x} 0\n3 0 1 2\n")
+        };
+        let p = file("ply", "big.ply", &ply("1e300"));
+        let e = load(&p).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains("f32 range"), "{e}");
+        let p = file("ply", "huge.ply", &ply("1e38"));
+        let scene = spec(&p).build().unwrap();
+        let r = scene
+            .mesh
+            .positions
+            .iter()
+            .map(|p| Vec3::from(*p).length())
+            .fold(0.0f32, f32::max);
+        assert!((r - 1.0).abs() < 1e-5, "normalised radius {r}");
+    }
 }

@@ -186,10 +186,17 @@ fn to_mesh(verts: &[Vertex], faces: &[Face]) -> Result<Mesh, String> {
     let mut mesh = Mesh::default();
     for (i, v) in verts.iter().enumerate() {
         let p = v.p.map(|c| c as f32);
-        if p.iter().any(|c| !c.is_finite()) {
+        if v.p.iter().any(|c| !c.is_finite()) {
             return Err(format!(
                 "element 'vertex' {i}: non-finite coordinate {:?}",
                 v.p
+            ));
+        }
+        if p.iter().any(|c| !c.is_finite()) {
+            return Err(format!(
+                "element 'vertex' {i}: coordinate {:?} is outside the f32 range (±{:e}) that the mesh is held in",
+                v.p,
+                f32::MAX
             ));
         }
         mesh.positions.push(p);

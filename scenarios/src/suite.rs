@@ -131,6 +131,12 @@ impl Suite {
     /// Loads a suite by file path or by name (`scenarios/suites/<name>.toml`, then built-ins).
     /// A path that exists but is not a readable file is named as such.
     pub fn load(name_or_path: &str) -> Result<Suite> {
+        let (text, source) = Suite::read(name_or_path)?;
+        Suite::parse(&text, &source)
+    }
+
+    /// A suite's text and where it came from (its file, or `(built-in) NAME`).
+    pub fn read(name_or_path: &str) -> Result<(String, String)> {
         let p = Path::new(name_or_path);
         let candidates = [
             p.to_path_buf(),
@@ -148,11 +154,11 @@ impl Suite {
                     path: c.display().to_string(),
                     why: e.to_string(),
                 })?;
-                return Suite::parse(&text, &c.display().to_string());
+                return Ok((text, c.display().to_string()));
             }
         }
         if let Some((_, text)) = BUILTIN.iter().find(|(n, _)| *n == name_or_path) {
-            return Suite::parse(text, &format!("(built-in) {name_or_path}"));
+            return Ok((text.to_string(), format!("(built-in) {name_or_path}")));
         }
         Err(SceneError::Suite {
             path: name_or_path.into(),
@@ -171,12 +177,20 @@ impl Suite {
     /// wrong types, empty arrays) as `Err(SceneError::Problems)`. What depends on the study
     /// kinds, methods and generators is checked by `bench_core::check`.
     pub fn parse(text: &str, source: &str) -> Result<Suite> {
+        match Suite::parse_partial(text, source) {
+            (Some(s), problems) if problems.is_empty() => Ok(s),
+            (_, problems) => Err(SceneError::Problems(problems)),
+        }
+    }
+
+    /// Parses what can be parsed: the suite with each bad value left at its default and each
+    /// unreadable study left out (`None` only when the text is not TOML), and every structural
+    /// problem. A checker reads the rest of the suite on from here, so one bad key in
+    /// `[timing]` does not hide the studies' problems.
+    pub fn parse_partial(text: &str, source: &str) -> (Option<Suite>, Vec<Problem>) {
         let mut problems = Vec::new();
         let suite = parse_into(text, source, &mut problems);
-        match suite {
-            Some(s) if problems.is_empty() => Ok(s),
-            _ => Err(SceneError::Problems(problems)),
-        }
+        (suite, problems)
     }
 
     /// The timing a study runs with on this adapter kind: `[timing]`, then `[software]`'s
@@ -201,6 +215,10 @@ impl Suite {
             .unwrap_or_else(|| self.resolutions.clone())
     }
 }
+
+/// The largest width or height a suite or `mfx render` accepts, in pixels (wgpu's
+/// `max_texture_dimension_2d` on the GPUs measured here; larger targets fail to allocate).
+pub const MAX_SIDE: u32 = 16384;
 
 /// Keys a suite may have at the top level.
 pub const TOP_KEYS: &[&str] = &[
@@ -583,8 +601,9 @@ fn resolutions(v: &toml::Value) -> std::result::Result<Vec<(u32, u32)>, String> 
                 .ok_or("each resolution must be [width, height]")?;
             let w = wh[0].as_integer().ok_or("width must be an integer")?;
             let h = wh[1].as_integer().ok_or("height must be an integer")?;
-            if !(1..=16384).contains(&w) || !(1..=16384).contains(&h) {
-                return Err(format!("resolution {w}x{h} out of range 1..=16384"));
+            let max = MAX_SIDE as i64;
+            if !(1..=max).contains(&w) || !(1..=max).contains(&h) {
+                return Err(format!("resolution {w}x{h} out of range 1..={max}"));
             }
             Ok((w as u32, h as u32))
         })

@@ -505,6 +505,30 @@ pub mod cols {
         "cpu_light_ms",
         "median wall-clock ms of the CPU lighting of one frame (threads start to last tile done)",
     );
+    pub const CPU_CULL_MS: Col = Col::new(
+        "cpu_cull_ms",
+        "CPU tile path, one extra frame with phase clocks (wall clock per worker thread, so time a thread is descheduled counts: run with thread_count ≤ free cores): ms summed over worker threads culling lights (tile and sub-tile frusta, normal cone); BF3 gives 1–4 ms of a 40 ms budget",
+    );
+    pub const CPU_UNPACK_MS: Col = Col::new(
+        "cpu_unpack_ms",
+        "CPU tile path, the phase-clock frame: thread-summed ms reading the G-buffer, reconstructing positions and filling the 4×4 quads' SoA lanes",
+    );
+    pub const CPU_SHADE_MS: Col = Col::new(
+        "cpu_shade_ms",
+        "CPU tile path, the phase-clock frame: thread-summed ms in the light loop and the sun",
+    );
+    pub const CPU_PACK_MS: Col = Col::new(
+        "cpu_pack_ms",
+        "CPU tile path, the phase-clock frame: thread-summed ms writing the quads' pixels and reordering tiles into rows",
+    );
+    pub const CPU_PHASES_MS: Col = Col::new(
+        "cpu_phases_ms",
+        "cpu_cull_ms + cpu_unpack_ms + cpu_shade_ms + cpu_pack_ms (thread-summed; with clock reads, so above cpu_light_ms × threads only by their cost)",
+    );
+    pub const SHADE_NS_PER_LIGHT_QUAD: Col = Col::new(
+        "shade_ns_per_light_quad",
+        "CPU tile path, the phase-clock frame: light-loop ns per (light, 4×4 quad) evaluation (sun excluded): the per-light cost BF3 compares for diffuse-only and specular lights",
+    );
     pub const QUAD_SKIP_FRAC: Col = Col::new(
         "quad_skip_frac",
         "CPU path: fraction of (light, 4×4 quad) pairs skipped because all 16 attenuations were 0",
@@ -562,6 +586,14 @@ pub mod cols {
     pub const LATENCY_MS: Col = Col::new(
         "latency_ms",
         "median ms from submitting the pre-pass to the main view's final image being complete",
+    );
+    pub const LIGHT_READY_MS: Col = Col::new(
+        "light_ready_ms",
+        "CPU lighting: median ms from submitting the pre-pass to the CPU-lit light buffer uploaded (before the material pass that reads it is submitted)",
+    );
+    pub const LIT_WITHIN_FRAME: Col = Col::new(
+        "lit_within_frame",
+        "CPU lighting: true when in every kept sample light_ready_ms ≤ latency_ms ≤ that frame's wall time: the frame's own light buffer lit and consumed within the frame (no added frame of latency); measured per sample",
     );
     pub const GPU_GAP_MS: Col = Col::new(
         "gpu_gap_ms",
@@ -1124,6 +1156,12 @@ pub const GROUPS: &[Group] = &[
             cols::CLASS_IDS_PRESENT,
             cols::PERMUTATIONS,
             cols::CPU_LIGHT_MS,
+            cols::CPU_CULL_MS,
+            cols::CPU_UNPACK_MS,
+            cols::CPU_SHADE_MS,
+            cols::CPU_PACK_MS,
+            cols::CPU_PHASES_MS,
+            cols::SHADE_NS_PER_LIGHT_QUAD,
             cols::QUAD_SKIP_FRAC,
             cols::SPEEDUP_VS_NAIVE,
             cols::REL_ERR_MAX,
@@ -1144,6 +1182,8 @@ pub const GROUPS: &[Group] = &[
             cols::FRAME_MS,
             cols::GPU_IDLE_MS,
             cols::LATENCY_MS,
+            cols::LIGHT_READY_MS,
+            cols::LIT_WITHIN_FRAME,
             cols::GPU_GAP_MS,
             cols::GPU_BUSY_IN_GAP_MS,
             cols::MAP_WAIT_MS,

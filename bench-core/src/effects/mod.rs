@@ -226,41 +226,47 @@ pub const SIGMA: Axis = Axis::float(
     1.0,
     0.0,
     f64::MAX,
-);
+)
+.only_when(&EFFECT, &["translucency", "fresnel"]);
 pub const CSG_A: Axis = Axis::int(
     cols::CSG_A,
     "csg_*: object id of operand A",
     0,
     0,
     u32::MAX as i64,
-);
+)
+.only_when(&EFFECT, &["csg_and", "csg_or", "csg_sub"]);
 pub const CSG_B: Axis = Axis::int(
     cols::CSG_B,
     "csg_*: object id of operand B",
     1,
     0,
     u32::MAX as i64,
-);
+)
+.only_when(&EFFECT, &["csg_and", "csg_or", "csg_sub"]);
 pub const DOF_NEAR: Axis = Axis::float(
     cols::DOF_NEAR,
     "dof: view depth between foreground and midground (≤ dof_far)",
     1.0,
     0.0,
     f64::MAX,
-);
+)
+.only_when(&EFFECT, &["dof"]);
 pub const DOF_FAR: Axis = Axis::float(
     cols::DOF_FAR,
     "dof: view depth between midground and background (≥ dof_near)",
     10.0,
     0.0,
     f64::MAX,
-);
+)
+.only_when(&EFFECT, &["dof"]);
 pub const THICKNESS: Axis = Axis::choice(
     cols::THICKNESS,
     "translucency/fresnel thickness arithmetic: naive (running ±z sum) or stable (Kahan pair differences)",
     "stable",
     &["naive", "stable"],
-);
+)
+.only_when(&EFFECT, &["translucency", "fresnel"]);
 
 /// Axes every effect-capable method reads: list them in its `axes()`, validate with
 /// [`EffectConfig::from_point`].

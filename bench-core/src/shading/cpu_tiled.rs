@@ -15,6 +15,12 @@
 //! - `diffuse_skip`: a diffuse-only light (the model's flag) is shaded without the specular
 //!   term; off, the term is evaluated and thrown away (the cost the flag saves).
 //!
+//! `phase_times`: BF3's per-phase costs (its slides give culling as 1–4 ms of a 40 ms budget),
+//! summed over worker threads: cull (tile and sub-tile frusta, the cone cull), unpack (G-buffer
+//! reads, position reconstruction, the quads' SoA lanes), shade (the light loop, then the sun)
+//! and pack (writing each quad's pixels, then the reorder into rows). Off by default: the clock
+//! reads (a few per 4×4 quad) would be in the timed frame.
+//!
 //! Deterministic for any thread count, bitwise: a pixel's value depends only on its own lanes
 //! and on the light list, which keeps light index order; which thread shades a tile does not
 //! matter. Output goes to per-tile chunks (no sharing), reordered to rows at the end.
@@ -57,6 +63,8 @@ pub struct CpuOptions {
     /// Light pre-pass output instead of the shaded colour: RGB = Σ diffuse light (sun
     /// included), A = Σ lum(contrib)·spec_term; sky pixels 0.
     pub light_buffer: bool,
+    /// Time the phases ([`Phases`]; see the module doc).
+    pub phase_times: bool,
 }
 
 impl Default for CpuOptions {
@@ -72,6 +80,52 @@ impl Default for CpuOptions {
             diffuse_skip: true,
             keep_lists: false,
             light_buffer: false,
+            phase_times: false,
+        }
+    }
+}
+
+/// Thread-summed nanoseconds per phase of one frame (with `phase_times`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Phases {
+    pub cull: u64,
+    pub unpack: u64,
+    /// The scene's lights (each (light, quad) evaluation counted in `quad_evals`).
+    pub lights: u64,
+    /// The sun, once per quad.
+    pub sun: u64,
+    pub pack: u64,
+}
+
+impl Phases {
+    fn add(&mut self, o: &Phases) {
+        self.cull += o.cull;
+        self.unpack += o.unpack;
+        self.lights += o.lights;
+        self.sun += o.sun;
+        self.pack += o.pack;
+    }
+    /// Shading: the lights and the sun.
+    pub fn shade(&self) -> u64 {
+        self.lights + self.sun
+    }
+    pub fn total(&self) -> u64 {
+        self.cull + self.unpack + self.shade() + self.pack
+    }
+}
+
+/// A stopwatch that adds the time since its last lap to a phase (nothing when off).
+struct Lap(Option<Instant>);
+
+impl Lap {
+    fn start(on: bool) -> Lap {
+        Lap(on.then(Instant::now))
+    }
+    fn lap(&mut self, acc: &mut u64) {
+        if let Some(t) = &mut self.0 {
+            let now = Instant::now();
+            *acc += (now - *t).as_nanos() as u64;
+            *t = now;
         }
     }
 }
@@ -104,6 +158,8 @@ pub struct CpuResult {
     pub cone_tests: u64,
     /// (light, quad) evaluations of diffuse-only lights done without the specular term.
     pub diffuse_skips: u64,
+    /// Per-phase times, thread-summed, when `phase_times`.
+    pub phases: Option<Phases>,
 }
 
 struct TileOut {
@@ -118,6 +174,7 @@ struct TileOut {
     cone_culls: u64,
     cone_tests: u64,
     diffuse_skips: u64,
+    phases: Phases,
 }
 
 /// Lights (with culling spheres for the threshold already in `lights`) on the G-buffer `gb`.
@@ -163,6 +220,8 @@ pub fn shade(
     let mut sub_lists = Vec::new();
     let (mut quad_skips, mut quad_evals, mut spec_skipped_quads, mut quads) = (0, 0, 0, 0);
     let (mut cone_culls, mut cone_tests, mut diffuse_skips) = (0, 0, 0);
+    let mut phases = Phases::default();
+    let mut lap = Lap::start(opts.phase_times);
     for (i, o) in outs.into_iter().enumerate() {
         let o = o.into_inner().unwrap().expect("every tile was taken");
         let (x0, y0) = ((i as u32 % tx) * t, (i as u32 / tx) * t);
@@ -181,7 +240,10 @@ pub fn shade(
         cone_culls += o.cone_culls;
         cone_tests += o.cone_tests;
         diffuse_skips += o.diffuse_skips;
+        phases.add(&o.phases);
     }
+    // The reorder into rows is packing (on this thread, after the workers).
+    lap.lap(&mut phases.pack);
     CpuResult {
         image,
         tile_counts,
@@ -195,6 +257,7 @@ pub fn shade(
         cone_culls,
         cone_tests,
         diffuse_skips,
+        phases: opts.phase_times.then_some(phases),
     }
 }
 
@@ -244,6 +307,8 @@ fn shade_tile(
     let (w, h) = (gb.width, gb.height);
     let tw = rect[2] - rect[0];
     let th = rect[3] - rect[1];
+    let mut lap = Lap::start(opts.phase_times);
+    let mut ph = Phases::default();
     // Positions of the tile's pixels, and the depth range of its non-sky pixels.
     let mut pos = vec![[0.0f32; 3]; (tw * th) as usize];
     let mut zr = (f32::MAX, 0.0f32);
@@ -259,7 +324,9 @@ fn shade_tile(
             zr.1 = zr.1.max(-p[2]);
         }
     }
+    lap.lap(&mut ph.unpack);
     let list = cull(vfc, (w, h), rect, zr, lights, &mut (0..lights.len() as u32));
+    lap.lap(&mut ph.cull);
     let mut out = TileOut {
         pixels: vec![[0.0; 4]; (tw * th) as usize],
         count: list.len() as u32,
@@ -275,6 +342,7 @@ fn shade_tile(
         cone_culls: 0,
         cone_tests: 0,
         diffuse_skips: 0,
+        phases: ph,
     };
     let (sw, sh) = opts.sub.unwrap_or((tw, th));
     let mut sy = 0;
@@ -320,6 +388,7 @@ fn shade_tile(
             } else {
                 sub_list
             };
+            lap.lap(&mut out.phases.cull);
             // 4×4 quads of the sub-tile.
             let mut qy = sub[1];
             while qy < sub[3] {
@@ -340,6 +409,7 @@ fn shade_tile(
                         opts.diffuse_skip,
                         opts.light_buffer,
                         &mut out,
+                        &mut lap,
                     );
                     qx += 4;
                 }
@@ -369,6 +439,7 @@ fn shade_quad(
     diffuse_skip: bool,
     light_buffer: bool,
     out: &mut TileOut,
+    lap: &mut Lap,
 ) {
     const N: usize = 16;
     let mut active = [false; N];
@@ -398,6 +469,7 @@ fn shade_quad(
         norm[k] = (pw[k] + 8.0) / 8.0;
     }
     let no_spec = spec_skip && (0..N).all(|k| !active[k] || gb.spec[gidx[k]] == [0.0; 3]);
+    lap.lap(&mut out.phases.unpack);
     if active.iter().any(|&a| a) {
         out.quads += 1;
         out.nospec += no_spec as u64;
@@ -506,6 +578,7 @@ fn shade_quad(
             }
         }
     }
+    lap.lap(&mut out.phases.lights);
     if let Some((d, c)) = sun {
         for k in 0..N {
             if active[k] {
@@ -513,6 +586,7 @@ fn shade_quad(
             }
         }
     }
+    lap.lap(&mut out.phases.sun);
     for k in 0..N {
         let (x, y) = (q[0] + k as u32 % 4, q[1] + k as u32 / 4);
         if x >= end[0] || y >= end[1] {
@@ -539,6 +613,7 @@ fn shade_quad(
         }
         o[3] = 1.0;
     }
+    lap.lap(&mut out.phases.pack);
 }
 
 /// BF3's normal-cone cull of one region `sub` (tile-relative) of tile `rect`: keeps the lights

@@ -155,6 +155,9 @@ pub struct CpuFrame {
     pub cpu_total_ms: f64,
     /// Submitting the pre-pass to the main view's final image being complete on the GPU.
     pub latency_ms: f64,
+    /// Submitting the pre-pass to the CPU-lit light buffer uploaded (the material pass that
+    /// reads it is submitted right after).
+    pub light_ready_ms: f64,
 }
 
 pub struct PrePass {
@@ -659,6 +662,7 @@ impl Timed for PrePass {
                     ("cpu_light_ms", f.cpu_light_ms),
                     ("map_wait_ms", f.map_wait_ms),
                     ("cpu_total_ms", f.cpu_total_ms),
+                    ("light_ready_ms", f.light_ready_ms),
                 ]);
             }
         }
@@ -761,6 +765,7 @@ impl PrePass {
                 upload(gpu, t, b);
             }
             let cpu_total = t_ready.elapsed().as_secs_f64() * 1e3;
+            let light_ready_ms = t0.elapsed().as_secs_f64() * 1e3;
             let mut enc = gpu.device.create_command_encoder(&Default::default());
             self.encode_second(&mut enc, gscene, timer);
             let idx3 = gpu.queue.submit([enc.finish()]);
@@ -778,6 +783,7 @@ impl PrePass {
                 cpu_light_ms: r.ms,
                 cpu_total_ms: cpu_total,
                 latency_ms: t0.elapsed().as_secs_f64() * 1e3,
+                light_ready_ms,
             });
             return Ok(());
         }

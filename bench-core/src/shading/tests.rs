@@ -287,6 +287,43 @@ fn quad_culls_change_nothing_but_the_work() {
     }
 }
 
+/// BF3's per-phase clocks only observe: the image is bit-identical with them on, every phase
+/// of a lit city takes some time, the phases add up to their total, and without them no
+/// phases are reported (the timed frames carry no clock reads).
+#[test]
+fn phase_clocks_change_nothing_but_report_every_phase() {
+    let s = city(64, false);
+    let r = run(&s, 80, Path::Naive, 0.0, false);
+    let lights = r.setup.gpu_lights(0.0);
+    let shade = |phase_times| {
+        let o = CpuOptions {
+            threads: 2,
+            phase_times,
+            ..Default::default()
+        };
+        cpu_tiled::shade(&r.setup, &r.gb, &lights, &o)
+    };
+    let off = shade(false);
+    assert!(off.phases.is_none());
+    let on = shade(true);
+    assert_eq!(bits(&on.image), bits(&off.image));
+    let ph = on.phases.expect("phases with phase_times");
+    for (name, ns) in [
+        ("cull", ph.cull),
+        ("unpack", ph.unpack),
+        ("lights", ph.lights),
+        ("sun", ph.sun),
+        ("pack", ph.pack),
+    ] {
+        assert!(ns > 0, "{name}: {ph:?}");
+    }
+    assert_eq!(
+        ph.total(),
+        ph.cull + ph.unpack + ph.lights + ph.sun + ph.pack
+    );
+    assert!(on.quad_evals > 0);
+}
+
 fn bits(img: &[[f32; 4]]) -> Vec<[u32; 4]> {
     img.iter().map(|p| p.map(f32::to_bits)).collect()
 }

@@ -11,6 +11,12 @@
 //! (`city(lights=N)`), recorded per row.
 //! `naive` runs first in each group so every row carries `speedup_vs_naive`.
 //!
+//! `cpu_tiled` rows also carry BF3's per-phase costs (`cpu_cull_ms`, `cpu_unpack_ms`,
+//! `cpu_shade_ms`, `cpu_pack_ms`, thread-summed) and the light loop's cost per (light, quad)
+//! evaluation (`shade_ns_per_light_quad`: diffuse-only against specular lights, BF3's "2×+"),
+//! from one extra frame with phase clocks after the timed ones (the clocks stay out of
+//! `cpu_light_ms`).
+//!
 //! Study options: `cpu_reps` (timed CPU frames per point, default 3: a single-thread frame at
 //! 4K is seconds).
 
@@ -251,6 +257,7 @@ impl Study for DeferredStudy {
                     diffuse_skip,
                     keep_lists: false,
                     light_buffer: false,
+                    phase_times: false,
                 };
                 let mut samples = Vec::new();
                 let mut last = None;
@@ -263,6 +270,18 @@ impl Study for DeferredStudy {
                 }
                 let r = last.expect("at least one frame");
                 let st = Stats::of(&samples).unwrap_or_default();
+                let timed = cpu_tiled::shade(
+                    setup,
+                    &gb,
+                    &lights,
+                    &CpuOptions {
+                        phase_times: true,
+                        ..o
+                    },
+                );
+                if let Some(ph) = timed.phases {
+                    set_phases(&mut row, &ph, timed.quad_evals);
+                }
                 // No GPU frame to time: CPU lighting of a G-buffer read back once, timed by its
                 // own fixed count (a single-thread 4K frame takes seconds, too long for the
                 // stopping rule's samples), so the row says that instead of the plan's rule.
@@ -297,7 +316,7 @@ impl Study for DeferredStudy {
                 set_error(&mut row, reference, &r.image);
                 row.set(
                     cols::NOTES,
-                    format!("cpu_reps={cpu_reps}; G-buffer read back once, untimed"),
+                    format!("cpu_reps={cpu_reps}; G-buffer read back once, untimed; cpu_*_ms phases from one more frame with phase clocks"),
                 );
                 emit(i, row)?;
                 continue;
@@ -367,6 +386,22 @@ impl Study for DeferredStudy {
     }
 }
 
+/// The phase-clock frame's columns (ns → ms; per-evaluation cost in ns).
+fn set_phases(row: &mut Row, ph: &cpu_tiled::Phases, evals: u64) {
+    let ms = |ns: u64| ns as f64 * 1e-6;
+    row.set_f(cols::CPU_CULL_MS, ms(ph.cull))
+        .set_f(cols::CPU_UNPACK_MS, ms(ph.unpack))
+        .set_f(cols::CPU_SHADE_MS, ms(ph.shade()))
+        .set_f(cols::CPU_PACK_MS, ms(ph.pack))
+        .set_f(cols::CPU_PHASES_MS, ms(ph.total()));
+    if evals > 0 {
+        row.set_f(
+            cols::SHADE_NS_PER_LIGHT_QUAD,
+            ph.lights as f64 / evals as f64,
+        );
+    }
+}
+
 fn set_tile_stats(row: &mut Row, counts: &[u32]) {
     let n = counts.len().max(1) as f64;
     row.set_f(
@@ -377,6 +412,67 @@ fn set_tile_stats(row: &mut Row, counts: &[u32]) {
         cols::LIGHTS_PER_TILE_MAX,
         counts.iter().max().copied().unwrap_or(0),
     );
+}
+
+#[cfg(test)]
+mod phase_tests {
+    use crate::record::cols;
+
+    /// cpu_tiled rows carry BF3's phases (thread-summed, adding up to cpu_phases_ms) and the
+    /// light loop's cost per evaluation for none and all lights diffuse-only; GPU rows none.
+    #[test]
+    fn cpu_tiled_rows_carry_the_phases_and_the_per_light_cost_64px() {
+        let rows = crate::runner::run_suite(
+            crate::testing::gpu(),
+            r#"
+            resolutions = [[64, 64]]
+            [timing]
+            min_samples = 1
+            max_samples = 1
+            warmup_frames = 0
+            [[study]]
+            kind = "deferred"
+            methods = ["naive", "cpu_tiled"]
+            axes = { thread_count = [2], diffuse_only_frac = [0.0, 1.0] }
+            cpu_reps = 1
+            [[study.scenes]]
+            generator = "city"
+            blocks = 2
+            lights = 48
+        "#,
+            "test",
+        )
+        .unwrap();
+        let f = |r: &crate::record::Row, c| r.get(c).and_then(|v| v.parse::<f64>().ok());
+        let mut cpu = 0;
+        for r in rows
+            .iter()
+            .filter(|r| r.get(cols::STUDY) == Some("deferred"))
+        {
+            let m = r.get(cols::METHOD).unwrap();
+            if m != "cpu_tiled" {
+                assert_eq!(f(r, cols::CPU_CULL_MS), None, "{m}");
+                continue;
+            }
+            cpu += 1;
+            let parts = [
+                cols::CPU_CULL_MS,
+                cols::CPU_UNPACK_MS,
+                cols::CPU_SHADE_MS,
+                cols::CPU_PACK_MS,
+            ]
+            .map(|c| f(r, c).unwrap_or_else(|| panic!("no {c}")));
+            assert!(parts.iter().all(|&p| p > 0.0), "{parts:?}");
+            let total = f(r, cols::CPU_PHASES_MS).unwrap();
+            // Each column is rounded on its own when written.
+            assert!(
+                (parts.iter().sum::<f64>() - total).abs() <= 1e-3 * total,
+                "{parts:?} {total}"
+            );
+            assert!(f(r, cols::SHADE_NS_PER_LIGHT_QUAD).unwrap() > 0.0);
+        }
+        assert_eq!(cpu, 2);
+    }
 }
 
 #[cfg(test)]

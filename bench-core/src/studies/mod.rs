@@ -126,8 +126,19 @@ impl<'a> GroupCtx<'a> {
 
     /// The exact fragment lists of this scene and resolution, computed once per group.
     pub fn reference(&self) -> &FragmentLists {
-        self.reference
-            .get_or_init(|| rasterize(self.scene, self.group.width, self.group.height))
+        self.reference.get_or_init(|| {
+            let lists = rasterize(self.scene, self.group.width, self.group.height);
+            if lists.total_fragments() == 0 {
+                // Every row of this group would compare empty images: valid, never silent.
+                eprintln!(
+                    "warning: scene {} covers no pixel at {}x{}: every image of it is the background",
+                    self.scene.spec.label(),
+                    self.group.width,
+                    self.group.height
+                );
+            }
+            lists
+        })
     }
 
     pub fn has_reference(&self) -> bool {

@@ -81,6 +81,38 @@ fn set_times<T: ?Sized>(row: &mut Row, m: &Measured<T>) {
     if let Some(l) = m.part_median("latency_ms") {
         row.set_f(cols::LATENCY_MS, l);
     }
+    if let Some(r) = m.part_median("light_ready_ms") {
+        row.set_f(cols::LIGHT_READY_MS, r);
+        if let Some(within) = lit_within_frame(m) {
+            row.set(cols::LIT_WITHIN_FRAME, within);
+        }
+    }
+}
+
+/// The light pre-pass chapter's "no added frame of latency", per kept sample: the CPU-lit light
+/// buffer was ready (uploaded) before the main view that reads it finished, and that view
+/// finished within the frame's own wall time (a design that lit frame N while the GPU drew
+/// frame N + 1 would fail the second). `None` where the parts and the kept samples do not
+/// line up one to one (nothing to decide from).
+fn lit_within_frame<T: ?Sized>(m: &Measured<T>) -> Option<bool> {
+    let ready = m.parts.get("light_ready_ms")?;
+    let latency = m.parts.get("latency_ms")?;
+    let wall: Vec<f64> = m
+        .samples
+        .iter()
+        .filter(|s| !s.discarded)
+        .map(|s| s.cpu_ms)
+        .collect();
+    if ready.is_empty() || ready.len() != latency.len() || latency.len() != wall.len() {
+        return None;
+    }
+    Some(
+        ready
+            .iter()
+            .zip(latency)
+            .zip(&wall)
+            .all(|((r, l), w)| r <= l && l <= w),
+    )
 }
 
 impl Study for PrepassStudy {

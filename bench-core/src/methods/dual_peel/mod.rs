@@ -6,12 +6,18 @@
 //! Axes like `depth_peel`: `max_layers` (⌈max_layers/2⌉ peel passes at most; pixels left with
 //! fragments are counted as `overflow_pixels`) and `occlusion_stop` (a count of pixels with
 //! fragments left, read by the CPU after each pass, ends peeling when it reaches 0; otherwise
-//! exactly ⌈max_layers/2⌉ peel passes in one submission). Exact except coplanar ties. The
-//! resolve is front-to-back and back-to-front at once, so it does not use the effects fold.
+//! exactly ⌈max_layers/2⌉ peel passes in one submission). Exact except coplanar ties.
+//!
+//! Effects: transparency on colour layers; translucency and Fresnel (Bavoil's thesis §6.1 reads
+//! no more than depth, facing and a normal) on layers of (signed view depth, normal), folded by
+//! two effects fold states per pixel, one fed nearest first and one farthest first, combined
+//! once (their thickness sums and transmittance products compose; see `dual_peel.wgsl`). CSG
+//! and depth of field are skipped with the reason ([`effect_of`]).
 
 use super::shared::axes::{MAX_LAYERS, OCCLUSION_STOP};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
+use crate::effects::{self, Effect, EffectConfig, Payload, FOLD_STATE_BYTES, FOLD_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
@@ -19,7 +25,7 @@ use crate::gpu_util::{
 };
 use crate::record::Flag;
 use crate::timing::GpuTimer;
-use crate::Result;
+use crate::{CoreError, Result};
 
 const WGSL: &str = include_str!("dual_peel.wgsl");
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
@@ -29,23 +35,60 @@ const BIG: f64 = 3.0e38;
 
 pub struct DualPeel;
 
+/// The point's effect, or why dual peeling cannot fold it: csg's first-surface search and dof's
+/// nearest-per-partition both need what the front sweep has not yet seen when the back sweep
+/// meets it (csg: the inside/outside state; dof: colour beside the depth, 5 channels in a
+/// 4-channel layer).
+fn effect_of(point: &Point) -> std::result::Result<EffectConfig, String> {
+    let e = EffectConfig::from_point(point)?;
+    match e.effect {
+        Effect::Transparency | Effect::Translucency | Effect::Fresnel => Ok(e),
+        other => Err(format!(
+            "dual_peel folds transparency, translucency and fresnel (they compose from a front and a back sweep): {} needs the front sweep's state or colour beside the depth at the back sweep's layer, which a 4-channel layer and two accumulations cannot keep",
+            other.name()
+        )),
+    }
+}
+
+/// Whether the layers hold (signed view depth, normal) for the effects fold.
+fn fx(e: &EffectConfig) -> bool {
+    e.effect != Effect::Transparency
+}
+
 impl Method for DualPeel {
     fn name(&self) -> &'static str {
         "dual_peel"
     }
     fn describe(&self) -> &'static str {
-        "Bavoil & Myers 2008: dual depth peeling (RG32F MAX blending), exact up to max_layers; ⌈n/2⌉+1 geometry passes; 2×8 B depth + 2×16 B layers + 2×16 B accumulation + 20 B per pixel"
+        "Bavoil & Myers 2008: dual depth peeling (RG32F MAX blending), exact up to max_layers; ⌈n/2⌉+1 geometry passes; 2×8 B depth + 2×16 B layers + 2×16 B accumulation (2×64 B fold states for translucency and fresnel) + 20 B per pixel"
     }
     fn exact(&self) -> bool {
         true
     }
     fn axes(&self) -> Vec<Axis> {
-        vec![MAX_LAYERS, OCCLUSION_STOP]
+        let mut v = vec![MAX_LAYERS, OCCLUSION_STOP];
+        v.extend_from_slice(effects::AXES);
+        v
+    }
+    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+        EffectConfig::from_point(point).map(|_| ())
+    }
+    fn payload(&self, point: &Point) -> Option<&'static str> {
+        let e = effect_of(point).ok()?;
+        Some(
+            if fx(&e) {
+                Payload::DEPTH_NORMAL
+            } else {
+                Payload::RGBA
+            }
+            .name(),
+        )
     }
     fn required_features(&self) -> wgpu::Features {
         wgpu::Features::FLOAT32_BLENDABLE
     }
-    fn supports(&self, gpu: &Gpu, _: &Point) -> std::result::Result<(), String> {
+    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        effect_of(point)?;
         for f in [DEPTH_FORMAT, LAYER_FORMAT] {
             if !gpu.renderable(f) {
                 return Err(format!("{f:?} is not renderable on this adapter"));
@@ -56,11 +99,13 @@ impl Method for DualPeel {
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let max_layers = point.int(&MAX_LAYERS) as u32;
         let occlusion_stop = point.bool(&OCCLUSION_STOP);
+        let effect = effect_of(point).map_err(CoreError::Param)?;
         Ok(Box::new(PreparedDual::new(
             gpu,
             scene,
             max_layers.div_ceil(2),
             occlusion_stop,
+            &effect,
         )))
     }
 }
@@ -88,10 +133,24 @@ struct PreparedDual {
 }
 
 impl PreparedDual {
-    fn new(gpu: &Gpu, scene: &GpuScene, max_peels: u32, occlusion_stop: bool) -> Self {
+    fn new(
+        gpu: &Gpu,
+        scene: &GpuScene,
+        max_peels: u32,
+        occlusion_stop: bool,
+        effect: &EffectConfig,
+    ) -> Self {
         let d = &gpu.device;
         let (w, h) = (scene.width, scene.height);
-        let module = shader(gpu, "dual_peel", WGSL);
+        let module = shader(gpu, "dual_peel", &format!("{FOLD_WGSL}\n{WGSL}"));
+        let fx = fx(effect);
+        let mut constants = effect.constants();
+        constants.push(("FX", if fx { 1.0 } else { 0.0 }));
+        let constants = &constants[..];
+        let options = || wgpu::PipelineCompilationOptions {
+            constants,
+            zero_initialize_workgroup_memory: false,
+        };
         let frag = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
         let comp = wgpu::ShaderStages::COMPUTE;
         let float = wgpu::TextureSampleType::Float { filterable: false };
@@ -141,7 +200,7 @@ impl PreparedDual {
                 vertex: wgpu::VertexState {
                     module: &module,
                     entry_point: Some("vs_full"),
-                    compilation_options: Default::default(),
+                    compilation_options: options(),
                     buffers: &layouts,
                 },
                 primitive: wgpu::PrimitiveState::default(),
@@ -150,7 +209,7 @@ impl PreparedDual {
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
                     entry_point: Some(fs),
-                    compilation_options: Default::default(),
+                    compilation_options: options(),
                     targets,
                 }),
                 multiview_mask: None,
@@ -173,7 +232,7 @@ impl PreparedDual {
             &comp_layout,
             &module,
             "composite",
-            &[],
+            constants,
             false,
         );
         let combine = compute_pipeline(
@@ -182,7 +241,7 @@ impl PreparedDual {
             &comp_layout,
             &module,
             "combine",
-            &[],
+            constants,
             false,
         );
 
@@ -200,8 +259,10 @@ impl PreparedDual {
             .texture(gpu, "dual back layer", w, h, LAYER_FORMAT, usage)
             .create_view(&Default::default());
         let px = scene.pixels() as u64;
-        let front_acc = alloc.buffer(gpu, "dual front accum", px * 16, STORAGE_RW);
-        let back_acc = alloc.buffer(gpu, "dual back accum", px * 16, STORAGE_RW);
+        // A premultiplied colour per pixel, or an effects fold state (FX).
+        let acc = if fx { FOLD_STATE_BYTES } else { 16 };
+        let front_acc = alloc.buffer(gpu, "dual front accum", px * acc, STORAGE_RW);
+        let back_acc = alloc.buffer(gpu, "dual back accum", px * acc, STORAGE_RW);
         let counts = alloc.buffer(gpu, "dual counts", px * 4, STORAGE_RW);
         let image = alloc.buffer(gpu, "dual image", px * 16, STORAGE_RW);
         let remaining = alloc.buffer(gpu, "dual remaining", 4, STORAGE_RW);
@@ -350,8 +411,8 @@ impl crate::timed::Timed for PreparedDual {
                     label: Some("peel"),
                     color_attachments: &[
                         Self::attachment(&self.depth[q], -BIG),
-                        Self::attachment(&self.front, 0.0),
-                        Self::attachment(&self.back, 0.0),
+                        Self::attachment(&self.front, -BIG),
+                        Self::attachment(&self.back, -BIG),
                     ],
                     depth_stencil_attachment: None,
                     timestamp_writes: timer.render_pass("peel"),
@@ -414,7 +475,10 @@ mod tests {
     use scenarios::ParamValue::{Bool, Int};
 
     use super::*;
-    use crate::testing::{count_mismatch, max_err, params, run, scene};
+    use crate::metrics::{image_error, BAD_PIXEL_TOL};
+    use crate::testing::{count_mismatch, max_err, params, point, run, scene};
+    use scenarios::ParamValue::{Float, Str};
+    use scenarios::Params;
 
     /// Front and back halves composited separately then combined: a few f32 ulps per layer.
     const IMAGE_TOL: f64 = 2e-5;
@@ -461,5 +525,99 @@ mod tests {
         let (cap, _) = run(&DualPeel, &s, 32, 32, &p);
         assert!(cap.overflow_pixels.unwrap() > 0);
         assert_eq!(cap.flag, Flag::Overflow.into());
+    }
+
+    /// Effects reading interpolated view depth and normals, as `tests/effects.rs` judges depth
+    /// peeling: max abs ≤ 2e-3, RMSE ≤ 2e-4. The GPU interpolates view_z from unsnapped vertex
+    /// positions while the reference snaps to 1/256 px, so at sphere silhouettes (view_z moving
+    /// ~0.5 per pixel) a fragment's depth differs by up to 0.5/512 ≈ 1e-3, and σ·Δl ≤ 1e-3 for
+    /// σ ≤ 1; the f32 folds and the one combining step add ~1e-6.
+    const FX_MAX: f64 = 2e-3;
+    const FX_RMSE: f64 = 2e-4;
+
+    /// (max abs, RMSE) of dual peeling's effect image against the f64 reference of its effect.
+    fn fx_err(s: &scenarios::Scene, p: &Params, w: u32) -> (f64, f64, Capture) {
+        let (cap, lists) = run(&DualPeel, s, w, w, p);
+        let cfg = EffectConfig::from_point(&point(&DualPeel, p)).unwrap();
+        let reference = cfg.reference(s, &lists, cap.expected);
+        let e = image_error(&reference, cap.image.as_ref().unwrap(), BAD_PIXEL_TOL);
+        assert_eq!(e.non_finite, 0, "{}: NaN/Inf", p.label());
+        (e.max_abs, e.rmse, cap)
+    }
+
+    #[test]
+    fn translucency_and_fresnel_from_both_ends_match_the_f64_reference_48px() {
+        // 3 nested shells: 6 layers, 3 peeled from the front and 3 from the back, so every
+        // covered pixel's image depends on the combining step; odd max_layers leaves a pass with
+        // near == far (the front sweep alone).
+        let shells = scene("shells", &[("count", Int(3)), ("segments", Int(16))]);
+        let mut cases = Vec::new();
+        for effect in ["translucency", "fresnel"] {
+            for thickness in ["stable", "naive"] {
+                for stop in [true, false] {
+                    cases.push(params(&[
+                        ("effect", Str(effect.into())),
+                        ("sigma", Float(0.8)),
+                        ("thickness", Str(thickness.into())),
+                        ("max_layers", Int(64)),
+                        ("occlusion_stop", Bool(stop)),
+                    ]));
+                }
+            }
+        }
+        for p in &cases {
+            let (m, r, cap) = fx_err(&shells, p, 48);
+            assert!(m <= FX_MAX, "{}: max abs {m} > {FX_MAX}", p.label());
+            assert!(r <= FX_RMSE, "{}: RMSE {r} > {FX_RMSE}", p.label());
+            assert_eq!(cap.overflow_pixels, Some(0), "{}", cap.notes);
+        }
+    }
+
+    #[test]
+    fn the_two_sweeps_are_both_used_and_fresnel_differs_from_translucency() {
+        // Guards against a combine that drops one end: the front sweep alone (max_layers 2:
+        // one pass, the nearest and farthest layer) is far from the reference on 6 layers,
+        // and flagged; Fresnel's product is not the plain transmittance.
+        let shells = scene("shells", &[("count", Int(3)), ("segments", Int(16))]);
+        let p = |e: &str, layers: i64| {
+            params(&[
+                ("effect", Str(e.into())),
+                ("sigma", Float(0.8)),
+                ("max_layers", Int(layers)),
+                ("occlusion_stop", Bool(false)),
+            ])
+        };
+        let (m, _, cap) = fx_err(&shells, &p("translucency", 2), 32);
+        assert!(cap.overflow_pixels.unwrap() > 0);
+        assert!(m > 0.05, "2 of 6 layers: max abs {m}");
+        let (a, _) = run(&DualPeel, &shells, 32, 32, &p("translucency", 64));
+        let (b, _) = run(&DualPeel, &shells, 32, 32, &p("fresnel", 64));
+        assert_ne!(a.image, b.image);
+        assert_eq!(
+            DualPeel.payload(&point(&DualPeel, &p("fresnel", 64))),
+            Some("depth_normal")
+        );
+    }
+
+    #[test]
+    fn csg_and_dof_are_skipped_with_the_reason_transparency_unchanged() {
+        let gpu = crate::testing::gpu();
+        for e in ["csg_and", "dof"] {
+            let why = DualPeel
+                .supports(
+                    gpu,
+                    &point(&DualPeel, &params(&[("effect", Str(e.into()))])),
+                )
+                .unwrap_err();
+            assert!(why.contains(e), "{why}");
+        }
+        let quads = scene("quads", &[("depth_complexity", Int(7))]);
+        let p = params(&[
+            ("effect", Str("transparency".into())),
+            ("max_layers", Int(64)),
+        ]);
+        let (cap, lists) = run(&DualPeel, &quads, 32, 32, &p);
+        let (e, at) = max_err(&cap, &lists);
+        assert!(e <= IMAGE_TOL, "error {e} at pixel {at}");
     }
 }

@@ -84,7 +84,8 @@ const LAYERS: Axis = Axis::int(
     8,
     1,
     1024,
-);
+)
+.only_when(&POOL, &["fixed"]);
 const POOL: Axis = Axis::choice(
     cols::POOL,
     "counted: per-8×8-tile sub-pools sized by a prepare-time count; fixed: layers × pixels nodes",
@@ -97,7 +98,8 @@ const POOL_SLACK: Axis = Axis::int(
     0,
     0,
     400,
-);
+)
+.only_when(&POOL, &["counted"]);
 const NODE: Axis = Axis::choice(
     cols::NODE,
     "compact: 12 B nodes, attributes re-derived from the primitive; full: 32 B nodes",

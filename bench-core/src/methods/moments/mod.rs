@@ -68,14 +68,11 @@ const PRECISION: Axis = Axis::choice(
     "f32",
     &["f32", "unorm16"],
 );
-const BIAS: Axis = Axis {
-    col: cols::MOMENT_BIAS,
-    doc:
-        "bias β: paper (the paper's value for the kind, count and precision) or a number in [0, 1)",
-    kind: scenarios::ValueKind::Text {
-        default: Some("paper"),
-    },
-};
+const BIAS: Axis = Axis::text(
+    cols::MOMENT_BIAS,
+    "bias β: paper (the paper's value for the kind, count and precision) or a number in [0, 1)",
+    Some("paper"),
+);
 const NORMALIZE: Axis = Axis::bool(
     cols::MOMENT_NORMALIZE,
     "normalise the colour by the total absorbance (exact for one layer)",

@@ -1,0 +1,320 @@
+//! "What bounds each method": for every trusted, timed point with per-pass times, the pass that
+//! takes the most GPU time, its share of the frame, how it compares with the depth-only floor of
+//! the same scene and resolution (a pass near the floor is bound by rasterising the geometry,
+//! not by its own work), and how far the frame's declared traffic is from the adapter's peak
+//! memory bandwidth. Written as `bounds.md` beside the report (for RUN.md) and as a section of
+//! the page.
+
+use std::collections::BTreeMap;
+use std::fmt::Write;
+
+use schema::{cols, PointKey};
+
+use crate::cells::{esc, short};
+use crate::data::{resolution, Rec, Runs};
+
+/// A limiting pass within this factor of the depth-only floor is "at the raster floor": the GPU
+/// spends it rasterising the scene once, which no capture can avoid.
+pub const AT_FLOOR: f64 = 1.25;
+
+/// The method whose time is the depth-only floor.
+const FLOOR_DEPTH: &str = "floor_depth";
+
+/// One point's bound.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bound {
+    pub study: String,
+    pub scene: String,
+    pub resolution: String,
+    /// Method and the axes the suite set.
+    pub config: String,
+    pub gpu_ms: f64,
+    /// The slowest pass: its label and median ms.
+    pub pass: String,
+    pub pass_ms: f64,
+    /// pass_ms / the sum of all passes' ms.
+    pub share: f64,
+    /// The depth-only floor of the same study, scene and resolution, when the run has one.
+    pub floor_ms: Option<f64>,
+    pub fragments_per_s: Option<f64>,
+    pub bytes_per_s: Option<f64>,
+    /// bytes_per_s / the adapter's peak memory bandwidth.
+    pub peak_frac: Option<f64>,
+}
+
+impl Bound {
+    /// In words: what the slowest pass is bound by, as far as the run can say.
+    pub fn verdict(&self) -> String {
+        let floor = match self.floor_ms {
+            Some(f) if f > 0.0 && self.pass_ms <= AT_FLOOR * f => {
+                format!(
+                    "at the raster floor ({}× depth-only)",
+                    short(Some(self.pass_ms / f))
+                )
+            }
+            Some(f) if f > 0.0 => {
+                format!("{}× the depth-only floor", short(Some(self.pass_ms / f)))
+            }
+            _ => "no floor in this run".into(),
+        };
+        match self.peak_frac {
+            Some(p) if p > 0.0 => format!(
+                "{floor}; declared traffic at {} % of peak bandwidth ({}× from the memory bound)",
+                short(Some(100.0 * p)),
+                short(Some(1.0 / p))
+            ),
+            _ => format!("{floor}; peak bandwidth unknown"),
+        }
+    }
+}
+
+/// The per-pass times of a row (`pass_ms`, a JSON object of label → ms).
+fn passes(r: &Rec) -> Vec<(String, f64)> {
+    let Ok(serde_json::Value::Object(m)) = serde_json::from_str(r.get(cols::PASS_MS)) else {
+        return Vec::new();
+    };
+    m.into_iter()
+        .filter_map(|(k, v)| v.as_f64().filter(|x| x.is_finite()).map(|x| (k, x)))
+        .collect()
+}
+
+/// The study, scene, resolution key of a row (its floors share it).
+fn place(r: &Rec) -> (String, String, String) {
+    (
+        r.get(cols::STUDY).to_string(),
+        r.get(cols::SCENE_LABEL).to_string(),
+        resolution(r),
+    )
+}
+
+/// Every point's bound, in the run's row order. Floors, rows not ok, rows whose GPU time is not
+/// trusted and rows with no per-pass times are left out.
+pub fn bounds(runs: &Runs) -> Vec<Bound> {
+    let mut floors: BTreeMap<(String, String, String), f64> = BTreeMap::new();
+    for r in &runs.rows {
+        if r.ok() && r.get(cols::METHOD) == FLOOR_DEPTH {
+            if let Some(ms) = r.trusted_ms() {
+                floors.entry(place(r)).or_insert(ms);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for r in &runs.rows {
+        if !r.ok() || r.is_floor() {
+            continue;
+        }
+        let Some(gpu_ms) = r.trusted_ms() else {
+            continue;
+        };
+        let ps = passes(r);
+        let total: f64 = ps.iter().map(|p| p.1).sum();
+        let Some((pass, pass_ms)) = ps.into_iter().max_by(|a, b| a.1.total_cmp(&b.1)) else {
+            continue;
+        };
+        let axes = r
+            .get(cols::POINT_KEY)
+            .parse::<PointKey>()
+            .map(|k| k.axes)
+            .unwrap_or_default();
+        let method = r.get(cols::METHOD);
+        let config = if axes.is_empty() {
+            method.to_string()
+        } else {
+            format!("{method} ({axes})")
+        };
+        let (study, scene, resolution) = place(r);
+        out.push(Bound {
+            floor_ms: floors
+                .get(&(study.clone(), scene.clone(), resolution.clone()))
+                .copied(),
+            study,
+            scene,
+            resolution,
+            config,
+            gpu_ms,
+            pass,
+            pass_ms,
+            share: if total > 0.0 { pass_ms / total } else { 0.0 },
+            fragments_per_s: r.f(cols::FRAGMENTS_PER_S),
+            bytes_per_s: r.f(cols::BYTES_PER_S),
+            peak_frac: r.f(cols::PEAK_BANDWIDTH_FRAC),
+        });
+    }
+    out
+}
+
+const HEAD: [&str; 8] = [
+    "scene",
+    "resolution",
+    "configuration",
+    "GPU ms",
+    "slowest pass (ms, share)",
+    "G fragments/s",
+    "GB/s declared",
+    "bound",
+];
+
+fn cells(b: &Bound) -> [String; 8] {
+    [
+        b.scene.clone(),
+        b.resolution.clone(),
+        b.config.clone(),
+        short(Some(b.gpu_ms)),
+        format!(
+            "{} ({}, {} %)",
+            b.pass,
+            short(Some(b.pass_ms)),
+            short(Some(100.0 * b.share))
+        ),
+        short(b.fragments_per_s.map(|x| x / 1e9)),
+        short(b.bytes_per_s.map(|x| x / 1e9)),
+        b.verdict(),
+    ]
+}
+
+/// The bounds as a markdown table per study (for RUN.md); "" when no row has per-pass times.
+pub fn markdown(runs: &Runs) -> String {
+    let all = bounds(runs);
+    let mut s = String::new();
+    let mut studies: Vec<&str> = all.iter().map(|b| b.study.as_str()).collect();
+    studies.dedup();
+    for study in studies {
+        let _ = writeln!(s, "### What bounds each point: {study}\n");
+        let _ = writeln!(s, "| {} |", HEAD.join(" | "));
+        let _ = writeln!(s, "|{}", "---|".repeat(HEAD.len()));
+        for b in all.iter().filter(|b| b.study == study) {
+            let c = cells(b).map(|c| c.replace('|', "\\|"));
+            let _ = writeln!(s, "| {} |", c.join(" | "));
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// The bounds as an HTML section, folded (the table is long); "" when no row has per-pass times.
+pub fn section(runs: &Runs) -> String {
+    let all = bounds(runs);
+    if all.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from(
+        "<h2 id=\"bounds\">What bounds each method</h2>\n<p>Per point: the slowest pass \
+         (<code>pass_ms</code>), how it compares with the depth-only floor of the same scene \
+         and resolution (within 1.25× = bound by rasterising the scene), and the frame's \
+         declared traffic against the adapter's peak memory bandwidth (NVML). Also in \
+         <code>bounds.md</code>.</p>\n<details><summary>",
+    );
+    let _ = write!(s, "{} points</summary>\n<table>\n<tr>", all.len());
+    for h in HEAD {
+        let _ = write!(s, "<th>{}</th>", esc(h));
+    }
+    s.push_str("</tr>\n");
+    for b in &all {
+        s.push_str("<tr>");
+        for c in cells(b) {
+            let _ = write!(s, "<td>{}</td>", esc(&c));
+        }
+        s.push_str("</tr>\n");
+    }
+    s.push_str("</table>\n</details>\n");
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use schema::Status;
+
+    fn row(method: &str, ms: &str, pass_ms: &str, peak: &str) -> Rec {
+        let mut m = BTreeMap::new();
+        for (k, v) in [
+            ("status", Status::Ok.name()),
+            ("study", "methods"),
+            ("scene_label", "quads(n=2)"),
+            ("width", "512"),
+            ("height", "512"),
+            ("method", method),
+            (
+                "point_key",
+                &format!("methods|quads(n=2)|512x512|{method}|layers=8"),
+            ),
+            ("gpu_ms_median", ms),
+            ("pass_ms", pass_ms),
+            ("peak_bandwidth_frac", peak),
+            ("gpu_time_trusted", "true"),
+        ] {
+            m.insert(k.to_string(), v.to_string());
+        }
+        Rec(m)
+    }
+
+    fn runs(rows: Vec<Rec>) -> Runs {
+        Runs {
+            rows,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn names_the_slowest_pass_and_its_distance_from_floor_and_memory() {
+        let r = runs(vec![
+            row("floor_depth", "1.0", "{\"floor\":1.0}", "0.001"),
+            row(
+                "bdp",
+                "3.0",
+                "{\"depth range\":1.1,\"route\":1.8,\"resolve\":0.1}",
+                "0.01",
+            ),
+        ]);
+        let b = bounds(&r);
+        assert_eq!(b.len(), 1, "floors are not bounded points");
+        assert_eq!(b[0].pass, "route");
+        assert!((b[0].share - 0.6).abs() < 1e-9);
+        assert_eq!(b[0].config, "bdp (layers=8)");
+        let v = b[0].verdict();
+        assert!(v.contains("1.8× the depth-only floor"), "{v}");
+        assert!(v.contains("100× from the memory bound"), "{v}");
+    }
+
+    #[test]
+    fn a_pass_near_the_floor_is_at_the_raster_floor() {
+        let r = runs(vec![
+            row("floor_depth", "1.0", "{\"floor\":1.0}", ""),
+            row("bdp", "1.3", "{\"depth range\":1.1,\"route\":0.2}", ""),
+        ]);
+        let v = bounds(&r)[0].verdict();
+        assert!(v.starts_with("at the raster floor"), "{v}");
+        assert!(v.contains("peak bandwidth unknown"), "{v}");
+    }
+
+    #[test]
+    fn untrusted_or_failed_or_passless_rows_are_left_out() {
+        let mut untrusted = row("compute_abuffer", "3.0", "{\"count\":1.0}", "");
+        untrusted
+            .0
+            .insert("gpu_time_trusted".into(), "false".into());
+        let mut failed = row("linked_list", "3.0", "{\"count\":1.0}", "");
+        failed
+            .0
+            .insert("status".into(), Status::Failed.name().into());
+        let passless = row("wboit", "3.0", "", "");
+        let r = runs(vec![untrusted, failed, passless]);
+        assert!(bounds(&r).is_empty());
+        assert_eq!(markdown(&r), "");
+        assert_eq!(section(&r), "");
+    }
+
+    #[test]
+    fn markdown_has_one_table_row_per_point() {
+        let r = runs(vec![
+            row("bdp", "3.0", "{\"route\":1.8}", ""),
+            row("adp", "4.0", "{\"route\":2.0,\"histogram\":1.0}", ""),
+        ]);
+        let md = markdown(&r);
+        assert_eq!(
+            md.lines().filter(|l| l.starts_with("| quads")).count(),
+            2,
+            "{md}"
+        );
+    }
+}
