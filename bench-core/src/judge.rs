@@ -438,7 +438,7 @@ const ULPS_FIXED: f64 = 4.0;
 /// another fragment: one triangle's where the reference has its neighbour's (f32 vertex
 /// snapping at a shared edge keeps the counts equal), and stays `image_differs`.
 pub fn exact_bounds(dc: &[u32], lists: Option<&FragmentLists>) -> Vec<f64> {
-    let tol = crate::methods::store::DEPTH_TOL;
+    let tol = crate::methods::shared::store::DEPTH_TOL;
     dc.iter()
         .enumerate()
         .map(|(p, &n)| {

@@ -36,13 +36,15 @@
 //! work, and `readback`). Nothing assumes a render pass: a compute-only method only has to fill
 //! the same [`Capture`]. Antialiasing (`aa`, `aa_capture`: `crate::aa`) is declared per method:
 //! `depth_peel` (per sample), `wboit` (both), `compute_abuffer` (coverage masks), each of them
-//! also under `ssaa2x2` (`ssaa`), `linked_list` (a list per sample, or coverage-mask compact
+//! also under `ssaa2x2` (`shared::ssaa`), `linked_list` (a list per sample, or coverage-mask compact
 //! nodes, and `ssaa2x2`), `kbuffer_atomic` (k slots per sample, and `ssaa2x2`; no coverage
 //! k-buffer: its k nearest per pixel have no per-sample rule), and `stochastic` (MSAA by
 //! construction);
 //! the rest are `skipped` rows with the reason. The shared vertex stage is `common.wgsl`, prepended to each method's WGSL;
-//! `effects.wgsl` ([`FOLD_WGSL`]) is the effects fold, and `packing` the float colour packing
-//! shared with the bucket methods. The approximate (continuum) methods' per-pixel rules have CPU
+//! `effects.wgsl` ([`FOLD_WGSL`]) is the effects fold. Pieces several methods build on (k slots,
+//! the counted capture, tails, buckets, packing, the bind table) live in [`shared`], named for
+//! what they are; no method folder imports another (tested: `tests/method_graph.rs`), and the
+//! yardsticks are [`floors`]. The approximate (continuum) methods' per-pixel rules have CPU
 //! twins in [`crate::oit`], which `Prepared::judge` runs on the reference fragments to fill
 //! `Capture.definition` (judged into `*_vs_k`).
 
@@ -50,22 +52,18 @@ pub mod adaptive;
 pub mod adp;
 pub mod bdp;
 pub mod bdp2;
-pub mod bucket;
 pub mod compute_abuffer;
 pub mod depth_peel;
 pub mod dual_peel;
-pub mod floor;
+pub mod floors;
 pub mod hybrid;
 pub mod kbuffer_atomic;
 pub mod kbuffer_rmw;
 pub mod linked_list;
 pub mod mlab;
 pub mod moments;
-pub mod packing;
-pub mod ssaa;
+pub mod shared;
 pub mod stochastic;
-pub mod store;
-pub mod tail;
 pub mod wboit;
 
 pub use crate::method::{supports, Capture, Expected, FrameStats, Method, Prepared, Timed};
@@ -73,11 +71,11 @@ pub use crate::method::{supports, Capture, Expected, FrameStats, Method, Prepare
 /// Every method, in listing order.
 pub fn all() -> Vec<Box<dyn Method>> {
     vec![
-        Box::new(floor::FloorDepth),
-        Box::new(floor::FloorDepthVs),
-        Box::new(floor::FloorOpaque),
-        Box::new(floor::FloorBlend),
-        Box::new(floor::FloorBlendConst),
+        Box::new(floors::FloorDepth),
+        Box::new(floors::FloorDepthVs),
+        Box::new(floors::FloorOpaque),
+        Box::new(floors::FloorBlend),
+        Box::new(floors::FloorBlendConst),
         Box::new(depth_peel::DepthPeel),
         Box::new(dual_peel::DualPeel),
         Box::new(kbuffer_rmw::KBufferRmw),
@@ -114,4 +112,37 @@ pub fn get(name: &str) -> Box<dyn Method> {
                 .join(", ")
         )
     })
+}
+
+/// Tests that hold one method against another on the same scene: the registry sees every
+/// method, a method folder sees none but its own.
+#[cfg(test)]
+mod tests {
+    use super::shared::bucket::testing::{quads_at, run};
+    use super::shared::bucket::{Config, Kind};
+    use super::{adp, bdp};
+
+    #[test]
+    fn adp_beats_bdp_on_clustered_depths_48px() {
+        // Six layers within 0.25 world units, one far in front and one far behind: uniform
+        // buckets put the cluster in one or two buckets, equalised ones give each its own.
+        let scene = quads_at(&[3.0, 0.25, 0.2, 0.15, 0.1, 0.05, 0.0, -3.0], 0.4);
+        let cfg = Config {
+            kind: Kind::Adaptive { hist_bins: 1024 },
+            buckets: 8,
+        };
+        let a = run(cfg, adp::tests_wgsl(), &scene, 48);
+        let adp_lost = a.assert_counts_match_twin(&cfg);
+        let uniform = Config {
+            kind: Kind::Uniform { paired: false },
+            buckets: 8,
+        };
+        let b = run(uniform, bdp::tests_wgsl(), &scene, 48);
+        let bdp_lost = b.assert_counts_match_twin(&uniform);
+        assert!(
+            bdp_lost > 0,
+            "precondition: the cluster collides in uniform buckets"
+        );
+        assert!(adp_lost < bdp_lost, "adp lost {adp_lost}, bdp {bdp_lost}");
+    }
 }

@@ -17,16 +17,16 @@
 //! Memory per pixel (race build): k × 8 B nodes + 4 B arrival count + 16 B resolve sum + 16 B
 //! image + 4 B stand-in depth.
 
-use super::compute_abuffer::{PreparedAbuffer, Replay};
-use super::mlab::judge_race;
-use super::store::{dummy_depth, storage_pass, storage_pipeline};
+use super::shared::bind::{blended, pipeline_layout, Bindings, Kind as B, Res, ADD, FC, FLOAT};
+use super::shared::counted_capture::{PreparedAbuffer, Replay};
+use super::shared::race::judge_race;
+use super::shared::store::{dummy_depth, storage_pass, storage_pipeline};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
-    camera_entry, check_storage_size, compute_pipeline, pixel_pass, read_vec, shader,
-    storage_entry, texture_entry, STORAGE_RW,
+    check_storage_size, compute_pipeline, pixel_pass, read_vec, shader, STORAGE_RW,
 };
 use crate::oit::{self, Order};
 use crate::record::cols;
@@ -128,47 +128,23 @@ struct PreparedRace {
     alloc: AllocCounter,
 }
 
-fn entry(binding: u32, x: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry {
-        binding,
-        resource: x.as_entire_binding(),
-    }
-}
-
 impl PreparedRace {
     fn new(gpu: &Gpu, scene: &GpuScene, k: u32) -> Result<Self> {
-        let d = &gpu.device;
         let module = shader(gpu, "adaptive", &format!("{RULE_WGSL}\n{RACE_WGSL}"));
-        let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
-        let capture_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("adaptive capture"),
-            entries: &[
-                camera_entry(0),
-                storage_entry(1, false, fc),
-                storage_entry(2, false, fc),
-            ],
-        });
-        let float = wgpu::TextureSampleType::Float { filterable: false };
-        let composite_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("adaptive composite"),
-            entries: &[
-                camera_entry(0),
-                storage_entry(1, false, fc),
-                storage_entry(2, false, fc),
-                storage_entry(3, false, fc),
-                storage_entry(4, false, fc),
-                texture_entry(5, float, fc),
-            ],
-        });
-        let layout = |bgl: &wgpu::BindGroupLayout| {
-            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("adaptive"),
-                bind_group_layouts: &[Some(bgl)],
-                immediate_size: 0,
-            })
-        };
+        // Camera, nodes, arrivals; the composite adds the image, the counters, the colour sum.
+        let capture_table = Bindings::seq(
+            gpu,
+            "adaptive capture",
+            FC,
+            &[B::Camera, B::Storage, B::Storage],
+        );
+        let mut rows = vec![B::Camera];
+        rows.extend([B::Storage; 4]);
+        rows.push(B::Texture(FLOAT));
+        let composite_table = Bindings::seq(gpu, "adaptive composite", FC, &rows);
+        let layout = |t: &Bindings| pipeline_layout(gpu, "adaptive", &[&t.layout]);
         let constants = [("K", k as f64)];
-        let capture_layout = layout(&capture_bgl);
+        let capture_layout = layout(&capture_table);
         let insert = storage_pipeline(
             gpu,
             "adaptive nodes",
@@ -177,31 +153,19 @@ impl PreparedRace {
             "fs_nodes",
             &constants,
         );
-        let add = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
-        let shade = super::store::storage_pipeline_with(
+        let shade = super::shared::store::storage_pipeline_with(
             gpu,
             "adaptive shade",
             &capture_layout,
             &module,
             "fs_shade",
             &constants,
-            &[Some(wgpu::ColorTargetState {
-                format: ACCUM,
-                blend: Some(wgpu::BlendState {
-                    color: add,
-                    alpha: add,
-                }),
-                write_mask: wgpu::ColorWrites::ALL,
-            })],
+            &[blended(ACCUM, ADD)],
         );
         let composite = compute_pipeline(
             gpu,
             "adaptive composite",
-            &layout(&composite_bgl),
+            &layout(&composite_table),
             &module,
             "composite",
             &constants,
@@ -226,30 +190,12 @@ impl PreparedRace {
                 wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
             )
             .create_view(&Default::default());
-        let bind_capture = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("adaptive capture"),
-            layout: &capture_bgl,
-            entries: &[
-                entry(0, &scene.camera),
-                entry(1, &nodes),
-                entry(2, &arrived),
-            ],
-        });
-        let bind_composite = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("adaptive composite"),
-            layout: &composite_bgl,
-            entries: &[
-                entry(0, &scene.camera),
-                entry(1, &nodes),
-                entry(2, &arrived),
-                entry(3, &image),
-                entry(4, &counters),
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: wgpu::BindingResource::TextureView(&accum),
-                },
-            ],
-        });
+        let bind_capture =
+            capture_table.group(gpu, &[&scene.camera, &nodes, &arrived].map(Res::Buf));
+        let bufs = [&scene.camera, &nodes, &arrived, &image, &counters];
+        let mut res = bufs.map(Res::Buf).to_vec();
+        res.push((&accum).into());
+        let bind_composite = composite_table.group(gpu, &res);
         Ok(PreparedRace {
             k,
             insert,
@@ -280,8 +226,13 @@ impl crate::timed::Timed for PreparedRace {
         }
         {
             let colors = [crate::gpu::cleared(&self.accum, wgpu::Color::TRANSPARENT)];
-            let mut pass =
-                super::store::storage_pass_with(&mut enc, &self.depth, &colors, timer, "shade");
+            let mut pass = super::shared::store::storage_pass_with(
+                &mut enc,
+                &self.depth,
+                &colors,
+                timer,
+                "shade",
+            );
             pass.set_pipeline(&self.shade);
             pass.set_bind_group(0, &self.bind_capture, &[]);
             scene.draw(&mut pass, Attrs::ALL);

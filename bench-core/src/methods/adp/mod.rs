@@ -9,7 +9,7 @@
 //! Geometry passes: 2 + ⌈max occupied bins / bucket_count⌉; memory per pixel: hist_bins/8 B
 //! histogram + 4·K B bounds + K·4 B buckets.
 
-use super::bucket::{self, Config, Kind, PreparedBucket};
+use super::shared::bucket::{self, Config, Kind, PreparedBucket};
 use super::{Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::effects;
@@ -17,6 +17,12 @@ use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
 use crate::record::cols;
 use crate::{CoreError, Result};
+
+/// adp's WGSL, for the registry's test that holds it against bdp.
+#[cfg(test)]
+pub(crate) fn tests_wgsl() -> &'static str {
+    WGSL
+}
 
 const WGSL: &str = include_str!("adp.wgsl");
 
@@ -95,8 +101,8 @@ impl Method for Adp {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::bucket::testing::{gpu, quads, quads_at, quantised_reference, run};
-    use crate::methods::bucket::{adp_equalise, pack_color, route_pixel, unpack_color};
+    use crate::methods::shared::bucket::testing::{gpu, quads, quantised_reference, run};
+    use crate::methods::shared::bucket::{adp_equalise, pack_color, route_pixel, unpack_color};
 
     fn adp(buckets: u32, hist_bins: u32) -> Config {
         Config {
@@ -146,27 +152,6 @@ mod tests {
             e < 1e-5,
             "pixel {p}: {e} from the packed twin across two passes"
         );
-    }
-
-    #[test]
-    fn adp_beats_bdp_on_clustered_depths_48px() {
-        // Six layers within 0.25 world units, one far in front and one far behind: uniform
-        // buckets put the cluster in one or two buckets, equalised ones give each its own.
-        let scene = quads_at(&[3.0, 0.25, 0.2, 0.15, 0.1, 0.05, 0.0, -3.0], 0.4);
-        let cfg = adp(8, 1024);
-        let a = run(cfg, WGSL, &scene, 48);
-        let adp_lost = a.assert_counts_match_twin(&cfg);
-        let uniform = Config {
-            kind: Kind::Uniform { paired: false },
-            buckets: 8,
-        };
-        let b = run(uniform, super::super::bdp::tests_wgsl(), &scene, 48);
-        let bdp_lost = b.assert_counts_match_twin(&uniform);
-        assert!(
-            bdp_lost > 0,
-            "precondition: the cluster collides in uniform buckets"
-        );
-        assert!(adp_lost < bdp_lost, "adp lost {adp_lost}, bdp {bdp_lost}");
     }
 
     #[test]

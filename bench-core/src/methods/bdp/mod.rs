@@ -5,9 +5,9 @@
 //! the effects fold. Exact (up to the colour packing) when no two fragments share a bucket;
 //! otherwise fragments collide and are counted (`collision_rate`, flag `collision`).
 //! `bucket_pairing = paired` keeps the nearest and the farthest fragment of each bucket (two
-//! channels per bucket, so at most 16 buckets). Shared machinery and CPU twins: `methods::bucket`.
+//! channels per bucket, so at most 16 buckets). Shared machinery and CPU twins: `methods::shared::bucket`.
 
-use super::bucket::{self, Config, Kind, PreparedBucket};
+use super::shared::bucket::{self, Config, Kind, PreparedBucket};
 use super::{Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::effects;
@@ -77,7 +77,7 @@ impl Method for Bdp {
     }
 }
 
-/// bdp's WGSL, for other methods' tests that compare against it.
+/// bdp's WGSL, for the registry's test that holds adp against it.
 #[cfg(test)]
 pub(crate) fn tests_wgsl() -> &'static str {
     WGSL
@@ -86,8 +86,8 @@ pub(crate) fn tests_wgsl() -> &'static str {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::bucket::testing::{quads, quads_z, quantised_reference, run};
-    use crate::methods::bucket::{keyed_color, pack_color, pack_keyed, unpack_color};
+    use crate::methods::shared::bucket::testing::{quads, quads_z, quantised_reference, run};
+    use crate::methods::shared::bucket::{keyed_color, pack_color, pack_keyed, unpack_color};
     use crate::record::Flag;
 
     #[test]

@@ -4,7 +4,7 @@
 //! bucket holds two fragments and a collision needs three (or two within 1/127 of a bucket).
 //! 3 geometry passes (depth range + 2); two sets of `bucket_count` channels.
 
-use super::bucket::{self, Config, Kind, PreparedBucket};
+use super::shared::bucket::{self, Config, Kind, PreparedBucket};
 use super::{Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::effects;
@@ -74,8 +74,8 @@ impl Method for Bdp2 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::bucket::testing::{quads, run};
-    use crate::methods::bucket::twin_collisions;
+    use crate::methods::shared::bucket::testing::{quads, run};
+    use crate::methods::shared::bucket::twin_collisions;
 
     #[test]
     fn bdp2_quads16_48px_8_buckets_collision_count_equals_the_twin_and_beats_one_pass() {

@@ -4,6 +4,8 @@ use scenarios::ParamValue::{Int, Str};
 use scenarios::{Camera, Mesh, Params, Scene, SceneSpec};
 
 use super::*;
+use crate::methods::shared::counted_capture::*;
+use crate::record::Flag;
 use crate::reference::rasterize;
 use crate::testing::{count_mismatch, gpu, max_err, params, run, scene};
 

@@ -18,6 +18,10 @@
 //! samples) and its end averages the samples' images. `ssaa2x2` peels at twice the width and
 //! height and box-filters.
 
+use super::shared::axes::{MAX_LAYERS, OCCLUSION_STOP, SPECIALISATION};
+use super::shared::bind::{
+    pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, Res, DEPTH, FLOAT, UINT,
+};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::aa::{self, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
@@ -26,8 +30,8 @@ use crate::effects::{FOLD_STATE_BYTES, FOLD_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
-    camera_entry, clear_depth, depth_state, multisample, per_sample_source, read_vec,
-    shader_source, storage_entry, texture_entry_ms, COMMON_WGSL,
+    clear_depth, compute_pipeline, depth_state, per_sample_source, read_vec, shader_source,
+    COMMON_WGSL, STORAGE_RW,
 };
 use crate::record::cols;
 use crate::timing::GpuTimer;
@@ -40,24 +44,6 @@ const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 pub struct DepthPeel;
 
-pub const MAX_LAYERS: Axis = Axis::int(
-    cols::MAX_LAYERS,
-    "peeling passes at most (occlusion_stop may end sooner)",
-    64,
-    1,
-    4096,
-);
-pub const OCCLUSION_STOP: Axis = Axis::bool(
-    cols::OCCLUSION_STOP,
-    "stop at the first pass an occlusion query finds empty (a CPU round trip per pass)",
-    true,
-);
-pub const SPECIALISATION: Axis = Axis::choice(
-    cols::SPECIALISATION,
-    "specialised: only the effect's payload is fetched, stored and read; uber: everything",
-    "specialised",
-    &["specialised", "uber"],
-);
 const TIEBREAK: Axis = Axis::bool(
     cols::TIEBREAK,
     "peel (depth, object id) pairs so coplanar fragments of distinct objects are kept",
@@ -151,12 +137,126 @@ impl Method for DepthPeel {
                 aa: AaConfig::NONE,
                 ..cfg
             };
-            return super::ssaa::prepare(gpu, scene, |big| {
+            return super::shared::ssaa::prepare(gpu, scene, |big| {
                 Ok(Box::new(PreparedPeel::new(gpu, big, inner)))
             });
         }
         Ok(Box::new(PreparedPeel::new(gpu, scene, cfg)))
     }
+}
+
+/// The peeling module: `depth_peel.wgsl` after the fold, or its per-sample form under MSAA.
+fn peel_module(gpu: &Gpu, ms: bool) -> wgpu::ShaderModule {
+    if ms {
+        // Every texture multisampled, every fragment entry per sample (module doc).
+        let body = WGSL
+            .replace("texture_depth_2d", "texture_depth_multisampled_2d")
+            .replace("texture_2d<", "texture_multisampled_2d<");
+        let body = ms_depth_source(&body);
+        let src = per_sample_source(&format!("{COMMON_WGSL}\n{FOLD_WGSL}\n{body}"));
+        shader_source(gpu, "depth_peel (per sample)", src)
+    } else {
+        shader_source(
+            gpu,
+            "depth_peel",
+            format!("{COMMON_WGSL}\n{FOLD_WGSL}\n{WGSL}"),
+        )
+    }
+}
+
+/// The ping-pong depth buffers and layer targets of the peel passes.
+struct Targets {
+    depth_views: [wgpu::TextureView; 2],
+    /// Per target, its views for parity 0 and 1 (the same view unless it alternates).
+    views: Vec<[wgpu::TextureView; 2]>,
+    /// Bound as the previous ids when there are none to read.
+    dummy_id: wgpu::TextureView,
+}
+
+impl Targets {
+    fn new(
+        gpu: &Gpu,
+        alloc: &mut AllocCounter,
+        scene: &GpuScene,
+        cfg: &Config,
+        var: &Variant,
+    ) -> Targets {
+        let (w, h) = (scene.width, scene.height);
+        let samples = cfg.aa.msaa();
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let mut texture = |label: &str, format| {
+            alloc
+                .texture_ms(gpu, label, w, h, format, usage, samples)
+                .create_view(&Default::default())
+        };
+        let depth_views = [0, 1].map(|i| {
+            texture(
+                &format!("peel depth {i}"),
+                wgpu::TextureFormat::Depth32Float,
+            )
+        });
+        // One texture per target; the id target gets a second one when the tie-break reads
+        // the previous layer's ids.
+        let mut views: Vec<[wgpu::TextureView; 2]> = Vec::new();
+        for &(f, binding) in var.targets {
+            let a = texture(&format!("peel layer {binding}"), f);
+            let b = if cfg.tiebreak && f == ID_FORMAT {
+                texture(&format!("peel layer {binding}'"), f)
+            } else {
+                a.clone()
+            };
+            views.push([a, b]);
+        }
+        let dummy_id = gpu
+            .create_texture(&wgpu::TextureDescriptor {
+                label: Some("peel no ids"),
+                size: wgpu::Extent3d {
+                    width: 1,
+                    height: 1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: samples,
+                dimension: wgpu::TextureDimension::D2,
+                format: ID_FORMAT,
+                // A multisampled texture must be renderable.
+                usage: if samples > 1 {
+                    usage
+                } else {
+                    wgpu::TextureUsages::TEXTURE_BINDING
+                },
+                view_formats: &[],
+            })
+            .create_view(&Default::default());
+        Targets {
+            depth_views,
+            views,
+            dummy_id,
+        }
+    }
+}
+
+/// One occlusion query, its resolve buffer and its read-back buffer.
+fn occlusion_query(gpu: &Gpu) -> (wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer) {
+    let d = &gpu.device;
+    let occlusion = d.create_query_set(&wgpu::QuerySetDescriptor {
+        label: Some("peel occlusion"),
+        ty: wgpu::QueryType::Occlusion,
+        count: 1,
+    });
+    let occ_resolve = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("occlusion resolve"),
+        size: 256,
+        usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let occ_read = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("occlusion read"),
+        size: 8,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    (occlusion, occ_resolve, occ_read)
 }
 
 /// The entry points and formats of one payload.
@@ -249,80 +349,33 @@ struct PreparedPeel {
 
 impl PreparedPeel {
     fn new(gpu: &Gpu, scene: &GpuScene, cfg: Config) -> Self {
-        let d = &gpu.device;
-        let (w, h) = (scene.width, scene.height);
         let samples = cfg.aa.msaa();
         let ms = samples > 1;
-        let module = if ms {
-            // Every texture multisampled, every fragment entry per sample (module doc).
-            let body = WGSL
-                .replace("texture_depth_2d", "texture_depth_multisampled_2d")
-                .replace("texture_2d<", "texture_multisampled_2d<");
-            let body = ms_depth_source(&body);
-            let src = per_sample_source(&format!("{COMMON_WGSL}\n{FOLD_WGSL}\n{body}"));
-            shader_source(gpu, "depth_peel (per sample)", src)
-        } else {
-            shader_source(
-                gpu,
-                "depth_peel",
-                format!("{COMMON_WGSL}\n{FOLD_WGSL}\n{WGSL}"),
-            )
-        };
+        let module = peel_module(gpu, ms);
         let var = variant(cfg.payload());
-        let frag = wgpu::ShaderStages::FRAGMENT;
-        let comp = wgpu::ShaderStages::COMPUTE;
         let mut alloc = AllocCounter::default();
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
-
-        let peel_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("peel"),
-            entries: &[
-                camera_entry(0),
-                texture_entry_ms(1, wgpu::TextureSampleType::Depth, frag, ms),
-                texture_entry_ms(2, wgpu::TextureSampleType::Uint, frag, ms),
-            ],
-        });
-        let sample_type = |f: wgpu::TextureFormat| match f {
-            ID_FORMAT => wgpu::TextureSampleType::Uint,
-            _ => wgpu::TextureSampleType::Float { filterable: false },
-        };
-        let mut resolve_entries = vec![texture_entry_ms(
-            1,
-            wgpu::TextureSampleType::Depth,
-            comp,
-            ms,
-        )];
-        for &(f, binding) in var.targets {
-            resolve_entries.push(texture_entry_ms(binding, sample_type(f), comp, ms));
-        }
-        for b in 5..=7 {
-            resolve_entries.push(storage_entry(b, false, comp));
-        }
-        let resolve_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("peel resolve"),
-            entries: &resolve_entries,
-        });
-        let peel_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("peel"),
-            bind_group_layouts: &[Some(&peel_bgl)],
-            immediate_size: 0,
-        });
-        let comp_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("peel resolve"),
-            bind_group_layouts: &[Some(&peel_bgl), Some(&resolve_bgl)],
-            immediate_size: 0,
-        });
+        // Every texture multisampled under MSAA (module doc).
+        let tex = |s| if ms { B::TextureMs(s) } else { B::Texture(s) };
+        let sample_type = |f: wgpu::TextureFormat| if f == ID_FORMAT { UINT } else { FLOAT };
+        // Group 0 of every pass: camera, the previous layer's depth and ids (tie-break).
+        let peel_rows = [(0, B::Camera), (1, tex(DEPTH)), (2, tex(UINT))];
+        let peel_table = Bindings::new(gpu, "peel", wgpu::ShaderStages::FRAGMENT, &peel_rows);
+        // Group 1 of the fold: this layer's depth and targets, fold state, counts, image.
+        let mut rows = vec![(1, tex(DEPTH))];
+        rows.extend(var.targets.iter().map(|&(f, b)| (b, tex(sample_type(f)))));
+        rows.extend([(5, B::Storage), (6, B::Storage), (7, B::Storage)]);
+        let resolve_table = Bindings::new(gpu, "peel resolve", wgpu::ShaderStages::COMPUTE, &rows);
+        let peel_layout = pipeline_layout(gpu, "peel", &[&peel_table.layout]);
+        let comp_layout = pipeline_layout(
+            gpu,
+            "peel resolve",
+            &[&peel_table.layout, &resolve_table.layout],
+        );
         let layouts: Vec<_> = GpuScene::layouts(var.attrs).into_iter().map(Some).collect();
         let targets: Vec<_> = var
             .targets
             .iter()
-            .map(|&(format, _)| {
-                Some(wgpu::ColorTargetState {
-                    format,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })
-            })
+            .map(|&(format, _)| Some(format.into()))
             .collect();
         let make = |peel: bool| {
             let constants = [
@@ -330,194 +383,62 @@ impl PreparedPeel {
                 ("TIEBREAK", if cfg.tiebreak { 1.0 } else { 0.0 }),
                 ("SAMPLES", samples as f64),
             ];
-            let opts = wgpu::PipelineCompilationOptions {
+            let label = if peel { "peel" } else { "peel first layer" };
+            let r = Raster {
+                module: &module,
+                vs: var.vs,
+                buffers: &layouts,
+                fs: var.fs,
+                targets: &targets,
                 constants: &constants,
-                zero_initialize_workgroup_memory: false,
+                depth: Some(depth_state(scene.reversed_z, true)),
+                samples,
             };
-            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(if peel { "peel" } else { "peel first layer" }),
-                layout: Some(&peel_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some(var.vs),
-                    compilation_options: Default::default(),
-                    buffers: &layouts,
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(depth_state(scene.reversed_z, true)),
-                multisample: multisample(samples),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(var.fs),
-                    compilation_options: opts,
-                    targets: &targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            render_pipeline(gpu, label, &peel_layout, r)
         };
         let first = make(false);
         let peel = make(true);
         let mut fold_constants = cfg.effect.constants();
         fold_constants.push(("SAMPLES", samples as f64));
         let compute = |entry: &str| {
-            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&comp_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &fold_constants,
-                    zero_initialize_workgroup_memory: false,
-                },
-                cache: None,
-            })
+            compute_pipeline(
+                gpu,
+                entry,
+                &comp_layout,
+                &module,
+                entry,
+                &fold_constants,
+                false,
+            )
         };
         let resolve = compute(var.resolve);
         let begin = compute("fold_begin");
         let end = compute("fold_end");
 
-        let depth_tex = [0, 1].map(|i| {
-            alloc.texture_ms(
-                gpu,
-                &format!("peel depth {i}"),
-                w,
-                h,
-                wgpu::TextureFormat::Depth32Float,
-                usage,
-                samples,
-            )
-        });
-        let depth_views = [0, 1].map(|i| depth_tex[i].create_view(&Default::default()));
-        // One texture per target; the id target gets a second one when the tie-break reads
-        // the previous layer's ids.
-        let mut views: Vec<[wgpu::TextureView; 2]> = Vec::new();
-        for &(f, binding) in var.targets {
-            let a = alloc
-                .texture_ms(
-                    gpu,
-                    &format!("peel layer {binding}"),
-                    w,
-                    h,
-                    f,
-                    usage,
-                    samples,
-                )
-                .create_view(&Default::default());
-            let b = if cfg.tiebreak && f == ID_FORMAT {
-                alloc
-                    .texture_ms(
-                        gpu,
-                        &format!("peel layer {binding}'"),
-                        w,
-                        h,
-                        f,
-                        usage,
-                        samples,
-                    )
-                    .create_view(&Default::default())
-            } else {
-                a.clone()
-            };
-            views.push([a, b]);
-        }
-        let target_views = [0, 1].map(|p| views.iter().map(|v| v[p].clone()).collect::<Vec<_>>());
-        let dummy_id = gpu
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("peel no ids"),
-                size: wgpu::Extent3d {
-                    width: 1,
-                    height: 1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: samples,
-                dimension: wgpu::TextureDimension::D2,
-                format: ID_FORMAT,
-                // A multisampled texture must be renderable.
-                usage: if ms {
-                    usage
-                } else {
-                    wgpu::TextureUsages::TEXTURE_BINDING
-                },
-                view_formats: &[],
-            })
-            .create_view(&Default::default());
-        let id_target = var.targets.iter().position(|&(f, _)| f == ID_FORMAT);
-
-        let px = (w * h) as u64;
+        let t = Targets::new(gpu, &mut alloc, scene, &cfg, &var);
+        let px = scene.pixels() as u64;
         let images = cfg.effect.effect.image_count();
-        let st = wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_SRC
-            | wgpu::BufferUsages::COPY_DST;
         let slots = px * samples as u64;
-        let fold = alloc.buffer(gpu, "peel fold state", slots * FOLD_STATE_BYTES, st);
-        let counts = alloc.buffer(gpu, "peel counts", slots * 4, st);
-        let image = alloc.buffer(gpu, "peel image", px * 16 * images as u64, st);
+        let fold = alloc.buffer(gpu, "peel fold state", slots * FOLD_STATE_BYTES, STORAGE_RW);
+        let counts = alloc.buffer(gpu, "peel counts", slots * 4, STORAGE_RW);
+        let image = alloc.buffer(gpu, "peel image", px * 16 * images as u64, STORAGE_RW);
+        let id_target = var.targets.iter().position(|&(f, _)| f == ID_FORMAT);
         let peel_bind = [0usize, 1].map(|p| {
             let prev_id = match (cfg.tiebreak, id_target) {
-                (true, Some(t)) => &views[t][1 - p],
-                _ => &dummy_id,
+                (true, Some(i)) => &t.views[i][1 - p],
+                _ => &t.dummy_id,
             };
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("peel"),
-                layout: &peel_bgl,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: scene.camera.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&depth_views[1 - p]),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: wgpu::BindingResource::TextureView(prev_id),
-                    },
-                ],
-            })
+            let depth = &t.depth_views[1 - p];
+            peel_table.group(gpu, &[(&scene.camera).into(), depth.into(), prev_id.into()])
         });
         let resolve_bind = [0usize, 1].map(|p| {
-            let mut entries = vec![wgpu::BindGroupEntry {
-                binding: 1,
-                resource: wgpu::BindingResource::TextureView(&depth_views[p]),
-            }];
-            for (t, &(_, binding)) in var.targets.iter().enumerate() {
-                entries.push(wgpu::BindGroupEntry {
-                    binding,
-                    resource: wgpu::BindingResource::TextureView(&views[t][p]),
-                });
-            }
-            for (binding, buf) in [(5, &fold), (6, &counts), (7, &image)] {
-                entries.push(wgpu::BindGroupEntry {
-                    binding,
-                    resource: buf.as_entire_binding(),
-                });
-            }
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("peel resolve"),
-                layout: &resolve_bgl,
-                entries: &entries,
-            })
+            let mut res: Vec<Res> = vec![(&t.depth_views[p]).into()];
+            res.extend(t.views.iter().map(|v| Res::View(&v[p])));
+            res.extend([&fold, &counts, &image].map(Res::Buf));
+            resolve_table.group(gpu, &res)
         });
-        let occlusion = d.create_query_set(&wgpu::QuerySetDescriptor {
-            label: Some("peel occlusion"),
-            ty: wgpu::QueryType::Occlusion,
-            count: 1,
-        });
-        let occ_resolve = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("occlusion resolve"),
-            size: 256,
-            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let occ_read = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("occlusion read"),
-            size: 8,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let (occlusion, occ_resolve, occ_read) = occlusion_query(gpu);
+        let target_views = [0, 1].map(|p| t.views.iter().map(|v| v[p].clone()).collect::<Vec<_>>());
         PreparedPeel {
             first,
             peel,
@@ -527,7 +448,7 @@ impl PreparedPeel {
             attrs: var.attrs,
             peel_bind,
             resolve_bind,
-            depth_views,
+            depth_views: t.depth_views,
             target_views,
             image,
             counts,

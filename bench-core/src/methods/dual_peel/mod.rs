@@ -14,7 +14,7 @@
 //! once (their thickness sums and transmittance products compose; see `dual_peel.wgsl`). CSG
 //! and depth of field are skipped with the reason ([`effect_of`]).
 
-use super::depth_peel::{MAX_LAYERS, OCCLUSION_STOP};
+use super::shared::axes::{MAX_LAYERS, OCCLUSION_STOP};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::effects::{self, Effect, EffectConfig, Payload, FOLD_STATE_BYTES, FOLD_WGSL};

@@ -2,7 +2,7 @@
 //! each pixel composited exactly and the rest accumulated order-independently, composited behind
 //! them (CPU twin [`crate::oit::hybrid`]). The core is the hazard-free atomic k-buffer
 //! (`kbuffer_atomic`: keys pass, payload pass, resolve); every fragment the payload pass does not
-//! capture is blended into the tail targets (methods/tail, `tail.wgsl`), whose opacity is the
+//! capture is blended into the tail targets (methods/shared/tail, `tail.wgsl`), whose opacity is the
 //! paper's weighted average (Bavoil & Myers 2008): 1 − (1 − Σα/n)ⁿ, colour Σαc/Σα. Its WGSL is
 //! the k-buffer's and the tail's (`tail_behind` with `MEAN_ALPHA`): no shader of its own.
 //!
@@ -12,9 +12,9 @@
 //!
 //! Memory per pixel: k × 40 B (key, claim, entry) + 16 B image + 24 B tail + 4 B stand-in depth.
 
-use super::kbuffer_atomic::PreparedAtomic;
-use super::kbuffer_rmw::LAYERS;
-use super::tail::{self, Bounding};
+use super::shared::kslots::atomic::PreparedAtomic;
+use super::shared::kslots::LAYERS;
+use super::shared::tail::{self, Bounding};
 use super::{Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;

@@ -15,7 +15,7 @@
 //! the insertion rule on the CPU, applied one fragment at a time (what a hazard-free run keeps).
 //!
 //! `tail = blend` (default `drop`): the fragment that falls out of a pixel (rejected, or the
-//! farthest kept one evicted by a nearer one) is returned to the blended tail (methods/tail).
+//! farthest kept one evicted by a nearer one) is returned to the blended tail (methods/shared/tail).
 //! `keep = first` (default `nearest`): a full pixel takes no more fragments, so the first k to
 //! arrive stay (the hazard judge then does not apply: its truth is the k nearest).
 //!
@@ -25,37 +25,31 @@
 //! k-buffer of Table 6.1, beside transparency's colour ("RGBZ"). The thesis's multipass
 //! peeling of k layers (MP) is `depth_peel` with `max_layers = k`.
 
-pub mod entry;
-
-use super::store::{self, dummy_depth, storage_pass_with, storage_pipeline_with};
-use super::tail::{self, Bounding, TailTargets, RESOLVE_WGSL, TAIL_WGSL};
-use super::{Capture, Expected, FrameStats, Method, Prepared};
+use super::shared::axes::SPECIALISATION;
+use super::shared::kslots::{
+    entry::SlotConfig, kslots_entries, kslots_layout, KSlots, Races, LAYERS,
+};
+use super::shared::packing::PACKING_WGSL;
+use super::shared::store::{dummy_depth, storage_pass_with, storage_pipeline_with};
+use super::shared::tail::{self, Bounding, TailTargets, RESOLVE_WGSL, TAIL_WGSL};
+use super::{Capture, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::effects::{self, FOLD_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
-use crate::gpu_util::{
-    bind_buffers, camera_entry, check_storage_size, pixel_pass, read_vec, shader, storage_entry,
-    STORAGE_RW,
-};
-use crate::methods::depth_peel::SPECIALISATION;
-use crate::methods::packing::PACKING_WGSL;
+use crate::gpu_util::{bind_buffers, pixel_pass, read_vec, shader};
 use crate::oit::Keep;
-use crate::record::{cols, Flag};
+use crate::record::cols;
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
 use crate::Result;
-use entry::SlotConfig;
 
 const WGSL: &str = include_str!("kbuffer_rmw.wgsl");
 /// Triangles per draw in the `heuristics` variant (the thesis's batch size).
 pub const BATCH_TRIANGLES: u32 = 32;
-pub const MAX_K: i64 = 64;
 
 pub struct KBufferRmw;
 
-/// k, the fragments a k-buffer keeps per pixel (both k-buffers).
-pub const LAYERS: Axis = Axis::int(cols::LAYERS, "k: fragments kept per pixel", 8, 1, MAX_K);
 const HEURISTICS: Axis = Axis::bool(
     cols::HEURISTICS,
     "the thesis's hazard heuristics: draws depth-sorted in batches of 32 triangles",
@@ -104,147 +98,6 @@ impl Method for KBufferRmw {
     }
 }
 
-/// Per-pixel k slots: keys (u32, larger = nearer, 0 = empty), entries, and the resolved image.
-pub struct KSlots {
-    pub k: u32,
-    /// Output images (dof: 3).
-    pub images: u64,
-    /// MSAA samples with k slots each (1: single-sample).
-    pub samples: u32,
-    pub keys: wgpu::Buffer,
-    pub entries: wgpu::Buffer,
-    pub image: wgpu::Buffer,
-    /// Captured depths of the last readback (k per pixel, nearest first), for `judge`.
-    pub captured: Vec<Option<f32>>,
-}
-
-impl KSlots {
-    pub fn new(
-        gpu: &Gpu,
-        alloc: &mut AllocCounter,
-        scene: &GpuScene,
-        k: u32,
-        slot: &SlotConfig,
-    ) -> Result<Self> {
-        Self::per_sample(gpu, alloc, scene, (k, slot), 1)
-    }
-
-    /// k slots of `slot`'s entries for each of `samples` samples per pixel (MSAA per-sample
-    /// capture); the effect's images.
-    pub fn per_sample(
-        gpu: &Gpu,
-        alloc: &mut AllocCounter,
-        scene: &GpuScene,
-        (k, slot): (u32, &SlotConfig),
-        samples: u32,
-    ) -> Result<Self> {
-        let px = scene.pixels() as u64;
-        let slots = px * samples as u64 * k as u64;
-        let entry = slot.entry_bytes();
-        check_storage_size(gpu, "k-buffer entries", slots * entry)?;
-        let images = slot.images();
-        Ok(KSlots {
-            k,
-            images,
-            samples,
-            keys: alloc.buffer(gpu, "k-buffer keys", slots * 4, STORAGE_RW),
-            entries: alloc.buffer(gpu, "k-buffer entries", slots * entry, STORAGE_RW),
-            image: alloc.buffer(gpu, "k-buffer image", px * 16 * images, STORAGE_RW),
-            captured: vec![],
-        })
-    }
-
-    /// Image, counts (non-empty slots) and the captured depths (kept for `judge`). Per-sample
-    /// slots read back the image only: per-pixel counts and the hazard judge are single-sample
-    /// by contract (the image is judged against each sample's k nearest).
-    pub fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
-        let n = scene.pixels();
-        let k = self.k as usize;
-        let mut cap = Capture::empty();
-        let images = n * self.images as usize;
-        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, images)?);
-        cap.expected = Expected::FirstK(self.k);
-        if self.samples > 1 {
-            self.captured.clear();
-            return Ok(cap);
-        }
-        let keys = read_vec::<u32>(gpu, &self.keys, n * k)?;
-        self.captured = keys
-            .iter()
-            .map(|&key| (key != 0).then(|| store::key_depth(key, scene.reversed_z)))
-            .collect();
-        cap.counts = Some(
-            keys.chunks(k)
-                .map(|s| s.iter().take_while(|&&x| x != 0).count() as u32)
-                .collect(),
-        );
-        Ok(cap)
-    }
-
-    /// `hazard_pixels`: pixels whose captured depths are not the true k nearest. It cannot tell
-    /// an RMW race from a raster-coverage disagreement with the reference (a fragment the GPU
-    /// did not rasterize: seen on 1 pixel of 128² grass on lavapipe, where depth_peel and
-    /// linked_list miss it too), so read it beside depth_peel's `layer_count_accuracy`.
-    pub fn judge(&self, cap: &mut Capture, lists: &FragmentLists, races: Races) {
-        if self.captured.len() != lists.pixels() * self.k as usize {
-            return;
-        }
-        let m = store::k_nearest_mismatch(&self.captured, self.k as usize, lists);
-        let mut notes = Vec::new();
-        match races {
-            Races::Possible => {
-                cap.hazard_pixels = Some(m.hazards);
-                if let Some(p) = m.first_hazard {
-                    cap.flag.add(Flag::Hazard);
-                    let (x, y) = (p as u32 % lists.width, p as u32 / lists.width);
-                    notes.push(format!("first hazard pixel ({x},{y})"));
-                }
-            }
-            Races::None => {
-                // An insertion without read-modify-write races: a pixel off the true k nearest
-                // is the rasteriser's fragment set differing from the reference's (the same
-                // pixels depth_peel and linked_list miss), never a hazard.
-                cap.hazard_pixels = Some(0);
-                if let Some(p) = m.first_hazard {
-                    cap.flag.add(Flag::FragmentsDiffer);
-                    let (x, y) = (p as u32 % lists.width, p as u32 / lists.width);
-                    notes.push(format!(
-                        "{} pixels hold other fragments than the reference's k nearest (raster coverage; first ({x},{y}))",
-                        m.hazards
-                    ));
-                }
-            }
-        }
-        if let Some(p) = m.first_tie {
-            // Not a race: the true k + 1 nearest hold an f32 depth tie the GPU cannot order.
-            cap.flag.add(Flag::LostCoplanar);
-            let (x, y) = (p as u32 % lists.width, p as u32 / lists.width);
-            notes.push(format!(
-                "{} pixels differ at f32 depth ties (not counted as hazards; first ({x},{y}))",
-                m.ties
-            ));
-        }
-        for note in notes {
-            cap.notes = if cap.notes.is_empty() {
-                note
-            } else {
-                format!("{}; {note}", cap.notes)
-            };
-        }
-    }
-}
-
-/// Whether a k-buffer's insertion can race ([`KSlots::judge`]): what a pixel off the true k
-/// nearest is named.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Races {
-    /// Read-modify-write of the slots (kbuffer_rmw): a wrong pixel is a `hazard`.
-    Possible,
-    /// Atomic insertion (kbuffer_atomic): hazard-free by construction, a wrong pixel is
-    /// `fragments_differ`.
-    None,
-}
-
 /// The insertion rule on the CPU, one fragment at a time: `slots` hold (depth, payload)
 /// nearest first; a fragment not nearer than a full buffer's last is dropped; equal depths keep
 /// arrival order. `nearer(a, b)` is the scene's depth convention.
@@ -280,25 +133,6 @@ struct PreparedRmw {
     tail: Option<TailTargets>,
     tailed: u64,
     alloc: AllocCounter,
-}
-
-/// Bind group layout shared by the insert and resolve stages: camera, keys, entries, image.
-pub fn kslots_layout(gpu: &Gpu, extra: u32) -> wgpu::BindGroupLayout {
-    gpu.device
-        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("k-buffer"),
-            entries: &kslots_entries(extra),
-        })
-}
-
-/// The entries of [`kslots_layout`] (a tail resolve adds its textures to them).
-pub fn kslots_entries(extra: u32) -> Vec<wgpu::BindGroupLayoutEntry> {
-    let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
-    let mut entries = vec![camera_entry(0)];
-    for b in 1..4 + extra {
-        entries.push(storage_entry(b, false, fc));
-    }
-    entries
 }
 
 impl PreparedRmw {
@@ -496,6 +330,8 @@ mod tests {
     use scenarios::ParamValue::{Bool, Int};
 
     use super::*;
+    use crate::methods::shared::store;
+    use crate::record::Flag;
     use crate::testing::{count_mismatch, max_err, params, run, scene};
 
     /// Composite of 8 layers in f32 vs f64: a few f32 ulps per step.
@@ -614,6 +450,6 @@ mod tests {
     #[test]
     fn tail_and_keep_modes_equal_their_definition_and_count_what_did_not_fit() {
         // Up to 8 kept layers composited in f32, plus f32 tail sums (≤ 30 terms here).
-        crate::methods::tail::check_tail_and_keep(&KBufferRmw, 2.0 * IMAGE_TOL);
+        tail::check_tail_and_keep(&KBufferRmw, 2.0 * IMAGE_TOL);
     }
 }

@@ -21,7 +21,7 @@
 //!   colour, depths and object id (every effect but Fresnel).
 //!
 //! - `tail = drop|blend` (default `drop`): `blend` sends the fragments that find their pool full
-//!   (the append pass's fragment stage returns them to methods/tail's blend targets; with compact
+//!   (the append pass's fragment stage returns them to methods/shared/tail's blend targets; with compact
 //!   nodes the append pass then runs the full vertex stage for their colour) and those beyond the
 //!   resolve's sort capacity (summed in the resolve, which sees them) to an out-of-order tail
 //!   composited behind the list. A pool fills in arrival order, so what a pixel keeps is its first
@@ -33,16 +33,19 @@
 //!   pixel-rate fragment with its coverage mask packed into the tag (12 B still: primitives in
 //!   23 bits), and the resolve folds each sample over the fragments whose mask has its bit.
 //!   Either resolve shades at the pixel centre and averages the samples. `ssaa2x2` wraps the
-//!   single-sample list (`methods::ssaa`). `tail = blend` is single-sample only.
+//!   single-sample list (`methods::shared::ssaa`). `tail = blend` is single-sample only.
 //!
 //! Memory: `bytes_overhead` is everything but the nodes (heads, per-pixel lost/resolved counts,
 //! output images, the per-tile cursors and ranges, the stand-in depth attachment).
 
 use wgpu::util::DeviceExt;
 
-use super::compute_abuffer::{MASKED_PRIM_BITS, VISIBILITY_WGSL};
-use super::store::storage_pass_with;
-use super::tail::{self, TailTargets, TAIL_WGSL};
+use super::shared::bind::{
+    mesh_buffers, pipeline_layout, pipeline_layout_gaps, Bindings, Kind as B, Res, FC, FLOAT,
+};
+use super::shared::counted_capture::{MASKED_PRIM_BITS, VISIBILITY_WGSL};
+use super::shared::store::storage_pass_with;
+use super::shared::tail::{self, TailTargets, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::aa::{self, AaCapture, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
@@ -50,8 +53,8 @@ use crate::effects::{self, Effect, EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
-    bind_buffers, camera_entry, check_storage_size, compute_pipeline, multisample,
-    per_sample_source, read_vec, storage_entry, COMMON_WGSL, STORAGE_RW,
+    check_storage_size, compute_pipeline, multisample, per_sample_source, read_vec, shader_source,
+    COMMON_WGSL, STORAGE_RW,
 };
 use crate::record::{cols, Flag};
 use crate::timing::GpuTimer;
@@ -166,7 +169,7 @@ impl Method for LinkedList {
                 aa: AaConfig::NONE,
                 ..c
             };
-            return super::ssaa::prepare(gpu, scene, |big| {
+            return super::shared::ssaa::prepare(gpu, scene, |big| {
                 Ok(Box::new(PreparedList::new(gpu, big, layers, c, &effect)?))
             });
         }
@@ -302,6 +305,180 @@ struct PreparedList {
     overhead: u64,
 }
 
+/// The module's source: the list, the node variant (compact nodes re-derive attributes from
+/// the primitive), the fold and the tail; per sample when a list is kept per sample.
+fn list_source(c: &ListConfig) -> String {
+    let variant = if c.compact {
+        format!("{COMPACT_WGSL}\n{VISIBILITY_WGSL}")
+    } else {
+        FULL_WGSL.to_string()
+    };
+    // `enable` directives must open the module, before the common vertex stage.
+    let enable = if c.compact {
+        "enable primitive_index;\n"
+    } else {
+        ""
+    };
+    let src = format!(
+        "{enable}{COMMON_WGSL}\n{WGSL}\n{variant}\n{EFFECTS_WGSL}\n{TAIL_WGSL}\n{TAIL_RESOLVE_WGSL}"
+    );
+    // Per-sample capture: every fragment entry runs per sample (SAMPLE = its index).
+    if c.lists_per_pixel() > 1 {
+        per_sample_source(&src)
+    } else {
+        src
+    }
+}
+
+/// Counted pools laid end to end: (first node, nodes) per tile, each its count plus
+/// `slack_pct` percent.
+fn counted_ranges(counts: &[u32], slack_pct: u64) -> Vec<[u32; 2]> {
+    let mut first = 0u64;
+    let mut r = Vec::with_capacity(counts.len());
+    for &n in counts {
+        let cap = n as u64 + (n as u64 * slack_pct).div_ceil(100);
+        r.push([
+            first.min(u32::MAX as u64) as u32,
+            cap.min(u32::MAX as u64) as u32,
+        ]);
+        first += cap;
+    }
+    r
+}
+
+fn flag(b: bool) -> f64 {
+    if b {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// Coverage-mask tags keep [`MASKED_PRIM_BITS`] bits of primitive: refuse larger scenes.
+fn check_tags(scene: &GpuScene, coverage: bool) -> Result<()> {
+    let ntri = scene.index_count / 3;
+    if coverage && ntri >= 1 << MASKED_PRIM_BITS {
+        return Err(CoreError::Param(format!(
+            "linked_list with coverage masks tags primitives in {MASKED_PRIM_BITS} bits: {ntri} triangles are too many"
+        )));
+    }
+    Ok(())
+}
+
+/// Overrides the raster stages and the resolve share; the compact tag's primitive bits where
+/// a mask is packed.
+fn shared_constants(c: &ListConfig, coverage: bool) -> Vec<(&'static str, f64)> {
+    let mut shared = vec![
+        ("SAMPLES", c.aa.msaa() as f64),
+        ("COVERAGE", flag(coverage)),
+    ];
+    if c.compact {
+        let bits = if coverage { MASKED_PRIM_BITS } else { 31 };
+        shared.push(("TAG_PRIM_BITS", bits as f64));
+    }
+    shared
+}
+
+/// An entry point and what it uses.
+type Stage<T> = (&'static str, T);
+
+/// The append pass's vertex stage (attributes fetched) and fragment stage (targets).
+fn append_stage(
+    c: &ListConfig,
+    coverage: bool,
+) -> (Stage<Attrs>, Stage<Vec<Option<wgpu::ColorTargetState>>>) {
+    let vs = if c.compact && !c.tail {
+        ("vs_position", Attrs::POSITION_ONLY)
+    } else {
+        ("vs_full", Attrs::ALL)
+    };
+    let fs = if c.tail {
+        ("fs_append_tail", TailTargets::color_targets())
+    } else if coverage {
+        ("fs_append_mask", Vec::new())
+    } else {
+        ("fs_append", Vec::new())
+    };
+    (vs, fs)
+}
+
+/// The resolve: sort and fold each list (per sample under MSAA), or with the tail behind.
+fn resolve_kernel(
+    gpu: &Gpu,
+    (module, layout): (&wgpu::ShaderModule, &wgpu::PipelineLayout),
+    c: &ListConfig,
+    effect: &EffectConfig,
+    shared: &[(&'static str, f64)],
+) -> wgpu::ComputePipeline {
+    let samples = c.aa.msaa();
+    let mut rc = effect.constants();
+    rc.push(("TAIL", flag(c.tail)));
+    rc.extend_from_slice(shared);
+    if c.compact {
+        // Under MSAA a fragment may cover samples but not the centre it is shaded at.
+        rc.push(("EXTRAPOLATE", flag(samples > 1)));
+    }
+    let entry = match (c.tail, samples > 1) {
+        (true, _) => "resolve_tail",
+        (false, true) => "resolve_ms",
+        (false, false) => "resolve",
+    };
+    compute_pipeline(
+        gpu,
+        "linked_list resolve",
+        layout,
+        module,
+        entry,
+        &rc,
+        false,
+    )
+}
+
+/// Pool ranges, (first node, nodes) per pool, and the note saying how they were sized:
+/// `counts` per tile (counted pools) or `layers` nodes per pixel; Err where the pool does not
+/// fit 32-bit node indices.
+fn pool_plan(
+    counts: Option<&[u32]>,
+    c: &ListConfig,
+    layers: u64,
+    px: u64,
+) -> Result<(Vec<[u32; 2]>, String)> {
+    let samples = c.aa.msaa();
+    let coverage = samples > 1 && c.aa.capture == AaCapture::Coverage;
+    let (ranges, note) = match counts {
+        Some(counts) => {
+            let true_frags: u64 = counts.iter().map(|&n| n as u64).sum();
+            let pools = counts.len();
+            let what = match (samples > 1, coverage) {
+                (false, _) => String::new(),
+                (true, true) => format!(" (pixel-rate, {samples}× coverage masks)"),
+                (true, false) => format!(" ({samples} samples each, a list per sample)"),
+            };
+            let note = format!(
+                "counted pool: {true_frags} fragments{what} at prepare in {pools} tiles of {TILE_SIDE}×{TILE_SIDE} px, {} % slack",
+                c.slack_pct
+            );
+            (counted_ranges(counts, c.slack_pct), note)
+        }
+        None => {
+            let pool = layers * px;
+            let note = format!("fixed pool: {layers} nodes per pixel");
+            (vec![[0, pool.min(u32::MAX as u64) as u32]], note)
+        }
+    };
+    let pool_end = ranges
+        .last()
+        .map(|r| r[0] as u64 + r[1] as u64)
+        .unwrap_or(0);
+    if pool_end >= u32::MAX as u64 || (!c.counted && layers * px >= u32::MAX as u64) {
+        return Err(CoreError::Param(format!(
+            "linked_list pool of {} nodes does not fit 32-bit node indices",
+            pool_end.max(layers * px * u64::from(!c.counted))
+        )));
+    }
+    Ok((ranges, note))
+}
+
 impl PreparedList {
     fn new(
         gpu: &Gpu,
@@ -312,102 +489,43 @@ impl PreparedList {
     ) -> Result<Self> {
         let d = &gpu.device;
         let px = scene.pixels() as u64;
-        let (node_bytes, variant) = if c.compact {
-            (
-                COMPACT_NODE_BYTES,
-                format!("{COMPACT_WGSL}\n{VISIBILITY_WGSL}"),
-            )
+        let node_bytes = if c.compact {
+            COMPACT_NODE_BYTES
         } else {
-            (FULL_NODE_BYTES, FULL_WGSL.to_string())
+            FULL_NODE_BYTES
         };
-        // `enable` directives must open the module, before the common vertex stage.
-        let enable = if c.compact {
-            "enable primitive_index;\n"
-        } else {
-            ""
-        };
-        let src = format!(
-            "{enable}{COMMON_WGSL}\n{WGSL}\n{variant}\n{EFFECTS_WGSL}\n{TAIL_WGSL}\n{TAIL_RESOLVE_WGSL}"
-        );
         let samples = c.aa.msaa();
         let coverage = samples > 1 && c.aa.capture == AaCapture::Coverage;
         let lists = c.lists_per_pixel();
-        // Per-sample capture: every fragment entry runs per sample (SAMPLE = its index).
-        let src = if lists > 1 {
-            per_sample_source(&src)
-        } else {
-            src
-        };
-        if coverage {
-            let ntri = scene.index_count / 3;
-            if ntri >= 1 << MASKED_PRIM_BITS {
-                return Err(CoreError::Param(format!(
-                    "linked_list with coverage masks tags primitives in {MASKED_PRIM_BITS} bits: {ntri} triangles are too many"
-                )));
-            }
-        }
-        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("linked_list"),
-            source: wgpu::ShaderSource::Wgsl(src.into()),
-        });
-        let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
-        let mut entries = vec![camera_entry(0)];
-        entries.extend((1..7).map(|b| storage_entry(b, false, fc)));
-        entries.push(storage_entry(7, true, fc));
-        let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("linked_list"),
-            entries: &entries,
-        });
-        let mesh_bgl = c.compact.then(|| {
-            let cs = wgpu::ShaderStages::COMPUTE;
-            let e: Vec<_> = (0..MESH_BUFFERS)
-                .map(|b| storage_entry(b, true, cs))
-                .collect();
-            d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("linked_list mesh"),
-                entries: &e,
-            })
-        });
-        let raster_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("linked_list append"),
-            bind_group_layouts: &[Some(&bgl)],
-            immediate_size: 0,
-        });
+        check_tags(scene, coverage)?;
+        let module = shader_source(gpu, "linked_list", list_source(&c));
+        // Group 0: camera, heads, nodes, image, counters, lost + resolved counts, pool cursors,
+        // pool ranges (read only).
+        let mut rows = vec![B::Camera];
+        rows.extend([B::Storage; 6]);
+        rows.push(B::StorageRo);
+        let table = Bindings::seq(gpu, "linked_list", FC, &rows);
+        // Group 1 of the compact resolve: the mesh, to re-derive attributes.
+        let mesh_rows = [B::StorageRo; MESH_BUFFERS as usize];
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let mesh_table = c
+            .compact
+            .then(|| Bindings::seq(gpu, "linked_list mesh", cs, &mesh_rows));
+        let raster_layout = pipeline_layout(gpu, "linked_list append", &[&table.layout]);
         // tail = blend: the tail textures as group 2 of the resolve only (the append pass
         // renders into them).
-        let tail_bgl = c.tail.then(|| {
-            d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("linked_list tail"),
-                entries: &TailTargets::layout_entries(0, wgpu::ShaderStages::COMPUTE),
-            })
-        });
-        let resolve_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("linked_list resolve"),
-            bind_group_layouts: &[Some(&bgl), mesh_bgl.as_ref(), tail_bgl.as_ref()],
-            immediate_size: 0,
-        });
-        let flag = |b: bool| if b { 1.0 } else { 0.0 };
-        // Overrides the raster stages and the resolve share; the compact tag's primitive bits
-        // where a mask is packed.
-        let mut shared = vec![("SAMPLES", samples as f64), ("COVERAGE", flag(coverage))];
-        if c.compact {
-            let bits = if coverage { MASKED_PRIM_BITS } else { 31 };
-            shared.push(("TAG_PRIM_BITS", bits as f64));
-        }
+        let tail_rows = TailTargets::rows(0, B::Texture(FLOAT));
+        let tail_table = c
+            .tail
+            .then(|| Bindings::new(gpu, "linked_list tail", cs, &tail_rows));
+        let mesh_layout = mesh_table.as_ref().map(|t| &t.layout);
+        let tail_layout = tail_table.as_ref().map(|t| &t.layout);
+        let groups = [Some(&table.layout), mesh_layout, tail_layout];
+        let resolve_layout = pipeline_layout_gaps(gpu, "linked_list resolve", &groups);
+        let shared = shared_constants(&c, coverage);
         let mut raster_constants = vec![("TILED", flag(c.counted))];
         raster_constants.extend_from_slice(&shared);
-        let (vs, attrs) = if c.compact && !c.tail {
-            ("vs_position", Attrs::POSITION_ONLY)
-        } else {
-            ("vs_full", Attrs::ALL)
-        };
-        let (fs, targets) = if c.tail {
-            ("fs_append_tail", TailTargets::color_targets())
-        } else if coverage {
-            ("fs_append_mask", Vec::new())
-        } else {
-            ("fs_append", Vec::new())
-        };
+        let ((vs, attrs), (fs, targets)) = append_stage(&c, coverage);
         let append = list_pipeline(
             gpu,
             "linked_list append",
@@ -417,30 +535,10 @@ impl PreparedList {
             (fs, &targets),
             (&raster_constants, samples),
         );
-        let mut rc = effect.constants();
-        rc.push(("TAIL", flag(c.tail)));
-        rc.extend_from_slice(&shared);
-        if c.compact {
-            // Under MSAA a fragment may cover samples but not the centre it is shaded at.
-            rc.push(("EXTRAPOLATE", flag(samples > 1)));
-        }
-        let entry = match (c.tail, samples > 1) {
-            (true, _) => "resolve_tail",
-            (false, true) => "resolve_ms",
-            (false, false) => "resolve",
-        };
-        let resolve = compute_pipeline(
-            gpu,
-            "linked_list resolve",
-            &resolve_layout,
-            &module,
-            entry,
-            &rc,
-            false,
-        );
+        let resolve = resolve_kernel(gpu, (&module, &resolve_layout), &c, effect, &shared);
         let images = effect.effect.image_count();
         let mut alloc = AllocCounter::default();
-        let depth = super::store::dummy_depth_ms(gpu, &mut alloc, scene, samples);
+        let depth = super::shared::store::dummy_depth_ms(gpu, &mut alloc, scene, samples);
         let heads = alloc.buffer(gpu, "list heads", px * lists * 4, STORAGE_RW);
         let image = alloc.buffer(gpu, "list image", px * 16 * images as u64, STORAGE_RW);
         let counters = alloc.buffer(gpu, "list counters", 16, STORAGE_RW);
@@ -453,69 +551,25 @@ impl PreparedList {
         };
         let cursors = alloc.buffer(gpu, "list pool cursors", pools as u64 * 4, STORAGE_RW);
         let bind_with = |nodes: &wgpu::Buffer, ranges: &wgpu::Buffer| {
-            bind_buffers(
-                gpu,
-                "linked_list",
-                &bgl,
-                &[
-                    &scene.camera,
-                    &heads,
-                    nodes,
-                    &image,
-                    &counters,
-                    &pix,
-                    &cursors,
-                    ranges,
-                ],
-            )
+            let lists = [&scene.camera, &heads, nodes, &image];
+            let pools = [&counters, &pix, &cursors, ranges];
+            let res: Vec<Res> = lists.into_iter().chain(pools).map(Res::Buf).collect();
+            table.group(gpu, &res)
         };
         // Pool ranges: (first node, nodes) per pool.
-        let (ranges, pool_note): (Vec<[u32; 2]>, String) = if c.counted {
-            let counts = count_tiles(
+        let counts = match c.counted {
+            true => Some(count_tiles(
                 gpu,
                 scene,
                 (&module, &raster_layout, &raster_constants, samples),
                 &depth,
                 &cursors,
                 |n, r| bind_with(n, r),
-            )?;
-            let true_frags: u64 = counts.iter().map(|&n| n as u64).sum();
-            let mut first = 0u64;
-            let mut r = Vec::with_capacity(pools);
-            for &n in &counts {
-                let cap = n as u64 + (n as u64 * c.slack_pct).div_ceil(100);
-                r.push([
-                    first.min(u32::MAX as u64) as u32,
-                    cap.min(u32::MAX as u64) as u32,
-                ]);
-                first += cap;
-            }
-            let what = match (samples > 1, coverage) {
-                (false, _) => String::new(),
-                (true, true) => format!(" (pixel-rate, {samples}× coverage masks)"),
-                (true, false) => format!(" ({samples} samples each, a list per sample)"),
-            };
-            let note = format!(
-                "counted pool: {true_frags} fragments{what} at prepare in {pools} tiles of {TILE_SIDE}×{TILE_SIDE} px, {} % slack",
-                c.slack_pct
-            );
-            (r, note)
-        } else {
-            let pool = layers * px;
-            let note = format!("fixed pool: {layers} nodes per pixel");
-            (vec![[0, pool.min(u32::MAX as u64) as u32]], note)
+            )?),
+            false => None,
         };
+        let (ranges, pool_note) = pool_plan(counts.as_deref(), &c, layers, px)?;
         let pool: u64 = ranges.iter().map(|r| r[1] as u64).sum();
-        let pool_end = ranges
-            .last()
-            .map(|r| r[0] as u64 + r[1] as u64)
-            .unwrap_or(0);
-        if pool_end >= u32::MAX as u64 || (!c.counted && layers * px >= u32::MAX as u64) {
-            return Err(CoreError::Param(format!(
-                "linked_list pool of {} nodes does not fit 32-bit node indices",
-                pool_end.max(layers * px * u64::from(!c.counted))
-            )));
-        }
         let node_buffer_bytes = pool.max(1) * node_bytes;
         check_storage_size(gpu, "linked_list node pool", node_buffer_bytes)?;
         let nodes = alloc.buffer(gpu, "list nodes", node_buffer_bytes, STORAGE_RW);
@@ -527,27 +581,12 @@ impl PreparedList {
             usage: wgpu::BufferUsages::STORAGE,
         });
         let bind = bind_with(&nodes, &ranges_buf);
-        let mesh_bind = mesh_bgl.as_ref().map(|l| {
-            bind_buffers(
-                gpu,
-                "linked_list mesh",
-                l,
-                &[
-                    &scene.positions,
-                    &scene.normals,
-                    &scene.colors,
-                    &scene.object_ids,
-                    &scene.indices,
-                ],
-            )
-        });
-        let tail = tail_bgl.as_ref().map(|l| {
+        let mesh_bind = mesh_table
+            .as_ref()
+            .map(|t| t.group(gpu, &mesh_buffers(scene).map(Res::Buf)));
+        let tail = tail_table.as_ref().map(|table| {
             let t = TailTargets::new(gpu, &mut alloc, scene);
-            let b = d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("linked_list tail"),
-                layout: l,
-                entries: &t.bind_entries(0),
-            });
+            let b = table.group(gpu, &t.views());
             (t, b)
         });
         let overhead = alloc.bytes - node_buffer_bytes;

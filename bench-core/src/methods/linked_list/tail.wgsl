@@ -1,4 +1,4 @@
-// tail = blend for linked lists (appended with methods/tail/tail.wgsl): the fragments that found
+// tail = blend for linked lists (appended with methods/shared/tail/tail.wgsl): the fragments that found
 // their pool full were blended into the tail targets by the append pass; those the resolve's sort
 // dropped were summed in `sort_tail_*`. Both join the tail composited behind the sorted list.
 

@@ -18,26 +18,27 @@
 //!
 //! Axes: `layers` = k (1–16); `tail = merge | drop | blend`: `merge` is MLAB (default); `drop` and
 //! `blend` replace the merge by dropping the farthest layer or blending it into an out-of-order
-//! tail (methods/tail), which keeps the k nearest (the twin `oit::tail_blend`, keep = nearest).
+//! tail (methods/shared/tail), which keeps the k nearest (the twin `oit::tail_blend`, keep = nearest).
 //! Fragments beyond k per pixel are reported: `overflow_pixels`, and `fragments_dropped` /
 //! `fragments_tailed` (merges are counted in the notes).
 //!
 //! Memory per pixel (race build): k × 20 B layers + 4 B arrival count + 16 B image + 4 B stand-in
 //! depth (+ 24 B tail targets with `tail = blend`).
 
-use super::compute_abuffer::{PreparedAbuffer, Replay};
-use super::store::{dummy_depth, storage_pass_with, storage_pipeline_with};
-use super::tail::{self, TailTargets, TAIL_WGSL};
+use super::shared::bind::{pipeline_layout, Bindings, Kind as B, Res, FC, FLOAT};
+use super::shared::counted_capture::{PreparedAbuffer, Replay};
+use super::shared::race::judge_race;
+use super::shared::store::{dummy_depth, storage_pass_with, storage_pipeline_with};
+use super::shared::tail::{self, TailTargets, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{
-    camera_entry, check_storage_size, compute_pipeline, pixel_pass, read_vec, shader,
-    storage_entry, STORAGE_RW,
+    check_storage_size, compute_pipeline, pixel_pass, read_vec, shader, STORAGE_RW,
 };
 use crate::oit::{self, Keep, Order, TailMode};
-use crate::record::{cols, Flag};
+use crate::record::cols;
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
 use crate::Result;
@@ -49,11 +50,6 @@ const IDEAL_WGSL: &str = include_str!("ideal.wgsl");
 pub const MAX_K: i64 = 16;
 /// Bytes of one layer in storage (depth, premultiplied RGB, transmittance).
 const LAYER_BYTES: u64 = 20;
-/// A pixel whose image differs from the ideal-order twin by more than this is a hazard: ten
-/// times what f32 arithmetic alone gives over 300 fragments (the twin's `mlab_f32_twin_follows_
-/// f64_to_1e5`), plus the GPU's f32 attribute interpolation.
-pub const HAZARD_TOL: f64 = 1e-4;
-
 const LAYERS: Axis = Axis::int(cols::LAYERS, "k: blend layers per pixel", 4, 1, MAX_K);
 const TAIL: Axis = Axis::choice(
     cols::TAIL,
@@ -82,41 +78,6 @@ pub fn definition(lists: &FragmentLists, k: usize, rule: Option<TailMode>) -> Ve
         None => oit::mlab::mlab_pixel(list, k, Order::Arrival).0,
         Some(mode) => oit::tail_blend(list, k, Keep::Nearest, mode).rgba,
     })
-}
-
-/// Pixels whose image differs from `definition` by more than [`HAZARD_TOL`] in some channel,
-/// and the first one.
-pub fn hazards(image: &[[f32; 4]], definition: &[[f64; 4]]) -> (u64, Option<usize>) {
-    let mut n = 0;
-    let mut first = None;
-    for (p, (g, d)) in image.iter().zip(definition).enumerate() {
-        if (0..4).any(|c| {
-            let e = (g[c] as f64 - d[c]).abs();
-            e.is_nan() || e > HAZARD_TOL
-        }) {
-            n += 1;
-            first.get_or_insert(p);
-        }
-    }
-    (n, first)
-}
-
-/// The race build's judgement: its ideal-order twin `def` becomes the capture's definition and
-/// the pixels that differ from it its hazards (flagged, the first named in the notes).
-pub fn judge_race(cap: &mut Capture, def: Vec<[f64; 4]>, width: u32) {
-    if let Some(img) = &cap.image {
-        let (n, first) = hazards(img, &def);
-        cap.hazard_pixels = Some(n);
-        if let Some(p) = first {
-            cap.flag.add(Flag::Hazard);
-            let (x, y) = (p as u32 % width, p as u32 / width);
-            cap.notes = format!(
-                "{}; {n} pixels differ from the ideal-order twin by more than {HAZARD_TOL:e} (first ({x},{y}))",
-                cap.notes
-            );
-        }
-    }
-    cap.definition = Some(def);
 }
 
 /// Reports fragments beyond k: overflow pixels, and dropped or tailed fragments by rule.
@@ -216,40 +177,19 @@ struct PreparedRace {
 
 impl PreparedRace {
     fn new(gpu: &Gpu, scene: &GpuScene, k: u32, rule: Option<TailMode>) -> Result<Self> {
-        let d = &gpu.device;
         let module = shader(
             gpu,
             "mlab",
             &format!("{TAIL_WGSL}\n{RULE_WGSL}\n{RACE_WGSL}"),
         );
-        let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
-        let capture_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("mlab capture"),
-            entries: &[
-                camera_entry(0),
-                storage_entry(1, false, fc),
-                storage_entry(7, false, fc),
-            ],
-        });
-        let mut entries = vec![
-            camera_entry(0),
-            storage_entry(1, false, fc),
-            storage_entry(2, false, fc),
-            storage_entry(3, false, fc),
-            storage_entry(7, false, fc),
-        ];
-        entries.extend(TailTargets::layout_entries(4, fc));
-        let resolve_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("mlab resolve"),
-            entries: &entries,
-        });
-        let layout = |bgl: &wgpu::BindGroupLayout| {
-            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("mlab"),
-                bind_group_layouts: &[Some(bgl)],
-                immediate_size: 0,
-            })
-        };
+        // Camera, layers, arrivals; the resolve adds the image, the counters and the tail.
+        let rows = [(0, B::Camera), (1, B::Storage), (7, B::Storage)];
+        let capture_table = Bindings::new(gpu, "mlab capture", FC, &rows);
+        let mut rows = vec![(0, B::Camera), (1, B::Storage), (2, B::Storage)];
+        rows.extend([(3, B::Storage), (7, B::Storage)]);
+        rows.extend(TailTargets::rows(4, B::Texture(FLOAT)));
+        let resolve_table = Bindings::new(gpu, "mlab resolve", FC, &rows);
+        let layout = |t: &Bindings| pipeline_layout(gpu, "mlab", &[&t.layout]);
         let constants = [("K", k as f64), ("TAIL_MODE", tail_constant(rule))];
         let blend = rule == Some(TailMode::Blend);
         let (fs, targets) = if blend {
@@ -260,7 +200,7 @@ impl PreparedRace {
         let insert = storage_pipeline_with(
             gpu,
             "mlab insert",
-            &layout(&capture_bgl),
+            &layout(&capture_table),
             &module,
             fs,
             &constants,
@@ -269,7 +209,7 @@ impl PreparedRace {
         let resolve = compute_pipeline(
             gpu,
             "mlab resolve",
-            &layout(&resolve_bgl),
+            &layout(&resolve_table),
             &module,
             "resolve",
             &constants,
@@ -287,31 +227,13 @@ impl PreparedRace {
         let tail = blend.then(|| TailTargets::new(gpu, &mut alloc, scene));
         // Without a tail the resolve's (dead) tail reads see 1×1 stand-ins.
         let stand_in = (!blend).then(|| TailTargets::stand_ins(gpu));
-        fn buf(binding: u32, x: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-            wgpu::BindGroupEntry {
-                binding,
-                resource: x.as_entire_binding(),
-            }
-        }
-        let bind_capture = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("mlab capture"),
-            layout: &capture_bgl,
-            entries: &[buf(0, &scene.camera), buf(1, &layers), buf(7, &arrived)],
-        });
+        let bind_capture =
+            capture_table.group(gpu, &[&scene.camera, &layers, &arrived].map(Res::Buf));
         let t = tail.as_ref().or(stand_in.as_ref()).expect("one of them");
-        let mut e = vec![
-            buf(0, &scene.camera),
-            buf(1, &layers),
-            buf(2, &image),
-            buf(3, &counters),
-            buf(7, &arrived),
-        ];
-        e.extend(t.bind_entries(4));
-        let bind_resolve = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("mlab resolve"),
-            layout: &resolve_bgl,
-            entries: &e,
-        });
+        let bufs = [&scene.camera, &layers, &image, &counters, &arrived];
+        let mut res = bufs.map(Res::Buf).to_vec();
+        res.extend(t.views());
+        let bind_resolve = resolve_table.group(gpu, &res);
         Ok(PreparedRace {
             k,
             rule,

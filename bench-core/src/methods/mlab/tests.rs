@@ -2,6 +2,7 @@ use scenarios::ParamValue::{Float, Int, Str};
 use scenarios::{Params, Scene};
 
 use super::*;
+use crate::methods::shared::race::{hazards, HAZARD_TOL};
 use crate::testing::{max_err, params, run, scene};
 
 const RULES: [&str; 3] = ["merge", "drop", "blend"];

@@ -26,15 +26,13 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::store::{dummy_depth, storage_pass, storage_pipeline};
+use super::shared::bind::{pipeline_layout, Bindings, Kind as B, Res, FC, FLOAT};
+use super::shared::store::{dummy_depth, storage_pass, storage_pipeline};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
-use crate::gpu_util::{
-    camera_entry, compute_pipeline, pixel_pass, read_vec, shader, storage_entry, texture_entry,
-    STORAGE_RW,
-};
+use crate::gpu_util::{compute_pipeline, pixel_pass, read_vec, shader, STORAGE_RW};
 use crate::oit::moment_math::wrapping_zone;
 use crate::oit::moments::{bias_vector, default_bias, depth_range_of, quant, B0_MIN};
 use crate::oit::{self, MomentConfig, MomentKind, MomentStorage};
@@ -314,7 +312,23 @@ fn blend_pipeline(
     constants: &[(&str, f64)],
     targets: &[Option<wgpu::ColorTargetState>],
 ) -> wgpu::RenderPipeline {
-    super::store::full_pipeline(gpu, label, layout, module, fs, constants, targets, None)
+    super::shared::store::full_pipeline(gpu, label, layout, module, fs, constants, targets, None)
+}
+
+/// The overrides every moments stage shares: the basis, the moment count, the stored reals
+/// and the 16-bit store.
+fn variant_constants(v: &Variant) -> [(&'static str, f64); 4] {
+    let kind = if v.kind == MomentKind::Power {
+        0.0
+    } else {
+        1.0
+    };
+    [
+        ("KIND", kind),
+        ("COUNT", v.count as f64),
+        ("REALS", v.reals() as f64),
+        ("UNORM16", if v.unorm16() { 1.0 } else { 0.0 }),
+    ]
 }
 
 impl PreparedMoments {
@@ -323,49 +337,22 @@ impl PreparedMoments {
         let (near, far) = warp_range(gpu, scene)?;
         let cfg = v.config(near, far).map_err(CoreError::Param)?;
         let module = shader(gpu, "moments", &format!("{WGSL}\n{MATH_WGSL}"));
-        let constants = [
-            (
-                "KIND",
-                if v.kind == MomentKind::Power {
-                    0.0
-                } else {
-                    1.0
-                },
-            ),
-            ("COUNT", v.count as f64),
-            ("REALS", v.reals() as f64),
-            ("UNORM16", if v.unorm16() { 1.0 } else { 0.0 }),
-        ];
-        let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
-        let float = wgpu::TextureSampleType::Float { filterable: false };
-        let mut params_entry = camera_entry(1);
-        params_entry.visibility = fc;
-        let base = vec![camera_entry(0), params_entry, storage_entry(2, false, fc)];
-        let bgl = |label: &str, extra: &[u32]| {
-            let mut e = base.clone();
-            for &b in extra {
-                e.push(if b == 7 || b == 8 {
-                    storage_entry(b, false, fc)
-                } else {
-                    texture_entry(b, float, fc)
-                });
-            }
-            d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries: &e,
-            })
+        let constants = variant_constants(&v);
+        // Camera, parameters, the 16-bit store; the resolve adds b0, m0, m1 and the failure
+        // count, the composite b0, the resolve sum and the image. One table per pass: a
+        // texture cannot be a pass's target and bound in it at once.
+        let base = [(0, B::Camera), (1, B::Uniform), (2, B::Storage)];
+        let table = |label: &str, extra: &[(u32, B)]| {
+            let mut rows = base.to_vec();
+            rows.extend_from_slice(extra);
+            Bindings::new(gpu, label, FC, &rows)
         };
-        // One layout per pass: a texture cannot be a pass's target and bound in it at once.
-        let bgl_moments = bgl("moments: moments pass", &[]);
-        let bgl_resolve = bgl("moments: resolve pass", &[3, 4, 5, 8]);
-        let bgl_composite = bgl("moments: composite", &[3, 6, 7]);
-        let layout = |bgl: &wgpu::BindGroupLayout| {
-            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("moments"),
-                bind_group_layouts: &[Some(bgl)],
-                immediate_size: 0,
-            })
-        };
+        let tex = B::Texture(FLOAT);
+        let bgl_moments = table("moments: moments pass", &[]);
+        let resolve_rows = [(3, tex), (4, tex), (5, tex), (8, B::Storage)];
+        let bgl_resolve = table("moments: resolve pass", &resolve_rows);
+        let bgl_composite = table("moments: composite", &[(3, tex), (6, tex), (7, B::Storage)]);
+        let layout = |t: &Bindings| pipeline_layout(gpu, "moments", &[&t.layout]);
         let mut alloc = AllocCounter::default();
         let (w, h) = (scene.width, scene.height);
         let px = scene.pixels() as u64;
@@ -462,56 +449,20 @@ impl PreparedMoments {
             };
             (targets[0].clone(), targets[1].clone(), m1)
         };
-        let group = |label: &str,
-                     bgl: &wgpu::BindGroupLayout,
-                     extra: &[(u32, wgpu::BindingResource<'_>)]| {
-            let mut e = vec![
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: scene.camera.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: params_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: store16.as_entire_binding(),
-                },
-            ];
-            for (b, r) in extra {
-                e.push(wgpu::BindGroupEntry {
-                    binding: *b,
-                    resource: r.clone(),
-                });
-            }
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(label),
-                layout: bgl,
-                entries: &e,
-            })
+        let base_res = [&scene.camera, &params_buf, &store16].map(Res::Buf);
+        let group = |t: &Bindings, extra: &[Res]| {
+            let mut res = base_res.to_vec();
+            res.extend_from_slice(extra);
+            t.group(gpu, &res)
         };
-        use wgpu::BindingResource::TextureView as Tv;
-        let bind_moments = group("moments: moments pass", &bgl_moments, &[]);
-        let bind_resolve = group(
-            "moments: resolve pass",
-            &bgl_resolve,
-            &[
-                (3, Tv(&b0_view)),
-                (4, Tv(&m0_view)),
-                (5, Tv(&m1_view)),
-                (8, failures.as_entire_binding()),
-            ],
+        let bind_moments = group(&bgl_moments, &[]);
+        let (b0, m0, m1) = (
+            Res::View(&b0_view),
+            Res::View(&m0_view),
+            Res::View(&m1_view),
         );
-        let bind_composite = group(
-            "moments: composite",
-            &bgl_composite,
-            &[
-                (3, Tv(&b0_view)),
-                (6, Tv(&accum)),
-                (7, image.as_entire_binding()),
-            ],
-        );
+        let bind_resolve = group(&bgl_resolve, &[b0, m0, m1, (&failures).into()]);
+        let bind_composite = group(&bgl_composite, &[b0, (&accum).into(), (&image).into()]);
         Ok(PreparedMoments {
             cfg,
             unorm16: v.unorm16(),

@@ -12,15 +12,15 @@
 //! S × (4 B depth + 16 B RGBA32F sum + 4 B R32F revealage with the correction) + 16 B running
 //! sum + 16 B image. Transparency only (no fold: it never has the fragments in order).
 
+use super::shared::bind::{
+    blended, pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, ADD, FLOAT, TRANSMIT,
+};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::aa::{self, AaMode};
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
-use crate::gpu_util::{
-    camera_entry, clear_depth, compute_pipeline, multisample, read_vec, shader, storage_entry,
-    texture_entry_ms, STORAGE_RW,
-};
+use crate::gpu_util::{clear_depth, compute_pipeline, read_vec, shader, STORAGE_RW};
 use crate::record::cols;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
@@ -148,42 +148,24 @@ impl PreparedSt {
         let s = cfg.samples;
         let module = shader(gpu, "stochastic", WGSL);
         let cs = wgpu::ShaderStages::COMPUTE;
-        let raster_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("stochastic raster"),
-            entries: &[camera_entry(0), camera_entry(1)],
-        });
-        let float = wgpu::TextureSampleType::Float { filterable: false };
-        let compute_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("stochastic resolve"),
-            entries: &[
-                camera_entry(0),
-                camera_entry(1),
-                texture_entry_ms(2, float, cs, true),
-                texture_entry_ms(3, float, cs, true),
-                storage_entry(4, false, cs),
-                storage_entry(5, false, cs),
-            ],
-        });
-        let layout = |bgl: &wgpu::BindGroupLayout| {
-            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("stochastic"),
-                bind_group_layouts: &[Some(bgl)],
-                immediate_size: 0,
-            })
-        };
-        let raster_layout = layout(&raster_bgl);
-        let compute_layout = layout(&compute_bgl);
+        let vfc = wgpu::ShaderStages::VERTEX_FRAGMENT | cs;
+        // Camera and the pass parameters (seed, passes, correction); the resolve adds the
+        // samples' sums and revealage, the running sum and the image.
+        let raster_table = Bindings::seq(gpu, "stochastic raster", vfc, &[B::Camera, B::Uniform]);
+        let ms = B::TextureMs(FLOAT);
+        let rows = [B::Camera, B::Uniform, ms, ms, B::Storage, B::Storage];
+        let compute_table = Bindings::seq(gpu, "stochastic resolve", cs, &rows);
+        let raster_layout = pipeline_layout(gpu, "stochastic", &[&raster_table.layout]);
+        let compute_layout = pipeline_layout(gpu, "stochastic", &[&compute_table.layout]);
         let constants = [("SAMPLES", s as f64)];
         let buffers: Vec<_> = GpuScene::layouts(ATTRS).into_iter().map(Some).collect();
-        let nearer = if scene.reversed_z {
-            wgpu::CompareFunction::Greater
+        // Nearest sample depth first (written), then every fragment at or before it.
+        let (nearer, nearer_or_equal) = if scene.reversed_z {
+            use wgpu::CompareFunction::{Greater, GreaterEqual};
+            (Greater, GreaterEqual)
         } else {
-            wgpu::CompareFunction::Less
-        };
-        let nearer_or_equal = if scene.reversed_z {
-            wgpu::CompareFunction::GreaterEqual
-        } else {
-            wgpu::CompareFunction::LessEqual
+            use wgpu::CompareFunction::{Less, LessEqual};
+            (Less, LessEqual)
         };
         let depth_state = |compare, write| wgpu::DepthStencilState {
             format: DEPTH,
@@ -192,54 +174,21 @@ impl PreparedSt {
             stencil: Default::default(),
             bias: Default::default(),
         };
-        let add = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
-        let mul = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::Zero,
-            dst_factor: wgpu::BlendFactor::OneMinusSrc,
-            operation: wgpu::BlendOperation::Add,
-        };
-        let target = |format, blend: wgpu::BlendComponent| {
-            Some(wgpu::ColorTargetState {
-                format,
-                blend: Some(wgpu::BlendState {
-                    color: blend,
-                    alpha: blend,
-                }),
-                write_mask: wgpu::ColorWrites::ALL,
-            })
-        };
         let pipeline = |label: &str,
                         fs: &str,
                         depth: Option<wgpu::DepthStencilState>,
                         targets: &[Option<wgpu::ColorTargetState>]| {
-            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&raster_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_st"),
-                    compilation_options: Default::default(),
-                    buffers: &buffers,
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: depth,
-                multisample: multisample(s),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(fs),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        zero_initialize_workgroup_memory: false,
-                    },
-                    targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            let r = Raster {
+                module: &module,
+                vs: "vs_st",
+                buffers: &buffers,
+                fs,
+                targets,
+                constants: &constants,
+                depth,
+                samples: s,
+            };
+            render_pipeline(gpu, label, &raster_layout, r)
         };
         let depth_pass = pipeline(
             "stochastic depth",
@@ -251,13 +200,13 @@ impl PreparedSt {
             "stochastic accumulate",
             "fs_accum",
             Some(depth_state(nearer_or_equal, false)),
-            &[target(ACCUM, add)],
+            &[blended(ACCUM, ADD)],
         );
         let alpha_pass = pipeline(
             "stochastic total alpha",
             "fs_alpha",
             None,
-            &[target(REVEAL, mul)],
+            &[blended(REVEAL, TRANSMIT)],
         );
         let resolve_pass = compute_pipeline(
             gpu,
@@ -281,16 +230,9 @@ impl PreparedSt {
         let mut alloc = AllocCounter::default();
         let (w, h) = (scene.width, scene.height);
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let ra = wgpu::TextureUsages::RENDER_ATTACHMENT;
         let depth = alloc
-            .texture_ms(
-                gpu,
-                "stochastic depth",
-                w,
-                h,
-                DEPTH,
-                wgpu::TextureUsages::RENDER_ATTACHMENT,
-                s,
-            )
+            .texture_ms(gpu, "stochastic depth", w, h, DEPTH, ra, s)
             .create_view(&Default::default());
         let accum = alloc
             .texture_ms(gpu, "stochastic sums", w, h, ACCUM, usage, s)
@@ -311,50 +253,18 @@ impl PreparedSt {
                 usage: wgpu::BufferUsages::UNIFORM,
             },
         );
-        let raster_bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("stochastic raster"),
-            layout: &raster_bgl,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: scene.camera.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: params.as_entire_binding(),
-                },
+        let raster_bind = raster_table.group(gpu, &[(&scene.camera).into(), (&params).into()]);
+        let compute_bind = compute_table.group(
+            gpu,
+            &[
+                (&scene.camera).into(),
+                (&params).into(),
+                (&accum).into(),
+                (&reveal).into(),
+                (&sum).into(),
+                (&image).into(),
             ],
-        });
-        let compute_bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("stochastic resolve"),
-            layout: &compute_bgl,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: scene.camera.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: params.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&accum),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(&reveal),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: sum.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: image.as_entire_binding(),
-                },
-            ],
-        });
+        );
         // Everything is per pixel: the samples' targets, the running sum and the image.
         let overhead = alloc.bytes;
         PreparedSt {

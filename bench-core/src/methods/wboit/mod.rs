@@ -11,10 +11,11 @@
 use crate::aa::{self, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
 use crate::gpu_util::{
-    camera_entry, compute_pipeline, multisample, per_sample_source, pixel_pass, read_vec, shader,
-    shader_source, storage_entry, texture_entry, texture_entry_ms, COMMON_WGSL, STORAGE_RW,
+    compute_pipeline, per_sample_source, pixel_pass, read_vec, shader, shader_source, COMMON_WGSL,
+    STORAGE_RW,
 };
 
+use super::shared::bind::{pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, FLOAT};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
@@ -60,7 +61,7 @@ impl Method for Wboit {
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let cfg = AaConfig::from_point(point);
         if cfg.mode == AaMode::Ssaa2x2 {
-            return super::ssaa::prepare(gpu, scene, |big| {
+            return super::shared::ssaa::prepare(gpu, scene, |big| {
                 Ok(Box::new(PreparedWboit::new(gpu, big, AaConfig::NONE)))
             });
         }
@@ -83,7 +84,6 @@ struct PreparedWboit {
 
 impl PreparedWboit {
     fn new(gpu: &Gpu, scene: &GpuScene, aa: AaConfig) -> Self {
-        let d = &gpu.device;
         let samples = aa.msaa();
         let module = if samples > 1 && aa.capture == aa::AaCapture::Sample {
             let src = per_sample_source(&format!("{COMMON_WGSL}\n{WGSL}"));
@@ -91,37 +91,18 @@ impl PreparedWboit {
         } else {
             shader(gpu, "wboit", WGSL)
         };
-        let comp = wgpu::ShaderStages::COMPUTE;
         let ms = samples > 1;
-        let cam_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("wboit camera"),
-            entries: &[camera_entry(0)],
-        });
-        let float = wgpu::TextureSampleType::Float { filterable: false };
-        let res_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("wboit resolve"),
-            entries: &[
-                camera_entry(0),
-                if ms {
-                    texture_entry_ms(4, float, comp, true)
-                } else {
-                    texture_entry(1, float, comp)
-                },
-                if ms {
-                    texture_entry_ms(5, float, comp, true)
-                } else {
-                    texture_entry(2, float, comp)
-                },
-                storage_entry(3, false, comp),
-            ],
-        });
-        let layout = |bgl: &wgpu::BindGroupLayout| {
-            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("wboit"),
-                bind_group_layouts: &[Some(bgl)],
-                immediate_size: 0,
-            })
+        let comp = wgpu::ShaderStages::COMPUTE;
+        let cam = Bindings::seq(gpu, "wboit camera", comp, &[B::Camera]);
+        // The resolve reads the accumulation and revealage targets (bindings 4, 5 when
+        // multisampled) and writes the image.
+        let (a, r, tex) = if ms {
+            (4, 5, B::TextureMs(FLOAT))
+        } else {
+            (1, 2, B::Texture(FLOAT))
         };
+        let rows = [(0, B::Camera), (a, tex), (r, tex), (3, B::Storage)];
+        let res = Bindings::new(gpu, "wboit resolve", comp, &rows);
         let add = wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::One,
             dst_factor: wgpu::BlendFactor::One,
@@ -155,31 +136,22 @@ impl PreparedWboit {
             .into_iter()
             .map(Some)
             .collect();
-        let accum_pass = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("wboit accumulate"),
-            layout: Some(&layout(&cam_bgl)),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_full"),
-                compilation_options: Default::default(),
-                buffers: &layouts,
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: multisample(samples),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_accum"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let raster = Raster {
+            module: &module,
+            vs: "vs_full",
+            buffers: &layouts,
+            fs: "fs_accum",
+            targets: &targets,
+            constants: &[],
+            depth: None,
+            samples,
+        };
+        let accum_layout = pipeline_layout(gpu, "wboit", &[&cam.layout]);
+        let accum_pass = render_pipeline(gpu, "wboit accumulate", &accum_layout, raster);
         let resolve = compute_pipeline(
             gpu,
             "wboit resolve",
-            &layout(&res_bgl),
+            &pipeline_layout(gpu, "wboit", &[&res.layout]),
             &module,
             if ms { "resolve_ms" } else { "resolve" },
             &[],
@@ -195,36 +167,16 @@ impl PreparedWboit {
             .texture_ms(gpu, "wboit revealage", w, h, REVEAL, usage, samples)
             .create_view(&Default::default());
         let image = alloc.buffer(gpu, "wboit image", scene.pixels() as u64 * 16, STORAGE_RW);
-        let cam_bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("wboit camera"),
-            layout: &cam_bgl,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: scene.camera.as_entire_binding(),
-            }],
-        });
-        let res_bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("wboit resolve"),
-            layout: &res_bgl,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: scene.camera.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: if ms { 4 } else { 1 },
-                    resource: wgpu::BindingResource::TextureView(&accum),
-                },
-                wgpu::BindGroupEntry {
-                    binding: if ms { 5 } else { 2 },
-                    resource: wgpu::BindingResource::TextureView(&reveal),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: image.as_entire_binding(),
-                },
+        let cam_bind = cam.group(gpu, &[(&scene.camera).into()]);
+        let res_bind = res.group(
+            gpu,
+            &[
+                (&scene.camera).into(),
+                (&accum).into(),
+                (&reveal).into(),
+                (&image).into(),
             ],
-        });
+        );
         PreparedWboit {
             accum_pass,
             resolve,

@@ -3,10 +3,10 @@
 //! each frame ends with a timed compute pass that box-filters every 2×2 block into the output
 //! image. Memory and time are the method's at 4× the pixels plus the output image.
 
-use super::{Capture, FrameStats, Prepared};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::gpu_util::{bind_buffers, compute_pipeline, read_vec, storage_entry, STORAGE_RW};
+use crate::methods::{Capture, FrameStats, Prepared};
 use crate::reference::AaMode;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};

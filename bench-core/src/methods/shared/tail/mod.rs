@@ -14,6 +14,7 @@ use crate::axes::Axis;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::gpu_util::{compute_pipeline, texture_entry};
+use crate::methods::shared::bind::{Kind, Res};
 use crate::oit::{Keep, TailMode};
 use crate::record::cols;
 
@@ -173,6 +174,16 @@ impl TailTargets {
         (0..3)
             .map(|i| texture_entry(first + i, float, stages))
             .collect()
+    }
+
+    /// The tail textures as bind-table rows from binding `first` (sums, transmittance, count).
+    pub fn rows(first: u32, kind: Kind) -> [(u32, Kind); 3] {
+        [(first, kind), (first + 1, kind), (first + 2, kind)]
+    }
+
+    /// The resources of [`Self::rows`], in order.
+    pub fn views(&self) -> [Res<'_>; 3] {
+        [&self.sums, &self.trans, &self.count].map(Res::View)
     }
 
     /// Bind group entries matching [`Self::layout_entries`].

@@ -20,19 +20,22 @@
 
 use crate::axes::{Axis, Point};
 use crate::effects::{Effect, EffectConfig, FOLD_STATE_BYTES};
-use crate::gpu_util::{camera_entry, read_vec, storage_entry, texture_entry};
-use crate::methods::packing::PACKING_WGSL;
+use crate::gpu_util::{compute_pipeline, read_vec, STORAGE_RW};
+use crate::methods::shared::bind::{
+    pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, Res, FC, FLOAT,
+};
+use crate::methods::shared::packing::PACKING_WGSL;
 use crate::record::{cols, Flag};
 
-use super::{Capture, Expected, FrameStats};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::methods::{Capture, Expected, FrameStats};
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
 use crate::Result;
 
 const WGSL: &str = include_str!("bucket.wgsl");
-const FOLD_WGSL: &str = include_str!("../../effects/fold.wgsl");
+const FOLD_WGSL: &str = include_str!("../../../effects/fold.wgsl");
 const SLOT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const RANGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 /// Float channels one routing pass can write: 8 attachments × 4 channels.
@@ -477,7 +480,6 @@ impl PreparedBucket {
         method_wgsl: &str,
         fx: Fx,
     ) -> Result<PreparedBucket> {
-        let d = &gpu.device;
         let (w, h) = (scene.width, scene.height);
         let px = w as u64 * h as u64;
         let attachments = cfg.attachments_fx(fx.pairs);
@@ -486,349 +488,68 @@ impl PreparedBucket {
             outputs_wgsl(attachments)
         );
         let module = crate::gpu_util::shader(gpu, "bucket", &body);
-        let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
-        let cam_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("bucket camera"),
-            entries: &[camera_entry(0)],
-        });
-        let mut main_entries = vec![
-            camera_entry(0),
-            texture_entry(1, wgpu::TextureSampleType::Float { filterable: false }, fc),
-            wgpu::BindGroupLayoutEntry {
-                binding: 2,
-                visibility: fc,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: true,
-                    min_binding_size: wgpu::BufferSize::new(16),
-                },
-                count: None,
-            },
-        ];
-        for b in 3..=9 {
-            main_entries.push(storage_entry(b, false, fc));
-        }
-        let main_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("bucket main"),
-            entries: &main_entries,
-        });
-        let arr_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("bucket slots"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: fc,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2Array,
-                    multisampled: false,
-                },
-                count: None,
-            }],
-        });
-        let layout = |label: &str, groups: &[&wgpu::BindGroupLayout]| {
-            let g: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().map(|g| Some(*g)).collect();
-            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(label),
-                bind_group_layouts: &g,
-                immediate_size: 0,
-            })
-        };
-        let cam_layout = layout("bucket bounds", &[&cam_bgl]);
-        let main_layout = layout("bucket main", &[&main_bgl]);
-        let second_layout = layout("bucket second", &[&main_bgl, &arr_bgl]);
-        let resolve_layout = layout("bucket resolve", &[&main_bgl, &arr_bgl, &arr_bgl]);
+        // Group 0 of the depth-range pass; group 0 of every other pass (binding 2: this pass's
+        // slice of `pass_info`; 3..=9: counter, histogram, bounds, occupied max, fold states,
+        // accumulation, counts); the slot arrays (groups 1 and 2).
+        let cam = Bindings::seq(gpu, "bucket camera", FC, &[B::Camera]);
+        let mut rows = vec![B::Camera, B::Texture(FLOAT), B::UniformDynamic(16)];
+        rows.extend([B::Storage; 7]);
+        let main = Bindings::seq(gpu, "bucket main", FC, &rows);
+        let arr = Bindings::seq(gpu, "bucket slots", FC, &[B::TextureArray(FLOAT)]);
+        let cam_layout = pipeline_layout(gpu, "bucket bounds", &[&cam.layout]);
+        let main_layout = pipeline_layout(gpu, "bucket main", &[&main.layout]);
+        let second_layout = pipeline_layout(gpu, "bucket second", &[&main.layout, &arr.layout]);
+        let resolve_layout = pipeline_layout(
+            gpu,
+            "bucket resolve",
+            &[&main.layout, &arr.layout, &arr.layout],
+        );
 
-        let constants = [
-            ("K", cfg.buckets as f64),
-            ("MODE", cfg.mode() as f64),
-            ("HIST_BINS", cfg.hist_bins() as f64),
-            (
-                "PAIRED",
-                if cfg.kind == (Kind::Uniform { paired: true }) {
-                    1.0
-                } else {
-                    0.0
-                },
-            ),
-            ("FX", if fx.pairs { 1.0 } else { 0.0 }),
-        ];
-        let effect = fx.effect.constants();
-        // Every override a stage can see must be known to it; pass only those the module declares.
-        let declared: Vec<(&str, f64)> = constants
-            .iter()
-            .chain(&effect)
-            .copied()
-            .filter(|(n, _)| body.contains(&format!("override {n}")))
-            .collect();
-        let opts = || wgpu::PipelineCompilationOptions {
-            constants: &declared,
-            zero_initialize_workgroup_memory: false,
-        };
-        let all_layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
-            .into_iter()
-            .map(Some)
-            .collect();
-        let pos_layouts: Vec<_> = GpuScene::layouts(Attrs::POSITION_ONLY)
-            .into_iter()
-            .map(Some)
-            .collect();
-        let slot_targets: Vec<Option<wgpu::ColorTargetState>> = (0..attachments)
-            .map(|_| {
-                Some(wgpu::ColorTargetState {
-                    format: SLOT_FORMAT,
-                    blend: Some(max_blend()),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })
-            })
-            .collect();
-        let render = |label: &str,
-                      pl: &wgpu::PipelineLayout,
-                      vs: &str,
-                      fs: &str,
-                      targets: &[Option<wgpu::ColorTargetState>]| {
-            let position_only = vs == "vs_position";
-            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(pl),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some(vs),
-                    compilation_options: opts(),
-                    buffers: if position_only {
-                        &pos_layouts
-                    } else {
-                        &all_layouts
-                    },
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(fs),
-                    compilation_options: opts(),
-                    targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        };
-        let range_target = [Some(wgpu::ColorTargetState {
-            format: RANGE_FORMAT,
-            blend: Some(max_blend()),
-            write_mask: wgpu::ColorWrites::ALL,
-        })];
-        // Passes that only touch storage still need a target; nothing is written to it.
-        let silent_target = [Some(wgpu::ColorTargetState {
-            format: SLOT_FORMAT,
-            blend: None,
-            write_mask: wgpu::ColorWrites::empty(),
-        })];
-        let bounds = render(
-            "bucket depth range",
-            &cam_layout,
-            "vs_position",
-            "fs_bounds",
-            &range_target,
-        );
-        let count = render(
-            "bucket count",
-            &main_layout,
-            "vs_position",
-            "fs_count",
-            &silent_target,
-        );
-        let (route, second, hist_pass) = match cfg.kind {
-            Kind::Uniform { .. } => (
-                render(
-                    "bdp route",
-                    &main_layout,
-                    "vs_full",
-                    "fs_route",
-                    &slot_targets,
-                ),
-                None,
-                None,
-            ),
-            Kind::TwoPass => (
-                render(
-                    "bdp2 first",
-                    &main_layout,
-                    "vs_full",
-                    "fs_first",
-                    &slot_targets,
-                ),
-                Some(render(
-                    "bdp2 second",
-                    &second_layout,
-                    "vs_full",
-                    "fs_second",
-                    &slot_targets,
-                )),
-                None,
-            ),
-            Kind::Adaptive { .. } => (
-                render(
-                    "adp route",
-                    &main_layout,
-                    "vs_full",
-                    "fs_route",
-                    &slot_targets,
-                ),
-                None,
-                Some(render(
-                    "adp histogram",
-                    &main_layout,
-                    "vs_full",
-                    "fs_hist",
-                    &silent_target,
-                )),
-            ),
-        };
-        let compute = |label: &str, pl: &wgpu::PipelineLayout, entry: &str| {
-            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(label),
-                layout: Some(pl),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: opts(),
-                cache: None,
-            })
-        };
-        let resolve = compute("bucket resolve", &resolve_layout, "resolve");
-        let equalise = matches!(cfg.kind, Kind::Adaptive { .. })
-            .then(|| compute("adp equalise", &main_layout, "equalise"));
+        let layouts = [&cam_layout, &main_layout, &second_layout, &resolve_layout];
+        let declared = declared_constants(&cfg, &fx, &body);
+        let Passes {
+            bounds,
+            count,
+            route,
+            second,
+            hist_pass,
+            equalise,
+            resolve,
+        } = Passes::new(gpu, &module, &declared, cfg, attachments, layouts);
 
         let mut alloc = AllocCounter::default();
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
         let range_view = alloc
             .texture(gpu, "bucket depth range", w, h, RANGE_FORMAT, usage)
             .create_view(&Default::default());
-        let mut make_slots = |label: &str| {
-            let layers = attachments;
-            alloc.bytes += px * 16 * layers as u64;
-            let tex = gpu.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: w,
-                    height: h,
-                    depth_or_array_layers: layers,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: SLOT_FORMAT,
-                usage: usage | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            });
-            let layer_views = (0..layers)
-                .map(|l| {
-                    tex.create_view(&wgpu::TextureViewDescriptor {
-                        dimension: Some(wgpu::TextureViewDimension::D2),
-                        base_array_layer: l,
-                        array_layer_count: Some(1),
-                        ..Default::default()
-                    })
-                })
-                .collect();
-            let array = tex.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(wgpu::TextureViewDimension::D2Array),
-                ..Default::default()
-            });
-            let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(label),
-                layout: &arr_bgl,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&array),
-                }],
-            });
-            Slots {
-                layers: layer_views,
-                _array: array,
-                bind,
-            }
-        };
-        let slots_a = make_slots("bucket slots");
-        let slots_b = (cfg.kind == Kind::TwoPass).then(|| make_slots("bdp2 second slots"));
-
-        let st = wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_SRC
-            | wgpu::BufferUsages::COPY_DST;
-        let adaptive = matches!(cfg.kind, Kind::Adaptive { .. });
-        let frag_count = alloc.buffer(gpu, "bucket fragment counter", px * 4, st);
-        let hist_bytes = if adaptive {
-            px * (cfg.hist_bins() / 32) as u64 * 4
-        } else {
-            4
-        };
-        let hist = alloc.buffer(gpu, "adp histogram", hist_bytes, st);
-        let bounds_bytes = if adaptive {
-            px * cfg.buckets as u64 * 4
-        } else {
-            4
-        };
-        let adp_bounds = alloc.buffer(gpu, "adp bounds", bounds_bytes, st);
-        let occupied_max = alloc.buffer(gpu, "adp occupied max", 4, st);
-        let occ_read = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("adp occupied read"),
-            size: 4,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
+        let slots_a = Slots::new(gpu, &mut alloc, &arr, "bucket slots", (w, h), attachments);
+        let slots_b = (cfg.kind == Kind::TwoPass).then(|| {
+            Slots::new(
+                gpu,
+                &mut alloc,
+                &arr,
+                "bdp2 second slots",
+                (w, h),
+                attachments,
+            )
         });
-        let fold_states = alloc.buffer(gpu, "bucket fold states", px * FOLD_STATE_BYTES, st);
-        let accum = alloc.buffer(gpu, "bucket accum", px * 16, st);
-        let counts = alloc.buffer(gpu, "bucket counts", px * 4, st);
-        let passes = cfg.max_passes() as u64;
-        let pass_data: Vec<u8> = (0..passes)
-            .flat_map(|p| {
-                let mut v = vec![0u8; PASS_STRIDE as usize];
-                v[..4].copy_from_slice(&(p as u32).to_le_bytes());
-                v
-            })
-            .collect();
-        let pass_info = alloc.buffer(
+        let b = Buffers::new(gpu, &mut alloc, &cfg, px);
+        let cam_bind = cam.group(gpu, &[Res::Buf(&scene.camera)]);
+        let main_bind = main.group(
             gpu,
-            "bucket pass info",
-            passes * PASS_STRIDE,
-            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        );
-        gpu.queue.write_buffer(&pass_info, 0, &pass_data);
-
-        let cam_bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("bucket camera"),
-            layout: &cam_bgl,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: scene.camera.as_entire_binding(),
-            }],
-        });
-        let main_bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("bucket main"),
-            layout: &main_bgl,
-            entries: &[
-                buf(0, &scene.camera),
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&range_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &pass_info,
-                        offset: 0,
-                        size: wgpu::BufferSize::new(16),
-                    }),
-                },
-                buf(3, &frag_count),
-                buf(4, &hist),
-                buf(5, &adp_bounds),
-                buf(6, &occupied_max),
-                buf(7, &fold_states),
-                buf(8, &accum),
-                buf(9, &counts),
+            &[
+                (&scene.camera).into(),
+                (&range_view).into(),
+                Res::Window(&b.pass_info, 16),
+                (&b.frag_count).into(),
+                (&b.hist).into(),
+                (&b.adp_bounds).into(),
+                (&b.occupied_max).into(),
+                (&b.fold_states).into(),
+                (&b.accum).into(),
+                (&b.counts).into(),
             ],
-        });
+        );
         Ok(PreparedBucket {
             cfg,
             bounds,
@@ -843,13 +564,13 @@ impl PreparedBucket {
             range_view,
             slots_a,
             slots_b,
-            frag_count,
-            hist,
-            adp_bounds,
-            occupied_max,
-            occ_read,
-            accum,
-            counts,
+            frag_count: b.frag_count,
+            hist: b.hist,
+            adp_bounds: b.adp_bounds,
+            occupied_max: b.occupied_max,
+            occ_read: b.occ_read,
+            accum: b.accum,
+            counts: b.counts,
             last_passes: 0,
             alloc,
         })
@@ -1080,7 +801,7 @@ impl crate::timed::Timed for PreparedBucket {
     }
 }
 
-impl super::Prepared for PreparedBucket {
+impl crate::methods::Prepared for PreparedBucket {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let n = scene.pixels();
         let mut cap = Capture::empty();
@@ -1106,10 +827,275 @@ impl super::Prepared for PreparedBucket {
     }
 }
 
-fn buf(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry {
-        binding,
-        resource: b.as_entire_binding(),
+/// The frame's pipelines: depth range, fragment count, routing (bdp2: two passes; adp: the
+/// histogram and equalisation too) and the resolve.
+struct Passes {
+    bounds: wgpu::RenderPipeline,
+    count: wgpu::RenderPipeline,
+    route: wgpu::RenderPipeline,
+    second: Option<wgpu::RenderPipeline>,
+    hist_pass: Option<wgpu::RenderPipeline>,
+    equalise: Option<wgpu::ComputePipeline>,
+    resolve: wgpu::ComputePipeline,
+}
+
+impl Passes {
+    /// `layouts`: depth range, main, second (+ slots), resolve (+ both slot arrays).
+    fn new(
+        gpu: &Gpu,
+        module: &wgpu::ShaderModule,
+        declared: &[(&str, f64)],
+        cfg: Config,
+        attachments: u32,
+        [cam_layout, main_layout, second_layout, resolve_layout]: [&wgpu::PipelineLayout; 4],
+    ) -> Passes {
+        let all_layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
+            .into_iter()
+            .map(Some)
+            .collect();
+        let pos_layouts: Vec<_> = GpuScene::layouts(Attrs::POSITION_ONLY)
+            .into_iter()
+            .map(Some)
+            .collect();
+        let slot_targets: Vec<_> = (0..attachments).map(|_| target(SLOT_FORMAT)).collect();
+        let render = |label: &str,
+                      pl: &wgpu::PipelineLayout,
+                      vs: &str,
+                      fs: &str,
+                      targets: &[Option<wgpu::ColorTargetState>]| {
+            let buffers = if vs == "vs_position" {
+                &pos_layouts
+            } else {
+                &all_layouts
+            };
+            let constants = declared;
+            let (module, depth, samples) = (module, None, 1);
+            let r = Raster {
+                module,
+                vs,
+                buffers,
+                fs,
+                targets,
+                constants,
+                depth,
+                samples,
+            };
+            render_pipeline(gpu, label, pl, r)
+        };
+        // Passes that only touch storage still need a target; nothing is written to it.
+        let silent = [Some(wgpu::ColorTargetState {
+            format: SLOT_FORMAT,
+            blend: None,
+            write_mask: wgpu::ColorWrites::empty(),
+        })];
+        let (full, slots) = ("vs_full", &slot_targets[..]);
+        let bounds = render(
+            "bucket depth range",
+            cam_layout,
+            "vs_position",
+            "fs_bounds",
+            &[target(RANGE_FORMAT)],
+        );
+        let count = render(
+            "bucket count",
+            main_layout,
+            "vs_position",
+            "fs_count",
+            &silent,
+        );
+        let (route, second, hist_pass) = match cfg.kind {
+            Kind::Uniform { .. } => (
+                render("bdp route", main_layout, full, "fs_route", slots),
+                None,
+                None,
+            ),
+            Kind::TwoPass => (
+                render("bdp2 first", main_layout, full, "fs_first", slots),
+                Some(render(
+                    "bdp2 second",
+                    second_layout,
+                    full,
+                    "fs_second",
+                    slots,
+                )),
+                None,
+            ),
+            Kind::Adaptive { .. } => (
+                render("adp route", main_layout, full, "fs_route", slots),
+                None,
+                Some(render(
+                    "adp histogram",
+                    main_layout,
+                    full,
+                    "fs_hist",
+                    &silent,
+                )),
+            ),
+        };
+        let compute = |label: &str, pl: &wgpu::PipelineLayout, entry: &str| {
+            compute_pipeline(gpu, label, pl, module, entry, declared, false)
+        };
+        let resolve = compute("bucket resolve", resolve_layout, "resolve");
+        let equalise = matches!(cfg.kind, Kind::Adaptive { .. })
+            .then(|| compute("adp equalise", main_layout, "equalise"));
+        Passes {
+            bounds,
+            count,
+            route,
+            second,
+            hist_pass,
+            equalise,
+            resolve,
+        }
+    }
+}
+
+/// A MAX-blended colour target of `format` (every routing and range pass).
+fn target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format,
+        blend: Some(max_blend()),
+        write_mask: wgpu::ColorWrites::ALL,
+    })
+}
+
+/// The override constants of `cfg` and `fx` that `body` declares: every override a stage can
+/// see must be known to it, so only those the module declares are passed.
+fn declared_constants(cfg: &Config, fx: &Fx, body: &str) -> Vec<(&'static str, f64)> {
+    let paired = cfg.kind == (Kind::Uniform { paired: true });
+    let constants = [
+        ("K", cfg.buckets as f64),
+        ("MODE", cfg.mode() as f64),
+        ("HIST_BINS", cfg.hist_bins() as f64),
+        ("PAIRED", if paired { 1.0 } else { 0.0 }),
+        ("FX", if fx.pairs { 1.0 } else { 0.0 }),
+    ];
+    constants
+        .iter()
+        .chain(&fx.effect.constants())
+        .copied()
+        .filter(|(n, _)| body.contains(&format!("override {n}")))
+        .collect()
+}
+
+impl Slots {
+    /// `layers` RGBA32F bucket attachments in one array texture, bound through `arr`.
+    fn new(
+        gpu: &Gpu,
+        alloc: &mut AllocCounter,
+        arr: &Bindings,
+        label: &str,
+        (w, h): (u32, u32),
+        layers: u32,
+    ) -> Slots {
+        alloc.bytes += w as u64 * h as u64 * 16 * layers as u64;
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC;
+        let tex = gpu.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: layers,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: SLOT_FORMAT,
+            usage,
+            view_formats: &[],
+        });
+        let layer_views = (0..layers)
+            .map(|l| {
+                tex.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: l,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
+        let array = tex.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let bind = arr.group(gpu, &[Res::View(&array)]);
+        Slots {
+            layers: layer_views,
+            _array: array,
+            bind,
+        }
+    }
+}
+
+/// The per-pixel storage of main bindings 2..=9, and the occupied-max read-back.
+struct Buffers {
+    pass_info: wgpu::Buffer,
+    frag_count: wgpu::Buffer,
+    hist: wgpu::Buffer,
+    adp_bounds: wgpu::Buffer,
+    occupied_max: wgpu::Buffer,
+    occ_read: wgpu::Buffer,
+    fold_states: wgpu::Buffer,
+    accum: wgpu::Buffer,
+    counts: wgpu::Buffer,
+}
+
+impl Buffers {
+    fn new(gpu: &Gpu, alloc: &mut AllocCounter, cfg: &Config, px: u64) -> Buffers {
+        let st = STORAGE_RW;
+        let adaptive = matches!(cfg.kind, Kind::Adaptive { .. });
+        let frag_count = alloc.buffer(gpu, "bucket fragment counter", px * 4, st);
+        let hist_bytes = if adaptive {
+            px * (cfg.hist_bins() / 32) as u64 * 4
+        } else {
+            4
+        };
+        let hist = alloc.buffer(gpu, "adp histogram", hist_bytes, st);
+        let bounds_bytes = if adaptive {
+            px * cfg.buckets as u64 * 4
+        } else {
+            4
+        };
+        let adp_bounds = alloc.buffer(gpu, "adp bounds", bounds_bytes, st);
+        let occupied_max = alloc.buffer(gpu, "adp occupied max", 4, st);
+        let occ_read = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("adp occupied read"),
+            size: 4,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let fold_states = alloc.buffer(gpu, "bucket fold states", px * FOLD_STATE_BYTES, st);
+        let accum = alloc.buffer(gpu, "bucket accum", px * 16, st);
+        let counts = alloc.buffer(gpu, "bucket counts", px * 4, st);
+        // One PASS_STRIDE slice per routing pass, its index in the first word.
+        let passes = cfg.max_passes() as u64;
+        let pass_data: Vec<u8> = (0..passes)
+            .flat_map(|p| {
+                let mut v = vec![0u8; PASS_STRIDE as usize];
+                v[..4].copy_from_slice(&(p as u32).to_le_bytes());
+                v
+            })
+            .collect();
+        let pass_info = alloc.buffer(
+            gpu,
+            "bucket pass info",
+            passes * PASS_STRIDE,
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        gpu.queue.write_buffer(&pass_info, 0, &pass_data);
+        Buffers {
+            pass_info,
+            frag_count,
+            hist,
+            adp_bounds,
+            occupied_max,
+            occ_read,
+            fold_states,
+            accum,
+            counts,
+        }
     }
 }
 

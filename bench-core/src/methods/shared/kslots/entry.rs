@@ -11,7 +11,7 @@
 
 use crate::axes::Point;
 use crate::effects::{Effect, EffectConfig, Payload};
-use crate::methods::depth_peel::SPECIALISATION;
+use crate::methods::shared::axes::SPECIALISATION;
 
 /// A point's effect and the payload its slots store.
 #[derive(Clone, Copy, Debug)]
