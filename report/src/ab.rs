@@ -209,6 +209,14 @@ impl PointSamples {
         out
     }
 
+    /// The median of each non-empty session, in session order.
+    fn session_medians(&self) -> Vec<f64> {
+        self.by_session(&self.gpu_ms)
+            .into_iter()
+            .filter_map(crate::bands::median)
+            .collect()
+    }
+
     /// How far apart whole sessions sit: max / min − 1 of the session medians, when there are
     /// two or more sessions and none of them alternates between two frame-time modes itself
     /// (such a point's session medians differ by their modes' shares, which mode matching
@@ -481,6 +489,9 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
             })
         };
         let (bsm, nsm) = (pick(&bsamp, b), scaled(pick(&nsamp, n)));
+        let meds =
+            |p: &Option<PointSamples>| p.as_ref().map_or(Vec::new(), |p| p.session_medians());
+        let (bsess, nsess) = (meds(&bsm), meds(&nsm));
         let two = |p: &Option<PointSamples>| {
             p.as_ref()
                 .and_then(|p| modes(&p.gpu_ms, MODE_MIN_FRAC, MODE_MIN_SEP))
@@ -541,6 +552,18 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
         if let Some(m) = mode_match(bmodes, nmodes, &time, cbm, cnm, band) {
             why.push(m);
             inst = f64::INFINITY;
+        }
+        // Median sessions judged without this point's own calibration (which has seen its
+        // session states): when either median session sits, within the band, in the state of
+        // a session of the other side, the majority may have changed state, not the code.
+        let by_median = matched
+            .as_ref()
+            .is_some_and(|m| m.matching == Matching::MedianSession);
+        if by_median && band_source != BandSource::Point {
+            if let Some(m) = state_match(&bsess, &nsess, cbm, cnm, &time, band) {
+                why.push(m);
+                inst = f64::INFINITY;
+            }
         }
         if bn && nn && !mode_matched {
             let s = spread(b).unwrap_or(0.0).max(spread(n).unwrap_or(0.0));
@@ -631,6 +654,39 @@ fn mode_match(
         fmt_ms(y),
         fmt_ms(x)
     ))
+}
+
+/// Why a FASTER / SLOWER between median sessions may be a change of session state (see
+/// `compare_runs`), or None: a side's median session (`bm`, `nm`) within the band of one of
+/// the other side's sessions.
+fn state_match(
+    base: &[f64],
+    new: &[f64],
+    bm: f64,
+    nm: f64,
+    c: &Comparison,
+    band: f64,
+) -> Option<String> {
+    if !matches!(c.verdict, Verdict::Faster | Verdict::Slower) {
+        return None;
+    }
+    let near = |x: f64, y: f64| x > 0.0 && (y / x - 1.0).abs() <= band;
+    if let Some(x) = base.iter().find(|x| near(**x, nm)) {
+        return Some(format!(
+            "NEW's median session ({} ms) sits in the state of a BASE session ({} ms): the \
+             sessions may have changed state (no calibration of this point says how often)",
+            fmt_ms(nm),
+            fmt_ms(*x)
+        ));
+    }
+    new.iter().find(|y| near(bm, **y)).map(|y| {
+        format!(
+            "BASE's median session ({} ms) sits in the state of a NEW session ({} ms): the \
+             sessions may have changed state (no calibration of this point says how often)",
+            fmt_ms(bm),
+            fmt_ms(*y)
+        )
+    })
 }
 
 /// "5%", "5 %" or "0.05" → 0.05 (for `--fail-on-slower`).
@@ -799,8 +855,10 @@ impl AbReport {
              side (the widest split of its sorted samples leaves two groups of ≥ {:.0} % of \
              them, medians ≥ {:.1} % apart) and a mode of NEW matches a mode of BASE within the \
              band (low with low, high with high when both have two; a side with one mode is \
-             its median); and, where both sides are noisy and the modes were not matched, one \
-             within ±(floor + their larger session spread).",
+             its median); where median sessions were compared and the point's band is not its \
+             own calibrated one, a median session within the band of a session of the other \
+             side (a change of session state); and, where both sides are noisy and the modes \
+             were not matched, one within ±(floor + their larger session spread).",
             MODE_MIN_FRAC * 100.0,
             MODE_MIN_SEP * 100.0
         );
