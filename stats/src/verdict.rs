@@ -415,7 +415,7 @@ pub fn median_session(sessions: &[Vec<f64>]) -> Option<&[f64]> {
         .filter(|v| !v.is_empty())
         .map(|v| (median(v), v))
         .collect();
-    if s.len() < 3 || s.len() % 2 == 0 {
+    if s.len() < 3 || s.len().is_multiple_of(2) {
         return None;
     }
     s.sort_by(|a, b| a.0.total_cmp(&b.0));
