@@ -77,6 +77,9 @@ pub struct Side {
     pub platforms: Vec<String>,
     pub run_ids: Vec<String>,
     pub git_revs: Vec<String>,
+    /// The GPU calibration set's median time on this run's GPU (`run.json`: `calibration`,
+    /// written by `mfx sweep` before the points; `mfx merge` compares it across shards).
+    pub gpu_calibration_ms: Option<f64>,
 }
 
 /// One point measured in both runs.
@@ -309,6 +312,24 @@ pub(crate) fn load_samples(path: &Path) -> Result<SampleMap> {
     Ok(out)
 }
 
+/// `calibration.canary_ms` of the `run.json` beside a runs.csv, where there is one (read as
+/// plain JSON: the report does not depend on the GPU crate that writes it).
+fn gpu_calibration_ms(csv: &Path) -> Option<f64> {
+    let text = std::fs::read_to_string(csv.with_file_name("run.json")).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    v.get("calibration")?
+        .get("canary_ms")?
+        .as_f64()
+        .filter(|x| x.is_finite() && *x > 0.0)
+}
+
+impl AbReport {
+    /// NEW's GPU over BASE's on the GPU calibration set, when both runs recorded it.
+    pub fn gpu_ratio(&self) -> Option<f64> {
+        Some(self.new.gpu_calibration_ms? / self.base.gpu_calibration_ms?)
+    }
+}
+
 pub(crate) fn load_side(p: &Path) -> Result<(Side, Runs, Option<SampleMap>)> {
     let (csv, samples_csv) = locate(p)?;
     let runs = Runs::load(&csv)?;
@@ -325,6 +346,7 @@ pub(crate) fn load_side(p: &Path) -> Result<(Side, Runs, Option<SampleMap>)> {
         None => None,
     };
     let side = Side {
+        gpu_calibration_ms: gpu_calibration_ms(&csv),
         runs_csv: csv,
         samples_csv,
         schema: schemas.into_iter().next().unwrap_or_default(),
@@ -918,6 +940,20 @@ impl AbReport {
                 self.new.platforms.join("; ")
             ));
         }
+        if let Some(g) = self.gpu_ratio() {
+            let within = self
+                .points
+                .iter()
+                .filter(|p| {
+                    matches!(p.time.verdict, Verdict::Faster | Verdict::Slower)
+                        && (p.time.ratio - 1.0).abs() <= (g - 1.0).abs()
+                })
+                .count();
+            v.push(format!(
+                "GPU calibration set: NEW's GPU took {g:.3}× BASE's; {within} FASTER / SLOWER \
+                 verdicts lie within that difference (may be the GPUs, not the methods)"
+            ));
+        }
         v
     }
 
@@ -957,6 +993,15 @@ impl AbReport {
             }
             if p.band_source != BandSource::Fixed {
                 note.push(p.band_note());
+            }
+            if let Some(g) = self.gpu_ratio() {
+                if matches!(p.time.verdict, Verdict::Faster | Verdict::Slower)
+                    && (p.time.ratio - 1.0).abs() <= (g - 1.0).abs()
+                {
+                    note.push(format!(
+                        "within the GPUs' difference on the calibration set ({g:.3}×)"
+                    ));
+                }
             }
             let _ = writeln!(
                 m,
@@ -1334,4 +1379,30 @@ pub fn baseline_dir(root: &Path, name: &str) -> Result<PathBuf> {
             have.join(", ")
         }
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_gpu_calibration_is_read_from_run_json_where_written() {
+        let d = std::env::temp_dir().join(format!("mfx-ab-gpucal-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let csv = d.join("runs.csv");
+        assert_eq!(gpu_calibration_ms(&csv), None, "no run.json");
+        std::fs::write(d.join("run.json"), r#"{"calibration": null}"#).unwrap();
+        assert_eq!(
+            gpu_calibration_ms(&csv),
+            None,
+            "run.json without a calibration"
+        );
+        std::fs::write(
+            d.join("run.json"),
+            r#"{"calibration": {"set": "canary", "canary_ms": 0.125, "runs": 21}}"#,
+        )
+        .unwrap();
+        assert_eq!(gpu_calibration_ms(&csv), Some(0.125));
+        std::fs::remove_dir_all(&d).unwrap();
+    }
 }
