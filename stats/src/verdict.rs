@@ -434,7 +434,8 @@ pub fn median_session(sessions: &[Vec<f64>]) -> Option<&[f64]> {
 ///    moves between runs of one build and drags a pooled median across the gap — while a change
 ///    of the code moves both modes. Compared mode with mode, a run of one build matches itself
 ///    whatever the shares, and a 5 % change stays 5 % in each mode.
-/// 2. **Median session.** Both sides hold an odd number (≥ 3) of sessions: the side's median
+/// 2. **Median session.** Both sides hold an odd number (≥ 3) of sessions, and their median
+///    sessions `min_samples` or more samples each: the side's median
 ///    session (its session medians' median, [`median_session`]) against the other's, by
 ///    [`compare_samples`]. Why: a session is prepared afresh and lands in one memory state for
 ///    all its samples (on the H200 a k-buffer session can sit 4–10 % above its twins), so the
@@ -505,7 +506,13 @@ pub fn compare_matched(base: &[Vec<f64>], new: &[Vec<f64>], o: &VerdictOptions) 
             };
         }
     }
-    if let (Some(sb), Some(sn)) = (median_session(base), median_session(new)) {
+    // A median session too short for a test within it (a 300 ms point capped at 4 samples a
+    // session) leaves the decision to the sessions resampled.
+    let long = |s: &&[f64]| s.len() >= o.min_samples;
+    if let (Some(sb), Some(sn)) = (
+        median_session(base).filter(long),
+        median_session(new).filter(long),
+    ) {
         let mut c = compare_samples(sb, sn, o);
         let count = |v: &[Vec<f64>]| v.iter().filter(|s| !s.is_empty()).count();
         c.why = format!(
@@ -929,6 +936,15 @@ mod tests {
             Matching::Sessions
         );
         assert_eq!(median_session(&base).unwrap()[0], base[2][0]);
+        // Median sessions too short for a test (4 samples, a 300 ms point): resampled.
+        let short = |m: f64, off: usize| series(4, m, 0.0001, off);
+        let (b3, n3) = (
+            vec![short(1.0, 0), short(1.0, 10), short(1.0, 20)],
+            vec![short(1.05, 30), short(1.05, 40), short(1.05, 50)],
+        );
+        let m = compare_matched(&b3, &n3, &o);
+        assert_eq!(m.matching, Matching::Sessions);
+        assert_eq!(m.comparison.verdict, Verdict::Slower, "{m:?}");
     }
 
     #[test]
