@@ -478,10 +478,17 @@ pub fn compare_matched(base: &[Vec<f64>], new: &[Vec<f64>], o: &VerdictOptions) 
                 lo.verdict,
                 hi.ratio,
                 hi.verdict,
-                if verdict == Verdict::Unsure {
-                    " (the modes disagree)"
-                } else {
-                    ""
+                match verdict {
+                    // Name the undecided mode's reason (e.g. "not significant").
+                    Verdict::Unsure => format!(
+                        " (the modes disagree: {})",
+                        if lo.verdict == Verdict::Unsure || hi.verdict != Verdict::Unsure {
+                            &lo.why
+                        } else {
+                            &hi.why
+                        }
+                    ),
+                    _ => String::new(),
                 }
             );
             return Matched {
