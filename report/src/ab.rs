@@ -19,8 +19,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use mfx_stats::{
-    compare_intervals, compare_sessions, cycles_k, hold_back, modes, Basis, Comparison, Interval,
-    Modes, Verdict, VerdictOptions, MODE_MIN_FRAC, MODE_MIN_SEP,
+    compare_intervals, compare_matched, cycles_k, hold_back, modes, Basis, Comparison, Interval,
+    Matched, Matching, Modes, Verdict, VerdictOptions, MODE_MIN_FRAC, MODE_MIN_SEP,
 };
 
 use crate::bands::{BandSource, Calibration};
@@ -77,6 +77,9 @@ pub struct Side {
     pub platforms: Vec<String>,
     pub run_ids: Vec<String>,
     pub git_revs: Vec<String>,
+    /// The GPU calibration set's median time on this run's GPU (`run.json`: `calibration`,
+    /// written by `mfx sweep` before the points; `mfx merge` compares it across shards).
+    pub gpu_calibration_ms: Option<f64>,
 }
 
 /// One point measured in both runs.
@@ -208,6 +211,40 @@ impl PointSamples {
         }
         out
     }
+
+    /// The median of each non-empty session, in session order.
+    fn session_medians(&self) -> Vec<f64> {
+        self.by_session(&self.gpu_ms)
+            .into_iter()
+            .filter_map(crate::bands::median)
+            .collect()
+    }
+
+    /// How far apart whole sessions sit: max / min − 1 of the session medians, when there are
+    /// two or more sessions and none of them alternates between two frame-time modes itself
+    /// (such a point's session medians differ by their modes' shares, which mode matching
+    /// resolves). `None` otherwise.
+    pub(crate) fn state_spread(&self) -> Option<f64> {
+        let sessions: Vec<Vec<f64>> = self
+            .by_session(&self.gpu_ms)
+            .into_iter()
+            .filter(|s| !s.is_empty())
+            .collect();
+        if sessions.len() < 2
+            || sessions
+                .iter()
+                .any(|s| modes(s, MODE_MIN_FRAC, MODE_MIN_SEP).is_some())
+        {
+            return None;
+        }
+        let meds: Vec<f64> = sessions
+            .into_iter()
+            .filter_map(crate::bands::median)
+            .collect();
+        let lo = meds.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = meds.iter().copied().fold(0.0f64, f64::max);
+        (lo > 0.0).then(|| hi / lo - 1.0)
+    }
 }
 
 /// Kept samples by (run_id, point_key), in sample order.
@@ -275,6 +312,24 @@ pub(crate) fn load_samples(path: &Path) -> Result<SampleMap> {
     Ok(out)
 }
 
+/// `calibration.canary_ms` of the `run.json` beside a runs.csv, where there is one (read as
+/// plain JSON: the report does not depend on the GPU crate that writes it).
+fn gpu_calibration_ms(csv: &Path) -> Option<f64> {
+    let text = std::fs::read_to_string(csv.with_file_name("run.json")).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    v.get("calibration")?
+        .get("canary_ms")?
+        .as_f64()
+        .filter(|x| x.is_finite() && *x > 0.0)
+}
+
+impl AbReport {
+    /// NEW's GPU over BASE's on the GPU calibration set, when both runs recorded it.
+    pub fn gpu_ratio(&self) -> Option<f64> {
+        Some(self.new.gpu_calibration_ms? / self.base.gpu_calibration_ms?)
+    }
+}
+
 pub(crate) fn load_side(p: &Path) -> Result<(Side, Runs, Option<SampleMap>)> {
     let (csv, samples_csv) = locate(p)?;
     let runs = Runs::load(&csv)?;
@@ -291,6 +346,7 @@ pub(crate) fn load_side(p: &Path) -> Result<(Side, Runs, Option<SampleMap>)> {
         None => None,
     };
     let side = Side {
+        gpu_calibration_ms: gpu_calibration_ms(&csv),
         runs_csv: csv,
         samples_csv,
         schema: schemas.into_iter().next().unwrap_or_default(),
@@ -455,16 +511,22 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
             })
         };
         let (bsm, nsm) = (pick(&bsamp, b), scaled(pick(&nsamp, n)));
+        let meds =
+            |p: &Option<PointSamples>| p.as_ref().map_or(Vec::new(), |p| p.session_medians());
+        let (bsess, nsess) = (meds(&bsm), meds(&nsm));
         let two = |p: &Option<PointSamples>| {
             p.as_ref()
                 .and_then(|p| modes(&p.gpu_ms, MODE_MIN_FRAC, MODE_MIN_SEP))
         };
-        let (bmodes, nmodes) = (two(&bsm), two(&nsm));
-        let (base_modes, new_modes) = (bmodes.map(|m| m.gap), nmodes.map(|m| m.gap));
+        let (base_modes, new_modes) = (two(&bsm).map(|m| m.gap), two(&nsm).map(|m| m.gap));
+        // The hold-back rules below look at the samples the verdict compared (`matched`):
+        // modes and medians of those, and whether modes were already matched.
+        let mut matched: Option<Matched> = None;
         let (time, cycles) = match (bsm, nsm) {
             (Some(sb), Some(sn)) => {
-                let time =
-                    compare_sessions(&sb.by_session(&sb.gpu_ms), &sn.by_session(&sn.gpu_ms), o);
+                let m = compare_matched(&sb.by_session(&sb.gpu_ms), &sn.by_session(&sn.gpu_ms), o);
+                let time = m.comparison.clone();
+                matched = Some(m);
                 // Per-sample clocks where every sample has one, else the row's mean clock.
                 let cyc = |s: &PointSamples, mean: Option<f64>| {
                     cycles_k(&s.gpu_ms, &s.sm_mhz)
@@ -472,7 +534,7 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
                 };
                 let cycles = match (cyc(&sb, bc), cyc(&sn, nc)) {
                     (Some(x), Some(y)) => {
-                        Some(compare_sessions(&sb.by_session(&x), &sn.by_session(&y), o))
+                        Some(compare_matched(&sb.by_session(&x), &sn.by_session(&y), o).comparison)
                     }
                     _ => None,
                 };
@@ -493,19 +555,39 @@ pub fn compare_runs(base: &Path, new: &Path, opts: &AbOptions) -> Result<AbRepor
                 (time, cycles)
             }
         };
-        // A verdict no more confident than the runs. Two frame-time modes on a side: when a
-        // mode of NEW matches a mode of BASE within the band (low with low and high with high
-        // when both have two), the change may be a shift between modes: UNSURE. Noisy on both
-        // sides: within the floor plus their session spread, UNSURE.
+        // A verdict no more confident than the runs. Two frame-time modes in the samples
+        // compared, not matched mode with mode: when a mode of NEW matches a mode of BASE within
+        // the band (a side with one mode is its median), the change may be a shift between
+        // modes: UNSURE. Noisy on both sides: within the floor plus their session spread,
+        // UNSURE — unless the modes were matched, which is what that spread was.
         let (bn, nn) = (noisy(b), noisy(n));
         let spread = |r: &Rec| r.f(cols::SESSION_SPREAD).filter(|x| x.is_finite());
         let mut why = Vec::new();
         let mut inst = 0.0f64;
-        if let Some(m) = mode_match(bmodes, nmodes, &time, bm, nm, band) {
+        let mode_matched = matched
+            .as_ref()
+            .is_some_and(|m| m.matching == Matching::Modes);
+        let (bmodes, nmodes, cbm, cnm) = match &matched {
+            Some(m) => (m.base_modes, m.new_modes, m.base_median, m.new_median),
+            None => (None, None, bm, nm),
+        };
+        if let Some(m) = mode_match(bmodes, nmodes, &time, cbm, cnm, band) {
             why.push(m);
             inst = f64::INFINITY;
         }
-        if bn && nn {
+        // Median sessions judged without this point's own calibration (which has seen its
+        // session states): when either median session sits, within the band, in the state of
+        // a session of the other side, the majority may have changed state, not the code.
+        let by_median = matched
+            .as_ref()
+            .is_some_and(|m| m.matching == Matching::MedianSession);
+        if by_median && band_source != BandSource::Point {
+            if let Some(m) = state_match(&bsess, &nsess, cbm, cnm, &time, band) {
+                why.push(m);
+                inst = f64::INFINITY;
+            }
+        }
+        if bn && nn && !mode_matched {
             let s = spread(b).unwrap_or(0.0).max(spread(n).unwrap_or(0.0));
             if s > 0.0 {
                 inst = inst.max(s);
@@ -589,11 +671,44 @@ fn mode_match(
         .find(|(x, y)| (y / x - 1.0).abs() <= band)?;
     let gap = b.or(n).map_or(0.0, |m| m.gap);
     Some(format!(
-        "two frame-time modes ({:.1} % apart): NEW's {} ms matches BASE's {} ms within the band, so          the change may be a shift between modes",
+        "two frame-time modes ({:.1} % apart): NEW's {} ms matches BASE's {} ms within the band, so the change may be a shift between modes",
         gap * 100.0,
         fmt_ms(y),
         fmt_ms(x)
     ))
+}
+
+/// Why a FASTER / SLOWER between median sessions may be a change of session state (see
+/// `compare_runs`), or None: a side's median session (`bm`, `nm`) within the band of one of
+/// the other side's sessions.
+fn state_match(
+    base: &[f64],
+    new: &[f64],
+    bm: f64,
+    nm: f64,
+    c: &Comparison,
+    band: f64,
+) -> Option<String> {
+    if !matches!(c.verdict, Verdict::Faster | Verdict::Slower) {
+        return None;
+    }
+    let near = |x: f64, y: f64| x > 0.0 && (y / x - 1.0).abs() <= band;
+    if let Some(x) = base.iter().find(|x| near(**x, nm)) {
+        return Some(format!(
+            "NEW's median session ({} ms) sits in the state of a BASE session ({} ms): the \
+             sessions may have changed state (no calibration of this point says how often)",
+            fmt_ms(nm),
+            fmt_ms(*x)
+        ));
+    }
+    new.iter().find(|y| near(bm, **y)).map(|y| {
+        format!(
+            "BASE's median session ({} ms) sits in the state of a NEW session ({} ms): the \
+             sessions may have changed state (no calibration of this point says how often)",
+            fmt_ms(bm),
+            fmt_ms(*y)
+        )
+    })
 }
 
 /// "5%", "5 %" or "0.05" → 0.05 (for `--fail-on-slower`).
@@ -707,10 +822,15 @@ impl AbReport {
              ({} resamples). SAME: the ratio is within ±{:.1} % (the noise band). SLOWER / \
              FASTER: beyond the band, Mann–Whitney U p < {} and the CI excludes 1. UNSURE: \
              beyond the band without that evidence, or fewer than {} samples on a side \
-             (then SAME only if every NEW/BASE sample ratio is within the band). Points \
-             timed in several sessions ([timing] sessions; the samples' session column): \
-             the CI resamples sessions, then samples within them, and \"significant\" means \
-             that CI excludes 1 (no p is shown), so sessions that disagree widen it. From \
+             (then SAME only if every NEW/BASE sample ratio is within the band). What is \
+             compared with what (first match): where both sides' samples show two modes \
+             whose gaps agree within the band, the fast mode with the fast and the slow with \
+             the slow, the point taking their common verdict (else UNSURE; ratio: the two \
+             ratios' geometric mean); where both sides hold an odd number ≥ 3 of sessions \
+             ([timing] sessions: each prepared afresh, in one memory state), the median \
+             session of each (a minority of sessions in another state cannot move it); \
+             otherwise the CI resamples sessions, then samples within them, and \
+             \"significant\" means that CI excludes 1 (no p is shown). From \
              summary columns only (no samples.csv), \"significant\" means the two medians' CIs \
              (else min–max ranges) do not overlap. Cycles = time × SM clock. An error column \
              moved when |Δ| > max({:e}, {:.0} % of the larger value). {}",
@@ -753,11 +873,14 @@ impl AbReport {
         let _ = write!(
             t,
             " Held back (UNSURE, the point's own instability could explain it): a FASTER / \
-             SLOWER where a side has two frame-time modes (the widest split of its sorted \
-             samples leaves two groups of ≥ {:.0} % of them, medians ≥ {:.1} % apart) and a mode \
-             of NEW matches a mode of BASE within the band (low with low, high with high when \
-             both have two; a side with one mode is its median); and, where both sides are \
-             noisy, one within ±(floor + their larger session spread).",
+             SLOWER where the samples compared (not mode-matched) show two frame-time modes on a \
+             side (the widest split of its sorted samples leaves two groups of ≥ {:.0} % of \
+             them, medians ≥ {:.1} % apart) and a mode of NEW matches a mode of BASE within the \
+             band (low with low, high with high when both have two; a side with one mode is \
+             its median); where median sessions were compared and the point's band is not its \
+             own calibrated one, a median session within the band of a session of the other \
+             side (a change of session state); and, where both sides are noisy and the modes \
+             were not matched, one within ±(floor + their larger session spread).",
             MODE_MIN_FRAC * 100.0,
             MODE_MIN_SEP * 100.0
         );
@@ -817,6 +940,20 @@ impl AbReport {
                 self.new.platforms.join("; ")
             ));
         }
+        if let Some(g) = self.gpu_ratio() {
+            let within = self
+                .points
+                .iter()
+                .filter(|p| {
+                    matches!(p.time.verdict, Verdict::Faster | Verdict::Slower)
+                        && (p.time.ratio - 1.0).abs() <= (g - 1.0).abs()
+                })
+                .count();
+            v.push(format!(
+                "GPU calibration set: NEW's GPU took {g:.3}× BASE's; {within} FASTER / SLOWER \
+                 verdicts lie within that difference (may be the GPUs, not the methods)"
+            ));
+        }
         v
     }
 
@@ -856,6 +993,15 @@ impl AbReport {
             }
             if p.band_source != BandSource::Fixed {
                 note.push(p.band_note());
+            }
+            if let Some(g) = self.gpu_ratio() {
+                if matches!(p.time.verdict, Verdict::Faster | Verdict::Slower)
+                    && (p.time.ratio - 1.0).abs() <= (g - 1.0).abs()
+                {
+                    note.push(format!(
+                        "within the GPUs' difference on the calibration set ({g:.3}×)"
+                    ));
+                }
             }
             let _ = writeln!(
                 m,
@@ -1233,4 +1379,30 @@ pub fn baseline_dir(root: &Path, name: &str) -> Result<PathBuf> {
             have.join(", ")
         }
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_gpu_calibration_is_read_from_run_json_where_written() {
+        let d = std::env::temp_dir().join(format!("mfx-ab-gpucal-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let csv = d.join("runs.csv");
+        assert_eq!(gpu_calibration_ms(&csv), None, "no run.json");
+        std::fs::write(d.join("run.json"), r#"{"calibration": null}"#).unwrap();
+        assert_eq!(
+            gpu_calibration_ms(&csv),
+            None,
+            "run.json without a calibration"
+        );
+        std::fs::write(
+            d.join("run.json"),
+            r#"{"calibration": {"set": "canary", "canary_ms": 0.125, "runs": 21}}"#,
+        )
+        .unwrap();
+        assert_eq!(gpu_calibration_ms(&csv), Some(0.125));
+        std::fs::remove_dir_all(&d).unwrap();
+    }
 }

@@ -10,7 +10,8 @@ use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 
 /// The `format` of a calibration file this code reads and writes.
-pub const FORMAT: &str = "mfx-calibration/1";
+/// 2: a point's band also covers its typical session-state spread (`calibrate.rs`).
+pub const FORMAT: &str = "mfx-calibration/2";
 
 /// Where a point's band came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -36,7 +36,8 @@ pub use stop::{Decision, Sampler, StopReason, StopRule};
 pub use summary::{Summary, BOOTSTRAP_RESAMPLES};
 pub use throttle::{discard, THROTTLE_FRACTION};
 pub use verdict::{
-    compare_intervals, compare_samples, compare_sessions, cycles_k, hold_back, mode_gap, modes,
-    Basis, Comparison, Interval, Modes, Verdict, VerdictOptions, MODE_MIN_FRAC, MODE_MIN_SEP,
+    compare_intervals, compare_matched, compare_samples, compare_sessions, cycles_k, hold_back,
+    median_session, mode_gap, modes, Basis, Comparison, Interval, Matched, Matching, Modes,
+    Verdict, VerdictOptions, MODE_MIN_FRAC, MODE_MIN_SEP,
 };
 pub use warmup::{Warmup, WarmupDecision, WarmupEnd, WarmupRule};

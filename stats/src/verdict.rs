@@ -329,6 +329,8 @@ pub struct Modes {
     pub high: f64,
     /// `(high − low) / median of all`.
     pub gap: f64,
+    /// A sample belongs to the slower mode when above this (the middle of the empty stretch).
+    pub split: f64,
 }
 
 /// The two modes behind [`mode_gap`], when there are two.
@@ -356,6 +358,7 @@ pub fn modes(samples: &[f64], min_frac: f64, min_sep: f64) -> Option<Modes> {
                 low,
                 high,
                 gap: sep,
+                split: 0.5 * (xs[i] + xs[i + 1]),
             });
         }
     }
@@ -366,6 +369,194 @@ pub fn modes(samples: &[f64], min_frac: f64, min_sep: f64) -> Option<Modes> {
 /// the 2 % band, so a gap that can flip a verdict is always seen).
 pub const MODE_MIN_FRAC: f64 = 0.2;
 pub const MODE_MIN_SEP: f64 = 0.015;
+
+/// How [`compare_matched`] reached its verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum Matching {
+    /// Both sides show two modes of the same gap: low compared with low, high with high.
+    Modes,
+    /// Both sides hold an odd number (≥ 3) of sessions: the median session of each compared.
+    MedianSession,
+    /// Otherwise: [`compare_sessions`] (one session a side: [`compare_samples`]).
+    Sessions,
+}
+
+impl Matching {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Matching::Modes => "mode-matched",
+            Matching::MedianSession => "median session",
+            Matching::Sessions => "sessions resampled",
+        }
+    }
+}
+
+/// A verdict from per-session samples, and what the hold-back rules need to know about the
+/// samples it compared.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Matched {
+    pub comparison: Comparison,
+    pub matching: Matching,
+    /// Two frame-time modes behind the samples compared, per side (None after mode matching:
+    /// resolved; for the median session: its own, or the side's where they alternate within
+    /// its sessions).
+    pub base_modes: Option<Modes>,
+    pub new_modes: Option<Modes>,
+    /// Median of the samples compared, per side (NEW as given, e.g. scaled).
+    pub base_median: f64,
+    pub new_median: f64,
+}
+
+/// The session whose median is the median of the side's session medians, when the side holds
+/// an odd number (≥ 3) of non-empty sessions.
+pub fn median_session(sessions: &[Vec<f64>]) -> Option<&[f64]> {
+    let mut s: Vec<(f64, &Vec<f64>)> = sessions
+        .iter()
+        .filter(|v| !v.is_empty())
+        .map(|v| (median(v), v))
+        .collect();
+    if s.len() < 3 || s.len().is_multiple_of(2) {
+        return None;
+    }
+    s.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Some(s[s.len() / 2].1)
+}
+
+/// The verdict between two sides' per-session samples, each compared with what it can be
+/// told apart from (first match wins):
+///
+/// 1. **Mode-matched.** Both sides' pooled samples show two modes ([`modes`], the verdict
+///    defaults) whose gaps agree within the noise band: the fast mode of NEW is compared with
+///    the fast mode of BASE and the slow with the slow ([`compare_samples`] on each), and the
+///    point is SLOWER / FASTER / SAME only when both modes say so, else UNSURE; `ratio` is the
+///    geometric mean of the two mode ratios, `ratio_ci` the hull of their CIs. Why: which mode a
+///    frame (or a whole session) falls in is a state the build does not choose — its share
+///    moves between runs of one build and drags a pooled median across the gap — while a change
+///    of the code moves both modes. Compared mode with mode, a run of one build matches itself
+///    whatever the shares, and a 5 % change stays 5 % in each mode.
+/// 2. **Median session.** Both sides hold an odd number (≥ 3) of sessions, and their median
+///    sessions `min_samples` or more samples each: the side's median
+///    session (its session medians' median, [`median_session`]) against the other's, by
+///    [`compare_samples`]. Why: a session is prepared afresh and lands in one memory state for
+///    all its samples (on the H200 a k-buffer session can sit 4–10 % above its twins), so the
+///    session is the unit of a state and the samples are the unit of noise within one. The
+///    median session cannot be moved by a minority of sessions in another state (one of three),
+///    and within a state its samples are independent enough for the test. The two-stage
+///    bootstrap of [`compare_sessions`] instead draws the odd session twice in a quarter of its
+///    resamples, so a point with one odd session of three can never be called at 5 %.
+/// 3. Otherwise [`compare_sessions`].
+///
+/// What a state-mix can still do (a majority of NEW's sessions in BASE's minority state; three
+/// states spread over three sessions) is left to the caller's band and hold-back rules, which
+/// see the modes of the samples actually compared (`base_modes`, `new_modes`).
+pub fn compare_matched(base: &[Vec<f64>], new: &[Vec<f64>], o: &VerdictOptions) -> Matched {
+    let flat = |v: &[Vec<f64>]| v.iter().flatten().copied().collect::<Vec<f64>>();
+    let (fb, fnew) = (flat(base), flat(new));
+    let two = |v: &[f64]| modes(v, MODE_MIN_FRAC, MODE_MIN_SEP);
+    if let (Some(mb), Some(mn)) = (two(&fb), two(&fnew)) {
+        if (mb.gap - mn.gap).abs() <= o.noise_band {
+            let split = |v: &[f64], m: &Modes| -> (Vec<f64>, Vec<f64>) {
+                v.iter().partition(|x| **x <= m.split)
+            };
+            let ((bl, bh), (nl, nh)) = (split(&fb, &mb), split(&fnew, &mn));
+            let (lo, hi) = (compare_samples(&bl, &nl, o), compare_samples(&bh, &nh, o));
+            let verdict = if lo.verdict == hi.verdict {
+                lo.verdict
+            } else {
+                Verdict::Unsure
+            };
+            let p = match (lo.p, hi.p) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                _ => None,
+            };
+            let why = format!(
+                "mode-matched (two modes on both sides, {:.1} % and {:.1} % apart): fast mode \
+                 {:.3} {}, slow mode {:.3} {}{}",
+                mb.gap * 100.0,
+                mn.gap * 100.0,
+                lo.ratio,
+                lo.verdict,
+                hi.ratio,
+                hi.verdict,
+                match verdict {
+                    // Name the undecided mode's reason (e.g. "not significant").
+                    Verdict::Unsure => format!(
+                        " (the modes disagree: {})",
+                        if lo.verdict == Verdict::Unsure || hi.verdict != Verdict::Unsure {
+                            &lo.why
+                        } else {
+                            &hi.why
+                        }
+                    ),
+                    _ => String::new(),
+                }
+            );
+            return Matched {
+                comparison: Comparison {
+                    verdict,
+                    ratio: (lo.ratio * hi.ratio).sqrt(),
+                    ratio_ci: (
+                        lo.ratio_ci.0.min(hi.ratio_ci.0),
+                        lo.ratio_ci.1.max(hi.ratio_ci.1),
+                    ),
+                    p,
+                    n_base: fb.len(),
+                    n_new: fnew.len(),
+                    basis: Basis::Samples,
+                    why,
+                },
+                matching: Matching::Modes,
+                base_modes: None,
+                new_modes: None,
+                base_median: median(&fb),
+                new_median: median(&fnew),
+            };
+        }
+    }
+    // A median session too short for a test within it (a 300 ms point capped at 4 samples a
+    // session) leaves the decision to the sessions resampled.
+    let long = |s: &&[f64]| s.len() >= o.min_samples;
+    if let (Some(sb), Some(sn)) = (
+        median_session(base).filter(long),
+        median_session(new).filter(long),
+    ) {
+        let mut c = compare_samples(sb, sn, o);
+        let count = |v: &[Vec<f64>]| v.iter().filter(|s| !s.is_empty()).count();
+        c.why = format!(
+            "{} (median session of {} vs {})",
+            c.why,
+            count(base),
+            count(new)
+        );
+        // Modes for the hold-back: the median session's own, else the side's pooled ones
+        // when they alternate frame by frame (some session holds both), not when whole
+        // sessions sit in different states (what the median session already sets aside).
+        let frame_modes = |side: &[Vec<f64>], med: &[f64], flat: &[f64]| {
+            two(med).or_else(|| {
+                side.iter()
+                    .any(|v| two(v).is_some())
+                    .then(|| two(flat))
+                    .flatten()
+            })
+        };
+        return Matched {
+            comparison: c,
+            matching: Matching::MedianSession,
+            base_modes: frame_modes(base, sb, &fb),
+            new_modes: frame_modes(new, sn, &fnew),
+            base_median: median(sb),
+            new_median: median(sn),
+        };
+    }
+    Matched {
+        comparison: compare_sessions(base, new, o),
+        matching: Matching::Sessions,
+        base_modes: two(&fb),
+        new_modes: two(&fnew),
+        base_median: median(&fb),
+        new_median: median(&fnew),
+    }
+}
 
 fn median_of(sorted: &[f64]) -> f64 {
     let n = sorted.len();
@@ -659,6 +850,108 @@ mod tests {
         assert_eq!(hold_back(c.clone(), 0.05, "x").verdict, Verdict::Slower);
         let same = compare_samples(&a, &a, &VerdictOptions::default());
         assert_eq!(hold_back(same, 0.5, "x").verdict, Verdict::Same);
+    }
+
+    /// Sessions of `n` frames in two modes (1.615 and 1.705 ms, the H200's compute A-buffer on
+    /// quads(32) 1024²), `slow[i]` of session i's frames in the slow mode, all × `scale`.
+    fn two_mode_sessions(n: usize, slow: &[usize], scale: f64, off: usize) -> Vec<Vec<f64>> {
+        slow.iter()
+            .enumerate()
+            .map(|(s, &k)| {
+                let mut v = series(n - k, 1.615 * scale, 0.002, off + 100 * s);
+                v.extend(series(k, 1.705 * scale, 0.002, off + 100 * s + 50));
+                v
+            })
+            .collect()
+    }
+
+    #[test]
+    fn mode_matching_catches_a_five_percent_shift_whatever_the_mode_shares() {
+        let o = VerdictOptions::default();
+        // BASE mostly fast (10 of 50 slow frames per session), NEW ×1.05 mostly slow: pooled,
+        // NEW's median is 11 % up, but its sessions disagree, and the mode mix explains it.
+        let base = two_mode_sessions(50, &[10, 12, 40], 1.0, 0);
+        let new = two_mode_sessions(50, &[40, 38, 12], 1.05, 1000);
+        let m = compare_matched(&base, &new, &o);
+        assert_eq!(m.matching, Matching::Modes, "{m:?}");
+        assert_eq!(m.comparison.verdict, Verdict::Slower, "{m:?}");
+        assert!((m.comparison.ratio - 1.05).abs() < 0.005, "{m:?}");
+        assert!(
+            m.comparison.why.contains("mode-matched"),
+            "{}",
+            m.comparison.why
+        );
+        // ×0.95: FASTER.
+        let fast = two_mode_sessions(50, &[40, 38, 12], 0.95, 1000);
+        assert_eq!(
+            compare_matched(&base, &fast, &o).comparison.verdict,
+            Verdict::Faster
+        );
+    }
+
+    #[test]
+    fn an_a_a_pair_whose_frames_flip_modes_is_not_called_slower() {
+        let o = VerdictOptions::default();
+        // One build twice: BASE's frames mostly in the fast mode, NEW's mostly in the slow.
+        let base = two_mode_sessions(50, &[10, 12, 15], 1.0, 0);
+        let new = two_mode_sessions(50, &[40, 38, 35], 1.0, 1000);
+        // Sessions resampled: the pooled medians differ by the whole gap and every session
+        // agrees, so that rule calls it SLOWER (what the issue's fresh machine saw).
+        let pooled = compare_sessions(&base, &new, &o);
+        assert!(pooled.ratio > 1.05, "{pooled:?}");
+        assert_eq!(pooled.verdict, Verdict::Slower, "{pooled:?}");
+        let m = compare_matched(&base, &new, &o);
+        assert_eq!(m.matching, Matching::Modes);
+        assert_eq!(m.comparison.verdict, Verdict::Same, "{m:?}");
+        assert!((m.comparison.ratio - 1.0).abs() < 0.005, "{m:?}");
+        // NEW entirely in the slow mode (one mode): not matched mode with mode; the median
+        // sessions differ by the gap, and the caller sees the modes it compared to hold it back.
+        let all_slow = two_mode_sessions(50, &[50, 50, 50], 1.0, 1000);
+        let m = compare_matched(&base, &all_slow, &o);
+        assert_eq!(m.matching, Matching::MedianSession);
+        assert!(m.base_modes.is_some() && m.new_modes.is_none(), "{m:?}");
+    }
+
+    #[test]
+    fn the_median_session_is_not_moved_by_one_session_in_another_state() {
+        let o = VerdictOptions::default();
+        // Three tight sessions, BASE's second 9 % up (the H200's k-buffer at 1024², k = 16).
+        let s = |m: f64, off: usize| series(10, m, 0.002, off);
+        let base = vec![s(6.13, 0), s(6.75, 100), s(6.18, 200)];
+        let new = vec![
+            s(6.18 * 1.05, 300),
+            s(6.18 * 1.05, 400),
+            s(6.18 * 1.05, 500),
+        ];
+        // Sessions resampled: the odd session drawn twice in a quarter of the resamples.
+        assert_eq!(compare_sessions(&base, &new, &o).verdict, Verdict::Unsure);
+        let m = compare_matched(&base, &new, &o);
+        assert_eq!(m.matching, Matching::MedianSession, "{m:?}");
+        assert_eq!(m.comparison.verdict, Verdict::Slower, "{m:?}");
+        assert!((m.comparison.ratio - 1.05).abs() < 0.005);
+        // A/A: NEW's sessions all in the common state, or one of them in the odd one.
+        for new in [
+            vec![s(6.18, 300), s(6.17, 400), s(6.18, 500)],
+            vec![s(6.18, 300), s(6.17, 400), s(6.75, 500)],
+        ] {
+            let m = compare_matched(&base, &new, &o);
+            assert_eq!(m.comparison.verdict, Verdict::Same, "{m:?}");
+        }
+        // Even session counts: resampled as before.
+        assert_eq!(
+            compare_matched(&base[..2], &new[..2], &o).matching,
+            Matching::Sessions
+        );
+        assert_eq!(median_session(&base).unwrap()[0], base[2][0]);
+        // Median sessions too short for a test (4 samples, a 300 ms point): resampled.
+        let short = |m: f64, off: usize| series(4, m, 0.0001, off);
+        let (b3, n3) = (
+            vec![short(1.0, 0), short(1.0, 10), short(1.0, 20)],
+            vec![short(1.05, 30), short(1.05, 40), short(1.05, 50)],
+        );
+        let m = compare_matched(&b3, &n3, &o);
+        assert_eq!(m.matching, Matching::Sessions);
+        assert_eq!(m.comparison.verdict, Verdict::Slower, "{m:?}");
     }
 
     #[test]
