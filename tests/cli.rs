@@ -501,3 +501,55 @@ fn list_json_parses_and_names_the_file_only_suites() {
     let t = text(&mfx(&["list", "suites"]));
     assert!(t.contains("scaling") && t.contains("(file only)"), "{t}");
 }
+
+#[test]
+fn a_gltf_scene_with_blend_and_mask_materials_is_judged_against_the_truth() {
+    let d = tmp("gltf");
+    let glb = scenarios::gltf::write_example(&d, true).unwrap();
+    let suite = d.join("gltf.toml");
+    std::fs::write(
+        &suite,
+        format!(
+            "name = \"gltf\"\nresolutions = [[64, 64]]\n[timing]\nmin_samples = 1\nmax_samples = 1\nwarmup_frames = 1\nwarmup_max_frames = 1\n[[study]]\nkind = \"methods\"\nmethods = [\"depth_peel\", \"kbuffer_atomic\", \"wboit\"]\naxes = {{ max_layers = [64], layers = [4] }}\n[[study.scenes]]\ngenerator = \"gltf\"\npath = \"{}\"\n",
+            glb.display()
+        ),
+    )
+    .unwrap();
+    let s = suite.to_str().unwrap();
+    let o = mfx(&["check", s]);
+    assert!(o.status.success(), "{}", text(&o));
+    let out = d.join("run");
+    let o = mfx(&["sweep", s, "--no-report", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let mut rd = csv::Reader::from_path(out.join("runs.csv")).unwrap();
+    let h = rd.headers().unwrap().clone();
+    let col = |n: &str| h.iter().position(|c| c == n).unwrap();
+    let (m, st, mt) = (col("method"), col("status"), col("matches_truth"));
+    let mut peel = None;
+    for r in rd.records() {
+        let r = r.unwrap();
+        assert_eq!(&r[st], "ok", "{r:?}");
+        if &r[m] == "depth_peel" {
+            peel = Some(r[mt].to_string());
+        }
+    }
+    assert_eq!(
+        peel.as_deref(),
+        Some("true"),
+        "exact depth peeling matches the f64 truth"
+    );
+    // A broken file is refused by check, naming glTF.
+    std::fs::write(d.join("bad.glb"), b"glTF junk").unwrap();
+    let bad = d.join("bad.toml");
+    std::fs::write(
+        &bad,
+        format!(
+            "name = \"bad\"\n[[study]]\nkind = \"methods\"\nmethods = [\"wboit\"]\n[[study.scenes]]\ngenerator = \"gltf\"\npath = \"{}\"\n",
+            d.join("bad.glb").display()
+        ),
+    )
+    .unwrap();
+    let o = mfx(&["check", bad.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("glTF file"), "{}", text(&o));
+}
