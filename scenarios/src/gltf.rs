@@ -132,7 +132,7 @@ pub fn load(path: &Path) -> Result<Mesh> {
                 Some(ix) => ix.into_u32().collect(),
                 None => (0..n as u32).collect(),
             };
-            if indices.len() % 3 != 0 {
+            if !indices.len().is_multiple_of(3) {
                 return Err(err(
                     path,
                     format!(
@@ -286,10 +286,10 @@ pub fn write_example(dir: &Path, glb: bool) -> std::io::Result<std::path::PathBu
     }
     // GLB: 12-byte header, a JSON chunk padded with spaces, a BIN chunk padded with zeros.
     let mut j = json.into_bytes();
-    while j.len() % 4 != 0 {
+    while !j.len().is_multiple_of(4) {
         j.push(b' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + j.len() + 8 + bin.len();
