@@ -553,3 +553,64 @@ fn a_gltf_scene_with_blend_and_mask_materials_is_judged_against_the_truth() {
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("glTF file"), "{}", text(&o));
 }
+
+#[test]
+fn backend_gles_lists_its_adapter_and_a_sweep_runs_on_it() {
+    let o = mfx(&["list", "adapters", "--backend", "gles", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("list --json parses");
+    let adapters = j["adapters"].as_array().unwrap();
+    if adapters.is_empty() {
+        // Only where EGL has no GLES 3 context; the warning names why.
+        assert!(text(&o).contains("GLES"), "{}", text(&o));
+        eprintln!("skipped: {}", text(&o));
+        return;
+    }
+    assert!(
+        adapters
+            .iter()
+            .all(|a| a["driver_info"].as_str().unwrap().contains("OpenGL ES")),
+        "{j}"
+    );
+    let d = tmp("gles");
+    let suite = d.join("gles.toml");
+    std::fs::write(
+        &suite,
+        "name = \"gles\"\nresolutions = [[32, 32]]\n[timing]\nmin_samples = 1\nmax_samples = 1\nwarmup_frames = 1\nwarmup_max_frames = 1\n[[study]]\nkind = \"methods\"\nmethods = [\"wboit\", \"compute_abuffer\"]\n[[study.scenes]]\ngenerator = \"quads\"\ndepth_complexity = 3\n",
+    )
+    .unwrap();
+    let out = d.join("run");
+    let o = mfx(&[
+        "sweep",
+        suite.to_str().unwrap(),
+        "--backend",
+        "gles",
+        "--no-report",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let mut rd = csv::Reader::from_path(out.join("runs.csv")).unwrap();
+    let h = rd.headers().unwrap().clone();
+    let col = |n: &str| h.iter().position(|c| c == n).unwrap();
+    let (m, st, b, mt) = (
+        col("method"),
+        col("status"),
+        col("backend"),
+        col("matches_truth"),
+    );
+    let mut abuffer = None;
+    for r in rd.records() {
+        let r = r.unwrap();
+        assert_eq!(&r[b], "gles", "{r:?}");
+        assert_eq!(&r[st], "ok", "{r:?}");
+        if &r[m] == "compute_abuffer" {
+            abuffer = Some(r[mt].to_string());
+        }
+    }
+    assert_eq!(
+        abuffer.as_deref(),
+        Some("true"),
+        "the exact compute A-buffer matches the f64 truth on GLES"
+    );
+}
