@@ -24,7 +24,8 @@ struct Cli {
 
 #[derive(Args, Clone)]
 pub(crate) struct GpuArgs {
-    /// wgpu backend: vulkan, gl or any.
+    /// wgpu backend: vulkan, gl (wgpu's own EGL/GL choice), gles (a GLES 3.x context of our own
+    /// through EGL: compute where wgpu alone would take desktop GL 3.3), or any (vulkan + gl).
     #[arg(long, default_value = "vulkan")]
     backend: BackendChoice,
     /// Use the adapter whose name contains this (case-insensitive).

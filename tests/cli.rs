@@ -628,3 +628,116 @@ fn list_json_parses_and_names_the_file_only_suites() {
     let t = text(&mfx(&["list", "suites"]));
     assert!(t.contains("scaling") && t.contains("(file only)"), "{t}");
 }
+
+#[test]
+fn a_gltf_scene_with_blend_and_mask_materials_is_judged_against_the_truth() {
+    let d = tmp("gltf");
+    let glb = scenarios::gltf::write_example(&d, true).unwrap();
+    let suite = d.join("gltf.toml");
+    std::fs::write(
+        &suite,
+        format!(
+            "name = \"gltf\"\nresolutions = [[64, 64]]\n[timing]\nmin_samples = 1\nmax_samples = 1\nwarmup_frames = 1\nwarmup_max_frames = 1\n[[study]]\nkind = \"methods\"\nmethods = [\"depth_peel\", \"kbuffer_atomic\", \"wboit\"]\naxes = {{ max_layers = [64], layers = [4] }}\n[[study.scenes]]\ngenerator = \"gltf\"\npath = \"{}\"\n",
+            glb.display()
+        ),
+    )
+    .unwrap();
+    let s = suite.to_str().unwrap();
+    let o = mfx(&["check", s]);
+    assert!(o.status.success(), "{}", text(&o));
+    let out = d.join("run");
+    let o = mfx(&["sweep", s, "--no-report", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let mut rd = csv::Reader::from_path(out.join("runs.csv")).unwrap();
+    let h = rd.headers().unwrap().clone();
+    let col = |n: &str| h.iter().position(|c| c == n).unwrap();
+    let (m, st, mt) = (col("method"), col("status"), col("matches_truth"));
+    let mut peel = None;
+    for r in rd.records() {
+        let r = r.unwrap();
+        assert_eq!(&r[st], "ok", "{r:?}");
+        if &r[m] == "depth_peel" {
+            peel = Some(r[mt].to_string());
+        }
+    }
+    assert_eq!(
+        peel.as_deref(),
+        Some("true"),
+        "exact depth peeling matches the f64 truth"
+    );
+    // A broken file is refused by check, naming glTF.
+    std::fs::write(d.join("bad.glb"), b"glTF junk").unwrap();
+    let bad = d.join("bad.toml");
+    std::fs::write(
+        &bad,
+        format!(
+            "name = \"bad\"\n[[study]]\nkind = \"methods\"\nmethods = [\"wboit\"]\n[[study.scenes]]\ngenerator = \"gltf\"\npath = \"{}\"\n",
+            d.join("bad.glb").display()
+        ),
+    )
+    .unwrap();
+    let o = mfx(&["check", bad.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("glTF file"), "{}", text(&o));
+}
+
+#[test]
+fn backend_gles_lists_its_adapter_and_a_sweep_runs_on_it() {
+    let o = mfx(&["list", "adapters", "--backend", "gles", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("list --json parses");
+    let adapters = j["adapters"].as_array().unwrap();
+    if adapters.is_empty() {
+        // Only where EGL has no GLES 3 context; the warning names why.
+        assert!(text(&o).contains("GLES"), "{}", text(&o));
+        eprintln!("skipped: {}", text(&o));
+        return;
+    }
+    assert!(
+        adapters
+            .iter()
+            .all(|a| a["driver_info"].as_str().unwrap().contains("OpenGL ES")),
+        "{j}"
+    );
+    let d = tmp("gles");
+    let suite = d.join("gles.toml");
+    std::fs::write(
+        &suite,
+        "name = \"gles\"\nresolutions = [[32, 32]]\n[timing]\nmin_samples = 1\nmax_samples = 1\nwarmup_frames = 1\nwarmup_max_frames = 1\n[[study]]\nkind = \"methods\"\nmethods = [\"wboit\", \"compute_abuffer\"]\n[[study.scenes]]\ngenerator = \"quads\"\ndepth_complexity = 3\n",
+    )
+    .unwrap();
+    let out = d.join("run");
+    let o = mfx(&[
+        "sweep",
+        suite.to_str().unwrap(),
+        "--backend",
+        "gles",
+        "--no-report",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let mut rd = csv::Reader::from_path(out.join("runs.csv")).unwrap();
+    let h = rd.headers().unwrap().clone();
+    let col = |n: &str| h.iter().position(|c| c == n).unwrap();
+    let (m, st, b, mt) = (
+        col("method"),
+        col("status"),
+        col("backend"),
+        col("matches_truth"),
+    );
+    let mut abuffer = None;
+    for r in rd.records() {
+        let r = r.unwrap();
+        assert_eq!(&r[b], "gles", "{r:?}");
+        assert_eq!(&r[st], "ok", "{r:?}");
+        if &r[m] == "compute_abuffer" {
+            abuffer = Some(r[mt].to_string());
+        }
+    }
+    assert_eq!(
+        abuffer.as_deref(),
+        Some("true"),
+        "the exact compute A-buffer matches the f64 truth on GLES"
+    );
+}

@@ -372,6 +372,9 @@ fn scene_problems(file: &str, table: &str, e: SceneError) -> Vec<Problem> {
         // A model a script fetches is not a suite problem: until it is fetched, its rows are
         // skipped with the command to run (`runner`).
         SceneError::ModelMissing { .. } => Vec::new(),
+        SceneError::Gltf { path, why } => {
+            vec![Problem::new(file, table, "path", format!("glTF file: {why}")).value(path)]
+        }
         other => vec![Problem::new(file, table, "", other.to_string())],
     }
 }

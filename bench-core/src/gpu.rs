@@ -63,7 +63,11 @@ pub fn wanted_features() -> wgpu::Features {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BackendChoice {
     Vulkan,
+    /// wgpu's own GL set-up: desktop GL 3.3 where EGL offers OpenGL (no compute), else GLES.
     Gl,
+    /// A GLES 3.x context of our own through EGL ([`crate::gles`]): compute where the driver
+    /// offers GLES 3.1+, on drivers where wgpu itself would pick desktop GL 3.3.
+    Gles,
     Any,
 }
 
@@ -72,9 +76,10 @@ impl std::str::FromStr for BackendChoice {
     fn from_str(s: &str) -> std::result::Result<Self, String> {
         match s.to_ascii_lowercase().as_str() {
             "vulkan" | "vk" => Ok(BackendChoice::Vulkan),
-            "gl" | "gles" | "opengl" => Ok(BackendChoice::Gl),
+            "gl" | "opengl" => Ok(BackendChoice::Gl),
+            "gles" => Ok(BackendChoice::Gles),
             "any" => Ok(BackendChoice::Any),
-            other => Err(format!("unknown backend '{other}' (vulkan, gl, any)")),
+            other => Err(format!("unknown backend '{other}' (vulkan, gl, gles, any)")),
         }
     }
 }
@@ -84,6 +89,8 @@ impl BackendChoice {
         match self {
             BackendChoice::Vulkan => wgpu::Backends::VULKAN,
             BackendChoice::Gl => wgpu::Backends::GL,
+            // Our own EGL context: wgpu opens none of its own (it would take desktop GL).
+            BackendChoice::Gles => wgpu::Backends::empty(),
             BackendChoice::Any => wgpu::Backends::VULKAN | wgpu::Backends::GL,
         }
     }
@@ -169,16 +176,46 @@ pub struct Gpu {
     pub texture_memory: crate::texture_memory::TextureMemory,
     /// Textures made in dedicated allocations so far (tests check the path was taken).
     pub dedicated_textures: std::sync::atomic::AtomicUsize,
+    /// `--backend gles`: the EGL context the device renders with (current on this thread).
+    /// Declared last: it outlives the device and adapter above it.
+    gles: Option<crate::gles::GlesContext>,
 }
 
 /// Lists adapters for a backend choice, in enumeration order (the `--adapter-index` order).
+/// Why `gles` has none is logged (see [`candidates`]).
 pub fn list_adapters(backend: BackendChoice) -> Vec<wgpu::Adapter> {
+    match candidates(backend) {
+        Ok(c) => c.into_iter().map(|(a, _)| a).collect(),
+        Err(why) => {
+            log::warn!("{why}");
+            Vec::new()
+        }
+    }
+}
+
+/// The adapters of a backend choice, each with its GLES context where it has one; or why
+/// `gles` has none (no libEGL, no display, no GLES 3 context).
+fn candidates(
+    backend: BackendChoice,
+) -> std::result::Result<Vec<(wgpu::Adapter, Option<crate::gles::GlesContext>)>, String> {
     let instance = make_instance(backend);
-    pollster::block_on(instance.enumerate_adapters(backend.backends()))
+    if backend == BackendChoice::Gles {
+        return Ok(crate::gles::adapters(&instance)?
+            .into_iter()
+            .map(|(a, c)| (a, Some(c)))
+            .collect());
+    }
+    Ok(
+        pollster::block_on(instance.enumerate_adapters(backend.backends()))
+            .into_iter()
+            .map(|a| (a, None))
+            .collect(),
+    )
 }
 
 fn make_instance(backend: BackendChoice) -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    // `gles`: no backend of wgpu's own; the adapters come from `crate::gles`.
     desc.backends = backend.backends();
     wgpu::Instance::new(desc)
 }
@@ -196,7 +233,7 @@ fn type_rank(t: wgpu::DeviceType) -> u8 {
 impl Gpu {
     /// Opens the chosen adapter: a hardware GPU if one exists, else a software one (lavapipe).
     pub fn new(opts: &GpuOptions) -> Result<Gpu> {
-        let adapters = list_adapters(opts.backend);
+        let adapters = candidates(opts.backend).map_err(CoreError::NoAdapter)?;
         if adapters.is_empty() {
             return Err(CoreError::NoAdapter(format!(
                 "no {:?} adapter found (on a machine without a GPU install Mesa's lavapipe: scripts/setup.sh)",
@@ -211,9 +248,9 @@ impl Gpu {
                 ))
             })?
         } else {
-            let mut cands: Vec<wgpu::Adapter> = adapters
+            let mut cands: Vec<_> = adapters
                 .into_iter()
-                .filter(|a| match &opts.adapter {
+                .filter(|(a, _)| match &opts.adapter {
                     Some(s) => a.get_info().name.to_lowercase().contains(&s.to_lowercase()),
                     None => true,
                 })
@@ -224,10 +261,20 @@ impl Gpu {
                     opts.adapter.clone().unwrap_or_default()
                 )));
             }
-            cands.sort_by_key(|a| type_rank(a.get_info().device_type));
+            cands.sort_by_key(|(a, _)| type_rank(a.get_info().device_type));
             cands.remove(0)
         };
-        let mut gpu = Self::open(adapter)?;
+        let (adapter, gles) = adapter;
+        let mut gpu = match gles {
+            Some(ctx) => {
+                ctx.make_current().map_err(CoreError::NoAdapter)?;
+                let mut gpu = Self::open(adapter)?;
+                gpu.facts.backend = "gles".into();
+                gpu.gles = Some(ctx);
+                gpu
+            }
+            None => Self::open(adapter)?,
+        };
         if let Some(m) = opts.texture_memory {
             gpu.set_texture_memory(m);
         }
@@ -284,6 +331,7 @@ impl Gpu {
             canary: std::sync::OnceLock::new(),
             texture_memory: crate::texture_memory::TextureMemory::Pooled,
             dedicated_textures: Default::default(),
+            gles: None,
         })
     }
 

@@ -9,6 +9,7 @@ pub mod build_info;
 pub mod check;
 pub mod clocks;
 pub mod effects;
+pub mod gles;
 pub mod gpu;
 pub mod gpu_scene;
 pub mod gpu_util;

@@ -4,6 +4,7 @@
 //! on every machine from its [`SceneSpec`] (generator name, parameters, seed).
 
 pub mod camera;
+pub mod gltf;
 pub mod obj;
 pub mod papers;
 pub mod params;
@@ -56,6 +57,8 @@ pub enum SceneError {
     /// valid, and its rows are skipped with this reason until the file is fetched.
     #[error("model file '{path}' not found: fetch it with `{fetch}`")]
     ModelMissing { path: String, fetch: String },
+    #[error("glTF file '{path}': {why}")]
+    Gltf { path: String, why: String },
     #[error("suite file '{path}': {why}")]
     Suite { path: String, why: String },
     /// Every problem found in a suite, one per line.

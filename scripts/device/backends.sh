@@ -2,7 +2,8 @@
 # Runs on the GPU machine of the device tool (no Rust there; same set-up as run-suites.sh: a
 # release `mfx` in ./.gpu, the loader debs in ./.gl). Runs the `backends` suite with saved images
 # on the GPU's Vulkan adapter (and tries wgpu's GL backend, which on the H100 fails at
-# request_device: its log says why) and packs the run folder into $OUT/backends-<NAME>.tgz.
+# request_device: its log says why), then through `--backend gles` (our own EGL GLES context),
+# and packs the run folders into $OUT/backends-<NAME>.tgz.
 # Merge it on the CPU machine with scripts/compare-backends.sh (see results/reference/backends/).
 #   bash scripts/device/backends.sh [NAME]        NAME defaults to h100
 set -u
@@ -17,6 +18,7 @@ r=/tmp/r/$name-vulkan
 mkdir -p "$out" "$r"
 nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv >"$r/gpu.txt" 2>&1
 ./.gpu/mfx list adapters >>"$r/gpu.txt" 2>&1
+./.gpu/mfx list adapters --backend gles >>"$r/gpu.txt" 2>&1
 cat "$r/gpu.txt"
 start=$(date +%s)
 ./.gpu/mfx sweep backends --save-images --out "$r" >"$r/sweep.log" 2>&1
@@ -25,5 +27,12 @@ echo "backends on vulkan: exit $? in $(($(date +%s) - start)) s; $(tail -n 1 "$r
 timeout 120 ./.gpu/mfx sweep backends --backend gl --save-images --no-report --out "/tmp/r/$name-gl" \
     >"$r/gl-attempt.log" 2>&1
 echo "backends on gl: exit $? (log in $name-vulkan/gl-attempt.log): $(grep -v '^\[' "$r/gl-attempt.log" | tail -n 2 | tr '\n' ' ')"
-tar czf "$out/backends-$name.tgz" -C /tmp/r "$name-vulkan"
+# GLES: our own EGL GLES 3.x context (`--backend gles`, bench-core/src/gles.rs), where wgpu's own
+# set-up above takes desktop GL 3.3 (no compute). Its own run folder, merged like the others.
+start=$(date +%s)
+timeout 300 ./.gpu/mfx sweep backends --backend gles --save-images --no-report --out "/tmp/r/$name-gles" \
+    >"$r/gles.log" 2>&1
+echo "backends on gles: exit $? in $(($(date +%s) - start)) s: $(grep -v '^\[' "$r/gles.log" | tail -n 2 | tr '\n' ' ')"
+cp "$r/gles.log" "/tmp/r/$name-gles/sweep.log" 2>/dev/null
+tar czf "$out/backends-$name.tgz" -C /tmp/r "$name-vulkan" $([ -d "/tmp/r/$name-gles" ] && echo "$name-gles")
 ls -la "$out"

@@ -33,6 +33,10 @@ for f in .gl/*.deb; do dpkg -x "$f" /; done
 ldconfig
 export VK_DRIVER_FILES=${VK_DRIVER_FILES:-/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json}
 export XDG_RUNTIME_DIR=/tmp
+# GL through EGL (`--backend gl`, `--backend gles`): NVIDIA's EGL vendor library, as in
+# shared/device/prepare-gl.sh's note.
+nv_egl=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
+[ -f "$nv_egl" ] && export __EGL_VENDOR_LIBRARY_FILENAMES=${__EGL_VENDOR_LIBRARY_FILENAMES:-$nv_egl}
 # BIN names another packed binary (e.g. .gpu/mfx-head.xz), so one call can run two builds.
 bin=${BIN:-./.gpu/mfx}
 bin=${bin%.xz}
@@ -56,6 +60,7 @@ smi=$!
   nvidia-smi --query-gpu=name,pci.bus_id,driver_version,clocks.sm,clocks.max.sm,clocks.mem,temperature.gpu --format=csv 2>&1
   "$mfx" --version 2>&1
   "$mfx" list adapters 2>&1
+  "$mfx" list adapters --backend gles 2>&1
 } > "$r/gpu.txt"
 cat "$r/gpu.txt"
 need_bunny=0

@@ -259,7 +259,12 @@ impl SceneSpec {
         }
         let mut problems = crate::params::check_params(|| self.build_unchecked());
         if let Some(crate::ParamValue::Str(path)) = self.params.get("path") {
-            if let Err(e) = obj::load(std::path::Path::new(path)) {
+            let path = std::path::Path::new(path);
+            let loaded = match self.generator.as_str() {
+                "gltf" => crate::gltf::load(path).map(drop),
+                _ => obj::load(path).map(drop),
+            };
+            if let Err(e) = loaded {
                 problems.push(e);
             }
         }
@@ -288,6 +293,7 @@ impl SceneSpec {
             "quads" => quads::build(self)?,
             "mesh" => mesh::build(self)?,
             "obj" => obj::build(self)?,
+            "gltf" => crate::gltf::build(self)?,
             "city" => city::build(self)?,
             "slabs" => stiff::slabs(self)?,
             "csg_pair" => stiff::csg_pair(self)?,
@@ -314,6 +320,7 @@ pub const GENERATORS: &[&str] = &[
     "quads",
     "mesh",
     "obj",
+    "gltf",
     "slabs",
     "csg_pair",
     "coplanar",
@@ -333,6 +340,7 @@ pub fn describe(generator: &str) -> &'static str {
         "quads" => "depth_complexity=d, alpha, tilt, seed: d quads over the centre at distinct depths",
         "mesh" => "triangles=N, shape=sphere|grid, alpha: a procedural large mesh with shared vertices (geometry study)",
         "obj" => "path, instances, alpha, stand_in (the published scene it stands in for; a name only): an OBJ file via tobj or a PLY file (.ply, .ply.gz; ASCII or binary) via ply-rs-bw, normalised, instanced on a grid; alpha × the MTL dissolve (d, or 1 − Tr) where the file has materials",
+        "gltf" => "path, alpha: a glTF 2.0 file (.gltf + .bin, or .glb) via the gltf crate: node transforms and instancing, normalised like obj; BLEND = transparent (baseColorFactor alpha × alpha), MASK = alpha-tested opaque, OPAQUE = occluder",
         "city" => "lights=N, blocks, room, sun, kinds=mixed|point|spot|line, range, seed: box city (or closed room) with N finite-range lights and materials",
         "slabs" => "count, tiles, distance, wall, alpha, reversed_z, seed: tiles² stacks of count nested thin closed boxes far away (thickness cancellation)",
         "csg_pair" => "offset, segments, shape=sphere|box, alpha: two overlapping closed solids, ids 0 (A) and 1 (B)",
