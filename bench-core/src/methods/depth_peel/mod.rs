@@ -115,6 +115,13 @@ impl Method for DepthPeel {
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
         let cfg = Config::read(point)?;
+        // naga's GLSL writer cannot translate `textureLoad` from a depth texture (the previous
+        // layer's depth): a GL pipeline would fail to build, so it is an adapter limit, not a failure.
+        if gpu.adapter.get_info().backend == wgpu::Backend::Gl {
+            return Err("reads the previous layer's depth with textureLoad from a depth texture, \
+                        which naga's GLSL writer (wgpu's GL backends) cannot translate"
+                .into());
+        }
         let p = cfg.payload();
         for (need, f) in [
             (p.color || p.normal, COLOR_FORMAT),
