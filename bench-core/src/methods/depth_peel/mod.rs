@@ -118,9 +118,11 @@ impl Method for DepthPeel {
         // naga's GLSL writer cannot translate `textureLoad` from a depth texture (the previous
         // layer's depth): a GL pipeline would fail to build, so it is an adapter limit, not a failure.
         if gpu.adapter.get_info().backend == wgpu::Backend::Gl {
-            return Err("reads the previous layer's depth with textureLoad from a depth texture, \
+            return Err(
+                "reads the previous layer's depth with textureLoad from a depth texture, \
                         which naga's GLSL writer (wgpu's GL backends) cannot translate"
-                .into());
+                    .into(),
+            );
         }
         let p = cfg.payload();
         for (need, f) in [

@@ -15,14 +15,15 @@
 //! and depth of field are skipped with the reason ([`effect_of`]).
 
 use super::shared::axes::{MAX_LAYERS, OCCLUSION_STOP};
+use super::shared::bind::{
+    blended, pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, Res, FLOAT,
+};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::effects::{self, Effect, EffectConfig, Payload, FOLD_STATE_BYTES, FOLD_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
-use crate::gpu_util::{
-    camera_entry, compute_pipeline, read_vec, shader, storage_entry, texture_entry, STORAGE_RW,
-};
+use crate::gpu_util::{compute_pipeline, read_vec, shader, STORAGE_RW};
 use crate::record::Flag;
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
@@ -147,83 +148,50 @@ impl PreparedDual {
         let mut constants = effect.constants();
         constants.push(("FX", if fx { 1.0 } else { 0.0 }));
         let constants = &constants[..];
-        let options = || wgpu::PipelineCompilationOptions {
-            constants,
-            zero_initialize_workgroup_memory: false,
-        };
         let frag = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
         let comp = wgpu::ShaderStages::COMPUTE;
-        let float = wgpu::TextureSampleType::Float { filterable: false };
-        let peel_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("dual peel"),
-            entries: &[camera_entry(0), texture_entry(1, float, frag)],
-        });
-        let mut ce: Vec<_> = (0..4).map(|b| texture_entry(b, float, comp)).collect();
-        ce.extend((4..9).map(|b| storage_entry(b, false, comp)));
-        let comp_bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("dual peel composite"),
-            entries: &ce,
-        });
-        let peel_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("dual peel"),
-            bind_group_layouts: &[Some(&peel_bgl)],
-            immediate_size: 0,
-        });
-        let comp_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("dual peel composite"),
-            bind_group_layouts: &[Some(&peel_bgl), Some(&comp_bgl)],
-            immediate_size: 0,
-        });
+        let peel_b = Bindings::seq(gpu, "dual peel", frag, &[B::Camera, B::Texture(FLOAT)]);
+        // Composite: the two depth targets, the front and back layers; the accumulations,
+        // counts, the remaining-pixels counter and the image.
+        let mut kinds = vec![B::Texture(FLOAT); 4];
+        kinds.extend([B::Storage; 5]);
+        let comp_b = Bindings::seq(gpu, "dual peel composite", comp, &kinds);
+        let peel_layout = pipeline_layout(gpu, "dual peel", &[&peel_b.layout]);
+        let comp_layout = pipeline_layout(
+            gpu,
+            "dual peel composite",
+            &[&peel_b.layout, &comp_b.layout],
+        );
         let max = wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::One,
             dst_factor: wgpu::BlendFactor::One,
             operation: wgpu::BlendOperation::Max,
-        };
-        let target = |format| {
-            Some(wgpu::ColorTargetState {
-                format,
-                blend: Some(wgpu::BlendState {
-                    color: max,
-                    alpha: max,
-                }),
-                write_mask: wgpu::ColorWrites::ALL,
-            })
         };
         let layouts: Vec<_> = GpuScene::layouts(Attrs::ALL)
             .into_iter()
             .map(Some)
             .collect();
         let make = |label: &str, fs: &str, targets: &[Option<wgpu::ColorTargetState>]| {
-            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&peel_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_full"),
-                    compilation_options: options(),
-                    buffers: &layouts,
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(fs),
-                    compilation_options: options(),
-                    targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            let raster = Raster {
+                module: &module,
+                vs: "vs_full",
+                buffers: &layouts,
+                fs,
+                targets,
+                constants,
+                depth: None,
+                samples: 1,
+            };
+            render_pipeline(gpu, label, &peel_layout, raster)
         };
-        let init = make("dual peel init", "fs_init", &[target(DEPTH_FORMAT)]);
+        let init = make("dual peel init", "fs_init", &[blended(DEPTH_FORMAT, max)]);
         let peel = make(
             "dual peel",
             "fs_peel",
             &[
-                target(DEPTH_FORMAT),
-                target(LAYER_FORMAT),
-                target(LAYER_FORMAT),
+                blended(DEPTH_FORMAT, max),
+                blended(LAYER_FORMAT, max),
+                blended(LAYER_FORMAT, max),
             ],
         );
         let composite = compute_pipeline(
@@ -272,50 +240,21 @@ impl PreparedDual {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        fn tex(v: &wgpu::TextureView) -> wgpu::BindingResource<'_> {
-            wgpu::BindingResource::TextureView(v)
-        }
-        let peel_bind = [0usize, 1].map(|q| {
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("dual peel"),
-                layout: &peel_bgl,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: scene.camera.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: tex(&depth[1 - q]),
-                    },
-                ],
-            })
-        });
+        let peel_bind = [0usize, 1]
+            .map(|q| peel_b.group(gpu, &[(&scene.camera).into(), (&depth[1 - q]).into()]));
         let comp_bind = [0usize, 1].map(|q| {
-            let res = [
-                tex(&depth[1 - q]),
-                tex(&depth[q]),
-                tex(&front),
-                tex(&back),
-                front_acc.as_entire_binding(),
-                back_acc.as_entire_binding(),
-                counts.as_entire_binding(),
-                remaining.as_entire_binding(),
-                image.as_entire_binding(),
+            let res: [Res; 9] = [
+                (&depth[1 - q]).into(),
+                (&depth[q]).into(),
+                (&front).into(),
+                (&back).into(),
+                (&front_acc).into(),
+                (&back_acc).into(),
+                (&counts).into(),
+                (&remaining).into(),
+                (&image).into(),
             ];
-            let entries: Vec<_> = res
-                .into_iter()
-                .enumerate()
-                .map(|(b, resource)| wgpu::BindGroupEntry {
-                    binding: b as u32,
-                    resource,
-                })
-                .collect();
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("dual peel composite"),
-                layout: &comp_bgl,
-                entries: &entries,
-            })
+            comp_b.group(gpu, &res)
         });
         PreparedDual {
             init,
