@@ -448,6 +448,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         manifest.continue_from(old);
     }
     manifest.software_profile = gpu.facts.is_software && suite.software.is_some();
+    manifest.limits = gpu.profile;
     manifest.points_total = total;
     manifest.resumed_points = done.len();
     // The cross-GPU calibration set, before any point (a software adapter's time says nothing

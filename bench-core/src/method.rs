@@ -138,6 +138,11 @@ pub trait Prepared: Timed {
     fn image_buffer(&self) -> Option<&wgpu::Buffer> {
         None
     }
+    /// How a buffer over the largest storage binding was split (the `split` column,
+    /// [`crate::limits::Split::column`]); None where nothing was.
+    fn split(&self) -> Option<String> {
+        None
+    }
     /// Judges what only the method can judge against the exact reference (e.g. the k-buffer's
     /// captured depths vs the true k nearest → `hazard_pixels`); called after `readback`.
     fn judge(&mut self, cap: &mut Capture, reference: &crate::reference::FragmentLists) {
