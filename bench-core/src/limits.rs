@@ -79,7 +79,7 @@ impl Profile {
     /// Whose limits these are, as a skipped row's reason says it.
     pub fn owner(self) -> &'static str {
         match self {
-            Profile::Adapter => "the adapter",
+            Profile::Adapter => "the adapter's",
             Profile::WebGpu => "WebGPU's default",
             Profile::Downlevel => "WebGL2's (downlevel)",
         }

@@ -35,9 +35,9 @@ use crate::effects::{self, FOLD_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::gpu_util::{
-    bind_buffers, camera_entry, check_storage_size, pixel_pass, read_vec, shader, storage_entry,
-    STORAGE_RW,
+    camera_entry, pixel_pass, read_vec, shader, storage_entry, STORAGE_RW,
 };
+use crate::limits::{self, Split};
 use crate::methods::depth_peel::SPECIALISATION;
 use crate::methods::packing::PACKING_WGSL;
 use crate::oit::Keep;
@@ -112,7 +112,11 @@ pub struct KSlots {
     /// MSAA samples with k slots each (1: single-sample).
     pub samples: u32,
     pub keys: wgpu::Buffer,
+    /// The entries, or their first part where they are split over several bindings.
     pub entries: wgpu::Buffer,
+    /// The entries' further parts (bound at `limits::SPLIT_BINDING` + 0, 1, …).
+    pub entries_more: Vec<wgpu::Buffer>,
+    pub split: Split,
     pub image: wgpu::Buffer,
     /// Captured depths of the last readback (k per pixel, nearest first), for `judge`.
     pub captured: Vec<Option<f32>>,
@@ -141,16 +145,60 @@ impl KSlots {
         let px = scene.pixels() as u64;
         let slots = px * samples as u64 * k as u64;
         let entry = slot.entry_bytes();
-        check_storage_size(gpu, "k-buffer entries", slots * entry)?;
+        let split = entries_split(gpu, scene, (k, slot), samples)?;
+        limits::check_storage(gpu, "k-buffer keys", slots * 4)?;
         let images = slot.images();
+        let keys = alloc.buffer(gpu, "k-buffer keys", slots * 4, STORAGE_RW);
+        let mut parts: Vec<wgpu::Buffer> = (0..split.parts)
+            .map(|i| {
+                let label = format!("k-buffer entries {i}");
+                alloc.buffer(gpu, &label, split.part_elems(i) * entry, STORAGE_RW)
+            })
+            .collect();
+        let entries = parts.remove(0);
         Ok(KSlots {
             k,
             images,
             samples,
-            keys: alloc.buffer(gpu, "k-buffer keys", slots * 4, STORAGE_RW),
-            entries: alloc.buffer(gpu, "k-buffer entries", slots * entry, STORAGE_RW),
+            keys,
+            entries,
+            entries_more: parts,
+            split,
             image: alloc.buffer(gpu, "k-buffer image", px * 16 * images, STORAGE_RW),
             captured: vec![],
+        })
+    }
+
+    /// A bind group of `buffers` at bindings 0, 1, …, the tail's textures at 5–7 if given, and
+    /// the entries' further parts.
+    pub fn bind(
+        &self,
+        gpu: &Gpu,
+        layout: &wgpu::BindGroupLayout,
+        buffers: &[&wgpu::Buffer],
+        tail: Option<&TailTargets>,
+    ) -> wgpu::BindGroup {
+        let mut e: Vec<wgpu::BindGroupEntry<'_>> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        if let Some(t) = tail {
+            e.extend(t.bind_entries(5));
+        }
+        e.extend(self.entries_more.iter().enumerate().map(|(i, b)| {
+            wgpu::BindGroupEntry {
+                binding: limits::SPLIT_BINDING + i as u32,
+                resource: b.as_entire_binding(),
+            }
+        }));
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("k-buffer"),
+            layout,
+            entries: &e,
         })
     }
 
@@ -283,22 +331,38 @@ struct PreparedRmw {
 }
 
 /// Bind group layout shared by the insert and resolve stages: camera, keys, entries, image.
-pub fn kslots_layout(gpu: &Gpu, extra: u32) -> wgpu::BindGroupLayout {
+pub fn kslots_layout(gpu: &Gpu, extra: u32, split: &Split) -> wgpu::BindGroupLayout {
     gpu.device
         .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("k-buffer"),
-            entries: &kslots_entries(extra),
+            entries: &kslots_entries(extra, split),
         })
 }
 
-/// The entries of [`kslots_layout`] (a tail resolve adds its textures to them).
-pub fn kslots_entries(extra: u32) -> Vec<wgpu::BindGroupLayoutEntry> {
+/// The entries of [`kslots_layout`] (a tail resolve adds its textures to them), the entries'
+/// further parts at `limits::SPLIT_BINDING` + 0, 1, ….
+pub fn kslots_entries(extra: u32, split: &Split) -> Vec<wgpu::BindGroupLayoutEntry> {
     let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
     let mut entries = vec![camera_entry(0)];
     for b in 1..4 + extra {
         entries.push(storage_entry(b, false, fc));
     }
+    for i in 1..split.parts {
+        entries.push(storage_entry(limits::SPLIT_BINDING + i - 1, false, fc));
+    }
     entries
+}
+
+/// How the k slots' entries lie over storage bindings here (`limits::split_storage`; keys,
+/// image and the atomic k-buffer's claims share the stage).
+pub fn entries_split(
+    gpu: &Gpu,
+    scene: &GpuScene,
+    (k, slot): (u32, &SlotConfig),
+    samples: u32,
+) -> Result<Split> {
+    let slots = scene.pixels() as u64 * samples as u64 * k as u64;
+    limits::split_storage(gpu, "k-buffer entries", (slots, slot.entry_bytes()), 3)
 }
 
 impl PreparedRmw {
@@ -310,12 +374,14 @@ impl PreparedRmw {
         bounding: Bounding,
     ) -> Result<Self> {
         let d = &gpu.device;
+        let split = entries_split(gpu, scene, (k, &slot), 1)?;
         let src = format!(
-            "{WGSL}\n{}\n{PACKING_WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}",
+            "{WGSL}\n{}\n{}\n{PACKING_WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}",
+            split.wgsl("entries", "Entry", 2),
             slot.wgsl()
         );
         let module = shader(gpu, "kbuffer_rmw", &src);
-        let bgl = kslots_layout(gpu, 0);
+        let bgl = kslots_layout(gpu, 0, &split);
         let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("kbuffer_rmw"),
             bind_group_layouts: &[Some(&bgl)],
@@ -346,18 +412,18 @@ impl PreparedRmw {
             &layout,
             &module,
             &rc,
-            blend.then(|| kslots_entries(0)),
+            blend.then(|| kslots_entries(0, &split)),
         );
         let mut alloc = AllocCounter::default();
         let depth = dummy_depth(gpu, &mut alloc, scene);
         let slots = KSlots::new(gpu, &mut alloc, scene, k, &slot)?;
         let buffers = [&scene.camera, &slots.keys, &slots.entries, &slots.image];
-        let bind = bind_buffers(gpu, "kbuffer_rmw", &bgl, &buffers);
+        let bind = slots.bind(gpu, &bgl, &buffers, None);
         let tail = blend.then(|| TailTargets::new(gpu, &mut alloc, scene));
         let resolve_bind = resolve_bgl
             .as_ref()
             .zip(tail.as_ref())
-            .map(|(l, t)| tail::resolve_bind(gpu, l, &buffers, t));
+            .map(|(l, t)| slots.bind(gpu, l, &buffers, Some(t)));
         let sorted = if heuristics {
             Some(sorted_indices(gpu, scene)?)
         } else {
@@ -461,6 +527,9 @@ impl crate::timed::Timed for PreparedRmw {
 }
 
 impl Prepared for PreparedRmw {
+    fn split(&self) -> Option<String> {
+        self.slots.split.column()
+    }
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         self.tailed = match &self.tail {
             Some(t) => t.tailed(gpu)?,
@@ -578,6 +647,8 @@ mod tests {
             samples: 1,
             keys: dummy(),
             entries: dummy(),
+            entries_more: vec![],
+            split: Split::whole(1, 4),
             image: dummy(),
             captured,
         };
