@@ -85,6 +85,15 @@ impl Profile {
         }
     }
 
+    /// Who sets the limits, as "… allows N" says it.
+    pub fn who(self) -> &'static str {
+        match self {
+            Profile::Adapter => "the adapter",
+            Profile::WebGpu => "WebGPU's default limits",
+            Profile::Downlevel => "WebGL2's (downlevel) limits",
+        }
+    }
+
     /// The limits to request on an adapter whose own are `adapter`.
     pub fn limits(self, adapter: &wgpu::Limits) -> wgpu::Limits {
         match self {
