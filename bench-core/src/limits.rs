@@ -164,6 +164,9 @@ pub fn storage_binding_limit(gpu: &Gpu) -> (u64, &'static str) {
 /// Whether a buffer of `bytes` can be bound as one storage buffer here; Err names the limit.
 pub fn check_storage(gpu: &Gpu, what: &str, bytes: u64) -> Result<()> {
     let (lim, name) = storage_binding_limit(gpu);
+    if lim == 0 || gpu.limits.max_storage_buffers_per_shader_stage == 0 {
+        return Err(no_storage(gpu, what));
+    }
     if bytes > lim {
         return Err(CoreError::Limit(format!(
             "{what} needs {bytes} B ({}) in one storage binding, over {} {name} of {lim} B ({})",
@@ -173,6 +176,16 @@ pub fn check_storage(gpu: &Gpu, what: &str, bytes: u64) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+/// A device without storage buffers (WebGL2-class).
+fn no_storage(gpu: &Gpu, what: &str) -> CoreError {
+    CoreError::Limit(format!(
+        "{what} needs a storage buffer; {} allow none (maxStorageBuffersPerShaderStage {}, maxStorageBufferBindingSize {})",
+        gpu.profile.who(),
+        gpu.limits.max_storage_buffers_per_shader_stage,
+        gpu.limits.max_storage_buffer_binding_size
+    ))
 }
 
 /// A split buffer is spread over at most this many storage bindings: WebGPU's whole
@@ -242,8 +255,10 @@ impl Split {
             store += &format!("    {name}[i] = v;\n}}\n");
         } else {
             let per = self.per_part;
-            load += &format!("    let p = i / {per}u;\n    let j = i - p * {per}u;\n    switch p {{\n");
-            store += &format!("    let p = i / {per}u;\n    let j = i - p * {per}u;\n    switch p {{\n");
+            load +=
+                &format!("    let p = i / {per}u;\n    let j = i - p * {per}u;\n    switch p {{\n");
+            store +=
+                &format!("    let p = i / {per}u;\n    let j = i - p * {per}u;\n    switch p {{\n");
             for i in 1..self.parts {
                 load += &format!("        case {i}u: {{ return {}[j]; }}\n", part(i));
                 store += &format!("        case {i}u: {{ {}[j] = v; }}\n", part(i));
@@ -267,18 +282,21 @@ pub fn split_storage(
 ) -> Result<Split> {
     let bytes = elems * elem_bytes;
     let (lim, name) = storage_binding_limit(gpu);
+    if lim == 0 || gpu.limits.max_storage_buffers_per_shader_stage == 0 {
+        return Err(no_storage(gpu, what));
+    }
     if bytes <= lim {
         return Ok(Split::whole(elems, elem_bytes));
     }
-    let fit = lim / elem_bytes;
-    let parts = if fit == 0 { u64::MAX } else { elems.div_ceil(fit) };
+    // lim ≥ 4 and elem_bytes a small struct: at least one element fits a binding.
+    let parts = elems.div_ceil((lim / elem_bytes).max(1));
     let stage = gpu.limits.max_storage_buffers_per_shader_stage as u64;
     let cap = (MAX_PARTS as u64).min(stage.saturating_sub(others as u64));
     if parts > cap {
         return Err(CoreError::Limit(format!(
             "{what} needs {bytes} B ({}): {} bindings under {} {name} of {lim} B ({}), over the {cap} a split may use (mfx splits over at most {MAX_PARTS}; maxStorageBuffersPerShaderStage {stage} with {others} other storage buffers in the stage)",
             human_bytes(bytes),
-            if parts == u64::MAX { "no number of".to_string() } else { parts.to_string() },
+            parts,
             gpu.profile.owner(),
             human_bytes(lim)
         )));

@@ -122,7 +122,10 @@ pub trait Method: Send + Sync {
 pub fn supports(method: &dyn Method, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
     let missing = method.required_features() - gpu.features;
     if !missing.is_empty() {
-        return Err(format!("adapter lacks {missing:?}"));
+        return Err(match gpu.profile {
+            crate::limits::Profile::Adapter => format!("adapter lacks {missing:?}"),
+            p => format!("the `{p}` limits profile grants no {missing:?}"),
+        });
     }
     method.supports(gpu, point)
 }

@@ -27,11 +27,11 @@ fn open(limits: Profile) -> Gpu {
 
 #[test]
 fn a_split_k_buffer_matches_the_reference_exactly_as_the_unsplit_one_does() {
-    // 40×40 pixels × 8 slots × 32 B of entries = 409.6 kB; a test-only binding limit of 128 KiB
-    // (the device itself allows more) splits them over 4 bindings.
+    // 40×40 pixels × 8 slots × 16 B of colour entries = 204.8 kB; a test-only binding limit of
+    // 64 KiB (the device itself allows more) splits them over 4 bindings.
     let unsplit = open(Profile::Adapter);
     let mut small = open(Profile::Adapter);
-    small.limits.max_storage_buffer_binding_size = 128 << 10;
+    small.limits.max_storage_buffer_binding_size = 64 << 10;
     let s = scene("shells", &[("count", Int(4)), ("segments", Int(12))]);
     let lists = rasterize(&s, 40, 40);
     for name in ["kbuffer_atomic", "kbuffer_rmw"] {
@@ -53,7 +53,10 @@ fn a_split_k_buffer_matches_the_reference_exactly_as_the_unsplit_one_does() {
             images.push(cap.image.unwrap());
         }
         // Same fragments, same order of compositing: the split changes where entries live only.
-        assert_eq!(images[0], images[1], "{name}: split image differs from unsplit");
+        assert_eq!(
+            images[0], images[1],
+            "{name}: split image differs from unsplit"
+        );
     }
 }
 
@@ -63,10 +66,10 @@ fn rows(gpu: &Gpu, text: &str) -> Vec<Row> {
 
 #[test]
 fn webgpu_limits_split_or_skip_naming_the_limit_and_downlevel_skips_storage_methods() {
-    // 264×256 pixels × 64 slots × 32 B = 138 MB of k-buffer entries: over WebGPU's 128 MiB
-    // storage binding, so split over 2; the linked list's nodes fit.
+    // 528×256 pixels × 64 slots × 16 B = 138 MB of k-buffer entries: over WebGPU's 128 MiB
+    // storage binding, so split over 2; WBOIT needs no storage buffer that large.
     let text = r#"
-        resolutions = [[264, 256]]
+        resolutions = [[528, 256]]
         [timing]
         min_samples = 1
         max_samples = 1
@@ -92,10 +95,15 @@ fn webgpu_limits_split_or_skip_naming_the_limit_and_downlevel_skips_storage_meth
     assert_eq!(get("wboit").get(cols::SPLIT), None);
 
     let down = open(Profile::Downlevel);
-    let r = rows(&down, &text.replace("[[264, 256]]", "[[16, 16]]"));
+    let r = rows(&down, &text.replace("[[528, 256]]", "[[16, 16]]"));
     let get = |m: &str| r.iter().find(|x| x.get(cols::METHOD) == Some(m)).unwrap();
     let k = get("kbuffer_atomic");
-    assert_eq!(k.get(cols::STATUS), Some("skipped"), "{:?}", k.get(cols::REASON));
+    assert_eq!(
+        k.get(cols::STATUS),
+        Some("skipped"),
+        "{:?}",
+        k.get(cols::REASON)
+    );
     let why = k.get(cols::REASON).unwrap();
     assert!(why.contains("WebGL2") && why.contains("limit"), "{why}");
     assert_eq!(k.get(cols::LIMITS), Some("downlevel"));

@@ -172,7 +172,10 @@ fn finish_point(
     let mut m = match measured {
         Ok(m) => m,
         // Under a browser's limits wgpu refuses what exceeds them: that is "does not fit".
-        Err(e) if ctx.gpu.profile.explains(&e.to_string()) => {
+        Err(e)
+            if !matches!(e, crate::CoreError::Limit(_))
+                && ctx.gpu.profile.explains(&e.to_string()) =>
+        {
             let why = format!("under {} limits: {e}", ctx.gpu.profile.owner());
             return emit(i, skipped_row(row, &why));
         }

@@ -66,11 +66,7 @@ fn cell(rows: &[&Rec], unsplit: &BTreeMap<&str, f64>) -> String {
     if why.is_empty() {
         esc(&parts.join(" "))
     } else {
-        format!(
-            "{}<br><small>{}</small>",
-            esc(&parts.join(" ")),
-            esc(why)
-        )
+        format!("{}<br><small>{}</small>", esc(&parts.join(" ")), esc(why))
     }
 }
 
@@ -103,9 +99,9 @@ pub fn figures(runs: &Runs, _dir: &Path) -> Result<Vec<Figure>> {
             html += &format!("<th>{}</th>", esc(r));
         }
         html += "</tr>";
-        for (method, mrows) in Runs::group_by(prow.iter().copied(), |r| {
-            r.get(cols::METHOD).to_string()
-        }) {
+        for (method, mrows) in
+            Runs::group_by(prow.iter().copied(), |r| r.get(cols::METHOD).to_string())
+        {
             html += &format!("<tr><td>{}</td>", esc(&method));
             for r in &res {
                 let here: Vec<&Rec> = mrows
@@ -135,7 +131,10 @@ mod tests {
     use super::*;
 
     fn rec(kv: &[(&str, &str)]) -> Rec {
-        Rec(kv.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect())
+        Rec(kv
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect())
     }
 
     #[test]
@@ -169,7 +168,10 @@ mod tests {
         assert!(html.contains("<th>512x512</th>"), "{html}");
         assert!(html.contains("<td>wboit</td><td>runs 1</td>"), "{html}");
         assert!(html.contains("split 1 (bindings:2)"), "{html}");
-        assert!(html.contains("skipped 1<br><small>mlab layers needs 171.6 MB"), "{html}");
+        assert!(
+            html.contains("skipped 1<br><small>mlab layers needs 171.6 MB"),
+            "{html}"
+        );
         let adapter_only = Runs {
             rows: vec![rec(&[("limits", "adapter"), ("status", "ok")])],
             ..Default::default()

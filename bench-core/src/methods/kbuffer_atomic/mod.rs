@@ -32,9 +32,7 @@ use crate::axes::{Axis, Point};
 use crate::effects::{self, Effect, FOLD_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
-use crate::gpu_util::{
-    per_sample_source, pixel_pass, shader_source, COMMON_WGSL, STORAGE_RW,
-};
+use crate::gpu_util::{per_sample_source, pixel_pass, shader_source, COMMON_WGSL, STORAGE_RW};
 use crate::methods::depth_peel::SPECIALISATION;
 use crate::methods::packing::PACKING_WGSL;
 use crate::oit::Keep;

@@ -34,9 +34,7 @@ use crate::axes::{Axis, Point};
 use crate::effects::{self, FOLD_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
-use crate::gpu_util::{
-    camera_entry, pixel_pass, read_vec, shader, storage_entry, STORAGE_RW,
-};
+use crate::gpu_util::{camera_entry, pixel_pass, read_vec, shader, storage_entry, STORAGE_RW};
 use crate::limits::{self, Split};
 use crate::methods::depth_peel::SPECIALISATION;
 use crate::methods::packing::PACKING_WGSL;
@@ -189,12 +187,15 @@ impl KSlots {
         if let Some(t) = tail {
             e.extend(t.bind_entries(5));
         }
-        e.extend(self.entries_more.iter().enumerate().map(|(i, b)| {
-            wgpu::BindGroupEntry {
-                binding: limits::SPLIT_BINDING + i as u32,
-                resource: b.as_entire_binding(),
-            }
-        }));
+        e.extend(
+            self.entries_more
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: limits::SPLIT_BINDING + i as u32,
+                    resource: b.as_entire_binding(),
+                }),
+        );
         gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("k-buffer"),
             layout,
