@@ -45,6 +45,10 @@ pub(crate) struct GpuArgs {
 }
 
 impl GpuArgs {
+    /// The `--limits` profile.
+    pub(crate) fn limits(&self) -> bench_core::limits::Profile {
+        self.limits
+    }
     pub(crate) fn options(&self) -> GpuOptions {
         GpuOptions {
             backend: self.backend,

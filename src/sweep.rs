@@ -389,6 +389,14 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
                         suite.source
                     )));
                 }
+                if m.limits != a.gpu.limits() {
+                    return Err(usage(format!(
+                        "{} was run with --limits {}; resuming it with --limits {} would mix two limits profiles: use a new --out",
+                        out.display(),
+                        m.limits,
+                        a.gpu.limits()
+                    )));
+                }
             }
             let samples = out.join("samples.csv");
             if samples.is_file() {

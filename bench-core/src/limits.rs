@@ -89,8 +89,8 @@ impl Profile {
     pub fn who(self) -> &'static str {
         match self {
             Profile::Adapter => "the adapter",
-            Profile::WebGpu => "WebGPU's default limits",
-            Profile::Downlevel => "WebGL2's (downlevel) limits",
+            Profile::WebGpu => "WebGPU's default limit set",
+            Profile::Downlevel => "WebGL2's (downlevel) limit set",
         }
     }
 
@@ -181,7 +181,7 @@ pub fn check_storage(gpu: &Gpu, what: &str, bytes: u64) -> Result<()> {
 /// A device without storage buffers (WebGL2-class).
 fn no_storage(gpu: &Gpu, what: &str) -> CoreError {
     CoreError::Limit(format!(
-        "{what} needs a storage buffer; {} allow none (maxStorageBuffersPerShaderStage {}, maxStorageBufferBindingSize {})",
+        "{what} needs a storage buffer; {} allows none (maxStorageBuffersPerShaderStage {}, maxStorageBufferBindingSize {})",
         gpu.profile.who(),
         gpu.limits.max_storage_buffers_per_shader_stage,
         gpu.limits.max_storage_buffer_binding_size
