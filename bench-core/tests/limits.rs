@@ -6,7 +6,6 @@ use bench_core::gpu::{Gpu, GpuOptions};
 use bench_core::gpu_scene::GpuScene;
 use bench_core::limits::Profile;
 use bench_core::measure::{measure, TimingPlan};
-use bench_core::method::Method;
 use bench_core::methods;
 use bench_core::record::Row;
 use bench_core::reference::rasterize;

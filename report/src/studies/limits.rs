@@ -32,7 +32,7 @@ fn outcome(r: &Rec) -> &'static str {
 }
 
 /// One cell: counts of each outcome, the splits used, the split's time against the unsplit
-/// row of the same point, and the first skip or failure reason.
+/// row of the same point, and every distinct skip or failure reason.
 fn cell(rows: &[&Rec], unsplit: &BTreeMap<&str, f64>) -> String {
     let mut n: BTreeMap<&str, usize> = BTreeMap::new();
     for r in rows {
@@ -58,16 +58,19 @@ fn cell(rows: &[&Rec], unsplit: &BTreeMap<&str, f64>) -> String {
         let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
         parts.push(format!("×{} of unsplit", short(Some(mean))));
     }
-    let why = rows
-        .iter()
-        .find(|r| matches!(outcome(r), "skipped" | "failed"))
-        .map(|r| r.get(cols::REASON))
-        .unwrap_or("");
-    if why.is_empty() {
-        esc(&parts.join(" "))
-    } else {
-        format!("{}<br><small>{}</small>", esc(&parts.join(" ")), esc(why))
+    // Each distinct reason once (a cell can hold a profile's limit and a suite's own cap).
+    let mut why: Vec<&str> = Vec::new();
+    for r in rows {
+        let w = r.get(cols::REASON);
+        if matches!(outcome(r), "skipped" | "failed") && !w.is_empty() && !why.contains(&w) {
+            why.push(w);
+        }
     }
+    let mut html = esc(&parts.join(" "));
+    for w in why {
+        html += &format!("<br><small>{}</small>", esc(w));
+    }
+    html
 }
 
 pub fn figures(runs: &Runs, _dir: &Path) -> Result<Vec<Figure>> {
@@ -119,7 +122,7 @@ pub fn figures(runs: &Runs, _dir: &Path) -> Result<Vec<Figure>> {
         f.caption = format!(
             "Per method and resolution, the rows under the `{profile}` limits profile (`mfx sweep --limits {profile}`): \
              `runs` as it is, `split` over several storage bindings (how, and its GPU time against the unsplit row of the \
-             same point under the adapter's limits where the runs hold one), `skipped` with the limit named (first reason shown)."
+             same point under the adapter's limits where the runs hold one), `skipped` with the limit named (each distinct reason shown)."
         );
         out.push(f);
     }
