@@ -320,6 +320,11 @@ impl Gpu {
         };
     }
 
+    /// The limits granted and the profile they came from, for [`crate::limits`]'s checks.
+    pub fn held(&self) -> crate::limits::Held<'_> {
+        (&self.limits, self.profile)
+    }
+
     pub fn has(&self, f: wgpu::Features) -> bool {
         self.features.contains(f)
     }

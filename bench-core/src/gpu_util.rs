@@ -202,7 +202,7 @@ pub fn bind_buffers(
 /// Whether a buffer of `bytes` can be bound as one storage buffer here; Err names the limit
 /// (of the run's limits profile: [`crate::limits::check_storage`]).
 pub fn check_storage_size(gpu: &Gpu, what: &str, bytes: u64) -> crate::Result<()> {
-    crate::limits::check_storage(gpu, what, bytes)
+    crate::limits::check_storage(gpu.held(), what, bytes)
 }
 
 /// Depth test "nearer passes", with or without writes, for the scene's depth convention.

@@ -5,8 +5,11 @@
 //! allows, on whatever adapter runs: wgpu then refuses what does not fit, and the checks here
 //! name the limit before any GPU work where the size can be computed (`skipped` rows).
 
-use crate::gpu::Gpu;
 use crate::{CoreError, Result};
+
+/// What a device was granted, as the checks below read it: its limits and the profile they
+/// came from (`Gpu::held`; this module sits below `gpu`, so it takes no `Gpu`).
+pub type Held<'a> = (&'a wgpu::Limits, Profile);
 
 /// The limits a run is held to: the adapter's own, or a browser's.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -151,9 +154,9 @@ pub fn human_bytes(bytes: u64) -> String {
 }
 
 /// The largest storage binding here, and the name of the limit that sets it.
-pub fn storage_binding_limit(gpu: &Gpu) -> (u64, &'static str) {
-    let b = gpu.limits.max_storage_buffer_binding_size;
-    let s = gpu.limits.max_buffer_size;
+pub fn storage_binding_limit((limits, _): Held<'_>) -> (u64, &'static str) {
+    let b = limits.max_storage_buffer_binding_size;
+    let s = limits.max_buffer_size;
     if s < b {
         (s, "maxBufferSize")
     } else {
@@ -162,16 +165,16 @@ pub fn storage_binding_limit(gpu: &Gpu) -> (u64, &'static str) {
 }
 
 /// Whether a buffer of `bytes` can be bound as one storage buffer here; Err names the limit.
-pub fn check_storage(gpu: &Gpu, what: &str, bytes: u64) -> Result<()> {
+pub fn check_storage(gpu: Held<'_>, what: &str, bytes: u64) -> Result<()> {
     let (lim, name) = storage_binding_limit(gpu);
-    if lim == 0 || gpu.limits.max_storage_buffers_per_shader_stage == 0 {
+    if lim == 0 || gpu.0.max_storage_buffers_per_shader_stage == 0 {
         return Err(no_storage(gpu, what));
     }
     if bytes > lim {
         return Err(CoreError::Limit(format!(
             "{what} needs {bytes} B ({}) in one storage binding, over {} {name} of {lim} B ({})",
             human_bytes(bytes),
-            gpu.profile.owner(),
+            gpu.1.owner(),
             human_bytes(lim)
         )));
     }
@@ -179,12 +182,12 @@ pub fn check_storage(gpu: &Gpu, what: &str, bytes: u64) -> Result<()> {
 }
 
 /// A device without storage buffers (WebGL2-class).
-fn no_storage(gpu: &Gpu, what: &str) -> CoreError {
+fn no_storage((limits, profile): Held<'_>, what: &str) -> CoreError {
     CoreError::Limit(format!(
         "{what} needs a storage buffer; {} allows none (maxStorageBuffersPerShaderStage {}, maxStorageBufferBindingSize {})",
-        gpu.profile.who(),
-        gpu.limits.max_storage_buffers_per_shader_stage,
-        gpu.limits.max_storage_buffer_binding_size
+        profile.who(),
+        limits.max_storage_buffers_per_shader_stage,
+        limits.max_storage_buffer_binding_size
     ))
 }
 
@@ -275,14 +278,14 @@ impl Split {
 /// else the fewest equal parts under the largest binding, at most [`MAX_PARTS`] and within
 /// `maxStorageBuffersPerShaderStage`. Err (a `skipped` row) names the limit it is over.
 pub fn split_storage(
-    gpu: &Gpu,
+    gpu: Held<'_>,
     what: &str,
     (elems, elem_bytes): (u64, u64),
     others: u32,
 ) -> Result<Split> {
     let bytes = elems * elem_bytes;
     let (lim, name) = storage_binding_limit(gpu);
-    if lim == 0 || gpu.limits.max_storage_buffers_per_shader_stage == 0 {
+    if lim == 0 || gpu.0.max_storage_buffers_per_shader_stage == 0 {
         return Err(no_storage(gpu, what));
     }
     if bytes <= lim {
@@ -290,14 +293,14 @@ pub fn split_storage(
     }
     // lim ≥ 4 and elem_bytes a small struct: at least one element fits a binding.
     let parts = elems.div_ceil((lim / elem_bytes).max(1));
-    let stage = gpu.limits.max_storage_buffers_per_shader_stage as u64;
+    let stage = gpu.0.max_storage_buffers_per_shader_stage as u64;
     let cap = (MAX_PARTS as u64).min(stage.saturating_sub(others as u64));
     if parts > cap {
         return Err(CoreError::Limit(format!(
             "{what} needs {bytes} B ({}): {} bindings under {} {name} of {lim} B ({}), over the {cap} a split may use (mfx splits over at most {MAX_PARTS}; maxStorageBuffersPerShaderStage {stage} with {others} other storage buffers in the stage)",
             human_bytes(bytes),
             parts,
-            gpu.profile.owner(),
+            gpu.1.owner(),
             human_bytes(lim)
         )));
     }
@@ -333,11 +336,12 @@ mod tests {
         assert_eq!(d.max_storage_buffers_per_shader_stage, 0);
         assert_eq!(d.max_compute_invocations_per_workgroup, 0);
         assert_eq!(d.max_texture_dimension_2d, 2048);
-        let f = Profile::WebGpu.features(crate::gpu::wanted_features());
+        let wanted = wgpu::Features::SHADER_INT64 | wgpu::Features::FLOAT32_BLENDABLE;
+        let f = Profile::WebGpu.features(wanted);
         assert!(!f.contains(wgpu::Features::SHADER_INT64));
         assert!(f.contains(wgpu::Features::FLOAT32_BLENDABLE));
         assert!(!Profile::Downlevel
-            .features(crate::gpu::wanted_features())
+            .features(wanted)
             .contains(wgpu::Features::FLOAT32_BLENDABLE));
     }
 

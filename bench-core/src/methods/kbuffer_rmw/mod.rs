@@ -144,7 +144,7 @@ impl KSlots {
         let slots = px * samples as u64 * k as u64;
         let entry = slot.entry_bytes();
         let split = entries_split(gpu, scene, (k, slot), samples)?;
-        limits::check_storage(gpu, "k-buffer keys", slots * 4)?;
+        limits::check_storage(gpu.held(), "k-buffer keys", slots * 4)?;
         let images = slot.images();
         let keys = alloc.buffer(gpu, "k-buffer keys", slots * 4, STORAGE_RW);
         let mut parts: Vec<wgpu::Buffer> = (0..split.parts)
@@ -363,7 +363,12 @@ pub fn entries_split(
     samples: u32,
 ) -> Result<Split> {
     let slots = scene.pixels() as u64 * samples as u64 * k as u64;
-    limits::split_storage(gpu, "k-buffer entries", (slots, slot.entry_bytes()), 3)
+    limits::split_storage(
+        gpu.held(),
+        "k-buffer entries",
+        (slots, slot.entry_bytes()),
+        3,
+    )
 }
 
 impl PreparedRmw {
