@@ -5,5 +5,7 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
 cargo test --workspace
+# The `default` suite under WebGPU's default limits (--limits webgpu), [software] profile: ~1 min.
+bash scripts/test-limits.sh
 # Sharding on a one-node Slurm cluster, the cross-backend report, the report in headless Chromium.
 bash scripts/test-distrib.sh

@@ -38,15 +38,25 @@ pub(crate) struct GpuArgs {
     /// allocation each, as VK_KHR_dedicated_allocation offers for render targets).
     #[arg(long)]
     texture_memory: Option<bench_core::texture_memory::TextureMemory>,
+    /// Limits the device is requested with: adapter (its own, the default), webgpu (WebGPU's
+    /// default limits: what a browser grants) or downlevel (a WebGL2-class device). What does
+    /// not fit is a `skipped` row naming the limit; k-buffers split their entries to fit.
+    #[arg(long, default_value = "adapter")]
+    limits: bench_core::limits::Profile,
 }
 
 impl GpuArgs {
+    /// The `--limits` profile.
+    pub(crate) fn limits(&self) -> bench_core::limits::Profile {
+        self.limits
+    }
     pub(crate) fn options(&self) -> GpuOptions {
         GpuOptions {
             backend: self.backend,
             adapter: self.adapter.clone(),
             adapter_index: self.adapter_index,
             texture_memory: self.texture_memory,
+            limits: self.limits,
         }
     }
 }

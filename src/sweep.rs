@@ -389,6 +389,14 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
                         suite.source
                     )));
                 }
+                if m.limits != a.gpu.limits() {
+                    return Err(usage(format!(
+                        "{} was run with --limits {}; resuming it with --limits {} would mix two limits profiles: use a new --out",
+                        out.display(),
+                        m.limits,
+                        a.gpu.limits()
+                    )));
+                }
             }
             let samples = out.join("samples.csv");
             if samples.is_file() {
@@ -448,6 +456,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         manifest.continue_from(old);
     }
     manifest.software_profile = gpu.facts.is_software && suite.software.is_some();
+    manifest.limits = gpu.profile;
     manifest.points_total = total;
     manifest.resumed_points = done.len();
     // The cross-GPU calibration set, before any point (a software adapter's time says nothing

@@ -107,6 +107,8 @@ pub struct GpuOptions {
     /// Where render targets' memory comes from (None: wgpu's pool, the default; see
     /// [`crate::texture_memory`] for what was measured).
     pub texture_memory: Option<crate::texture_memory::TextureMemory>,
+    /// The limits the device is requested with (`--limits`, [`crate::limits`]).
+    pub limits: crate::limits::Profile,
 }
 
 impl Default for GpuOptions {
@@ -116,6 +118,7 @@ impl Default for GpuOptions {
             adapter: None,
             adapter_index: None,
             texture_memory: None,
+            limits: Default::default(),
         }
     }
 }
@@ -161,6 +164,8 @@ pub struct Gpu {
     pub limits: wgpu::Limits,
     pub facts: AdapterFacts,
     pub downlevel: wgpu::DownlevelCapabilities,
+    /// The limits profile `limits` and `features` were requested under (column `limits`).
+    pub profile: crate::limits::Profile,
     /// Set by the device-lost callback; a lost device fails every later point with this reason.
     pub lost: Arc<Mutex<Option<String>>>,
     /// NVML for this adapter's clocks, temperature, power and throttle reasons, or why not
@@ -268,12 +273,12 @@ impl Gpu {
         let mut gpu = match gles {
             Some(ctx) => {
                 ctx.make_current().map_err(CoreError::NoAdapter)?;
-                let mut gpu = Self::open(adapter)?;
+                let mut gpu = Self::open_with(adapter, opts.limits)?;
                 gpu.facts.backend = "gles".into();
                 gpu.gles = Some(ctx);
                 gpu
             }
-            None => Self::open(adapter)?,
+            None => Self::open_with(adapter, opts.limits)?,
         };
         if let Some(m) = opts.texture_memory {
             gpu.set_texture_memory(m);
@@ -282,9 +287,14 @@ impl Gpu {
     }
 
     pub fn open(adapter: wgpu::Adapter) -> Result<Gpu> {
+        Self::open_with(adapter, Default::default())
+    }
+
+    /// Opens `adapter` held to `profile`'s limits and features.
+    pub fn open_with(adapter: wgpu::Adapter, profile: crate::limits::Profile) -> Result<Gpu> {
         let info = adapter.get_info();
-        let features = adapter.features() & wanted_features();
-        let limits = adapter.limits();
+        let features = profile.features(adapter.features() & wanted_features());
+        let limits = profile.limits(&adapter.limits());
         let desc = wgpu::DeviceDescriptor {
             label: Some("mfx"),
             required_features: features,
@@ -305,7 +315,7 @@ impl Gpu {
         device.on_uncaptured_error(Arc::new(|e: wgpu::Error| {
             log::error!("uncaptured wgpu error: {e}")
         }));
-        let downlevel = adapter.get_downlevel_capabilities();
+        let downlevel = profile.downlevel(adapter.get_downlevel_capabilities());
         // 0x10DE: NVIDIA's PCI vendor id (NVML knows no other vendor's GPUs).
         let monitor = if info.vendor == 0x10DE {
             crate::clocks::GpuMonitor::open(
@@ -325,6 +335,7 @@ impl Gpu {
             features,
             limits,
             downlevel,
+            profile,
             lost,
             monitor,
             spin: std::sync::OnceLock::new(),
@@ -355,6 +366,11 @@ impl Gpu {
             (crate::texture_memory::TextureMemory::Dedicated, wgpu::Backend::Vulkan) => m,
             _ => crate::texture_memory::TextureMemory::Pooled,
         };
+    }
+
+    /// The limits granted and the profile they came from, for [`crate::limits`]'s checks.
+    pub fn held(&self) -> crate::limits::Held<'_> {
+        (&self.limits, self.profile)
     }
 
     pub fn has(&self, f: wgpu::Features) -> bool {

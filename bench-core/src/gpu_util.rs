@@ -199,18 +199,10 @@ pub fn bind_buffers(
     })
 }
 
-/// Whether a buffer of `bytes` can be bound as one storage buffer here; Err names the limit.
+/// Whether a buffer of `bytes` can be bound as one storage buffer here; Err names the limit
+/// (of the run's limits profile: [`crate::limits::check_storage`]).
 pub fn check_storage_size(gpu: &Gpu, what: &str, bytes: u64) -> crate::Result<()> {
-    let lim = gpu
-        .limits
-        .max_storage_buffer_binding_size
-        .min(gpu.limits.max_buffer_size);
-    if bytes > lim {
-        return Err(crate::CoreError::Limit(format!(
-            "{what} needs {bytes} B, over the adapter's storage binding limit of {lim} B"
-        )));
-    }
-    Ok(())
+    crate::limits::check_storage(gpu.held(), what, bytes)
 }
 
 /// Depth test "nearer passes", with or without writes, for the scene's depth convention.

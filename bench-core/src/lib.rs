@@ -16,6 +16,7 @@ pub mod gpu_util;
 pub mod image_io;
 pub mod interrupt;
 pub mod judge;
+pub mod limits;
 pub mod manifest;
 pub mod measure;
 pub mod merge;
@@ -45,9 +46,10 @@ pub enum CoreError {
     Gpu(String),
     #[error("GPU out of memory: {0}")]
     OutOfMemory(String),
-    /// A limit of the adapter, known before any GPU work, rules the point out (a buffer over
-    /// the largest storage binding): a `skipped` row naming it, not a `failed` one.
-    #[error("adapter limit: {0}")]
+    /// A limit of the adapter or of the run's limits profile, known before any GPU work, rules
+    /// the point out (a buffer over the largest storage binding): a `skipped` row naming it,
+    /// not a `failed` one.
+    #[error("limit: {0}")]
     Limit(String),
     #[error("{0}")]
     DeviceLost(String),

@@ -190,6 +190,9 @@ pub struct RunManifest {
     /// The suite's `[software]` profile applied (a software adapter and a suite that has one).
     #[serde(default)]
     pub software_profile: bool,
+    /// The limits profile the device was requested with (`--limits`; the `limits` column).
+    #[serde(default)]
+    pub limits: crate::limits::Profile,
     /// Every call on this run folder, oldest first; the last is this one. The top-level
     /// command line, times and counts are the latest call's (counts: of the whole folder).
     #[serde(default)]
@@ -269,6 +272,7 @@ impl RunManifest {
             host: HostInfo::here(),
             build: BuildInfo::this(),
             software_profile: false,
+            limits: Default::default(),
             calls: vec![call],
             clock: Some(Instant::now()),
         }
@@ -340,6 +344,7 @@ pub fn context_block(manifest: &RunManifest, schema_version: u32, clocks: Option
         "host": m.host,
         "build": m.build,
         "software_profile": m.software_profile,
+        "limits": m.limits,
         "shard": format!("{}/{}", m.shard.0, m.shard.1),
         "started_utc": m.started_utc,
         "ended_utc": m.ended_utc,

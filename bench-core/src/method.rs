@@ -122,7 +122,10 @@ pub trait Method: Send + Sync {
 pub fn supports(method: &dyn Method, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
     let missing = method.required_features() - gpu.features;
     if !missing.is_empty() {
-        return Err(format!("adapter lacks {missing:?}"));
+        return Err(match gpu.profile {
+            crate::limits::Profile::Adapter => format!("adapter lacks {missing:?}"),
+            p => format!("the `{p}` limits profile grants no {missing:?}"),
+        });
     }
     method.supports(gpu, point)
 }
@@ -136,6 +139,11 @@ pub trait Prepared: Timed {
     /// `vec4<f32>` per pixel, every effect image one after another), for methods that keep it
     /// in one: the 2×2 supersampling wrapper box-filters it on the GPU.
     fn image_buffer(&self) -> Option<&wgpu::Buffer> {
+        None
+    }
+    /// How a buffer over the largest storage binding was split (the `split` column,
+    /// [`crate::limits::Split::column`]); None where nothing was.
+    fn split(&self) -> Option<String> {
         None
     }
     /// Judges what only the method can judge against the exact reference (e.g. the k-buffer's

@@ -163,6 +163,7 @@ pub fn run(
                 .set(cols::DRIVER_INFO, &f.driver_info)
                 .set(cols::ADAPTER_FEATURES, &f.features)
                 .set(cols::TEXTURE_MEMORY, gpu.texture_memory.as_str())
+                .set(cols::LIMITS, gpu.profile.name())
                 .set(cols::WIDTH, group.width)
                 .set(cols::HEIGHT, group.height)
                 .set(cols::SCENE, &group.scene.generator)

@@ -104,6 +104,10 @@ pub mod cols {
         "texture_memory",
         "where render targets' memory came from: `pooled` (wgpu's shared blocks, the default) or `dedicated` (`mfx sweep --texture-memory dedicated`: each single-level, single-layer 2-D render target in a Vulkan allocation of its own; other textures, or one whose dedicated allocation failed, logged, stay pooled)",
     );
+    pub const LIMITS: Col = Col::new(
+        "limits",
+        "the limits profile the device was requested with (`mfx sweep --limits`): `adapter` (the adapter's own, the default), `webgpu` (WebGPU's default limits and optional features only) or `downlevel` (a WebGL2-class device: no compute, no storage buffers); what does not fit is a `skipped` row naming the limit",
+    );
     pub const WIDTH: Col = Col::new("width", "render target width in pixels");
     pub const HEIGHT: Col = Col::new("height", "render target height in pixels");
     pub const TIMING_RULE: Col = Col::new(
@@ -856,6 +860,10 @@ pub mod cols {
         "bytes of buffers and textures the method allocated (scene buffers excluded)",
     );
     pub const BYTES_PER_PIXEL: Col = Col::new("bytes_per_pixel", "bytes_allocated / pixels");
+    pub const SPLIT: Col = Col::new(
+        "split",
+        "how a buffer over the largest storage binding was split to fit (`bindings:N`: one array over N storage bindings, indexed through a switch); empty where nothing was split. Compare with the unsplit row of a larger limit for the cost",
+    );
     pub const BYTES_OVERHEAD: Col = Col::new(
         "bytes_overhead",
         "of bytes_allocated, the per-pixel structures (heads, offsets, counters, output image) where the method reports them",
@@ -1014,6 +1022,7 @@ pub const GROUPS: &[Group] = &[
             cols::DRIVER_INFO,
             cols::ADAPTER_FEATURES,
             cols::TEXTURE_MEMORY,
+            cols::LIMITS,
             cols::WIDTH,
             cols::HEIGHT,
             cols::TIMING_RULE,
@@ -1263,6 +1272,7 @@ pub const GROUPS: &[Group] = &[
             cols::LAYERS_CAPTURED_MAX,
             cols::BYTES_ALLOCATED,
             cols::BYTES_PER_PIXEL,
+            cols::SPLIT,
             cols::BYTES_OVERHEAD,
             cols::FRAGMENT_BYTES_RATIO,
             cols::BYTES_TRUE_FRAGMENTS,

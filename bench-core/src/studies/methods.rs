@@ -171,8 +171,19 @@ fn finish_point(
     let pt = &ctx.group.points[i];
     let mut m = match measured {
         Ok(m) => m,
+        // Under a browser's limits wgpu refuses what exceeds them: that is "does not fit".
+        Err(e)
+            if !matches!(e, crate::CoreError::Limit(_))
+                && ctx.gpu.profile.explains(&e.to_string()) =>
+        {
+            let why = format!("under {} limits: {e}", ctx.gpu.profile.owner());
+            return emit(i, skipped_row(row, &why));
+        }
         Err(e) => return emit(i, error_row(row, &e)),
     };
+    if let Some(s) = m.prepared.split() {
+        row.set(cols::SPLIT, s);
+    }
     set_timing(&mut row, &m, &ctx.scene.mesh);
     // This study's frames are GPU work only: a wall time far above the GPU time means the
     // timestamps missed work (judge::timestamps_incomplete says how far).

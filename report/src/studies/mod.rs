@@ -5,6 +5,7 @@
 pub mod buckets;
 pub mod deferred;
 pub mod geometry;
+pub mod limits;
 pub mod methods;
 pub mod prepass;
 pub mod scaling;
@@ -42,6 +43,11 @@ pub const PAGES: &[StudyPage] = &[
                 .chain(buckets::figures(r, d)?)
                 .collect())
         },
+    },
+    StudyPage {
+        heading: "Fits a browser? (limits profiles)",
+        applies: limits::applies,
+        figures: limits::figures,
     },
     StudyPage {
         heading: "How cost grows (scaling)",

@@ -73,14 +73,16 @@ impl Method for ComputeAbuffer {
         let have = gpu.limits.max_storage_buffers_per_shader_stage;
         if have < STORAGE_BUFFERS {
             return Err(format!(
-                "needs {STORAGE_BUFFERS} storage buffers per shader stage, the adapter allows {have}"
+                "needs {STORAGE_BUFFERS} storage buffers per shader stage, {} allows {have}",
+                gpu.profile.who()
             ));
         }
         let v = variants(point);
         let wg = gpu.limits.max_compute_workgroup_storage_size;
         if v.wg_sort && wg < WG_SORT_BYTES {
             return Err(format!(
-                "resolve_sort = workgroup needs {WG_SORT_BYTES} B of workgroup memory, the adapter allows {wg}"
+                "resolve_sort = workgroup needs {WG_SORT_BYTES} B of workgroup memory, {} allows {wg}",
+                gpu.profile.who()
             ));
         }
         AA_SUPPORT.check(self.name(), AaConfig::from_point(point))

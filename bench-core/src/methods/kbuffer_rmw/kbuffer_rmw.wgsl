@@ -10,7 +10,8 @@ override K: u32 = 8u;
 
 // Per pixel K keys, larger = nearer, 0 = empty (so a cleared buffer is an empty k-buffer).
 @group(0) @binding(1) var<storage, read_write> keys: array<u32>;
-@group(0) @binding(2) var<storage, read_write> entries: array<Entry>;
+// `entries` (binding 2, split over more bindings where over the largest one) and
+// entries_load / entries_store are generated: limits::Split::wgsl.
 @group(0) @binding(3) var<storage, read_write> out_image: array<vec4<f32>>;
 
 // Window depth → key with "larger is nearer" for both depth conventions; never 0.
@@ -34,7 +35,7 @@ fn insert(in: Varyings, ff: bool) -> vec4<f32> {
     }
     var out = vec4<f32>(0.0, 0.0, 0.0, -1.0);
     if last != 0u {
-        let c = entry_color(entries[base + K - 1u]);
+        let c = entry_color(entries_load(base + K - 1u));
         out = vec4<f32>(c.rgb * c.a, c.a);
     }
     // Start at the first empty slot (or the last one when full).
@@ -55,11 +56,11 @@ fn insert(in: Varyings, ff: bool) -> vec4<f32> {
             break;
         }
         keys[base + j] = prev;
-        entries[base + j] = entries[base + j - 1u];
+        entries_store(base + j, entries_load(base + j - 1u));
         j = j - 1u;
     }
     keys[base + j] = key;
-    entries[base + j] = make_entry(in, ff);
+    entries_store(base + j, make_entry(in, ff));
     return out;
 }
 
@@ -106,7 +107,7 @@ fn fold_kept(base: u32, pixel: vec2<f32>) -> FoldState {
         if key == 0u {
             break;
         }
-        fold_step(&s, entry_frag(entries[base + i], key));
+        fold_step(&s, entry_frag(entries_load(base + i), key));
     }
     return s;
 }

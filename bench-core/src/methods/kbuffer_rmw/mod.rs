@@ -27,7 +27,7 @@
 
 use super::shared::axes::SPECIALISATION;
 use super::shared::kslots::{
-    entry::SlotConfig, kslots_entries, kslots_layout, KSlots, Races, LAYERS,
+    entries_split, entry::SlotConfig, kslots_entries, kslots_layout, KSlots, Races, LAYERS,
 };
 use super::shared::packing::PACKING_WGSL;
 use super::shared::store::{dummy_depth, storage_pass_with, storage_pipeline_with};
@@ -37,7 +37,7 @@ use crate::axes::{Axis, Point};
 use crate::effects::{self, FOLD_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
-use crate::gpu_util::{bind_buffers, pixel_pass, read_vec, shader};
+use crate::gpu_util::{pixel_pass, read_vec, shader};
 use crate::oit::Keep;
 use crate::record::cols;
 use crate::reference::FragmentLists;
@@ -144,12 +144,14 @@ impl PreparedRmw {
         bounding: Bounding,
     ) -> Result<Self> {
         let d = &gpu.device;
+        let split = entries_split(gpu, scene, (k, &slot), 1)?;
         let src = format!(
-            "{WGSL}\n{}\n{PACKING_WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}",
+            "{WGSL}\n{}\n{}\n{PACKING_WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}",
+            split.wgsl("entries", "Entry", 2),
             slot.wgsl()
         );
         let module = shader(gpu, "kbuffer_rmw", &src);
-        let bgl = kslots_layout(gpu, 0);
+        let bgl = kslots_layout(gpu, 0, &split);
         let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("kbuffer_rmw"),
             bind_group_layouts: &[Some(&bgl)],
@@ -180,18 +182,18 @@ impl PreparedRmw {
             &layout,
             &module,
             &rc,
-            blend.then(|| kslots_entries(0)),
+            blend.then(|| kslots_entries(0, &split)),
         );
         let mut alloc = AllocCounter::default();
         let depth = dummy_depth(gpu, &mut alloc, scene);
         let slots = KSlots::new(gpu, &mut alloc, scene, k, &slot)?;
         let buffers = [&scene.camera, &slots.keys, &slots.entries, &slots.image];
-        let bind = bind_buffers(gpu, "kbuffer_rmw", &bgl, &buffers);
+        let bind = slots.bind(gpu, &bgl, &buffers, None);
         let tail = blend.then(|| TailTargets::new(gpu, &mut alloc, scene));
         let resolve_bind = resolve_bgl
             .as_ref()
             .zip(tail.as_ref())
-            .map(|(l, t)| tail::resolve_bind(gpu, l, &buffers, t));
+            .map(|(l, t)| slots.bind(gpu, l, &buffers, Some(t)));
         let sorted = if heuristics {
             Some(sorted_indices(gpu, scene)?)
         } else {
@@ -295,6 +297,9 @@ impl crate::timed::Timed for PreparedRmw {
 }
 
 impl Prepared for PreparedRmw {
+    fn split(&self) -> Option<String> {
+        self.slots.split.column()
+    }
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         self.tailed = match &self.tail {
             Some(t) => t.tailed(gpu)?,
@@ -414,6 +419,8 @@ mod tests {
             samples: 1,
             keys: dummy(),
             entries: dummy(),
+            entries_more: vec![],
+            split: crate::limits::Split::whole(1, 4),
             image: dummy(),
             captured,
         };

@@ -155,7 +155,8 @@ impl Method for LinkedList {
         let have = gpu.limits.max_storage_buffers_per_shader_stage;
         if have < need {
             return Err(format!(
-                "needs {need} storage buffers per shader stage, the adapter allows {have}"
+                "needs {need} storage buffers per shader stage, {} allows {have}",
+                gpu.profile.who()
             ));
         }
         Ok(())

@@ -188,7 +188,8 @@ impl Method for Moments {
             let have = gpu.limits.max_color_attachment_bytes_per_sample;
             if bytes > have {
                 return Err(format!(
-                    "the moments pass writes {bytes} B per sample, the adapter allows {have}"
+                    "the moments pass writes {bytes} B per sample, {} allows {have}",
+                    gpu.profile.who()
                 ));
             }
         }

@@ -138,6 +138,9 @@ impl crate::timed::Timed for Supersampled {
 }
 
 impl Prepared for Supersampled {
+    fn split(&self) -> Option<String> {
+        self.inner.split()
+    }
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let mut cap = self.inner.readback(gpu, &self.big)?;
         cap.image = Some(read_vec::<[f32; 4]>(

@@ -191,14 +191,16 @@ pub fn supports_targets_fx(gpu: &Gpu, cfg: &Config, fx: bool) -> std::result::Re
     let n = cfg.attachments_fx(fx);
     if n > gpu.limits.max_color_attachments {
         return Err(format!(
-            "{n} colour attachments needed, adapter allows {}",
+            "{n} colour attachments needed, {} allows {}",
+            gpu.profile.who(),
             gpu.limits.max_color_attachments
         ));
     }
     if n * 16 > gpu.limits.max_color_attachment_bytes_per_sample {
         return Err(format!(
-            "{} bytes per sample needed, adapter allows {}",
+            "{} bytes per sample needed, {} allows {}",
             n * 16,
+            gpu.profile.who(),
             gpu.limits.max_color_attachment_bytes_per_sample
         ));
     }

@@ -5,14 +5,12 @@
 //! the method and the WGSL header for why not 64-bit atomicMin.
 
 use super::entry::SlotConfig;
-use super::{kslots_entries, kslots_layout, KSlots, Races};
+use super::{entries_split, kslots_entries, kslots_layout, KSlots, Races};
 use crate::aa::{self, AaCapture, AaMode};
 use crate::effects::FOLD_WGSL;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
-use crate::gpu_util::{
-    bind_buffers, per_sample_source, pixel_pass, shader_source, COMMON_WGSL, STORAGE_RW,
-};
+use crate::gpu_util::{per_sample_source, pixel_pass, shader_source, COMMON_WGSL, STORAGE_RW};
 use crate::methods::shared::packing::PACKING_WGSL;
 use crate::methods::shared::store::{dummy_depth_ms, storage_pass_with, storage_pipeline_ms};
 use crate::methods::shared::tail::{self, Bounding, TailTargets, RESOLVE_WGSL, TAIL_WGSL};
@@ -55,8 +53,10 @@ impl PreparedAtomic {
         samples: u32,
     ) -> Result<Self> {
         let d = &gpu.device;
+        let split = entries_split(gpu, scene, (k, &slot), samples)?;
         let src = format!(
-            "{COMMON_WGSL}\n{WGSL}\n{}\n{PACKING_WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}",
+            "{COMMON_WGSL}\n{WGSL}\n{}\n{}\n{PACKING_WGSL}\n{FOLD_WGSL}\n{TAIL_WGSL}\n{RESOLVE_WGSL}",
+            split.wgsl("entries", "Entry", 2),
             slot.wgsl()
         );
         let src = if samples > 1 {
@@ -65,7 +65,7 @@ impl PreparedAtomic {
             src
         };
         let module = shader_source(gpu, "kbuffer_atomic", src);
-        let bgl = kslots_layout(gpu, 1);
+        let bgl = kslots_layout(gpu, 1, &split);
         let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("kbuffer_atomic"),
             bind_group_layouts: &[Some(&bgl)],
@@ -114,7 +114,7 @@ impl PreparedAtomic {
             &layout,
             &module,
             &rc,
-            blend.then(|| kslots_entries(1)),
+            blend.then(|| kslots_entries(1, &split)),
         );
         let mut alloc = AllocCounter::default();
         let depth = dummy_depth_ms(gpu, &mut alloc, scene, samples);
@@ -132,12 +132,12 @@ impl PreparedAtomic {
             &slots.image,
             &claims,
         ];
-        let bind = bind_buffers(gpu, "kbuffer_atomic", &bgl, &buffers);
+        let bind = slots.bind(gpu, &bgl, &buffers, None);
         let tail = blend.then(|| TailTargets::new(gpu, &mut alloc, scene));
         let resolve_bind = resolve_bgl
             .as_ref()
             .zip(tail.as_ref())
-            .map(|(l, t)| tail::resolve_bind(gpu, l, &buffers, t));
+            .map(|(l, t)| slots.bind(gpu, l, &buffers, Some(t)));
         Ok(PreparedAtomic {
             keys_pass,
             payload_pass,
@@ -194,6 +194,9 @@ impl crate::timed::Timed for PreparedAtomic {
 }
 
 impl Prepared for PreparedAtomic {
+    fn split(&self) -> Option<String> {
+        self.slots.split.column()
+    }
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         self.tailed = match &self.tail {
             Some(t) => t.tailed(gpu)?,

@@ -18,7 +18,8 @@ var<private> SAMPLE: i32 = 0;
 // `Entry` (what a slot keeps for the effects fold) is generated for the point: kbuffer_rmw/entry.rs.
 
 @group(0) @binding(1) var<storage, read_write> keys: array<atomic<u32>>;
-@group(0) @binding(2) var<storage, read_write> entries: array<Entry>;
+// `entries` (binding 2, split over more bindings where over the largest one) and
+// entries_load / entries_store are generated: limits::Split::wgsl.
 @group(0) @binding(3) var<storage, read_write> out_image: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> claims: array<atomic<u32>>;
 
@@ -62,7 +63,7 @@ fn payload(in: Varyings, ff: bool) -> bool {
             return false;
         }
         if s == key && atomicAdd(&claims[base + i], 1u) == 0u {
-            entries[base + i] = make_entry(in, ff);
+            entries_store(base + i, make_entry(in, ff));
             return true;
         }
     }
@@ -92,7 +93,7 @@ fn keep_first(in: Varyings, ff: bool) -> bool {
         return false;
     }
     atomicStore(&keys[base + i], near_key(in.clip.z));
-    entries[base + i] = make_entry(in, ff);
+    entries_store(base + i, make_entry(in, ff));
     return true;
 }
 
@@ -126,7 +127,7 @@ fn fold_kept(p: u32, pixel: vec2<f32>) -> FoldState {
             if key == 0u {
                 break;
             }
-            fold_step(&s, entry_frag(entries[base + i], key));
+            fold_step(&s, entry_frag(entries_load(base + i), key));
         }
         return s;
     }
@@ -151,7 +152,7 @@ fn fold_kept(p: u32, pixel: vec2<f32>) -> FoldState {
     }
     for (var i = 0u; i < n; i = i + 1u) {
         let j = base + order[i];
-        fold_step(&s, entry_frag(entries[j], atomicLoad(&keys[j])));
+        fold_step(&s, entry_frag(entries_load(j), atomicLoad(&keys[j])));
     }
     return s;
 }

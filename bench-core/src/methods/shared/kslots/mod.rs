@@ -9,7 +9,9 @@ use super::store;
 use crate::axes::Axis;
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
-use crate::gpu_util::{camera_entry, check_storage_size, read_vec, storage_entry, STORAGE_RW};
+use crate::gpu_util::{camera_entry, read_vec, storage_entry, STORAGE_RW};
+use crate::limits::{self, Split};
+use crate::methods::shared::tail::TailTargets;
 use crate::methods::{Capture, Expected};
 use crate::record::{cols, Flag};
 use crate::reference::FragmentLists;
@@ -28,7 +30,11 @@ pub struct KSlots {
     /// MSAA samples with k slots each (1: single-sample).
     pub samples: u32,
     pub keys: wgpu::Buffer,
+    /// The entries, or their first part where they are split over several bindings.
     pub entries: wgpu::Buffer,
+    /// The entries' further parts (bound at `limits::SPLIT_BINDING` + 0, 1, …).
+    pub entries_more: Vec<wgpu::Buffer>,
+    pub split: Split,
     pub image: wgpu::Buffer,
     /// Captured depths of the last readback (k per pixel, nearest first), for `judge`.
     pub captured: Vec<Option<f32>>,
@@ -57,16 +63,63 @@ impl KSlots {
         let px = scene.pixels() as u64;
         let slots = px * samples as u64 * k as u64;
         let entry = slot.entry_bytes();
-        check_storage_size(gpu, "k-buffer entries", slots * entry)?;
+        let split = entries_split(gpu, scene, (k, slot), samples)?;
+        limits::check_storage(gpu.held(), "k-buffer keys", slots * 4)?;
         let images = slot.images();
+        let keys = alloc.buffer(gpu, "k-buffer keys", slots * 4, STORAGE_RW);
+        let mut parts: Vec<wgpu::Buffer> = (0..split.parts)
+            .map(|i| {
+                let label = format!("k-buffer entries {i}");
+                alloc.buffer(gpu, &label, split.part_elems(i) * entry, STORAGE_RW)
+            })
+            .collect();
+        let entries = parts.remove(0);
         Ok(KSlots {
             k,
             images,
             samples,
-            keys: alloc.buffer(gpu, "k-buffer keys", slots * 4, STORAGE_RW),
-            entries: alloc.buffer(gpu, "k-buffer entries", slots * entry, STORAGE_RW),
+            keys,
+            entries,
+            entries_more: parts,
+            split,
             image: alloc.buffer(gpu, "k-buffer image", px * 16 * images, STORAGE_RW),
             captured: vec![],
+        })
+    }
+
+    /// A bind group of `buffers` at bindings 0, 1, …, the tail's textures at 5–7 if given, and
+    /// the entries' further parts.
+    pub fn bind(
+        &self,
+        gpu: &Gpu,
+        layout: &wgpu::BindGroupLayout,
+        buffers: &[&wgpu::Buffer],
+        tail: Option<&TailTargets>,
+    ) -> wgpu::BindGroup {
+        let mut e: Vec<wgpu::BindGroupEntry<'_>> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        if let Some(t) = tail {
+            e.extend(t.bind_entries(5));
+        }
+        e.extend(
+            self.entries_more
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: limits::SPLIT_BINDING + i as u32,
+                    resource: b.as_entire_binding(),
+                }),
+        );
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("k-buffer"),
+            layout,
+            entries: &e,
         })
     }
 
@@ -162,20 +215,41 @@ pub enum Races {
 }
 
 /// Bind group layout shared by the insert and resolve stages: camera, keys, entries, image.
-pub fn kslots_layout(gpu: &Gpu, extra: u32) -> wgpu::BindGroupLayout {
+pub fn kslots_layout(gpu: &Gpu, extra: u32, split: &Split) -> wgpu::BindGroupLayout {
     gpu.device
         .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("k-buffer"),
-            entries: &kslots_entries(extra),
+            entries: &kslots_entries(extra, split),
         })
 }
 
-/// The entries of [`kslots_layout`] (a tail resolve adds its textures to them).
-pub fn kslots_entries(extra: u32) -> Vec<wgpu::BindGroupLayoutEntry> {
+/// The entries of [`kslots_layout`] (a tail resolve adds its textures to them), the entries'
+/// further parts at `limits::SPLIT_BINDING` + 0, 1, ….
+pub fn kslots_entries(extra: u32, split: &Split) -> Vec<wgpu::BindGroupLayoutEntry> {
     let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
     let mut entries = vec![camera_entry(0)];
     for b in 1..4 + extra {
         entries.push(storage_entry(b, false, fc));
     }
+    for i in 1..split.parts {
+        entries.push(storage_entry(limits::SPLIT_BINDING + i - 1, false, fc));
+    }
     entries
+}
+
+/// How the k slots' entries lie over storage bindings here (`limits::split_storage`; keys,
+/// image and the atomic k-buffer's claims share the stage).
+pub fn entries_split(
+    gpu: &Gpu,
+    scene: &GpuScene,
+    (k, slot): (u32, &SlotConfig),
+    samples: u32,
+) -> Result<Split> {
+    let slots = scene.pixels() as u64 * samples as u64 * k as u64;
+    limits::split_storage(
+        gpu.held(),
+        "k-buffer entries",
+        (slots, slot.entry_bytes()),
+        3,
+    )
 }

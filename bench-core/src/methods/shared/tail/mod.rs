@@ -68,7 +68,8 @@ pub fn supports(gpu: &Gpu, extra_bytes_per_sample: u32) -> Result<(), String> {
     let have = gpu.limits.max_color_attachment_bytes_per_sample;
     if need > have {
         return Err(format!(
-            "tail = blend writes {need} B per sample, the adapter allows {have}"
+            "tail = blend writes {need} B per sample, {} allows {have}",
+            gpu.profile.who()
         ));
     }
     Ok(())

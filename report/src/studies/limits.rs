@@ -1,0 +1,184 @@
+//! "Fits a browser?": per limits profile (`mfx sweep --limits`), method and resolution, whether
+//! the method ran as it is, ran split over several storage bindings (with its time against the
+//! unsplit run of the same point under the adapter's limits, where the runs hold one), or was
+//! skipped, with the limit that ruled it out.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use anyhow::Result;
+use schema::{cols, Status};
+
+use crate::cells::{esc, short};
+use crate::charts::Figure;
+use crate::data::{resolution, Rec, Runs};
+
+/// The runs were made under a browser's limits, or something was split.
+pub fn applies(runs: &Runs) -> bool {
+    runs.rows.iter().any(|r| {
+        let l = r.get(cols::LIMITS);
+        (!l.is_empty() && l != "adapter") || !r.get(cols::SPLIT).is_empty()
+    })
+}
+
+/// How one row of a method fared, as the table counts it.
+fn outcome(r: &Rec) -> &'static str {
+    match r.get(cols::STATUS).parse::<Status>() {
+        Ok(Status::Ok) if r.get(cols::SPLIT).is_empty() => "runs",
+        Ok(Status::Ok) => "split",
+        Ok(Status::Skipped) => "skipped",
+        _ => "failed",
+    }
+}
+
+/// One cell: counts of each outcome, the splits used, the split's time against the unsplit
+/// row of the same point, and every distinct skip or failure reason.
+fn cell(rows: &[&Rec], unsplit: &BTreeMap<&str, f64>) -> String {
+    let mut n: BTreeMap<&str, usize> = BTreeMap::new();
+    for r in rows {
+        *n.entry(outcome(r)).or_default() += 1;
+    }
+    let mut parts: Vec<String> = ["runs", "split", "skipped", "failed"]
+        .iter()
+        .filter_map(|o| n.get(o).map(|c| format!("{o} {c}")))
+        .collect();
+    let mut splits: Vec<&str> = rows.iter().map(|r| r.get(cols::SPLIT)).collect();
+    splits.retain(|s| !s.is_empty());
+    splits.sort();
+    splits.dedup();
+    if !splits.is_empty() {
+        parts.push(format!("({})", splits.join(", ")));
+    }
+    let ratios: Vec<f64> = rows
+        .iter()
+        .filter(|r| !r.get(cols::SPLIT).is_empty())
+        .filter_map(|r| Some(r.trusted_ms()? / unsplit.get(r.get(cols::POINT_KEY))?))
+        .collect();
+    if !ratios.is_empty() {
+        let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+        parts.push(format!("×{} of unsplit", short(Some(mean))));
+    }
+    // Each distinct reason once (a cell can hold a profile's limit and a suite's own cap).
+    let mut why: Vec<&str> = Vec::new();
+    for r in rows {
+        let w = r.get(cols::REASON);
+        if matches!(outcome(r), "skipped" | "failed") && !w.is_empty() && !why.contains(&w) {
+            why.push(w);
+        }
+    }
+    let mut html = esc(&parts.join(" "));
+    for w in why {
+        html += &format!("<br><small>{}</small>", esc(w));
+    }
+    html
+}
+
+pub fn figures(runs: &Runs, _dir: &Path) -> Result<Vec<Figure>> {
+    let rows: Vec<&Rec> = runs.rows.iter().filter(|r| !r.is_floor()).collect();
+    // Unsplit times under the adapter's own limits, by point: the cost of a split.
+    let unsplit: BTreeMap<&str, f64> = rows
+        .iter()
+        .filter(|r| r.get(cols::LIMITS) == "adapter" && r.get(cols::SPLIT).is_empty())
+        .filter_map(|r| Some((r.get(cols::POINT_KEY), r.trusted_ms()?)))
+        .collect();
+    let mut out = Vec::new();
+    for (profile, prow) in Runs::group_by(rows.iter().copied(), |r| {
+        let l = r.get(cols::LIMITS);
+        if l.is_empty() { "adapter" } else { l }.to_string()
+    }) {
+        // Resolutions by pixel count.
+        let mut res: Vec<(u64, String)> = prow
+            .iter()
+            .map(|r| {
+                let px = r.f(cols::WIDTH).unwrap_or(0.0) * r.f(cols::HEIGHT).unwrap_or(0.0);
+                (px as u64, resolution(r))
+            })
+            .collect();
+        res.sort();
+        res.dedup();
+        let res: Vec<String> = res.into_iter().map(|(_, r)| r).collect();
+        let mut html = String::from("<table><tr><th>method</th>");
+        for r in &res {
+            html += &format!("<th>{}</th>", esc(r));
+        }
+        html += "</tr>";
+        for (method, mrows) in
+            Runs::group_by(prow.iter().copied(), |r| r.get(cols::METHOD).to_string())
+        {
+            html += &format!("<tr><td>{}</td>", esc(&method));
+            for r in &res {
+                let here: Vec<&Rec> = mrows
+                    .iter()
+                    .copied()
+                    .filter(|x| &resolution(x) == r)
+                    .collect();
+                html += &format!("<td>{}</td>", cell(&here, &unsplit));
+            }
+            html += "</tr>";
+        }
+        html += "</table>";
+        let mut f = Figure::html(format!("Fits a browser? Limits profile `{profile}`"), html);
+        f.stem = format!("limits-{profile}");
+        f.caption = format!(
+            "Per method and resolution, the rows under the `{profile}` limits profile (`mfx sweep --limits {profile}`): \
+             `runs` as it is, `split` over several storage bindings (how, and its GPU time against the unsplit row of the \
+             same point under the adapter's limits where the runs hold one), `skipped` with the limit named (each distinct reason shown)."
+        );
+        out.push(f);
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rec(kv: &[(&str, &str)]) -> Rec {
+        Rec(kv
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect())
+    }
+
+    #[test]
+    fn the_table_says_runs_split_or_skipped_with_the_limit_per_resolution() {
+        let base = [("study", "methods"), ("width", "512"), ("height", "512")];
+        let row = |m: &str, status: &str, split: &str, why: &str| {
+            let mut r = rec(&base);
+            for (k, v) in [
+                ("method", m),
+                ("status", status),
+                ("split", split),
+                ("reason", why),
+                ("limits", "webgpu"),
+            ] {
+                r.0.insert(k.into(), v.into());
+            }
+            r
+        };
+        let runs = Runs {
+            rows: vec![
+                row("wboit", "ok", "", ""),
+                row("kbuffer_atomic", "ok", "bindings:2", ""),
+                row("mlab", "skipped", "", "mlab layers needs 171.6 MB in one storage binding, over WebGPU's default maxStorageBufferBindingSize of 134217728 B (128 MiB)"),
+            ],
+            ..Default::default()
+        };
+        assert!(applies(&runs));
+        let f = figures(&runs, Path::new("/nonexistent")).unwrap();
+        assert_eq!(f.len(), 1);
+        let html = f[0].html.as_deref().unwrap();
+        assert!(html.contains("<th>512x512</th>"), "{html}");
+        assert!(html.contains("<td>wboit</td><td>runs 1</td>"), "{html}");
+        assert!(html.contains("split 1 (bindings:2)"), "{html}");
+        assert!(
+            html.contains("skipped 1<br><small>mlab layers needs 171.6 MB"),
+            "{html}"
+        );
+        let adapter_only = Runs {
+            rows: vec![rec(&[("limits", "adapter"), ("status", "ok")])],
+            ..Default::default()
+        };
+        assert!(!applies(&adapter_only));
+    }
+}
