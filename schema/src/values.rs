@@ -88,6 +88,11 @@ pub enum Flag {
     /// precision loss or fragment-set difference to explain it (e.g. an MSAA capture, which has
     /// no per-pixel counts).
     ImageDiffers,
+    /// The image is off the truth beyond the f32 bound of its arithmetic only at pixels where
+    /// fragments within the method's depth precision have no defined order, and by no more than
+    /// compositing them in another order can make (`depth_tie_pixels`): the truth is ambiguous
+    /// there, so the row is not `exact`, but nothing was lost or merged.
+    DepthTies,
     /// GPU time far below the wall-clock time of the same frames: the timestamps missed work.
     TimestampsIncomplete,
     /// The stopping rule's noise target was not reached (max samples, max time or drift).
@@ -97,7 +102,7 @@ pub enum Flag {
 }
 
 impl Flag {
-    pub const ALL: [Flag; 10] = [
+    pub const ALL: [Flag; 11] = [
         Flag::Overflow,
         Flag::Hazard,
         Flag::Collision,
@@ -105,6 +110,7 @@ impl Flag {
         Flag::LostCoplanar,
         Flag::FragmentsDiffer,
         Flag::ImageDiffers,
+        Flag::DepthTies,
         Flag::TimestampsIncomplete,
         Flag::Noisy,
         Flag::Throttled,
@@ -129,6 +135,7 @@ impl Flag {
             Flag::LostCoplanar => "lost_coplanar",
             Flag::FragmentsDiffer => "fragments_differ",
             Flag::ImageDiffers => "image_differs",
+            Flag::DepthTies => "depth_ties",
             Flag::TimestampsIncomplete => "timestamps_incomplete",
             Flag::Noisy => "noisy",
             Flag::Throttled => "throttled",
