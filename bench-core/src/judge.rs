@@ -134,7 +134,8 @@ pub struct Judgement {
     /// The largest per-pixel bound `exact` was judged with ([`exact_bounds`]).
     pub exact_bound: Option<f64>,
     /// Pixels off the truth beyond their arithmetic bound but within what reordering their
-    /// near-equal-depth fragments can make (flag `depth_ties`; None without an image).
+    /// near-equal-depth fragments can make (flag `depth_ties`; None without an image or for a
+    /// method that does not claim every fragment).
     pub depth_tie_pixels: Option<u64>,
     /// Known flags and the method's own words (kept, never dropped); only added to.
     pub flags: FlagSet,
@@ -388,20 +389,26 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
                 ));
             }
         }
-        // Pixels off the truth beyond their arithmetic but within another order of their ties.
+        // Pixels off the truth beyond their arithmetic but within another order of their ties:
+        // judged for methods that claim every fragment, within capacity (an approximation's or
+        // an overflow's error there is not a tie order).
         let errs: Vec<f64> = img
             .iter()
             .zip(truth.iter())
             .map(|(g, w)| pixel_err(g, w))
             .collect();
-        let ties = errs
-            .iter()
-            .enumerate()
-            .filter(|&(i, &e)| e > bound_of(i).arith && e <= bound_of(i).with_order())
-            .count() as u64;
-        j.depth_tie_pixels = Some(ties);
-        if ties > 0 {
-            j.flag(Flag::DepthTies);
+        if cx.exact {
+            let ties = errs
+                .iter()
+                .enumerate()
+                .filter(|&(i, &e)| {
+                    !over(i) && e > bound_of(i).arith && e <= bound_of(i).with_order()
+                })
+                .count() as u64;
+            j.depth_tie_pixels = Some(ties);
+            if ties > 0 {
+                j.flag(Flag::DepthTies);
+            }
         }
         // Exact: nothing lost or merged, every pixel within its f32 bound of the truth (no tie
         // order allowed: the truth has one order), and so within bad_pixel_tol (a bound above
@@ -943,6 +950,10 @@ mod tests {
         j.write(&mut row);
         assert_eq!(row.get(cols::DEPTH_TIE_PIXELS), Some("1"));
         assert_eq!(row.get(cols::FLAG), Some(Flag::DepthTies.name()));
+        // An approximate method's error there is its approximation, not a tie order.
+        let j = run(&cap, &l, false);
+        assert!(!j.flags.contains(Flag::DepthTies), "{:?}", j.flags);
+        assert_eq!(j.depth_tie_pixels, None);
         // The truth's own order at the tie is exact, with no tie pixel.
         let cap = cap_with(l.composite(), vec![8, 3], Expected::All);
         let j = run(&cap, &l, true);

@@ -914,7 +914,7 @@ pub mod cols {
     );
     pub const DEPTH_TIE_PIXELS: Col = Col::new(
         "depth_tie_pixels",
-        "pixels whose image is off the f64 ground truth beyond the f32 bound of its arithmetic (exact_bound) but within what compositing fragments within the method's depth precision in another order can make: the truth has no defined order there (flag depth_ties); empty for rows without a judged image",
+        "pixels whose image is off the f64 ground truth beyond the f32 bound of its arithmetic (exact_bound) but within what compositing fragments within the method's depth precision in another order can make: the truth has no defined order there (flag depth_ties); judged for methods that claim every fragment (claims_exact), at pixels within capacity; empty otherwise",
     );
     pub const FRAGMENTS_DROPPED: Col = Col::new(
         "fragments_dropped",
