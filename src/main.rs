@@ -746,33 +746,9 @@ fn models_line(suite: &Suite) -> String {
     }
 }
 
+/// UTC now as yyyymmdd-hhmmss (a run folder's name).
 pub(crate) fn chrono_stamp() -> String {
-    let now = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .unwrap_or_default()
-        .as_secs();
-    // UTC yyyymmdd-hhmmss without another dependency in the binary.
-    let (d, s) = (now / 86400, now % 86400);
-    let (y, m, day) = civil_from_days(d as i64);
-    format!(
-        "{y:04}{m:02}{day:02}-{:02}{:02}{:02}",
-        s / 3600,
-        (s / 60) % 60,
-        s % 60
-    )
-}
-
-/// Days since 1970-01-01 to (year, month, day) (H. Hinnant's algorithm).
-fn civil_from_days(z: i64) -> (i64, u32, u32) {
-    let z = z + 719468;
-    let era = z.div_euclid(146097);
-    let doe = z.rem_euclid(146097);
-    let yoe = (doe - doe / 1460 + doe / 36524 - doe / 146096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
-    (yoe + era * 400 + (m <= 2) as i64, m, d)
+    chrono::Utc::now().format("%Y%m%d-%H%M%S").to_string()
 }
 
 struct RenderJob {

@@ -4,6 +4,8 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+use schema::Status;
+
 fn mfx(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_mfx"))
         .args(args)
@@ -655,7 +657,7 @@ fn a_gltf_scene_with_blend_and_mask_materials_is_judged_against_the_truth() {
     let mut peel = None;
     for r in rd.records() {
         let r = r.unwrap();
-        assert_eq!(&r[st], "ok", "{r:?}");
+        assert_eq!(&r[st], Status::Ok.name(), "{r:?}");
         if &r[m] == "depth_peel" {
             peel = Some(r[mt].to_string());
         }
@@ -730,7 +732,7 @@ fn backend_gles_lists_its_adapter_and_a_sweep_runs_on_it() {
     for r in rd.records() {
         let r = r.unwrap();
         assert_eq!(&r[b], "gles", "{r:?}");
-        assert_eq!(&r[st], "ok", "{r:?}");
+        assert_eq!(&r[st], Status::Ok.name(), "{r:?}");
         if &r[m] == "compute_abuffer" {
             abuffer = Some(r[mt].to_string());
         }

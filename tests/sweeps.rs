@@ -483,7 +483,7 @@ fn compare_calls_a_run_same_as_itself_slower_at_1_5x_and_refuses_mixed_schemas()
     // is UNSURE, and only with the noise named (never silently undecided).
     for line in slow.lines().filter(|l| l.contains("| UNSURE")) {
         assert!(
-            line.contains("noisy") && line.contains("not significant"),
+            line.contains(schema::Flag::Noisy.name()) && line.contains("not significant"),
             "an UNSURE point without its reason: {line}"
         );
     }

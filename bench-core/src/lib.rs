@@ -30,6 +30,10 @@ pub mod reference;
 pub mod runner;
 pub mod shading;
 pub mod studies;
+/// Test helpers (a shared adapter, scenes, run-and-compare): built for this crate's unit tests
+/// and, through the `testing` feature its dev-dependency on itself turns on, for its
+/// integration tests; not part of the release library.
+#[cfg(any(test, feature = "testing"))]
 pub mod testing;
 pub mod texture_memory;
 pub mod timed;

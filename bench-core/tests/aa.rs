@@ -21,7 +21,7 @@ use bench_core::aa::{self, AaMode};
 use bench_core::effects::EffectConfig;
 use bench_core::method::Method;
 use bench_core::methods;
-use bench_core::record::Flag;
+use bench_core::record::{Flag, Status};
 use bench_core::testing::{self, max_err_vs, params, point, run_truth};
 use scenarios::ParamValue::{self, Int, Str};
 use scenarios::Scene;
@@ -394,7 +394,7 @@ fn aa_ci_runs_through_the_runner_with_no_failed_rows_and_aa_checks() {
     let get = |r: &bench_core::record::Row, c| r.get(c).unwrap_or("").to_string();
     let failed: Vec<String> = rows
         .iter()
-        .filter(|r| get(r, cols::STATUS) == "failed")
+        .filter(|r| r.status() == Some(Status::Failed))
         .map(|r| {
             format!(
                 "{} {}: {}",
@@ -420,7 +420,7 @@ fn aa_ci_runs_through_the_runner_with_no_failed_rows_and_aa_checks() {
         let n = rows
             .iter()
             .filter(|r| get(r, cols::METHOD) == method && get(r, cols::AA) == mode)
-            .filter(|r| get(r, cols::STATUS) == "ok")
+            .filter(|r| r.is_ok())
             .count();
         // The linked list runs msaa4 with both captures.
         let want = if (method, mode) == ("linked_list", "msaa4") {
@@ -464,7 +464,7 @@ fn aa_ci_runs_through_the_runner_with_no_failed_rows_and_aa_checks() {
     }
     let st = rows
         .iter()
-        .filter(|r| get(r, cols::METHOD) == "stochastic" && get(r, cols::STATUS) == "ok")
+        .filter(|r| get(r, cols::METHOD) == "stochastic" && r.is_ok())
         .count();
     assert_eq!(st, 12, "stochastic: 3 pass counts × correction × 2 scenes");
 }

@@ -5,7 +5,7 @@
 use bench_core::gpu_scene::GpuScene;
 use bench_core::measure::{measure, set_timing, TimingPlan};
 use bench_core::methods;
-use bench_core::record::{cols, Row};
+use bench_core::record::{cols, Flag, Row};
 use bench_core::testing::{gpu, params, point, scene};
 use scenarios::{ParamValue, TimingSpec};
 
@@ -93,6 +93,5 @@ fn a_sample_is_discarded_exactly_when_its_canary_ran_over_the_ratio() {
         row.get(cols::GPU_MS_MEDIAN).is_some(),
         "a median even if all were discarded"
     );
-    let flags = row.get(cols::FLAG).unwrap_or("");
-    assert!(flags.contains("throttled"), "{flags}");
+    assert!(row.has_flag(Flag::Throttled), "{}", row.flags());
 }

@@ -8,7 +8,7 @@ use std::collections::BTreeSet;
 use bench_core::methods;
 use bench_core::runner::{expand, run_suite};
 use bench_core::testing;
-use schema::cols;
+use schema::{cols, Status};
 
 const SUITE: &str = include_str!("../../scenarios/suites/continuum-ci.toml");
 
@@ -24,7 +24,7 @@ fn continuum_ci_runs_every_method_and_every_approximate_row_has_finite_errors() 
     let mut seen = BTreeSet::new();
     for r in &rows {
         let method = r.get(cols::METHOD).unwrap_or("?").to_string();
-        let status = r.get(cols::STATUS).unwrap_or("?");
+        let status = r.status();
         let what = format!(
             "{method} on {} ({})",
             r.get(cols::SCENE_LABEL).unwrap_or("?"),
@@ -32,7 +32,7 @@ fn continuum_ci_runs_every_method_and_every_approximate_row_has_finite_errors() 
         );
         assert_ne!(
             status,
-            "failed",
+            Some(Status::Failed),
             "{what}: {}",
             r.get(cols::REASON).unwrap_or("")
         );
@@ -41,7 +41,7 @@ fn continuum_ci_runs_every_method_and_every_approximate_row_has_finite_errors() 
         }
         assert_eq!(
             status,
-            "ok",
+            Some(Status::Ok),
             "{what}: {}",
             r.get(cols::REASON).unwrap_or("")
         );

@@ -13,7 +13,7 @@ use bench_core::metrics::{image_error, BAD_PIXEL_TOL};
 use bench_core::reference::rasterize;
 use bench_core::testing;
 use scenarios::{ParamValue, Params, SceneSpec};
-use schema::cols;
+use schema::{cols, Status};
 
 const W: u32 = 48;
 
@@ -254,7 +254,7 @@ fn effect_axis_rows_are_judged_per_effect_and_a_method_without_a_fold_is_skipped
             .unwrap_or_else(|| panic!("no row {m} {e} {sp:?}"))
     };
     let csg = get("depth_peel", "csg_and", Some("specialised"));
-    assert_eq!(csg.get(cols::STATUS), Some("ok"));
+    assert_eq!(csg.status(), Some(Status::Ok));
     assert_eq!(csg.get(cols::PAYLOAD), Some("depth_id"));
     assert_eq!(
         csg.get(cols::MAX_ABS_ERR)
@@ -266,7 +266,7 @@ fn effect_axis_rows_are_judged_per_effect_and_a_method_without_a_fold_is_skipped
         Some("all")
     );
     let floor = get("floor_opaque", "csg_and", None);
-    assert_eq!(floor.get(cols::STATUS), Some("skipped"));
+    assert_eq!(floor.status(), Some(Status::Skipped));
     assert!(
         floor.get(cols::REASON).unwrap().contains("csg_and"),
         "{:?}",

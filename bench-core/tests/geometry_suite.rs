@@ -1,7 +1,7 @@
 //! The geometry study through the real runner on lavapipe: suites run end to end, bad axes are
 //! refused before any GPU work, and missing meshes become failed rows when a sweep meets them.
 
-use bench_core::record::{cols, Col, Row, VecSink};
+use bench_core::record::{cols, Col, Row, Status, VecSink};
 use bench_core::testing;
 use scenarios::Suite;
 
@@ -52,11 +52,11 @@ triangles = 800
         let indexed = r.get(cols::INDEXED) == Some("true");
         let strip = r.get(cols::PRIMITIVE) == Some("strip");
         if !indexed && strip {
-            assert_eq!(r.get(cols::STATUS), Some("skipped"));
+            assert_eq!(r.status(), Some(Status::Skipped));
             assert!(r.get(cols::REASON).unwrap().contains("indexed"));
             continue;
         }
-        assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells());
+        assert_eq!(r.status(), Some(Status::Ok), "{:?}", r.cells());
         let tris: f64 = r.get(cols::TRIANGLES).unwrap().parse().unwrap();
         assert!(r.get(cols::ACMR).is_some());
         if gpu.has(wgpu::Features::PIPELINE_STATISTICS_QUERY) {
@@ -153,7 +153,7 @@ fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
             .unwrap()
     };
     for r in &rows {
-        assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells());
+        assert_eq!(r.status(), Some(Status::Ok), "{:?}", r.cells());
         let drawn = match num(r, cols::DRAW_TRIANGLES) {
             0.0 => num(r, cols::TRIANGLES),
             d => d,
@@ -252,7 +252,7 @@ fn geometry_models_without_the_meshes_fails_rows_naming_the_file() {
     assert_eq!(n, bench_core::runner::rows_in(&groups));
     assert_eq!(sink.0.len(), n);
     for r in &sink.0 {
-        assert_eq!(r.get(cols::STATUS), Some("failed"), "{:?}", r.cells());
+        assert_eq!(r.status(), Some(Status::Failed), "{:?}", r.cells());
         let why = r.get(cols::REASON).unwrap();
         assert!(
             why.contains("file not found") && why.contains("models/"),

@@ -11,7 +11,7 @@ use bench_core::record::Row;
 use bench_core::reference::rasterize;
 use bench_core::testing::{count_mismatch, max_err, params, point, scene};
 use scenarios::ParamValue::Int;
-use schema::cols;
+use schema::{cols, Status};
 
 fn open(limits: Profile) -> Gpu {
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
@@ -86,11 +86,16 @@ fn webgpu_limits_split_or_skip_naming_the_limit_and_downlevel_skips_storage_meth
     let r = rows(&web, text);
     let get = |m: &str| r.iter().find(|x| x.get(cols::METHOD) == Some(m)).unwrap();
     let k = get("kbuffer_atomic");
-    assert_eq!(k.get(cols::STATUS), Some("ok"), "{:?}", k.get(cols::REASON));
+    assert_eq!(
+        k.get(cols::STATUS),
+        Some(Status::Ok.name()),
+        "{:?}",
+        k.get(cols::REASON)
+    );
     assert_eq!(k.get(cols::SPLIT), Some("bindings:2"));
     assert_eq!(k.get(cols::EXACT), Some("true"), "{:?}", k.get(cols::FLAG));
     assert_eq!(k.get(cols::LIMITS), Some("webgpu"));
-    assert_eq!(get("wboit").get(cols::STATUS), Some("ok"));
+    assert_eq!(get("wboit").get(cols::STATUS), Some(Status::Ok.name()));
     assert_eq!(get("wboit").get(cols::SPLIT), None);
 
     let down = open(Profile::Downlevel);
@@ -99,7 +104,7 @@ fn webgpu_limits_split_or_skip_naming_the_limit_and_downlevel_skips_storage_meth
     let k = get("kbuffer_atomic");
     assert_eq!(
         k.get(cols::STATUS),
-        Some("skipped"),
+        Some(Status::Skipped.name()),
         "{:?}",
         k.get(cols::REASON)
     );

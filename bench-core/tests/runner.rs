@@ -1,6 +1,6 @@
 //! The runner's promises: every point gets a row; bad values are skipped or errors, not panics.
 
-use bench_core::record::Row;
+use bench_core::record::{Row, Status};
 use bench_core::runner::{self};
 use bench_core::testing;
 use scenarios::Suite;
@@ -40,7 +40,7 @@ fn out_of_range_axis_is_refused_before_any_gpu_work_and_a_valid_one_runs() {
         .filter(|r| r.get(cols::METHOD) == Some("depth_peel"))
         .collect();
     assert_eq!(good.len(), 1);
-    assert_eq!(good[0].get(cols::STATUS), Some("ok"));
+    assert_eq!(good[0].status(), Some(Status::Ok));
     assert_eq!(good[0].get(cols::MAX_LAYERS), Some("4"));
     // Axes the suite left out are written with their defaults.
     assert_eq!(good[0].get(cols::OCCLUSION_STOP), Some("true"));
@@ -88,7 +88,7 @@ fn a_scene_that_cannot_be_built_fails_every_row_of_its_group_with_the_reason() {
     let rows = sink.0;
     assert_eq!(rows.len(), 5, "four floors and the point");
     for r in &rows {
-        assert_eq!(r.get(cols::STATUS), Some("failed"));
+        assert_eq!(r.status(), Some(Status::Failed));
         assert!(
             r.get(cols::REASON)
                 .unwrap()
@@ -162,7 +162,7 @@ fn a_buffer_over_the_adapters_storage_binding_is_a_skipped_row_naming_the_limit(
         .filter(|r| r.get(cols::METHOD) == Some("kbuffer_atomic"))
         .collect();
     assert_eq!(k.len(), 1);
-    assert_eq!(k[0].get(cols::STATUS), Some("skipped"), "{:?}", k[0]);
+    assert_eq!(k[0].status(), Some(Status::Skipped), "{:?}", k[0]);
     let why = k[0].get(cols::REASON).unwrap_or("");
     assert!(
         why.contains("maxStorageBufferBindingSize") && why.contains("k-buffer entries"),

@@ -1,7 +1,7 @@
 //! The shadows study through the runner, on lavapipe at 32×32: every point gets a row, a scene
 //! without an area light is a skipped row with its reason, bad study settings are errors.
 
-use bench_core::record::Row;
+use bench_core::record::{Row, Status};
 use bench_core::runner::{self};
 use bench_core::testing;
 use scenarios::Suite;
@@ -45,7 +45,7 @@ fn shadows_32px_rows_ok_with_errors_and_no_light_scene_skipped() {
         let mode = r.get(cols::BIAS_MODE).unwrap();
         match (scene, mode) {
             ("soft_shadow", "slope") => {
-                assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells());
+                assert_eq!(r.status(), Some(Status::Ok), "{:?}", r.cells());
                 let rmse: f64 = r.get(cols::VIS_RMSE).unwrap().parse().unwrap();
                 assert!(rmse.is_finite() && rmse < 0.2, "{:?}", r.cells());
                 assert!(
@@ -53,10 +53,10 @@ fn shadows_32px_rows_ok_with_errors_and_no_light_scene_skipped() {
                 );
             }
             ("soft_shadow", _) => {
-                assert_eq!(r.get(cols::STATUS), Some("ok"), "{:?}", r.cells());
+                assert_eq!(r.status(), Some(Status::Ok), "{:?}", r.cells());
             }
             _ => {
-                assert_eq!(r.get(cols::STATUS), Some("skipped"), "{:?}", r.cells());
+                assert_eq!(r.status(), Some(Status::Skipped), "{:?}", r.cells());
                 assert!(r.get(cols::REASON).unwrap().contains("area light"));
             }
         }

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use bench_core::record::CsvSink;
+use bench_core::record::{CsvSink, Status};
 use bench_core::runner::{self, RunOptions};
 use bench_core::{merge, testing};
 use scenarios::Suite;
@@ -76,7 +76,7 @@ fn merged_shards_of_smoke_equal_the_unsharded_point_set() {
     let col = |n: &str| h.iter().position(|c| c == n).unwrap();
     let mut checked = 0;
     for r in &recs {
-        if !r[col("method")].starts_with("floor_") && &r[col("status")] == "ok" {
+        if !r[col("method")].starts_with("floor_") && r[col("status")].parse() == Ok(Status::Ok) {
             let f = &r[col("image_file")];
             assert!(f.starts_with("images/") && f.ends_with(".npy"), "{f}");
             let (w, hgt, px) =

@@ -7,7 +7,7 @@
 use bench_core::effects::{signed_view_z, EffectConfig};
 use bench_core::methods::{self, Capture};
 use bench_core::metrics::{image_error, ImageError, BAD_PIXEL_TOL};
-use bench_core::record::Row;
+use bench_core::record::{Flag, Row, Status};
 use bench_core::reference::{rasterize, FragmentLists};
 use bench_core::runner::{self};
 use bench_core::testing;
@@ -358,12 +358,12 @@ fn stability_suite_software_profile_flags_every_known_failure() {
     for r in &rows {
         let key = r.get(cols::POINT_KEY).unwrap_or("?");
         assert_ne!(
-            r.get(cols::STATUS),
-            Some("failed"),
+            r.status(),
+            Some(Status::Failed),
             "{key}: {:?}",
             r.get(cols::REASON)
         );
-        if r.get(cols::STATUS) == Some("ok") {
+        if r.is_ok() {
             let nf: u64 = r
                 .get(cols::NON_FINITE)
                 .map(|v| v.parse().unwrap())
@@ -378,12 +378,9 @@ fn stability_suite_software_profile_flags_every_known_failure() {
             );
         }
     }
-    let flagged = |case: &str, flag: &str| {
-        rows.iter().any(|r| {
-            r.get(cols::STABILITY_CASE) == Some(case)
-                && r.get(cols::FLAG)
-                    .is_some_and(|f| f.split('|').any(|w| w == flag))
-        })
+    let flagged = |case: &str, flag: Flag| {
+        rows.iter()
+            .any(|r| r.get(cols::STABILITY_CASE) == Some(case) && r.has_flag(flag))
     };
     let flags_of = |case: &str| -> Vec<String> {
         rows.iter()
@@ -398,16 +395,16 @@ fn stability_suite_software_profile_flags_every_known_failure() {
             .collect()
     };
     assert!(
-        flagged("coplanar", "lost_coplanar"),
+        flagged("coplanar", Flag::LostCoplanar),
         "classic peeling's coplanar loss is flagged: {:?}",
         flags_of("coplanar")
     );
     assert!(
-        flagged("high_complexity", "overflow"),
+        flagged("high_complexity", Flag::Overflow),
         "overflow is flagged"
     );
     assert!(
-        flagged("near_far", "precision"),
+        flagged("near_far", Flag::Precision),
         "standard-Z depth precision loss is flagged"
     );
 }

@@ -12,7 +12,7 @@
 //!
 //! Kept independent of the chart code: the page is plain HTML with an inline SVG.
 
-use schema::{cols, samples, Col};
+use schema::{cols, samples, Col, Flag};
 use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -358,7 +358,7 @@ pub(crate) fn load_side(p: &Path) -> Result<(Side, Runs, Option<SampleMap>)> {
 }
 
 fn noisy(r: &Rec) -> bool {
-    r.get(cols::FLAG).split('|').any(|f| f == "noisy") || r.get(cols::TARGET_REACHED) == "false"
+    r.flag_set().contains(Flag::Noisy) || r.get(cols::TARGET_REACHED) == "false"
 }
 
 /// The summary interval of a row: the median's CI where written, else min–max.

@@ -477,7 +477,7 @@ mod tests {
 
     #[test]
     fn compares_platforms_speedups_and_images() {
-        let d = setup("ok");
+        let d = setup("platforms");
         let runs = Runs::load(&d.join("runs.csv")).unwrap();
         let c = compare(&runs, &d, &d.join("report"), Some("llvmpipe (vulkan"))
             .unwrap()

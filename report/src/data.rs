@@ -1,6 +1,6 @@
 //! Reading runs.csv: rows as column → text maps, with typed accessors.
 
-use schema::{cols, Col, FlagSet, Status};
+use schema::{cols, Col, Flag, FlagSet, Status};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -32,7 +32,11 @@ impl Rec {
         s.parse::<f64>().ok()
     }
     pub fn ok(&self) -> bool {
-        self.get(cols::STATUS).parse::<Status>() == Ok(Status::Ok)
+        self.status() == Some(Status::Ok)
+    }
+    /// The row's `status` (None for a word that is not one).
+    pub fn status(&self) -> Option<Status> {
+        self.get(cols::STATUS).parse().ok()
     }
     /// The row's flags: `flag` is a `|`-joined list (older CSVs hold one value).
     pub fn flags(&self) -> Vec<&str> {
@@ -91,14 +95,12 @@ impl Rec {
     pub fn exact_result(&self) -> Option<bool> {
         let within = self.within_tolerance()?;
         if self.0.contains_key(EXACT_BOUND) {
-            return match self.get(cols::EXACT) {
-                "true" => Some(true),
-                "false" => Some(false),
-                _ => Some(false),
-            };
+            // Within tolerance too: rows written before `depth_ties` (the H200's compute
+            // A-buffer on grass) could be exact = true with matches_truth = false.
+            return Some(self.get(cols::EXACT) == "true" && within);
         }
         let claimed = self.get(cols::EXACT) != "false";
-        let lost = self.flags().iter().any(|f| LOSS_FLAGS.contains(f));
+        let lost = self.flag_set().iter().any(|f| LOSS_FLAGS.contains(&f));
         let zero = |c: Col| self.f(c).is_none_or(|v| v == 0.0);
         Some(
             claimed
@@ -115,7 +117,7 @@ impl Rec {
         match self.get_name(GPU_TIME_TRUSTED) {
             "true" => true,
             "false" => false,
-            _ => !self.flags().contains(&"timestamps_incomplete"),
+            _ => !self.flag_set().contains(Flag::TimestampsIncomplete),
         }
     }
     /// The median GPU time when it can be trusted (see `time_trusted`).
@@ -201,13 +203,14 @@ const GPU_MS_INTERVAL: &str = "gpu_ms_interval";
 const RUN_WIDE: &str = "\u{1}run_wide_flags";
 
 /// Flags that say a fragment was lost, merged or misplaced: a row with one is never exact.
-pub const LOSS_FLAGS: &[&str] = &[
-    "overflow",
-    "collision",
-    "hazard",
-    "lost_coplanar",
-    "fragments_differ",
-    "image_differs",
+/// (`Flag::LOSS` less `precision`: older CSVs flagged non-finite output that way too.)
+pub const LOSS_FLAGS: &[Flag] = &[
+    Flag::Overflow,
+    Flag::Collision,
+    Flag::Hazard,
+    Flag::LostCoplanar,
+    Flag::FragmentsDiffer,
+    Flag::ImageDiffers,
 ];
 
 /// Older CSVs (no `matches_truth`): a row counts as exact at RMSE ≤ this, no bad pixel, no flag.
@@ -408,7 +411,7 @@ mod tests {
             ("exact", "true"),
             ("overflow_rate", "0.271"),
             ("rmse", "3.2e-4"),
-            ("flag", "overflow"),
+            ("flag", Flag::Overflow.name()),
         ]);
         assert_eq!(k.within_tolerance(), Some(true));
         assert_eq!(k.exact_result(), Some(false));
@@ -437,13 +440,21 @@ mod tests {
             ("rmse", "1e-7"),
         ]);
         assert_eq!(new.exact_result(), Some(false));
+        // Exact implies within tolerance, also in a CSV written when it did not.
+        let tie = rec(&[
+            ("matches_truth", "false"),
+            ("exact", "true"),
+            ("exact_bound", "0.18"),
+            ("rmse", "1e-3"),
+        ]);
+        assert_eq!(tie.exact_result(), Some(false));
     }
 
     #[test]
     fn untrusted_times_and_small_samples_are_read_with_fallbacks() {
         let r = rec(&[
             ("gpu_ms_median", "3.45"),
-            ("flag", "timestamps_incomplete"),
+            ("flag", Flag::TimestampsIncomplete.name()),
             ("samples", "3"),
         ]);
         assert!(!r.time_trusted() && r.trusted_ms().is_none());

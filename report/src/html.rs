@@ -1,7 +1,7 @@
 //! The report page: run metadata, the summary (the same text as `summary_text`), flagged points,
 //! figures and tables per study, FLIP images, every row, and every skipped/failed row.
 
-use schema::cols;
+use schema::{cols, Status};
 use std::fmt::Write;
 
 use crate::cells::{esc, exact_cell, short, time_cell};
@@ -50,7 +50,7 @@ pub fn page(
             })
             .collect();
         let f = rs[0];
-        let count = |s: &str| rs.iter().filter(|r| r.get(cols::STATUS) == s).count();
+        let count = |s: Status| rs.iter().filter(|r| r.status() == Some(s)).count();
         let _ = write!(
             h,
             "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} {}</td><td>{} / {} / {}</td></tr>",
@@ -62,9 +62,9 @@ pub fn page(
             esc(f.get(cols::DEVICE_TYPE)),
             esc(f.get(cols::DRIVER)),
             esc(f.get(cols::DRIVER_INFO)),
-            count("ok"),
-            count("skipped"),
-            count("failed")
+            count(Status::Ok),
+            count(Status::Skipped),
+            count(Status::Failed)
         );
     }
     h.push_str("</table>");

@@ -168,10 +168,11 @@ pub fn section(runs: &Runs) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use schema::Status;
 
     const D: &str = "obj(path=models/dragon_vrip.ply.gz)";
 
-    fn rec(method: &str, axes: &[(&str, &str)], ms: &str, status: &str) -> Rec {
+    fn rec(method: &str, axes: &[(&str, &str)], ms: &str, status: Status) -> Rec {
         let mut m = std::collections::BTreeMap::new();
         for (k, v) in [
             ("suite", "seeds-buckets"),
@@ -179,11 +180,11 @@ mod tests {
             ("scene_label", D),
             ("width", "512"),
             ("height", "512"),
-            ("status", status),
+            ("status", status.name()),
             ("gpu_ms_median", ms),
             (
                 "reason",
-                if status == "ok" {
+                if status == Status::Ok {
                     ""
                 } else {
                     "scene: model file 'models/dragon_vrip.ply.gz' not found: fetch it with `bash scripts/fetch-dragon.sh`"
@@ -209,16 +210,16 @@ mod tests {
     #[test]
     fn each_figure_gets_ours_the_ratio_and_the_verdict_of_its_rule() {
         let r = runs(vec![
-            rec("depth_peel", &[("max_layers", "256")], "40.0", "ok"),
+            rec("depth_peel", &[("max_layers", "256")], "40.0", Status::Ok),
             // 40 / 5 = 8: within 2× of 10.7 (holds).
             rec(
                 "bdp",
                 &[("bucket_count", "16"), ("bucket_pairing", "paired")],
                 "5.0",
-                "ok",
+                Status::Ok,
             ),
             // 40 / 20 = 2: not within 2× of 5.3 (differs).
-            rec("bdp2", &[("bucket_count", "32")], "20.0", "ok"),
+            rec("bdp2", &[("bucket_count", "32")], "20.0", Status::Ok),
         ]);
         let h = section(&r);
         let row = |id: &str| {
@@ -252,19 +253,19 @@ mod tests {
     #[test]
     fn a_skipped_point_shows_its_reason_and_a_run_of_other_suites_has_no_section() {
         let r = runs(vec![
-            rec("depth_peel", &[("max_layers", "256")], "", "skipped"),
+            rec("depth_peel", &[("max_layers", "256")], "", Status::Skipped),
             rec(
                 "bdp",
                 &[("bucket_count", "16"), ("bucket_pairing", "paired")],
                 "",
-                "skipped",
+                Status::Skipped,
             ),
         ]);
         assert!(
             section(&r).contains("skipped: scene: model file"),
             "fetch reason shown"
         );
-        let mut other = rec("bdp", &[], "1.0", "ok");
+        let mut other = rec("bdp", &[], "1.0", Status::Ok);
         other.0.insert("suite".into(), "buckets".into());
         assert_eq!(section(&runs(vec![other])), "");
     }

@@ -5,7 +5,7 @@
 //! first section) and `summary_text` (the end of `mfx sweep`) only write it down, so the two
 //! cannot disagree with each other or with the CSV.
 
-use schema::{cols, Col};
+use schema::{cols, Col, Status};
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
@@ -343,12 +343,7 @@ fn other_scene(study: &str, rows: &[&Rec], labels: &ConfigLabels) -> (String, St
 
 /// What the run is, and the flags that cover every row of a run (said once, here).
 fn preamble(runs: &Runs) -> Vec<String> {
-    let count = |s: &str| {
-        runs.rows
-            .iter()
-            .filter(|r| r.get(cols::STATUS) == s)
-            .count()
-    };
+    let count = |s: Status| runs.rows.iter().filter(|r| r.status() == Some(s)).count();
     let mut ids: Vec<&str> = Vec::new();
     for r in &runs.rows {
         if !ids.contains(&r.get(cols::RUN_ID)) {
@@ -364,9 +359,9 @@ fn preamble(runs: &Runs) -> Vec<String> {
             format!("{} runs", ids.len())
         },
         platforms(runs).join("; "),
-        count("ok"),
-        count("skipped"),
-        count("failed")
+        count(Status::Ok),
+        count(Status::Skipped),
+        count(Status::Failed)
     )];
     for (id, flags) in runs.run_wide_flags() {
         out.push(format!(
@@ -386,11 +381,11 @@ fn preamble(runs: &Runs) -> Vec<String> {
 /// The skipped and failed points, grouped by reason.
 fn not_run(runs: &Runs) -> Vec<String> {
     let mut out = Vec::new();
-    for status in ["skipped", "failed"] {
+    for status in [Status::Skipped, Status::Failed] {
         let rows: Vec<&Rec> = runs
             .rows
             .iter()
-            .filter(|r| r.get(cols::STATUS) == status)
+            .filter(|r| r.status() == Some(status))
             .collect();
         let mut reasons: Vec<(String, Vec<&Rec>)> = Vec::new();
         for r in &rows {

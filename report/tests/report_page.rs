@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use report::charts::{layout, Layout};
+use schema::{Flag, FlagSet};
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("mfx-report-{name}-{}", std::process::id()));
@@ -103,7 +104,7 @@ fn a_custom_suite_report_reads_well() {
             0.8,
             "2e-3",
             false,
-            "overflow|noisy",
+            &FlagSet::of(&[Flag::Overflow, Flag::Noisy]).to_string(),
             "0.05",
             160.0,
         ));

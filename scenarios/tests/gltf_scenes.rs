@@ -12,7 +12,7 @@ fn tmp(name: &str) -> std::path::PathBuf {
 
 #[test]
 fn gltf_and_glb_load_the_same_instanced_scene_with_material_alpha() {
-    let d = tmp("ok");
+    let d = tmp("instanced");
     let a = scenarios::gltf::load(&scenarios::gltf::write_example(&d, false).unwrap()).unwrap();
     let b = scenarios::gltf::load(&scenarios::gltf::write_example(&d, true).unwrap()).unwrap();
     assert_eq!(a.positions, b.positions);

@@ -61,7 +61,7 @@ fn triangle_alphas(s: &scenarios::Scene) -> Vec<f32> {
 
 #[test]
 fn mtl_dissolve_and_tr_set_per_material_alpha_times_the_alpha_param() {
-    let p = write("ok", &[("m.obj", OBJ), ("m.mtl", MTL)]);
+    let p = write("materials", &[("m.obj", OBJ), ("m.mtl", MTL)]);
     let s = build(&p, Some(0.8)).unwrap();
     let a = triangle_alphas(&s);
     // No material → opaque → 0.8; d 0.5 → 0.4; Tr 0.75 → opacity 0.25 → 0.2 (f32 products).

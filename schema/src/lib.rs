@@ -22,7 +22,9 @@ pub use values::{Flag, FlagSet, GpuMsInterval, ParseError, PointKey, Status, MIN
 ///   the `floor_blend` floor and `x_blend`.
 /// - 3: `exact` is now a verdict on the row (no fragment lost or merged and the image within
 ///   `exact_bound` of the truth); the method's claim that was called `exact` is `claims_exact`.
-///   New: `exact_bound`, `gpu_time_trusted`, `gpu_ms_interval`.
+///   New: `exact_bound`, `gpu_time_trusted`, `gpu_ms_interval`. Later in 3: `exact_bound` no
+///   longer allows near-equal-depth fragments in any order (they are `depth_ties`, counted in
+///   `depth_tie_pixels`), so `exact` implies `matches_truth`.
 pub const SCHEMA_VERSION: u32 = 3;
 
 /// One declared column: its name in the CSV header and what it means (units in the name).
@@ -149,11 +151,11 @@ pub mod cols {
     );
     pub const EXACT: Col = Col::new(
         "exact",
-        "true only when no fragment was lost or merged (no overflow, hazard, collision, precision, lost_coplanar, fragments_differ, image_differs) and the image is within exact_bound of the f64 ground truth at every pixel; empty for rows without a judged image. matches_truth is the weaker within-tolerance label",
+        "true only when no fragment was lost or merged (no overflow, hazard, collision, precision, lost_coplanar, fragments_differ, image_differs), the image is within exact_bound of the f64 ground truth at every pixel (so fragments at near-equal depths composited in another order are not exact: depth_ties) and matches_truth holds; empty for rows without a judged image. matches_truth is the weaker within-tolerance label",
     );
     pub const EXACT_BOUND: Col = Col::new(
         "exact_bound",
-        "the max-abs error bound `exact` was judged with: the f32 rounding of the effect's compositing over the pixel's fragments (derived in bench-core/src/judge.rs)",
+        "the max-abs error bound `exact` was judged with: the f32 rounding of the effect's compositing over the pixel's fragments (derived in bench-core/src/judge.rs); the order of fragments at near-equal depths is not part of it (depth_ties)",
     );
     pub const EFFECT: Col = Col::new(
         "effect",
@@ -166,7 +168,7 @@ pub mod cols {
     );
     pub const FLAG: Col = Col::new(
         "flag",
-        "known failure modes of this row, |-joined: overflow, hazard, collision, precision, lost_coplanar, fragments_differ, image_differs, timestamps_incomplete, noisy, throttled (empty if none; each is defined in results/README.md)",
+        "known failure modes of this row, |-joined: overflow, hazard, collision, precision, lost_coplanar, fragments_differ, image_differs, depth_ties, timestamps_incomplete, noisy, throttled (empty if none; each is defined in results/README.md)",
     );
 
     // ---- Sweep axes shared by several methods (empty where an axis does not apply) ----
@@ -950,6 +952,10 @@ pub mod cols {
         "fragments_extra",
         "exact methods: fragments the capture has beyond the true ones, summed over pixels",
     );
+    pub const DEPTH_TIE_PIXELS: Col = Col::new(
+        "depth_tie_pixels",
+        "pixels whose image is off the f64 ground truth beyond the f32 bound of its arithmetic (exact_bound) but within what compositing fragments within the method's depth precision in another order can make: the truth has no defined order there (flag depth_ties); judged for methods that claim every fragment (claims_exact), at pixels within capacity; empty otherwise",
+    );
     pub const FRAGMENTS_DROPPED: Col = Col::new(
         "fragments_dropped",
         "bounded captures: fragments that did not fit and were dropped this frame",
@@ -1295,6 +1301,7 @@ pub const GROUPS: &[Group] = &[
             cols::FLIP_P99,
             cols::FRAGMENTS_MISSING,
             cols::FRAGMENTS_EXTRA,
+            cols::DEPTH_TIE_PIXELS,
             cols::FRAGMENTS_DROPPED,
             cols::FRAGMENTS_TAILED,
             cols::LAYER_COUNT_ACCURACY,

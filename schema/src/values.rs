@@ -28,87 +28,104 @@ fn err(what: &'static str, text: &str) -> ParseError {
     }
 }
 
-/// The `status` of a row.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Status {
-    /// Measured (and judged, where the study judges).
-    Ok,
-    /// Not run: what the adapter cannot do, with the reason.
-    Skipped,
-    /// Run and failed (a GPU error, a failed readback), with the reason.
-    Failed,
-}
-
-impl Status {
-    pub const ALL: [Status; 3] = [Status::Ok, Status::Skipped, Status::Failed];
-    pub fn name(self) -> &'static str {
-        match self {
-            Status::Ok => "ok",
-            Status::Skipped => "skipped",
-            Status::Failed => "failed",
+/// Declares a cell value with a fixed vocabulary once: the enum, `ALL` (in declaration order),
+/// `name` (the word in the CSV), `Display` writing it and `FromStr` reading it back (the error
+/// names the value and every word).
+macro_rules! words {
+    (
+        $(#[$m:meta])*
+        pub enum $name:ident as $what:literal {
+            $(#[$fm:meta])* $first:ident = $first_word:literal,
+            $($(#[$vm:meta])* $variant:ident = $word:literal,)*
         }
+    ) => {
+        $(#[$m])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub enum $name {
+            $(#[$fm])* $first,
+            $($(#[$vm])* $variant,)*
+        }
+
+        impl $name {
+            pub const ALL: [$name; [$first_word $(, $word)*].len()] =
+                [$name::$first $(, $name::$variant)*];
+            pub fn name(self) -> &'static str {
+                match self {
+                    $name::$first => $first_word,
+                    $($name::$variant => $word,)*
+                }
+            }
+        }
+
+        impl fmt::Display for $name {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(self.name())
+            }
+        }
+
+        impl FromStr for $name {
+            type Err = ParseError;
+            fn from_str(s: &str) -> Result<Self, ParseError> {
+                $name::ALL
+                    .into_iter()
+                    .find(|v| v.name() == s)
+                    .ok_or_else(|| {
+                        err(concat!($what, " (", $first_word $(, " | ", $word)*, ")"), s)
+                    })
+            }
+        }
+    };
+}
+
+words! {
+    /// The `status` of a row.
+    pub enum Status as "status" {
+        /// Measured (and judged, where the study judges).
+        Ok = "ok",
+        /// Not run: what the adapter cannot do, with the reason.
+        Skipped = "skipped",
+        /// Run and failed (a GPU error, a failed readback), with the reason.
+        Failed = "failed",
     }
 }
 
-impl fmt::Display for Status {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
+words! {
+    /// A known, reported failure mode of a row (the `flag` column holds them `|`-joined, in this
+    /// order). Each is defined in results/README.md.
+    pub enum Flag as "flag" {
+        /// Fragments exceeded the method's capacity (k, a pool, a sort buffer).
+        Overflow = "overflow",
+        /// k-buffer read-modify-write races changed the captured set.
+        Hazard = "hazard",
+        /// Bucket methods merged or lost fragments sharing a bucket.
+        Collision = "collision",
+        /// Distinct layers merged in the method's depth precision, or a non-finite output.
+        Precision = "precision",
+        /// Fragments at exactly equal depths lost (strict peeling).
+        LostCoplanar = "lost_coplanar",
+        /// An exact method's fragment set differs from the reference's (fragments missing without
+        /// an overflow, or fragments the reference does not have).
+        FragmentsDiffer = "fragments_differ",
+        /// An exact method's image is off its own definition (or, without one, the truth) beyond
+        /// the f32 bound of its arithmetic (`exact_bound`), with no overflow, coplanar loss,
+        /// precision loss or fragment-set difference to explain it (e.g. an MSAA capture, which has
+        /// no per-pixel counts).
+        ImageDiffers = "image_differs",
+        /// The image is off the truth beyond the f32 bound of its arithmetic only at pixels where
+        /// fragments within the method's depth precision have no defined order, and by no more than
+        /// compositing them in another order can make (`depth_tie_pixels`): the truth is ambiguous
+        /// there, so the row is not `exact`, but nothing was lost or merged.
+        DepthTies = "depth_ties",
+        /// GPU time far below the wall-clock time of the same frames: the timestamps missed work.
+        TimestampsIncomplete = "timestamps_incomplete",
+        /// The stopping rule's noise target was not reached (max samples, max time or drift).
+        Noisy = "noisy",
+        /// A sample was taken below 75 % of the reference SM clock, or NVML reported a slowdown.
+        Throttled = "throttled",
     }
-}
-
-impl FromStr for Status {
-    type Err = ParseError;
-    fn from_str(s: &str) -> Result<Self, ParseError> {
-        Status::ALL
-            .into_iter()
-            .find(|v| v.name() == s)
-            .ok_or_else(|| err("status (ok | skipped | failed)", s))
-    }
-}
-
-/// A known, reported failure mode of a row (the `flag` column holds them `|`-joined, in this
-/// order). Each is defined in results/README.md.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Flag {
-    /// Fragments exceeded the method's capacity (k, a pool, a sort buffer).
-    Overflow,
-    /// k-buffer read-modify-write races changed the captured set.
-    Hazard,
-    /// Bucket methods merged or lost fragments sharing a bucket.
-    Collision,
-    /// Distinct layers merged in the method's depth precision, or a non-finite output.
-    Precision,
-    /// Fragments at exactly equal depths lost (strict peeling).
-    LostCoplanar,
-    /// An exact method's fragment set differs from the reference's (fragments missing without
-    /// an overflow, or fragments the reference does not have).
-    FragmentsDiffer,
-    /// An exact method's image is off its own definition (or, without one, the truth) beyond
-    /// the f32 bound of its arithmetic (`exact_bound`), with no overflow, coplanar loss,
-    /// precision loss or fragment-set difference to explain it (e.g. an MSAA capture, which has
-    /// no per-pixel counts).
-    ImageDiffers,
-    /// GPU time far below the wall-clock time of the same frames: the timestamps missed work.
-    TimestampsIncomplete,
-    /// The stopping rule's noise target was not reached (max samples, max time or drift).
-    Noisy,
-    /// A sample was taken below 75 % of the reference SM clock, or NVML reported a slowdown.
-    Throttled,
 }
 
 impl Flag {
-    pub const ALL: [Flag; 10] = [
-        Flag::Overflow,
-        Flag::Hazard,
-        Flag::Collision,
-        Flag::Precision,
-        Flag::LostCoplanar,
-        Flag::FragmentsDiffer,
-        Flag::ImageDiffers,
-        Flag::TimestampsIncomplete,
-        Flag::Noisy,
-        Flag::Throttled,
-    ];
     /// The flags that say a fragment was lost or merged (or, for `image_differs`, that the
     /// image shows an unexplained difference): a row carrying one is never `exact`.
     pub const LOSS: [Flag; 7] = [
@@ -120,31 +137,11 @@ impl Flag {
         Flag::FragmentsDiffer,
         Flag::ImageDiffers,
     ];
-    pub fn name(self) -> &'static str {
-        match self {
-            Flag::Overflow => "overflow",
-            Flag::Hazard => "hazard",
-            Flag::Collision => "collision",
-            Flag::Precision => "precision",
-            Flag::LostCoplanar => "lost_coplanar",
-            Flag::FragmentsDiffer => "fragments_differ",
-            Flag::ImageDiffers => "image_differs",
-            Flag::TimestampsIncomplete => "timestamps_incomplete",
-            Flag::Noisy => "noisy",
-            Flag::Throttled => "throttled",
-        }
-    }
     pub fn parse(s: &str) -> Option<Flag> {
-        Flag::ALL.iter().copied().find(|f| f.name() == s)
+        s.parse().ok()
     }
     pub fn is_loss(self) -> bool {
         Flag::LOSS.contains(&self)
-    }
-}
-
-impl fmt::Display for Flag {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
     }
 }
 
@@ -250,37 +247,13 @@ impl From<Flag> for FlagSet {
     }
 }
 
-/// What `gpu_ms_ci_lo` / `gpu_ms_ci_hi` hold.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum GpuMsInterval {
-    /// A 95 % confidence interval of the median.
-    Ci95,
-    /// The minimum and maximum: too few samples for a 95 % interval of the median.
-    Range,
-}
-
-impl GpuMsInterval {
-    pub fn name(self) -> &'static str {
-        match self {
-            GpuMsInterval::Ci95 => "ci95",
-            GpuMsInterval::Range => "range",
-        }
-    }
-}
-
-impl fmt::Display for GpuMsInterval {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for GpuMsInterval {
-    type Err = ParseError;
-    fn from_str(s: &str) -> Result<Self, ParseError> {
-        [GpuMsInterval::Ci95, GpuMsInterval::Range]
-            .into_iter()
-            .find(|v| v.name() == s)
-            .ok_or_else(|| err("gpu_ms_interval (ci95 | range)", s))
+words! {
+    /// What `gpu_ms_ci_lo` / `gpu_ms_ci_hi` hold.
+    pub enum GpuMsInterval as "gpu_ms_interval" {
+        /// A 95 % confidence interval of the median.
+        Ci95 = "ci95",
+        /// The minimum and maximum: too few samples for a 95 % interval of the median.
+        Range = "range",
     }
 }
 
@@ -370,6 +343,17 @@ mod tests {
             assert_eq!(s.to_string().parse::<Status>(), Ok(s));
         }
         assert!("OK".parse::<Status>().is_err());
+        // The error names the value and every word the macro declared.
+        let e = "OK".parse::<Status>().unwrap_err().to_string();
+        assert!(Status::ALL.iter().all(|s| e.contains(s.name())), "{e}");
+        assert!("nope"
+            .parse::<Flag>()
+            .unwrap_err()
+            .to_string()
+            .contains("depth_ties | "));
+        for f in Flag::ALL {
+            assert_eq!(f.to_string().parse::<Flag>(), Ok(f));
+        }
     }
 
     #[test]

@@ -1871,7 +1871,7 @@ mod tests {
             points: vec![Pt::new(8.0, 0.0), Pt::new(32.0, 0.1 * c as f64)],
         };
         let xy = XY {
-            title: "hazard".into(),
+            title: "hazard rate".into(),
             series: vec![s("k=4", 1), s("k=8", 2)],
             ..Default::default()
         };

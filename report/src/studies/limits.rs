@@ -26,8 +26,8 @@ fn outcome(r: &Rec) -> &'static str {
     match r.get(cols::STATUS).parse::<Status>() {
         Ok(Status::Ok) if r.get(cols::SPLIT).is_empty() => "runs",
         Ok(Status::Ok) => "split",
-        Ok(Status::Skipped) => "skipped",
-        _ => "failed",
+        Ok(Status::Skipped) => Status::Skipped.name(),
+        _ => Status::Failed.name(),
     }
 }
 
@@ -38,10 +38,15 @@ fn cell(rows: &[&Rec], unsplit: &BTreeMap<&str, f64>) -> String {
     for r in rows {
         *n.entry(outcome(r)).or_default() += 1;
     }
-    let mut parts: Vec<String> = ["runs", "split", "skipped", "failed"]
-        .iter()
-        .filter_map(|o| n.get(o).map(|c| format!("{o} {c}")))
-        .collect();
+    let mut parts: Vec<String> = [
+        "runs",
+        "split",
+        Status::Skipped.name(),
+        Status::Failed.name(),
+    ]
+    .iter()
+    .filter_map(|o| n.get(o).map(|c| format!("{o} {c}")))
+    .collect();
     let mut splits: Vec<&str> = rows.iter().map(|r| r.get(cols::SPLIT)).collect();
     splits.retain(|s| !s.is_empty());
     splits.sort();
@@ -62,7 +67,8 @@ fn cell(rows: &[&Rec], unsplit: &BTreeMap<&str, f64>) -> String {
     let mut why: Vec<&str> = Vec::new();
     for r in rows {
         let w = r.get(cols::REASON);
-        if matches!(outcome(r), "skipped" | "failed") && !w.is_empty() && !why.contains(&w) {
+        let ran = matches!(r.get(cols::STATUS).parse::<Status>(), Ok(Status::Ok));
+        if !ran && !w.is_empty() && !why.contains(&w) {
             why.push(w);
         }
     }
@@ -158,9 +164,9 @@ mod tests {
         };
         let runs = Runs {
             rows: vec![
-                row("wboit", "ok", "", ""),
-                row("kbuffer_atomic", "ok", "bindings:2", ""),
-                row("mlab", "skipped", "", "mlab layers needs 171.6 MB in one storage binding, over WebGPU's default maxStorageBufferBindingSize of 134217728 B (128 MiB)"),
+                row("wboit", Status::Ok.name(), "", ""),
+                row("kbuffer_atomic", Status::Ok.name(), "bindings:2", ""),
+                row("mlab", Status::Skipped.name(), "", "mlab layers needs 171.6 MB in one storage binding, over WebGPU's default maxStorageBufferBindingSize of 134217728 B (128 MiB)"),
             ],
             ..Default::default()
         };
@@ -176,7 +182,7 @@ mod tests {
             "{html}"
         );
         let adapter_only = Runs {
-            rows: vec![rec(&[("limits", "adapter"), ("status", "ok")])],
+            rows: vec![rec(&[("limits", "adapter"), ("status", Status::Ok.name())])],
             ..Default::default()
         };
         assert!(!applies(&adapter_only));

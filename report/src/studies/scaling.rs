@@ -9,7 +9,7 @@
 //! rows hollow. Drawn for runs of a suite named `scaling`: a mix of unrelated scenes (the
 //! `methods` suite) has no single law to fit.
 
-use schema::cols;
+use schema::{cols, Flag};
 use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::path::Path;
@@ -303,8 +303,8 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             for r in &sw.rows {
                 let why = if !r.ok() {
                     Some(format!("{} ({})", r.get(cols::STATUS), r.get(cols::REASON)))
-                } else if r.flags().contains(&"overflow") {
-                    Some("overflow".to_string())
+                } else if r.flag_set().contains(Flag::Overflow) {
+                    Some(Flag::Overflow.to_string())
                 } else {
                     None
                 };

@@ -28,6 +28,8 @@ use crate::timed::{FrameStats, Timed};
 use crate::timing::GpuTimer;
 use crate::Result;
 
+use super::twin::LightUniform;
+
 const WGSL: &str = include_str!("shadows.wgsl");
 const LAYER_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 const PACKED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -126,17 +128,6 @@ impl Config {
         }
         l
     }
-}
-
-/// Matches `struct Light` in shadows.wgsl.
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-pub struct LightUniform {
-    pub view_from_world: [[f32; 4]; 4],
-    pub map: [f32; 4],
-    pub cfg: [u32; 4],
-    pub bias: [f32; 4],
-    pub level_offset: [[u32; 4]; 4],
 }
 
 #[repr(C)]

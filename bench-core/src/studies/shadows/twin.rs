@@ -5,9 +5,21 @@
 
 use glam::{Mat4, Vec2, Vec4};
 
-use super::layered::LightUniform;
+use bytemuck::{Pod, Zeroable};
 
 const FAR: f32 = 1.0e30;
+
+/// Matches `struct Light` in shadows.wgsl: the GPU pass (layered.rs) fills it, the twin reads
+/// it back (here, so the twin does not import the pass that imports the twin).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct LightUniform {
+    pub view_from_world: [[f32; 4]; 4],
+    pub map: [f32; 4],
+    pub cfg: [u32; 4],
+    pub bias: [f32; 4],
+    pub level_offset: [[u32; 4]; 4],
+}
 
 /// The GPU's shading inputs after a frame: the light uniform, the packed depth and slope
 /// texels (row-major, r×r) and the min pyramid (all levels, as the GPU stores them).
