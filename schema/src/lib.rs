@@ -1363,7 +1363,7 @@ pub mod samples {
     );
     pub const SESSION: Col = Col::new(
         "session",
-        "the [timing] sessions session that took the sample, from 0 (each prepared afresh elsewhere in memory; mfx compare resamples sessions, not samples, when a point has several)",
+        "the [timing] sessions session that took the sample, from 0 (each prepared afresh elsewhere in memory; mfx compare matches frame-time modes, else compares the median sessions, else resamples sessions: stats::compare_matched)",
     );
     /// The header of `samples.csv`.
     pub const ALL: &[Col] = &[
