@@ -136,20 +136,30 @@ pub struct AdapterFacts {
     pub is_software: bool,
 }
 
+/// `features` by the names `mfx list adapters` prints, `|`-joined (wgpu's Debug text of its
+/// two bit sets where a feature is not one mfx names).
+pub fn feature_names(features: wgpu::Features) -> String {
+    let names: Vec<&str> = FEATURE_NAMES
+        .iter()
+        .filter(|(f, _)| features.contains(*f))
+        .map(|(_, n)| *n)
+        .collect();
+    if (features - wanted_features()).is_empty() {
+        names.join("|")
+    } else {
+        format!("{features:?}")
+    }
+}
+
 impl AdapterFacts {
     pub fn of(info: &wgpu::AdapterInfo, features: wgpu::Features) -> Self {
-        let names: Vec<&str> = FEATURE_NAMES
-            .iter()
-            .filter(|(f, _)| features.contains(*f))
-            .map(|(_, n)| *n)
-            .collect();
         AdapterFacts {
             name: info.name.clone(),
             backend: format!("{:?}", info.backend).to_lowercase(),
             device_type: format!("{:?}", info.device_type).to_lowercase(),
             driver: info.driver.clone(),
             driver_info: info.driver_info.clone(),
-            features: names.join("|"),
+            features: feature_names(features),
             is_software: info.device_type == wgpu::DeviceType::Cpu,
         }
     }

@@ -26,6 +26,9 @@ pub struct Duplicate {
     pub point_key: String,
     pub adapter: String,
     pub backend: String,
+    /// The limits profile (`adapter` where the column is empty): another profile on the same
+    /// adapter is another platform, not a duplicate.
+    pub limits: String,
     /// File of the row that was kept, and of this later one.
     pub kept_from: PathBuf,
     pub from: PathBuf,
@@ -111,7 +114,7 @@ impl Merged {
         }
         if !self.duplicates.is_empty() {
             s.push_str(&format!(
-                "\n{} duplicate points (same point_key, adapter and backend): kept the first row \
+                "\n{} duplicate points (same point_key, adapter, backend and limits): kept the first row \
                  of each in runs.csv, wrote the others to duplicates.csv:",
                 self.duplicates.len()
             ));
@@ -257,16 +260,17 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
     }
     let (header, _) = header.expect("at least one file");
     let col = |name: &str| header.iter().position(|c| c == name);
-    let (kp, ka, kb) = (
+    let (kp, ka, kb, kl) = (
         col(cols::POINT_KEY.name),
         col(cols::ADAPTER.name),
         col(cols::BACKEND.name),
+        col(cols::LIMITS.name),
     );
 
     std::fs::create_dir_all(out).map_err(|e| io(out, e))?;
     let mut w = csv::Writer::from_path(&out_csv).map_err(|e| io(&out_csv, e))?;
     w.write_record(&header).map_err(|e| io(&out_csv, e))?;
-    let mut seen: HashMap<(String, String, String), PathBuf> = HashMap::new();
+    let mut seen: HashMap<(String, String, String, String), PathBuf> = HashMap::new();
     let mut dups: Vec<(PathBuf, csv::StringRecord, Duplicate)> = Vec::new();
     let mut rows = 0;
     let cell = |r: &csv::StringRecord, i: Option<usize>| {
@@ -274,7 +278,11 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
     };
     for (f, recs) in &tables {
         for r in recs {
-            let key = (cell(r, kp), cell(r, ka), cell(r, kb));
+            let limits = match cell(r, kl) {
+                l if l.is_empty() => "adapter".to_string(),
+                l => l,
+            };
+            let key = (cell(r, kp), cell(r, ka), cell(r, kb), limits);
             if let Some(kept) = seen.get(&key) {
                 dups.push((
                     f.clone(),
@@ -283,6 +291,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
                         point_key: key.0,
                         adapter: key.1,
                         backend: key.2,
+                        limits: key.3,
                         kept_from: kept.clone(),
                         from: f.clone(),
                     },
@@ -565,6 +574,21 @@ mod tests {
         );
         let keys = point_keys(&t.join("out/runs.csv")).unwrap();
         assert_eq!(keys, ["k1", "k2", "k2"]);
+    }
+
+    #[test]
+    fn the_same_point_under_another_limits_profile_is_not_a_duplicate() {
+        // `default` and `default --limits webgpu` on one GPU: 294 rows once dropped as duplicates.
+        let t = tmp("limits");
+        let hl = "schema,point_key,adapter,backend,limits,status\n";
+        let a = write(&t, "a", &format!("{hl}1,k1,gpu,vulkan,adapter,ok\n"));
+        let b = write(&t, "b", &format!("{hl}1,k1,gpu,vulkan,webgpu,ok\n"));
+        let c = write(&t, "c", &format!("{hl}1,k1,gpu,vulkan,,ok\n"));
+        let m = merge(&[a, b, c], &t.join("out")).unwrap();
+        assert_eq!(m.rows, 2, "{}", m.summary());
+        // An empty limits cell is the adapter's own limits (runs before the column existed).
+        assert_eq!(m.duplicates.len(), 1);
+        assert_eq!(m.duplicates[0].limits, "adapter");
     }
 
     #[test]

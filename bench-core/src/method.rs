@@ -122,9 +122,10 @@ pub trait Method: Send + Sync {
 pub fn supports(method: &dyn Method, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
     let missing = method.required_features() - gpu.features;
     if !missing.is_empty() {
+        let names = crate::gpu::feature_names(missing);
         return Err(match gpu.profile {
-            crate::limits::Profile::Adapter => format!("adapter lacks {missing:?}"),
-            p => format!("the `{p}` limits profile grants no {missing:?}"),
+            crate::limits::Profile::Adapter => format!("adapter lacks {names}"),
+            p => format!("the `{p}` limits profile grants no {names}"),
         });
     }
     method.supports(gpu, point)

@@ -64,6 +64,21 @@ fn rows(gpu: &Gpu, text: &str) -> Vec<Row> {
 }
 
 #[test]
+fn dual_peeling_names_the_colour_bytes_limit_before_any_gpu_work() {
+    // 8 + 16 + 16 B per sample in one pass, over WebGPU's 32: once a raw validation error at
+    // prepare, now a reason from `supports`.
+    let web = open(Profile::WebGpu);
+    let m = methods::by_name("dual_peel").unwrap();
+    let p = point(m.as_ref(), &params(&[]));
+    let why = bench_core::method::supports(m.as_ref(), &web, &p).unwrap_err();
+    assert!(
+        why.contains("40 bytes per sample") && why.contains("WebGPU") && why.contains("32"),
+        "{why}"
+    );
+    assert!(bench_core::method::supports(m.as_ref(), &open(Profile::Adapter), &p).is_ok());
+}
+
+#[test]
 fn webgpu_limits_split_or_skip_naming_the_limit_and_downlevel_skips_storage_methods() {
     // 528×256 pixels × 64 slots × 16 B = 138 MB of k-buffer entries: over WebGPU's 128 MiB
     // storage binding, so split over 2; WBOIT needs no storage buffer that large.

@@ -123,11 +123,10 @@ pub fn compare(
         return Ok(None);
     }
     let base = baseline(runs, baseline_name)?;
-    let ok: Vec<&Rec> = runs
-        .rows
-        .iter()
-        .filter(|r| r.ok() && r.trusted_ms().is_some())
-        .collect();
+    // Every ok row, timed or not: a platform without GPU timestamps (GLES) has no time to
+    // chart or divide, but its images still agree or not with the others'. The time charts and
+    // the speed-ups read `trusted_ms` themselves.
+    let ok: Vec<&Rec> = runs.rows.iter().filter(|r| r.ok()).collect();
     // point_key → platform → row
     let mut by_point: BTreeMap<&str, BTreeMap<String, &Rec>> = BTreeMap::new();
     let mut order: Vec<&str> = Vec::new();
@@ -515,6 +514,28 @@ mod tests {
             "the identical pair is listed: {}",
             c.html
         );
+    }
+
+    #[test]
+    fn a_platform_without_gpu_time_still_has_its_images_compared() {
+        // The H200's GLES rows have no timestamps: they once vanished from image agreement.
+        let d = setup("untimed");
+        let csv = std::fs::read_to_string(d.join("runs.csv")).unwrap();
+        let csv = csv.replace("llvmpipe,gl,cpu,ok,40,39,41,", "llvmpipe,gl,cpu,ok,,,,");
+        std::fs::write(d.join("runs.csv"), csv).unwrap();
+        let runs = Runs::load(&d.join("runs.csv")).unwrap();
+        let c = compare(&runs, &d, &d.join("report"), Some("llvmpipe (vulkan"))
+            .unwrap()
+            .unwrap();
+        assert_eq!(c.worst_image_diff.clone().unwrap().0, 0.25);
+        assert_eq!(
+            c.html.matches("<td>0.250</td><td>0.088</td>").count(),
+            2,
+            "{}",
+            c.html
+        );
+        // It has no speed-up: it was never timed.
+        assert!(!c.html.contains("<td>0.500×"), "{}", c.html);
     }
 
     #[test]

@@ -377,7 +377,15 @@ pub fn resolution(r: &Rec) -> String {
 
 /// "adapter (backend)": the unit compared.
 pub fn platform(r: &Rec) -> String {
-    format!("{} ({})", r.get(cols::ADAPTER), r.get(cols::BACKEND))
+    // Another limits profile on the same adapter is another platform (what a browser grants).
+    match r.get(cols::LIMITS) {
+        "" | "adapter" => format!("{} ({})", r.get(cols::ADAPTER), r.get(cols::BACKEND)),
+        l => format!(
+            "{} ({}, {l} limits)",
+            r.get(cols::ADAPTER),
+            r.get(cols::BACKEND)
+        ),
+    }
 }
 
 pub fn platforms(runs: &Runs) -> Vec<String> {

@@ -95,9 +95,15 @@ pub fn page(
                     esc(n)
                 );
             } else if let Some(block) = &f.html {
+                // A table's caption says how to read it, as a chart's does.
+                let cap = if f.caption.is_empty() {
+                    String::new()
+                } else {
+                    format!("<p class=\"note\">{}</p>", esc(&f.caption))
+                };
                 let _ = write!(
                     h,
-                    "<details><summary>{}</summary>{block}</details>",
+                    "<details><summary>{}</summary>{cap}{block}</details>",
                     esc(&f.title)
                 );
             } else {

@@ -124,10 +124,12 @@ fn image_verdict<'a>(
         .copied()
         .filter(|r| r.exact_result() == Some(true))
         .collect();
+    // Exact but not rankable by time: timestamps that miss part of the frame, or none at all
+    // (GLES in wgpu has no timer queries): such rows are named, not hidden behind "none exact".
     let exact_untrusted = exact
         .iter()
         .copied()
-        .filter(|r| r.f(cols::GPU_MS_MEDIAN).is_some() && !r.time_trusted())
+        .filter(|r| r.trusted_ms().is_none())
         .collect();
     let budgets = BUDGETS
         .iter()
@@ -240,8 +242,17 @@ fn cells(v: &Verdict, labels: &ConfigLabels) -> Cells {
         String::new()
     } else {
         let names: Vec<String> = v.exact_untrusted.iter().map(|r| labels.get(r)).collect();
+        let why = if v
+            .exact_untrusted
+            .iter()
+            .all(|r| r.f(cols::GPU_MS_MEDIAN).is_none())
+        {
+            "no GPU time: the adapter gave no timestamps"
+        } else {
+            "GPU timestamps miss part of the frame or are missing, gpu_time_trusted false"
+        };
         format!(
-            "{} exact but left out: {} (GPU timestamps miss part of the frame, gpu_time_trusted false)",
+            "{} exact but left out: {} ({why})",
             names.len(),
             names.join("; ")
         )
@@ -396,8 +407,13 @@ fn not_run(runs: &Runs) -> Vec<String> {
             }
         }
         for (why, rs) in reasons {
-            let mut methods: Vec<&str> = rs.iter().map(|r| r.get(cols::METHOD)).collect();
-            methods.dedup();
+            // Each method once, in order of first appearance (groups repeat them).
+            let mut methods: Vec<&str> = Vec::new();
+            for r in &rs {
+                if !methods.contains(&r.get(cols::METHOD)) {
+                    methods.push(r.get(cols::METHOD));
+                }
+            }
             out.push(format!(
                 "{status}: {} × {} ({}): {}",
                 rs.len(),
@@ -723,7 +739,7 @@ mod tests {
                 assert!(exact.is_empty());
             }
             for r in &v.exact_untrusted {
-                assert!(r.exact_result() == Some(true) && !r.time_trusted());
+                assert!(r.exact_result() == Some(true) && r.trusted_ms().is_none());
             }
             for (b, p) in &v.budgets {
                 let within: Vec<&Rec> = timed
@@ -785,6 +801,30 @@ mod tests {
         assert!(t.contains("Fastest exact: linked_list"), "{t}");
         assert!(
             t.contains("skipped: 1 × adp (methods): needs 8 attachments"),
+            "{t}"
+        );
+    }
+
+    #[test]
+    fn exact_rows_without_timestamps_are_named_and_skipped_methods_once() {
+        // The H200's GLES rows: exact, but wgpu's GLES has no timer queries.
+        let r = runs(
+            "untimed",
+            &[
+                "1,r,methods,q,64,64,linked_list,k1,H200,gl,ok,,,,,,,3e-8,0,true,true,,",
+                "1,r,methods,q,64,64,bdp,k2,H200,gl,skipped,lacks FLOAT32_BLENDABLE,,,,,,,,,,,",
+                "1,r,methods,q,64,64,adp,k3,H200,gl,skipped,lacks FLOAT32_BLENDABLE,,,,,,,,,,,",
+                "1,r,methods,q2,64,64,bdp,k4,H200,gl,skipped,lacks FLOAT32_BLENDABLE,,,,,,,,,,,",
+            ],
+        );
+        let t = summary_text(&r);
+        assert!(!t.contains("none exact"), "{t}");
+        assert!(
+            t.contains("1 exact but left out: linked_list") && t.contains("no GPU time"),
+            "{t}"
+        );
+        assert!(
+            t.contains("skipped: 3 × bdp, adp (methods): lacks FLOAT32_BLENDABLE"),
             "{t}"
         );
     }

@@ -4,7 +4,7 @@
 # on the GPU's Vulkan adapter (and tries wgpu's GL backend, which on the H100 fails at
 # request_device: its log says why), then through `--backend gles` (our own EGL GLES context),
 # and packs the run folders into $OUT/backends-<NAME>.tgz.
-# Merge it on the CPU machine with scripts/compare-backends.sh (see results/reference/backends/).
+# Merge it on the CPU machine with scripts/compare-backends.sh (see results/reference/2026-12-03-h200-backends/RUN.md).
 #   bash scripts/device/backends.sh [NAME]        NAME defaults to h100
 set -u
 name=${1:-h100}

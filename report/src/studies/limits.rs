@@ -9,7 +9,7 @@ use std::path::Path;
 use anyhow::Result;
 use schema::{cols, Status};
 
-use crate::cells::{esc, short};
+use crate::cells::esc;
 use crate::charts::Figure;
 use crate::data::{resolution, Rec, Runs};
 
@@ -61,7 +61,18 @@ fn cell(rows: &[&Rec], unsplit: &BTreeMap<&str, f64>) -> String {
         .collect();
     if !ratios.is_empty() {
         let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
-        parts.push(format!("×{} of unsplit", short(Some(mean))));
+        // Three decimals: a split's cost is a few per cent or less, which `short` rounds to ×1.
+        let (lo, hi) = ratios
+            .iter()
+            .fold((f64::INFINITY, 0.0_f64), |(l, h), &x| (l.min(x), h.max(x)));
+        parts.push(if ratios.len() > 1 {
+            format!(
+                "×{mean:.3} of unsplit ({lo:.3}–{hi:.3}, n = {})",
+                ratios.len()
+            )
+        } else {
+            format!("×{mean:.3} of unsplit")
+        });
     }
     // Each distinct reason once (a cell can hold a profile's limit and a suite's own cap).
     let mut why: Vec<&str> = Vec::new();
@@ -179,6 +190,35 @@ mod tests {
         assert!(html.contains("split 1 (bindings:2)"), "{html}");
         assert!(
             html.contains("skipped 1<br><small>mlab layers needs 171.6 MB"),
+            "{html}"
+        );
+        // Merged with the unlimited run of the same points (mfx merge keeps both since the
+        // limits profile is part of a row's identity): the split's cost beside it, to 3 decimals.
+        let timed = |limits: &str, split: &str, key: &str, ms: &str| {
+            let mut r = row("kbuffer_atomic", Status::Ok.name(), split, "");
+            for (k, v) in [
+                ("limits", limits),
+                ("point_key", key),
+                ("gpu_ms_median", ms),
+            ] {
+                r.0.insert(k.into(), v.into());
+            }
+            r
+        };
+        let merged = Runs {
+            rows: vec![
+                timed("adapter", "", "k16", "2.000"),
+                timed("webgpu", "bindings:2", "k16", "2.040"),
+                timed("adapter", "", "k32", "4.000"),
+                timed("webgpu", "bindings:4", "k32", "4.000"),
+            ],
+            ..Default::default()
+        };
+        let f = figures(&merged, Path::new("/nonexistent")).unwrap();
+        let web = f.iter().find(|f| f.stem == "limits-webgpu").unwrap();
+        let html = web.html.as_deref().unwrap();
+        assert!(
+            html.contains("×1.010 of unsplit (1.000–1.020, n = 2)"),
             "{html}"
         );
         let adapter_only = Runs {

@@ -95,6 +95,20 @@ impl Method for DualPeel {
                 return Err(format!("{f:?} is not renderable on this adapter"));
             }
         }
+        // The peel pass writes the depth pair and the front and back layers at once: checked
+        // here, before any GPU work, not left to the pipeline's validation error.
+        let need: u32 = [DEPTH_FORMAT, LAYER_FORMAT, LAYER_FORMAT]
+            .iter()
+            .map(|f| f.block_copy_size(None).unwrap_or(16))
+            .sum();
+        let have = gpu.limits.max_color_attachment_bytes_per_sample;
+        if need > have {
+            return Err(format!(
+                "{need} bytes per sample in colour attachments needed (a depth pair, the front and \
+                 back layers in one pass), {} allows {have}",
+                gpu.profile.who()
+            ));
+        }
         Ok(())
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
