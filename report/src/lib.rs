@@ -48,7 +48,7 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
             let sub = format!("platform{i}");
             let dir = out.join(&sub);
             std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-            for (title, figs) in studies::all_figures(&one, &dir)? {
+            for (title, figs) in studies::figures_of(&one, &dir, |p| !p.across_platforms)? {
                 let figs = figs
                     .into_iter()
                     .map(|mut f| {
@@ -62,6 +62,7 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
                 sections.push((format!("{title} — {p}"), figs));
             }
         }
+        sections.extend(studies::figures_of(&runs, &out, |p| p.across_platforms)?);
     }
     // More than one adapter or backend (a merged CSV): compare them.
     let mut extra = String::new();

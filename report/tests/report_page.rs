@@ -188,3 +188,25 @@ fn every_committed_reference_csv_still_renders() {
         check_layouts(&d.join("report"));
     }
 }
+
+#[test]
+fn a_merged_limits_run_shows_the_split_s_cost_against_the_adapter_s_row() {
+    // `default` and `default --limits webgpu` merged: two platforms for the charts, one table
+    // that reads both (the split row beside the unsplit one of the same point).
+    let d = tmp("limits");
+    let h = format!("{HEADER},limits,split");
+    let key = "methods|q|64x64|kbuffer_atomic|layers=16";
+    let r = |limits: &str, split: &str, ms: f64| {
+        format!(
+            "1,r,default,methods,quads,q,64,64,kbuffer_atomic,\"{key}\",H200,vulkan,discretegpu,ok,,{ms},{},{},,0,0,true,,,,4096,1,2,0,{limits},{split}",
+            ms * 0.99,
+            ms * 1.01
+        )
+    };
+    let rows = [r("adapter", "", 2.0), r("webgpu", "bindings:2", 2.04)];
+    std::fs::write(d.join("runs.csv"), format!("{h}\n{}\n", rows.join("\n"))).unwrap();
+    let page = report::build(&d, None).unwrap();
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.contains("×1.020 of unsplit"), "{html}");
+    assert!(html.contains("H200 (vulkan, webgpu limits)"), "{html}");
+}

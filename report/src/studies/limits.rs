@@ -31,9 +31,18 @@ fn outcome(r: &Rec) -> &'static str {
     }
 }
 
+/// A point on one adapter and backend, whatever its limits profile.
+fn same_point(r: &Rec) -> (&str, &str, &str) {
+    (
+        r.get(cols::ADAPTER),
+        r.get(cols::BACKEND),
+        r.get(cols::POINT_KEY),
+    )
+}
+
 /// One cell: counts of each outcome, the splits used, the split's time against the unsplit
 /// row of the same point, and every distinct skip or failure reason.
-fn cell(rows: &[&Rec], unsplit: &BTreeMap<&str, f64>) -> String {
+fn cell(rows: &[&Rec], unsplit: &BTreeMap<(&str, &str, &str), f64>) -> String {
     let mut n: BTreeMap<&str, usize> = BTreeMap::new();
     for r in rows {
         *n.entry(outcome(r)).or_default() += 1;
@@ -57,7 +66,7 @@ fn cell(rows: &[&Rec], unsplit: &BTreeMap<&str, f64>) -> String {
     let ratios: Vec<f64> = rows
         .iter()
         .filter(|r| !r.get(cols::SPLIT).is_empty())
-        .filter_map(|r| Some(r.trusted_ms()? / unsplit.get(r.get(cols::POINT_KEY))?))
+        .filter_map(|r| Some(r.trusted_ms()? / unsplit.get(&same_point(r))?))
         .collect();
     if !ratios.is_empty() {
         let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
@@ -92,11 +101,12 @@ fn cell(rows: &[&Rec], unsplit: &BTreeMap<&str, f64>) -> String {
 
 pub fn figures(runs: &Runs, _dir: &Path) -> Result<Vec<Figure>> {
     let rows: Vec<&Rec> = runs.rows.iter().filter(|r| !r.is_floor()).collect();
-    // Unsplit times under the adapter's own limits, by point: the cost of a split.
-    let unsplit: BTreeMap<&str, f64> = rows
+    // Unsplit times under the adapter's own limits, by point on the same adapter and backend:
+    // the cost of a split.
+    let unsplit: BTreeMap<(&str, &str, &str), f64> = rows
         .iter()
         .filter(|r| r.get(cols::LIMITS) == "adapter" && r.get(cols::SPLIT).is_empty())
-        .filter_map(|r| Some((r.get(cols::POINT_KEY), r.trusted_ms()?)))
+        .filter_map(|r| Some((same_point(r), r.trusted_ms()?)))
         .collect();
     let mut out = Vec::new();
     for (profile, prow) in Runs::group_by(rows.iter().copied(), |r| {

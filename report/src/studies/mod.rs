@@ -26,6 +26,9 @@ pub struct StudyPage {
     pub heading: &'static str,
     pub applies: fn(&Runs) -> bool,
     pub figures: fn(&Runs, &Path) -> Result<Vec<Figure>>,
+    /// Reads every platform's rows of a merged CSV at once (the limits table sets a profile's
+    /// rows beside the adapter's own); other pages draw one platform at a time.
+    pub across_platforms: bool,
 }
 
 fn has(runs: &Runs, study: &str) -> bool {
@@ -43,54 +46,72 @@ pub const PAGES: &[StudyPage] = &[
                 .chain(buckets::figures(r, d)?)
                 .collect())
         },
+        across_platforms: false,
     },
     StudyPage {
         heading: "Fits a browser? (limits profiles)",
         applies: limits::applies,
         figures: limits::figures,
+        across_platforms: true,
     },
     StudyPage {
         heading: "How cost grows (scaling)",
         applies: scaling::applies,
         figures: scaling::figures,
+        across_platforms: false,
     },
     StudyPage {
         heading: "Effects and stability",
         applies: |r| has(r, "stability") || has(r, "methods"),
         figures: stability::figures,
+        across_platforms: false,
     },
     StudyPage {
         heading: "Geometry feeding (Bavoil ch. 3)",
         applies: |r| has(r, "geometry"),
         figures: geometry::figures,
+        across_platforms: false,
     },
     StudyPage {
         heading: "Soft shadows (layered shadow maps vs ray tracing)",
         applies: |r| has(r, "shadows"),
         figures: shadows::figures,
+        across_platforms: false,
     },
     StudyPage {
         heading: "Deferred shading (tiles, classification, CPU tiles)",
         applies: |r| has(r, "deferred"),
         figures: deferred::figures,
+        across_platforms: false,
     },
     StudyPage {
         heading: "Light pre-pass (and the light buffer on CPU cores)",
         applies: |r| has(r, "prepass"),
         figures: prepass::figures,
+        across_platforms: false,
     },
     StudyPage {
         heading: "Frame-time tail and throughput (every study)",
         applies: tail::applies,
         figures: tail::figures,
+        across_platforms: false,
     },
 ];
 
 /// (heading, figures) for every section of `PAGES` the runs hold something for.
 pub fn all_figures(runs: &Runs, dir: &Path) -> Result<Vec<(String, Vec<Figure>)>> {
+    figures_of(runs, dir, |_| true)
+}
+
+/// The pages `keep` selects (e.g. one platform's, or those read across platforms).
+pub fn figures_of(
+    runs: &Runs,
+    dir: &Path,
+    keep: impl Fn(&StudyPage) -> bool,
+) -> Result<Vec<(String, Vec<Figure>)>> {
     let mut out = Vec::new();
     for page in PAGES {
-        if !(page.applies)(runs) {
+        if !keep(page) || !(page.applies)(runs) {
             continue;
         }
         let figs = (page.figures)(runs, dir)?;
