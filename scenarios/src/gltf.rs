@@ -16,8 +16,9 @@ use std::path::Path;
 
 use glam::{Mat4, Vec3};
 
-use crate::obj::{face_normals, normalise};
-use crate::scenes::{frame_sphere, Mesh, ObjectInfo, Scene, SceneSpec};
+use crate::scenes::scene::{
+    face_normals, frame_sphere, normalise, Mesh, ObjectInfo, Scene, SceneSpec,
+};
 use crate::{Result, SceneError};
 
 fn err(path: &Path, why: impl Into<String>) -> SceneError {

@@ -6,7 +6,9 @@ use std::path::Path;
 
 use glam::{DMat4, DVec3, Vec3};
 
-use crate::scenes::{frame_sphere, Mesh, ObjectInfo, Scene, SceneSpec};
+use crate::scenes::scene::{
+    face_normals, frame_sphere, normalisation, normalise, Mesh, ObjectInfo, Scene, SceneSpec,
+};
 use crate::{Result, SceneError};
 
 /// Model files this repository's scripts fetch (they are not committed): a path starting with
@@ -356,54 +358,6 @@ pub fn material_alpha(m: &tobj::Material) -> std::result::Result<f32, String> {
         return Err(format!("{what} gives opacity {alpha}, outside [0, 1]"));
     }
     Ok(alpha)
-}
-
-/// Area-weighted vertex normals.
-pub fn face_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
-    let mut acc = vec![Vec3::ZERO; positions.len()];
-    for t in indices.chunks_exact(3) {
-        let [a, b, c] = [t[0], t[1], t[2]].map(|i| Vec3::from(positions[i as usize]));
-        let n = (b - a).cross(c - a);
-        for &i in t {
-            acc[i as usize] += n;
-        }
-    }
-    acc.into_iter()
-        .map(|n| n.normalize_or(Vec3::Y).into())
-        .collect()
-}
-
-/// Centres the mesh at the origin and scales it into the unit sphere. Computed in f64: a mesh
-/// at ±1e38 has a radius whose square overflows f32 (its scale would round to 0).
-pub fn normalise(mesh: &mut Mesh) {
-    let (centre, s) = normalisation(mesh);
-    for p in &mut mesh.positions {
-        *p = ((Vec3::from(*p).as_dvec3() - centre) * s).as_vec3().into();
-    }
-}
-
-/// The centre and scale `normalise` applies: p' = (p − centre) · scale, in f64. A mesh of one
-/// point (refused by the loaders) keeps scale 1.
-fn normalisation(mesh: &Mesh) -> (DVec3, f64) {
-    let mut lo = DVec3::splat(f64::INFINITY);
-    let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    for p in &mesh.positions {
-        let p = Vec3::from(*p).as_dvec3();
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    let centre = (lo + hi) * 0.5;
-    let radius = mesh
-        .positions
-        .iter()
-        .map(|p| (Vec3::from(*p).as_dvec3() - centre).length())
-        .fold(0.0f64, f64::max);
-    let s = if radius > 0.0 && radius.is_finite() {
-        1.0 / radius
-    } else {
-        1.0
-    };
-    (centre, s)
 }
 
 fn affine(centre: DVec3, s: f64) -> DMat4 {

@@ -10,8 +10,7 @@ use std::path::Path;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{Property, PropertyAccess, PropertyAccessResult};
 
-use crate::obj::face_normals;
-use crate::scenes::Mesh;
+use crate::scenes::scene::{face_normals, Mesh};
 
 /// One `vertex` element: position, and the normal where the file has one.
 #[derive(Default)]

@@ -25,229 +25,23 @@ pub mod hair;
 pub mod mesh;
 pub mod particles;
 pub mod quads;
+pub mod scene;
 pub mod shells;
 pub mod slivers;
 pub mod soft_shadow;
 pub mod stiff;
 
-use glam::{DVec3, Vec3};
+#[cfg(test)]
+use glam::Vec3;
 
-use crate::{obj, Camera, Params, Result, SceneError};
+pub use scene::{
+    face_normals, frame_sphere, normalise, AreaLight, Light, LightKind, Material, Mesh, ObjectInfo,
+    Scene, SceneSpec, Sun,
+};
 
-/// Vertex data of a whole scene (one triangle list). Attributes are per vertex.
-#[derive(Clone, Debug, Default)]
-pub struct Mesh {
-    pub positions: Vec<[f32; 3]>,
-    pub normals: Vec<[f32; 3]>,
-    /// Straight (not premultiplied) RGBA; alpha is opacity.
-    pub colors: Vec<[f32; 4]>,
-    pub object_ids: Vec<u32>,
-    pub indices: Vec<u32>,
-}
-
-impl Mesh {
-    pub fn triangle_count(&self) -> usize {
-        self.indices.len() / 3
-    }
-    pub fn vertex_count(&self) -> usize {
-        self.positions.len()
-    }
-
-    /// Appends `other`, offsetting its indices.
-    pub fn append(&mut self, other: &Mesh) {
-        let base = self.positions.len() as u32;
-        self.positions.extend_from_slice(&other.positions);
-        self.normals.extend_from_slice(&other.normals);
-        self.colors.extend_from_slice(&other.colors);
-        self.object_ids.extend_from_slice(&other.object_ids);
-        self.indices.extend(other.indices.iter().map(|i| i + base));
-    }
-
-    /// Adds a quad (two triangles, a b c / a c d) with one colour, normal and object id.
-    pub fn push_quad(&mut self, corners: [Vec3; 4], color: [f32; 4], object_id: u32) {
-        let n = (corners[1] - corners[0])
-            .cross(corners[2] - corners[0])
-            .normalize_or_zero();
-        let base = self.positions.len() as u32;
-        for c in corners {
-            self.positions.push(c.into());
-            self.normals.push(n.into());
-            self.colors.push(color);
-            self.object_ids.push(object_id);
-        }
-        self.indices
-            .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
-    }
-
-    /// Axis-aligned bounds of the positions.
-    pub fn bounds(&self) -> (Vec3, Vec3) {
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for p in &self.positions {
-            lo = lo.min(Vec3::from(*p));
-            hi = hi.max(Vec3::from(*p));
-        }
-        (lo, hi)
-    }
-
-    /// Checks the invariants every consumer relies on; names the first violation.
-    pub fn validate(&self, what: &str) -> std::result::Result<(), String> {
-        let n = self.positions.len();
-        if self.indices.is_empty() {
-            return Err(format!("{what}: no triangles"));
-        }
-        if !self.indices.len().is_multiple_of(3) {
-            return Err(format!(
-                "{what}: index count {} is not a multiple of 3",
-                self.indices.len()
-            ));
-        }
-        if self.normals.len() != n || self.colors.len() != n || self.object_ids.len() != n {
-            return Err(format!(
-                "{what}: attribute arrays differ in length from positions ({n})"
-            ));
-        }
-        if let Some(i) = self.indices.iter().find(|&&i| i as usize >= n) {
-            return Err(format!("{what}: index {i} out of range (vertices: {n})"));
-        }
-        if let Some(v) = self
-            .positions
-            .iter()
-            .position(|p| p.iter().any(|c| !c.is_finite()))
-        {
-            return Err(format!(
-                "{what}: vertex {v} has a non-finite coordinate {:?}",
-                self.positions[v]
-            ));
-        }
-        Ok(())
-    }
-}
-
-/// One object of the scene (object ids index this table).
-#[derive(Clone, Debug)]
-pub struct ObjectInfo {
-    pub name: String,
-    /// Closed (watertight) surface: a ray enters and leaves it an equal number of times.
-    pub closed: bool,
-}
-
-/// Surface material, per object id (used by the shading studies).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Material {
-    pub albedo: [f32; 3],
-    pub specular: [f32; 3],
-    /// 0..1; specular power is 2^(1 + 10·smoothness) (BF3).
-    pub smoothness: f32,
-}
-
-impl Default for Material {
-    fn default() -> Self {
-        Material {
-            albedo: [0.7, 0.7, 0.7],
-            specular: [0.04, 0.04, 0.04],
-            smoothness: 0.5,
-        }
-    }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LightKind {
-    Point,
-    Spot,
-    /// A capsule (line) light from `position` to `position + direction·length`.
-    Line,
-}
-
-/// A light with finite range (used by the shading studies).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Light {
-    pub kind: LightKind,
-    pub position: [f32; 3],
-    pub direction: [f32; 3],
-    pub color: [f32; 3],
-    pub range: f32,
-    /// Spot: cosine of the outer cone half-angle.
-    pub cos_outer: f32,
-    /// Line: segment length.
-    pub length: f32,
-}
-
-/// A directional light (the sun) for the shading studies; `None` on a scene without one.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sun {
-    /// Unit vector from the surface towards the sun, world space.
-    pub direction: [f32; 3],
-    pub color: [f32; 3],
-}
-
-/// A square area light (the `shadows` study): the light's camera sits at the square's centre and
-/// looks along its normal; the square's sides follow the camera's x and y axes. `camera.fovy`
-/// and `camera.near`/`far` frame the shadow map (aspect 1).
-#[derive(Clone, Debug, PartialEq)]
-pub struct AreaLight {
-    pub camera: Camera,
-    /// Side length of the square, world units.
-    pub size: f64,
-}
-
-/// A scene ready to render.
-#[derive(Clone, Debug)]
-pub struct Scene {
-    pub spec: SceneSpec,
-    pub mesh: Mesh,
-    pub camera: Camera,
-    pub objects: Vec<ObjectInfo>,
-    /// Maximum fragments per pixel when the generator knows it in closed form.
-    pub analytic_max_depth_complexity: Option<u32>,
-    pub materials: Vec<Material>,
-    pub lights: Vec<Light>,
-    /// Directional light of the shading studies (none: no sun feature anywhere).
-    pub sun: Option<Sun>,
-    /// The square area light of soft-shadow scenes (None elsewhere).
-    pub area_light: Option<AreaLight>,
-}
-
-impl Scene {
-    pub fn new(spec: SceneSpec, mesh: Mesh, camera: Camera) -> Self {
-        Scene {
-            spec,
-            mesh,
-            camera,
-            objects: Vec::new(),
-            analytic_max_depth_complexity: None,
-            materials: Vec::new(),
-            lights: Vec::new(),
-            sun: None,
-            area_light: None,
-        }
-    }
-    pub fn name(&self) -> &str {
-        &self.spec.generator
-    }
-    pub fn label(&self) -> String {
-        self.spec.label()
-    }
-}
-
-/// What to build: a generator name and its parameters.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct SceneSpec {
-    pub generator: String,
-    pub params: Params,
-}
+use crate::{obj, Result, SceneError};
 
 impl SceneSpec {
-    pub fn new(generator: &str, params: Params) -> Self {
-        SceneSpec {
-            generator: generator.to_string(),
-            params,
-        }
-    }
-    /// `generator(k=v,...)`: stable across runs and machines.
-    pub fn label(&self) -> String {
-        format!("{}({})", self.generator, self.params.label())
-    }
     /// Checks the generator and every parameter without building any geometry (every problem
     /// at once); an OBJ file named by `path` is read and checked too.
     pub fn check(&self) -> Vec<SceneError> {
@@ -368,18 +162,6 @@ pub fn palette(i: u32, alpha: f32) -> [f32; 4] {
     };
     // Keep channels away from 0 and 1 so compositing errors show in every channel.
     [0.15 + 0.7 * r, 0.15 + 0.7 * g, 0.15 + 0.7 * b, alpha]
-}
-
-/// A camera on +z looking at the origin, framing a sphere of `radius`.
-pub fn frame_sphere(radius: f64, fovy_deg: f64) -> Camera {
-    let dist = radius / (fovy_deg.to_radians() * 0.5).sin() * 1.05;
-    Camera::look_at(
-        DVec3::new(0.0, 0.0, dist),
-        DVec3::ZERO,
-        fovy_deg,
-        dist * 0.05,
-        dist * 4.0,
-    )
 }
 
 /// True if every vertex of `scene` projects inside the view (|NDC x, y| ≤ 1, depth in [0, 1]) at

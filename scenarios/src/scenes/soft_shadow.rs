@@ -184,7 +184,7 @@ pub fn build(spec: &SceneSpec) -> Result<Scene> {
                 why: "case = \"obj\" needs path = \"file.obj\"".into(),
             })?;
             let mut m = obj::load(Path::new(&path))?;
-            obj::normalise(&mut m);
+            super::scene::normalise(&mut m);
             // Unit sphere → radius 1 resting on the ground near the centre.
             for p in &mut m.positions {
                 *p = (Vec3::from(*p) + Vec3::new(0.0, 1.05, 0.0)).into();
