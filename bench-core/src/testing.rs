@@ -184,30 +184,33 @@ pub fn count_mismatch(cap: &Capture, lists: &FragmentLists, k: u32) -> (usize, O
     (bad.len(), bad.first().copied())
 }
 
-/// Runs `method` on every scene for every `k` (the `layers` axis; `None` = the method's default)
-/// at w×h and asserts its image matches the reference of its expected set within `tol` and its
-/// counts match min(depth complexity, k). `why` is the tolerance's reason (in the message).
+/// Runs `method` on every scene at every point of `points` (its parameters) at w×h and asserts
+/// its image matches the reference of its expected set within `tol` (`why`: the tolerance's
+/// reason, in the message) and its counts match min(depth complexity, k) where it reports
+/// counts; `also` checks what else the caller's method promises (no hazard, no overflow) on
+/// each capture, named "scene params".
 pub fn assert_matches_reference(
     method: &dyn Method,
-    scenes: &[Scene],
-    ks: &[Option<u32>],
+    scenes: &[&Scene],
+    points: &[Params],
     (w, h): (u32, u32),
     tol: f64,
     why: &str,
+    also: impl Fn(&str, &Capture),
 ) {
     for scene in scenes {
-        for &k in ks {
-            let p = match k {
-                Some(k) => params(&[("layers", ParamValue::Int(k as i64))]),
-                None => Params::new(),
-            };
-            let (cap, lists) = run(method, scene, w, h, &p);
+        for p in points {
+            let name = format!(
+                "{} {} at {w}x{h}, {}",
+                method.name(),
+                scene.label(),
+                p.label()
+            );
+            let (cap, lists) = run(method, scene, w, h, p);
             let (err, px) = max_err(&cap, &lists);
             assert!(
                 err <= tol,
-                "{} on {} at {w}x{h}, k = {k:?}: max error {err:.3e} at pixel {px} (tolerance {tol:e}: {why})",
-                method.name(),
-                scene.label()
+                "{name}: max error {err:.3e} at pixel {px} (tolerance {tol:e}: {why})"
             );
             if cap.counts.is_some() {
                 let cap_k = match cap.expected {
@@ -216,13 +219,11 @@ pub fn assert_matches_reference(
                 };
                 let (bad, first) = count_mismatch(&cap, &lists, cap_k);
                 assert_eq!(
-                    bad,
-                    0,
-                    "{} on {} at {w}x{h}, k = {k:?}: {bad} pixels with the wrong fragment count (first: {first:?})",
-                    method.name(),
-                    scene.label()
+                    bad, 0,
+                    "{name}: {bad} pixels with the wrong fragment count (first: {first:?})"
                 );
             }
+            also(&name, &cap);
         }
     }
 }

@@ -429,7 +429,7 @@ mod tests {
 
     use super::*;
     use crate::metrics::{image_error, BAD_PIXEL_TOL};
-    use crate::testing::{count_mismatch, max_err, params, point, run, scene};
+    use crate::testing::{assert_matches_reference, max_err, params, point, run, scene};
     use scenarios::ParamValue::{Float, Str};
     use scenarios::Params;
 
@@ -441,20 +441,18 @@ mod tests {
         let shells = scene("shells", &[("count", Int(3)), ("segments", Int(12))]);
         let quads = scene("quads", &[("depth_complexity", Int(7))]);
         let grass = scene("grass", &[("blades", Int(200))]);
-        for (name, s) in [("shells", &shells), ("quads", &quads), ("grass", &grass)] {
-            for stop in [true, false] {
-                let p = params(&[("max_layers", Int(64)), ("occlusion_stop", Bool(stop))]);
-                let (cap, lists) = run(&DualPeel, s, 40, 40, &p);
-                assert_eq!(cap.overflow_pixels, Some(0), "{name}: {}", cap.notes);
-                let (e, at) = max_err(&cap, &lists);
-                assert!(
-                    e <= IMAGE_TOL,
-                    "{name} stop={stop}: error {e} at pixel {at}"
-                );
-                let (bad, first) = count_mismatch(&cap, &lists, u32::MAX);
-                assert_eq!(bad, 0, "{name}: counts differ first at {first:?}");
-            }
-        }
+        let points: Vec<Params> = [true, false]
+            .map(|stop| params(&[("max_layers", Int(64)), ("occlusion_stop", Bool(stop))]))
+            .into();
+        assert_matches_reference(
+            &DualPeel,
+            &[&shells, &quads, &grass],
+            &points,
+            (40, 40),
+            IMAGE_TOL,
+            "front and back halves composited separately in f32",
+            |name, cap| assert_eq!(cap.overflow_pixels, Some(0), "{name}: {}", cap.notes),
+        );
     }
 
     #[test]

@@ -115,7 +115,7 @@ mod tests {
     use scenarios::ParamValue::Int;
 
     use super::*;
-    use crate::testing::{count_mismatch, max_err, params, run, scene};
+    use crate::testing::{assert_matches_reference, params, scene};
 
     /// Composite of up to 16 layers in f32 vs f64: a few f32 ulps per step.
     const IMAGE_TOL: f64 = 2e-5;
@@ -125,16 +125,16 @@ mod tests {
         let shells = scene("shells", &[("count", Int(4)), ("segments", Int(12))]);
         let quads = scene("quads", &[("depth_complexity", Int(9))]);
         let grass = scene("grass", &[("blades", Int(200))]);
-        for (name, s) in [("shells", &shells), ("quads", &quads), ("grass", &grass)] {
-            for k in [1, 3, 8, 16] {
-                let (cap, lists) = run(&KBufferAtomic, s, 40, 40, &params(&[("layers", Int(k))]));
-                assert_eq!(cap.hazard_pixels, Some(0), "{name} k={k}: {}", cap.notes);
-                let (e, at) = max_err(&cap, &lists);
-                assert!(e <= IMAGE_TOL, "{name} k={k}: error {e} at pixel {at}");
-                let (bad, first) = count_mismatch(&cap, &lists, k as u32);
-                assert_eq!(bad, 0, "{name} k={k}: counts differ first at {first:?}");
-            }
-        }
+        let ks: Vec<_> = [1, 3, 8, 16].map(|k| params(&[("layers", Int(k))])).into();
+        assert_matches_reference(
+            &KBufferAtomic,
+            &[&shells, &quads, &grass],
+            &ks,
+            (40, 40),
+            IMAGE_TOL,
+            "k layers composited in f32",
+            |name, cap| assert_eq!(cap.hazard_pixels, Some(0), "{name}: {}", cap.notes),
+        );
     }
 
     #[test]

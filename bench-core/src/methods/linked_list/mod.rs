@@ -823,7 +823,7 @@ mod tests {
 
     use super::*;
     use crate::reference::rasterize;
-    use crate::testing::{count_mismatch, gpu, max_err, params, run, scene};
+    use crate::testing::{assert_matches_reference, gpu, params, run, scene};
     use scenarios::Params;
 
     /// Composite of up to 16 layers in f32 vs f64: a few f32 ulps per step (compact nodes
@@ -845,22 +845,24 @@ mod tests {
     fn equals_the_reference_within_the_pool_for_every_pool_and_node() {
         let shells = scene("shells", &[("count", Int(4)), ("segments", Int(12))]);
         let grass = scene("grass", &[("blades", Int(300))]);
-        for pool in POOLS {
-            for node in NODES {
-                for (name, s) in [("shells", &shells), ("grass", &grass)] {
-                    let name = format!("{name} pool={pool} node={node}");
-                    // 16 nodes per pixel on average (fixed pool) is far more than these scenes'
-                    // mean depth; the counted pool holds exactly their fragments.
-                    let (cap, lists) = run(&LinkedList, s, 48, 48, &list_params(pool, node, 16));
-                    assert_eq!(cap.overflow_pixels, Some(0), "{name}: {}", cap.notes);
-                    assert!(cap.flag.is_empty(), "{name}: {}", cap.flag);
-                    let (e, at) = max_err(&cap, &lists);
-                    assert!(e <= IMAGE_TOL, "{name}: error {e} at pixel {at}");
-                    let (bad, first) = count_mismatch(&cap, &lists, u32::MAX);
-                    assert_eq!(bad, 0, "{name}: counts differ first at {first:?}");
-                }
-            }
-        }
+        // 16 nodes per pixel on average (fixed pool) is far more than these scenes' mean depth;
+        // the counted pool holds exactly their fragments.
+        let points: Vec<Params> = POOLS
+            .iter()
+            .flat_map(|pool| NODES.iter().map(move |node| list_params(pool, node, 16)))
+            .collect();
+        assert_matches_reference(
+            &LinkedList,
+            &[&shells, &grass],
+            &points,
+            (48, 48),
+            IMAGE_TOL,
+            "16 layers composited in f32, compact nodes re-deriving attributes in f32",
+            |name, cap| {
+                assert_eq!(cap.overflow_pixels, Some(0), "{name}: {}", cap.notes);
+                assert!(cap.flag.is_empty(), "{name}: {}", cap.flag);
+            },
+        );
     }
 
     #[test]
