@@ -78,6 +78,14 @@ fn passes(r: &Rec) -> Vec<(String, f64)> {
         .collect()
 }
 
+/// A row's slowest pass: (label, ms, share of the summed passes), from `pass_ms`.
+pub fn slowest_pass(r: &Rec) -> Option<(String, f64, f64)> {
+    let ps = passes(r);
+    let total: f64 = ps.iter().map(|p| p.1).sum();
+    let (pass, ms) = ps.into_iter().max_by(|a, b| a.1.total_cmp(&b.1))?;
+    Some((pass, ms, if total > 0.0 { ms / total } else { 0.0 }))
+}
+
 /// The study, scene, resolution key of a row (its floors share it).
 fn place(r: &Rec) -> (String, String, String) {
     (
@@ -106,9 +114,7 @@ pub fn bounds(runs: &Runs) -> Vec<Bound> {
         let Some(gpu_ms) = r.trusted_ms() else {
             continue;
         };
-        let ps = passes(r);
-        let total: f64 = ps.iter().map(|p| p.1).sum();
-        let Some((pass, pass_ms)) = ps.into_iter().max_by(|a, b| a.1.total_cmp(&b.1)) else {
+        let Some((pass, pass_ms, share)) = slowest_pass(r) else {
             continue;
         };
         let axes = r
@@ -134,7 +140,7 @@ pub fn bounds(runs: &Runs) -> Vec<Bound> {
             gpu_ms,
             pass,
             pass_ms,
-            share: if total > 0.0 { pass_ms / total } else { 0.0 },
+            share,
             fragments_per_s: r.f(cols::FRAGMENTS_PER_S),
             bytes_per_s: r.f(cols::BYTES_PER_S),
             peak_frac: r.f(cols::PEAK_BANDWIDTH_FRAC),

@@ -51,6 +51,35 @@ fn num(x: f64) -> String {
     }
 }
 
+/// What the two rows' GPU times are made of, measured (their slowest pass and its share of
+/// the frame), for a figure ruled on a time: the reason a ratio holds or differs, from the run.
+fn measured(runs: &Runs, f: &Figure) -> String {
+    let (Some(o), Some(b), Some(rule)) = (&f.ours, &f.baseline, &f.holds) else {
+        return String::new();
+    };
+    if !rule.column().ends_with("_ms_median") {
+        return String::new();
+    }
+    let (Some(ro), Some(rb)) = (find(runs, o), find(runs, b)) else {
+        return String::new();
+    };
+    let one = |r: &Rec| -> Option<String> {
+        let (pass, ms, share) = crate::bounds::slowest_pass(r)?;
+        Some(format!(
+            "{}: {} {} of {} ms ({} %)",
+            r.get_name("method"),
+            pass,
+            num(ms),
+            num(r.f_name(rule.column())?),
+            (100.0 * share).round()
+        ))
+    };
+    match (one(ro), one(rb)) {
+        (Some(a), Some(b)) => format!("ours {a}; baseline {b}"),
+        _ => String::new(),
+    }
+}
+
 /// What the run says for one figure: (ours, verdict).
 fn ours(runs: &Runs, f: &Figure) -> (String, String) {
     if !f.reproducible {
@@ -116,7 +145,7 @@ pub fn section(runs: &Runs) -> String {
     for (name, f) in &files {
         let _ = write!(
             h,
-            "<h3>{} — {} ({})</h3><table class=\"repro\" id=\"repro-{}\"><tr><th>row</th><th>figure</th><th>setup</th><th>paper</th><th>paper ratio</th><th>ours</th><th>holds / differs</th></tr>",
+            "<h3>{} — {} ({})</h3><table class=\"repro\" id=\"repro-{}\"><tr><th>row</th><th>figure</th><th>setup</th><th>paper</th><th>paper ratio</th><th>ours</th><th>holds / differs</th><th>measured: slowest pass (ours; baseline)</th></tr>",
             esc(&f.source.title),
             esc(&f.source.authors),
             esc(&f.source.venue),
@@ -148,7 +177,7 @@ pub fn section(runs: &Runs) -> String {
             let (o, verdict) = ours(runs, fig);
             let _ = write!(
                 h,
-                "<tr><td>{}</td><td>{} {} ({})</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                "<tr><td>{}</td><td>{} {} ({})</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
                 fig.row,
                 esc(&fig.table),
                 esc(&fig.section),
@@ -157,7 +186,8 @@ pub fn section(runs: &Runs) -> String {
                 esc(&paper),
                 fig.ratio.map(num).unwrap_or_else(|| "—".into()),
                 esc(&o),
-                esc(&verdict)
+                esc(&verdict),
+                esc(&measured(runs, fig))
             );
         }
         h.push_str("</table>");
@@ -241,6 +271,27 @@ mod tests {
         );
         assert!(row("fig1.2-adp").contains("not in this run"));
         assert!(row("fig1.4-adp-fresnel").contains("not reproducible: An image only"));
+        // Without pass times there is nothing measured to say; with them, each side's slowest pass.
+        assert!(
+            !row("fig1.2-bdp2").contains("slowest"),
+            "{}",
+            row("fig1.2-bdp2")
+        );
+        let mut timed = r.clone();
+        for x in &mut timed.rows {
+            let passes = match x.get_name("method") {
+                "depth_peel" => r#"{"peel": 36.0, "composite": 4.0}"#,
+                _ => r#"{"route": 18.0, "resolve": 2.0}"#,
+            };
+            x.0.insert("pass_ms".into(), passes.into());
+        }
+        let h = section(&timed);
+        let i = h.find("(fig1.2-bdp2)").unwrap();
+        let row = h[i..].split("</tr>").next().unwrap();
+        assert!(
+            row.contains("ours bdp2: route 18.00 of 20.00 ms (90 %); baseline depth_peel: peel 36.00 of 40.00 ms (90 %)"),
+            "{row}"
+        );
         // Every source has its table, every figure its row.
         for (name, text) in papers::BUILTIN {
             assert!(h.contains(&format!("id=\"repro-{name}\"")), "{name}");
