@@ -135,9 +135,15 @@ fn scene_res(r: &Rec) -> String {
 
 /// Whether the runs are a `scaling` suite's.
 pub fn applies(runs: &Runs) -> bool {
-    runs.rows
+    // A fit needs at least two scene × resolution places: a run filtered to one point (the 4K
+    // study alone) has nothing to fit, and its rows read on the methods pages.
+    let places: std::collections::BTreeSet<String> = runs
+        .rows
         .iter()
-        .any(|r| r.get(cols::SUITE) == "scaling" && r.get(cols::STUDY) == "methods")
+        .filter(|r| r.get(cols::SUITE) == "scaling" && r.get(cols::STUDY) == "methods")
+        .map(scene_res)
+        .collect();
+    places.len() >= 2
 }
 
 /// One sweep of a method: rows where one of F or T varies (a scene at several resolutions, or a
@@ -408,6 +414,36 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn one_scene_at_one_resolution_has_no_scaling_page() {
+        let rec = |scene: &str, w: &str| {
+            let mut r = Rec::default();
+            for (k, v) in [
+                ("suite", "scaling"),
+                ("study", "methods"),
+                ("scene_label", scene),
+                ("width", w),
+                ("height", w),
+            ] {
+                r.0.insert(k.into(), v.into());
+            }
+            r
+        };
+        let one = Runs {
+            rows: vec![rec("shells(count=8,segments=354)", "3840")],
+            ..Default::default()
+        };
+        assert!(!applies(&one));
+        let two = Runs {
+            rows: vec![
+                rec("shells(count=8,segments=354)", "512"),
+                rec("shells(count=8,segments=354)", "1024"),
+            ],
+            ..Default::default()
+        };
+        assert!(applies(&two));
+    }
 
     #[test]
     fn a_power_law_is_fitted_exactly_and_a_constant_variable_is_refused() {
