@@ -64,6 +64,33 @@ fn rows(gpu: &Gpu, text: &str) -> Vec<Row> {
 }
 
 #[test]
+fn a_split_mlab_matches_the_unsplit_one_and_says_how_it_was_split() {
+    // 40×40 pixels × 8 layers × 20 B = 256 kB of MLAB layers; a test-only binding limit of
+    // 64 KiB splits them over 4 bindings (issue 34: MLAB at 4K needs 2.65 GB, over 2 GiB).
+    let unsplit = open(Profile::Adapter);
+    let mut small = open(Profile::Adapter);
+    small.limits.max_storage_buffer_binding_size = 64 << 10;
+    // Depth complexity ≤ k: MLAB keeps every fragment, so both builds equal the reference.
+    let s = scene("quads", &[("depth_complexity", Int(6))]);
+    let lists = rasterize(&s, 40, 40);
+    let m = methods::by_name("mlab").unwrap();
+    let p = point(m.as_ref(), &params(&[("layers", Int(8))]));
+    let mut images = Vec::new();
+    for (gpu, want) in [(&unsplit, None), (&small, Some("bindings:4"))] {
+        let gs = GpuScene::upload(gpu, &s, 40, 40);
+        let mut r = measure(gpu, &gs, m.as_ref(), &p, &TimingPlan::once())
+            .unwrap_or_else(|e| panic!("mlab split {want:?}: {e}"));
+        assert_eq!(r.prepared.split().as_deref(), want);
+        let cap = r.prepared.readback(gpu, &gs).unwrap();
+        // ≤ 6 layers composited in f32 (the method's own tests' bound).
+        let (e, at) = max_err(&cap, &lists);
+        assert!(e <= 1e-5, "mlab split {want:?}: error {e} at pixel {at}");
+        images.push(cap.image.unwrap());
+    }
+    assert_eq!(images[0], images[1], "split image differs from unsplit");
+}
+
+#[test]
 fn dual_peeling_names_the_colour_bytes_limit_before_any_gpu_work() {
     // 8 + 16 + 16 B per sample in one pass, over WebGPU's 32: once a raw validation error at
     // prepare, now a reason from `supports`.

@@ -34,9 +34,8 @@ use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
-use crate::gpu_util::{
-    check_storage_size, compute_pipeline, pixel_pass, read_vec, shader, STORAGE_RW,
-};
+use crate::gpu_util::{compute_pipeline, pixel_pass, read_vec, shader, STORAGE_RW};
+use crate::limits;
 use crate::oit::{self, Keep, Order, TailMode};
 use crate::record::cols;
 use crate::reference::FragmentLists;
@@ -163,6 +162,8 @@ impl Method for MlabIdeal {
 struct PreparedRace {
     k: u32,
     rule: Option<TailMode>,
+    /// The `split` column: how the layers lie over storage bindings.
+    split: Option<String>,
     insert: wgpu::RenderPipeline,
     resolve: wgpu::ComputePipeline,
     bind_capture: wgpu::BindGroup,
@@ -177,16 +178,33 @@ struct PreparedRace {
 
 impl PreparedRace {
     fn new(gpu: &Gpu, scene: &GpuScene, k: u32, rule: Option<TailMode>) -> Result<Self> {
+        let px = scene.pixels() as u64;
+        // The layers over as many storage bindings as the device needs (4K with 16 layers:
+        // 2.65 GB, over a 2 GiB binding); the resolve binds 3 other storage buffers.
+        let split = limits::split_storage(
+            gpu.held(),
+            "mlab layers",
+            (px * k as u64 * LAYER_BYTES / 4, 4),
+            3,
+        )?;
         let module = shader(
             gpu,
             "mlab",
-            &format!("{TAIL_WGSL}\n{RULE_WGSL}\n{RACE_WGSL}"),
+            &format!(
+                "{}\n{TAIL_WGSL}\n{RULE_WGSL}\n{RACE_WGSL}",
+                split.wgsl("layers", "u32", 1)
+            ),
         );
+        let more: Vec<(u32, B)> = (1..split.parts)
+            .map(|i| (limits::SPLIT_BINDING + i - 1, B::Storage))
+            .collect();
         // Camera, layers, arrivals; the resolve adds the image, the counters and the tail.
-        let rows = [(0, B::Camera), (1, B::Storage), (7, B::Storage)];
+        let mut rows = vec![(0, B::Camera), (1, B::Storage), (7, B::Storage)];
+        rows.extend(more.iter().copied());
         let capture_table = Bindings::new(gpu, "mlab capture", FC, &rows);
         let mut rows = vec![(0, B::Camera), (1, B::Storage), (2, B::Storage)];
         rows.extend([(3, B::Storage), (7, B::Storage)]);
+        rows.extend(more.iter().copied());
         rows.extend(TailTargets::rows(4, B::Texture(FLOAT)));
         let resolve_table = Bindings::new(gpu, "mlab resolve", FC, &rows);
         let layout = |t: &Bindings| pipeline_layout(gpu, "mlab", &[&t.layout]);
@@ -216,10 +234,13 @@ impl PreparedRace {
             false,
         );
         let mut alloc = AllocCounter::default();
-        let px = scene.pixels() as u64;
-        let layer_bytes = px * k as u64 * LAYER_BYTES;
-        check_storage_size(gpu, "mlab layers", layer_bytes)?;
-        let layers = alloc.buffer(gpu, "mlab layers", layer_bytes, STORAGE_RW);
+        let mut parts: Vec<wgpu::Buffer> = (0..split.parts)
+            .map(|i| {
+                let label = format!("mlab layers {i}");
+                alloc.buffer(gpu, &label, split.part_elems(i) * 4, STORAGE_RW)
+            })
+            .collect();
+        let layers = parts.remove(0);
         let arrived = alloc.buffer(gpu, "mlab arrivals", px * 4, STORAGE_RW);
         let image = alloc.buffer(gpu, "mlab image", px * 16, STORAGE_RW);
         let counters = alloc.buffer(gpu, "mlab counters", 8, STORAGE_RW);
@@ -227,16 +248,20 @@ impl PreparedRace {
         let tail = blend.then(|| TailTargets::new(gpu, &mut alloc, scene));
         // Without a tail the resolve's (dead) tail reads see 1×1 stand-ins.
         let stand_in = (!blend).then(|| TailTargets::stand_ins(gpu));
-        let bind_capture =
-            capture_table.group(gpu, &[&scene.camera, &layers, &arrived].map(Res::Buf));
+        let mut res: Vec<Res> = [&scene.camera, &layers, &arrived].map(Res::Buf).to_vec();
+        res.extend(parts.iter().map(Res::Buf));
+        let bind_capture = capture_table.group(gpu, &res);
         let t = tail.as_ref().or(stand_in.as_ref()).expect("one of them");
         let bufs = [&scene.camera, &layers, &image, &counters, &arrived];
+        // In the table's order: the buffers, the layers' further parts, the tail.
         let mut res = bufs.map(Res::Buf).to_vec();
+        res.extend(parts.iter().map(Res::Buf));
         res.extend(t.views());
         let bind_resolve = resolve_table.group(gpu, &res);
         Ok(PreparedRace {
             k,
             rule,
+            split: split.column(),
             insert,
             resolve,
             bind_capture,
@@ -284,6 +309,9 @@ impl crate::timed::Timed for PreparedRace {
 }
 
 impl Prepared for PreparedRace {
+    fn split(&self) -> Option<String> {
+        self.split.clone()
+    }
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let mut cap = Capture::empty();
         cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, scene.pixels())?);

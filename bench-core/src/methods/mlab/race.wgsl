@@ -6,7 +6,8 @@
 // pixel is returned to the blended tail targets (tail.wgsl).
 
 // Per pixel K × (z, r, g, b, t) as f32 bits; only the first min(arrivals, K) are meaningful.
-@group(0) @binding(1) var<storage, read_write> layers: array<u32>;
+// `layers` (binding 1, with further parts where one storage binding is too small) and its
+// `layers_load(i)` / `layers_store(i, v)` are prepended by mod.rs (limits::Split::wgsl).
 // Per pixel: fragments seen (cleared every frame).
 @group(0) @binding(7) var<storage, read_write> arrived: array<u32>;
 @group(0) @binding(2) var<storage, read_write> out_image: array<vec4<f32>>;
@@ -25,9 +26,9 @@ fn load_blend(base: u32, n: u32) -> Blend {
     s.n = n;
     for (var i = 0u; i < n; i = i + 1u) {
         let b = base + 5u * i;
-        s.z[i] = bitcast<f32>(layers[b]);
-        s.rgb[i] = vec3<f32>(bitcast<f32>(layers[b + 1u]), bitcast<f32>(layers[b + 2u]), bitcast<f32>(layers[b + 3u]));
-        s.t[i] = bitcast<f32>(layers[b + 4u]);
+        s.z[i] = bitcast<f32>(layers_load(b));
+        s.rgb[i] = vec3<f32>(bitcast<f32>(layers_load(b + 1u)), bitcast<f32>(layers_load(b + 2u)), bitcast<f32>(layers_load(b + 3u)));
+        s.t[i] = bitcast<f32>(layers_load(b + 4u));
     }
     return s;
 }
@@ -40,11 +41,11 @@ fn mlab_rmw(in: Varyings) -> Inserted {
     let r = mlab_insert(&s, in.view_z, in.color);
     for (var i = r.first; i < s.n; i = i + 1u) {
         let b = base + 5u * i;
-        layers[b] = bitcast<u32>(s.z[i]);
-        layers[b + 1u] = bitcast<u32>(s.rgb[i].r);
-        layers[b + 2u] = bitcast<u32>(s.rgb[i].g);
-        layers[b + 3u] = bitcast<u32>(s.rgb[i].b);
-        layers[b + 4u] = bitcast<u32>(s.t[i]);
+        layers_store(b, bitcast<u32>(s.z[i]));
+        layers_store(b + 1u, bitcast<u32>(s.rgb[i].r));
+        layers_store(b + 2u, bitcast<u32>(s.rgb[i].g));
+        layers_store(b + 3u, bitcast<u32>(s.rgb[i].b));
+        layers_store(b + 4u, bitcast<u32>(s.t[i]));
     }
     arrived[p] = arrivals + 1u;
     return r;
