@@ -226,6 +226,11 @@ impl Split {
         self.elems.saturating_sub(start).min(self.per_part)
     }
 
+    /// Bindings of the parts after the first ([`SPLIT_BINDING`] + 0, 1, …).
+    pub fn more_bindings(&self) -> impl Iterator<Item = u32> {
+        (1..self.parts).map(|i| SPLIT_BINDING + i - 1)
+    }
+
     /// The `split` column: empty when unsplit, else `bindings:N`.
     pub fn column(&self) -> Option<String> {
         (self.parts > 1).then(|| format!("bindings:{}", self.parts))
@@ -238,10 +243,9 @@ impl Split {
         let mut s = format!(
             "@group(0) @binding({binding}) var<storage, read_write> {name}: array<{ty}>;\n"
         );
-        for i in 1..self.parts {
+        for (i, b) in (1..).zip(self.more_bindings()) {
             s += &format!(
-                "@group(0) @binding({}) var<storage, read_write> {name}_{i}: array<{ty}>;\n",
-                SPLIT_BINDING + i - 1
+                "@group(0) @binding({b}) var<storage, read_write> {name}_{i}: array<{ty}>;\n"
             );
         }
         let part = |i: u32| {

@@ -28,7 +28,7 @@
 use super::shared::bind::{pipeline_layout, Bindings, Kind as B, Res, FC, FLOAT};
 use super::shared::counted_capture::{PreparedAbuffer, Replay};
 use super::shared::race::judge_race;
-use super::shared::store::{dummy_depth, storage_pass_with, storage_pipeline_with};
+use super::shared::store::{dummy_depth, split_buffers, storage_pass_with, storage_pipeline_with};
 use super::shared::tail::{self, TailTargets, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
@@ -195,9 +195,7 @@ impl PreparedRace {
                 split.wgsl("layers", "u32", 1)
             ),
         );
-        let more: Vec<(u32, B)> = (1..split.parts)
-            .map(|i| (limits::SPLIT_BINDING + i - 1, B::Storage))
-            .collect();
+        let more: Vec<(u32, B)> = split.more_bindings().map(|b| (b, B::Storage)).collect();
         // Camera, layers, arrivals; the resolve adds the image, the counters and the tail.
         let mut rows = vec![(0, B::Camera), (1, B::Storage), (7, B::Storage)];
         rows.extend(more.iter().copied());
@@ -234,12 +232,7 @@ impl PreparedRace {
             false,
         );
         let mut alloc = AllocCounter::default();
-        let mut parts: Vec<wgpu::Buffer> = (0..split.parts)
-            .map(|i| {
-                let label = format!("mlab layers {i}");
-                alloc.buffer(gpu, &label, split.part_elems(i) * 4, STORAGE_RW)
-            })
-            .collect();
+        let mut parts = split_buffers(gpu, &mut alloc, "mlab layers", &split);
         let layers = parts.remove(0);
         let arrived = alloc.buffer(gpu, "mlab arrivals", px * 4, STORAGE_RW);
         let image = alloc.buffer(gpu, "mlab image", px * 16, STORAGE_RW);

@@ -5,6 +5,8 @@
 
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::gpu_util::STORAGE_RW;
+use crate::limits::Split;
 use crate::reference::FragmentLists;
 use crate::timing::GpuTimer;
 
@@ -297,6 +299,22 @@ pub fn same_k_nearest(slots: &[Option<f32>], truth: &[f64], k: usize) -> bool {
         used[j] = true;
         fresh
     })
+}
+
+/// The storage buffers of `split`'s parts, `"{label} 0"`, `"{label} 1"`, … (the first bound
+/// at the buffer's own binding, the rest at `split.more_bindings()`).
+pub fn split_buffers(
+    gpu: &Gpu,
+    alloc: &mut AllocCounter,
+    label: &str,
+    split: &Split,
+) -> Vec<wgpu::Buffer> {
+    (0..split.parts)
+        .map(|i| {
+            let bytes = split.part_elems(i) * split.elem_bytes;
+            alloc.buffer(gpu, &format!("{label} {i}"), bytes, STORAGE_RW)
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -62,17 +62,11 @@ impl KSlots {
     ) -> Result<Self> {
         let px = scene.pixels() as u64;
         let slots = px * samples as u64 * k as u64;
-        let entry = slot.entry_bytes();
         let split = entries_split(gpu, scene, (k, slot), samples)?;
         limits::check_storage(gpu.held(), "k-buffer keys", slots * 4)?;
         let images = slot.images();
         let keys = alloc.buffer(gpu, "k-buffer keys", slots * 4, STORAGE_RW);
-        let mut parts: Vec<wgpu::Buffer> = (0..split.parts)
-            .map(|i| {
-                let label = format!("k-buffer entries {i}");
-                alloc.buffer(gpu, &label, split.part_elems(i) * entry, STORAGE_RW)
-            })
-            .collect();
+        let mut parts = store::split_buffers(gpu, alloc, "k-buffer entries", &split);
         let entries = parts.remove(0);
         Ok(KSlots {
             k,
@@ -108,11 +102,11 @@ impl KSlots {
             e.extend(t.bind_entries(5));
         }
         e.extend(
-            self.entries_more
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: limits::SPLIT_BINDING + i as u32,
+            self.split
+                .more_bindings()
+                .zip(&self.entries_more)
+                .map(|(binding, b)| wgpu::BindGroupEntry {
+                    binding,
                     resource: b.as_entire_binding(),
                 }),
         );
@@ -231,8 +225,8 @@ pub fn kslots_entries(extra: u32, split: &Split) -> Vec<wgpu::BindGroupLayoutEnt
     for b in 1..4 + extra {
         entries.push(storage_entry(b, false, fc));
     }
-    for i in 1..split.parts {
-        entries.push(storage_entry(limits::SPLIT_BINDING + i - 1, false, fc));
+    for b in split.more_bindings() {
+        entries.push(storage_entry(b, false, fc));
     }
     entries
 }
