@@ -53,16 +53,13 @@ fn num(x: f64) -> String {
 
 /// What the two rows' GPU times are made of, measured (their slowest pass and its share of
 /// the frame), for a figure ruled on a time: the reason a ratio holds or differs, from the run.
-fn measured(runs: &Runs, f: &Figure) -> String {
-    let (Some(o), Some(b), Some(rule)) = (&f.ours, &f.baseline, &f.holds) else {
+fn measured(f: &Figure, rows: Option<(&Rec, &Rec)>) -> String {
+    let (Some(rule), Some((ro, rb))) = (&f.holds, rows) else {
         return String::new();
     };
     if !rule.column().ends_with("_ms_median") {
         return String::new();
     }
-    let (Some(ro), Some(rb)) = (find(runs, o), find(runs, b)) else {
-        return String::new();
-    };
     let one = |r: &Rec| -> Option<String> {
         let (pass, ms, share) = crate::bounds::slowest_pass(r)?;
         Some(format!(
@@ -80,20 +77,27 @@ fn measured(runs: &Runs, f: &Figure) -> String {
     }
 }
 
-/// What the run says for one figure: (ours, verdict).
-fn ours(runs: &Runs, f: &Figure) -> (String, String) {
+/// The rows of a figure's point and its baseline, where the run holds both.
+fn rows_of<'a>(runs: &'a Runs, f: &Figure) -> Option<(&'a Rec, &'a Rec)> {
+    Some((
+        find(runs, f.ours.as_ref()?)?,
+        find(runs, f.baseline.as_ref()?)?,
+    ))
+}
+
+/// What the run says for one figure (`rows`: [`rows_of`]): (ours, verdict).
+fn ours(f: &Figure, rows: Option<(&Rec, &Rec)>) -> (String, String) {
     if !f.reproducible {
         return (
             "—".into(),
             format!("not reproducible: {}", f.reason.as_deref().unwrap_or("")),
         );
     }
-    let (Some(o), Some(b), Some(rule)) = (&f.ours, &f.baseline, &f.holds) else {
+    let (Some(o), Some(_), Some(rule)) = (&f.ours, &f.baseline, &f.holds) else {
         return ("—".into(), "no point declared".into());
     };
-    let (ro, rb) = match (find(runs, o), find(runs, b)) {
-        (Some(ro), Some(rb)) => (ro, rb),
-        _ => return ("—".into(), format!("not in this run (suite {})", o.suite)),
+    let Some((ro, rb)) = rows else {
+        return ("—".into(), format!("not in this run (suite {})", o.suite));
     };
     for r in [ro, rb] {
         if !r.ok() {
@@ -174,7 +178,8 @@ pub fn section(runs: &Runs) -> String {
                     .map(|l| format!(", {l}"))
                     .unwrap_or_default()
             );
-            let (o, verdict) = ours(runs, fig);
+            let rows = rows_of(runs, fig);
+            let (o, verdict) = ours(fig, rows);
             let _ = write!(
                 h,
                 "<tr><td>{}</td><td>{} {} ({})</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
@@ -187,7 +192,7 @@ pub fn section(runs: &Runs) -> String {
                 fig.ratio.map(num).unwrap_or_else(|| "—".into()),
                 esc(&o),
                 esc(&verdict),
-                esc(&measured(runs, fig))
+                esc(&measured(fig, rows))
             );
         }
         h.push_str("</table>");
