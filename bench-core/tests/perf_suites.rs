@@ -129,3 +129,26 @@ fn scaling_spans_the_stated_triangles_resolutions_and_depth_complexities() {
     }
     assert_eq!(in_study(3).count(), 6);
 }
+
+#[test]
+fn perf_binned_puts_both_captures_on_every_scene_and_resolution() {
+    let groups = load("perf-binned");
+    // quads ×3, shells ×4, grass ×2, the bunnies: 10 scenes × 512², 1024², 2048².
+    assert_eq!(groups.len(), 30);
+    for g in &groups {
+        let captures: std::collections::BTreeSet<String> = g
+            .points
+            .iter()
+            .filter(|p| p.method == "compute_abuffer")
+            .map(|p| {
+                p.point
+                    .get("capture")
+                    .map(|v| v.to_string())
+                    .unwrap_or_default()
+            })
+            .collect();
+        let want: std::collections::BTreeSet<String> =
+            ["pixels", "tiles"].iter().map(|s| s.to_string()).collect();
+        assert_eq!(captures, want, "{}", g.scene.label());
+    }
+}

@@ -232,6 +232,10 @@ pub mod cols {
         "coverage",
         "compute_abuffer: stepped (exact integer edge functions stepped pixel to pixel; big triangles' tiles classified empty/full/partial) | direct (three exact 64-bit products per bounding-box pixel)",
     );
+    pub const CAPTURE: Col = Col::new(
+        "capture",
+        "compute_abuffer: pixels (count → scan → fill: an 8 B fragment per pixel slot, then sort) | tiles (triangles binned to 8×8-pixel tiles, 4 B per tile and triangle; each tile's pixels test its triangles and sort in workgroup memory: no fragment array)",
+    );
     pub const RESOLVE_SORT: Col = Col::new(
         "resolve_sort",
         "compute_abuffer: workgroup (lists of up to 32 fragments sorted in workgroup memory) | private (every list in a per-thread array)",
@@ -1075,6 +1079,7 @@ pub const GROUPS: &[Group] = &[
             cols::SMALL_MAX,
             cols::TRANSFORM,
             cols::COVERAGE,
+            cols::CAPTURE,
             cols::RESOLVE_SORT,
             cols::POOL,
             cols::POOL_SLACK,

@@ -4,7 +4,7 @@
 //! which `mlab_ideal` and `adaptive_ideal` replay; this module is the method: its axes, what it
 //! needs of the adapter, and `prepare`.
 
-use super::shared::counted_capture::{PreparedAbuffer, Variants, STORAGE_BUFFERS, WG_SORT_BYTES};
+use super::shared::counted_capture::{PreparedAbuffer, Variants, STORAGE_BUFFERS};
 use super::shared::ssaa;
 use super::{Method, Prepared};
 use crate::aa::{self, AaConfig, AaMode, AaSupport};
@@ -43,6 +43,12 @@ const COVERAGE: Axis = Axis::choice(
     "stepped",
     &["stepped", "direct"],
 );
+const CAPTURE: Axis = Axis::choice(
+    cols::CAPTURE,
+    "pixels: count, scan and fill an 8 B fragment per pixel slot, then sort; tiles: bin triangles to 8×8 tiles, each tile's pixels test its triangles (no fragment array)",
+    "pixels",
+    &["pixels", "tiles"],
+);
 const RESOLVE_SORT: Axis = Axis::choice(
     cols::RESOLVE_SORT,
     "workgroup: short lists sorted in workgroup memory; private: every list in a per-thread array",
@@ -55,13 +61,13 @@ impl Method for ComputeAbuffer {
         "compute_abuffer"
     }
     fn describe(&self) -> &'static str {
-        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position)"
+        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position); capture=tiles bins triangles to 8×8 tiles instead (4 B per tile and triangle, 8 B per pixel) and each tile's pixels test its triangles, the fragments never leaving workgroup memory"
     }
     fn exact(&self) -> bool {
         true
     }
     fn axes(&self) -> Vec<Axis> {
-        let mut v = vec![SMALL_MAX, TRANSFORM, COVERAGE, RESOLVE_SORT];
+        let mut v = vec![SMALL_MAX, TRANSFORM, COVERAGE, CAPTURE, RESOLVE_SORT];
         v.extend_from_slice(effects::AXES);
         v.extend([aa::AA, aa::AA_CAPTURE]);
         v
@@ -79,13 +85,22 @@ impl Method for ComputeAbuffer {
         }
         let v = variants(point);
         let wg = gpu.limits.max_compute_workgroup_storage_size;
-        if v.wg_sort && wg < WG_SORT_BYTES {
+        let need = v.workgroup_bytes();
+        if need > wg {
             return Err(format!(
-                "resolve_sort = workgroup needs {WG_SORT_BYTES} B of workgroup memory, {} allows {wg}",
+                "{} needs {need} B of workgroup memory, {} allows {wg}",
+                v.name(),
                 gpu.profile.who()
             ));
         }
-        AA_SUPPORT.check(self.name(), AaConfig::from_point(point))
+        let aa = AaConfig::from_point(point);
+        if v.binned && aa.msaa() > 1 {
+            return Err(format!(
+                "capture = tiles tests pixel centres only (no coverage masks): aa = {} needs capture = pixels",
+                point.choice(&aa::AA)
+            ));
+        }
+        AA_SUPPORT.check(self.name(), aa)
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let small = point.int(&SMALL_MAX) as u32;
@@ -115,6 +130,7 @@ fn variants(point: &Point) -> Variants {
         stepped: point.choice(&COVERAGE) == "stepped",
         wg_sort: point.choice(&RESOLVE_SORT) == "workgroup",
         aa_samples: 1,
+        binned: point.choice(&CAPTURE) == "tiles",
     }
 }
 

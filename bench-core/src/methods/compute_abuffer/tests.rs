@@ -28,6 +28,8 @@ const VARIANTS: &[&[(&str, &str)]] = &[
     &[("transform", "triangle")],
     &[("coverage", "direct")],
     &[("resolve_sort", "private")],
+    &[("capture", "tiles")],
+    &[("capture", "tiles"), ("resolve_sort", "private")],
 ];
 
 fn variant_params(v: &[(&str, &str)], small: i64) -> (String, Params) {
@@ -84,7 +86,8 @@ fn big_triangles_tiles_empty_full_and_partial_equal_the_reference() {
         let (label, p) = variant_params(v, 1);
         let (cap, lists) = run(&ComputeAbuffer, &quads, 160, 128, &p);
         assert!(lists.max_depth_complexity() > 32);
-        if !label.contains("direct") {
+        // The tile classes are the pixel capture's shared raster; the binned one has none.
+        if !label.contains("direct") && !label.contains("tiles") {
             let [empty, full, partial] = tile_classes(&cap.notes);
             assert!(
                 empty > 0 && full > 0 && partial > 0,
@@ -527,14 +530,15 @@ fn full_tiles_of_big_triangles_keep_each_fragments_facing() {
         ("translucency", ("sigma", scenarios::ParamValue::Float(0.8))),
         ("csg_sub", ("csg_b", Int(1))),
     ] {
-        for small in [1, 1 << 20] {
+        for (small, capture) in [(1, "pixels"), (1 << 20, "pixels"), (1, "tiles")] {
             let p = params(&[
                 ("small_max", Int(small)),
+                ("capture", Str(capture.into())),
                 ("effect", Str(effect.into())),
                 extra.clone(),
             ]);
             let (cap, lists) = run(&ComputeAbuffer, &shells, 256, 256, &p);
-            if small == 1 {
+            if small == 1 && capture == "pixels" {
                 let [_, full, _] = tile_classes(&cap.notes);
                 assert!(full > 0, "full tiles occur: {}", cap.notes);
             }
@@ -549,7 +553,7 @@ fn full_tiles_of_big_triangles_keep_each_fragments_facing() {
             // ones (tests/effects.rs: ≤ 2e-3); a flipped facing is ≥ 0.1.
             assert!(
                 worst <= 2e-3,
-                "{effect} small_max {small}: max error {worst:.3e} at pixel {at}: {}",
+                "{effect} small_max {small} capture {capture}: max error {worst:.3e} at pixel {at}: {}",
                 cap.notes
             );
         }
@@ -589,10 +593,12 @@ fn lists_in_depth_order_reverse_order_or_shuffled_sort_alike_in_workgroup_memory
         ] {
             let mut s = base.clone();
             s.mesh.indices = order.iter().flatten().copied().collect();
-            for small in [1, 1 << 20] {
-                let (_, p) = variant_params(&[], small);
+            // capture = tiles: a pixel's ring fills in bin order and, past 32, moves to the
+            // per-thread array mid-list.
+            for (small, capture) in [(1, "pixels"), (1 << 20, "pixels"), (128, "tiles")] {
+                let (_, p) = variant_params(&[("capture", capture)], small);
                 check(
-                    &format!("quads({layers}) {label} small_max {small}"),
+                    &format!("quads({layers}) {label} small_max {small} capture {capture}"),
                     &s,
                     48,
                     40,
@@ -601,4 +607,64 @@ fn lists_in_depth_order_reverse_order_or_shuffled_sort_alike_in_workgroup_memory
             }
         }
     }
+}
+
+#[test]
+fn binned_triangles_longer_than_the_fast_span_step_their_edges_in_64_bits() {
+    // capture = tiles steps a triangle's edges from each tile's first pixel in i32 only when
+    // every edge spans under 598,000 units (2,336 px); longer ones (here a vertex ~5,000 px off
+    // to the side, inside the guard band, so not clipped) test every pixel in 64 bits. A
+    // thin one crosses the screen, with ordinary triangles over and under it.
+    let mut m = Mesh::default();
+    tri(
+        &mut m,
+        [[-0.9, -0.2, 0.0], [600.0, 0.35, 0.0], [-0.8, 0.6, 0.0]],
+        [0.9, 0.4, 0.1, 0.5],
+        0,
+    );
+    tri(
+        &mut m,
+        [[-0.6, -0.7, 0.5], [0.7, -0.5, 0.5], [0.0, 0.8, 0.5]],
+        [0.1, 0.5, 0.9, 0.5],
+        1,
+    );
+    tri(
+        &mut m,
+        [[0.6, -0.7, -0.5], [-0.7, -0.5, -0.5], [0.2, 0.9, -0.5]],
+        [0.3, 0.9, 0.2, 0.5],
+        2,
+    );
+    let s = scene_with(m, 5.0, 0.5);
+    let lists = rasterize(&s, 64, 48);
+    assert!(lists.max_depth_complexity() >= 3, "the triangles overlap");
+    for sort in ["workgroup", "private"] {
+        let (label, p) = variant_params(&[("capture", "tiles"), ("resolve_sort", sort)], 256);
+        check(&format!("long edges {label}"), &s, 64, 48, &p);
+    }
+}
+
+#[test]
+fn binned_capture_allocates_four_bytes_per_bin_entry_and_no_fragment_array() {
+    // 256² shells(2, 8): big triangles, a few hundred fragments each: the bins (one 4 B entry
+    // per touched 8×8 tile) are far smaller than the 8 B per fragment the pixel capture stores,
+    // and the offsets hold the tiles' ends then each pixel's count.
+    let s = scene("shells", &[("count", Int(2)), ("segments", Int(8))]);
+    let (w, h) = (256u32, 256u32);
+    let g = gpu();
+    let gs = GpuScene::upload(g, &s, w, h);
+    let total = rasterize(&s, w, h).total_fragments();
+    let p = params(&[("capture", Str("tiles".into()))]);
+    let pt = crate::testing::point(&ComputeAbuffer, &p);
+    let e = EffectConfig::from_point(&pt).unwrap();
+    let prepared = PreparedAbuffer::new(g, &gs, 256, &e, variants(&pt), None).unwrap();
+    let px = (w * h) as u64;
+    let tiles = (w.div_ceil(BIN) * h.div_ceil(BIN)) as u64;
+    let overhead = (tiles + px) * 4 + px * 16 + (COUNTERS + tiles.div_ceil(SCAN_BLOCK)) * 4;
+    assert_eq!(prepared.bytes_overhead().unwrap(), overhead);
+    let rest = prepared.bytes_allocated() - overhead;
+    assert!(
+        rest < total * FRAG_BYTES / 4,
+        "{rest} B beside the per-pixel part for {total} fragments"
+    );
+    check("shells(2, 8) 256² tiles", &s, w, h, &p);
 }

@@ -889,6 +889,83 @@ fn scan_add(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_inde
 var<workgroup> sort_d: array<f32, 2048>;
 var<workgroup> sort_t: array<u32, 2048>;
 
+// Pixel li's ring (`resolve_sort = workgroup`): a ring of WG_CAP slots whose logical entry i (in
+// depth order) is at slot (head + i) & RING. A fragment goes in from the nearer end of the list,
+// so lists that arrive in depth order *or in reverse* (the fill's atomics order big triangles
+// either way from frame to frame; nested shells alternate near and far) cost no moves, where a
+// one-ended insertion sort moved every entry in the reverse case: quads(32) at 1024² on the H200
+// ran its resolve at 0.53 or 0.77 ms by which order a frame's fill happened to give. n < WG_CAP.
+fn ring_insert(li: u32, head: ptr<function, u32>, n: u32, z: f32, tag: u32) {
+    let h0 = *head;
+    let mid = (h0 + n / 2u) & RING;
+    if n > 0u && before(z, tag, sort_d[mid * 64u + li], sort_t[mid * 64u + li]) {
+        // Front half: the entries before z move one slot toward the front.
+        let h = (h0 + RING) & RING;
+        *head = h;
+        var j = 0u;
+        loop {
+            let k = (h + j + 1u) & RING;
+            if !before(sort_d[k * 64u + li], sort_t[k * 64u + li], z, tag) {
+                break;
+            }
+            let m = (h + j) & RING;
+            sort_d[m * 64u + li] = sort_d[k * 64u + li];
+            sort_t[m * 64u + li] = sort_t[k * 64u + li];
+            j = j + 1u;
+        }
+        let m = (h + j) & RING;
+        sort_d[m * 64u + li] = z;
+        sort_t[m * 64u + li] = tag;
+    } else {
+        // Back half (or empty): the entries after z move one slot toward the back.
+        var j = n;
+        loop {
+            let k = (h0 + j + RING) & RING;
+            if j == 0u || !before(z, tag, sort_d[k * 64u + li], sort_t[k * 64u + li]) {
+                break;
+            }
+            let m = (h0 + j) & RING;
+            sort_d[m * 64u + li] = sort_d[k * 64u + li];
+            sort_t[m * 64u + li] = sort_t[k * 64u + li];
+            j = j - 1u;
+        }
+        let m = (h0 + j) & RING;
+        sort_d[m * 64u + li] = z;
+        sort_t[m * 64u + li] = tag;
+    }
+}
+
+// Insertion into a per-thread sorted array of SORT_MAX; beyond it the farthest is dropped (and
+// counted), keeping the SORT_MAX nearest.
+fn private_insert(
+    d: ptr<function, array<f32, SORT_MAX>>,
+    t: ptr<function, array<u32, SORT_MAX>>,
+    n: ptr<function, u32>,
+    dropped: ptr<function, u32>,
+    z: f32,
+    tag: u32,
+) {
+    if *n == SORT_MAX {
+        *dropped = *dropped + 1u;
+        if !before(z, tag, (*d)[SORT_MAX - 1u], (*t)[SORT_MAX - 1u]) {
+            return;
+        }
+        *n = SORT_MAX - 1u;
+    }
+    var j = *n;
+    loop {
+        if j == 0u || !before(z, tag, (*d)[j - 1u], (*t)[j - 1u]) {
+            break;
+        }
+        (*d)[j] = (*d)[j - 1u];
+        (*t)[j] = (*t)[j - 1u];
+        j = j - 1u;
+    }
+    (*d)[j] = z;
+    (*t)[j] = tag;
+    *n = *n + 1u;
+}
+
 fn fragment(depth: f32, tag: u32, ndc: vec2<f32>) -> Frag {
     let i = tri_indices(tag_prim(tag));
     return frag_from(depth, tag, ndc, i, clip_at(i.x), clip_at(i.y), clip_at(i.z));
@@ -911,78 +988,17 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocati
     var t: array<u32, SORT_MAX>;
     var n = 0u;
     var dropped = 0u;
+    // resolve_sort = workgroup: lists of up to WG_CAP in the pixel's ring (`ring_insert`).
     let in_wg = WG_SORT && end - start <= WG_CAP;
-    // resolve_sort = workgroup: a ring of WG_CAP slots whose logical entry i (in depth order)
-    // is at slot (head + i) & RING. A fragment goes in from the nearer end of the list, so lists
-    // that arrive in depth order *or in reverse* (the fill's atomics order big triangles either
-    // way from frame to frame; nested shells alternate near and far) cost no moves, where a
-    // one-ended insertion sort moved every entry in the reverse case: quads(32) at 1024² on the
-    // H200 ran its resolve at 0.53 or 0.77 ms by which order a frame's fill happened to give.
     var head = 0u;
-    if in_wg {
-        for (var s = start; s < end; s = s + 1u) {
-            let e = frags[s];
-            let z = bitcast<f32>(e.x);
-            let mid = (head + n / 2u) & RING;
-            if n > 0u && before(z, e.y, sort_d[mid * 64u + li], sort_t[mid * 64u + li]) {
-                // Front half: the entries before z move one slot toward the front.
-                head = (head + RING) & RING;
-                var j = 0u;
-                loop {
-                    let k = (head + j + 1u) & RING;
-                    if !before(sort_d[k * 64u + li], sort_t[k * 64u + li], z, e.y) {
-                        break;
-                    }
-                    let m = (head + j) & RING;
-                    sort_d[m * 64u + li] = sort_d[k * 64u + li];
-                    sort_t[m * 64u + li] = sort_t[k * 64u + li];
-                    j = j + 1u;
-                }
-                let m = (head + j) & RING;
-                sort_d[m * 64u + li] = z;
-                sort_t[m * 64u + li] = e.y;
-            } else {
-                // Back half (or empty): the entries after z move one slot toward the back.
-                var j = n;
-                loop {
-                    let k = (head + j + RING) & RING;
-                    if j == 0u || !before(z, e.y, sort_d[k * 64u + li], sort_t[k * 64u + li]) {
-                        break;
-                    }
-                    let m = (head + j) & RING;
-                    sort_d[m * 64u + li] = sort_d[k * 64u + li];
-                    sort_t[m * 64u + li] = sort_t[k * 64u + li];
-                    j = j - 1u;
-                }
-                let m = (head + j) & RING;
-                sort_d[m * 64u + li] = z;
-                sort_t[m * 64u + li] = e.y;
-            }
+    for (var s = start; s < end; s = s + 1u) {
+        let e = frags[s];
+        let z = bitcast<f32>(e.x);
+        if in_wg {
+            ring_insert(li, &head, n, z, e.y);
             n = n + 1u;
-        }
-    } else {
-        for (var s = start; s < end; s = s + 1u) {
-            let e = frags[s];
-            let z = bitcast<f32>(e.x);
-            if n == SORT_MAX {
-                dropped = dropped + 1u;
-                if !before(z, e.y, d[n - 1u], t[n - 1u]) {
-                    continue;
-                }
-                n = n - 1u;
-            }
-            var j = n;
-            loop {
-                if j == 0u || !before(z, e.y, d[j - 1u], t[j - 1u]) {
-                    break;
-                }
-                d[j] = d[j - 1u];
-                t[j] = t[j - 1u];
-                j = j - 1u;
-            }
-            d[j] = z;
-            t[j] = e.y;
-            n = n + 1u;
+        } else {
+            private_insert(&d, &t, &n, &dropped, z, e.y);
         }
     }
     let ndc = pixel_ndc(id.xy);

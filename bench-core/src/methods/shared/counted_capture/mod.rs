@@ -26,6 +26,12 @@
 //!   fragments in workgroup memory (16 KiB per 8×8 pixels) — into a ring, from its nearer end,
 //!   so lists that arrive in depth order or reversed cost no moves — longer ones in a per-thread
 //!   array; `private` sorts every list in the per-thread array (the first version).
+//! - `capture = pixels|tiles`: `pixels` (default) is the count → scan → fill above; `tiles`
+//!   (binned.wgsl) bins triangles to 8×8-pixel tiles instead (count → scan → fill of 4 B entries,
+//!   one per tile a triangle may touch) and each tile's workgroup sets its triangles up once and
+//!   tests every pixel against them, inserting covered fragments straight into the sort: no
+//!   per-fragment atomic, store or reload. Passes keep their labels (`count`, `fill`: of bins).
+//!   Single-sample only.
 //!
 //! Antialiasing (`aa`): `aa_capture = coverage` tests coverage at the MSAA sample positions
 //! (Vulkan's standard locations) by the same exact integer rule, in the count and fill passes
@@ -51,6 +57,8 @@ use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
 const WGSL: &str = include_str!("compute_abuffer.wgsl");
+/// `capture = tiles`: triangles binned to 8×8 tiles, fragments kept in workgroup memory.
+const BINNED_WGSL: &str = include_str!("binned.wgsl");
 /// Attribute re-derivation from a primitive id (also used by `linked_list`'s compact nodes).
 pub const VISIBILITY_WGSL: &str = include_str!("visibility.wgsl");
 /// Double-f32 arithmetic (error-free transformations), for the snapped screen positions.
@@ -87,7 +95,7 @@ pub(crate) const TILE_W: u32 = 32;
 /// Storage buffers the kernels bind.
 pub(crate) const STORAGE_BUFFERS: u32 = 10;
 /// Workgroup memory of the resolve's `resolve_sort = workgroup` (2 × 2048 words).
-pub(crate) const WG_SORT_BYTES: u32 = 16 * 1024;
+const WG_SORT_BYTES: u32 = 16 * 1024;
 /// Bytes per vertex of the clip buffer (`transform = vertex`): clip position and snapped screen
 /// position.
 pub(crate) const CLIP_BYTES: u64 = 24;
@@ -106,9 +114,37 @@ pub(crate) struct Variants {
     pub wg_sort: bool,
     /// MSAA coverage-mask samples (1: pixel centres).
     pub aa_samples: u32,
+    /// `capture = tiles`: triangles binned to 8×8 tiles, each tile's pixels test its triangles
+    /// and sort what covers them in workgroup memory (no fragment array); single-sample only.
+    pub binned: bool,
 }
 
+/// Pixels per side of a bin tile (`BIN` in binned.wgsl; one resolve workgroup).
+pub(crate) const BIN: u32 = 8;
+
+/// Workgroup memory of the binned resolve's triangle entries (`be_*` and the tile's range).
+const BIN_ENTRY_BYTES: u32 = 3 * 64 * 16 + 192 * 16 + 8;
+
 impl Variants {
+    /// Workgroup memory the resolve needs: the sort rings (any binned resolve declares them),
+    /// and the binned resolve's triangle entries.
+    pub(crate) fn workgroup_bytes(&self) -> u32 {
+        match (self.binned, self.wg_sort) {
+            (true, _) => WG_SORT_BYTES + BIN_ENTRY_BYTES,
+            (false, true) => WG_SORT_BYTES,
+            (false, false) => 0,
+        }
+    }
+
+    /// The axis value that needs [`Self::workgroup_bytes`], for a skip reason.
+    pub(crate) fn name(&self) -> &'static str {
+        if self.binned {
+            "capture = tiles"
+        } else {
+            "resolve_sort = workgroup"
+        }
+    }
+
     /// The override constants every kernel of this variant shares.
     fn aa_constants(&self) -> [(&'static str, f64); 3] {
         let ms = self.aa_samples > 1;
@@ -169,6 +205,8 @@ pub(crate) struct PreparedAbuffer {
     images: usize,
     prep_note: String,
     pub aa_samples: u32,
+    shape: ScanShape,
+    binned: bool,
     _sizes: wgpu::Buffer,
     _clipv: wgpu::Buffer,
     alloc: AllocCounter,
@@ -182,11 +220,35 @@ struct Layout {
     pipeline: wgpu::PipelineLayout,
 }
 
+/// What the scan runs over and how `offs` is laid out: every pixel's fragment count (the pixel
+/// capture), or every bin tile's entries followed by each pixel's fragment count, which the
+/// resolve writes (`capture = tiles`).
+#[derive(Clone, Copy)]
+struct ScanShape {
+    scanned: u64,
+    nblocks: u64,
+    offs_words: u64,
+}
+
 /// Scenes the capture cannot take: more pixels than one scan dispatch, or more triangles than
-/// a coverage-mask tag can name. Ok: the scan blocks.
-fn check_scene(scene: &GpuScene, v: Variants) -> Result<u64> {
+/// a coverage-mask tag can name. Ok: what the scan runs over.
+fn check_scene(scene: &GpuScene, v: Variants) -> Result<ScanShape> {
     let px = scene.pixels() as u64;
-    let nblocks = px.div_ceil(SCAN_BLOCK);
+    let tiles = (scene.width.div_ceil(BIN) * scene.height.div_ceil(BIN)) as u64;
+    let shape = if v.binned {
+        ScanShape {
+            scanned: tiles,
+            nblocks: tiles.div_ceil(SCAN_BLOCK),
+            offs_words: tiles + px,
+        }
+    } else {
+        ScanShape {
+            scanned: px,
+            nblocks: px.div_ceil(SCAN_BLOCK),
+            offs_words: px,
+        }
+    };
+    let nblocks = shape.nblocks;
     if nblocks > MAX_GROUPS as u64 {
         return Err(CoreError::Param(format!(
             "compute_abuffer scans at most {} pixels, not {px}",
@@ -199,14 +261,16 @@ fn check_scene(scene: &GpuScene, v: Variants) -> Result<u64> {
             "compute_abuffer with coverage masks tags primitives in {MASKED_PRIM_BITS} bits: {ntri} triangles are too many"
         )));
     }
-    Ok(nblocks)
+    Ok(shape)
 }
 
 impl Layout {
     /// The module (with `replay`'s kernel), its one bind group's table and pipeline layout.
     fn new(gpu: &Gpu, replay: Option<&Replay>) -> Layout {
         let extra = replay.map_or(String::new(), |r| format!("{REPLAY_WGSL}\n{}", r.wgsl));
-        let src = format!("{WGSL}\n{DF32_WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}\n{extra}");
+        let src = format!(
+            "{WGSL}\n{BINNED_WGSL}\n{DF32_WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}\n{extra}"
+        );
         let module = shader(gpu, "compute_abuffer", &src);
         // Camera; the mesh (positions, normals, colours, object ids, indices); offsets,
         // fragments, work, image; sizes; clip buffer.
@@ -245,9 +309,19 @@ fn sizing_count(
     read_vec::<u32>(gpu, counted, COUNTERS as usize)
 }
 
-/// The fragment array for `total` counted fragments: (capacity, buffer); Err where the slot
-/// indices or the adapter's binding limit cannot hold it.
-fn fragment_buffer(gpu: &Gpu, alloc: &mut AllocCounter, total: u64) -> Result<(u64, wgpu::Buffer)> {
+/// The fragment array for `total` counted fragments (8 B each), or (`binned`) the bins for
+/// `total` entries (4 B each, two per 8 B element): (capacity in fragments or entries, buffer);
+/// Err where the slot indices or the adapter's binding limit cannot hold it.
+fn fragment_buffer(
+    gpu: &Gpu,
+    alloc: &mut AllocCounter,
+    total: u64,
+    binned: bool,
+) -> Result<(u64, wgpu::Buffer)> {
+    if binned {
+        let (slots, buf) = fragment_buffer(gpu, alloc, total.div_ceil(2), false)?;
+        return Ok(((2 * slots).min(u32::MAX as u64), buf));
+    }
     let capacity = total.max(1);
     if capacity >= u32::MAX as u64 {
         return Err(CoreError::OutOfMemory(format!(
@@ -258,6 +332,18 @@ fn fragment_buffer(gpu: &Gpu, alloc: &mut AllocCounter, total: u64) -> Result<(u
     let usage = wgpu::BufferUsages::STORAGE;
     let frags = alloc.buffer(gpu, "abuffer fragments", capacity * FRAG_BYTES, usage);
     Ok((capacity, frags))
+}
+
+/// What the prepare-time counts found, for the rows' notes.
+fn prep_note(v: Variants, total: u64, (nbig, nchunks): (u64, u64), freed: u64) -> String {
+    if v.binned {
+        return format!(
+            "sized by prepare-time counts: {total} bin entries (4 B each) in {BIN}×{BIN}-px tiles, {nbig} triangles binned by workgroups (big or clipped), no fragment array, {freed} B of sizing scratch freed"
+        );
+    }
+    format!(
+        "sized by prepare-time counts: {total} fragments, {nbig} shared (big or clipped) triangles in {nchunks} tiles of {TILE_PIXELS} px (≤ {TILE_W} wide), {freed} B of sizing scratch freed"
+    )
 }
 
 /// The resolve, or a replay kernel in its place (the ideal-order twins). A replay runs
@@ -275,7 +361,14 @@ fn resolve_kernel(
             rc.push(("PRETRANSFORM", flag(v.pretransform)));
             rc.push(("WG_SORT", flag(v.wg_sort)));
             rc.extend(v.aa_constants());
-            ("resolve", rc)
+            (
+                if v.binned {
+                    "resolve_binned"
+                } else {
+                    "resolve"
+                },
+                rc,
+            )
         }
         Some(r) => {
             let mut c = r.constants.clone();
@@ -307,9 +400,14 @@ fn kernels(gpu: &Gpu, l: &Layout, fill: bool, v: Variants) -> Kernels {
         aa_x,
     ];
     let mk = |entry: &str| compute_pipeline(gpu, entry, &l.pipeline, &l.module, entry, &c, false);
+    let (small, big) = if v.binned {
+        ("bin_small", "bin_big")
+    } else {
+        ("raster_small", "raster_big")
+    };
     Kernels {
-        small: mk("raster_small"),
-        big: mk("raster_big"),
+        small: mk(small),
+        big: mk(big),
     }
 }
 
@@ -341,6 +439,7 @@ impl PreparedAbuffer {
             stepped: true,
             wg_sort: false,
             aa_samples: 1,
+            binned: false,
         };
         Self::new(gpu, scene, 256, &EffectConfig::default(), v, Some(replay))
     }
@@ -361,13 +460,14 @@ impl PreparedAbuffer {
     ) -> Result<Self> {
         let d = &gpu.device;
         let px = scene.pixels() as u64;
-        let nblocks = check_scene(scene, v)?;
+        let shape = check_scene(scene, v)?;
+        let nblocks = shape.nblocks;
         let ntri = scene.index_count / 3;
         let nvert = (scene.positions.size() / 12) as u32;
         let l = Layout::new(gpu, replay);
         let sizes = |capacity: u64, big_cap: u64, chunk_cap: u64| Sizes {
             ntri,
-            npix: px as u32,
+            npix: shape.scanned as u32,
             nblocks: nblocks as u32,
             capacity: capacity as u32,
             big_cap: big_cap as u32,
@@ -411,7 +511,8 @@ impl PreparedAbuffer {
         // scene, no chunk table) for their number and chunks; (2) with the exact list and table,
         // count every fragment. Each frame then runs (2) again before filling.
         let mut scratch = AllocCounter::default();
-        let offs = scratch.buffer(gpu, "abuffer offsets", px * 4, STORAGE_RW);
+        let offs_bytes = shape.offs_words * 4;
+        let offs = scratch.buffer(gpu, "abuffer offsets", offs_bytes, STORAGE_RW);
         let work_words =
             |big: u64, chunks: u64| COUNTERS + nblocks + 2 * big.max(1) + chunks.max(1);
         let listing_bytes = work_words(ntri as u64, 0) * 4;
@@ -438,13 +539,14 @@ impl PreparedAbuffer {
         drop(listing_bind);
         drop(listing);
 
-        alloc.bytes += px * 4; // the offsets (allocated above, kept)
+        alloc.bytes += offs_bytes; // the offsets (allocated above, kept)
         let work_bytes = work_words(nbig, nchunks) * 4;
         check_storage_size(gpu, "compute_abuffer work", work_bytes)?;
         let work = alloc.buffer(gpu, "abuffer work", work_bytes, STORAGE_RW);
         let (big_cap, chunk_cap) = (nbig.max(1), nchunks.max(1));
         set_sizes(sizes(0, big_cap, chunk_cap));
-        let big_groups = groups_2d(nchunks as u32);
+        // Shared raster tiles, or (binned) one workgroup per listed triangle.
+        let big_groups = groups_2d(if v.binned { nbig } else { nchunks } as u32);
         let sizing_bind = bind_with(&dummy, &work, &dummy_image);
         let counts = [(&count.small, small_groups), (&count.big, big_groups)];
         let scan_jobs: Vec<_> = scan.iter().zip(scan_groups).collect();
@@ -458,18 +560,15 @@ impl PreparedAbuffer {
         drop(sizing_bind);
         drop((dummy, dummy_image));
 
-        let (capacity, frags) = fragment_buffer(gpu, &mut alloc, total)?;
+        let (capacity, frags) = fragment_buffer(gpu, &mut alloc, total, v.binned)?;
         let image = alloc.buffer(gpu, "abuffer image", image_bytes, STORAGE_RW);
         let bind = bind_with(&frags, &work, &image);
         set_sizes(sizes(capacity, big_cap, chunk_cap));
         let fill = kernels(gpu, &l, true, v);
         let resolve = resolve_kernel(gpu, &l, effect, v, replay);
-        let prep_note = format!(
-            "sized by prepare-time counts: {total} fragments, {nbig} shared (big or clipped) triangles in {nchunks} tiles of {TILE_PIXELS} px (≤ {TILE_W} wide), {} B of sizing scratch freed",
-            scratch.bytes - px * 4
-        );
+        let prep_note = prep_note(v, total, (nbig, nchunks), scratch.bytes - offs_bytes);
         drop(pre);
-        let overhead = px * 4 + (COUNTERS + nblocks) * 4 + image_bytes;
+        let overhead = offs_bytes + (COUNTERS + nblocks) * 4 + image_bytes;
         Ok(PreparedAbuffer {
             transform,
             count,
@@ -487,6 +586,8 @@ impl PreparedAbuffer {
             images,
             prep_note,
             aa_samples: v.aa_samples,
+            shape,
+            binned: v.binned,
             _sizes: sizes_buf,
             _clipv: clipv,
             alloc,
@@ -537,7 +638,8 @@ impl crate::timed::Timed for PreparedAbuffer {
         );
         gpu.queue.submit([enc.finish()]);
         Ok(FrameStats {
-            geometry_passes: 2,
+            // Binned, the resolve sets every binned triangle up again.
+            geometry_passes: if self.binned { 3 } else { 2 },
             layers: 0,
         })
     }
@@ -553,24 +655,39 @@ impl crate::timed::Timed for PreparedAbuffer {
     }
 }
 
-impl Prepared for PreparedAbuffer {
-    fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
-        let n = scene.pixels();
-        let mut cap = Capture::empty();
-        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n * self.images)?);
+impl PreparedAbuffer {
+    /// Fragments per pixel (cut to what the resolve could sort) and the pixels that lost
+    /// fragments to the allocation.
+    fn pixel_counts(&self, gpu: &Gpu, n: usize) -> Result<(Vec<u32>, u64)> {
+        let words = read_vec::<u32>(gpu, &self.offs, self.shape.offs_words as usize)?;
+        if self.binned {
+            // The resolve wrote each pixel's count after the tiles' ends; lost bin entries are
+            // counted (and flagged) by the fill.
+            let counts = words[self.shape.scanned as usize..][..n].iter();
+            return Ok((counts.map(|&c| c.min(SORT_MAX)).collect(), 0));
+        }
         // After the fill, offs[p] is one past pixel p's last slot: counts are the differences,
         // cut to the slots that exist and to what the resolve could sort.
-        let ends = read_vec::<u32>(gpu, &self.offs, n)?;
         let cap_slots = self.capacity.min(u32::MAX as u64) as u32;
         let (mut prev, mut short) = (0u32, 0u64);
         let mut counts = Vec::with_capacity(n);
-        for &end in &ends {
+        for &end in &words[..n] {
             // A pixel whose slots run past the allocation lost fragments.
             short += u64::from(end > cap_slots && prev < end);
             let e = end.min(cap_slots);
             counts.push((e - prev.min(e)).min(SORT_MAX));
             prev = end;
         }
+        Ok((counts, short))
+    }
+}
+
+impl Prepared for PreparedAbuffer {
+    fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
+        let n = scene.pixels();
+        let mut cap = Capture::empty();
+        cap.image = Some(read_vec::<[f32; 4]>(gpu, &self.image, n * self.images)?);
+        let (counts, short) = self.pixel_counts(gpu, n)?;
         cap.expected = Expected::All;
         if self.aa_samples > 1 {
             // Counts are fragments per pixel (coverage masks), not per sample.
@@ -594,8 +711,13 @@ impl Prepared for PreparedAbuffer {
         if lost + dropped + big_lost > 0 {
             cap.flag.add(Flag::Overflow);
         }
+        let what = if self.binned {
+            "bin entries"
+        } else {
+            "fragments"
+        };
         cap.notes = format!(
-            "{}; this frame {total} fragments, {lost} beyond the allocation, {dropped} beyond the sort capacity ({SORT_MAX}) in {ovf_px} pixels, {big_lost} big triangles unlisted; big-triangle tiles {empty} empty, {full} full, {partial} partial",
+            "{}; this frame {total} {what}, {lost} beyond the allocation, {dropped} beyond the sort capacity ({SORT_MAX}) in {ovf_px} pixels, {big_lost} big triangles unlisted; big-triangle tiles {empty} empty, {full} full, {partial} partial",
             self.prep_note
         );
         Ok(cap)
