@@ -234,7 +234,7 @@ pub mod cols {
     );
     pub const CAPTURE: Col = Col::new(
         "capture",
-        "compute_abuffer: pixels (count → scan → fill: an 8 B fragment per pixel slot, then sort) | tiles (triangles binned to 8×8-pixel tiles, 4 B per tile and triangle; each tile's pixels test its triangles and sort in workgroup memory: no fragment array)",
+        "compute_abuffer: pixels (count → scan → fill: an 8 B fragment per pixel slot, then sort) | tiles (triangles over small_max binned to 8×8-pixel tiles instead, 8 B per tile and triangle; each tile's pixels test them and sort in workgroup memory: their fragments are never stored)",
     );
     pub const RESOLVE_SORT: Col = Col::new(
         "resolve_sort",

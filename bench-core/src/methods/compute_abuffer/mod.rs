@@ -45,7 +45,7 @@ const COVERAGE: Axis = Axis::choice(
 );
 const CAPTURE: Axis = Axis::choice(
     cols::CAPTURE,
-    "pixels: count, scan and fill an 8 B fragment per pixel slot, then sort; tiles: bin triangles to 8×8 tiles, each tile's pixels test its triangles (no fragment array)",
+    "pixels: count, scan and fill an 8 B fragment per pixel slot, then sort; tiles: triangles over small_max binned to 8×8 tiles instead, each tile's pixels test them (their fragments never stored)",
     "pixels",
     &["pixels", "tiles"],
 );
@@ -61,7 +61,7 @@ impl Method for ComputeAbuffer {
         "compute_abuffer"
     }
     fn describe(&self) -> &'static str {
-        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position); capture=tiles bins triangles to 8×8 tiles instead (4 B per tile and triangle, 8 B per pixel) and each tile's pixels test its triangles, the fragments never leaving workgroup memory"
+        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position); capture=tiles bins the triangles over small_max to 8×8 tiles instead of storing their fragments (8 B per tile and triangle, + 8 B per pixel) and each tile's pixels test them, those fragments never leaving workgroup memory"
     }
     fn exact(&self) -> bool {
         true

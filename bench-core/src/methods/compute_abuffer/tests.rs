@@ -593,9 +593,15 @@ fn lists_in_depth_order_reverse_order_or_shuffled_sort_alike_in_workgroup_memory
         ] {
             let mut s = base.clone();
             s.mesh.indices = order.iter().flatten().copied().collect();
-            // capture = tiles: a pixel's ring fills in bin order and, past 32, moves to the
+            // capture = tiles: a pixel's ring fills in bin order (small_max 128: every quad is
+            // binned) or from its stored fragments (1 << 20: none is), and past 32 moves to the
             // per-thread array mid-list.
-            for (small, capture) in [(1, "pixels"), (1 << 20, "pixels"), (128, "tiles")] {
+            for (small, capture) in [
+                (1, "pixels"),
+                (1 << 20, "pixels"),
+                (128, "tiles"),
+                (1 << 20, "tiles"),
+            ] {
                 let (_, p) = variant_params(&[("capture", capture)], small);
                 check(
                     &format!("quads({layers}) {label} small_max {small} capture {capture}"),
@@ -610,11 +616,12 @@ fn lists_in_depth_order_reverse_order_or_shuffled_sort_alike_in_workgroup_memory
 }
 
 #[test]
-fn binned_triangles_longer_than_the_fast_span_step_their_edges_in_64_bits() {
-    // capture = tiles steps a triangle's edges from each tile's first pixel in i32 only when
-    // every edge spans under 598,000 units (2,336 px); longer ones (here a vertex ~5,000 px off
-    // to the side, inside the guard band, so not clipped) test every pixel in 64 bits. A
-    // thin one crosses the screen, with ordinary triangles over and under it.
+fn binned_triangles_decide_pixels_alike_stepped_in_i32_or_in_64_bits() {
+    // capture = tiles steps a binned triangle's edges from each tile's first pixel in i32 when
+    // every edge spans under FAST_SPAN units (586k px); longer ones (guard-band sizes, which no
+    // small viewport reaches) test every pixel in 64 bits. With FAST_SPAN lowered to 1 unit
+    // every binned triangle takes the 64-bit path here; both must equal the reference. Also a
+    // triangle reaching ~5,000 px off screen (inside the guard band: not clipped).
     let mut m = Mesh::default();
     tri(
         &mut m,
@@ -635,19 +642,38 @@ fn binned_triangles_longer_than_the_fast_span_step_their_edges_in_64_bits() {
         2,
     );
     let s = scene_with(m, 5.0, 0.5);
+    let quads = scene("quads", &[("depth_complexity", Int(6))]);
     let lists = rasterize(&s, 64, 48);
     assert!(lists.max_depth_complexity() >= 3, "the triangles overlap");
-    for sort in ["workgroup", "private"] {
-        let (label, p) = variant_params(&[("capture", "tiles"), ("resolve_sort", sort)], 256);
-        check(&format!("long edges {label}"), &s, 64, 48, &p);
+    let span = |v| FAST_SPAN.store(v, std::sync::atomic::Ordering::Relaxed);
+    for fast_span in [150_000_000, 1] {
+        span(fast_span);
+        for sort in ["workgroup", "private"] {
+            let (label, p) = variant_params(&[("capture", "tiles"), ("resolve_sort", sort)], 1);
+            check(
+                &format!("long edges {label} span {fast_span}"),
+                &s,
+                64,
+                48,
+                &p,
+            );
+            check(
+                &format!("quads {label} span {fast_span}"),
+                &quads,
+                48,
+                40,
+                &p,
+            );
+        }
     }
+    span(150_000_000);
 }
 
 #[test]
-fn binned_capture_allocates_four_bytes_per_bin_entry_and_no_fragment_array() {
-    // 256² shells(2, 8): big triangles, a few hundred fragments each: the bins (one 4 B entry
-    // per touched 8×8 tile) are far smaller than the 8 B per fragment the pixel capture stores,
-    // and the offsets hold the tiles' ends then each pixel's count.
+fn binned_capture_stores_an_entry_per_touched_tile_instead_of_big_triangles_fragments() {
+    // 256² shells(2, 8): big triangles, hundreds of fragments each, all binned: the bins (one
+    // 8 B entry per touched 8×8 tile) are far smaller than the 8 B per fragment the pixel
+    // capture stores, and the offsets hold the pixels' and tiles' ends, then each pixel's count.
     let s = scene("shells", &[("count", Int(2)), ("segments", Int(8))]);
     let (w, h) = (256u32, 256u32);
     let g = gpu();
@@ -659,7 +685,8 @@ fn binned_capture_allocates_four_bytes_per_bin_entry_and_no_fragment_array() {
     let prepared = PreparedAbuffer::new(g, &gs, 256, &e, variants(&pt), None).unwrap();
     let px = (w * h) as u64;
     let tiles = (w.div_ceil(BIN) * h.div_ceil(BIN)) as u64;
-    let overhead = (tiles + px) * 4 + px * 16 + (COUNTERS + tiles.div_ceil(SCAN_BLOCK)) * 4;
+    let overhead =
+        (px + tiles + px) * 4 + px * 16 + (COUNTERS + (px + tiles).div_ceil(SCAN_BLOCK)) * 4;
     assert_eq!(prepared.bytes_overhead().unwrap(), overhead);
     let rest = prepared.bytes_allocated() - overhead;
     assert!(

@@ -36,6 +36,9 @@ override AA_SAMPLES: u32 = 1u;
 // Resolve: sort lists of up to WG_CAP fragments in workgroup memory (axis `resolve_sort =
 // workgroup`); longer lists, and every list when false, in a per-thread array.
 override WG_SORT: bool = true;
+// `capture = tiles` (binned.wgsl): what `raster_small` does not take is binned to 8×8 tiles
+// instead of shared by `raster_big`.
+override TILES: bool = false;
 // Sizes read at run time, so that one compiled kernel serves every scene and resolution (a
 // software driver compiles each specialisation anew).
 struct Sizes {
@@ -624,6 +627,10 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         }
         let px = u32(bb.z - bb.x + 1) * u32(bb.w - bb.y + 1);
         if p.n != 3u || px > sizes.small_max || (STEPPED && !fits_i32(p)) {
+            if TILES {
+                bin_triangle(p, bb, prim);
+                continue;
+            }
             if !FILL {
                 let k = atomicAdd(&work[W_BIG], 1u);
                 let grid = tile_grid(bb);

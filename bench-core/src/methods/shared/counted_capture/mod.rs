@@ -26,12 +26,14 @@
 //!   fragments in workgroup memory (16 KiB per 8×8 pixels) — into a ring, from its nearer end,
 //!   so lists that arrive in depth order or reversed cost no moves — longer ones in a per-thread
 //!   array; `private` sorts every list in the per-thread array (the first version).
-//! - `capture = pixels|tiles`: `pixels` (default) is the count → scan → fill above; `tiles`
-//!   (binned.wgsl) bins triangles to 8×8-pixel tiles instead (count → scan → fill of 4 B entries,
-//!   one per tile a triangle may touch) and each tile's workgroup sets its triangles up once and
-//!   tests every pixel against them, inserting covered fragments straight into the sort: no
-//!   per-fragment atomic, store or reload. Passes keep their labels (`count`, `fill`: of bins).
-//!   Single-sample only.
+//! - `capture = pixels|tiles`: `pixels` (default) is the count → scan → fill above; with
+//!   `tiles` (binned.wgsl) what one thread would not rasterise (bounding box over `small_max`,
+//!   long or clipped) is binned to 8×8-pixel tiles instead of shared by tiles of the raster
+//!   (an 8 B entry per tile it may touch, counted, scanned and filled with the fragments), and
+//!   the resolve, one workgroup per tile, sets each binned triangle up once and tests every pixel
+//!   against it, inserting covered fragments straight into the sort: a big triangle costs no
+//!   per-fragment atomic, store or reload. Passes keep their labels (`count`, `fill` of
+//!   fragments and entries). Single-sample only.
 //!
 //! Antialiasing (`aa`): `aa_capture = coverage` tests coverage at the MSAA sample positions
 //! (Vulkan's standard locations) by the same exact integer rule, in the count and fill passes
@@ -121,6 +123,13 @@ pub(crate) struct Variants {
 
 /// Pixels per side of a bin tile (`BIN` in binned.wgsl; one resolve workgroup).
 pub(crate) const BIN: u32 = 8;
+/// `FAST_SPAN` of binned.wgsl (edges stepped in i32 within a tile); a test lowers it to send
+/// every binned triangle down the 64-bit path, which no small test scene reaches otherwise.
+#[cfg(test)]
+pub(crate) static FAST_SPAN: std::sync::atomic::AtomicI32 =
+    std::sync::atomic::AtomicI32::new(150_000_000);
+/// Primitive bits of a bin entry (`FAN_SHIFT`: a clipped polygon's fan triangle above them).
+const BIN_PRIM_BITS: u32 = 28;
 
 /// Workgroup memory of the binned resolve's triangle entries (`be_*` and the tile's range).
 const BIN_ENTRY_BYTES: u32 = 3 * 64 * 16 + 192 * 16 + 8;
@@ -237,9 +246,9 @@ fn check_scene(scene: &GpuScene, v: Variants) -> Result<ScanShape> {
     let tiles = (scene.width.div_ceil(BIN) * scene.height.div_ceil(BIN)) as u64;
     let shape = if v.binned {
         ScanShape {
-            scanned: tiles,
-            nblocks: tiles.div_ceil(SCAN_BLOCK),
-            offs_words: tiles + px,
+            scanned: px + tiles,
+            nblocks: (px + tiles).div_ceil(SCAN_BLOCK),
+            offs_words: px + tiles + px,
         }
     } else {
         ScanShape {
@@ -248,14 +257,19 @@ fn check_scene(scene: &GpuScene, v: Variants) -> Result<ScanShape> {
             offs_words: px,
         }
     };
-    let nblocks = shape.nblocks;
-    if nblocks > MAX_GROUPS as u64 {
+    if shape.nblocks > MAX_GROUPS as u64 {
         return Err(CoreError::Param(format!(
-            "compute_abuffer scans at most {} pixels, not {px}",
-            MAX_GROUPS as u64 * SCAN_BLOCK
+            "compute_abuffer scans at most {} pixels (and tiles), not {}",
+            MAX_GROUPS as u64 * SCAN_BLOCK,
+            shape.scanned
         )));
     }
     let ntri = scene.index_count / 3;
+    if v.binned && ntri >= 1 << BIN_PRIM_BITS {
+        return Err(CoreError::Param(format!(
+            "compute_abuffer with capture = tiles names primitives in {BIN_PRIM_BITS} bits of a bin entry: {ntri} triangles are too many"
+        )));
+    }
     if v.aa_samples > 1 && ntri >= 1 << MASKED_PRIM_BITS {
         return Err(CoreError::Param(format!(
             "compute_abuffer with coverage masks tags primitives in {MASKED_PRIM_BITS} bits: {ntri} triangles are too many"
@@ -309,19 +323,10 @@ fn sizing_count(
     read_vec::<u32>(gpu, counted, COUNTERS as usize)
 }
 
-/// The fragment array for `total` counted fragments (8 B each), or (`binned`) the bins for
-/// `total` entries (4 B each, two per 8 B element): (capacity in fragments or entries, buffer);
-/// Err where the slot indices or the adapter's binding limit cannot hold it.
-fn fragment_buffer(
-    gpu: &Gpu,
-    alloc: &mut AllocCounter,
-    total: u64,
-    binned: bool,
-) -> Result<(u64, wgpu::Buffer)> {
-    if binned {
-        let (slots, buf) = fragment_buffer(gpu, alloc, total.div_ceil(2), false)?;
-        return Ok(((2 * slots).min(u32::MAX as u64), buf));
-    }
+/// The fragment array for `total` counted slots of 8 B (fragments, and with `capture = tiles`
+/// bin entries): (capacity, buffer); Err where the slot indices or the adapter's binding limit
+/// cannot hold it.
+fn fragment_buffer(gpu: &Gpu, alloc: &mut AllocCounter, total: u64) -> Result<(u64, wgpu::Buffer)> {
     let capacity = total.max(1);
     if capacity >= u32::MAX as u64 {
         return Err(CoreError::OutOfMemory(format!(
@@ -338,7 +343,7 @@ fn fragment_buffer(
 fn prep_note(v: Variants, total: u64, (nbig, nchunks): (u64, u64), freed: u64) -> String {
     if v.binned {
         return format!(
-            "sized by prepare-time counts: {total} bin entries (4 B each) in {BIN}×{BIN}-px tiles, {nbig} triangles binned by workgroups (big or clipped), no fragment array, {freed} B of sizing scratch freed"
+            "sized by prepare-time counts: {total} slots of 8 B (small triangles' fragments and the other triangles' entries in {BIN}×{BIN}-px tiles), {nbig} polygons binned by workgroups (big or clipped), {freed} B of sizing scratch freed"
         );
     }
     format!(
@@ -361,6 +366,11 @@ fn resolve_kernel(
             rc.push(("PRETRANSFORM", flag(v.pretransform)));
             rc.push(("WG_SORT", flag(v.wg_sort)));
             rc.extend(v.aa_constants());
+            #[cfg(test)]
+            rc.push((
+                "FAST_SPAN",
+                FAST_SPAN.load(std::sync::atomic::Ordering::Relaxed) as f64,
+            ));
             (
                 if v.binned {
                     "resolve_binned"
@@ -393,6 +403,7 @@ fn kernels(gpu: &Gpu, l: &Layout, fill: bool, v: Variants) -> Kernels {
     let [aa_n, aa_bits, aa_x] = v.aa_constants();
     let c = [
         ("FILL", flag(fill)),
+        ("TILES", flag(v.binned)),
         ("PRETRANSFORM", flag(v.pretransform)),
         ("STEPPED", flag(v.stepped)),
         aa_n,
@@ -401,7 +412,7 @@ fn kernels(gpu: &Gpu, l: &Layout, fill: bool, v: Variants) -> Kernels {
     ];
     let mk = |entry: &str| compute_pipeline(gpu, entry, &l.pipeline, &l.module, entry, &c, false);
     let (small, big) = if v.binned {
-        ("bin_small", "bin_big")
+        ("raster_small", "bin_big")
     } else {
         ("raster_small", "raster_big")
     };
@@ -560,7 +571,7 @@ impl PreparedAbuffer {
         drop(sizing_bind);
         drop((dummy, dummy_image));
 
-        let (capacity, frags) = fragment_buffer(gpu, &mut alloc, total, v.binned)?;
+        let (capacity, frags) = fragment_buffer(gpu, &mut alloc, total)?;
         let image = alloc.buffer(gpu, "abuffer image", image_bytes, STORAGE_RW);
         let bind = bind_with(&frags, &work, &image);
         set_sizes(sizes(capacity, big_cap, chunk_cap));
