@@ -132,7 +132,7 @@ pub(crate) static FAST_SPAN: std::sync::atomic::AtomicI32 =
 const BIN_PRIM_BITS: u32 = 28;
 
 /// Workgroup memory of the binned resolve's triangle entries (`be_*` and the tile's range).
-const BIN_ENTRY_BYTES: u32 = 3 * 64 * 16 + 192 * 16 + 8;
+const BIN_ENTRY_BYTES: u32 = 3 * 64 * 16 + 192 * 16 + 8 + 2 * 64 * 4;
 
 impl Variants {
     /// Workgroup memory the resolve needs: the sort rings (any binned resolve declares them),
