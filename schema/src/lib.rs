@@ -507,6 +507,14 @@ pub mod cols {
         "class_ids_present",
         "classified: classification ids with at least one 4×4 tile this frame",
     );
+    pub const SUN_SHADOW: Col = Col::new(
+        "sun_shadow",
+        "deferred: sun shadow map (off, or taps8: an orthographic sun depth map read with an 8-tap bilinear PCF filter where a pixel's footprint straddles a shadow edge, one tap elsewhere; in the paths and the f64 reference)",
+    );
+    pub const SHADOW_FADE_TILE_FRAC: Col = Col::new(
+        "shadow_fade_tile_frac",
+        "classified, sun_shadow = taps8: fraction of 4×4 tiles in the shadow-fade class (some pixel's filter footprint straddles a shadow edge: only these run the 8-tap filter)",
+    );
     pub const PERMUTATIONS: Col = Col::new(
         "permutations",
         "shader permutations compiled and drawn (classified: one per id the scene can produce; uber: 1)",
@@ -1174,6 +1182,8 @@ pub const GROUPS: &[Group] = &[
             cols::LIGHTS_PER_TILE_MEAN,
             cols::LIGHTS_PER_TILE_MAX,
             cols::CLASS_IDS_PRESENT,
+            cols::SUN_SHADOW,
+            cols::SHADOW_FADE_TILE_FRAC,
             cols::PERMUTATIONS,
             cols::CPU_LIGHT_MS,
             cols::CPU_CULL_MS,

@@ -11,13 +11,16 @@
 //! | `uber`       | the same tile list drawn with the uber-shader (every feature) in one draw |
 //!
 //! The classified and uber paths loop over every light (no culling): the comparison isolates
-//! what classification saves.
+//! what classification saves. With `sun_shadow = taps8` (naive, classified, uber) the sun is
+//! shaded through a shadow map (`sun_shadow.rs`): the uber-shader runs the 8-tap filter on every
+//! sun-facing pixel, the classified path only in tiles of the fade class.
 
 use crate::gpu_util::{compute_pipeline, read_vec, storage_entry, texture_entry};
 use scenarios::{ParamValue, Scene};
 use wgpu::util::DeviceExt;
 
 use super::gbuffer::{read_rgba32f, GBufferPass};
+use super::sun_shadow::{self, SunShadow};
 use super::{class, GBuffer, ShadeSetup, LIGHT_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
@@ -26,6 +29,11 @@ use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
 
 pub const PATHS_WGSL: &str = include_str!("paths.wgsl");
+
+/// The paths' WGSL body (after light.wgsl): paths.wgsl and the sun shadow it calls.
+pub fn paths_source() -> String {
+    format!("{PATHS_WGSL}\n{}", sun_shadow::WGSL)
+}
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// Per-tile list capacity when lists are kept for inspection (tests, debug views).
 pub const LIST_CAP: u32 = 1024;
@@ -70,6 +78,9 @@ pub fn module(gpu: &Gpu, label: &str, extra: &str) -> wgpu::ShaderModule {
 }
 
 impl ShadeInputs {
+    /// `shadow`: the sun's map and its range map (bindings 4, 5); `None` binds 1×1 stand-ins (the
+    /// uniform then says the shadow is off and nothing reads them).
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         gpu: &Gpu,
         setup: &ShadeSetup,
@@ -77,6 +88,7 @@ impl ShadeInputs {
         tau: f64,
         tiles: (u32, u32),
         tile: u32,
+        shadow: Option<&SunShadow>,
         alloc: &mut AllocCounter,
     ) -> ShadeInputs {
         let d = &gpu.device;
@@ -98,6 +110,8 @@ impl ShadeInputs {
                 storage_entry(1, true, all),
                 texture_entry(2, wgpu::TextureSampleType::Depth, all),
                 texture_entry(3, ff, all),
+                texture_entry(4, wgpu::TextureSampleType::Depth, all),
+                storage_entry(5, true, all),
             ],
         });
         let bgl1 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -128,6 +142,22 @@ impl ShadeInputs {
             ..Default::default()
         });
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let stand_in;
+        let stand_in_range;
+        let (shadow_tex, shadow_range) = match shadow {
+            Some(s) => (&s.texture, &s.range),
+            None => {
+                stand_in =
+                    gpu.stand_in_texture("shadow stand-in", wgpu::TextureFormat::Depth32Float);
+                stand_in_range = d.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("shadow range stand-in"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
+                });
+                (&stand_in, &stand_in_range)
+            }
+        };
         let bind0 = d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("shade inputs"),
             layout: &bgl0,
@@ -148,6 +178,11 @@ impl ShadeInputs {
                     binding: 3,
                     resource: wgpu::BindingResource::TextureView(&view(&gb.normal)),
                 },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&view(shadow_tex)),
+                },
+                bge(5, shadow_range),
             ],
         });
         let bind1 = match (&gb.albedo, &gb.spec, &gb.mat) {
@@ -199,7 +234,7 @@ impl ShadeInputs {
             }
         };
         ShadeInputs {
-            module: module(gpu, "shading paths", PATHS_WGSL),
+            module: module(gpu, "shading paths", &paths_source()),
             bgl0,
             bgl1,
             bind0,
@@ -210,11 +245,15 @@ impl ShadeInputs {
     }
 }
 
-/// Feature bits a scene can show at all: no sun → no SUN ids; a closed room → no SKY ids.
-pub fn possible_features(scene: &Scene) -> u32 {
+/// Feature bits a scene can show at all: no sun → no SUN ids; a closed room → no SKY ids;
+/// no shadow map → no FADE ids.
+pub fn possible_features(scene: &Scene, shadow: sun_shadow::Mode) -> u32 {
     let mut f = class::GEOM | class::SPEC;
     if scene.sun.is_some() {
         f |= class::SUN;
+        if shadow != sun_shadow::Mode::Off {
+            f |= class::FADE;
+        }
     }
     let room = matches!(scene.spec.params.get("room"), Some(ParamValue::Bool(true)));
     if !room {
@@ -274,6 +313,8 @@ pub struct Deferred {
     alloc: AllocCounter,
     light_count: u32,
     pub permutations: u32,
+    /// The sun's shadow map (`sun_shadow = taps8`), kept for its read-back twin.
+    sun: Option<SunShadow>,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -382,11 +423,22 @@ impl Deferred {
         tau: f64,
         store_lists: bool,
     ) -> Result<Deferred> {
-        Self::new_with(gpu, scene, gscene, path, tau, store_lists, 0.0)
+        Self::new_with(
+            gpu,
+            scene,
+            gscene,
+            path,
+            tau,
+            store_lists,
+            0.0,
+            sun_shadow::Mode::Off,
+        )
     }
 
     /// [`Deferred::new`] with `diffuse_only_frac` of the lights flagged diffuse-only
-    /// ([`ShadeSetup::with_diffuse_only`]).
+    /// ([`ShadeSetup::with_diffuse_only`]) and the sun shaded through a shadow map or not
+    /// (rendered here, once, untimed: `sun_shadow.rs`).
+    #[allow(clippy::too_many_arguments)]
     pub fn new_with(
         gpu: &Gpu,
         scene: &Scene,
@@ -395,19 +447,43 @@ impl Deferred {
         tau: f64,
         store_lists: bool,
         diffuse_only_frac: f64,
+        shadow: sun_shadow::Mode,
     ) -> Result<Deferred> {
         supports(gpu, path).map_err(CoreError::Param)?;
+        if shadow != sun_shadow::Mode::Off && !matches!(path, Path::Naive | Path::Classified { .. })
+        {
+            return Err(CoreError::Param(format!(
+                "sun_shadow = {} is built for naive, classified and uber only, not {}",
+                shadow.name(),
+                path.name()
+            )));
+        }
         let d = &gpu.device;
         let (w, h) = (gscene.width, gscene.height);
         let mut alloc = AllocCounter::default();
-        let setup = ShadeSetup::new(scene, w, h).with_diffuse_only(diffuse_only_frac);
+        let sun = match shadow {
+            sun_shadow::Mode::Off => None,
+            sun_shadow::Mode::Taps8 => SunShadow::new(gpu, scene, gscene, &mut alloc)?,
+        };
+        let setup = ShadeSetup::new(scene, w, h)
+            .with_diffuse_only(diffuse_only_frac)
+            .with_sun_shadow(sun.as_ref().map(|s| s.map.clone()));
         let gbuf = GBufferPass::new(gpu, scene, gscene, false, &mut alloc);
         let tile = match path {
             Path::Tiled { tile, .. } => tile,
             _ => class::TILE,
         };
         let tiles = (w.div_ceil(tile), h.div_ceil(tile));
-        let inputs = ShadeInputs::new(gpu, &setup, &gbuf, tau, tiles, tile, &mut alloc);
+        let inputs = ShadeInputs::new(
+            gpu,
+            &setup,
+            &gbuf,
+            tau,
+            tiles,
+            tile,
+            sun.as_ref(),
+            &mut alloc,
+        );
         let hdr = alloc.texture(
             gpu,
             "hdr",
@@ -546,14 +622,15 @@ impl Deferred {
                 let n = (ct.0 * ct.1) as u64;
                 let e = wgpu::BufferUsages::empty();
                 let tile_class = storage_buf(gpu, &mut alloc, "tile class", n * 4, e);
-                let counts = storage_buf(gpu, &mut alloc, "class counts", 64, e);
-                let offsets_buf = storage_buf(gpu, &mut alloc, "class offsets", 64, e);
-                let cursor = storage_buf(gpu, &mut alloc, "class cursor", 64, e);
+                let ids = class::IDS as u64;
+                let counts = storage_buf(gpu, &mut alloc, "class counts", ids * 4, e);
+                let offsets_buf = storage_buf(gpu, &mut alloc, "class offsets", ids * 4, e);
+                let cursor = storage_buf(gpu, &mut alloc, "class cursor", ids * 4, e);
                 let args = storage_buf(
                     gpu,
                     &mut alloc,
                     "draw args",
-                    256,
+                    ids * 16,
                     wgpu::BufferUsages::INDIRECT,
                 );
                 let list = storage_buf(gpu, &mut alloc, "tile list", n * 4, e);
@@ -579,7 +656,7 @@ impl Deferred {
                     compute_pipeline(gpu, "class offsets", &lc, m, "cs_offsets", &[], true);
                 let scatter =
                     compute_pipeline(gpu, "class scatter", &lc, m, "cs_scatter", &[], true);
-                let possible = possible_features(scene);
+                let possible = possible_features(scene, shadow);
                 let draws: Vec<(u32, wgpu::RenderPipeline)> = if uber {
                     vec![(
                         class::IDS,
@@ -590,7 +667,7 @@ impl Deferred {
                             m,
                             "vs_tile",
                             "fs_shade",
-                            &[("CLASS_ID", 16.0)],
+                            &[("CLASS_ID", class::IDS as f64)],
                             None,
                             None,
                         ),
@@ -615,6 +692,7 @@ impl Deferred {
                                     ("F_GEOM", f(class::GEOM)),
                                     ("F_SUN", f(class::SUN)),
                                     ("F_SPEC", f(class::SPEC)),
+                                    ("F_SHADOW_FADE", f(class::FADE)),
                                 ],
                                 None,
                                 None,
@@ -651,6 +729,7 @@ impl Deferred {
             alloc,
             light_count: setup.lights.len() as u32,
             permutations,
+            sun,
         })
     }
 
@@ -753,6 +832,11 @@ impl Deferred {
         }
     }
 
+    /// The read-back sun shadow map this path shades with (the reference's input).
+    pub fn sun_shadow_map(&self) -> Option<std::sync::Arc<sun_shadow::ShadowMap>> {
+        self.sun.as_ref().map(|s| s.map.clone())
+    }
+
     pub fn read_image(&self, gpu: &Gpu) -> Result<Vec<[f32; 4]>> {
         read_rgba32f(gpu, &self.hdr)
     }
@@ -804,8 +888,8 @@ impl Deferred {
                 let n = (c.tiles.0 * c.tiles.1) as usize;
                 Ok(Some((
                     read_vec(gpu, &c.tile_class, n)?,
-                    read_vec(gpu, &c.counts, 16)?,
-                    read_vec(gpu, &c.offsets_buf, 16)?,
+                    read_vec(gpu, &c.counts, class::IDS as usize)?,
+                    read_vec(gpu, &c.offsets_buf, class::IDS as usize)?,
                     read_vec(gpu, &c.list, n)?,
                 )))
             }

@@ -37,6 +37,10 @@ struct Shade {
     counts: vec4<u32>,
     // attenuation threshold, clear depth, reversed_z, 0
     misc: vec4<f32>,
+    // sun shadow (sun_shadow.wgsl): view space -> the map's clip space
+    shadow_from_view: mat4x4<f32>,
+    // map side in texels, compare bias, 1 when on, 0
+    shadow: vec4<f32>,
 };
 
 struct GPixel {
@@ -118,12 +122,17 @@ fn acc_light(acc: ptr<function, Acc>, l: Light, g: GPixel, v: vec3<f32>, p: f32,
 }
 
 fn acc_sun(acc: ptr<function, Acc>, sh: Shade, g: GPixel, v: vec3<f32>, p: f32, norm: f32, with_spec: bool) {
+    acc_sun_vis(acc, sh, g, v, p, norm, with_spec, 1.0);
+}
+
+// The sun times its visibility `vis` (the shadow map's, 1 without one).
+fn acc_sun_vis(acc: ptr<function, Acc>, sh: Shade, g: GPixel, v: vec3<f32>, p: f32, norm: f32, with_spec: bool, vis: f32) {
     let ld = sh.sun_dir.xyz;
     let ndl = dot(g.n, ld);
     if sh.sun_dir.w < 0.5 || ndl <= 0.0 {
         return;
     }
-    let contrib = sh.sun_color.xyz * ndl;
+    let contrib = sh.sun_color.xyz * (vis * ndl);
     (*acc).diffuse += contrib;
     if with_spec {
         let h = normalize(ld + v);

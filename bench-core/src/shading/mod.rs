@@ -1,14 +1,15 @@
 //! The one light model of the shading studies (`deferred`, issue 6; `prepass`, issue 10), its
 //! GPU twin (`light.wgsl`), the f64 brute-force reference (`reference.rs`), the G-buffer pass
-//! (`gbuffer.rs`), the GPU shading paths (`gpu_paths.rs`) and the BF3-style CPU tile path
-//! (`cpu_tiled.rs`).
+//! (`gbuffer.rs`), the GPU shading paths (`gpu_paths.rs`), the BF3-style CPU tile path
+//! (`cpu_tiled.rs`) and the sun shadow map with its 8-tap filter (`sun_shadow.rs`).
 //!
 //! Model (all in view space): lights have a finite range r; attenuation
 //! att(d) = (1 − (d/r)²)² for d < r, else 0 (monotone in d, so a culling sphere is a proof);
 //! spot lights multiply by saturate((cos∠ − cos_outer)/(1 − cos_outer))²; line (capsule) lights
 //! use the segment's nearest point. Blinn-Phong, specular power p = 2^(1 + 10·smoothness) with
 //! the (p + 8)/8 normalisation. Pixel = albedo·(Σ diffuse + ambient) + specular·Σ specular,
-//! where the sun (if any) is one more light with att = 1; sky pixels are the sky colour.
+//! where the sun (if any) is one more light with att = 1 (with a sun shadow map: att = the
+//! sun's visibility, `sun_shadow::ShadowMap::visibility`); sky pixels are the sky colour.
 //! A light flagged *diffuse-only* (BF3) has a specular term of exactly 0 everywhere: it adds
 //! to Σ diffuse only (`GpuLight::extra[1]` = 1 on the GPU and the CPU path,
 //! `ViewLight::diffuse_only` in the reference); [`ShadeSetup::with_diffuse_only`] flags a
@@ -25,8 +26,11 @@ pub mod gbuffer;
 pub mod gpu_paths;
 pub mod prepass;
 pub mod reference;
+pub mod sun_shadow;
 #[cfg(test)]
 mod tests;
+
+use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DVec3, DVec4, Mat4, Vec3};
@@ -74,6 +78,10 @@ pub struct ShadeUniform {
     pub ambient: [f32; 4],
     pub counts: [u32; 4],
     pub misc: [f32; 4],
+    /// Sun shadow: view space → the map's clip space (orthographic).
+    pub shadow_from_view: [[f32; 4]; 4],
+    /// Map side in texels, compare bias, 1 when on, 0.
+    pub shadow: [f32; 4],
 }
 
 /// A light transformed to view space, f64 (the reference's input; the GPU gets it as f32).
@@ -132,6 +140,8 @@ pub struct ShadeSetup {
     pub clip_from_view: DMat4,
     pub clear_depth: f32,
     pub reversed_z: bool,
+    /// The sun's shadow map (read back from the GPU), when the point shades with one.
+    pub sun_shadow: Option<Arc<sun_shadow::ShadowMap>>,
 }
 
 fn v3(a: [f32; 3]) -> DVec3 {
@@ -174,6 +184,7 @@ impl ShadeSetup {
             clip_from_view: proj,
             clear_depth: cam.clear_depth(),
             reversed_z: cam.reversed_z,
+            sun_shadow: None,
         }
     }
 
@@ -183,6 +194,12 @@ impl ShadeSetup {
         for (i, l) in self.lights.iter_mut().enumerate() {
             l.diffuse_only = ((i + 1) as f64 * frac).floor() > (i as f64 * frac).floor();
         }
+        self
+    }
+
+    /// The sun shaded through `map` (its visibility scales the sun term).
+    pub fn with_sun_shadow(mut self, map: Option<Arc<sun_shadow::ShadowMap>>) -> ShadeSetup {
+        self.sun_shadow = map;
         self
     }
 
@@ -266,6 +283,14 @@ impl ShadeSetup {
                 if self.reversed_z { 1.0 } else { 0.0 },
                 0.0,
             ],
+            shadow_from_view: match &self.sun_shadow {
+                Some(m) => m.shadow_from_view.as_mat4().to_cols_array_2d(),
+                None => Mat4::IDENTITY.to_cols_array_2d(),
+            },
+            shadow: match &self.sun_shadow {
+                Some(m) => [m.size as f32, sun_shadow::COMPARE_BIAS as f32, 1.0, 0.0],
+                None => [1.0, 0.0, 0.0, 0.0],
+            },
         }
     }
 
@@ -309,16 +334,28 @@ pub mod class {
     pub const GEOM: u32 = 2;
     pub const SUN: u32 = 4;
     pub const SPEC: u32 = 8;
+    /// Sun shadow fade (penumbra): some sun-facing pixel's 8-tap footprint straddles a shadow
+    /// edge, so the tile's shader runs the filter (`sun_shadow`); set only with a shadow map.
+    pub const FADE: u32 = 16;
     /// Classification ids: every OR of the bits above.
-    pub const IDS: u32 = 16;
+    pub const IDS: u32 = 32;
     pub const TILE: u32 = 4;
-    /// Ids a tile can have: sky and/or geometry; sun and specular only with geometry.
+    /// Ids a tile can have: sky and/or geometry; sun and specular only with geometry; fade
+    /// only with sun.
     pub fn valid(id: u32) -> bool {
-        id & (SKY | GEOM) != 0 && (id & (SUN | SPEC) == 0 || id & GEOM != 0)
+        id & (SKY | GEOM) != 0
+            && (id & (SUN | SPEC) == 0 || id & GEOM != 0)
+            && (id & FADE == 0 || id & SUN != 0)
     }
     pub fn names(id: u32) -> String {
         let mut v = vec![];
-        for (b, n) in [(SKY, "sky"), (GEOM, "geom"), (SUN, "sun"), (SPEC, "spec")] {
+        for (b, n) in [
+            (SKY, "sky"),
+            (GEOM, "geom"),
+            (SUN, "sun"),
+            (SPEC, "spec"),
+            (FADE, "fade"),
+        ] {
             if id & b != 0 {
                 v.push(n);
             }
@@ -333,20 +370,36 @@ pub mod class {
 
 /// The feature bits of one pixel of a G-buffer (the CPU twin of `classify` in the GPU path).
 pub fn pixel_class(setup: &ShadeSetup, gb: &GBuffer, i: usize) -> u32 {
+    pixel_class_margin(setup, gb, i).0
+}
+
+/// [`pixel_class`] and how far its fade decision is from a tie (infinite without one): within
+/// `sun_shadow::TIE_EPS` the f32 GPU may decide the other way.
+pub fn pixel_class_margin(setup: &ShadeSetup, gb: &GBuffer, i: usize) -> (u32, f64) {
     if gb.is_sky(i) {
-        return class::SKY;
+        return (class::SKY, f64::INFINITY);
     }
     let mut bits = class::GEOM;
+    let mut margin = f64::INFINITY;
     if let Some((d, _)) = setup.sun {
         let n = gb.normal[i];
         if (n[0] * d.x as f32 + n[1] * d.y as f32 + n[2] * d.z as f32) > 0.0 {
             bits |= class::SUN;
+            if let Some(m) = &setup.sun_shadow {
+                let x = (i % gb.width as usize) as u32;
+                let y = (i / gb.width as usize) as u32;
+                let f = m.fade(m.coord(setup.view_pos(x, y, gb.depth[i])));
+                margin = f.margin;
+                if f.value > 0.5 {
+                    bits |= class::FADE;
+                }
+            }
         }
     }
     if gb.spec[i].iter().any(|&s| s > 0.0) {
         bits |= class::SPEC;
     }
-    bits
+    (bits, margin)
 }
 
 /// The six planes (inward normals, n·x + w ≥ 0 inside) of the frustum through the pixel

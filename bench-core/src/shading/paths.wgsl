@@ -1,11 +1,14 @@
-// The GPU shading paths of the deferred study (prepended: light.wgsl). Group 0: the shading
-// uniform, the lights and the depth/normal targets; group 1: albedo, specular, material id;
-// group 2: per-path buffers.
+// The GPU shading paths of the deferred study (prepended: light.wgsl; appended:
+// sun_shadow.wgsl). Group 0: the shading uniform, the lights, the depth/normal targets and the
+// sun shadow map with its per-texel neighbourhood min/max; group 1: albedo, specular, material id; group 2:
+// per-path buffers.
 
 @group(0) @binding(0) var<uniform> sh: Shade;
 @group(0) @binding(1) var<storage, read> lights: array<Light>;
 @group(0) @binding(2) var t_depth: texture_depth_2d;
 @group(0) @binding(3) var t_normal: texture_2d<f32>;
+@group(0) @binding(4) var t_shadow: texture_depth_2d;
+@group(0) @binding(5) var<storage, read> shadow_range: array<vec2<f32>>;
 @group(1) @binding(0) var t_albedo: texture_2d<f32>;
 @group(1) @binding(1) var t_spec: texture_2d<f32>;
 @group(1) @binding(2) var t_mat: texture_2d<u32>;
@@ -16,6 +19,9 @@ override F_GEOM: bool = true;
 override F_SUN: bool = true;
 override F_SPEC: bool = true;
 override F_LIGHTS: bool = true;
+// Sun shadow (when the uniform turns it on): the 8-tap filter, else one compare (exact in tiles
+// without the fade bit).
+override F_SHADOW_FADE: bool = true;
 // Light pre-pass: write the light buffer (Σ diffuse RGB, Σ lum·spec in A, times LB_SCALE).
 override LIGHT_BUFFER: bool = false;
 override LB_SCALE: f32 = 1.0;
@@ -43,7 +49,7 @@ fn load_pixel(p: vec2<u32>) -> GPixel {
     return g;
 }
 
-// Feature bits of one pixel (SKY 1, GEOM 2, SUN 4, SPEC 8), as shading::pixel_class.
+// Feature bits of one pixel (SKY 1, GEOM 2, SUN 4, SPEC 8, FADE 16), as shading::pixel_class.
 fn pixel_bits(g: GPixel) -> u32 {
     if g.sky {
         return 1u;
@@ -51,6 +57,9 @@ fn pixel_bits(g: GPixel) -> u32 {
     var b = 2u;
     if sh.sun_dir.w > 0.5 && dot(g.n, sh.sun_dir.xyz) > 0.0 {
         b |= 4u;
+        if shadow_on() && shadow_fade(shadow_coord(g.pos)) {
+            b |= 16u;
+        }
     }
     if any(g.spec > vec3<f32>(0.0)) {
         b |= 8u;
@@ -83,7 +92,16 @@ fn shade_all(g: GPixel) -> vec4<f32> {
         }
     }
     if F_SUN {
-        acc_sun(&acc, sh, g, v, p, norm, F_SPEC);
+        var vis = 1.0;
+        if shadow_on() && sh.sun_dir.w > 0.5 && dot(g.n, sh.sun_dir.xyz) > 0.0 {
+            let c = shadow_coord(g.pos);
+            if F_SHADOW_FADE {
+                vis = shadow_filter8(c);
+            } else {
+                vis = shadow_hard(c);
+            }
+        }
+        acc_sun_vis(&acc, sh, g, v, p, norm, F_SPEC, vis);
     }
     if LIGHT_BUFFER {
         return light_buffer_value(g, acc);
@@ -123,16 +141,19 @@ fn fs_shade_split(@builtin(position) frag: vec4<f32>) -> SplitOut {
 // ---- classified (Split/Second): 4×4 tiles, ids, per-id lists, one draw per id ----
 
 override CLASS_ID: u32 = 0u;
+// Classification ids (shading::class::IDS): every OR of the 5 bits; CLASS_ID = CLASS_IDS is
+// the uber-shader drawing every tile.
+const CLASS_IDS: u32 = 32u;
 
 @group(2) @binding(0) var<storage, read_write> tile_class: array<u32>;
-@group(2) @binding(1) var<storage, read_write> class_count: array<atomic<u32>, 16>;
-@group(2) @binding(2) var<storage, read_write> class_offset: array<u32, 16>;
-@group(2) @binding(3) var<storage, read_write> class_cursor: array<atomic<u32>, 16>;
+@group(2) @binding(1) var<storage, read_write> class_count: array<atomic<u32>, CLASS_IDS>;
+@group(2) @binding(2) var<storage, read_write> class_offset: array<u32, CLASS_IDS>;
+@group(2) @binding(3) var<storage, read_write> class_cursor: array<atomic<u32>, CLASS_IDS>;
 @group(2) @binding(4) var<storage, read_write> draw_args: array<u32>;
 @group(2) @binding(5) var<storage, read_write> tile_list: array<u32>;
 
 @group(2) @binding(10) var<storage, read> tile_list_ro: array<u32>;
-@group(2) @binding(11) var<storage, read> class_offset_ro: array<u32, 16>;
+@group(2) @binding(11) var<storage, read> class_offset_ro: array<u32, CLASS_IDS>;
 
 fn class_tiles() -> vec2<u32> {
     return (vec2<u32>(sh.viewport.xy) + 3u) / 4u;
@@ -162,7 +183,7 @@ fn cs_classify(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(1)
 fn cs_offsets() {
     var o = 0u;
-    for (var id = 0u; id < 16u; id++) {
+    for (var id = 0u; id < CLASS_IDS; id++) {
         let c = atomicLoad(&class_count[id]);
         class_offset[id] = o;
         draw_args[id * 4u + 0u] = 6u;
@@ -188,10 +209,10 @@ fn cs_scatter(@builtin(global_invocation_id) gid: vec3<u32>) {
 @vertex
 fn vs_tile(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> FsOut {
     let nt = class_tiles();
-    // CLASS_ID 16: the uber-shader drawing every tile in one draw (the list from offset 0).
+    // CLASS_ID CLASS_IDS: the uber-shader drawing every tile in one draw (the list from 0).
     var t = tile_list_ro[ii];
-    if CLASS_ID < 16u {
-        t = tile_list_ro[class_offset_ro[min(CLASS_ID, 15u)] + ii];
+    if CLASS_ID < CLASS_IDS {
+        t = tile_list_ro[class_offset_ro[min(CLASS_ID, CLASS_IDS - 1u)] + ii];
     }
     let corner = array<vec2<f32>, 6>(
         vec2<f32>(0.0, 0.0), vec2<f32>(1.0, 0.0), vec2<f32>(1.0, 1.0),

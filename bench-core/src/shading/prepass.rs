@@ -31,7 +31,7 @@ use scenarios::Scene;
 
 use super::cpu_tiled::{self, CpuOptions};
 use super::gbuffer::{padded_row, read_rgba32f, GBufferPass};
-use super::gpu_paths::{bge, module, Deferred, Path, ShadeInputs, HDR_FORMAT, PATHS_WGSL};
+use super::gpu_paths::{bge, module, paths_source, Deferred, Path, ShadeInputs, HDR_FORMAT};
 use super::{GBuffer, ShadeSetup, SKY, SKY_MATERIAL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
@@ -210,7 +210,7 @@ impl PrePass {
             _ => 16,
         };
         let tiles = (w.div_ceil(tile), h.div_ceil(tile));
-        let inputs = ShadeInputs::new(gpu, &setup, &gbuf, tau, tiles, tile, &mut alloc);
+        let inputs = ShadeInputs::new(gpu, &setup, &gbuf, tau, tiles, tile, None, &mut alloc);
         let (f0, f1) = format.formats();
         let mut lb_usage = wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
@@ -274,7 +274,7 @@ impl PrePass {
             }
             Accum::Tiled { tile } => {
                 // The deferred tile kernel, its output declared in the light buffer's format.
-                let src = PATHS_WGSL.replace(
+                let src = paths_source().replace(
                     "texture_storage_2d<rgba32float, write>",
                     &format!("texture_storage_2d<{}, write>", format.wgsl_storage()),
                 );

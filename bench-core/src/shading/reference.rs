@@ -106,9 +106,30 @@ pub fn terms(setup: &ShadeSetup, s: &Surface) -> Terms {
         }
     }
     if let Some((d, c)) = setup.sun {
-        add(&mut t, s, v, d, c, 1.0, false);
+        // The shadow is looked up only where the sun faces the surface (as the GPU paths do);
+        // its visibility is the sun's attenuation.
+        let vis = match &setup.sun_shadow {
+            Some(m) if s.n.dot(d) > 0.0 => m.visibility(s.pos).value,
+            _ => 1.0,
+        };
+        add(&mut t, s, v, d, c, vis, false);
     }
     t
+}
+
+/// Pixels whose sun shadow look-up has a compare within `sun_shadow::TIE_EPS` of a tie (the
+/// f32 GPU may decide it the other way; none without a shadow map).
+pub fn sun_shadow_ties(setup: &ShadeSetup, gb: &GBuffer) -> Vec<bool> {
+    (0..gb.pixels())
+        .into_par_iter()
+        .map(|i| match (&setup.sun_shadow, setup.sun) {
+            (Some(m), Some((d, _))) if !gb.is_sky(i) => {
+                let s = surface(setup, gb, i);
+                s.n.dot(d) > 0.0 && m.visibility(s.pos).margin < super::sun_shadow::TIE_EPS
+            }
+            _ => false,
+        })
+        .collect()
 }
 
 /// The final pixel from its terms: albedo·(diffuse + ambient) + specular·Σspecular.

@@ -10,7 +10,7 @@ use scenarios::{ParamValue, Params, Scene, SceneSpec};
 use super::cpu_tiled::{self, CpuOptions, TileList};
 use super::gpu_paths::{Deferred, Path};
 use super::reference::{self, intensity_att, surface};
-use super::{class, pixel_class, GBuffer, ShadeSetup};
+use super::{class, pixel_class, pixel_class_margin, sun_shadow, GBuffer, ShadeSetup};
 use crate::gpu::{Gpu, GpuOptions};
 use crate::gpu_scene::GpuScene;
 use crate::timed::Timed;
@@ -65,16 +65,40 @@ fn run(scene: &Scene, size: u32, path: Path, tau: f64, store: bool) -> Run {
 
 /// [`run`] with `diffuse_only` of the lights flagged diffuse-only (GPU path and reference).
 fn run_with(scene: &Scene, size: u32, path: Path, tau: f64, store: bool, diffuse_only: f64) -> Run {
+    run_shadowed(
+        scene,
+        size,
+        path,
+        tau,
+        store,
+        diffuse_only,
+        sun_shadow::Mode::Off,
+    )
+}
+
+/// [`run_with`] with the sun shaded through its shadow map or not (the reference uses the
+/// map the path rendered, read back, as it uses the G-buffer).
+fn run_shadowed(
+    scene: &Scene,
+    size: u32,
+    path: Path,
+    tau: f64,
+    store: bool,
+    diffuse_only: f64,
+    shadow: sun_shadow::Mode,
+) -> Run {
     let g = gpu();
     let gs = GpuScene::upload(g, scene, size, size);
-    let mut d = Deferred::new_with(g, scene, &gs, path, tau, store, diffuse_only).unwrap();
+    let mut d = Deferred::new_with(g, scene, &gs, path, tau, store, diffuse_only, shadow).unwrap();
     let mut timer = GpuTimer::new(g);
     timer.begin_frame();
     d.frame(g, &gs, &mut timer).unwrap();
     g.wait().unwrap();
     let image = d.read_image(g).unwrap();
     let gb = d.read_gbuffer(g).unwrap();
-    let setup = ShadeSetup::new(scene, size, size).with_diffuse_only(diffuse_only);
+    let setup = ShadeSetup::new(scene, size, size)
+        .with_diffuse_only(diffuse_only)
+        .with_sun_shadow(d.sun_shadow_map());
     let reference = reference::shade(&setup, &gb);
     Run {
         d,
@@ -472,7 +496,7 @@ fn classified_lists_every_tile_once_and_matches_uber() {
         let (tx, ty) = rc.d.class_tiles().unwrap();
         let n = (tx * ty) as usize;
         let mut seen = vec![0u32; n];
-        for id in 0..16usize {
+        for id in 0..class::IDS as usize {
             let range = offsets[id] as usize..(offsets[id] + counts[id]) as usize;
             for &t in &list[range] {
                 seen[t as usize] += 1;
@@ -500,7 +524,7 @@ fn classified_lists_every_tile_once_and_matches_uber() {
         if room {
             // No sky, no sun: those permutations are neither compiled nor drawn.
             assert_eq!(rc.d.permutations, 2);
-            for id in 0..16u32 {
+            for id in 0..class::IDS {
                 if id & (class::SKY | class::SUN) != 0 {
                     assert_eq!(counts[id as usize], 0);
                 }
@@ -690,4 +714,119 @@ mod prepass_tests {
             assert!(e < 0.1, "rg11b10 vs packed reference: {e}");
         }
     }
+}
+
+/// Max relative error (as [`max_rel_err`]) over the pixels that are not sun-shadow ties, and
+/// how many ties there were.
+fn max_rel_err_off_ties(r: &Run) -> (f64, usize) {
+    let ties = reference::sun_shadow_ties(&r.setup, &r.gb);
+    let keep = |i: &usize| !ties[*i];
+    let idx: Vec<usize> = (0..ties.len()).filter(keep).collect();
+    let rr: Vec<[f64; 4]> = idx.iter().map(|&i| r.reference[i]).collect();
+    let gg: Vec<[f32; 4]> = idx.iter().map(|&i| r.image[i]).collect();
+    (max_rel_err(&rr, &gg), ties.iter().filter(|&&t| t).count())
+}
+
+#[test]
+fn sun_shadow_taps8_city_64px_naive_classified_uber_match_reference_within_path_tol() {
+    let s = city(8, false);
+    let n = 64 * 64;
+    let off = run(&s, 64, Path::Naive, 0.0, false);
+    for path in [
+        Path::Naive,
+        Path::Classified { uber: false },
+        Path::Classified { uber: true },
+    ] {
+        let r = run_shadowed(&s, 64, path, 0.0, false, 0.0, sun_shadow::Mode::Taps8);
+        let (e, ties) = max_rel_err_off_ties(&r);
+        println!("{}: max rel err {e:.2e} off {ties} tie pixels", path.name());
+        // PATH_TOL's reason holds: the filter adds only f32 bilinear weights (≤ 1e-7 relative).
+        assert!(e < PATH_TOL, "{} sun_shadow=taps8: {e}", path.name());
+        // Ties: compares within TIE_EPS of equal, where the f32 GPU may go either way (a few
+        // pixels on faces nearly parallel to the sun); more would mean a wrong bias or transform.
+        assert!(ties * 100 <= n, "{} tie pixels of {n}", ties);
+        // The shadow is there: the shadowed reference is darker than the unshadowed one on
+        // many pixels, and some pixels are in a penumbra (neither 0 nor 1).
+        let darker = (0..n)
+            .filter(|&i| r.reference[i][1] < off.reference[i][1] - 0.05)
+            .count();
+        assert!(darker * 20 > n, "only {darker} shadowed pixels of {n}");
+        assert!(
+            (0..n).all(|i| r.reference[i][1] <= off.reference[i][1] + 1e-9),
+            "a shadow brightened a pixel"
+        );
+    }
+    let r = run_shadowed(
+        &s,
+        64,
+        Path::Naive,
+        0.0,
+        false,
+        0.0,
+        sun_shadow::Mode::Taps8,
+    );
+    let m = r.setup.sun_shadow.as_ref().expect("city has a sun");
+    let (d, _) = r.setup.sun.unwrap();
+    let penumbra = (0..n)
+        .filter(|&i| {
+            let su = surface(&r.setup, &r.gb, i);
+            !r.gb.is_sky(i) && su.n.dot(d) > 0.0 && {
+                let v = m.visibility(su.pos).value;
+                v > 0.0 && v < 1.0
+            }
+        })
+        .count();
+    assert!(penumbra > 0, "no penumbra pixel on the test city");
+}
+
+#[test]
+fn sun_shadow_fade_class_city_64px_gpu_equals_cpu_off_ties_and_is_a_minority() {
+    let s = city(8, false);
+    let rc = run_shadowed(
+        &s,
+        64,
+        Path::Classified { uber: false },
+        0.0,
+        false,
+        0.0,
+        sun_shadow::Mode::Taps8,
+    );
+    let (ids, counts, _, _) = rc.d.classification(gpu()).unwrap().unwrap();
+    let (tx, ty) = rc.d.class_tiles().unwrap();
+    let n = (tx * ty) as usize;
+    let (mut tie_tiles, mut fade, mut sun) = (0, 0, 0);
+    for t in 0..n {
+        let (x0, y0) = ((t as u32 % tx) * 4, (t as u32 / tx) * 4);
+        let (mut bits, mut margin) = (0, f64::INFINITY);
+        for y in y0..(y0 + 4).min(64) {
+            for x in x0..(x0 + 4).min(64) {
+                let (b, m) = pixel_class_margin(&rc.setup, &rc.gb, (y * 64 + x) as usize);
+                bits |= b;
+                margin = margin.min(m);
+            }
+        }
+        if ids[t] != bits {
+            println!("tile {t}: gpu {} cpu {} margin {margin:e}", ids[t], bits);
+        }
+        if margin < sun_shadow::TIE_EPS {
+            // The f32 GPU may decide a tie the other way; only the fade bit may differ.
+            tie_tiles += 1;
+            assert_eq!(ids[t] & !class::FADE, bits & !class::FADE, "tile {t}");
+        } else {
+            assert_eq!(ids[t], bits, "tile {t}");
+        }
+        fade += (ids[t] & class::FADE != 0) as usize;
+        sun += (ids[t] & class::SUN != 0) as usize;
+    }
+    println!("{fade} fade tiles of {sun} sun tiles ({n} tiles, {tie_tiles} with a tie)");
+    assert!(tie_tiles * 20 <= n, "{tie_tiles} tie tiles of {n}");
+    // Both kinds exist: filtered tiles, and sun tiles the classified path shades with one tap.
+    assert!(
+        fade > 0 && fade < sun,
+        "{fade} fade tiles of {sun} sun tiles"
+    );
+    assert_eq!(counts.iter().sum::<u32>() as usize, n);
+    // 9 permutations without the shadow (classified_lists_every_tile_once_and_matches_uber), 4
+    // more with fade (fade needs sun and geometry: ± sky, ± spec).
+    assert_eq!(rc.d.permutations, 13);
 }

@@ -7,7 +7,10 @@
 //! `cull_levels`, `attenuation_threshold` (tiled, volumes, cpu_tiled), `thread_count`,
 //! `quad_skip`, `spec_skip`, `cone_cull` and `diffuse_skip` (cpu_tiled), `diffuse_only_frac`
 //! (every path: the fraction of lights flagged diffuse-only, which changes the image, so the
-//! reference and the naive time are per fraction). The light count is a scene parameter
+//! reference and the naive time are per fraction), `sun_shadow` (naive, classified, uber:
+//! `off`, or `taps8`: the sun through a shadow map with an 8-tap filter, Split/Second's
+//! expensive soft-shadow class; the reference and the naive time are per value too). The light
+//! count is a scene parameter
 //! (`city(lights=N)`), recorded per row.
 //! `naive` runs first in each group so every row carries `speedup_vs_naive`.
 //!
@@ -36,7 +39,8 @@ use crate::record::{error_row, failed_row, set_params, skipped_row};
 use crate::shading::cpu_tiled::{self, CpuOptions};
 use crate::shading::gbuffer::GBufferPass;
 use crate::shading::gpu_paths::{self, Deferred, Path};
-use crate::shading::{reference, GBuffer, ShadeSetup};
+use crate::shading::sun_shadow::{self, SunShadow};
+use crate::shading::{class, reference, GBuffer, ShadeSetup};
 use crate::timing::{GpuTimer, Stats};
 use crate::Result;
 pub const PATHS: &[&str] = &[
@@ -83,6 +87,12 @@ const DIFFUSE_ONLY_FRAC: Axis = Axis::float(
     0.0,
     1.0,
 );
+const SUN_SHADOW: Axis = Axis::choice(
+    cols::SUN_SHADOW,
+    "naive, classified, uber: the sun through a shadow map with an 8-tap filter (taps8; the classified path filters only its fade tiles) or unshadowed (off)",
+    "off",
+    sun_shadow::Mode::NAMES,
+);
 const THREAD_COUNT: Axis = Axis::int(cols::THREAD_COUNT, "CPU worker threads", 1, 1, 1024);
 const QUAD_SKIP: Axis = Axis::bool(
     cols::QUAD_SKIP,
@@ -121,7 +131,16 @@ fn axes_of(path: &str) -> Vec<Axis> {
             DIFFUSE_SKIP,
             DIFFUSE_ONLY_FRAC,
         ],
+        "naive" | "classified" | "uber" => vec![DIFFUSE_ONLY_FRAC, SUN_SHADOW],
         _ => vec![DIFFUSE_ONLY_FRAC],
+    }
+}
+
+/// The sun shadow of a point (off for the paths that do not read it).
+fn shadow_mode(point: &Point) -> sun_shadow::Mode {
+    match point.get(SUN_SHADOW.name()) {
+        Some(_) => sun_shadow::Mode::parse(&point.choice(&SUN_SHADOW)).unwrap_or_default(),
+        None => sun_shadow::Mode::Off,
     }
 }
 
@@ -187,6 +206,9 @@ fn set_error(row: &mut Row, reference: &[[f64; 4]], img: &[[f32; 4]]) {
     }
 }
 
+/// What changes a point's image: the diffuse-only fraction (its bits) and the sun shadow.
+type ImageKey = (u64, sun_shadow::Mode);
+
 pub struct DeferredStudy;
 
 impl Study for DeferredStudy {
@@ -210,13 +232,26 @@ impl Study for DeferredStudy {
         let (gpu, scene, gscene) = (ctx.gpu, ctx.scene, ctx.gscene);
         let setup0 = ShadeSetup::new(scene, gscene.width, gscene.height);
         let gb = gbuffer_of(gpu, scene, gscene, false)?;
-        // The diffuse-only fraction changes the image: a setup, a reference and a naive time
-        // per fraction (keyed by its bits).
-        let mut references: HashMap<u64, (ShadeSetup, Vec<[f64; 4]>)> = HashMap::new();
+        // The diffuse-only fraction and the sun shadow change the image: a setup, a reference
+        // and a naive time per (fraction bits, shadow).
+        let mut references: HashMap<ImageKey, (ShadeSetup, Vec<[f64; 4]>)> = HashMap::new();
+        // The sun's map as the paths render it (deterministic: each path renders the same),
+        // read back once for the reference; `None` without a sun.
+        let wants_shadow = ctx
+            .group
+            .points
+            .iter()
+            .any(|p| shadow_mode(&p.point) != sun_shadow::Mode::Off);
+        let shadow_map = if wants_shadow {
+            let mut alloc = AllocCounter::default();
+            SunShadow::new(gpu, scene, gscene, &mut alloc)?.map(|s| s.map)
+        } else {
+            None
+        };
         let cpu_reps = CPU_REPS.int(ctx.study) as u32;
         let mut order: Vec<usize> = (0..ctx.group.points.len()).collect();
         order.sort_by_key(|&i| ctx.group.points[i].method != "naive");
-        let mut naive_by_frac: HashMap<u64, f64> = HashMap::new();
+        let mut naive_by_frac: HashMap<ImageKey, f64> = HashMap::new();
         for i in order {
             let pt = &ctx.group.points[i];
             let mut row = Row::new();
@@ -227,12 +262,36 @@ impl Study for DeferredStudy {
             row.set(cols::CLAIMS_EXACT, tau == 0.0);
             let frac = pt.point.float(&DIFFUSE_ONLY_FRAC);
             row.set_f(cols::DIFFUSE_ONLY_FRAC, frac);
-            let (setup, reference) = &*references.entry(frac.to_bits()).or_insert_with(|| {
-                let s = setup0.clone().with_diffuse_only(frac);
+            let shadow = shadow_mode(&pt.point);
+            if pt.point.get(SUN_SHADOW.name()).is_some() {
+                row.set(cols::SUN_SHADOW, shadow.name());
+            }
+            if shadow != sun_shadow::Mode::Off && scene.sun.is_none() {
+                emit(
+                    i,
+                    skipped_row(
+                        row,
+                        &format!(
+                            "sun_shadow = {} needs a sun; this scene has none",
+                            shadow.name()
+                        ),
+                    ),
+                )?;
+                continue;
+            }
+            let key = (frac.to_bits(), shadow);
+            let (setup, reference) = &*references.entry(key).or_insert_with(|| {
+                let s = setup0
+                    .clone()
+                    .with_diffuse_only(frac)
+                    .with_sun_shadow(match shadow {
+                        sun_shadow::Mode::Off => None,
+                        sun_shadow::Mode::Taps8 => shadow_map.clone(),
+                    });
                 let r = reference::shade(&s, &gb);
                 (s, r)
             });
-            let naive_ms = naive_by_frac.get(&frac.to_bits()).copied();
+            let naive_ms = naive_by_frac.get(&key).copied();
             if pt.method == "cpu_tiled" {
                 let threads = pt.point.int(&THREAD_COUNT) as usize;
                 let levels = pt.point.int(&CPU_CULL_LEVELS);
@@ -338,7 +397,7 @@ impl Study for DeferredStudy {
             }
             let make = |gs: &GpuScene| -> Result<Box<Deferred>> {
                 Ok(Box::new(Deferred::new_with(
-                    gpu, scene, gs, path, tau, false, frac,
+                    gpu, scene, gs, path, tau, false, frac, shadow,
                 )?))
             };
             let meas = match measure_timed(gpu, gscene, &make, &ctx.plan) {
@@ -352,10 +411,10 @@ impl Study for DeferredStudy {
             let g = meas.gpu_median();
             if pt.method == "naive" && naive_ms.is_none() {
                 if let Some(g) = g {
-                    naive_by_frac.insert(frac.to_bits(), g);
+                    naive_by_frac.insert(key, g);
                 }
             }
-            let naive_ms = naive_by_frac.get(&frac.to_bits()).copied();
+            let naive_ms = naive_by_frac.get(&key).copied();
             if let (Some(n), Some(g)) = (naive_ms, g) {
                 if g > 0.0 {
                     row.set_f(cols::SPEEDUP_VS_NAIVE, n / g);
@@ -374,11 +433,18 @@ impl Study for DeferredStudy {
             if let Some(c) = dd.tile_counts(gpu)? {
                 set_tile_stats(&mut row, &c);
             }
-            if let Some((_, counts, _, _)) = dd.classification(gpu)? {
+            if let Some((ids, counts, _, _)) = dd.classification(gpu)? {
                 row.set(
                     cols::CLASS_IDS_PRESENT,
                     counts.iter().filter(|&&c| c > 0).count(),
                 );
+                if shadow != sun_shadow::Mode::Off {
+                    let fade = ids.iter().filter(|&&id| id & class::FADE != 0).count();
+                    row.set_f(
+                        cols::SHADOW_FADE_TILE_FRAC,
+                        fade as f64 / ids.len().max(1) as f64,
+                    );
+                }
             }
             emit(i, row)?;
         }

@@ -12,7 +12,12 @@ use crate::charts::{Bars, Figure, Pt, Series, XY};
 use crate::data::{resolution, Rec, Runs};
 
 /// Axes that tell configurations of one path apart.
-pub const CONFIG_AXES: &[Col] = &[cols::TILE_SIZE, cols::CULL_LEVELS, cols::THREAD_COUNT];
+pub const CONFIG_AXES: &[Col] = &[
+    cols::TILE_SIZE,
+    cols::CULL_LEVELS,
+    cols::THREAD_COUNT,
+    cols::SUN_SHADOW,
+];
 
 pub(crate) fn safe(s: &str) -> String {
     s.chars()
@@ -65,7 +70,7 @@ fn time_ms(r: &Rec) -> Option<f64> {
     }
 }
 
-/// A short configuration label: "tiled 16px L2", "cpu_tiled 64px L1 ×8".
+/// A short configuration label: "tiled 16px L2", "cpu_tiled 64px L1 ×8", "uber shadow8".
 fn short(r: &Rec) -> String {
     let mut s = r.get(cols::METHOD).to_string();
     if !r.get(cols::TILE_SIZE).is_empty() {
@@ -76,6 +81,10 @@ fn short(r: &Rec) -> String {
     }
     if !r.get(cols::THREAD_COUNT).is_empty() {
         s += &format!(" ×{}", r.get(cols::THREAD_COUNT));
+    }
+    // Only the shadowed points are marked: the unshadowed ones keep their earlier labels.
+    if r.get(cols::SUN_SHADOW) == "taps8" {
+        s += " shadow8";
     }
     s
 }
