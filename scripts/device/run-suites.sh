@@ -66,7 +66,7 @@ cat "$r/gpu.txt"
 need_bunny=0
 for job in "$@"; do
   job=${job%%,*}
-  case "${job%@*}" in perf-abuffer* | perf-binned* | *bunny*) need_bunny=1 ;; esac
+  case "${job%@*}" in perf-abuffer* | perf-binned* | exp-binned* | *bunny*) need_bunny=1 ;; esac
 done
 if [ "$need_bunny" = 1 ] && [ ! -f models/bunny-stack16.obj ]; then
   bash scripts/bake-bunny-stack.sh models/stanford-bunny.obj models/bunny-stack16.obj \
