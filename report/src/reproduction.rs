@@ -111,15 +111,49 @@ fn ours(f: &Figure, rows: Option<(&Rec, &Rec)>) -> (String, String) {
         return ("—".into(), format!("no {} in the rows", rule.column()));
     };
     let r = vb / vo;
-    let verdict = match rule.holds(r, f.ratio) {
-        Some(true) => "holds",
-        Some(false) => "differs",
-        None => "undecided",
+    let interval = ratio_interval(rule.column(), rule.baseline_column(), ro, rb);
+    let verdict = match interval {
+        Some((lo, hi)) => verdict_over(rule, lo, hi, f.ratio),
+        None => match rule.holds(r, f.ratio) {
+            Some(true) => "holds",
+            Some(false) => "differs",
+            None => "undecided",
+        },
     };
-    (
-        format!("r = {}", num(r)),
-        format!("{verdict} ({})", rule.describe(f.ratio)),
-    )
+    let ours = match interval {
+        Some((lo, hi)) => format!("r = {} ({}–{})", num(r), num(lo), num(hi)),
+        None => format!("r = {}", num(r)),
+    };
+    (ours, format!("{verdict} ({})", rule.describe(f.ratio)))
+}
+
+/// The 95 % interval of r = baseline ÷ ours where both columns are median GPU times with their
+/// bootstrap intervals (the other columns have none): r's ends pair one row's low end with the
+/// other's high end.
+fn ratio_interval(col: &str, base_col: &str, ro: &Rec, rb: &Rec) -> Option<(f64, f64)> {
+    if col != "gpu_ms_median" || base_col != "gpu_ms_median" {
+        return None;
+    }
+    let (olo, ohi) = (ro.f_name("gpu_ms_ci_lo")?, ro.f_name("gpu_ms_ci_hi")?);
+    let (blo, bhi) = (rb.f_name("gpu_ms_ci_lo")?, rb.f_name("gpu_ms_ci_hi")?);
+    (olo > 0.0 && ohi >= olo && bhi >= blo).then(|| (blo / ohi, bhi / olo))
+}
+
+/// A rule's verdict over an interval of r: "holds" or "differs" only when the whole interval
+/// does; one that straddles the rule's boundary is "within noise" (a ratio of 1.00 against
+/// "r > 1" flipped between two H200 runs of the same build before this).
+fn verdict_over(rule: &papers::Rule, lo: f64, hi: f64, paper: Option<f64>) -> &'static str {
+    let outside_within = match (rule.rule, paper, rule.factor) {
+        (papers::RuleKind::RatioWithin, Some(p), Some(f)) => Some(hi < p / f || lo > p * f),
+        _ => None,
+    };
+    match (rule.holds(lo, paper), rule.holds(hi, paper), outside_within) {
+        (Some(true), Some(true), _) => "holds",
+        (_, _, Some(true)) => "differs",
+        (Some(false), Some(false), None) => "differs",
+        (None, _, _) | (_, None, _) => "undecided",
+        _ => "within noise",
+    }
 }
 
 /// The section's HTML, or "" when no row of `runs` is from a suite a papers file points to.
@@ -304,6 +338,40 @@ mod tests {
                 assert!(h.contains(&format!("({})", fig.id)), "{}", fig.id);
             }
         }
+    }
+
+    #[test]
+    fn a_ratio_whose_interval_straddles_the_rule_is_within_noise_not_a_verdict() {
+        // fig1.2-bdp-over-bdp2 rules r > 1 on bdp2 ÷ bdp. Medians 10.0 vs 9.9 (r = 1.01) whose
+        // intervals overlap: within noise; 10.0 vs 8.0 with tight intervals: holds.
+        let with_ci = |method: &str, axes: &[(&str, &str)], ms: &str, lo: &str, hi: &str| {
+            let mut r = rec(method, axes, ms, Status::Ok);
+            r.0.insert("gpu_ms_ci_lo".into(), lo.into());
+            r.0.insert("gpu_ms_ci_hi".into(), hi.into());
+            r
+        };
+        let bdp = [("bucket_count", "16"), ("bucket_pairing", "paired")];
+        let bdp2 = [("bucket_count", "32")];
+        let row_of = |h: &str| {
+            let at = h.find("(fig1.2-bdp-over-bdp2)").unwrap();
+            h[at..at + h[at..].find("</tr>").unwrap()].to_string()
+        };
+        let close = section(&runs(vec![
+            with_ci("bdp", &bdp, "9.9", "9.7", "10.1"),
+            with_ci("bdp2", &bdp2, "10.0", "9.8", "10.2"),
+        ]));
+        let row = row_of(&close);
+        assert!(row.contains("within noise (r &gt; 1)"), "{row}");
+        assert!(row.contains("r = 1.01 (0.97–1.05)"), "{row}");
+        let apart = section(&runs(vec![
+            with_ci("bdp", &bdp, "8.0", "7.9", "8.1"),
+            with_ci("bdp2", &bdp2, "10.0", "9.9", "10.1"),
+        ]));
+        assert!(
+            row_of(&apart).contains("holds (r &gt; 1)"),
+            "{}",
+            row_of(&apart)
+        );
     }
 
     #[test]
