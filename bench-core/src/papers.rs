@@ -43,7 +43,20 @@ pub fn check_file(f: &PapersFile, file: &str) -> Vec<Problem> {
             if fig.reason.as_deref().is_none_or(|r| r.trim().is_empty()) {
                 p("reason", "reproducible = false needs the reason".into());
             }
+            if fig.why_differs.is_some() {
+                p(
+                    "why_differs",
+                    "a figure that is not reproduced cannot differ: its reason says why".into(),
+                );
+            }
             continue;
+        }
+        if fig
+            .why_differs
+            .as_deref()
+            .is_some_and(|w| w.trim().is_empty())
+        {
+            p("why_differs", "empty: say why, or leave the key out".into());
         }
         let (Some(ours), Some(base), Some(rule)) = (&fig.ours, &fig.baseline, &fig.holds) else {
             p(

@@ -77,6 +77,18 @@ fn measured(f: &Figure, rows: Option<(&Rec, &Rec)>) -> String {
     }
 }
 
+/// The measured passes, then the figure's declared `why_differs` where the verdict is "differs"
+/// or "within noise" (a figure that holds needs no excuse).
+fn measured_and_why(f: &Figure, rows: Option<(&Rec, &Rec)>, verdict: &str) -> String {
+    let m = measured(f, rows);
+    let differs = verdict.starts_with("differs") || verdict.starts_with("within noise");
+    match (&f.why_differs, differs) {
+        (Some(why), true) if m.is_empty() => format!("why: {why}"),
+        (Some(why), true) => format!("{m}. Why: {why}"),
+        _ => m,
+    }
+}
+
 /// The rows of a figure's point and its baseline, where the run holds both.
 fn rows_of<'a>(runs: &'a Runs, f: &Figure) -> Option<(&'a Rec, &'a Rec)> {
     Some((
@@ -183,7 +195,7 @@ pub fn section(runs: &Runs) -> String {
     for (name, f) in &files {
         let _ = write!(
             h,
-            "<h3>{} — {} ({})</h3><table class=\"repro\" id=\"repro-{}\"><tr><th>row</th><th>figure</th><th>setup</th><th>paper</th><th>paper ratio</th><th>ours</th><th>holds / differs</th><th>measured: slowest pass (ours; baseline)</th></tr>",
+            "<h3>{} — {} ({})</h3><table class=\"repro\" id=\"repro-{}\"><tr><th>row</th><th>figure</th><th>setup</th><th>paper</th><th>paper ratio</th><th>ours</th><th>holds / differs</th><th>measured: slowest pass (ours; baseline), and why ours differs</th></tr>",
             esc(&f.source.title),
             esc(&f.source.authors),
             esc(&f.source.venue),
@@ -226,7 +238,7 @@ pub fn section(runs: &Runs) -> String {
                 fig.ratio.map(num).unwrap_or_else(|| "—".into()),
                 esc(&o),
                 esc(&verdict),
-                esc(&measured(fig, rows))
+                esc(&measured_and_why(fig, rows, &verdict))
             );
         }
         h.push_str("</table>");
@@ -371,6 +383,35 @@ mod tests {
             row_of(&apart).contains("holds (r &gt; 1)"),
             "{}",
             row_of(&apart)
+        );
+    }
+
+    #[test]
+    fn a_figure_that_differs_shows_why_and_one_that_holds_does_not() {
+        // fig1.2-bdp declares why_differs: r = 40 / 20 = 2 is not within 2× of 10.7 (differs),
+        // r = 40 / 5 = 8 is (holds).
+        let row = |bdp_ms: &str| {
+            let h = section(&runs(vec![
+                rec("depth_peel", &[("max_layers", "256")], "40.0", Status::Ok),
+                rec(
+                    "bdp",
+                    &[("bucket_count", "16"), ("bucket_pairing", "paired")],
+                    bdp_ms,
+                    Status::Ok,
+                ),
+            ]));
+            let at = h.find("(fig1.2-bdp)").unwrap();
+            h[at..at + h[at..].find("</tr>").unwrap()].to_string()
+        };
+        assert!(
+            row("20.0").contains("differs") && row("20.0").contains("why: "),
+            "{}",
+            row("20.0")
+        );
+        assert!(
+            row("5.0").contains("holds") && !row("5.0").contains("why"),
+            "{}",
+            row("5.0")
         );
     }
 

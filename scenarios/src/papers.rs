@@ -76,6 +76,11 @@ pub struct Figure {
     pub baseline: Option<PointRef>,
     /// The rule by which ours holds (required when reproducible).
     pub holds: Option<Rule>,
+    /// Why ours differs from the paper, as the committed runs measure it (the mechanism, named
+    /// by the columns that show it: the report puts it beside the measured passes). Shown only
+    /// when the verdict is "differs" or "within noise"; a figure that holds again keeps it
+    /// silent.
+    pub why_differs: Option<String>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
