@@ -216,5 +216,16 @@ mod tests {
         assert!(all(&p).contains("does not run 64x64"), "{}", all(&p));
         let p = first_figure_with(text, "reproducible = true", "reproducible = false");
         assert!(all(&p).contains("needs the reason"), "{}", all(&p));
+        // The first figure says why it differs: not on a figure that is not reproduced, and
+        // never empty.
+        let p = first_figure_with(
+            text,
+            "reproducible = true\nwhy_differs",
+            "reproducible = false\nreason = \"x\"\nwhy_differs",
+        );
+        assert!(all(&p).contains("cannot differ"), "{}", all(&p));
+        // An empty reason (the old text left behind as a comment line).
+        let p = first_figure_with(text, "why_differs = \"", "why_differs = \" \"\n# \"");
+        assert!(all(&p).contains("empty: say why"), "{}", all(&p));
     }
 }
