@@ -72,6 +72,11 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
     }
     // The sources' published figures beside ours (empty unless a seeds-* suite ran).
     extra.push_str(&reproduction::section(&runs));
+    let md = reproduction::markdown(&runs);
+    if !md.is_empty() {
+        let p = out.join("reproduction.md");
+        std::fs::write(&p, md).with_context(|| format!("writing {}", p.display()))?;
+    }
     // What bounds each point (slowest pass, floor, bandwidth): also as markdown for RUN.md.
     extra.push_str(&bounds::section(&runs));
     let md = bounds::markdown(&runs);

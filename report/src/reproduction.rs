@@ -168,8 +168,31 @@ fn verdict_over(rule: &papers::Rule, lo: f64, hi: f64, paper: Option<f64>) -> &'
     }
 }
 
-/// The section's HTML, or "" when no row of `runs` is from a suite a papers file points to.
-pub fn section(runs: &Runs) -> String {
+/// One source's table: its heading, its papers file's name, and a row of cells per figure
+/// (row, figure, setup, paper, paper ratio, ours, verdict, measured and why).
+struct Table {
+    heading: String,
+    name: String,
+    rows: Vec<[String; 8]>,
+}
+
+/// The columns of every table.
+const HEADER: [&str; 8] = [
+    "row",
+    "figure",
+    "setup",
+    "paper",
+    "paper ratio",
+    "ours",
+    "holds / differs",
+    "measured: slowest pass (ours; baseline), and why ours differs",
+];
+
+/// The note under the heading.
+const NOTE: &str = "r = baseline ÷ ours of the rule's column (for times, ours' speed-up); the rule is declared in scenarios/papers/*.toml.";
+
+/// Every source's table, or none when no row of `runs` is from a suite a papers file points to.
+fn tables(runs: &Runs) -> Vec<Table> {
     let files: Vec<(&str, papers::PapersFile)> = papers::BUILTIN
         .iter()
         .filter_map(|(n, t)| papers::parse(t).ok().map(|f| (*n, f)))
@@ -185,65 +208,111 @@ pub fn section(runs: &Runs) -> String {
         .iter()
         .any(|r| suites.contains(&r.get_name("suite")))
     {
+        return Vec::new();
+    }
+    files
+        .iter()
+        .map(|(name, f)| Table {
+            heading: format!(
+                "{} — {} ({})",
+                f.source.title, f.source.authors, f.source.venue
+            ),
+            name: name.to_string(),
+            rows: f.figures.iter().map(|fig| cells(runs, fig)).collect(),
+        })
+        .collect()
+}
+
+/// One figure's cells.
+fn cells(runs: &Runs, fig: &Figure) -> [String; 8] {
+    let paper = match (fig.value, &fig.against, &fig.claim) {
+        (Some(v), Some(a), _) => format!("{} {} vs {}", num(v), fig.metric, a),
+        (Some(v), None, _) => format!("{} {}", num(v), fig.metric),
+        (None, _, Some(c)) => c.clone(),
+        _ => fig.metric.clone(),
+    };
+    let s = &fig.setup;
+    let setup = format!(
+        "{}{}, {}{}{}",
+        s.gpu,
+        s.resolution
+            .map(|r| format!(", {}×{}", r[0], r[1]))
+            .unwrap_or_default(),
+        s.scene,
+        s.triangles
+            .map(|t| format!(" ({t} triangles)"))
+            .unwrap_or_default(),
+        s.layers
+            .as_ref()
+            .map(|l| format!(", {l}"))
+            .unwrap_or_default()
+    );
+    let rows = rows_of(runs, fig);
+    let (o, verdict) = ours(fig, rows);
+    let why = measured_and_why(fig, rows, &verdict);
+    [
+        fig.row.to_string(),
+        format!("{} {} ({})", fig.table, fig.section, fig.id),
+        setup,
+        paper,
+        fig.ratio.map(num).unwrap_or_else(|| "—".into()),
+        o,
+        verdict,
+        why,
+    ]
+}
+
+/// The section's HTML, or "" when no row of `runs` is from a suite a papers file points to.
+pub fn section(runs: &Runs) -> String {
+    let tables = tables(runs);
+    if tables.is_empty() {
         return String::new();
     }
-    let mut h = String::from(
-        "<h2 id=\"reproduction\">Reproduction: the sources' published figures beside ours</h2>\
-         <p class=\"note\">r = baseline ÷ ours of the rule's column (for times, ours' speed-up); \
-         the rule is declared in scenarios/papers/*.toml.</p>",
+    let mut h = format!(
+        "<h2 id=\"reproduction\">Reproduction: the sources' published figures beside ours</h2><p class=\"note\">{}</p>",
+        esc(NOTE)
     );
-    for (name, f) in &files {
+    for t in &tables {
         let _ = write!(
             h,
-            "<h3>{} — {} ({})</h3><table class=\"repro\" id=\"repro-{}\"><tr><th>row</th><th>figure</th><th>setup</th><th>paper</th><th>paper ratio</th><th>ours</th><th>holds / differs</th><th>measured: slowest pass (ours; baseline), and why ours differs</th></tr>",
-            esc(&f.source.title),
-            esc(&f.source.authors),
-            esc(&f.source.venue),
-            esc(name)
+            "<h3>{}</h3><table class=\"repro\" id=\"repro-{}\"><tr>",
+            esc(&t.heading),
+            esc(&t.name)
         );
-        for fig in &f.figures {
-            let paper = match (fig.value, &fig.against, &fig.claim) {
-                (Some(v), Some(a), _) => format!("{} {} vs {}", num(v), fig.metric, a),
-                (Some(v), None, _) => format!("{} {}", num(v), fig.metric),
-                (None, _, Some(c)) => c.clone(),
-                _ => fig.metric.clone(),
-            };
-            let s = &fig.setup;
-            let setup = format!(
-                "{}{}, {}{}{}",
-                s.gpu,
-                s.resolution
-                    .map(|r| format!(", {}×{}", r[0], r[1]))
-                    .unwrap_or_default(),
-                s.scene,
-                s.triangles
-                    .map(|t| format!(" ({t} triangles)"))
-                    .unwrap_or_default(),
-                s.layers
-                    .as_ref()
-                    .map(|l| format!(", {l}"))
-                    .unwrap_or_default()
-            );
-            let rows = rows_of(runs, fig);
-            let (o, verdict) = ours(fig, rows);
-            let _ = write!(
-                h,
-                "<tr><td>{}</td><td>{} {} ({})</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                fig.row,
-                esc(&fig.table),
-                esc(&fig.section),
-                esc(&fig.id),
-                esc(&setup),
-                esc(&paper),
-                fig.ratio.map(num).unwrap_or_else(|| "—".into()),
-                esc(&o),
-                esc(&verdict),
-                esc(&measured_and_why(fig, rows, &verdict))
-            );
+        for c in HEADER {
+            let _ = write!(h, "<th>{}</th>", esc(c));
+        }
+        h.push_str("</tr>");
+        for r in &t.rows {
+            h.push_str("<tr>");
+            for c in r {
+                let _ = write!(h, "<td>{}</td>", esc(c));
+            }
+            h.push_str("</tr>");
         }
         h.push_str("</table>");
     }
     h
+}
+
+/// The same tables as markdown (`reproduction.md` beside the report, for a RUN.md), or "".
+pub fn markdown(runs: &Runs) -> String {
+    let tables = tables(runs);
+    if tables.is_empty() {
+        return String::new();
+    }
+    let cell = |c: &str| c.replace('|', "\\|").replace('\n', " ");
+    let mut m = format!("### Reproduction: the sources' published figures beside ours\n\n{NOTE}\n");
+    for t in &tables {
+        let _ = write!(m, "\n#### {}\n\n| {} |\n|", t.heading, HEADER.join(" | "));
+        m.push_str(&"---|".repeat(HEADER.len()));
+        m.push('\n');
+        for r in &t.rows {
+            let row: Vec<String> = r.iter().map(|c| cell(c)).collect();
+            let _ = writeln!(m, "| {} |", row.join(" | "));
+        }
+    }
+    m
 }
 
 #[cfg(test)]
@@ -413,6 +482,26 @@ mod tests {
             "{}",
             row("5.0")
         );
+    }
+
+    #[test]
+    fn the_markdown_has_the_html_tables_rows() {
+        let r = runs(vec![
+            rec("depth_peel", &[("max_layers", "256")], "40.0", Status::Ok),
+            rec("bdp2", &[("bucket_count", "32")], "20.0", Status::Ok),
+        ]);
+        let (h, m) = (section(&r), markdown(&r));
+        let rows = |text: &str, start: &str| text.matches(start).count();
+        assert_eq!(
+            rows(&h, "<tr><td>"),
+            rows(&m, "\n| ") - 5,
+            "one markdown row per figure (plus 5 header rows)"
+        );
+        assert!(
+            m.contains("| r = 2.00 | differs (r within 2× of 5.3) |"),
+            "{m}"
+        );
+        assert_eq!(markdown(&runs(vec![])), "");
     }
 
     #[test]
