@@ -515,6 +515,14 @@ pub mod cols {
         "shadow_fade_tile_frac",
         "classified, sun_shadow = taps8: fraction of 4×4 tiles in the shadow-fade class (some pixel's filter footprint straddles a shadow edge: only these run the 8-tap filter)",
     );
+    pub const MSAA: Col = Col::new(
+        "msaa",
+        "deferred: G-buffer samples per pixel (off, or x2: a 2×MSAA G-buffer; naive and uber shade both samples of every pixel and average, classified only in its MSAA-edge tiles, once elsewhere; the f64 reference averages per-sample shading)",
+    );
+    pub const MSAA_EDGE_TILE_FRAC: Col = Col::new(
+        "msaa_edge_tile_frac",
+        "classified, msaa = x2: fraction of 4×4 tiles in the MSAA-edge class (some pixel's two samples differ in depth, normal, albedo, specular or material: only these are shaded per sample)",
+    );
     pub const PERMUTATIONS: Col = Col::new(
         "permutations",
         "shader permutations compiled and drawn (classified: one per id the scene can produce; uber: 1)",
@@ -1184,6 +1192,8 @@ pub const GROUPS: &[Group] = &[
             cols::CLASS_IDS_PRESENT,
             cols::SUN_SHADOW,
             cols::SHADOW_FADE_TILE_FRAC,
+            cols::MSAA,
+            cols::MSAA_EDGE_TILE_FRAC,
             cols::PERMUTATIONS,
             cols::CPU_LIGHT_MS,
             cols::CPU_CULL_MS,

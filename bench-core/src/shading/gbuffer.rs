@@ -71,6 +71,8 @@ pub struct GBufferPass {
     reversed: bool,
     /// True: depth + normal only (light pre-pass).
     pub prepass: bool,
+    /// Samples per pixel (2: the MSAA G-buffer of `msaa = x2`, read back by `msaa::read_samples`).
+    pub samples: u32,
 }
 
 impl GBufferPass {
@@ -81,6 +83,21 @@ impl GBufferPass {
         prepass: bool,
         alloc: &mut AllocCounter,
     ) -> GBufferPass {
+        Self::new_ms(gpu, scene, gscene, prepass, 1, alloc)
+    }
+
+    /// [`GBufferPass::new`] with `samples` samples per pixel (> 1: multisampled targets, the
+    /// full G-buffer only; its fragment shader also writes the pixel-centre depth, so every
+    /// sample a triangle covers holds the same values: `msaa.rs`).
+    pub fn new_ms(
+        gpu: &Gpu,
+        scene: &scenarios::Scene,
+        gscene: &GpuScene,
+        prepass: bool,
+        samples: u32,
+        alloc: &mut AllocCounter,
+    ) -> GBufferPass {
+        assert!(samples == 1 || !prepass, "the MSAA G-buffer is a full one");
         let d = &gpu.device;
         let (w, h) = (gscene.width, gscene.height);
         let module = shader(gpu, "gbuffer", WGSL);
@@ -120,25 +137,24 @@ impl GBufferPass {
                 resource: materials.as_entire_binding(),
             }],
         });
+        // Multisampled textures cannot be copied: no COPY_SRC (read back by a compute pass).
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC;
-        let depth = alloc.texture(
-            gpu,
-            "gb depth",
-            w,
-            h,
-            wgpu::TextureFormat::Depth32Float,
-            usage,
-        );
-        let normal = alloc.texture(gpu, "gb normal", w, h, NORMAL_FORMAT, usage);
+            | if samples == 1 {
+                wgpu::TextureUsages::COPY_SRC
+            } else {
+                wgpu::TextureUsages::empty()
+            };
+        let mut tex = |label, format| alloc.texture_ms(gpu, label, w, h, format, usage, samples);
+        let depth = tex("gb depth", wgpu::TextureFormat::Depth32Float);
+        let normal = tex("gb normal", NORMAL_FORMAT);
         let (albedo, spec, mat) = if prepass {
             (None, None, None)
         } else {
             (
-                Some(alloc.texture(gpu, "gb albedo", w, h, ALBEDO_FORMAT, usage)),
-                Some(alloc.texture(gpu, "gb spec", w, h, SPEC_FORMAT, usage)),
-                Some(alloc.texture(gpu, "gb material", w, h, MAT_FORMAT, usage)),
+                Some(tex("gb albedo", ALBEDO_FORMAT)),
+                Some(tex("gb spec", SPEC_FORMAT)),
+                Some(tex("gb material", MAT_FORMAT)),
             )
         };
         let target = |f| {
@@ -171,10 +187,17 @@ impl GBufferPass {
             },
             primitive: wgpu::PrimitiveState::default(),
             depth_stencil: Some(depth_state(gscene.reversed_z, true)),
-            multisample: Default::default(),
+            multisample: wgpu::MultisampleState {
+                count: samples,
+                ..Default::default()
+            },
             fragment: Some(wgpu::FragmentState {
                 module: &module,
-                entry_point: Some(if prepass { "fs_prepass" } else { "fs_gbuffer" }),
+                entry_point: Some(match (prepass, samples > 1) {
+                    (true, _) => "fs_prepass",
+                    (false, false) => "fs_gbuffer",
+                    (false, true) => "fs_gbuffer_ms",
+                }),
                 compilation_options: Default::default(),
                 targets: &targets,
             }),
@@ -195,6 +218,7 @@ impl GBufferPass {
             materials,
             reversed: gscene.reversed_z,
             prepass,
+            samples,
         }
     }
 
@@ -265,7 +289,11 @@ impl GBufferPass {
     /// Reads the G-buffer back and decodes it. For the pre-pass variant, albedo/spec come from
     /// the material table (`mats`, by object id) is not possible (no id target): they are zero
     /// and the material is 0 except where the depth is the clear value (sky).
+    /// A multisampled G-buffer reads back its sample 0 (`msaa::read_samples` has them all).
     pub fn read(&self, gpu: &Gpu) -> Result<GBuffer> {
+        if self.samples > 1 {
+            return Ok(super::msaa::read_samples(gpu, self)?.swap_remove(0));
+        }
         let (w, h) = (self.depth.width(), self.depth.height());
         let n = (w * h) as usize;
         let depth: Vec<f32> = bytemuck::cast_slice(&read_texture(

@@ -13,13 +13,17 @@
 //! The classified and uber paths loop over every light (no culling): the comparison isolates
 //! what classification saves. With `sun_shadow = taps8` (naive, classified, uber) the sun is
 //! shaded through a shadow map (`sun_shadow.rs`): the uber-shader runs the 8-tap filter on every
-//! sun-facing pixel, the classified path only in tiles of the fade class.
+//! sun-facing pixel, the classified path only in tiles of the fade class. With `msaa = x2`
+//! (naive, classified, uber) the G-buffer has 2 samples per pixel (`msaa.rs`; x4: 4): naive and
+//! the uber-shader shade every sample of every pixel and average, the classified path only in
+//! tiles of the edge class (elsewhere a pixel's samples are equal: it shades sample 0).
 
-use crate::gpu_util::{compute_pipeline, read_vec, storage_entry, texture_entry};
+use crate::gpu_util::{compute_pipeline, read_vec, storage_entry, texture_entry_ms};
 use scenarios::{ParamValue, Scene};
 use wgpu::util::DeviceExt;
 
 use super::gbuffer::{read_rgba32f, GBufferPass};
+use super::msaa;
 use super::sun_shadow::{self, SunShadow};
 use super::{class, GBuffer, ShadeSetup, LIGHT_WGSL};
 use crate::gpu::Gpu;
@@ -33,6 +37,43 @@ pub const PATHS_WGSL: &str = include_str!("paths.wgsl");
 /// The paths' WGSL body (after light.wgsl): paths.wgsl and the sun shadow it calls.
 pub fn paths_source() -> String {
     format!("{PATHS_WGSL}\n{}", sun_shadow::WGSL)
+}
+
+/// [`paths_source`] over a G-buffer of `samples` samples per pixel (> 1: multisampled textures
+/// and `SAMPLES` = samples; `textureLoad`'s last argument becomes the sample index).
+pub fn paths_source_ms(samples: u32) -> String {
+    let mut src = paths_source();
+    if samples == 1 {
+        return src;
+    }
+    for (a, b) in [
+        (
+            "var t_depth: texture_depth_2d;",
+            "var t_depth: texture_depth_multisampled_2d;",
+        ),
+        (
+            "var t_normal: texture_2d<f32>;",
+            "var t_normal: texture_multisampled_2d<f32>;",
+        ),
+        (
+            "var t_albedo: texture_2d<f32>;",
+            "var t_albedo: texture_multisampled_2d<f32>;",
+        ),
+        (
+            "var t_spec: texture_2d<f32>;",
+            "var t_spec: texture_multisampled_2d<f32>;",
+        ),
+        (
+            "var t_mat: texture_2d<u32>;",
+            "var t_mat: texture_multisampled_2d<u32>;",
+        ),
+    ] {
+        assert!(src.contains(a), "paths.wgsl lost '{a}'");
+        src = src.replace(a, b);
+    }
+    let a = "const SAMPLES: u32 = 1u;";
+    assert!(src.contains(a), "paths.wgsl lost '{a}'");
+    src.replace(a, &format!("const SAMPLES: u32 = {samples}u;"))
 }
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// Per-tile list capacity when lists are kept for inspection (tests, debug views).
@@ -94,6 +135,8 @@ impl ShadeInputs {
         let d = &gpu.device;
         let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
         let ff = wgpu::TextureSampleType::Float { filterable: false };
+        let ms = gb.samples > 1;
+        let gtex = |b, t| texture_entry_ms(b, t, all, ms);
         let bgl0 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shade inputs"),
             entries: &[
@@ -108,18 +151,18 @@ impl ShadeInputs {
                     count: None,
                 },
                 storage_entry(1, true, all),
-                texture_entry(2, wgpu::TextureSampleType::Depth, all),
-                texture_entry(3, ff, all),
-                texture_entry(4, wgpu::TextureSampleType::Depth, all),
+                gtex(2, wgpu::TextureSampleType::Depth),
+                gtex(3, ff),
+                texture_entry_ms(4, wgpu::TextureSampleType::Depth, all, false),
                 storage_entry(5, true, all),
             ],
         });
         let bgl1 = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shade surface"),
             entries: &[
-                texture_entry(0, ff, all),
-                texture_entry(1, ff, all),
-                texture_entry(2, wgpu::TextureSampleType::Uint, all),
+                gtex(0, ff),
+                gtex(1, ff),
+                gtex(2, wgpu::TextureSampleType::Uint),
             ],
         });
         let uniform = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -234,7 +277,7 @@ impl ShadeInputs {
             }
         };
         ShadeInputs {
-            module: module(gpu, "shading paths", &paths_source()),
+            module: module(gpu, "shading paths", &paths_source_ms(gb.samples)),
             bgl0,
             bgl1,
             bind0,
@@ -246,9 +289,12 @@ impl ShadeInputs {
 }
 
 /// Feature bits a scene can show at all: no sun → no SUN ids; a closed room → no SKY ids;
-/// no shadow map → no FADE ids.
-pub fn possible_features(scene: &Scene, shadow: sun_shadow::Mode) -> u32 {
+/// no shadow map → no FADE ids; no MSAA → no EDGE ids.
+pub fn possible_features(scene: &Scene, shadow: sun_shadow::Mode, ms: msaa::Mode) -> u32 {
     let mut f = class::GEOM | class::SPEC;
+    if ms != msaa::Mode::Off {
+        f |= class::EDGE;
+    }
     if scene.sun.is_some() {
         f |= class::SUN;
         if shadow != sun_shadow::Mode::Off {
@@ -432,12 +478,14 @@ impl Deferred {
             store_lists,
             0.0,
             sun_shadow::Mode::Off,
+            msaa::Mode::Off,
         )
     }
 
     /// [`Deferred::new`] with `diffuse_only_frac` of the lights flagged diffuse-only
     /// ([`ShadeSetup::with_diffuse_only`]) and the sun shaded through a shadow map or not
-    /// (rendered here, once, untimed: `sun_shadow.rs`).
+    /// (rendered here, once, untimed: `sun_shadow.rs`), over a 2×MSAA G-buffer or not
+    /// (`msaa.rs`).
     #[allow(clippy::too_many_arguments)]
     pub fn new_with(
         gpu: &Gpu,
@@ -448,8 +496,26 @@ impl Deferred {
         store_lists: bool,
         diffuse_only_frac: f64,
         shadow: sun_shadow::Mode,
+        ms: msaa::Mode,
     ) -> Result<Deferred> {
         supports(gpu, path).map_err(CoreError::Param)?;
+        if ms != msaa::Mode::Off {
+            if !matches!(path, Path::Naive | Path::Classified { .. }) {
+                return Err(CoreError::Param(format!(
+                    "msaa = {} is built for naive, classified and uber only, not {}",
+                    ms.name(),
+                    path.name()
+                )));
+            }
+            msaa::supported(gpu, ms).map_err(CoreError::Param)?;
+            if shadow != sun_shadow::Mode::Off {
+                return Err(CoreError::Param(format!(
+                    "msaa = {} with sun_shadow = {} is not built (each is tested alone)",
+                    ms.name(),
+                    shadow.name()
+                )));
+            }
+        }
         if shadow != sun_shadow::Mode::Off && !matches!(path, Path::Naive | Path::Classified { .. })
         {
             return Err(CoreError::Param(format!(
@@ -468,7 +534,7 @@ impl Deferred {
         let setup = ShadeSetup::new(scene, w, h)
             .with_diffuse_only(diffuse_only_frac)
             .with_sun_shadow(sun.as_ref().map(|s| s.map.clone()));
-        let gbuf = GBufferPass::new(gpu, scene, gscene, false, &mut alloc);
+        let gbuf = GBufferPass::new_ms(gpu, scene, gscene, false, ms.samples(), &mut alloc);
         let tile = match path {
             Path::Tiled { tile, .. } => tile,
             _ => class::TILE,
@@ -656,7 +722,7 @@ impl Deferred {
                     compute_pipeline(gpu, "class offsets", &lc, m, "cs_offsets", &[], true);
                 let scatter =
                     compute_pipeline(gpu, "class scatter", &lc, m, "cs_scatter", &[], true);
-                let possible = possible_features(scene, shadow);
+                let possible = possible_features(scene, shadow, ms);
                 let draws: Vec<(u32, wgpu::RenderPipeline)> = if uber {
                     vec![(
                         class::IDS,
@@ -693,6 +759,7 @@ impl Deferred {
                                     ("F_SUN", f(class::SUN)),
                                     ("F_SPEC", f(class::SPEC)),
                                     ("F_SHADOW_FADE", f(class::FADE)),
+                                    ("F_EDGE", f(class::EDGE)),
                                 ],
                                 None,
                                 None,
@@ -845,6 +912,11 @@ impl Deferred {
         self.gbuf.read(gpu)
     }
 
+    /// Every sample's G-buffer (one without MSAA): the MSAA reference's input.
+    pub fn read_samples(&self, gpu: &Gpu) -> Result<Vec<GBuffer>> {
+        msaa::read_samples(gpu, &self.gbuf)
+    }
+
     /// Tiled: lights kept per tile (before the list cap), tiles row-major.
     pub fn tile_counts(&self, gpu: &Gpu) -> Result<Option<Vec<u32>>> {
         match &self.kind {
@@ -922,10 +994,11 @@ impl Timed for Deferred {
     }
 
     /// Render-target traffic, one touch per pixel (as the prepass study's `bytes_rt_*`): the
-    /// G-buffer written and read once, the HDR colour written.
+    /// G-buffer written and read once (every sample), the HDR colour written.
     fn bytes_moved(&self) -> u64 {
         let px = self.hdr.width() as u64 * self.hdr.height() as u64;
-        px * (2 * super::gbuffer::FULL_BYTES_PER_PIXEL + 16)
+        let s = self.gbuf.samples as u64;
+        px * (2 * s * super::gbuffer::FULL_BYTES_PER_PIXEL + 16)
     }
 }
 

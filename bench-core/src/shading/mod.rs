@@ -1,7 +1,8 @@
 //! The one light model of the shading studies (`deferred`, issue 6; `prepass`, issue 10), its
 //! GPU twin (`light.wgsl`), the f64 brute-force reference (`reference.rs`), the G-buffer pass
 //! (`gbuffer.rs`), the GPU shading paths (`gpu_paths.rs`), the BF3-style CPU tile path
-//! (`cpu_tiled.rs`) and the sun shadow map with its 8-tap filter (`sun_shadow.rs`).
+//! (`cpu_tiled.rs`), the sun shadow map with its 8-tap filter (`sun_shadow.rs`) and the 2×MSAA
+//! G-buffer's sample read-back and edge class (`msaa.rs`).
 //!
 //! Model (all in view space): lights have a finite range r; attenuation
 //! att(d) = (1 − (d/r)²)² for d < r, else 0 (monotone in d, so a culling sphere is a proof);
@@ -24,6 +25,7 @@ pub mod cpu_tiled;
 pub mod debug;
 pub mod gbuffer;
 pub mod gpu_paths;
+pub mod msaa;
 pub mod prepass;
 pub mod reference;
 pub mod sun_shadow;
@@ -337,15 +339,20 @@ pub mod class {
     /// Sun shadow fade (penumbra): some sun-facing pixel's 8-tap footprint straddles a shadow
     /// edge, so the tile's shader runs the filter (`sun_shadow`); set only with a shadow map.
     pub const FADE: u32 = 16;
+    /// MSAA edge (2×MSAA G-buffer only): some pixel's samples differ in what the shading reads
+    /// (depth, normal + smoothness, albedo, specular, material), so the tile's shader shades
+    /// every sample and averages; elsewhere one sample is the pixel (`msaa`).
+    pub const EDGE: u32 = 32;
     /// Classification ids: every OR of the bits above.
-    pub const IDS: u32 = 32;
+    pub const IDS: u32 = 64;
     pub const TILE: u32 = 4;
     /// Ids a tile can have: sky and/or geometry; sun and specular only with geometry; fade
-    /// only with sun.
+    /// only with sun; edge only with geometry (two sky samples are equal).
     pub fn valid(id: u32) -> bool {
         id & (SKY | GEOM) != 0
             && (id & (SUN | SPEC) == 0 || id & GEOM != 0)
             && (id & FADE == 0 || id & SUN != 0)
+            && (id & EDGE == 0 || id & GEOM != 0)
     }
     pub fn names(id: u32) -> String {
         let mut v = vec![];
@@ -355,6 +362,7 @@ pub mod class {
             (SUN, "sun"),
             (SPEC, "spec"),
             (FADE, "fade"),
+            (EDGE, "edge"),
         ] {
             if id & b != 0 {
                 v.push(n);

@@ -1,7 +1,8 @@
 // The GPU shading paths of the deferred study (prepended: light.wgsl; appended:
 // sun_shadow.wgsl). Group 0: the shading uniform, the lights, the depth/normal targets and the
 // sun shadow map with its per-texel neighbourhood min/max; group 1: albedo, specular, material id; group 2:
-// per-path buffers.
+// per-path buffers. With a 2×MSAA G-buffer (msaa.rs) gpu_paths::paths_source makes the five
+// G-buffer textures multisampled and SAMPLES 2 (textureLoad's last argument is then the sample).
 
 @group(0) @binding(0) var<uniform> sh: Shade;
 @group(0) @binding(1) var<storage, read> lights: array<Light>;
@@ -25,6 +26,11 @@ override F_SHADOW_FADE: bool = true;
 // Light pre-pass: write the light buffer (Σ diffuse RGB, Σ lum·spec in A, times LB_SCALE).
 override LIGHT_BUFFER: bool = false;
 override LB_SCALE: f32 = 1.0;
+// Samples per G-buffer pixel (a constant of the source: 2 in the MSAA variant).
+const SAMPLES: u32 = 1u;
+// MSAA: shade every sample and average (naive, the uber-shader and the edge class); without it
+// the pixel is its sample 0 (exact where the samples are equal).
+override F_EDGE: bool = true;
 
 fn light_buffer_value(g: GPixel, acc: Acc) -> vec4<f32> {
     if g.sky {
@@ -34,19 +40,63 @@ fn light_buffer_value(g: GPixel, acc: Acc) -> vec4<f32> {
 }
 
 fn load_pixel(p: vec2<u32>) -> GPixel {
+    return load_sample(p, 0u);
+}
+
+// Sample s of pixel p (s = 0 without MSAA: the third argument is then the mip level).
+fn load_sample(p: vec2<u32>, s: u32) -> GPixel {
     var g: GPixel;
-    g.mat = textureLoad(t_mat, p, 0).x;
-    let d = textureLoad(t_depth, p, 0);
+    g.mat = textureLoad(t_mat, p, s).x;
+    let d = textureLoad(t_depth, p, s);
     // Sky = nothing rasterised: the clear depth (the material id marks the same pixels; the
     // light pre-pass has only depth and normals).
     g.sky = d == sh.misc.y;
     g.pos = view_pos(sh, p, d);
-    let n = textureLoad(t_normal, p, 0);
+    let n = textureLoad(t_normal, p, s);
     g.n = n.xyz;
     g.smoothness = n.w;
-    g.albedo = textureLoad(t_albedo, p, 0).xyz;
-    g.spec = textureLoad(t_spec, p, 0).xyz;
+    g.albedo = textureLoad(t_albedo, p, s).xyz;
+    g.spec = textureLoad(t_spec, p, s).xyz;
     return g;
+}
+
+// MSAA edge (as shading::msaa::samples_differ): some sample differs from sample 0 in what the
+// shading reads.
+fn samples_differ(p: vec2<u32>) -> bool {
+    for (var s = 1u; s < SAMPLES; s++) {
+        if textureLoad(t_depth, p, 0u) != textureLoad(t_depth, p, s)
+            || any(textureLoad(t_normal, p, 0u) != textureLoad(t_normal, p, s))
+            || any(textureLoad(t_albedo, p, 0u).xyz != textureLoad(t_albedo, p, s).xyz)
+            || any(textureLoad(t_spec, p, 0u).xyz != textureLoad(t_spec, p, s).xyz)
+            || textureLoad(t_mat, p, 0u).x != textureLoad(t_mat, p, s).x {
+            return true;
+        }
+    }
+    return false;
+}
+
+// The class bits of pixel p: every sample's, and EDGE (32) where they differ.
+fn pixel_bits_ms(p: vec2<u32>) -> u32 {
+    var b = pixel_bits(load_sample(p, 0u));
+    for (var s = 1u; s < SAMPLES; s++) {
+        b |= pixel_bits(load_sample(p, s));
+    }
+    if SAMPLES > 1u && samples_differ(p) {
+        b |= 32u;
+    }
+    return b;
+}
+
+// The pixel's colour: the average over its samples (MSAA with F_EDGE), else its sample 0.
+fn shade_pixel(p: vec2<u32>) -> vec4<f32> {
+    if SAMPLES > 1u && F_EDGE {
+        var c = vec4<f32>(0.0);
+        for (var s = 0u; s < SAMPLES; s++) {
+            c += shade_all(load_sample(p, s));
+        }
+        return c / f32(SAMPLES);
+    }
+    return shade_all(load_pixel(p));
 }
 
 // Feature bits of one pixel (SKY 1, GEOM 2, SUN 4, SPEC 8, FADE 16), as shading::pixel_class.
@@ -123,7 +173,7 @@ fn vs_fullscreen(@builtin(vertex_index) i: u32) -> FsOut {
 
 @fragment
 fn fs_shade(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
-    return shade_all(load_pixel(vec2<u32>(frag.xy)));
+    return shade_pixel(vec2<u32>(frag.xy));
 }
 
 struct SplitOut {
@@ -141,9 +191,9 @@ fn fs_shade_split(@builtin(position) frag: vec4<f32>) -> SplitOut {
 // ---- classified (Split/Second): 4×4 tiles, ids, per-id lists, one draw per id ----
 
 override CLASS_ID: u32 = 0u;
-// Classification ids (shading::class::IDS): every OR of the 5 bits; CLASS_ID = CLASS_IDS is
+// Classification ids (shading::class::IDS): every OR of the 6 bits; CLASS_ID = CLASS_IDS is
 // the uber-shader drawing every tile.
-const CLASS_IDS: u32 = 32u;
+const CLASS_IDS: u32 = 64u;
 
 @group(2) @binding(0) var<storage, read_write> tile_class: array<u32>;
 @group(2) @binding(1) var<storage, read_write> class_count: array<atomic<u32>, CLASS_IDS>;
@@ -171,7 +221,7 @@ fn cs_classify(@builtin(global_invocation_id) gid: vec3<u32>) {
         for (var x = 0u; x < 4u; x++) {
             let p = gid.xy * 4u + vec2<u32>(x, y);
             if p.x < size.x && p.y < size.y {
-                bits |= pixel_bits(load_pixel(p));
+                bits |= pixel_bits_ms(p);
             }
         }
     }

@@ -9,7 +9,10 @@
 //! (every path: the fraction of lights flagged diffuse-only, which changes the image, so the
 //! reference and the naive time are per fraction), `sun_shadow` (naive, classified, uber:
 //! `off`, or `taps8`: the sun through a shadow map with an 8-tap filter, Split/Second's
-//! expensive soft-shadow class; the reference and the naive time are per value too). The light
+//! expensive soft-shadow class; the reference and the naive time are per value too), `msaa`
+//! (naive, classified, uber: `off`, or `x2`: a 2×MSAA G-buffer, Split/Second's MSAA-edge class;
+//! `x4` the same with 4 samples, lavapipe's only MSAA count; judged against the average of the
+//! f64 shading of each read-back sample). The light
 //! count is a scene parameter
 //! (`city(lights=N)`), recorded per row.
 //! `naive` runs first in each group so every row carries `speedup_vs_naive`.
@@ -39,6 +42,7 @@ use crate::record::{error_row, failed_row, set_params, skipped_row};
 use crate::shading::cpu_tiled::{self, CpuOptions};
 use crate::shading::gbuffer::GBufferPass;
 use crate::shading::gpu_paths::{self, Deferred, Path};
+use crate::shading::msaa;
 use crate::shading::sun_shadow::{self, SunShadow};
 use crate::shading::{class, reference, GBuffer, ShadeSetup};
 use crate::timing::{GpuTimer, Stats};
@@ -93,6 +97,12 @@ const SUN_SHADOW: Axis = Axis::choice(
     "off",
     sun_shadow::Mode::NAMES,
 );
+const MSAA: Axis = Axis::choice(
+    cols::MSAA,
+    "naive, classified, uber: a 2×MSAA G-buffer (x2; naive and uber shade both samples of every pixel, classified only in MSAA-edge tiles), 4× (x4, the same) or one sample (off)",
+    "off",
+    msaa::Mode::NAMES,
+);
 const THREAD_COUNT: Axis = Axis::int(cols::THREAD_COUNT, "CPU worker threads", 1, 1, 1024);
 const QUAD_SKIP: Axis = Axis::bool(
     cols::QUAD_SKIP,
@@ -131,7 +141,7 @@ fn axes_of(path: &str) -> Vec<Axis> {
             DIFFUSE_SKIP,
             DIFFUSE_ONLY_FRAC,
         ],
-        "naive" | "classified" | "uber" => vec![DIFFUSE_ONLY_FRAC, SUN_SHADOW],
+        "naive" | "classified" | "uber" => vec![DIFFUSE_ONLY_FRAC, SUN_SHADOW, MSAA],
         _ => vec![DIFFUSE_ONLY_FRAC],
     }
 }
@@ -142,6 +152,33 @@ fn shadow_mode(point: &Point) -> sun_shadow::Mode {
         Some(_) => sun_shadow::Mode::parse(&point.choice(&SUN_SHADOW)).unwrap_or_default(),
         None => sun_shadow::Mode::Off,
     }
+}
+
+/// The G-buffer samples of a point (off for the paths that do not read it).
+fn msaa_mode(point: &Point) -> msaa::Mode {
+    match point.get(MSAA.name()) {
+        Some(_) => msaa::Mode::parse(&point.choice(&MSAA)).unwrap_or_default(),
+        None => msaa::Mode::Off,
+    }
+}
+
+/// Renders the multisampled G-buffer once (untimed) and reads every sample back: the MSAA
+/// reference's input.
+fn gbuffer_samples(
+    gpu: &Gpu,
+    scene: &Scene,
+    gscene: &GpuScene,
+    ms: msaa::Mode,
+) -> Result<Vec<GBuffer>> {
+    let mut alloc = AllocCounter::default();
+    let gb = GBufferPass::new_ms(gpu, scene, gscene, false, ms.samples(), &mut alloc);
+    let mut timer = GpuTimer::new(gpu);
+    timer.begin_frame();
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    gb.encode(&mut enc, gscene, &mut timer, "gbuffer");
+    gpu.queue.submit([enc.finish()]);
+    gpu.wait()?;
+    msaa::read_samples(gpu, &gb)
 }
 
 /// τ of a point (0 for the paths that do not read it).
@@ -206,8 +243,9 @@ fn set_error(row: &mut Row, reference: &[[f64; 4]], img: &[[f32; 4]]) {
     }
 }
 
-/// What changes a point's image: the diffuse-only fraction (its bits) and the sun shadow.
-type ImageKey = (u64, sun_shadow::Mode);
+/// What changes a point's image: the diffuse-only fraction (its bits), the sun shadow and the
+/// G-buffer's samples.
+type ImageKey = (u64, sun_shadow::Mode, msaa::Mode);
 
 pub struct DeferredStudy;
 
@@ -242,6 +280,9 @@ impl Study for DeferredStudy {
             .points
             .iter()
             .any(|p| shadow_mode(&p.point) != sun_shadow::Mode::Off);
+        // The multisampled G-buffers' samples (deterministic, as the paths render them), read
+        // back once per sample count.
+        let mut ms_samples: HashMap<msaa::Mode, Vec<GBuffer>> = HashMap::new();
         let shadow_map = if wants_shadow {
             let mut alloc = AllocCounter::default();
             SunShadow::new(gpu, scene, gscene, &mut alloc)?.map(|s| s.map)
@@ -266,6 +307,33 @@ impl Study for DeferredStudy {
             if pt.point.get(SUN_SHADOW.name()).is_some() {
                 row.set(cols::SUN_SHADOW, shadow.name());
             }
+            let ms = msaa_mode(&pt.point);
+            if pt.point.get(MSAA.name()).is_some() {
+                row.set(cols::MSAA, ms.name());
+            }
+            if ms != msaa::Mode::Off && shadow != sun_shadow::Mode::Off {
+                emit(
+                    i,
+                    skipped_row(
+                        row,
+                        &format!(
+                            "msaa = {} with sun_shadow = {} is not built (each is tested alone)",
+                            ms.name(),
+                            shadow.name()
+                        ),
+                    ),
+                )?;
+                continue;
+            }
+            if ms != msaa::Mode::Off {
+                if let Err(why) = msaa::supported(gpu, ms) {
+                    emit(i, skipped_row(row, &why))?;
+                    continue;
+                }
+                if let std::collections::hash_map::Entry::Vacant(e) = ms_samples.entry(ms) {
+                    e.insert(gbuffer_samples(gpu, scene, gscene, ms)?);
+                }
+            }
             if shadow != sun_shadow::Mode::Off && scene.sun.is_none() {
                 emit(
                     i,
@@ -279,7 +347,7 @@ impl Study for DeferredStudy {
                 )?;
                 continue;
             }
-            let key = (frac.to_bits(), shadow);
+            let key = (frac.to_bits(), shadow, ms);
             let (setup, reference) = &*references.entry(key).or_insert_with(|| {
                 let s = setup0
                     .clone()
@@ -288,7 +356,10 @@ impl Study for DeferredStudy {
                         sun_shadow::Mode::Off => None,
                         sun_shadow::Mode::Taps8 => shadow_map.clone(),
                     });
-                let r = reference::shade(&s, &gb);
+                let r = match ms_samples.get(&ms) {
+                    Some(samples) if ms != msaa::Mode::Off => msaa::reference(&s, samples),
+                    _ => reference::shade(&s, &gb),
+                };
                 (s, r)
             });
             let naive_ms = naive_by_frac.get(&key).copied();
@@ -397,7 +468,7 @@ impl Study for DeferredStudy {
             }
             let make = |gs: &GpuScene| -> Result<Box<Deferred>> {
                 Ok(Box::new(Deferred::new_with(
-                    gpu, scene, gs, path, tau, false, frac, shadow,
+                    gpu, scene, gs, path, tau, false, frac, shadow, ms,
                 )?))
             };
             let meas = match measure_timed(gpu, gscene, &make, &ctx.plan) {
@@ -443,6 +514,13 @@ impl Study for DeferredStudy {
                     row.set_f(
                         cols::SHADOW_FADE_TILE_FRAC,
                         fade as f64 / ids.len().max(1) as f64,
+                    );
+                }
+                if ms != msaa::Mode::Off {
+                    let edge = ids.iter().filter(|&&id| id & class::EDGE != 0).count();
+                    row.set_f(
+                        cols::MSAA_EDGE_TILE_FRAC,
+                        edge as f64 / ids.len().max(1) as f64,
                     );
                 }
             }

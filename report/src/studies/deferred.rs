@@ -17,6 +17,7 @@ pub const CONFIG_AXES: &[Col] = &[
     cols::CULL_LEVELS,
     cols::THREAD_COUNT,
     cols::SUN_SHADOW,
+    cols::MSAA,
 ];
 
 pub(crate) fn safe(s: &str) -> String {
@@ -70,7 +71,8 @@ fn time_ms(r: &Rec) -> Option<f64> {
     }
 }
 
-/// A short configuration label: "tiled 16px L2", "cpu_tiled 64px L1 ×8", "uber shadow8".
+/// A short configuration label: "tiled 16px L2", "cpu_tiled 64px L1 ×8", "uber shadow8",
+/// "classified msaa2".
 fn short(r: &Rec) -> String {
     let mut s = r.get(cols::METHOD).to_string();
     if !r.get(cols::TILE_SIZE).is_empty() {
@@ -85,6 +87,12 @@ fn short(r: &Rec) -> String {
     // Only the shadowed points are marked: the unshadowed ones keep their earlier labels.
     if r.get(cols::SUN_SHADOW) == "taps8" {
         s += " shadow8";
+    }
+    // Likewise only the multisampled points: "uber msaa2".
+    match r.get(cols::MSAA) {
+        "x2" => s += " msaa2",
+        "x4" => s += " msaa4",
+        _ => {}
     }
     s
 }
