@@ -289,10 +289,15 @@ impl GBufferPass {
     /// Reads the G-buffer back and decodes it. For the pre-pass variant, albedo/spec come from
     /// the material table (`mats`, by object id) is not possible (no id target): they are zero
     /// and the material is 0 except where the depth is the clear value (sky).
-    /// A multisampled G-buffer reads back its sample 0 (`msaa::read_samples` has them all).
+    /// Single-sample only: multisampled textures cannot be copied, so a multisampled G-buffer
+    /// is read by `msaa::read_samples` (which calls this for one sample; this module does not
+    /// call it back).
     pub fn read(&self, gpu: &Gpu) -> Result<GBuffer> {
         if self.samples > 1 {
-            return Ok(super::msaa::read_samples(gpu, self)?.swap_remove(0));
+            return Err(crate::CoreError::Param(format!(
+                "a {}-sample G-buffer is read by msaa::read_samples",
+                self.samples
+            )));
         }
         let (w, h) = (self.depth.width(), self.depth.height());
         let n = (w * h) as usize;

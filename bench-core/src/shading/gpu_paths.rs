@@ -908,8 +908,9 @@ impl Deferred {
         read_rgba32f(gpu, &self.hdr)
     }
 
+    /// The G-buffer (its sample 0 when multisampled).
     pub fn read_gbuffer(&self, gpu: &Gpu) -> Result<GBuffer> {
-        self.gbuf.read(gpu)
+        Ok(msaa::read_samples(gpu, &self.gbuf)?.swap_remove(0))
     }
 
     /// Every sample's G-buffer (one without MSAA): the MSAA reference's input.

@@ -145,12 +145,12 @@ pub fn read_samples(gpu: &Gpu, gb: &GBufferPass) -> Result<Vec<GBuffer>> {
         true,
     );
     let mut alloc = AllocCounter::default();
-    let buf = super::gpu_paths::storage_buf(
+    // Not gpu_paths' helpers: gpu_paths reads the samples through this module.
+    let buf = alloc.buffer(
         gpu,
-        &mut alloc,
         "msaa samples",
-        (s * n * 48) as u64,
-        wgpu::BufferUsages::empty(),
+        ((s * n * 48) as u64).max(16),
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
     );
     let surface = |t: &Option<wgpu::Texture>| -> wgpu::TextureView {
         t.as_ref()
@@ -175,7 +175,10 @@ pub fn read_samples(gpu: &Gpu, gb: &GBufferPass) -> Result<Vec<GBuffer>> {
             resource: wgpu::BindingResource::TextureView(v),
         })
         .collect();
-    entries.push(super::gpu_paths::bge(5, &buf));
+    entries.push(wgpu::BindGroupEntry {
+        binding: 5,
+        resource: buf.as_entire_binding(),
+    });
     let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("msaa read"),
         layout: &bgl,
