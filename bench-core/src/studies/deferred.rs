@@ -170,15 +170,29 @@ fn gbuffer_samples(
     gscene: &GpuScene,
     ms: msaa::Mode,
 ) -> Result<Vec<GBuffer>> {
+    msaa::read_samples(
+        gpu,
+        &render_gbuffer(gpu, scene, gscene, false, ms.samples())?,
+    )
+}
+
+/// Renders a G-buffer of `samples` samples once, untimed, and waits for it.
+fn render_gbuffer(
+    gpu: &Gpu,
+    scene: &Scene,
+    gscene: &GpuScene,
+    prepass: bool,
+    samples: u32,
+) -> Result<GBufferPass> {
     let mut alloc = AllocCounter::default();
-    let gb = GBufferPass::new_ms(gpu, scene, gscene, false, ms.samples(), &mut alloc);
+    let gb = GBufferPass::new_ms(gpu, scene, gscene, prepass, samples, &mut alloc);
     let mut timer = GpuTimer::new(gpu);
     timer.begin_frame();
     let mut enc = gpu.device.create_command_encoder(&Default::default());
     gb.encode(&mut enc, gscene, &mut timer, "gbuffer");
     gpu.queue.submit([enc.finish()]);
     gpu.wait()?;
-    msaa::read_samples(gpu, &gb)
+    Ok(gb)
 }
 
 /// τ of a point (0 for the paths that do not read it).
@@ -206,15 +220,7 @@ fn gpu_path(name: &str, point: &Point) -> std::result::Result<Path, String> {
 /// Renders the G-buffer once (untimed) and reads it back: the input of the reference and of
 /// the CPU paths.
 pub fn gbuffer_of(gpu: &Gpu, scene: &Scene, gscene: &GpuScene, prepass: bool) -> Result<GBuffer> {
-    let mut alloc = AllocCounter::default();
-    let gb = GBufferPass::new(gpu, scene, gscene, prepass, &mut alloc);
-    let mut timer = GpuTimer::new(gpu);
-    timer.begin_frame();
-    let mut enc = gpu.device.create_command_encoder(&Default::default());
-    gb.encode(&mut enc, gscene, &mut timer, "gbuffer");
-    gpu.queue.submit([enc.finish()]);
-    gpu.wait()?;
-    gb.read(gpu)
+    render_gbuffer(gpu, scene, gscene, prepass, 1)?.read(gpu)
 }
 
 pub fn rel_err_max(r: &[[f64; 4]], g: &[[f32; 4]]) -> f64 {
