@@ -594,8 +594,8 @@ fn lists_in_depth_order_reverse_order_or_shuffled_sort_alike_in_workgroup_memory
             let mut s = base.clone();
             s.mesh.indices = order.iter().flatten().copied().collect();
             // capture = tiles: a pixel's ring fills in bin order (small_max 128: every quad is
-            // binned) or from its stored fragments (1 << 20: none is), and past 32 moves to the
-            // per-thread array mid-list.
+            // binned) or from its stored fragments (1 << 20: none is); past 32 the tile resolves
+            // again with per-thread arrays.
             for (small, capture) in [
                 (1, "pixels"),
                 (1 << 20, "pixels"),

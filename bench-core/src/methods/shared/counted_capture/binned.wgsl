@@ -161,6 +161,9 @@ var<workgroup> be_s: array<vec4<i32>, 64>;
 var<workgroup> be_y: array<vec4<i32>, 64>;
 var<workgroup> be_f: array<vec4<f32>, 192>;
 var<workgroup> bt_range: vec2<u32>;
+// Whether a pixel of the tile outgrew its ring (`resolve_binned`), and its uniform copy.
+var<workgroup> bt_over: atomic<u32>;
+var<workgroup> bt_over_u: u32;
 // The chunk's entries in the order the pixels visit them: by their plane's depth at the tile's
 // centre. Bins fill in whatever order the binning workgroups reach a tile (all of a scene's big
 // triangles are binned at once), and a pixel's ring inserts a list that comes nearly in depth
@@ -243,12 +246,102 @@ fn load_entry(li: u32, entry: u32, o: vec2<i32>) {
     be_y[li] = vec4<i32>(tl, 0, 0, 0);
 }
 
-// Moves pixel li's full ring, in order, to its per-thread array.
-fn spill_ring(li: u32, head: u32, d: ptr<function, array<f32, SORT_MAX>>, t: ptr<function, array<u32, SORT_MAX>>) {
-    for (var i = 0u; i < WG_CAP; i = i + 1u) {
-        let k = (head + i) & RING;
-        (*d)[i] = sort_d[k * 64u + li];
-        (*t)[i] = sort_t[k * 64u + li];
+// Chunk [base, base + m) of the tile's bin set up in workgroup memory and ranked by depth at the
+// tile centre (`be_ord`). Called by the whole workgroup.
+fn load_chunk(li: u32, base: u32, m: u32, o: vec2<i32>) {
+    if li < m {
+        load_entry(li, frags[base + li].x, o);
+    }
+    workgroupBarrier();
+    if li < m {
+        // Rank by (key, slot): a permutation of 0..m.
+        let k = be_key[li];
+        var r = 0u;
+        for (var i = 0u; i < m; i = i + 1u) {
+            let ki = be_key[i];
+            r = r + select(0u, 1u, ki < k || (ki == k && i < li));
+        }
+        be_ord[r] = li;
+    }
+    workgroupBarrier();
+}
+
+// Whether set-up entry j covers pixel (x, y), lane `lid` of the tile.
+fn entry_hit(j: u32, lid: vec2<u32>, x: i32, y: i32) -> bool {
+    let e = be_e[j];
+    if e.w == K_FAST {
+        let v = e.xyz + be_s[j].xyz * i32(lid.x) + be_y[j].xyz * i32(lid.y);
+        return (v.x | v.y | v.z) >= 0;
+    } else if e.w == K_SLOW {
+        let tr = entry_tri(j);
+        let a = edge_biased64(tr, 0u, x, y);
+        let b = edge_biased64(tr, 1u, x, y);
+        let c = edge_biased64(tr, 2u, x, y);
+        return ((a.y | b.y | c.y) & 0x80000000u) == 0u;
+    }
+    return false;
+}
+
+// The pixel's stored fragments' slot range.
+fn stored_range(p: u32) -> vec2<u32> {
+    var start = 0u;
+    if p > 0u {
+        start = min(atomicLoad(&offs[p - 1u]), sizes.capacity);
+    }
+    return vec2<u32>(start, min(atomicLoad(&offs[p]), sizes.capacity));
+}
+
+fn store_binned(p: u32, st: FoldState, n: u32) {
+    atomicStore(&offs[sizes.npix + p], n);
+    let wh = u32(camera.viewport.x) * u32(camera.viewport.y);
+    for (var k = 0u; k < fold_image_count(); k = k + 1u) {
+        out_image[k * wh + p] = fold_finish_image(st, k);
+    }
+}
+
+// The tile resolved with per-thread arrays, by the whole workgroup (it sets up the bin again);
+// only pixels with `mine` insert and store. Its own function because WGSL zero-initialises a
+// function's variables on entry (1 KiB a thread): tiles whose lists all fit the ring never pay it.
+fn resolve_binned_private(li: u32, lid: vec2<u32>, px: vec2<u32>, range: vec2<u32>, mine: bool) {
+    var d: array<f32, SORT_MAX>;
+    var t: array<u32, SORT_MAX>;
+    var n = 0u;
+    var dropped = 0u;
+    let w = u32(camera.viewport.x);
+    let p = px.y * w + px.x;
+    let o = vec2<i32>(px - lid);
+    let x = i32(px.x);
+    let y = i32(px.y);
+    if mine {
+        let r = stored_range(p);
+        for (var s = r.x; s < r.y; s = s + 1u) {
+            let e = frags[s];
+            private_insert(&d, &t, &n, &dropped, bitcast<f32>(e.x), e.y);
+        }
+    }
+    for (var base = range.x; base < range.y; base = base + 64u) {
+        let m = min(64u, range.y - base);
+        load_chunk(li, base, m, o);
+        for (var jj = 0u; jj < m && mine; jj = jj + 1u) {
+            let j = be_ord[jj];
+            if entry_hit(j, lid, x, y) {
+                private_insert(&d, &t, &n, &dropped, depth_at(entry_tri(j), x, y), bitcast<u32>(be_s[j].w));
+            }
+        }
+        workgroupBarrier();
+    }
+    if !mine {
+        return;
+    }
+    let ndc = pixel_ndc(px);
+    var fs = fold_init_at(vec2<f32>(px) + 0.5);
+    for (var i = 0u; i < n; i = i + 1u) {
+        fold_step(&fs, fragment(d[i], t[i], ndc));
+    }
+    store_binned(p, fs, n + dropped);
+    if dropped > 0u {
+        atomicAdd(&work[W_OVF_PIXELS], 1u);
+        atomicAdd(&work[W_DROPPED], dropped);
     }
 }
 
@@ -265,6 +358,7 @@ fn resolve_binned(
         // The tiles' words follow the pixels': tile 0 starts where the last pixel ends.
         let tw = tile_word(tile);
         bt_range = vec2<u32>(min(atomicLoad(&offs[tw - 1u]), sizes.capacity), min(atomicLoad(&offs[tw]), sizes.capacity));
+        atomicStore(&bt_over, 0u);
     }
     let range = workgroupUniformLoad(&bt_range);
     let o = vec2<i32>(wg.xy * 8u);
@@ -273,101 +367,61 @@ fn resolve_binned(
     let p = px.y * w + px.x;
     let x = i32(px.x);
     let y = i32(px.y);
-    var d: array<f32, SORT_MAX>;
-    var t: array<u32, SORT_MAX>;
-    var n = 0u;
-    var head = 0u;
-    var dropped = 0u;
-    var in_wg = WG_SORT;
-    // The pixel's stored fragments (small triangles).
-    if inside {
-        var start = 0u;
-        if p > 0u {
-            start = min(atomicLoad(&offs[p - 1u]), sizes.capacity);
-        }
-        let end = min(atomicLoad(&offs[p]), sizes.capacity);
-        for (var s = start; s < end; s = s + 1u) {
-            let e = frags[s];
-            if in_wg && n == WG_CAP {
-                spill_ring(li, head, &d, &t);
-                in_wg = false;
-            }
-            if in_wg {
-                ring_insert(li, &head, n, bitcast<f32>(e.x), e.y);
-                n = n + 1u;
-            } else {
-                private_insert(&d, &t, &n, &dropped, bitcast<f32>(e.x), e.y);
-            }
-        }
-    }
-    // The tile's binned triangles.
-    for (var base = range.x; base < range.y; base = base + 64u) {
-        let m = min(64u, range.y - base);
-        if li < m {
-            load_entry(li, frags[base + li].x, o);
-        }
-        workgroupBarrier();
-        if li < m {
-            // Rank by (key, slot): a permutation of 0..m.
-            let k = be_key[li];
-            var r = 0u;
-            for (var i = 0u; i < m; i = i + 1u) {
-                let ki = be_key[i];
-                r = r + select(0u, 1u, ki < k || (ki == k && i < li));
-            }
-            be_ord[r] = li;
-        }
-        workgroupBarrier();
-        for (var jj = 0u; jj < m && inside; jj = jj + 1u) {
-            let j = be_ord[jj];
-            let e = be_e[j];
-            var hit = false;
-            if e.w == K_FAST {
-                let v = e.xyz + be_s[j].xyz * i32(lid.x) + be_y[j].xyz * i32(lid.y);
-                hit = (v.x | v.y | v.z) >= 0;
-            } else if e.w == K_SLOW {
-                let tr = entry_tri(j);
-                let a = edge_biased64(tr, 0u, x, y);
-                let b = edge_biased64(tr, 1u, x, y);
-                let c = edge_biased64(tr, 2u, x, y);
-                hit = ((a.y | b.y | c.y) & 0x80000000u) == 0u;
-            }
-            if hit {
-                let z = depth_at(entry_tri(j), x, y);
-                let tag = bitcast<u32>(be_s[j].w);
-                if in_wg && n == WG_CAP {
-                    spill_ring(li, head, &d, &t);
-                    in_wg = false;
-                }
-                if in_wg {
-                    ring_insert(li, &head, n, z, tag);
-                    n = n + 1u;
-                } else {
-                    private_insert(&d, &t, &n, &dropped, z, tag);
-                }
-            }
-        }
-        workgroupBarrier();
-    }
-    if !inside {
+    if !WG_SORT {
+        resolve_binned_private(li, lid.xy, px, range, inside);
         return;
     }
-    atomicStore(&offs[sizes.npix + p], n + dropped);
+    // resolve_sort = workgroup: every list in its ring; a pixel whose list outgrows it marks the
+    // tile, which then resolves those pixels again with per-thread arrays.
+    var n = 0u;
+    var head = 0u;
+    var over = false;
+    if inside {
+        let r = stored_range(p);
+        for (var s = r.x; s < r.y; s = s + 1u) {
+            if n == WG_CAP {
+                over = true;
+                break;
+            }
+            let e = frags[s];
+            ring_insert(li, &head, n, bitcast<f32>(e.x), e.y);
+            n = n + 1u;
+        }
+    }
+    for (var base = range.x; base < range.y; base = base + 64u) {
+        let m = min(64u, range.y - base);
+        load_chunk(li, base, m, o);
+        for (var jj = 0u; jj < m && inside && !over; jj = jj + 1u) {
+            let j = be_ord[jj];
+            if entry_hit(j, lid.xy, x, y) {
+                if n == WG_CAP {
+                    over = true;
+                } else {
+                    ring_insert(li, &head, n, depth_at(entry_tri(j), x, y), bitcast<u32>(be_s[j].w));
+                    n = n + 1u;
+                }
+            }
+        }
+        workgroupBarrier();
+    }
+    if over {
+        atomicStore(&bt_over, 1u);
+    }
+    workgroupBarrier();
+    if li == 0u {
+        bt_over_u = atomicLoad(&bt_over);
+    }
+    if workgroupUniformLoad(&bt_over_u) != 0u {
+        resolve_binned_private(li, lid.xy, px, range, inside && over);
+    }
+    if !inside || over {
+        return;
+    }
     let ndc = pixel_ndc(px);
     var fs = fold_init_at(vec2<f32>(px) + 0.5);
     for (var i = 0u; i < n; i = i + 1u) {
-        if in_wg {
-            let k = (head + i) & RING;
-            fold_step(&fs, fragment(sort_d[k * 64u + li], sort_t[k * 64u + li], ndc));
-        } else {
-            fold_step(&fs, fragment(d[i], t[i], ndc));
-        }
+        let k = (head + i) & RING;
+        fold_step(&fs, fragment(sort_d[k * 64u + li], sort_t[k * 64u + li], ndc));
     }
-    for (var k = 0u; k < fold_image_count(); k = k + 1u) {
-        out_image[k * w * h + p] = fold_finish_image(fs, k);
-    }
-    if dropped > 0u {
-        atomicAdd(&work[W_OVF_PIXELS], 1u);
-        atomicAdd(&work[W_DROPPED], dropped);
-    }
+    store_binned(p, fs, n);
 }

@@ -978,6 +978,78 @@ fn fragment(depth: f32, tag: u32, ndc: vec2<f32>) -> Frag {
     return frag_from(depth, tag, ndc, i, clip_at(i.x), clip_at(i.y), clip_at(i.z));
 }
 
+// Pixel p's folds written: one image per fold image, the mean over the samples with MSAA.
+fn store_fold(p: u32, st: FoldState) {
+    let wh = u32(camera.viewport.x) * u32(camera.viewport.y);
+    for (var k = 0u; k < fold_image_count(); k = k + 1u) {
+        out_image[k * wh + p] = fold_finish_image(st, k);
+    }
+}
+
+fn store_samples(p: u32, ss: ptr<function, array<FoldState, 8>>) {
+    let wh = u32(camera.viewport.x) * u32(camera.viewport.y);
+    for (var k = 0u; k < fold_image_count(); k = k + 1u) {
+        var sum = vec4<f32>(0.0);
+        for (var s = 0u; s < AA_SAMPLES; s = s + 1u) {
+            sum = sum + fold_finish_image((*ss)[s], k);
+        }
+        out_image[k * wh + p] = sum / f32(AA_SAMPLES);
+    }
+}
+
+// One fragment into each sample's fold whose bit its coverage mask has (attributes derived once,
+// at the pixel centre).
+fn fold_samples(ss: ptr<function, array<FoldState, 8>>, f: Frag, tag: u32) {
+    let mask = (tag >> TAG_PRIM_BITS) & 0xffu;
+    for (var s = 0u; s < AA_SAMPLES; s = s + 1u) {
+        if (mask & (1u << s)) != 0u {
+            var st = (*ss)[s];
+            fold_step(&st, f);
+            (*ss)[s] = st;
+        }
+    }
+}
+
+fn init_samples(ss: ptr<function, array<FoldState, 8>>, xy: vec2<u32>) {
+    for (var s = 0u; s < AA_SAMPLES; s = s + 1u) {
+        (*ss)[s] = fold_init_at(vec2<f32>(xy) + 0.5);
+    }
+}
+
+// A list sorted in a per-thread array (`resolve_sort = private`, or longer than the ring). The
+// arrays live here and not in `resolve` because WGSL zero-initialises a function's variables on
+// entry (naga writes an OpConstantNull initialiser): 1 KiB a thread at SORT_MAX = 128, which a
+// pixel whose list fits the ring must not pay.
+fn resolve_private(xy: vec2<u32>, p: u32, start: u32, end: u32) {
+    var d: array<f32, SORT_MAX>;
+    var t: array<u32, SORT_MAX>;
+    var n = 0u;
+    var dropped = 0u;
+    for (var s = start; s < end; s = s + 1u) {
+        let e = frags[s];
+        private_insert(&d, &t, &n, &dropped, bitcast<f32>(e.x), e.y);
+    }
+    let ndc = pixel_ndc(xy);
+    if AA_SAMPLES > 1u {
+        var ss: array<FoldState, 8>;
+        init_samples(&ss, xy);
+        for (var i = 0u; i < n; i = i + 1u) {
+            fold_samples(&ss, fragment(d[i], t[i], ndc), t[i]);
+        }
+        store_samples(p, &ss);
+    } else {
+        var st = fold_init_at(vec2<f32>(xy) + 0.5);
+        for (var i = 0u; i < n; i = i + 1u) {
+            fold_step(&st, fragment(d[i], t[i], ndc));
+        }
+        store_fold(p, st);
+    }
+    if dropped > 0u {
+        atomicAdd(&work[W_OVF_PIXELS], 1u);
+        atomicAdd(&work[W_DROPPED], dropped);
+    }
+}
+
 @compute @workgroup_size(8, 8)
 fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let w = u32(camera.viewport.x);
@@ -991,72 +1063,34 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocati
         start = min(atomicLoad(&offs[p - 1u]), sizes.capacity);
     }
     let end = min(atomicLoad(&offs[p]), sizes.capacity);
-    var d: array<f32, SORT_MAX>;
-    var t: array<u32, SORT_MAX>;
-    var n = 0u;
-    var dropped = 0u;
     // resolve_sort = workgroup: lists of up to WG_CAP in the pixel's ring (`ring_insert`).
-    let in_wg = WG_SORT && end - start <= WG_CAP;
+    if !(WG_SORT && end - start <= WG_CAP) {
+        resolve_private(id.xy, p, start, end);
+        return;
+    }
     var head = 0u;
+    var n = 0u;
     for (var s = start; s < end; s = s + 1u) {
         let e = frags[s];
-        let z = bitcast<f32>(e.x);
-        if in_wg {
-            ring_insert(li, &head, n, z, e.y);
-            n = n + 1u;
-        } else {
-            private_insert(&d, &t, &n, &dropped, z, e.y);
-        }
+        ring_insert(li, &head, n, bitcast<f32>(e.x), e.y);
+        n = n + 1u;
     }
     let ndc = pixel_ndc(id.xy);
     if AA_SAMPLES > 1u {
-        // One fold per sample over the fragments whose mask covers it; attributes derived once
-        // per fragment (at the centre); the image is the samples' mean.
         var ss: array<FoldState, 8>;
-        for (var s = 0u; s < AA_SAMPLES; s = s + 1u) {
-            ss[s] = fold_init_at(vec2<f32>(id.xy) + 0.5);
-        }
+        init_samples(&ss, id.xy);
         for (var i = 0u; i < n; i = i + 1u) {
-            var z = d[i];
-            var tag = t[i];
-            if in_wg {
-                let k = (head + i) & RING;
-                z = sort_d[k * 64u + li];
-                tag = sort_t[k * 64u + li];
-            }
-            let f = fragment(z, tag, ndc);
-            let mask = (tag >> TAG_PRIM_BITS) & 0xffu;
-            for (var s = 0u; s < AA_SAMPLES; s = s + 1u) {
-                if (mask & (1u << s)) != 0u {
-                    var st = ss[s];
-                    fold_step(&st, f);
-                    ss[s] = st;
-                }
-            }
+            let k = (head + i) & RING;
+            let tag = sort_t[k * 64u + li];
+            fold_samples(&ss, fragment(sort_d[k * 64u + li], tag, ndc), tag);
         }
-        for (var k = 0u; k < fold_image_count(); k = k + 1u) {
-            var sum = vec4<f32>(0.0);
-            for (var s = 0u; s < AA_SAMPLES; s = s + 1u) {
-                sum = sum + fold_finish_image(ss[s], k);
-            }
-            out_image[k * w * h + p] = sum / f32(AA_SAMPLES);
-        }
+        store_samples(p, &ss);
     } else {
         var st = fold_init_at(vec2<f32>(id.xy) + 0.5);
         for (var i = 0u; i < n; i = i + 1u) {
-            if in_wg {
-                let k = (head + i) & RING;
-                fold_step(&st, fragment(sort_d[k * 64u + li], sort_t[k * 64u + li], ndc));
-            } else {
-                fold_step(&st, fragment(d[i], t[i], ndc));
-            }
+            let k = (head + i) & RING;
+            fold_step(&st, fragment(sort_d[k * 64u + li], sort_t[k * 64u + li], ndc));
         }
-        for (var k = 0u; k < fold_image_count(); k = k + 1u) {
-            out_image[k * w * h + p] = fold_finish_image(st, k);
-        }
-    }
-    if dropped > 0u {
-        atomicAdd(&work[W_OVF_PIXELS], 1u);
-        atomicAdd(&work[W_DROPPED], dropped);
+        store_fold(p, st);
     }
 }

@@ -131,8 +131,9 @@ pub(crate) static FAST_SPAN: std::sync::atomic::AtomicI32 =
 /// Primitive bits of a bin entry (`FAN_SHIFT`: a clipped polygon's fan triangle above them).
 const BIN_PRIM_BITS: u32 = 28;
 
-/// Workgroup memory of the binned resolve's triangle entries (`be_*` and the tile's range).
-const BIN_ENTRY_BYTES: u32 = 3 * 64 * 16 + 192 * 16 + 8 + 2 * 64 * 4;
+/// Workgroup memory of the binned resolve's triangle entries (`be_*`, the tile's range and its
+/// overflow flag).
+const BIN_ENTRY_BYTES: u32 = 3 * 64 * 16 + 192 * 16 + 8 + 8 + 2 * 64 * 4;
 
 impl Variants {
     /// Workgroup memory the resolve needs: the sort rings (any binned resolve declares them),
