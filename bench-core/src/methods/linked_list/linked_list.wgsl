@@ -96,27 +96,82 @@ fn sort_drops(f: Frag) {
     sort_tail_count = sort_tail_count + 1.0;
 }
 
+// Lists of up to SHORT_CAP nodes are sorted in workgroup memory (lane li's slot j at j·64 + li):
+// a function's or a private array is zero-initialised on every invocation (naga writes an
+// OpConstantNull initialiser: 1 KiB a pixel at SORT_MAX), workgroup memory here is not. Longer
+// lists are walked again into the per-thread arrays of `sort_list`.
+const SHORT_CAP: u32 = 32u;
+var<workgroup> short_d: array<f32, 2048>;
+var<workgroup> short_k: array<u32, 2048>;
+
+// List `head` sorted nearest first into lane li's slots; SHORT_CAP + 1 when it is longer.
+fn sort_short(head: u32, li: u32) -> u32 {
+    var n = 0u;
+    var cur = atomicLoad(&heads[head]);
+    loop {
+        if cur == 0u {
+            break;
+        }
+        if n == SHORT_CAP {
+            return SHORT_CAP + 1u;
+        }
+        let ni = cur - 1u;
+        let z = node_depth(ni);
+        let k = node_key(ni);
+        cur = nodes[ni * NODE_WORDS + NEXT];
+        var j = n;
+        loop {
+            let q = (j - 1u) * 64u + li;
+            if j == 0u || !list_before(z, k, short_d[q], short_k[q]) {
+                break;
+            }
+            short_d[j * 64u + li] = short_d[q];
+            short_k[j * 64u + li] = short_k[q];
+            j = j - 1u;
+        }
+        short_d[j * 64u + li] = z;
+        short_k[j * 64u + li] = k;
+        n = n + 1u;
+    }
+    return n;
+}
+
 @compute @workgroup_size(8, 8)
-fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
+fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let w = u32(camera.viewport.x);
     let h = u32(camera.viewport.y);
     if id.x >= w || id.y >= h {
         return;
     }
-    let s = resolve_lists(id.xy);
     let p = id.y * w + id.x;
+    var s: FoldState;
+    let n = sort_short(p, li);
+    if n <= SHORT_CAP {
+        sort_dropped = 0u;
+        let ndc = centre_ndc(id.xy);
+        s = fold_init_at(vec2<f32>(id.xy) + 0.5);
+        for (var i = 0u; i < n; i = i + 1u) {
+            fold_step(&s, list_frag(short_d[i * 64u + li], short_k[i * 64u + li], ndc));
+        }
+        count_resolved(p, n);
+    } else {
+        s = resolve_lists(id.xy);
+    }
     for (var k = 0u; k < fold_image_count(); k = k + 1u) {
         out_image[k * w * h + p] = fold_finish_image(s, k);
     }
 }
 
-// A list sorted nearest first (its SORT_MAX nearest) in `sort_d`/`sort_key`; what is beyond
-// the capacity is dropped (counted in `sort_dropped`, summed into the tail under TAIL).
-var<private> sort_d: array<f32, SORT_MAX>;
-var<private> sort_key: array<u32, SORT_MAX>;
+// A list sorted nearest first (its SORT_MAX nearest) in the caller's `sort_d`/`sort_key`; what is
+// beyond the capacity is dropped (counted in `sort_dropped`, summed into the tail under TAIL).
 var<private> sort_dropped: u32;
 
-fn sort_list(head: u32, ndc: vec2<f32>) -> u32 {
+fn sort_list(
+    head: u32,
+    ndc: vec2<f32>,
+    sort_d: ptr<function, array<f32, SORT_MAX>>,
+    sort_key: ptr<function, array<u32, SORT_MAX>>,
+) -> u32 {
     var n = 0u;
     var cur = atomicLoad(&heads[head]);
     loop {
@@ -129,28 +184,28 @@ fn sort_list(head: u32, ndc: vec2<f32>) -> u32 {
         cur = nodes[ni * NODE_WORDS + NEXT];
         if n == SORT_MAX {
             sort_dropped = sort_dropped + 1u;
-            if !list_before(z, k, sort_d[n - 1u], sort_key[n - 1u]) {
+            if !list_before(z, k, (*sort_d)[n - 1u], (*sort_key)[n - 1u]) {
                 if TAIL {
                     sort_drops(list_frag(z, k, ndc));
                 }
                 continue;
             }
             if TAIL {
-                sort_drops(list_frag(sort_d[n - 1u], sort_key[n - 1u], ndc));
+                sort_drops(list_frag((*sort_d)[n - 1u], (*sort_key)[n - 1u], ndc));
             }
             n = n - 1u;
         }
         var j = n;
         loop {
-            if j == 0u || !list_before(z, k, sort_d[j - 1u], sort_key[j - 1u]) {
+            if j == 0u || !list_before(z, k, (*sort_d)[j - 1u], (*sort_key)[j - 1u]) {
                 break;
             }
-            sort_d[j] = sort_d[j - 1u];
-            sort_key[j] = sort_key[j - 1u];
+            (*sort_d)[j] = (*sort_d)[j - 1u];
+            (*sort_key)[j] = (*sort_key)[j - 1u];
             j = j - 1u;
         }
-        sort_d[j] = z;
-        sort_key[j] = k;
+        (*sort_d)[j] = z;
+        (*sort_key)[j] = k;
         n = n + 1u;
     }
     return n;
@@ -179,7 +234,9 @@ fn resolve_lists(xy: vec2<u32>) -> FoldState {
     sort_tail_count = 0.0;
     sort_dropped = 0u;
     let ndc = centre_ndc(xy);
-    let n = sort_list(p, ndc);
+    var sort_d: array<f32, SORT_MAX>;
+    var sort_key: array<u32, SORT_MAX>;
+    let n = sort_list(p, ndc, &sort_d, &sort_key);
     var s = fold_init_at(vec2<f32>(xy) + 0.5);
     for (var i = 0u; i < n; i = i + 1u) {
         fold_step(&s, list_frag(sort_d[i], sort_key[i], ndc));
@@ -201,10 +258,12 @@ fn resolve_ms(@builtin(global_invocation_id) id: vec3<u32>) {
     let p = id.y * w + id.x;
     let ndc = centre_ndc(id.xy);
     sort_dropped = 0u;
+    var sort_d: array<f32, SORT_MAX>;
+    var sort_key: array<u32, SORT_MAX>;
     var acc: array<vec4<f32>, 3>;
     var total = 0u;
     if COVERAGE {
-        let n = sort_list(p, ndc);
+        let n = sort_list(p, ndc, &sort_d, &sort_key);
         total = n;
         var ss: array<FoldState, 8>;
         for (var s = 0u; s < SAMPLES; s = s + 1u) {
@@ -228,7 +287,7 @@ fn resolve_ms(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     } else {
         for (var s = 0u; s < SAMPLES; s = s + 1u) {
-            let n = sort_list(p * SAMPLES + s, ndc);
+            let n = sort_list(p * SAMPLES + s, ndc, &sort_d, &sort_key);
             total = total + n;
             var st = fold_init_at(vec2<f32>(id.xy) + 0.5);
             for (var i = 0u; i < n; i = i + 1u) {

@@ -866,6 +866,38 @@ mod tests {
     }
 
     #[test]
+    fn lists_longer_than_the_workgroup_sort_equal_the_reference() {
+        // 40 layers at the centre: over the resolve's 32 workgroup slots (those lists are walked
+        // again into the per-thread arrays), under SORT_MAX; the rim's shorter lists stay in the
+        // slots. The counted pool holds every fragment.
+        let quads = scene("quads", &[("depth_complexity", Int(40))]);
+        let (_, lists) = run(
+            &LinkedList,
+            &quads,
+            48,
+            40,
+            &list_params("counted", "compact", 16),
+        );
+        assert!(lists.max_depth_complexity() > 32 && lists.max_depth_complexity() < SORT_MAX);
+        let points: Vec<Params> = NODES
+            .iter()
+            .map(|node| list_params("counted", node, 16))
+            .collect();
+        assert_matches_reference(
+            &LinkedList,
+            &[&quads],
+            &points,
+            (48, 40),
+            IMAGE_TOL,
+            "40 layers composited in f32",
+            |name, cap| {
+                assert_eq!(cap.overflow_pixels, Some(0), "{name}: {}", cap.notes);
+                assert!(cap.flag.is_empty(), "{name}: {}", cap.flag);
+            },
+        );
+    }
+
+    #[test]
     fn overflow_is_counted_on_a_scene_built_to_overflow() {
         // 12 full-screen-ish quads over the centre with a fixed pool of 1 node per pixel: the
         // pool holds fewer nodes than fragments, so some pixels must lose fragments.
