@@ -1,7 +1,7 @@
 //! "What bounds each method": for every trusted, timed point with per-pass times, the pass that
 //! takes the most GPU time, its share of the frame, how it compares with the depth-only floor of
-//! the same scene and resolution (a pass near the floor is bound by rasterising the geometry,
-//! not by its own work), and how far the frame's declared traffic is from the adapter's peak
+//! the same scene and resolution (a pass near the floor costs no more than rasterising the scene
+//! once, whatever it does), and how far the frame's declared traffic is from the adapter's peak
 //! memory bandwidth. Written as `bounds.md` beside the report (for RUN.md) and as a section of
 //! the page.
 
@@ -13,8 +13,9 @@ use schema::{cols, PointKey};
 use crate::cells::{esc, short};
 use crate::data::{resolution, Rec, Runs};
 
-/// A limiting pass within this factor of the depth-only floor is "at the raster floor": the GPU
-/// spends it rasterising the scene once, which no capture can avoid.
+/// A limiting pass within this factor of the depth-only floor costs about what rasterising the
+/// scene once costs, which no raster capture avoids. It says nothing of what bounds the pass
+/// itself (a compute resolve rasterises nothing): the words say only the comparison.
 pub const AT_FLOOR: f64 = 1.25;
 
 /// The method whose time is the depth-only floor.
@@ -48,7 +49,7 @@ impl Bound {
         let floor = match self.floor_ms {
             Some(f) if f > 0.0 && self.pass_ms <= AT_FLOOR * f => {
                 format!(
-                    "at the raster floor ({}× depth-only)",
+                    "near the depth-only floor ({}× it)",
                     short(Some(self.pass_ms / f))
                 )
             }
@@ -283,13 +284,13 @@ mod tests {
     }
 
     #[test]
-    fn a_pass_near_the_floor_is_at_the_raster_floor() {
+    fn a_pass_near_the_floor_is_said_to_be_near_it() {
         let r = runs(vec![
             row("floor_depth", "1.0", "{\"floor\":1.0}", ""),
             row("bdp", "1.3", "{\"depth range\":1.1,\"route\":0.2}", ""),
         ]);
         let v = bounds(&r)[0].verdict();
-        assert!(v.starts_with("at the raster floor"), "{v}");
+        assert!(v.starts_with("near the depth-only floor (1.1× it)"), "{v}");
         assert!(v.contains("peak bandwidth unknown"), "{v}");
     }
 
