@@ -9,14 +9,16 @@
 #
 # POSIX shell + awk only (no Python, no Rust), so the device run can bake it where it runs:
 #   bash scripts/bake-bunny-stack.sh [SRC] [OUT]
-# SRC defaults to models/stanford-bunny.obj (else ../shared/models/stanford-bunny.obj), OUT to
+# SRC defaults to models/stanford-bunny.obj (else ../shared/models/stanford-bunny.obj); another
+# mesh gives the same stack of it (the ogre's for the `stacked-scans` suite); OUT defaults to
 # models/bunny-stack16.obj (≈ 45 MB: git-ignored, never committed; bake it, don't copy it).
 # Only `v` and `f` records are read (normals are recomputed by the loader); face indices may
 # carry /vt/vn suffixes, which are dropped.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 src=${1:-models/stanford-bunny.obj}
-[ -f "$src" ] || src=../shared/models/stanford-bunny.obj
+# Only the default source falls back to ../shared: a named mesh that is missing is an error.
+[ $# -eq 0 ] && [ ! -f "$src" ] && src=../shared/models/stanford-bunny.obj
 out=${2:-models/bunny-stack16.obj}
 [ -f "$src" ] || { echo "bake-bunny-stack: no source mesh ($src)" >&2; exit 1; }
 mkdir -p "$(dirname "$out")"

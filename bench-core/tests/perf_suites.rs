@@ -152,3 +152,31 @@ fn perf_binned_puts_both_captures_on_every_scene_and_resolution() {
         assert_eq!(captures, want, "{}", g.scene.label());
     }
 }
+
+#[test]
+fn stacked_scans_time_the_linked_list_and_the_compute_abuffer_on_two_stacked_meshes() {
+    let groups = load("stacked-scans");
+    // The bunnies and the ogres × 512², 1024², 2048².
+    assert_eq!(groups.len(), 6);
+    let paths: std::collections::BTreeSet<String> = groups
+        .iter()
+        .map(|g| match g.scene.params.get("path") {
+            Some(scenarios::ParamValue::Str(s)) => s.clone(),
+            other => panic!("{}: path = {other:?}", g.scene.label()),
+        })
+        .collect();
+    let want: std::collections::BTreeSet<String> =
+        ["models/bunny-stack16.obj", "models/ogre-stack16.obj"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+    assert_eq!(paths, want);
+    // The runner adds each group's floors (x_blend, x_floor) to these.
+    for g in &groups {
+        let methods: std::collections::BTreeSet<&str> =
+            g.points.iter().map(|p| p.method.as_str()).collect();
+        let want: std::collections::BTreeSet<&str> =
+            ["linked_list", "compute_abuffer"].into_iter().collect();
+        assert_eq!(methods, want, "{}", g.scene.label());
+    }
+}

@@ -2,7 +2,7 @@
 # Runs on the GPU machine of the device tool (no Rust there), in one call: a release `mfx` built
 # on the CPU machine is carried in ./.gpu (./.gpu/mfx, or packed as ./.gpu/mfx.gz or ./.gpu/mfx.xz), the Vulkan
 # loader debs in ./.gl (../shared/device/prepare-gl.sh), and, for suites that read models,
-# ./models/stanford-bunny.obj (the stacked bunnies are baked here: the 45 MB OBJ is not carried).
+# ./models/stanford-bunny.obj and ./models/ogre.obj (the stacks are baked here: their OBJs are not carried).
 #
 # Usage (as the device command): bash scripts/device/run-suites.sh JOB [JOB...]
 #   JOB = SUITE or SUITE@TAG (a name or a TOML path; the run folder is SUITE or SUITE-TAG), so
@@ -64,13 +64,20 @@ smi=$!
 } > "$r/gpu.txt"
 cat "$r/gpu.txt"
 need_bunny=0
+need_ogre=0
 for job in "$@"; do
   job=${job%%,*}
-  case "${job%@*}" in perf-abuffer* | perf-binned* | exp-binned* | *bunny*) need_bunny=1 ;; esac
+  case "${job%@*}" in perf-abuffer* | perf-binned* | exp-binned* | *bunny* | stacked-scans*) need_bunny=1 ;; esac
+  case "${job%@*}" in stacked-scans*) need_ogre=1 ;; esac
 done
 if [ "$need_bunny" = 1 ] && [ ! -f models/bunny-stack16.obj ]; then
   bash scripts/bake-bunny-stack.sh models/stanford-bunny.obj models/bunny-stack16.obj \
     || echo "bake failed: the bunny-stack rows will fail with 'file not found'"
+fi
+# The second stacked scan (issue 34 goal 4): 16 ogres, baked the same way from models/ogre.obj.
+if [ "$need_ogre" = 1 ] && [ ! -f models/ogre-stack16.obj ]; then
+  bash scripts/bake-bunny-stack.sh models/ogre.obj models/ogre-stack16.obj \
+    || echo "bake failed: the ogre-stack rows will fail with 'file not found'"
 fi
 echo "set-up done in $(( $(date +%s) - start )) s"
 for spec in "$@"; do
