@@ -204,12 +204,13 @@ pub fn section(runs: &Runs) -> String {
     if all.is_empty() {
         return String::new();
     }
-    let mut s = String::from(
+    let mut s = format!(
         "<h2 id=\"bounds\">What bounds each method</h2>\n<p>Per point: the slowest pass \
          (<code>pass_ms</code>), how it compares with the depth-only floor of the same scene \
-         and resolution (within 1.25× = bound by rasterising the scene), and the frame's \
-         declared traffic against the adapter's peak memory bandwidth (NVML). Also in \
-         <code>bounds.md</code>.</p>\n<details><summary>",
+         and resolution (within {AT_FLOOR}×: near it, costing about what rasterising the scene \
+         once costs, whatever the pass does), and the frame's declared traffic against the \
+         adapter's peak memory bandwidth (NVML). Also in <code>bounds.md</code>.</p>\n\
+         <details><summary>"
     );
     let _ = write!(s, "{} points</summary>\n<table>\n<tr>", all.len());
     for h in HEAD {
