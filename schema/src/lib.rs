@@ -236,6 +236,10 @@ pub mod cols {
         "capture",
         "compute_abuffer: pixels (count → scan → fill: an 8 B fragment per pixel slot, then sort) | tiles (triangles over small_max binned to 8×8-pixel tiles instead, 8 B per tile and triangle; each tile's pixels test them and sort in workgroup memory: their fragments are never stored)",
     );
+    pub const ATTRIBUTES: Col = Col::new(
+        "attributes",
+        "compute_abuffer: clip (a fragment's attributes weighted by the 2D homogeneous weights of its unsnapped clip-space triangle) | snapped (by the perspective-corrected barycentrics of its snapped screen triangle, from exact integer edge functions, as the reference and a hardware rasteriser; clip-space weights where the triangle was clipped or spans over 126 px)",
+    );
     pub const RESOLVE_SORT: Col = Col::new(
         "resolve_sort",
         "compute_abuffer: workgroup (lists of up to 32 fragments sorted in workgroup memory) | private (every list in a per-thread array)",
@@ -1096,6 +1100,7 @@ pub const GROUPS: &[Group] = &[
             cols::TRANSFORM,
             cols::COVERAGE,
             cols::CAPTURE,
+            cols::ATTRIBUTES,
             cols::RESOLVE_SORT,
             cols::POOL,
             cols::POOL_SLACK,

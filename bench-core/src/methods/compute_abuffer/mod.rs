@@ -49,6 +49,12 @@ const CAPTURE: Axis = Axis::choice(
     "pixels",
     &["pixels", "tiles"],
 );
+const ATTRIBUTES: Axis = Axis::choice(
+    cols::ATTRIBUTES,
+    "clip: attributes weighted by the unsnapped clip-space triangle (2D homogeneous); snapped: by the snapped screen triangle's perspective-corrected barycentrics (exact integer edges), as the reference",
+    "clip",
+    &["clip", "snapped"],
+);
 const RESOLVE_SORT: Axis = Axis::choice(
     cols::RESOLVE_SORT,
     "workgroup: short lists sorted in workgroup memory; private: every list in a per-thread array",
@@ -61,13 +67,20 @@ impl Method for ComputeAbuffer {
         "compute_abuffer"
     }
     fn describe(&self) -> &'static str {
-        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position); capture=tiles bins the triangles over small_max to 8×8 tiles instead of storing their fragments (8 B per tile and triangle, + 8 B per pixel) and each tile's pixels test them, those fragments never leaving workgroup memory"
+        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position); capture=tiles bins the triangles over small_max to 8×8 tiles instead of storing their fragments (8 B per tile and triangle, + 8 B per pixel) and each tile's pixels test them, those fragments never leaving workgroup memory; attributes=snapped weights a fragment's attributes as its snapped screen triangle's (the reference's), not its clip-space triangle's"
     }
     fn exact(&self) -> bool {
         true
     }
     fn axes(&self) -> Vec<Axis> {
-        let mut v = vec![SMALL_MAX, TRANSFORM, COVERAGE, CAPTURE, RESOLVE_SORT];
+        let mut v = vec![
+            SMALL_MAX,
+            TRANSFORM,
+            COVERAGE,
+            CAPTURE,
+            ATTRIBUTES,
+            RESOLVE_SORT,
+        ];
         v.extend_from_slice(effects::AXES);
         v.extend([aa::AA, aa::AA_CAPTURE]);
         v
@@ -131,6 +144,7 @@ fn variants(point: &Point) -> Variants {
         wg_sort: point.choice(&RESOLVE_SORT) == "workgroup",
         aa_samples: 1,
         binned: point.choice(&CAPTURE) == "tiles",
+        snapped_attrs: point.choice(&ATTRIBUTES) == "snapped",
     }
 }
 

@@ -30,6 +30,8 @@ const VARIANTS: &[&[(&str, &str)]] = &[
     &[("resolve_sort", "private")],
     &[("capture", "tiles")],
     &[("capture", "tiles"), ("resolve_sort", "private")],
+    &[("attributes", "snapped")],
+    &[("attributes", "snapped"), ("capture", "tiles")],
 ];
 
 fn variant_params(v: &[(&str, &str)], small: i64) -> (String, Params) {
@@ -329,10 +331,17 @@ fn slivers_of_snapped_degenerate_triangles_stay_finite() {
             ("degenerate", Int(3000)),
         ],
     );
-    let (cap, _) = run(&ComputeAbuffer, &s, 96, 96, &Params::new());
-    let img = cap.image.unwrap();
-    let bad = img.iter().flatten().filter(|v| !v.is_finite()).count();
-    assert_eq!(bad, 0, "{bad} non-finite channels; {}", cap.notes);
+    for attributes in ["clip", "snapped"] {
+        let p = params(&[("attributes", Str(attributes.into()))]);
+        let (cap, _) = run(&ComputeAbuffer, &s, 96, 96, &p);
+        let img = cap.image.unwrap();
+        let bad = img.iter().flatten().filter(|v| !v.is_finite()).count();
+        assert_eq!(
+            bad, 0,
+            "attributes {attributes}: {bad} non-finite channels; {}",
+            cap.notes
+        );
+    }
 }
 
 /// Runs `main` of `body` (after df32.wgsl) over `n` threads with read-only storage buffers
@@ -694,4 +703,58 @@ fn binned_capture_stores_an_entry_per_touched_tile_instead_of_big_triangles_frag
         "{rest} B beside the per-pixel part for {total} fragments"
     );
     check("shells(2, 8) 256² tiles", &s, w, h, &p);
+}
+
+#[test]
+fn a_sliver_takes_its_snapped_triangles_attributes_with_attributes_snapped() {
+    // A sliver thinner than a pixel across pixel (21, 21)'s centre, its corners where an ogre
+    // scan's had them at 512² (the same fractions of a pixel): snapping to 1/256 px moves them by
+    // a fair share of its width, so the snapped screen triangle's barycentrics at the centre
+    // (the reference's, a hardware rasteriser's) are far from the unsnapped clip-space triangle's
+    // (0.34, 0.41, 0.25 against 0.20, 0.71, 0.09 on the ogre). Red, green and blue corners at
+    // three depths make both the weights and their perspective correction show in the colour.
+    let (w, h) = (64u32, 64u32);
+    let at = |sx: f64, sy: f64, z: f64| -> [f32; 3] {
+        let half = (5.0 - z) * 30f64.to_radians().tan();
+        let x = (sx / (w as f64 / 2.0) - 1.0) * half;
+        let y = (1.0 - sy / (h as f64 / 2.0)) * half;
+        [x as f32, y as f32, z as f32]
+    };
+    let mut m = Mesh::default();
+    let corners = [
+        (at(20.80171, 20.98571, 0.0), [1.0, 0.0, 0.0, 0.5]),
+        (at(21.60347, 21.57705, 0.5), [0.0, 1.0, 0.0, 0.5]),
+        (at(22.31393, 22.09241, 1.0), [0.0, 0.0, 1.0, 0.5]),
+    ];
+    for (p, c) in corners {
+        m.positions.push(p);
+        m.normals.push([0.0, 0.0, 1.0]);
+        m.colors.push(c);
+        m.object_ids.push(0);
+    }
+    m.indices.extend_from_slice(&[0, 1, 2]);
+    let s = scene_with(m, 5.0, 0.5);
+    for capture in ["pixels", "tiles"] {
+        let (_, snapped) = variant_params(&[("attributes", "snapped"), ("capture", capture)], 1);
+        check(
+            &format!("sliver, attributes snapped, capture {capture}"),
+            &s,
+            w,
+            h,
+            &snapped,
+        );
+        // The scene bites: the clip-space weights miss the reference at the sliver's pixel.
+        let (_, clip) = variant_params(&[("capture", capture)], 1);
+        let (cap, lists) = run(&ComputeAbuffer, &s, w, h, &clip);
+        assert_eq!(
+            lists.total_fragments(),
+            1,
+            "the sliver covers one pixel centre"
+        );
+        let (e, at) = max_err(&cap, &lists);
+        assert!(
+            e > 1e-2,
+            "attributes clip, capture {capture}: error {e} at {at}"
+        );
+    }
 }

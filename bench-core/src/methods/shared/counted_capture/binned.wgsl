@@ -336,7 +336,7 @@ fn resolve_binned_private(li: u32, lid: vec2<u32>, px: vec2<u32>, range: vec2<u3
     let ndc = pixel_ndc(px);
     var fs = fold_init_at(vec2<f32>(px) + 0.5);
     for (var i = 0u; i < n; i = i + 1u) {
-        fold_step(&fs, fragment(d[i], t[i], ndc));
+        fold_step(&fs, fragment(d[i], t[i], ndc, px));
     }
     store_binned(p, fs, n + dropped);
     if dropped > 0u {
@@ -421,7 +421,7 @@ fn resolve_binned(
     var fs = fold_init_at(vec2<f32>(px) + 0.5);
     for (var i = 0u; i < n; i = i + 1u) {
         let k = (head + i) & RING;
-        fold_step(&fs, fragment(sort_d[k * 64u + li], sort_t[k * 64u + li], ndc));
+        fold_step(&fs, fragment(sort_d[k * 64u + li], sort_t[k * 64u + li], ndc, px));
     }
     store_binned(p, fs, n);
 }

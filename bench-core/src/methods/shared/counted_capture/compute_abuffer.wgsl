@@ -39,6 +39,9 @@ override WG_SORT: bool = true;
 // `capture = tiles` (binned.wgsl): what `raster_small` does not take is binned to 8×8 tiles
 // instead of shared by `raster_big`.
 override TILES: bool = false;
+// `attributes = snapped` (`fragment`): a fragment's attributes weighted as its snapped screen
+// triangle's, not its clip-space triangle's.
+override SNAPPED_ATTRS: bool = false;
 // Sizes read at run time, so that one compiled kernel serves every scene and resolution (a
 // software driver compiles each specialisation anew).
 struct Sizes {
@@ -973,9 +976,56 @@ fn private_insert(
     *n = *n + 1u;
 }
 
-fn fragment(depth: f32, tag: u32, ndc: vec2<f32>) -> Frag {
+// The weights of the snapped screen triangle `i` at pixel `xy`'s centre, perspective-corrected
+// (what the reference computes in f64, and a hardware rasteriser from its snapped positions),
+// from exact i32 edge functions; (0, 0, 0, 0) where they do not apply: a triangle the capture
+// clipped (its fan triangles are other triangles), one over SMALL_EXTENT (i32 would overflow),
+// or one degenerate once snapped.
+fn snapped_weights(i: vec3<u32>, c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, xy: vec2<u32>) -> vec4<f32> {
+    let c = array<vec4<f32>, 3>(c0, c1, c2);
+    for (var k = 0u; k < 3u; k = k + 1u) {
+        if !(c[k].z >= 0.0 && c[k].w - c[k].z >= 0.0) || outside_guard(c[k]) {
+            return vec4<f32>(0.0);
+        }
+    }
+    let a = vec2<i32>(screen_at(i.x) * SUB);
+    let b = vec2<i32>(screen_at(i.y) * SUB);
+    let d = vec2<i32>(screen_at(i.z) * SUB);
+    let span = max(max(a, b), d) - min(min(a, b), d);
+    if span.x > SMALL_EXTENT || span.y > SMALL_EXTENT {
+        return vec4<f32>(0.0);
+    }
+    let p = centre_units(i32(xy.x), i32(xy.y));
+    let e = vec3<i32>(edge_i32(b, d, p), edge_i32(d, a, p), edge_i32(a, b, p));
+    let area = e.x + e.y + e.z;
+    if area == 0 {
+        return vec4<f32>(0.0);
+    }
+    let pw = (vec3<f32>(e) / f32(area)) / vec3<f32>(c0.w, c1.w, c2.w);
+    let sum = pw.x + pw.y + pw.z;
+    if !(sum > 0.0) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(pw / sum, 1.0);
+}
+
+// The fragment (depth, tag) at pixel `xy` (NDC `ndc`): attributes weighted as the snapped
+// screen triangle's (axis `attributes = snapped`) or by the 2D homogeneous weights of the
+// unsnapped clip-space triangle (`clip`; also where the snapped ones do not apply). The two
+// differ on slivers thinner than a pixel, where snapping moves a vertex by a fair share of the
+// triangle's width.
+fn fragment(depth: f32, tag: u32, ndc: vec2<f32>, xy: vec2<u32>) -> Frag {
     let i = tri_indices(tag_prim(tag));
-    return frag_from(depth, tag, ndc, i, clip_at(i.x), clip_at(i.y), clip_at(i.z));
+    let c0 = clip_at(i.x);
+    let c1 = clip_at(i.y);
+    let c2 = clip_at(i.z);
+    if SNAPPED_ATTRS {
+        let w = snapped_weights(i, c0, c1, c2, xy);
+        if w.w > 0.0 {
+            return frag_weighted(depth, tag, i, w.xyz);
+        }
+    }
+    return frag_from(depth, tag, ndc, i, c0, c1, c2);
 }
 
 // Pixel p's folds written: one image per fold image, the mean over the samples with MSAA.
@@ -1034,13 +1084,13 @@ fn resolve_private(xy: vec2<u32>, p: u32, start: u32, end: u32) {
         var ss: array<FoldState, 8>;
         init_samples(&ss, xy);
         for (var i = 0u; i < n; i = i + 1u) {
-            fold_samples(&ss, fragment(d[i], t[i], ndc), t[i]);
+            fold_samples(&ss, fragment(d[i], t[i], ndc, xy), t[i]);
         }
         store_samples(p, &ss);
     } else {
         var st = fold_init_at(vec2<f32>(xy) + 0.5);
         for (var i = 0u; i < n; i = i + 1u) {
-            fold_step(&st, fragment(d[i], t[i], ndc));
+            fold_step(&st, fragment(d[i], t[i], ndc, xy));
         }
         store_fold(p, st);
     }
@@ -1082,14 +1132,14 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocati
         for (var i = 0u; i < n; i = i + 1u) {
             let k = (head + i) & RING;
             let tag = sort_t[k * 64u + li];
-            fold_samples(&ss, fragment(sort_d[k * 64u + li], tag, ndc), tag);
+            fold_samples(&ss, fragment(sort_d[k * 64u + li], tag, ndc, id.xy), tag);
         }
         store_samples(p, &ss);
     } else {
         var st = fold_init_at(vec2<f32>(id.xy) + 0.5);
         for (var i = 0u; i < n; i = i + 1u) {
             let k = (head + i) & RING;
-            fold_step(&st, fragment(sort_d[k * 64u + li], sort_t[k * 64u + li], ndc));
+            fold_step(&st, fragment(sort_d[k * 64u + li], sort_t[k * 64u + li], ndc, id.xy));
         }
         store_fold(p, st);
     }

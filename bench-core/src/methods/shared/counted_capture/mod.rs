@@ -34,6 +34,13 @@
 //!   against it, inserting covered fragments straight into the sort: a big triangle costs no
 //!   per-fragment atomic, store or reload. Passes keep their labels (`count`, `fill` of
 //!   fragments and entries). Single-sample only.
+//! - `attributes = clip|snapped`: the resolve re-derives a fragment's attributes from its
+//!   triangle; `clip` (default) weights them by the 2D homogeneous weights of the unsnapped
+//!   clip-space triangle, `snapped` by the perspective-corrected barycentrics of the snapped
+//!   screen triangle from exact i32 edge functions, as the reference does (clip-space weights
+//!   where a triangle was clipped or spans over 126 px). They differ on slivers thinner than a
+//!   pixel: on the ogre at 512² (lavapipe) `clip` is `image_differs` at 2 pixels and off at 347
+//!   more within their order bound, `snapped` at none and 2. Not yet timed on a GPU.
 //!
 //! Antialiasing (`aa`): `aa_capture = coverage` tests coverage at the MSAA sample positions
 //! (Vulkan's standard locations) by the same exact integer rule, in the count and fill passes
@@ -119,6 +126,8 @@ pub(crate) struct Variants {
     /// `capture = tiles`: triangles binned to 8×8 tiles, each tile's pixels test its triangles
     /// and sort what covers them in workgroup memory (no fragment array); single-sample only.
     pub binned: bool,
+    /// `attributes = snapped`: attributes weighted as the snapped screen triangle's.
+    pub snapped_attrs: bool,
 }
 
 /// Pixels per side of a bin tile (`BIN` in binned.wgsl; one resolve workgroup).
@@ -366,6 +375,7 @@ fn resolve_kernel(
             let mut rc = effect.constants();
             rc.push(("PRETRANSFORM", flag(v.pretransform)));
             rc.push(("WG_SORT", flag(v.wg_sort)));
+            rc.push(("SNAPPED_ATTRS", flag(v.snapped_attrs)));
             rc.extend(v.aa_constants());
             #[cfg(test)]
             rc.push((
@@ -452,6 +462,7 @@ impl PreparedAbuffer {
             wg_sort: false,
             aa_samples: 1,
             binned: false,
+            snapped_attrs: false,
         };
         Self::new(gpu, scene, 256, &EffectConfig::default(), v, Some(replay))
     }

@@ -64,7 +64,11 @@ fn persp_weights(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, ndc: vec2<f32>) ->
 // The fragment of primitive `tag_prim(tag)` (vertices `i`, clip positions `c0..c2`) at NDC
 // point `ndc`. Attributes an effect does not read are dead code once EFFECT is fixed.
 fn frag_from(depth: f32, tag: u32, ndc: vec2<f32>, i: vec3<u32>, c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>) -> Frag {
-    let b = persp_weights(c0, c1, c2, ndc);
+    return frag_weighted(depth, tag, i, persp_weights(c0, c1, c2, ndc));
+}
+
+// The fragment of primitive `tag_prim(tag)` (vertices `i`) with vertex weights `b`.
+fn frag_weighted(depth: f32, tag: u32, i: vec3<u32>, b: vec3<f32>) -> Frag {
     let v = camera.view_from_world;
     let vz = -vec3<f32>(
         (v * vec4<f32>(position(i.x), 1.0)).z,
