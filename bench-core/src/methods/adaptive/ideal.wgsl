@@ -18,13 +18,13 @@ fn replay_adaptive(@builtin(global_invocation_id) id: vec3<u32>) {
     s.n = 0u;
     for (var i = r.x; i < r.y; i = i + 1u) {
         let e = frags[i];
-        let f = fragment(bitcast<f32>(e.x), e.y, ndc);
+        let f = fragment(bitcast<f32>(e.x), e.y, ndc, id.xy);
         _ = at_insert(&s, f.view_z, f.color.a);
     }
     var c = vec3<f32>(0.0);
     for (var i = r.x; i < r.y; i = i + 1u) {
         let e = frags[i];
-        let f = fragment(bitcast<f32>(e.x), e.y, ndc);
+        let f = fragment(bitcast<f32>(e.x), e.y, ndc, id.xy);
         c = c + f.color.rgb * (visibility(&s, f.view_z) * f.color.a);
     }
     out_image[p] = vec4<f32>(c, 1.0 - total_transmittance(&s));

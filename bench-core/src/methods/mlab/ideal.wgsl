@@ -22,7 +22,7 @@ fn replay_mlab(@builtin(global_invocation_id) id: vec3<u32>) {
     var count = 0.0;
     for (var i = r.x; i < r.y; i = i + 1u) {
         let e = frags[i];
-        let f = fragment(bitcast<f32>(e.x), e.y, ndc);
+        let f = fragment(bitcast<f32>(e.x), e.y, ndc, id.xy);
         let ins = mlab_insert(&s, f.view_z, f.color);
         if ins.fell {
             sums = sums + vec4<f32>(ins.rgb, ins.a);
