@@ -282,21 +282,10 @@ fn entry_hit(j: u32, lid: vec2<u32>, x: i32, y: i32) -> bool {
     return false;
 }
 
-// The pixel's stored fragments' slot range.
-fn stored_range(p: u32) -> vec2<u32> {
-    var start = 0u;
-    if p > 0u {
-        start = min(atomicLoad(&offs[p - 1u]), sizes.capacity);
-    }
-    return vec2<u32>(start, min(atomicLoad(&offs[p]), sizes.capacity));
-}
-
+// Pixel p's fold and its fragment count (after the tiles' words).
 fn store_binned(p: u32, st: FoldState, n: u32) {
     atomicStore(&offs[sizes.npix + p], n);
-    let wh = u32(camera.viewport.x) * u32(camera.viewport.y);
-    for (var k = 0u; k < fold_image_count(); k = k + 1u) {
-        out_image[k * wh + p] = fold_finish_image(st, k);
-    }
+    store_fold(p, st);
 }
 
 // The tile resolved with per-thread arrays, by the whole workgroup (it sets up the bin again);

@@ -193,6 +193,11 @@ const CLIP_PLANES = array<vec4<f32>, 6>(
 const CLIP_AXIS = array<i32, 6>(-1, -1, 0, 0, 1, 1);
 const CLIP_SIGN = array<f32, 6>(0.0, 0.0, 1.0, -1.0, 1.0, -1.0);
 
+// Whether a clip position lies between the near and far planes (0 ≤ z ≤ w).
+fn in_depth_range(c: vec4<f32>) -> bool {
+    return c.z >= 0.0 && c.w - c.z >= 0.0;
+}
+
 fn outside_guard(c: vec4<f32>) -> bool {
     return abs(c.x) > GUARD * c.w || abs(c.y) > GUARD * c.w;
 }
@@ -212,8 +217,7 @@ fn setup(prim: u32) -> Poly {
     p.v[2] = clip_at(idx.z);
     var inside = true;
     for (var k = 0u; k < 3u; k = k + 1u) {
-        let c = p.v[k];
-        inside = inside && c.z >= 0.0 && c.w - c.z >= 0.0;
+        inside = inside && in_depth_range(p.v[k]);
     }
     var guard = false;
     var clipped = false;
@@ -492,9 +496,11 @@ fn sample_steps(t: Tri) -> array<vec3<i32>, 8> {
 // Whether a 3-vertex polygon spans at most SMALL_EXTENT units in x and y (its i32 edge
 // functions cannot overflow over its bounding box).
 fn fits_i32(p: Poly) -> bool {
-    let a = units(p.v[0]);
-    let b = units(p.v[1]);
-    let c = units(p.v[2]);
+    return spans_fit_i32(units(p.v[0]), units(p.v[1]), units(p.v[2]));
+}
+
+// Whether a triangle (1/256-px units) spans at most SMALL_EXTENT each way.
+fn spans_fit_i32(a: vec2<i32>, b: vec2<i32>, c: vec2<i32>) -> bool {
     let e = max(max(a, b), c) - min(min(a, b), c);
     return e.x <= SMALL_EXTENT && e.y <= SMALL_EXTENT;
 }
@@ -984,15 +990,14 @@ fn private_insert(
 fn snapped_weights(i: vec3<u32>, c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, xy: vec2<u32>) -> vec4<f32> {
     let c = array<vec4<f32>, 3>(c0, c1, c2);
     for (var k = 0u; k < 3u; k = k + 1u) {
-        if !(c[k].z >= 0.0 && c[k].w - c[k].z >= 0.0) || outside_guard(c[k]) {
+        if !in_depth_range(c[k]) || outside_guard(c[k]) {
             return vec4<f32>(0.0);
         }
     }
     let a = vec2<i32>(screen_at(i.x) * SUB);
     let b = vec2<i32>(screen_at(i.y) * SUB);
     let d = vec2<i32>(screen_at(i.z) * SUB);
-    let span = max(max(a, b), d) - min(min(a, b), d);
-    if span.x > SMALL_EXTENT || span.y > SMALL_EXTENT {
+    if !spans_fit_i32(a, b, d) {
         return vec4<f32>(0.0);
     }
     let p = centre_units(i32(xy.x), i32(xy.y));
@@ -1026,6 +1031,15 @@ fn fragment(depth: f32, tag: u32, ndc: vec2<f32>, xy: vec2<u32>) -> Frag {
         }
     }
     return frag_from(depth, tag, ndc, i, c0, c1, c2);
+}
+
+// The pixel's stored fragments' slot range.
+fn stored_range(p: u32) -> vec2<u32> {
+    var start = 0u;
+    if p > 0u {
+        start = min(atomicLoad(&offs[p - 1u]), sizes.capacity);
+    }
+    return vec2<u32>(start, min(atomicLoad(&offs[p]), sizes.capacity));
 }
 
 // Pixel p's folds written: one image per fold image, the mean over the samples with MSAA.
@@ -1108,11 +1122,9 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocati
         return;
     }
     let p = id.y * w + id.x;
-    var start = 0u;
-    if p > 0u {
-        start = min(atomicLoad(&offs[p - 1u]), sizes.capacity);
-    }
-    let end = min(atomicLoad(&offs[p]), sizes.capacity);
+    let r = stored_range(p);
+    let start = r.x;
+    let end = r.y;
     // resolve_sort = workgroup: lists of up to WG_CAP in the pixel's ring (`ring_insert`).
     if !(WG_SORT && end - start <= WG_CAP) {
         resolve_private(id.xy, p, start, end);
