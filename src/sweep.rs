@@ -337,7 +337,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
     let fail_frac = a
         .fail_on_slower
         .as_deref()
-        .map(report::ab::parse_fraction)
+        .map(mfx_analysis::ab::parse_fraction)
         .transpose()
         .map_err(|e| usage(format!("--fail-on-slower: {e}")))?;
     for name in a.save_baseline.iter().chain(&a.baseline) {
@@ -349,7 +349,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
     }
     // The baseline to compare with must exist now, not after the whole sweep.
     if let Some(name) = &a.baseline {
-        report::ab::baseline_dir(&baselines_root(), name)
+        mfx_analysis::ab::baseline_dir(&baselines_root(), name)
             .map_err(|e| usage(format!("--baseline: {e:#}")))?;
     }
     let stamp = crate::chrono_stamp();
@@ -623,14 +623,14 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         eprintln!("mfx: report {}", page.display());
     }
     if let Some(name) = &a.save_baseline {
-        let dir = report::ab::save_baseline(&out, &baselines_root(), name)?;
+        let dir = mfx_analysis::ab::save_baseline(&out, &baselines_root(), name)?;
         eprintln!("mfx: baseline '{name}' saved in {}", dir.display());
     }
     let mut slower = 0;
     if let Some(name) = &a.baseline {
-        let base = report::ab::baseline_dir(&baselines_root(), name)?;
-        let cmp = report::ab::compare_runs(&base, &out, &Default::default())?;
-        println!("{}", cmp.markdown());
+        let base = mfx_analysis::ab::baseline_dir(&baselines_root(), name)?;
+        let cmp = mfx_analysis::ab::compare_runs(&base, &out, &Default::default())?;
+        println!("{}", report::ab::markdown(&cmp));
         if let Some(f) = fail_frac {
             slower = cmp.slower_beyond(f).len();
         }
@@ -694,14 +694,14 @@ pub fn calibrate(
     noise_band: Option<&str>,
     margin: f64,
 ) -> Result<()> {
-    let mut opts = report::ab::AbOptions::default();
+    let mut opts = mfx_analysis::ab::AbOptions::default();
     if let Some(b) = noise_band {
         opts.verdict.noise_band =
-            report::ab::parse_fraction(b).map_err(|e| usage(format!("--noise-band: {e}")))?;
+            mfx_analysis::ab::parse_fraction(b).map_err(|e| usage(format!("--noise-band: {e}")))?;
     }
-    let c =
-        report::calibrate::calibrate(runs, &opts, margin).map_err(|e| usage(format!("{e:#}")))?;
-    print!("{}", c.markdown());
+    let c = mfx_analysis::calibrate::calibrate(runs, &opts, margin)
+        .map_err(|e| usage(format!("{e:#}")))?;
+    print!("{}", report::ab::calibration_markdown(&c));
     c.save(out)?;
     eprintln!("mfx: calibration {}", out.display());
     Ok(())
@@ -717,14 +717,14 @@ pub fn compare(base: &Path, new: &Path, a: CompareArgs) -> Result<()> {
         scale_new,
         json,
     } = a;
-    let mut opts = report::ab::AbOptions::default();
+    let mut opts = mfx_analysis::ab::AbOptions::default();
     if let Some(b) = noise_band {
         opts.verdict.noise_band =
-            report::ab::parse_fraction(b).map_err(|e| usage(format!("--noise-band: {e}")))?;
+            mfx_analysis::ab::parse_fraction(b).map_err(|e| usage(format!("--noise-band: {e}")))?;
     }
     if let Some(f) = band_from {
         opts.calibration = Some(
-            report::calibrate::Calibration::load(f)
+            mfx_analysis::calibrate::Calibration::load(f)
                 .map_err(|e| usage(format!("--band-from: {e:#}")))?,
         );
     }
@@ -741,20 +741,21 @@ pub fn compare(base: &Path, new: &Path, a: CompareArgs) -> Result<()> {
         opts.verdict.alpha = a;
     }
     let frac = fail_on_slower
-        .map(report::ab::parse_fraction)
+        .map(mfx_analysis::ab::parse_fraction)
         .transpose()
         .map_err(|e| usage(format!("--fail-on-slower: {e}")))?;
-    let r = report::ab::compare_runs(base, new, &opts).map_err(|e| usage(format!("{e:#}")))?;
+    let r =
+        mfx_analysis::ab::compare_runs(base, new, &opts).map_err(|e| usage(format!("{e:#}")))?;
     if json {
         println!("{}", serde_json::to_string_pretty(&compare_json(&r))?);
     } else {
-        print!("{}", r.markdown());
+        print!("{}", report::ab::markdown(&r));
     }
     // The page is written only where asked: comparing against a committed reference run must
     // not change the tree it reads.
     if let Some(dir) = html {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        let page = r.write_html(dir)?;
+        let page = report::ab::write_html(&r, dir)?;
         eprintln!("mfx: comparison page {}", page.display());
     }
     if let Some(f) = frac {
@@ -772,9 +773,9 @@ pub fn compare(base: &Path, new: &Path, a: CompareArgs) -> Result<()> {
 
 /// `mfx compare --json`: the comparison's points, verdicts and moves as one object (the same
 /// content as the Markdown, for scripts).
-fn compare_json(r: &report::ab::AbReport) -> serde_json::Value {
+fn compare_json(r: &mfx_analysis::ab::AbReport) -> serde_json::Value {
     use serde_json::json;
-    let side = |s: &report::ab::Side| {
+    let side = |s: &mfx_analysis::ab::Side| {
         json!({
             "runs_csv": s.runs_csv.display().to_string(),
             "samples_csv": s.samples_csv.as_ref().map(|p| p.display().to_string()),

@@ -18,6 +18,7 @@ fn exists(token: &str) -> bool {
         "scenarios",
         "schema",
         "stats",
+        "analysis",
         "flip",
     ];
     // `packing.rs/.wgsl` names two files.

@@ -11,7 +11,7 @@ use std::fmt::Write;
 use schema::{cols, PointKey};
 
 use crate::cells::{esc, short};
-use crate::data::{resolution, Rec, Runs};
+use mfx_analysis::data::{resolution, Rec, Runs};
 
 /// A limiting pass within this factor of the depth-only floor costs about what rasterising the
 /// scene once costs, which no raster capture avoids. It says nothing of what bounds the pass

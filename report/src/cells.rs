@@ -4,7 +4,7 @@
 
 use schema::cols;
 
-use crate::data::{Interval, Rec};
+use mfx_analysis::data::{Interval, Rec};
 
 pub fn esc(s: &str) -> String {
     s.replace('&', "&amp;")

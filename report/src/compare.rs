@@ -16,8 +16,8 @@ use anyhow::{bail, Context, Result};
 
 use crate::cells::esc;
 use crate::charts::{Bars, Figure, Pt};
-use crate::data::{platform, platforms, resolution, Rec, Runs};
 use crate::labels::{file_safe, scene_name, ConfigLabels};
+use mfx_analysis::data::{platform, platforms, resolution, Rec, Runs};
 
 /// What the comparison adds to the page.
 pub struct Comparison {

@@ -6,8 +6,8 @@ use std::fmt::Write;
 
 use crate::cells::{esc, exact_cell, short, time_cell};
 use crate::charts::Figure;
-use crate::data::{Rec, Runs};
 use crate::labels::scene_name;
+use mfx_analysis::data::{Rec, Runs};
 
 const STYLE: &str = "body{font-family:sans-serif;max-width:1400px;margin:2em auto;color:#222;padding:0 1em}\
 table{border-collapse:collapse;margin:1em 0;font-size:13px}td,th{border:1px solid #ccc;padding:3px 7px;text-align:left}\

@@ -6,7 +6,7 @@
 use schema::{cols, PointKey};
 use std::collections::BTreeMap;
 
-use crate::data::Rec;
+use mfx_analysis::data::Rec;
 
 /// A row's configuration axes: the `k=v` pairs of its point key's last field (the axes the
 /// method read, as the sweep set them; an axis left at its default is absent).

@@ -5,13 +5,10 @@
 //! `mfx sweep` prints at its end).
 
 pub mod ab;
-pub mod bands;
 pub mod bounds;
-pub mod calibrate;
 pub mod cells;
 pub mod charts;
 pub mod compare;
-pub mod data;
 pub mod flip;
 pub mod html;
 pub mod labels;
@@ -25,7 +22,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
-pub use data::{Rec, Runs};
+pub use mfx_analysis::{Rec, Runs};
+/// The rows, read by `mfx_analysis` (kept under this name for the pages that say `crate::data`).
+pub use mfx_analysis::data;
 pub use summary::summary_text;
 
 /// Builds the report of a run folder; returns the page's path.
@@ -37,14 +36,14 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
     clear_charts(&out)?;
     // Each study's figures read one platform's rows: a merged CSV (several adapters or backends)
     // gets one set per platform, in its own subfolder, so no chart mixes two machines' rows.
-    let plats = data::platforms(&runs);
+    let plats = mfx_analysis::data::platforms(&runs);
     let mut sections = Vec::new();
     if plats.len() < 2 {
         sections = studies::all_figures(&runs, &out)?;
     } else {
         for (i, p) in plats.iter().enumerate() {
             let mut one = runs.clone();
-            one.rows.retain(|r| data::platform(r) == *p);
+            one.rows.retain(|r| mfx_analysis::data::platform(r) == *p);
             let sub = format!("platform{i}");
             let dir = out.join(&sub);
             std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;

@@ -3,7 +3,7 @@
 use schema::cols;
 
 use crate::charts::Pt;
-use crate::data::{Interval, Rec, Runs};
+use mfx_analysis::data::{Interval, Rec, Runs};
 
 /// A GPU-time point: y = median, whisker = its interval (a 95 % CI, or min–max where too few
 /// samples for one). `None` when the row's time is not trusted (its timestamps missed part of

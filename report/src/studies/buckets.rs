@@ -9,9 +9,9 @@ use anyhow::Result;
 
 use super::methods::{config_series, scene_families, Styles};
 use crate::charts::{Figure, Pt, XY};
-use crate::data::{resolution, Rec, Runs};
 use crate::labels::{file_safe, scene_name, scene_names, ConfigLabels};
 use crate::points::ci_caption;
+use mfx_analysis::data::{resolution, Rec, Runs};
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     // Only rows that report a collision rate: the bucket methods.

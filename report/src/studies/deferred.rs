@@ -9,7 +9,7 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::charts::{Bars, Figure, Pt, Series, XY};
-use crate::data::{resolution, Rec, Runs};
+use mfx_analysis::data::{resolution, Rec, Runs};
 
 /// Axes that tell configurations of one path apart.
 pub const CONFIG_AXES: &[Col] = &[

@@ -11,8 +11,8 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::charts::{Bars, Figure, Pt, Series, XY};
-use crate::data::{resolution, Rec, Runs};
 use crate::labels::{file_safe, scene_name};
+use mfx_analysis::data::{resolution, Rec, Runs};
 
 /// What the whiskers of this study's charts show.
 const WHISKERS: &str = "Whiskers: 95 % CI of the median GPU time where the CSV has one (none otherwise: min–max is not a spread of the median).";
@@ -442,20 +442,6 @@ fn raster_check(at: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) -> R
         "One point per measured row; ≈ 1 means shrinking the viewport does not change the time, so the raster stage is not the bottleneck (the thesis's method).",
     )?);
     Ok(())
-}
-
-impl Runs {
-    /// Distinct values of `key` over rows, first-seen order.
-    pub fn distinct_by(rows: &[&Rec], key: impl Fn(&Rec) -> String) -> Vec<String> {
-        let mut out: Vec<String> = Vec::new();
-        for r in rows {
-            let k = key(r);
-            if !out.contains(&k) {
-                out.push(k);
-            }
-        }
-        out
-    }
 }
 
 #[cfg(test)]

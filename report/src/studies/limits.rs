@@ -11,7 +11,7 @@ use schema::{cols, Status};
 
 use crate::cells::esc;
 use crate::charts::Figure;
-use crate::data::{resolution, Rec, Runs};
+use mfx_analysis::data::{resolution, Rec, Runs};
 
 /// The runs were made under a browser's limits, or something was split.
 pub fn applies(runs: &Runs) -> bool {

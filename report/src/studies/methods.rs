@@ -14,10 +14,10 @@ use anyhow::Result;
 
 use crate::cells::{esc, exact_cell, short, time_cell};
 use crate::charts::{Bars, Figure, Named, Pt, Series, MARKERS, XY};
-use crate::data::{resolution, Rec, Runs};
 use crate::labels::{config_key, file_safe, parse_scene, scene_name, scene_names, ConfigLabels};
 use crate::pareto;
 use crate::points::{ci_caption, time_pt};
+use mfx_analysis::data::{resolution, Rec, Runs};
 
 /// Colour (configuration) and marker (method family) of every configuration of a set of rows,
 /// fixed across a report's charts so a configuration looks the same everywhere.

@@ -18,7 +18,7 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::charts::Figure;
-use crate::data::Runs;
+use mfx_analysis::data::Runs;
 
 /// One section of the report: its heading, whether the runs hold anything for it, and how its
 /// figures are drawn into a folder. A section whose figures come back empty is left out.

@@ -10,7 +10,7 @@ use anyhow::Result;
 
 use super::deferred::{rows_by_resolution, safe, series};
 use crate::charts::{Bars, Figure, Pt, Series, XY};
-use crate::data::{Rec, Runs};
+use mfx_analysis::data::{Rec, Runs};
 
 const AXES: &[Col] = &[cols::LIGHT_ACCUM, cols::LIGHT_BUFFER_FORMAT];
 

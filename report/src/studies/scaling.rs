@@ -18,9 +18,9 @@ use anyhow::Result;
 
 use crate::cells::{esc, short};
 use crate::charts::{Figure, Pt, Series, XY};
-use crate::data::{Rec, Runs};
 use crate::labels::{parse_scene, scene_name};
 use crate::studies::methods::scene_families;
+use mfx_analysis::data::{Rec, Runs};
 
 /// A local exponent above this (time growing faster than x^1.5) leaves the linear regime.
 pub const OFF_FIT: f64 = 1.5;

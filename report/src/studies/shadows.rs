@@ -8,9 +8,9 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::charts::{Figure, Named, Pt, Series, XY};
-use crate::data::{Rec, Runs};
 use crate::labels::{config_axes, file_safe, scene_name, ConfigLabels};
 use crate::pareto;
+use mfx_analysis::data::{Rec, Runs};
 
 /// Which of the suite's sweeps a row belongs to, told by the axes its point key sets.
 fn sweep(r: &Rec) -> (usize, &'static str) {

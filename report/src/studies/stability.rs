@@ -9,8 +9,8 @@ use anyhow::Result;
 
 use super::methods::{config_series, Styles};
 use crate::charts::{Bars, Figure, Pt, XY};
-use crate::data::{Rec, Runs};
 use crate::labels::{file_safe, scene_name, ConfigLabels};
+use mfx_analysis::data::{Rec, Runs};
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let rows: Vec<&Rec> = runs

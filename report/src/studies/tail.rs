@@ -10,9 +10,9 @@ use schema::cols;
 
 use crate::cells::{esc, short};
 use crate::charts::{Figure, Pt, Series, XY};
-use crate::data::{resolution, Rec, Runs};
 use crate::labels::{file_safe, scene_name, ConfigLabels};
 use crate::points::TAIL_RATIO;
+use mfx_analysis::data::{resolution, Rec, Runs};
 
 /// Whether any row carries the tail columns (CSVs before them have none).
 pub fn applies(runs: &Runs) -> bool {

@@ -357,6 +357,18 @@ impl Runs {
         out
     }
 
+    /// Distinct values of `key` over rows, first-seen order.
+    pub fn distinct_by(rows: &[&Rec], key: impl Fn(&Rec) -> String) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for r in rows {
+            let k = key(r);
+            if !out.contains(&k) {
+                out.push(k);
+            }
+        }
+        out
+    }
+
     /// Distinct non-empty values of a column, in first-seen order.
     pub fn distinct<'a>(rows: impl IntoIterator<Item = &'a Rec>, col: Col) -> Vec<String> {
         let mut out: Vec<String> = Vec::new();

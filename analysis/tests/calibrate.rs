@@ -6,9 +6,9 @@
 
 use std::path::PathBuf;
 
+use mfx_analysis::ab::{compare_runs, AbOptions, AbReport};
+use mfx_analysis::calibrate::{calibrate, Calibration};
 use mfx_stats::Verdict;
-use report::ab::{compare_runs, AbOptions, AbReport};
-use report::calibrate::{calibrate, Calibration};
 
 fn run(name: &str) -> PathBuf {
     let call = if name == "s3a" || name == "s3b" {

@@ -263,7 +263,8 @@ mod tests {
     }
 
     /// The tables for RUN.md (default resamples, fixed band and calibrated):
-    /// `cargo test -p report --lib verdict_tables -- --ignored --nocapture`.
+    /// `cargo test -p mfx-analysis --lib verdict_tables -- --ignored --nocapture`. The
+    /// calibration's own Markdown is what `mfx calibrate` prints (`report::ab`).
     #[test]
     #[ignore]
     fn verdict_tables() {
@@ -271,7 +272,10 @@ mod tests {
         let r = o.verdict.resamples;
         let dec02 = calibrate(&runs(&SESSIONS), &o, 1.0).unwrap();
         let dec03 = calibrate(&runs(&REPEAT), &o, 1.0).unwrap();
-        println!("{}", dec02.markdown());
+        println!(
+            "false alarms per family at the fixed band (2026-12-02 pairs): {:#?}",
+            dec02.false_alarms
+        );
         println!("## 2026-12-03, fixed band\n{}", table(&REPEAT, None, r).0);
         println!(
             "## 2026-12-03, bands from 2026-12-02\n{}",
