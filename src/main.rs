@@ -76,9 +76,16 @@ enum Cmd {
     /// Run a suite (a name in scenarios/suites or a TOML path) and write runs.csv + plots.
     Sweep(sweep::SweepArgs),
     /// Compare two runs point by point (run folders or runs.csv files): ratio of medians with
-    /// its CI, SAME / FASTER / SLOWER / UNSURE, and errors that moved.
+    /// its CI, SAME / FASTER / SLOWER / UNSURE, and errors that moved. Points are joined by
+    /// point_key; two runs with no point in common exit 2 (nothing was compared).
     Compare {
+        /// The run compared against: a run folder (its runs.csv, and samples.csv or
+        /// samples.csv.gz beside it when there) or a runs.csv path.
+        #[arg(value_name = "BASE")]
         base: PathBuf,
+        /// The run judged against BASE, in the same forms; ratios are NEW / BASE (> 1: NEW is
+        /// slower).
+        #[arg(value_name = "NEW")]
         new: PathBuf,
         /// Changes within this band are SAME even when significant (default 2%).
         #[arg(long)]

@@ -630,6 +630,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
     if let Some(name) = &a.baseline {
         let base = mfx_analysis::ab::baseline_dir(&baselines_root(), name)?;
         let cmp = mfx_analysis::ab::compare_runs(&base, &out, &Default::default())?;
+        no_common_point(&cmp).map_err(|e| anyhow::anyhow!("--baseline {name}: {e}"))?;
         println!("{}", report::ab::markdown(&cmp));
         if let Some(f) = fail_frac {
             slower = cmp.slower_beyond(f).len();
@@ -746,6 +747,7 @@ pub fn compare(base: &Path, new: &Path, a: CompareArgs) -> Result<()> {
         .map_err(|e| usage(format!("--fail-on-slower: {e}")))?;
     let r =
         mfx_analysis::ab::compare_runs(base, new, &opts).map_err(|e| usage(format!("{e:#}")))?;
+    no_common_point(&r).map_err(usage)?;
     if json {
         println!("{}", serde_json::to_string_pretty(&compare_json(&r))?);
     } else {
@@ -769,6 +771,25 @@ pub fn compare(base: &Path, new: &Path, a: CompareArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Two runs that share no point compared nothing: an error naming both sides' sizes and a key
+/// of each (a different suite, resolution or schema of keys), never an empty SAME.
+fn no_common_point(r: &mfx_analysis::ab::AbReport) -> std::result::Result<(), String> {
+    if r.common > 0 {
+        return Ok(());
+    }
+    let first = |v: &[String]| v.first().cloned().unwrap_or_else(|| "none".into());
+    Err(format!(
+        "{} and {} have no point in common (points are joined by point_key): nothing to compare. \
+         BASE has {} points (e.g. {}), NEW {} (e.g. {})",
+        r.base.runs_csv.display(),
+        r.new.runs_csv.display(),
+        r.only_base.len(),
+        first(&r.only_base),
+        r.only_new.len(),
+        first(&r.only_new)
+    ))
 }
 
 /// `mfx compare --json`: the comparison's points, verdicts and moves as one object (the same

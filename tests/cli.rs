@@ -743,3 +743,27 @@ fn backend_gles_lists_its_adapter_and_a_sweep_runs_on_it() {
         "the exact compute A-buffer matches the f64 truth on GLES"
     );
 }
+
+#[test]
+fn compare_of_runs_with_no_common_point_exits_2_and_its_help_says_what_base_and_new_are() {
+    // Two committed runs of different suites (same schema): not one point_key in common.
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/results/reference");
+    let a = format!("{root}/2026-12-02-h200-effects/runs.csv");
+    let b = format!("{root}/2026-12-02-h200-shadows-bunny/runs.csv");
+    let o = mfx(&["compare", &a, &b]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("no point in common") && text(&o).contains("nothing to compare"),
+        "{}",
+        text(&o)
+    );
+    let h = text(&mfx(&["compare", "--help"]));
+    assert!(
+        h.contains("<BASE>") && h.contains("The run compared against"),
+        "{h}"
+    );
+    assert!(
+        h.contains("<NEW>") && h.contains("ratios are NEW / BASE"),
+        "{h}"
+    );
+}

@@ -111,6 +111,15 @@ impl Rec {
                 && zero(cols::FRAGMENTS_DROPPED),
         )
     }
+    /// What the method claims: every fragment captured exactly within capacity (`claims_exact`);
+    /// `None` where the CSV has no such column (schema ≤ 2, whose `exact` was the claim).
+    pub fn claims_exact(&self) -> Option<bool> {
+        match self.get(cols::CLAIMS_EXACT) {
+            "true" => Some(true),
+            "false" => Some(false),
+            _ => None,
+        }
+    }
     /// Whether the row's GPU time covers the whole frame: `gpu_time_trusted`, else the absence
     /// of the `timestamps_incomplete` flag. Untrusted times are never charted or ranked.
     pub fn time_trusted(&self) -> bool {
@@ -364,6 +373,17 @@ impl Runs {
             let k = key(r);
             if !out.contains(&k) {
                 out.push(k);
+            }
+        }
+        out
+    }
+
+    /// Distinct strings, first-seen order.
+    pub fn distinct_strings<'a>(items: impl IntoIterator<Item = &'a str>) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for s in items {
+            if !out.iter().any(|o| o == s) {
+                out.push(s.to_string());
             }
         }
         out

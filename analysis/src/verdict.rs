@@ -1,7 +1,10 @@
 //! The verdict of a run, computed from its rows: per scene × resolution (× effect) of an image
-//! study, the fastest exact configuration (with the ones statistically tied with it) and its
-//! floor, the fastest within each RMSE budget, and the exact rows left out because their GPU
-//! time is not trusted. `report` writes it (the page's first table, the end of `mfx sweep`),
+//! study, the fastest configuration exact by construction (with the ones statistically tied
+//! with it) and its floor, apart from it the fastest that was exact in this run only (a method
+//! that claims no exactness, such as a racy read-modify-write that lost nothing this time), the
+//! fastest within each RMSE budget, and the rows left out of the ranking because their GPU time
+//! is not trusted, with why. What kind of adapter measured the times (`software`) is part of it:
+//! a CPU rasteriser's times say nothing of a GPU's. `report` writes it (the page's first table, the end of `mfx sweep`),
 //! so the two cannot disagree with each other or with the CSV.
 
 use schema::cols;
@@ -31,9 +34,17 @@ pub struct Verdict<'a> {
     pub effect: String,
     /// The configurations ranked (ok, not floors).
     pub rows: Vec<&'a Rec>,
+    /// The fastest configuration exact by construction: its method claims every fragment
+    /// (`claims_exact`) and it was exact in this run.
     pub fastest_exact: Option<Pick<'a>>,
+    /// The fastest configuration exact in this run, when it is one whose method claims no
+    /// exactness (`claims_exact = false`: exact here because, e.g., no race happened) and it is
+    /// faster than `fastest_exact` (or there is none). Never called "fastest exact".
+    pub exact_in_run: Option<Pick<'a>>,
     /// Exact rows left out of the ranking because their GPU time is not trusted.
     pub exact_untrusted: Vec<&'a Rec>,
+    /// Every row left out of the ranking by time (no trusted GPU time), exact or not.
+    pub untrusted: Vec<&'a Rec>,
     /// (RMSE budget, the fastest configuration whose RMSE is within it).
     pub budgets: Vec<(f64, Option<Pick<'a>>)>,
     pub floor_ms: Option<f64>,
@@ -67,6 +78,21 @@ pub fn fastest<'a>(rows: &[&'a Rec]) -> Option<Pick<'a>> {
     Some(Pick { row, ties })
 }
 
+/// Whether a row is exact by construction: exact in this run and its method claims every
+/// fragment. A CSV without `claims_exact` (schema ≤ 2) judged `exact` from the claim already.
+pub fn exact_by_construction(r: &Rec) -> bool {
+    r.exact_result() == Some(true) && r.claims_exact() != Some(false)
+}
+
+/// Why a row has no trusted GPU time, in words.
+pub fn untrusted_reason(r: &Rec) -> &'static str {
+    if r.f(cols::GPU_MS_MEDIAN).is_none() {
+        "no GPU time: the adapter gave no timestamps"
+    } else {
+        "its GPU timestamps miss part of the frame (gpu_time_trusted = false)"
+    }
+}
+
 /// Studies whose verdict ranks configurations by image error.
 fn image_verdict<'a>(
     study: &str,
@@ -88,6 +114,18 @@ fn image_verdict<'a>(
         .copied()
         .filter(|r| r.trusted_ms().is_none())
         .collect();
+    let untrusted = rows
+        .iter()
+        .copied()
+        .filter(|r| r.trusted_ms().is_none())
+        .collect();
+    let by_construction: Vec<&Rec> = exact
+        .iter()
+        .copied()
+        .filter(|r| exact_by_construction(r))
+        .collect();
+    let fastest_exact = fastest(&by_construction);
+    let exact_in_run = fastest(&exact).filter(|p| !exact_by_construction(p.row));
     let budgets = BUDGETS
         .iter()
         .map(|&b| {
@@ -113,8 +151,10 @@ fn image_verdict<'a>(
         scene: scene.to_string(),
         res: res.to_string(),
         effect: effect.to_string(),
-        fastest_exact: fastest(&exact),
+        fastest_exact,
+        exact_in_run,
         exact_untrusted,
+        untrusted,
         budgets,
         floor_ms: floors
             .iter()
@@ -164,6 +204,105 @@ pub fn verdicts(runs: &Runs) -> Vec<(String, Verdict<'_>)> {
                 ));
             }
         }
+    }
+    out
+}
+
+/// A method left out of the ranking by time in some verdicts (its GPU time not trusted).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LeftOut {
+    pub platform: String,
+    pub method: String,
+    /// Verdicts (scene × resolution × effect) it was left out of, of `of` on its platform.
+    pub verdicts: usize,
+    pub of: usize,
+    pub reason: &'static str,
+}
+
+/// Per platform and method, the verdicts a method was left out of because its GPU time is not
+/// trusted, with the reason: said on the first screen, never left to a table cell.
+pub fn left_out(vs: &[(String, Verdict<'_>)]) -> Vec<LeftOut> {
+    let mut out: Vec<LeftOut> = Vec::new();
+    for p in Runs::distinct_strings(vs.iter().map(|(p, _)| p.as_str())) {
+        let mine: Vec<&Verdict> = vs.iter().filter(|(q, _)| *q == p).map(|(_, v)| v).collect();
+        for v in &mine {
+            for r in &v.untrusted {
+                let m = r.get(cols::METHOD);
+                let reason = untrusted_reason(r);
+                match out
+                    .iter_mut()
+                    .find(|l| l.platform == p && l.method == m && l.reason == reason)
+                {
+                    Some(l) => l.verdicts += 1,
+                    None => out.push(LeftOut {
+                        platform: p.clone(),
+                        method: m.to_string(),
+                        verdicts: 1,
+                        of: mine.len(),
+                        reason,
+                    }),
+                }
+            }
+        }
+    }
+    // A method with several untrusted rows in one verdict counts that verdict once.
+    for l in &mut out {
+        l.verdicts = vs
+            .iter()
+            .filter(|(q, v)| {
+                *q == l.platform
+                    && v.untrusted
+                        .iter()
+                        .any(|r| r.get(cols::METHOD) == l.method && untrusted_reason(r) == l.reason)
+            })
+            .count();
+    }
+    out
+}
+
+/// What measured a platform's times when it is a software adapter (a CPU rasteriser such as
+/// lavapipe or llvmpipe): its resolutions and sample counts, and whether the suite's
+/// `[software]` profile was applied (run.json beside the CSV; `None` where none says).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Software {
+    pub platform: String,
+    pub adapter: String,
+    pub resolutions: Vec<String>,
+    /// Distinct kept sample counts of its timed rows, smallest first.
+    pub samples: Vec<usize>,
+    pub profile: Option<bool>,
+}
+
+/// The software adapters among a run's platforms (`device_type = cpu`).
+pub fn software(runs: &Runs) -> Vec<Software> {
+    let profile = runs.sources.iter().find_map(|csv| {
+        let text = std::fs::read_to_string(csv.with_file_name("run.json")).ok()?;
+        let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+        v.get("software_profile")?.as_bool()
+    });
+    let mut out = Vec::new();
+    for p in platforms(runs) {
+        let rows: Vec<&Rec> = runs
+            .rows
+            .iter()
+            .filter(|r| platform(r) == p && r.get(cols::DEVICE_TYPE) == "cpu")
+            .collect();
+        let Some(first) = rows.first() else { continue };
+        let ok: Vec<&Rec> = rows.iter().copied().filter(|r| r.ok()).collect();
+        let mut samples: Vec<usize> = ok
+            .iter()
+            .filter(|r| r.f(cols::GPU_MS_MEDIAN).is_some())
+            .filter_map(|r| r.samples())
+            .collect();
+        samples.sort_unstable();
+        samples.dedup();
+        out.push(Software {
+            adapter: first.get(cols::ADAPTER).to_string(),
+            resolutions: Runs::distinct_by(&ok, resolution),
+            samples,
+            profile,
+            platform: p,
+        });
     }
     out
 }

@@ -210,6 +210,10 @@ pub fn compare(
                 (p.clone(), v)
             })
             .collect();
+        let drawn: Vec<&Rec> = here
+            .iter()
+            .flat_map(|k| by_point[k].values().copied())
+            .collect();
         let bars = Bars {
             title: format!("GPU time per platform — {}, {res}", scene_name(label)),
             y_label: "GPU time per frame [ms]".into(),
@@ -224,7 +228,7 @@ pub fn compare(
             &format!(
                 "Median GPU time per frame of each configuration on each platform. {} \
                  floor_depth/floor_opaque are the rasterisation floors of the same scene.",
-                crate::points::ci_caption(runs)
+                crate::points::ci_caption_rows(&drawn)
             ),
         )?);
     }

@@ -3,7 +3,7 @@
 use schema::cols;
 
 use crate::charts::Pt;
-use mfx_analysis::data::{Interval, Rec, Runs};
+use mfx_analysis::data::{Interval, Rec};
 
 /// A GPU-time point: y = median, whisker = its interval (a 95 % CI, or min–max where too few
 /// samples for one). `None` when the row's time is not trusted (its timestamps missed part of
@@ -13,17 +13,8 @@ pub fn time_pt(r: &Rec, x: f64) -> Option<Pt> {
     Some(Pt::spread(x, r.trusted_ms()?, lo, hi).flagged(r.flagged()))
 }
 
-/// What the time whiskers of a run's charts mean, for captions.
-pub fn ci_caption(runs: &Runs) -> String {
-    let rows: Vec<&Rec> = runs.rows.iter().collect();
-    if runs.has(cols::GPU_MS_CI_LO) {
-        whiskers(&rows)
-    } else {
-        "No whiskers: this CSV has no confidence interval of the median (gpu_ms_ci_lo/hi), and min–max is not one.".into()
-    }
-}
-
-/// `ci_caption` for a set of rows (whether any has an interval).
+/// What the time whiskers of a chart's rows mean, for its caption (never the whole run's: a
+/// caption describes its own chart).
 pub fn ci_caption_rows(rows: &[&Rec]) -> String {
     if rows.iter().any(|r| r.gpu_ci().is_some()) {
         whiskers(rows)
@@ -70,3 +61,7 @@ fn whiskers(rows: &[&Rec]) -> String {
 /// A row's p99 GPU time above this multiple of its median is a tail: the summary names it and
 /// the tail chart draws the line.
 pub const TAIL_RATIO: f64 = 1.2;
+
+/// The fewest kept samples a p95/p99 is shown with: with fewer, nearest-rank p95 is one of the
+/// two largest samples and p99 the largest (results/README.md), a maximum, not a tail.
+pub const TAIL_MIN_SAMPLES: usize = 20;

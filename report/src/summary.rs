@@ -11,7 +11,7 @@ use std::fmt::Write;
 
 use crate::cells::{esc, short, time_cell};
 use crate::labels::{scene_name, ConfigLabels};
-use crate::points::TAIL_RATIO;
+use crate::points::{TAIL_MIN_SAMPLES, TAIL_RATIO};
 use mfx_analysis::data::{platform, platforms, resolution, Rec, Runs};
 use mfx_analysis::verdict::{fastest, verdicts, Pick, Verdict, BUDGETS, IMAGE_STUDIES};
 
@@ -83,31 +83,46 @@ fn cells(v: &Verdict, labels: &ConfigLabels) -> Cells {
         String::new()
     } else {
         let names: Vec<String> = v.exact_untrusted.iter().map(|r| labels.get(r)).collect();
-        let why = if v
-            .exact_untrusted
-            .iter()
-            .all(|r| r.f(cols::GPU_MS_MEDIAN).is_none())
-        {
-            "no GPU time: the adapter gave no timestamps"
-        } else {
-            "GPU timestamps miss part of the frame or are missing, gpu_time_trusted false"
-        };
+        let why = Runs::distinct_strings(
+            v.exact_untrusted
+                .iter()
+                .map(|r| mfx_analysis::verdict::untrusted_reason(r)),
+        )
+        .join("; ");
         format!(
             "{} exact but left out: {} ({why})",
             names.len(),
             names.join("; ")
         )
     };
-    let exact = match &v.fastest_exact {
-        Some(p) => {
+    // A racy method exact only because nothing raced this time is named apart, never as the
+    // fastest exact.
+    let in_run = v.exact_in_run.as_ref().map(|p| {
+        format!(
+            "exact in this run only, not by construction (claims_exact = false): {}",
+            pick_text(labels, p, false)
+        )
+    });
+    let exact = match (&v.fastest_exact, in_run) {
+        (Some(p), in_run) => {
             let mut s = pick_text(labels, p, false);
+            for extra in in_run
+                .iter()
+                .chain(Some(&left_out).filter(|l| !l.is_empty()))
+            {
+                s.push_str(&format!("; {extra}"));
+            }
+            s
+        }
+        (None, Some(t)) => {
+            let mut s = format!("none exact by construction; {t}");
             if !left_out.is_empty() {
                 s.push_str(&format!("; {left_out}"));
             }
             s
         }
-        None if !left_out.is_empty() => format!("none with a trusted time; {left_out}"),
-        None => format!(
+        (None, None) if !left_out.is_empty() => format!("none with a trusted time; {left_out}"),
+        (None, None) => format!(
             "none exact{}",
             v.best_error
                 .map(|r| format!(
@@ -215,6 +230,28 @@ fn preamble(runs: &Runs) -> Vec<String> {
         count(Status::Skipped),
         count(Status::Failed)
     )];
+    for sw in mfx_analysis::verdict::software(runs) {
+        out.push(software_line(&sw));
+    }
+    let vs = verdicts(runs);
+    let plats = platforms(runs).len();
+    for l in mfx_analysis::verdict::left_out(&vs) {
+        out.push(format!(
+            "Left out of the ranking by time: {} in {} of {} verdict rows{}: {}.",
+            l.method,
+            l.verdicts,
+            l.of,
+            if plats > 1 {
+                format!(" on {}", l.platform)
+            } else {
+                String::new()
+            },
+            l.reason
+        ));
+    }
+    if vs.iter().any(|(_, v)| v.exact_in_run.is_some()) {
+        out.push("\"Fastest exact\" names only configurations exact by construction (the method claims every fragment, claims_exact, and was exact here). A method that claims no exactness (a racy read-modify-write) whose capture happened to be exact in this run is named apart, \"exact in this run only\".".into());
+    }
     for (id, flags) in runs.run_wide_flags() {
         out.push(format!(
             "Every timed row of run {id} is flagged {} (a property of the run, e.g. a software adapter's timer): said here once, not marked per point.",
@@ -228,6 +265,25 @@ fn preamble(runs: &Runs) -> Vec<String> {
         ));
     }
     out
+}
+
+/// The first-screen line of a software adapter: what its times are, at what size and n.
+fn software_line(sw: &mfx_analysis::verdict::Software) -> String {
+    let n = match (sw.samples.first(), sw.samples.last()) {
+        (Some(a), Some(b)) if a == b => format!("n = {a} samples per point"),
+        (Some(a), Some(b)) => format!("n = {a}–{b} samples per point"),
+        _ => "samples per point not recorded in this CSV".to_string(),
+    };
+    format!(
+        "Software adapter: {} is a CPU rasteriser, not a GPU. Its times are of the CPU at {}{}, {n}: they rank the methods on this machine only and say nothing of a GPU's speed.",
+        sw.adapter,
+        sw.resolutions.join(", "),
+        match sw.profile {
+            Some(true) => " (the suite's [software] profile)",
+            Some(false) => " (the suite's own sizes: no [software] profile applied)",
+            None => "",
+        }
+    )
 }
 
 /// The skipped and failed points, grouped by reason.
@@ -322,8 +378,10 @@ fn other_studies(runs: &Runs) -> Vec<(String, String, Vec<OtherLine>)> {
 }
 
 /// The rows whose per-sample GPU time has a tail (p99 > `TAIL_RATIO` × p50), worst first:
-/// "tail: METHOD on SCENE, RES p99 = X ms, R× median (M ms)". Rows whose timestamps miss part of
-/// the frame are left out (their times are not the frame's).
+/// "tail: METHOD on SCENE, RES p99 = X ms, R× median (M ms), n = N". Only rows with at least
+/// `TAIL_MIN_SAMPLES` kept samples (below that p99 is the largest sample or next to it, not a
+/// tail); rows whose timestamps miss part of the frame are left out (their times are not the
+/// frame's).
 pub fn tail_lines(runs: &Runs) -> Vec<String> {
     let ok: Vec<&Rec> = runs.rows.iter().filter(|r| r.ok()).collect();
     let labels = ConfigLabels::new(ok.iter().copied());
@@ -331,13 +389,14 @@ pub fn tail_lines(runs: &Runs) -> Vec<String> {
         .iter()
         .filter(|r| r.trusted_ms().is_some())
         .filter_map(|r| {
+            let n = r.samples().filter(|n| *n >= TAIL_MIN_SAMPLES)?;
             let (p50, p99) = (r.f(cols::GPU_MS_P50)?, r.f(cols::GPU_MS_P99)?);
             let ratio = p99 / p50;
             (p50 > 0.0 && ratio > TAIL_RATIO).then(|| {
                 (
                     ratio,
                     format!(
-                        "tail: {} on {}, {} p99 = {} ms, {:.2}× median ({} ms)",
+                        "tail: {} on {}, {} p99 = {} ms, {:.2}× median ({} ms), n = {n}",
                         labels.get(r),
                         scene_name(r.get(cols::SCENE_LABEL)),
                         resolution(r),
@@ -371,7 +430,7 @@ pub fn summary_html(runs: &Runs) -> String {
         let labels = ConfigLabels::new(all.iter().copied());
         let _ = write!(
             h,
-            "<table class=\"verdict\" id=\"verdict-{}\"><caption>{}{}: the winner per scene × resolution</caption><tr><th>scene</th><th>resolution</th><th>fastest exact</th><th>× floor_depth</th>{}<th>flagged (not counting run-wide flags)</th></tr>",
+            "<table class=\"verdict\" id=\"verdict-{}\"><caption>{}{}: the winner per scene × resolution</caption><tr><th>scene</th><th>resolution</th><th>fastest exact (by construction)</th><th>× floor_depth</th>{}<th>flagged (not counting run-wide flags)</th></tr>",
             esc(study),
             esc(study),
             if plats > 1 { format!(" — {}", esc(p)) } else { String::new() },
@@ -478,7 +537,7 @@ pub fn summary_text(runs: &Runs) -> String {
             let _ = writeln!(out, "{}, {}:", scene_title(v), v.res);
             let _ = writeln!(
                 out,
-                "- Fastest exact: {}{}.",
+                "- Fastest exact (by construction): {}{}.",
                 c.exact,
                 if c.x_floor.0.is_empty() {
                     String::new()
@@ -534,15 +593,90 @@ pub fn summary_text(runs: &Runs) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mfx_analysis::verdict::overlap;
+    use mfx_analysis::verdict::{exact_by_construction, overlap};
 
-    fn runs(name: &str, rows: &[&str]) -> Runs {
+    fn runs(_name: &str, rows: &[&str]) -> Runs {
         let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,gpu_ms_ci_lo,gpu_ms_ci_hi,samples,x_floor,rmse,bad_pixel_frac,matches_truth,exact,overflow_rate,flag";
-        let d = std::env::temp_dir().join(format!("mfx-summary-{name}-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
-        let p = d.join("runs.csv");
+        with_header(header, rows)
+    }
+
+    /// Rows under a header, loaded (the CSV is read whole; its folder is removed at once).
+    fn with_header(header: &str, rows: &[&str]) -> Runs {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("runs.csv");
         std::fs::write(&p, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
         Runs::load(&p).unwrap()
+    }
+
+    const LAVAPIPE: &str = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,device_type,status,reason,gpu_ms_median,gpu_ms_ci_lo,gpu_ms_ci_hi,gpu_ms_p50,gpu_ms_p99,samples,rmse,matches_truth,exact,claims_exact,exact_bound,gpu_time_trusted,flag";
+
+    /// quads(8) at 128² on lavapipe, as issue 44 found it: the racy RMW k-buffer fastest and
+    /// exact in this run, the compute A-buffer exact but untimed, 3 samples a point.
+    fn lavapipe_rows() -> Runs {
+        with_header(
+            LAVAPIPE,
+            &[
+                "3,r,methods,quads(depth_complexity=8),128,128,floor_depth,k0,lavapipe,vulkan,cpu,ok,,0.5,0.4,0.6,0.5,0.6,3,,,,,,true,",
+                "3,r,methods,quads(depth_complexity=8),128,128,kbuffer_rmw,k1,lavapipe,vulkan,cpu,ok,,1.0,0.9,1.1,1.0,2.0,3,3e-8,true,true,false,1e-6,true,",
+                "3,r,methods,quads(depth_complexity=8),128,128,depth_peel,k2,lavapipe,vulkan,cpu,ok,,3.0,2.9,3.1,3.0,3.3,3,3e-8,true,true,true,1e-6,true,",
+                "3,r,methods,quads(depth_complexity=8),128,128,compute_abuffer,k3,lavapipe,vulkan,cpu,ok,,0.2,0.1,0.3,0.2,0.3,3,3e-8,true,true,true,1e-6,false,timestamps_incomplete",
+                "3,r,methods,quads(depth_complexity=8),128,128,wboit,k4,lavapipe,vulkan,cpu,ok,,0.8,0.7,0.9,0.8,0.9,3,2e-2,false,false,false,1e-6,true,",
+            ],
+        )
+    }
+
+    #[test]
+    fn a_racy_method_exact_in_this_run_is_never_the_fastest_exact() {
+        let r = lavapipe_rows();
+        let (_, v) = &verdicts(&r)[0];
+        assert_eq!(
+            v.fastest_exact.as_ref().unwrap().row.get(cols::METHOD),
+            "depth_peel"
+        );
+        assert_eq!(
+            v.exact_in_run.as_ref().unwrap().row.get(cols::METHOD),
+            "kbuffer_rmw"
+        );
+        let t = summary_text(&r);
+        assert!(
+            t.contains("Fastest exact (by construction): depth_peel")
+                && t.contains("exact in this run only, not by construction (claims_exact = false): kbuffer_rmw"),
+            "{t}"
+        );
+        let h = summary_html(&r);
+        assert!(h.contains("fastest exact (by construction)"), "{h}");
+        // A racy method slower than the fastest exact one is not named at all.
+        assert!(check_against_rows(&r) == 1);
+    }
+
+    #[test]
+    fn a_software_adapter_s_first_screen_says_what_it_is_and_what_was_left_out() {
+        let t = summary_text(&lavapipe_rows());
+        assert!(
+            t.contains("Software adapter: lavapipe is a CPU rasteriser, not a GPU")
+                && t.contains("at 128x128")
+                && t.contains("n = 3 samples per point"),
+            "{t}"
+        );
+        assert!(
+            t.contains("Left out of the ranking by time: compute_abuffer in 1 of 1 verdict rows: its GPU timestamps miss part of the frame (gpu_time_trusted = false)"),
+            "{t}"
+        );
+        // Said before the verdicts (the first screen), not only in a table cell.
+        assert!(t.find("Software adapter").unwrap() < t.find("Fastest exact").unwrap());
+        // No tail from 3 samples: p99 = 2× the median here is the largest sample.
+        assert!(tail_lines(&lavapipe_rows()).is_empty());
+        assert!(!t.contains("Frame-time tails"), "{t}");
+        // A GPU run says none of it.
+        let gpu = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../results/reference/2026-12-02-h200-default/default/runs.csv"
+        ))
+        .unwrap();
+        let d = tempfile::tempdir().unwrap();
+        std::fs::write(d.path().join("runs.csv"), gpu).unwrap();
+        let g = summary_text(&Runs::load(&d.path().join("runs.csv")).unwrap());
+        assert!(!g.contains("Software adapter"), "{g}");
     }
 
     /// Every winner the verdict names is what the rows say: exact rows for "fastest exact",
@@ -560,12 +694,11 @@ mod tests {
             let exact: Vec<&Rec> = timed
                 .iter()
                 .copied()
-                .filter(|r| r.exact_result() == Some(true))
+                .filter(|r| exact_by_construction(r))
                 .collect();
             if let Some(p) = &v.fastest_exact {
-                assert_eq!(
-                    p.row.exact_result(),
-                    Some(true),
+                assert!(
+                    exact_by_construction(p.row),
                     "{}",
                     p.row.get(cols::POINT_KEY)
                 );
@@ -575,10 +708,18 @@ mod tests {
                     assert!(r.trusted_ms().unwrap() >= t, "{}", r.get(cols::POINT_KEY));
                 }
                 for tie in &p.ties {
-                    assert!(overlap(tie, p.row) && tie.exact_result() == Some(true));
+                    assert!(overlap(tie, p.row) && exact_by_construction(tie));
                 }
             } else {
                 assert!(exact.is_empty());
+            }
+            // "Exact in this run" is a method that claims no exactness, faster than the
+            // fastest exact by construction.
+            if let Some(p) = &v.exact_in_run {
+                assert!(p.row.exact_result() == Some(true) && p.row.claims_exact() == Some(false));
+                if let Some(f) = &v.fastest_exact {
+                    assert!(p.row.trusted_ms() < f.row.trusted_ms());
+                }
             }
             for r in &v.exact_untrusted {
                 assert!(r.exact_result() == Some(true) && r.trusted_ms().is_none());
@@ -640,7 +781,10 @@ mod tests {
         assert!(h.contains("1 exact but left out: compute_abuffer"), "{h}");
         assert!(h.contains("10× (0.1 ms)"), "{h}");
         let t = summary_text(&r);
-        assert!(t.contains("Fastest exact: linked_list"), "{t}");
+        assert!(
+            t.contains("Fastest exact (by construction): linked_list"),
+            "{t}"
+        );
         assert!(
             t.contains("skipped: 1 × adp (methods): needs 8 attachments"),
             "{t}"
@@ -711,8 +855,8 @@ mod tests {
     #[test]
     fn a_tail_is_said_when_p99_exceeds_the_median_by_a_fifth_and_not_otherwise() {
         let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,gpu_ms_p50,gpu_ms_p95,gpu_ms_p99,samples,flag";
-        let d = std::env::temp_dir().join(format!("mfx-summary-tail-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
         let p = d.join("runs.csv");
         let rows = [
             "1,r,methods,quads(depth_complexity=8),64,64,linked_list,a,gpu,vulkan,ok,,1.0,1.0,1.2,1.35,30,",
@@ -726,7 +870,8 @@ mod tests {
         assert_eq!(t.len(), 1, "{t:?}");
         assert!(
             t[0].starts_with("tail: linked_list on quads")
-                && t[0].contains("p99 = 1.35 ms, 1.35× median"),
+                && t[0].contains("p99 = 1.35 ms, 1.35× median")
+                && t[0].ends_with("n = 30"),
             "{t:?}"
         );
         assert!(summary_text(&r).contains(&t[0]));

@@ -132,7 +132,9 @@ fn a_custom_suite_report_reads_well() {
     let runs = report::Runs::load(&d.join("runs.csv")).unwrap();
     let text = report::summary_text(&runs);
     assert!(
-        text.contains("Fastest exact: linked_list layers=8 at 1 [0.95, 1.05] ms, 10× floor_depth"),
+        text.contains(
+            "Fastest exact (by construction): linked_list layers=8 at 1 [0.95, 1.05] ms, 10× floor_depth"
+        ),
         "{text}"
     );
     assert!(text.contains("RMSE ≤ 1e-2: linked_list layers=4"), "{text}");

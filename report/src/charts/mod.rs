@@ -600,7 +600,9 @@ fn style_key(c: RGBColor, family: usize) -> String {
 /// Moves a marker that would sit on (nearly) the same spot as an earlier one of another series
 /// to the nearest free spot of a `DODGE_STEP` grid around it (sideways first), inside the plot
 /// (`inside`, for marker centres), so none hides another and each stays by its value; returns how many moved.
-fn dodge(pos: &mut [Vec<Option<(f64, f64)>>], inside: Rect) -> usize {
+/// A `level` marker (a value that is exactly 0 on a linear axis: a rate that never happened)
+/// moves sideways only, so it stays on its line.
+fn dodge(pos: &mut [Vec<Option<(f64, f64)>>], level: &[Vec<bool>], inside: Rect) -> usize {
     let mut grid: Vec<(f64, f64)> = (-8..=8)
         .flat_map(|i| (-8..=8).map(move |j| (f64::from(i), f64::from(j))))
         .collect();
@@ -612,22 +614,32 @@ fn dodge(pos: &mut [Vec<Option<(f64, f64)>>], inside: Rect) -> usize {
     let mut placed: Vec<(usize, f64, f64)> = Vec::new();
     let mut moved = 0;
     for (i, s) in pos.iter_mut().enumerate() {
-        for p in s.iter_mut() {
+        for (j, p) in s.iter_mut().enumerate() {
             let Some((x, y)) = *p else { continue };
+            let sideways = level
+                .get(i)
+                .and_then(|l| l.get(j))
+                .copied()
+                .unwrap_or(false);
             let clash = |cx: f64, cy: f64| {
                 placed
                     .iter()
                     .any(|(k, ox, oy)| *k != i && (cx - ox).hypot(cy - oy) < DODGE_PX)
             };
-            let (nx, ny) = grid
-                .iter()
-                .map(|(a, b)| (x + a * DODGE_STEP, y + b * DODGE_STEP))
-                .filter(|(cx, cy)| {
-                    (*cx, *cy) == (x, y)
-                        || (inside.x..=inside.right()).contains(cx)
-                            && (inside.y..=inside.bottom()).contains(cy)
-                })
-                .find(|(cx, cy)| !clash(*cx, *cy))
+            let free = |only_sideways: bool| {
+                grid.iter()
+                    .filter(|(_, b)| !only_sideways || *b == 0.0)
+                    .map(|(a, b)| (x + a * DODGE_STEP, y + b * DODGE_STEP))
+                    .filter(|(cx, cy)| {
+                        (*cx, *cy) == (x, y)
+                            || (inside.x..=inside.right()).contains(cx)
+                                && (inside.y..=inside.bottom()).contains(cy)
+                    })
+                    .find(|(cx, cy)| !clash(*cx, *cy))
+            };
+            // Off its line only when the line itself is full (the caption counts every move).
+            let (nx, ny) = free(sideways)
+                .or_else(|| free(false).filter(|_| sideways))
                 .unwrap_or((x, y));
             if (nx, ny) != (x, y) {
                 moved += 1;
@@ -865,8 +877,14 @@ impl XY {
                     .collect()
             })
             .collect();
+        let level: Vec<Vec<bool>> = self
+            .series
+            .iter()
+            .map(|s| s.points.iter().map(|q| !self.log_y && q.y == 0.0).collect())
+            .collect();
         let dodged = dodge(
             &mut pos,
+            &level,
             Rect::new(plot.x + 6.0, plot.y + 6.0, plot.w - 12.0, plot.h - 12.0),
         );
         let marks: Vec<Mark> = pos

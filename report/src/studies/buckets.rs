@@ -10,7 +10,7 @@ use anyhow::Result;
 use super::methods::{config_series, scene_families, Styles};
 use crate::charts::{Figure, Pt, XY};
 use crate::labels::{file_safe, scene_name, scene_names, ConfigLabels};
-use crate::points::ci_caption;
+use crate::points::ci_caption_rows;
 use mfx_analysis::data::{resolution, Rec, Runs};
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
@@ -97,7 +97,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                 &format!("buckets_collisions_vs_time_{}_{res}", file_safe(&scene)),
                 &format!(
                     "One point per bucket configuration on this scene: lower-left is better. {} {}",
-                    ci_caption(runs),
+                    ci_caption_rows(&g),
                     labels.fixed_note()
                 ),
             )?);

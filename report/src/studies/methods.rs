@@ -16,7 +16,7 @@ use crate::cells::{esc, exact_cell, short, time_cell};
 use crate::charts::{Bars, Figure, Named, Pt, Series, MARKERS, XY};
 use crate::labels::{config_key, file_safe, parse_scene, scene_name, scene_names, ConfigLabels};
 use crate::pareto;
-use crate::points::{ci_caption, time_pt};
+use crate::points::{ci_caption_rows, time_pt};
 use mfx_analysis::data::{resolution, Rec, Runs};
 
 /// Colour (configuration) and marker (method family) of every configuration of a set of rows,
@@ -129,8 +129,6 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let methods: Vec<&Rec> = all.iter().copied().filter(|r| !r.is_floor()).collect();
     let styles = Styles::new(methods.iter().copied());
     let mut figs = Vec::new();
-    let ci = ci_caption(runs);
-    let ci = ci.as_str();
     for (res, at_res) in Runs::group_by(methods.iter().copied(), resolution) {
         // Errors of different effects are different quantities: one front per scene and effect.
         let effects = Runs::distinct(at_res.iter().copied(), cols::EFFECT).len() > 1;
@@ -147,10 +145,10 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                 })
                 .collect();
             scene_figures(
-                runs, label, effect, &res, &g, &floors, &styles, ci, dir, &mut figs,
+                runs, label, effect, &res, &g, &floors, &styles, dir, &mut figs,
             )?;
         }
-        time_vs_complexity(&at_res, &res, &styles, ci, dir, &mut figs)?;
+        time_vs_complexity(&at_res, &res, &styles, dir, &mut figs)?;
         rates(&at_res, &res, &styles, dir, &mut figs)?;
         ratio_bars(&at_res, &res, dir, &mut figs)?;
     }
@@ -166,10 +164,12 @@ fn scene_figures(
     g: &[&Rec],
     floors: &[&Rec],
     styles: &Styles,
-    ci: &str,
     dir: &Path,
     figs: &mut Vec<Figure>,
 ) -> Result<()> {
+    // Every chart of this scene draws these rows: its caption says what their whiskers are.
+    let ci = ci_caption_rows(g);
+    let ci = ci.as_str();
     let name = if effect.is_empty() {
         scene_name(label)
     } else {
@@ -436,7 +436,6 @@ fn time_vs_complexity(
     at_res: &[&Rec],
     res: &str,
     styles: &Styles,
-    ci: &str,
     dir: &Path,
     figs: &mut Vec<Figure>,
 ) -> Result<()> {
@@ -466,6 +465,7 @@ fn time_vs_complexity(
         let all = config_series(&g, &labels, styles, |r| {
             time_pt(r, r.f(cols::DEPTH_COMPLEXITY_MAX)?)
         });
+        let ci = ci_caption_rows(&g);
         let caption = format!(
             "Scenes: {}. x: the scene's true maximum depth complexity (CPU reference). {ci} {}",
             scene_names(&scenes).join("; "),
@@ -678,6 +678,7 @@ fn ratio_bars(at_res: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) ->
             .copied()
             .filter(|r| r.f(col).is_some() && r.time_trusted() && Some(r.get(cols::METHOD)) != skip)
             .collect();
+        let dropped = dropped_from_ratio(at_res, col, skip, &labels);
         let title = format!("{title} — {res}");
         if rows.is_empty() {
             if at_res.iter().any(|r| r.f(col).is_some()) {
@@ -726,12 +727,47 @@ fn ratio_bars(at_res: &[&Rec], res: &str, dir: &Path, figs: &mut Vec<Figure>) ->
             dir,
             &format!("{stem}_{res}"),
             &format!(
-                "Same scene, resolution and run; the vertical line marks 1×. {}",
+                "Same scene, resolution and run; the vertical line marks 1×. {}{dropped}",
                 labels.fixed_note()
             ),
         )?);
     }
     Ok(())
+}
+
+/// The caption's sentence naming the rows a ratio chart leaves out, and why: " Left out: a
+/// (2 scenes), b: no trusted GPU time (…)." (empty when none is).
+fn dropped_from_ratio(
+    at_res: &[&Rec],
+    col: schema::Col,
+    skip: Option<&str>,
+    labels: &ConfigLabels,
+) -> String {
+    let mut why: Vec<(String, Vec<String>)> = Vec::new();
+    for r in at_res {
+        if Some(r.get(cols::METHOD)) == skip || (r.f(col).is_some() && r.time_trusted()) {
+            continue;
+        }
+        let reason = if !r.time_trusted() {
+            mfx_analysis::verdict::untrusted_reason(r).to_string()
+        } else if r.trusted_ms().is_none() {
+            "no GPU time".to_string()
+        } else {
+            format!("no {col} (its scene has no trusted reference time)")
+        };
+        let name = format!(
+            "{} on {}",
+            labels.get(r),
+            scene_name(r.get(cols::SCENE_LABEL))
+        );
+        match why.iter_mut().find(|(w, _)| *w == reason) {
+            Some((_, v)) => v.push(name),
+            None => why.push((reason, vec![name])),
+        }
+    }
+    why.iter()
+        .map(|(w, names)| format!(" Left out ({}): {}: {w}.", names.len(), names.join("; ")))
+        .collect()
 }
 
 #[cfg(test)]
@@ -768,6 +804,108 @@ mod tests {
             );
         }
         assert!(seen.len() > crate::charts::PALETTE.len());
+    }
+
+    /// Two scenes measured with different sample counts, the compute A-buffer untimed on one,
+    /// and overflow rates of 0 at one depth complexity.
+    fn two_scenes() -> (tempfile::TempDir, Runs) {
+        let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,gpu_ms_median,gpu_ms_ci_lo,gpu_ms_ci_hi,samples,gpu_ms_interval,gpu_time_trusted,x_floor,rmse,matches_truth,exact,depth_complexity_max,overflow_rate,bytes_per_pixel,flag";
+        let mut rows = Vec::new();
+        for (scene, n, dc) in [
+            ("quads(depth_complexity=8)", 3, 8),
+            ("quads(depth_complexity=32)", 2, 32),
+        ] {
+            let key = |m: &str| format!("\"methods|{scene}|64x64|{m}|\"");
+            rows.push(format!("3,r,methods,\"{scene}\",64,64,floor_depth,{},G,vulkan,ok,0.1,0.09,0.11,{n},range,true,,,,,{dc},,,", key("floor_depth")));
+            for (i, m) in ["depth_peel", "linked_list", "kbuffer_rmw", "bdp"]
+                .iter()
+                .enumerate()
+            {
+                let ms = 1.0 + i as f64;
+                let over = if *m == "kbuffer_rmw" && dc == 32 {
+                    "0.2"
+                } else {
+                    "0"
+                };
+                rows.push(format!(
+                    "3,r,methods,\"{scene}\",64,64,{m},{},G,vulkan,ok,{ms},{},{},{n},range,true,{},3e-8,true,true,{dc},{over},{},",
+                    key(m), ms * 0.9, ms * 1.1, ms / 0.1, 16 * (i + 1)
+                ));
+            }
+            if dc == 8 {
+                rows.push(format!("3,r,methods,\"{scene}\",64,64,compute_abuffer,{},G,vulkan,ok,0.05,0.04,0.06,{n},range,false,,3e-8,true,true,{dc},0,8,timestamps_incomplete", key("compute_abuffer")));
+            }
+        }
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("runs.csv");
+        std::fs::write(&p, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
+        let runs = Runs::load(&p).unwrap();
+        (d, runs)
+    }
+
+    #[test]
+    fn each_caption_describes_its_own_chart() {
+        let (d, runs) = two_scenes();
+        let figs = figures(&runs, d.path()).unwrap();
+        let cap = |stem: &str| {
+            figs.iter()
+                .find(|f| f.stem.starts_with(stem))
+                .unwrap_or_else(|| {
+                    panic!(
+                        "no {stem}: {:?}",
+                        figs.iter().map(|f| &f.stem).collect::<Vec<_>>()
+                    )
+                })
+                .caption
+                .clone()
+        };
+        let p8 = cap("methods_pareto_time_quads_depth_complexity_8");
+        assert!(
+            p8.contains("range (n = 3)") && !p8.contains("n = 2"),
+            "{p8}"
+        );
+        assert!(p8.contains("1 point(s) whose GPU timestamps miss"), "{p8}");
+        let p32 = cap("methods_pareto_time_quads_depth_complexity_32");
+        assert!(
+            p32.contains("range (n = 2)") && !p32.contains("n = 3"),
+            "{p32}"
+        );
+        // Nothing is left out of the second scene's chart, and its caption says nothing of it.
+        assert!(
+            !p32.contains("left out") && !p32.contains("miss part"),
+            "{p32}"
+        );
+        // The × floor chart names the point it drops and why.
+        let xf = cap("methods_x_floor");
+        assert!(
+            xf.contains("Left out (1): compute_abuffer on quads")
+                && xf.contains("GPU timestamps miss part of the frame"),
+            "{xf}"
+        );
+    }
+
+    #[test]
+    fn zero_rates_stay_on_the_zero_line() {
+        let (d, runs) = two_scenes();
+        let figs = figures(&runs, d.path()).unwrap();
+        let f = figs
+            .iter()
+            .find(|f| f.stem.starts_with("methods_overflow_rate"))
+            .expect("an overflow chart");
+        let l: crate::charts::Layout = serde_json::from_str(
+            &std::fs::read_to_string(d.path().join(format!("{}.layout.json", f.stem))).unwrap(),
+        )
+        .unwrap();
+        // Every marker but the one overflowing sits at y = 0: one pixel row for all of them.
+        let mut ys: Vec<i64> = l
+            .marks
+            .iter()
+            .map(|m| (m.rect.y + m.rect.h / 2.0).round() as i64)
+            .collect();
+        ys.sort_unstable();
+        ys.dedup();
+        assert_eq!(ys.len(), 2, "zero markers moved off their line: {ys:?}");
+        assert_eq!(crate::charts::layout::check(&l), Ok(()));
     }
 
     #[test]

@@ -1,6 +1,8 @@
 //! The frame-time tail and the throughput of every timed row (any study): per study and
 //! resolution, p99 / median GPU time against the median (one colour and marker per scene), and a
-//! table of fragments/s, bytes/s and the fraction of the adapter's peak memory bandwidth.
+//! table of fragments/s, bytes/s and the fraction of the adapter's peak memory bandwidth. A p95
+//! or p99 is shown only with its n, and only where n ≥ `TAIL_MIN_SAMPLES` (with fewer it is the
+//! largest sample, not a tail).
 
 use std::fmt::Write;
 use std::path::Path;
@@ -11,7 +13,7 @@ use schema::cols;
 use crate::cells::{esc, short};
 use crate::charts::{Figure, Pt, Series, XY};
 use crate::labels::{file_safe, scene_name, ConfigLabels};
-use crate::points::TAIL_RATIO;
+use crate::points::{TAIL_MIN_SAMPLES, TAIL_RATIO};
 use mfx_analysis::data::{resolution, Rec, Runs};
 
 /// Whether any row carries the tail columns (CSVs before them have none).
@@ -34,10 +36,47 @@ fn timed(runs: &Runs) -> Vec<&Rec> {
         .collect()
 }
 
+/// Whether a row has enough kept samples for its p95/p99 to be a tail.
+fn tail_n(r: &Rec) -> Option<usize> {
+    r.samples().filter(|n| *n >= TAIL_MIN_SAMPLES)
+}
+
+/// "n = 3" or "n = 3–5": the sample counts of rows.
+fn n_range(rows: &[&Rec]) -> String {
+    let mut ns: Vec<usize> = rows.iter().filter_map(|r| r.samples()).collect();
+    ns.sort_unstable();
+    match (ns.first(), ns.last()) {
+        (Some(a), Some(b)) if a == b => format!("n = {a}"),
+        (Some(a), Some(b)) => format!("n = {a}–{b}"),
+        _ => "n unknown".into(),
+    }
+}
+
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let rows = timed(runs);
     let mut figs = Vec::new();
-    for (key, g) in Runs::group_by(rows.iter().copied(), |r| {
+    let tailed: Vec<&Rec> = rows
+        .iter()
+        .copied()
+        .filter(|r| tail_n(r).is_some())
+        .collect();
+    if tailed.len() < rows.len() {
+        let short: Vec<&Rec> = rows
+            .iter()
+            .copied()
+            .filter(|r| tail_n(r).is_none())
+            .collect();
+        figs.push(Figure::note(
+            "Frame-time tail",
+            format!(
+                "{} of {} timed rows have fewer than {TAIL_MIN_SAMPLES} kept samples ({}): no p95 or p99 is shown for them (with so few samples p99 is the largest sample, not a tail).",
+                short.len(),
+                rows.len(),
+                n_range(&short)
+            ),
+        ));
+    }
+    for (key, g) in Runs::group_by(tailed.iter().copied(), |r| {
         format!("{}\u{0}{}", r.get(cols::STUDY), resolution(r))
     }) {
         let (study, res) = key.split_once('\u{0}').unwrap_or((&key, ""));
@@ -88,7 +127,8 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
             dir,
             &format!("tail_{}_{res}", file_safe(study)),
             &format!(
-                "One point per configuration and scene (colour and marker: the scene). x: the 99th percentile of the per-sample GPU time over the median; whisker from p95 to the maximum. Right of the {TAIL_RATIO}× line the summary names the row ({n_tail} here). Samples per row: the run's sample count (with few samples p99 is the maximum, see results/README.md)."
+                "One point per configuration and scene (colour and marker: the scene). x: the 99th percentile of the per-sample GPU time over the median; whisker from p95 to the maximum. Right of the {TAIL_RATIO}× line the summary names the row ({n_tail} here). Kept samples per row: {} (rows with fewer than {TAIL_MIN_SAMPLES} are not drawn).",
+                n_range(&g)
             ),
         )?);
     }
@@ -121,7 +161,7 @@ fn bound_table(rows: &[&Rec]) -> Option<String> {
         .any(|r| r.f(cols::PEAK_BANDWIDTH_FRAC).is_some());
     let mut h = format!(
         "<p class=\"note\">fragments/s: the reference's fragment count over the median GPU time; bytes/s: the frame's declared traffic (not a measured count) over it; {}. A method near the peak is bandwidth-bound; one far below it with a high fragment rate is fill- or atomic-bound.</p>\
-         <details><summary>{} rows</summary><table id=\"throughput\"><tr><th>study</th><th>scene</th><th>resolution</th><th>configuration</th><th>median ms</th><th>p95 / median</th><th>p99 / median</th><th>fragments/s</th><th>GB/s</th><th>of peak bandwidth</th></tr>",
+         <details><summary>{} rows</summary><table id=\"throughput\"><tr><th>study</th><th>scene</th><th>resolution</th><th>configuration</th><th>median ms</th><th>n</th><th>p95 / median</th><th>p99 / median</th><th>fragments/s</th><th>GB/s</th><th>of peak bandwidth</th></tr>",
         if has_peak {
             "of peak bandwidth: bytes/s over the adapter's peak (NVML)"
         } else {
@@ -129,8 +169,10 @@ fn bound_table(rows: &[&Rec]) -> Option<String> {
         },
         rows.len()
     );
+    // No tail without its n, none under TAIL_MIN_SAMPLES.
     let ratio = |r: &Rec, c| {
-        r.f(c)
+        tail_n(r)
+            .and(r.f(c))
             .zip(r.f(cols::GPU_MS_P50))
             .map(|(a, b)| format!("{:.3}", a / b))
             .unwrap_or_default()
@@ -138,12 +180,13 @@ fn bound_table(rows: &[&Rec]) -> Option<String> {
     for r in rows {
         let _ = write!(
             h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             esc(r.get(cols::STUDY)),
             esc(&scene_name(r.get(cols::SCENE_LABEL))),
             esc(&resolution(r)),
             esc(&labels.get(r)),
             short(r.f(cols::GPU_MS_P50)),
+            r.samples().map(|n| n.to_string()).unwrap_or_default(),
             ratio(r, cols::GPU_MS_P95),
             ratio(r, cols::GPU_MS_P99),
             short(r.f(cols::FRAGMENTS_PER_S)),
