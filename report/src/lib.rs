@@ -22,9 +22,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
-pub use mfx_analysis::{Rec, Runs};
 /// The rows, read by `mfx_analysis` (kept under this name for the pages that say `crate::data`).
 pub use mfx_analysis::data;
+pub use mfx_analysis::{Rec, Runs};
 pub use summary::summary_text;
 
 /// Builds the report of a run folder; returns the page's path.
