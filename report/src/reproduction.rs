@@ -170,14 +170,14 @@ fn verdict_over(rule: &papers::Rule, lo: f64, hi: f64, paper: Option<f64>) -> &'
 
 /// One source's table: its heading, its papers file's name, and a row of cells per figure
 /// (row, figure, setup, paper, paper ratio, ours, verdict, measured and why).
-struct Table {
-    heading: String,
-    name: String,
-    rows: Vec<[String; 8]>,
+pub(crate) struct Table {
+    pub(crate) heading: String,
+    pub(crate) name: String,
+    pub(crate) rows: Vec<[String; 8]>,
 }
 
 /// The columns of every table.
-const HEADER: [&str; 8] = [
+pub(crate) const HEADER: [&str; 8] = [
     "row",
     "figure",
     "setup",
@@ -189,10 +189,10 @@ const HEADER: [&str; 8] = [
 ];
 
 /// The note under the heading.
-const NOTE: &str = "r = baseline ÷ ours of the rule's column (for times, ours' speed-up); the rule is declared in scenarios/papers/*.toml.";
+pub(crate) const NOTE: &str = "r = baseline ÷ ours of the rule's column (for times, ours' speed-up); the rule is declared in scenarios/papers/*.toml.";
 
 /// Every source's table, or none when no row of `runs` is from a suite a papers file points to.
-fn tables(runs: &Runs) -> Vec<Table> {
+pub(crate) fn tables(runs: &Runs) -> Vec<Table> {
     let files: Vec<(&str, papers::PapersFile)> = papers::BUILTIN
         .iter()
         .filter_map(|(n, t)| papers::parse(t).ok().map(|f| (*n, f)))
