@@ -18,6 +18,11 @@
 # TABLES="runs rows notok" lists the table ids that must exist (default: runs rows notok);
 # MIN_CHARTS (default 0) the fewest charts with a layout record;
 # MIN_IMAGES (default 1) the fewest images the page must hold.
+# The run for a paper (report/src/latex.rs), checked when the report folder has latex/ or
+# LATEX=1 requires it: numbers.tex defines macros, the booktabs tables and sample.tex exist,
+# every SVG chart has its PDF with a font embedded, and sample.tex (which \inputs them all and
+# includes a chart PDF) compiles with pdflatex. Without pdflatex that part says SKIPPED, except
+# in CI (CI=true), where it FAILS (scripts/setup.sh installs texlive-latex-base and -recommended).
 set -uo pipefail
 say() { echo "check-report: $*"; }
 [ $# -eq 1 ] || { sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
@@ -158,7 +163,38 @@ if [ "$n" -lt "${MIN_IMAGES:-1}" ]; then say "FAILED: $n images on the page (wan
 for t in ${TABLES:-runs rows notok}; do
     grep -q "\"$t\"" <<<"$tables" || { say "FAILED: no table id=\"$t\" (tables: $tables)"; status=1; }
 done
+latex_note=
+rep=$(dirname "$page")
+if [ -d "$rep/latex" ] || [ "${LATEX:-0}" = 1 ]; then
+    lx=$rep/latex
+    for f in numbers.tex verdict.tex reproduction.tex bounds.tex sample.tex; do
+        [ -f "$lx/$f" ] || { say "FAILED: latex: no $f in $lx"; status=1; }
+    done
+    macros=$(grep -c '^\\newcommand{\\mfx[A-Za-z]*}' "$lx/numbers.tex" 2>/dev/null || true)
+    [ "${macros:-0}" -ge 1 ] || { say "FAILED: latex: numbers.tex defines no \\mfx macro"; status=1; }
+    nsvg=0
+    for svg in "$rep"/*.svg; do
+        [ -f "$svg" ] || continue
+        nsvg=$((nsvg + 1))
+        pdf=${svg%.svg}.pdf
+        if [ ! -f "$pdf" ]; then say "FAILED: latex: $(basename "$svg") has no PDF beside it"; status=1
+        elif ! grep -aq '/FontFile2' "$pdf"; then say "FAILED: latex: $(basename "$pdf") embeds no font"; status=1; fi
+    done
+    if command -v pdflatex >/dev/null; then
+        mkdir -p "$work/tex"
+        cp -r "$rep"/. "$work/tex/"
+        if (cd "$work/tex/latex" && timeout 120 pdflatex -interaction=nonstopmode -halt-on-error sample.tex >"$work/pdflatex.log" 2>&1); then
+            latex_note=", LaTeX: $macros macros, $nsvg PDF charts, sample.tex compiles"
+        else
+            say "FAILED: latex: pdflatex sample.tex failed:"; tail -n 20 "$work/pdflatex.log"; status=1
+        fi
+    elif [ "${CI:-}" = true ]; then
+        say "FAILED: latex: no pdflatex in CI (scripts/setup.sh installs texlive-latex-base texlive-latex-recommended)"; status=1
+    else
+        latex_note=", LaTeX: $macros macros, $nsvg PDF charts; SKIPPED the pdflatex build (no pdflatex here: apt-get install texlive-latex-base texlive-latex-recommended)"
+    fi
+fi
 if [ "$status" = 0 ]; then
-    say "PASSED: $page in $($browser --version 2>/dev/null | head -n 1): $n images loaded, $charts chart layouts pass, tables $tables"
+    say "PASSED: $page in $($browser --version 2>/dev/null | head -n 1): $n images loaded, $charts chart layouts pass, tables $tables$latex_note"
 fi
 exit "$status"

@@ -8,6 +8,9 @@
 #   3. scripts/check-report.sh: that report in headless Chromium (every image loaded, the runs,
 #      rows, skipped, speedup and image-agreement tables present); then a copy with one image
 #      deleted must FAIL the same check (the check can fail).
+#   4. `mfx report` of a committed H200 run (results/reference/2026-12-03-h200-resolve/default,
+#      copied: the tree is not written) writes numbers.tex, the booktabs tables and a PDF per
+#      chart, and the sample that \inputs them compiles (scripts/check-report.sh with LATEX=1).
 # A step that cannot run on this machine (no Slurm daemons, no Chromium, no GL adapter) prints
 # SKIPPED with the reason; anything else that goes wrong fails the script.
 set -euo pipefail
@@ -49,4 +52,11 @@ if grep -q PASSED <<<"$out"; then
         { cat "$tmp/broken.log"; echo "test-distrib: FAILED: the broken report's failure does not name $(basename "$victim")"; exit 1; }
     echo "test-distrib: check-report.sh fails a report with $(basename "$victim") deleted, as it must"
 fi
+echo "== 4. a committed H200 run for a paper: numbers.tex, booktabs tables, PDF charts"
+h200=results/reference/2026-12-03-h200-resolve/default
+mkdir -p "$tmp/h200"
+cp "$h200/runs.csv" "$h200/run.json" "$tmp/h200/"
+"$mfx" report "$tmp/h200" >/dev/null
+out=$(LATEX=1 TABLES="runs verdict-methods rows notok" MIN_CHARTS=5 bash scripts/check-report.sh "$tmp/h200") || { echo "$out"; exit 1; }
+echo "$out"
 echo "test-distrib: PASSED"

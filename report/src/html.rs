@@ -111,7 +111,7 @@ pub fn page(
                 // the PNG beside it is for slides and is not tracked under results/reference/.
                 let _ = write!(
                     h,
-                    "<figure><img src=\"{0}.svg\" alt=\"{1}\"><figcaption>{1}. {2} (<a href=\"{0}.png\">PNG</a>)</figcaption></figure>",
+                    "<figure><img src=\"{0}.svg\" alt=\"{1}\"><figcaption>{1}. {2} (<a href=\"{0}.png\">PNG</a>, <a href=\"{0}.pdf\">PDF</a>)</figcaption></figure>",
                     esc(&f.stem),
                     esc(&f.title),
                     esc(&f.caption)

@@ -1,6 +1,7 @@
 //! CSV → plots → HTML. Never touches a GPU: a report can be built from CSVs made on other
 //! machines, merged, or years old. `build(dir)` reads `dir/runs.csv` and writes
-//! `dir/report/index.html` with PNG and SVG figures (and their layout records) beside it;
+//! `dir/report/index.html` with PNG, SVG and PDF figures (and their layout records) beside it,
+//! and `dir/report/latex/` (numbers.tex and booktabs tables, `latex.rs`);
 //! `summary_text` is the run's findings as text (the page's summary section, and what
 //! `mfx sweep` prints at its end).
 
@@ -12,6 +13,7 @@ pub mod compare;
 pub mod flip;
 pub mod html;
 pub mod labels;
+pub mod latex;
 pub mod pareto;
 pub mod points;
 pub mod reproduction;
@@ -83,6 +85,8 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
         let p = out.join("bounds.md");
         std::fs::write(&p, md).with_context(|| format!("writing {}", p.display()))?;
     }
+    // The run for a paper: numbers.tex, booktabs tables (the PDF charts sit beside the SVGs).
+    latex::write(&runs, &out)?;
     let flip = flip::section(dir, &out)?;
     let page = html::page(&runs, &sections, &extra, &flip);
     let path = out.join("index.html");
@@ -98,7 +102,7 @@ fn clear_charts(out: &Path) -> Result<()> {
         let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
         if p.is_dir() && name.starts_with("platform") {
             clear_charts(&p)?;
-        } else if [".png", ".svg", ".layout.json"]
+        } else if [".png", ".svg", ".pdf", ".layout.json"]
             .iter()
             .any(|x| name.ends_with(x))
         {

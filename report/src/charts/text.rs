@@ -6,13 +6,16 @@ use std::sync::Once;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
+/// DejaVu Sans, in the tree: the charts' one font (PNG, the SVG's measured widths, the PDF's
+/// embedded font).
+pub(super) const FONT_BYTES: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+
 pub(super) static FONT: Once = Once::new();
 
 pub(super) fn ensure_font() {
     FONT.call_once(|| {
-        let bytes: &'static [u8] = include_bytes!("../../assets/DejaVuSans.ttf");
         for style in [FontStyle::Normal, FontStyle::Bold] {
-            let _ = plotters::style::register_font("sans-serif", style, bytes);
+            let _ = plotters::style::register_font("sans-serif", style, FONT_BYTES);
         }
     });
 }
