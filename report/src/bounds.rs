@@ -10,7 +10,7 @@ use std::fmt::Write;
 
 use schema::{cols, PointKey};
 
-use crate::cells::{esc, short};
+use crate::cells::short;
 use mfx_analysis::data::{resolution, Rec, Runs};
 
 /// A limiting pass within this factor of the depth-only floor costs about what rasterising the
@@ -199,33 +199,28 @@ pub fn markdown(runs: &Runs) -> String {
 }
 
 /// The bounds as an HTML section, folded (the table is long); "" when no row has per-pass times.
-pub fn section(runs: &Runs) -> String {
+pub fn section(runs: &Runs) -> maud::Markup {
     let all = bounds(runs);
     if all.is_empty() {
-        return String::new();
+        return maud::html! {};
     }
-    let mut s = format!(
-        "<h2 id=\"bounds\">What bounds each method</h2>\n<p>Per point: the slowest pass \
-         (<code>pass_ms</code>), how it compares with the depth-only floor of the same scene \
-         and resolution (within {AT_FLOOR}×: near it, costing about what rasterising the scene \
-         once costs, whatever the pass does), and the frame's declared traffic against the \
-         adapter's peak memory bandwidth (NVML). Also in <code>bounds.md</code>.</p>\n\
-         <details><summary>"
-    );
-    let _ = write!(s, "{} points</summary>\n<table>\n<tr>", all.len());
-    for h in HEAD {
-        let _ = write!(s, "<th>{}</th>", esc(h));
-    }
-    s.push_str("</tr>\n");
-    for b in &all {
-        s.push_str("<tr>");
-        for c in cells(b) {
-            let _ = write!(s, "<td>{}</td>", esc(&c));
+    maud::html! {
+        h2 id="bounds" { "What bounds each method" }
+        p {
+            "Per point: the slowest pass (" code { "pass_ms" } "), how it compares with the \
+             depth-only floor of the same scene and resolution (within " (AT_FLOOR) "×: near it, \
+             costing about what rasterising the scene once costs, whatever the pass does), and \
+             the frame's declared traffic against the adapter's peak memory bandwidth (NVML). \
+             Also in " code { "bounds.md" } "."
         }
-        s.push_str("</tr>\n");
+        details {
+            summary { (all.len()) " points" }
+            table {
+                tr { @for h in HEAD { th { (h) } } }
+                @for b in &all { tr { @for c in cells(b) { td { (c) } } } }
+            }
+        }
     }
-    s.push_str("</table>\n</details>\n");
-    s
 }
 
 #[cfg(test)]
@@ -309,7 +304,7 @@ mod tests {
         let r = runs(vec![untrusted, failed, passless]);
         assert!(bounds(&r).is_empty());
         assert_eq!(markdown(&r), "");
-        assert_eq!(section(&r), "");
+        assert_eq!(section(&r).into_string(), "");
     }
 
     #[test]

@@ -6,6 +6,8 @@ use schema::cols;
 
 use mfx_analysis::data::{Interval, Rec};
 
+/// Hand escaping, left for report/src/reproduction.rs (its HTML is the papers work's); every
+/// other page is written through maud, which escapes each value itself.
 pub fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")

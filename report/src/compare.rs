@@ -9,12 +9,11 @@
 
 use schema::cols;
 use std::collections::BTreeMap;
-use std::fmt::Write;
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
+use maud::{html, Markup};
 
-use crate::cells::esc;
 use crate::charts::{Bars, Figure, Pt};
 use crate::labels::{file_safe, scene_name, ConfigLabels};
 use mfx_analysis::data::{platform, platforms, resolution, Rec, Runs};
@@ -22,8 +21,8 @@ use mfx_analysis::data::{platform, platforms, resolution, Rec, Runs};
 /// What the comparison adds to the page.
 pub struct Comparison {
     pub figures: Vec<Figure>,
-    /// Tables (speedups, image agreement) as HTML.
-    pub html: String,
+    /// Tables (speedups, image agreement).
+    pub html: Markup,
     /// The largest max-abs image difference between platforms, with its point and platforms.
     pub worst_image_diff: Option<(f64, String, String, String)>,
 }
@@ -65,9 +64,9 @@ fn num(v: f64) -> String {
     }
 }
 
-/// A CSV number cell, shortened like `num`; text that is not a number is kept (escaped).
+/// A CSV number cell, shortened like `num`; text that is not a number is kept.
 fn cell(s: &str) -> String {
-    s.parse::<f64>().map(num).unwrap_or_else(|_| esc(s))
+    s.parse::<f64>().map(num).unwrap_or_else(|_| s.to_string())
 }
 
 fn geomean(v: &[f64]) -> Option<f64> {
@@ -105,32 +104,20 @@ fn read_image(path: &Path) -> Result<(Vec<u64>, Vec<f32>)> {
     Ok((shape, v))
 }
 
-/// The comparison of a run folder's rows, or `None` when they hold one platform only.
-pub fn compare(
-    runs: &Runs,
-    run_dir: &Path,
-    out: &Path,
-    baseline_name: Option<&str>,
-) -> Result<Option<Comparison>> {
-    let plats = platforms(runs);
-    if plats.len() < 2 {
-        if let Some(n) = baseline_name {
-            bail!(
-                "--baseline '{n}': the CSV holds one adapter only ({})",
-                plats.join("")
-            );
-        }
-        return Ok(None);
-    }
-    let base = baseline(runs, baseline_name)?;
-    // Every ok row, timed or not: a platform without GPU timestamps (GLES) has no time to
-    // chart or divide, but its images still agree or not with the others'. The time charts and
-    // the speed-ups read `trusted_ms` themselves.
-    let ok: Vec<&Rec> = runs.rows.iter().filter(|r| r.ok()).collect();
-    // point_key → platform → row
+/// The ok rows by point key and platform, and the keys in first-seen order: points are
+/// compared only on exactly the same scene, resolution and configuration.
+struct Points<'a> {
+    by_point: BTreeMap<&'a str, BTreeMap<String, &'a Rec>>,
+    order: Vec<&'a str>,
+}
+
+/// Every ok row, timed or not: a platform without GPU timestamps (GLES) has no time to chart
+/// or divide, but its images still agree or not with the others'. The time charts and the
+/// speed-ups read `trusted_ms` themselves.
+fn points(runs: &Runs) -> Points<'_> {
     let mut by_point: BTreeMap<&str, BTreeMap<String, &Rec>> = BTreeMap::new();
     let mut order: Vec<&str> = Vec::new();
-    for r in &ok {
+    for r in runs.rows.iter().filter(|r| r.ok()) {
         let k = r.get(cols::POINT_KEY);
         if !by_point.contains_key(k) {
             order.push(k);
@@ -141,44 +128,37 @@ pub fn compare(
             .entry(platform(r))
             .or_insert(r);
     }
-    let labels = ConfigLabels::new(ok.iter().copied());
-    let mut figures = Vec::new();
-    let mut html = String::new();
-    let _ = write!(
-        html,
-        "<h2>Adapters and backends: speedups and image agreement</h2><p>{} platforms (adapter, backend): {}. Baseline for \
-         speedups: <b>{}</b>{}.</p>",
-        plats.len(),
-        plats.iter().map(|p| esc(p)).collect::<Vec<_>>().join("; "),
-        esc(&base),
-        if baseline_name.is_none() {
-            " (default: the first CPU adapter; choose with <code>mfx report --baseline NAME</code>)"
-        } else {
-            ""
-        }
-    );
+    Points { by_point, order }
+}
 
-    // 1. Time per method configuration, one chart per scene × resolution, one bar per platform.
+/// Step 1, time per configuration: one chart per scene × resolution, one bar per platform
+/// (points measured on at least two platforms only: only they say anything about platforms).
+fn time_charts(
+    pts: &Points,
+    plats: &[String],
+    labels: &ConfigLabels,
+    out: &Path,
+) -> Result<Vec<Figure>> {
     let mut scenes: Vec<(String, String)> = Vec::new();
-    for r in &ok {
+    for k in &pts.order {
+        let r = pts.by_point[k].values().next().expect("non-empty");
         let s = (r.get(cols::SCENE_LABEL).to_string(), resolution(r));
         if !scenes.contains(&s) {
             scenes.push(s);
         }
     }
+    let mut figures = Vec::new();
     for (label, res) in &scenes {
-        let here: Vec<&str> = order
+        let here: Vec<&str> = pts
+            .order
             .iter()
             .copied()
             .filter(|k| {
-                let r = by_point[k].values().next().expect("non-empty");
-                r.get(cols::SCENE_LABEL) == label && resolution(r) == *res
+                let r = pts.by_point[k].values().next().expect("non-empty");
+                r.get(cols::SCENE_LABEL) == label
+                    && resolution(r) == *res
+                    && pts.by_point[k].len() >= 2
             })
-            .collect();
-        // Only points measured on at least two platforms say anything about platforms.
-        let here: Vec<&str> = here
-            .into_iter()
-            .filter(|k| by_point[k].len() >= 2)
             .collect();
         if here.is_empty() {
             continue;
@@ -186,7 +166,7 @@ pub fn compare(
         let categories: Vec<String> = here
             .iter()
             .map(|k| {
-                let r = by_point[k].values().next().expect("non-empty");
+                let r = pts.by_point[k].values().next().expect("non-empty");
                 let study = r.get(cols::STUDY);
                 let c = labels.get(r);
                 if study == "methods" || c.starts_with("floor_") {
@@ -202,7 +182,7 @@ pub fn compare(
                 let v = here
                     .iter()
                     .map(|k| {
-                        by_point[k]
+                        pts.by_point[k]
                             .get(p)
                             .and_then(|r| crate::points::time_pt(r, 0.0))
                     })
@@ -212,7 +192,7 @@ pub fn compare(
             .collect();
         let drawn: Vec<&Rec> = here
             .iter()
-            .flat_map(|k| by_point[k].values().copied())
+            .flat_map(|k| pts.by_point[k].values().copied())
             .collect();
         let bars = Bars {
             title: format!("GPU time per platform — {}, {res}", scene_name(label)),
@@ -232,22 +212,45 @@ pub fn compare(
             ),
         )?);
     }
+    Ok(figures)
+}
 
-    // 2. Speedup over the baseline: per configuration, the geometric mean over scenes of
-    //    baseline ms / platform ms (whiskers: the smallest and largest scene).
-    let others: Vec<&String> = plats.iter().filter(|p| **p != base).collect();
+/// Per configuration, per platform other than the baseline: baseline ms / platform ms on each
+/// scene measured (trusted times) on both.
+struct Speedups {
+    base: String,
+    others: Vec<String>,
+    /// Configurations in first-seen order.
+    configs: Vec<String>,
+    speed: BTreeMap<String, BTreeMap<String, Vec<f64>>>,
+}
+
+impl Speedups {
+    fn of(&self, config: &str, platform: &str) -> Option<&Vec<f64>> {
+        self.speed.get(config)?.get(platform)
+    }
+}
+
+fn min_max(s: &[f64]) -> (f64, f64) {
+    (
+        s.iter().copied().fold(f64::INFINITY, f64::min),
+        s.iter().copied().fold(0.0, f64::max),
+    )
+}
+
+/// Step 2, speed-ups over the baseline platform.
+fn speedups(pts: &Points, plats: &[String], base: &str, labels: &ConfigLabels) -> Speedups {
+    let others: Vec<String> = plats.iter().filter(|p| *p != base).cloned().collect();
     let mut configs: Vec<String> = Vec::new();
-    // config → platform → speedups over the scenes
     let mut speed: BTreeMap<String, BTreeMap<String, Vec<f64>>> = BTreeMap::new();
-    for k in &order {
-        let per = &by_point[k];
-        let Some(b) = per.get(&base).and_then(|r| r.trusted_ms()) else {
+    for k in &pts.order {
+        let per = &pts.by_point[k];
+        let Some(b) = per.get(base).and_then(|r| r.trusted_ms()) else {
             continue;
         };
-        let r0 = per.values().next().expect("non-empty");
-        let c = labels.get(r0);
+        let c = labels.get(per.values().next().expect("non-empty"));
         for p in &others {
-            if let Some(t) = per.get(*p).and_then(|r| r.trusted_ms()) {
+            if let Some(t) = per.get(p).and_then(|r| r.trusted_ms()) {
                 if t > 0.0 && b > 0.0 {
                     if !configs.contains(&c) {
                         configs.push(c.clone());
@@ -255,86 +258,116 @@ pub fn compare(
                     speed
                         .entry(c.clone())
                         .or_default()
-                        .entry((*p).clone())
+                        .entry(p.clone())
                         .or_default()
                         .push(b / t);
                 }
             }
         }
     }
-    if !configs.is_empty() {
-        let series = others
-            .iter()
-            .map(|p| {
-                let v = configs
-                    .iter()
-                    .map(|c| {
-                        let s = speed.get(c)?.get(*p)?;
-                        let g = geomean(s)?;
-                        let lo = s.iter().copied().fold(f64::INFINITY, f64::min);
-                        let hi = s.iter().copied().fold(0.0, f64::max);
-                        Some(Pt::spread(0.0, g, Some(lo), Some(hi)))
-                    })
-                    .collect();
-                ((*p).clone(), v)
-            })
-            .collect();
-        let bars = Bars {
-            title: format!("Speedup over {base}"),
-            y_label: "baseline GPU time / platform GPU time (×)".into(),
-            log_y: true,
-            categories: configs.clone(),
-            series,
-            reference: Some(1.0),
-        };
-        figures.push(bars.draw(
-            out,
-            "compare_speedup",
-            &format!(
-                "Per configuration: geometric mean over the scenes measured on both of \
-                 (GPU time on {base}) / (GPU time on the platform); whiskers: the smallest and \
-                 largest scene. Above 1 is faster than the baseline."
-            ),
-        )?);
-        let _ = write!(
-            html,
-            "<h3>Speedup over {}</h3><table id=\"speedup\"><tr><th>configuration</th>",
-            esc(&base)
-        );
-        for p in &others {
-            let _ = write!(html, "<th>{} (geomean, min–max, scenes)</th>", esc(p));
-        }
-        html.push_str("</tr>");
-        for c in &configs {
-            let _ = write!(html, "<tr><td>{}</td>", esc(c));
-            for p in &others {
-                match speed.get(c).and_then(|m| m.get(*p)) {
-                    Some(s) => {
-                        let lo = s.iter().copied().fold(f64::INFINITY, f64::min);
-                        let hi = s.iter().copied().fold(0.0, f64::max);
-                        let _ = write!(
-                            html,
-                            "<td>{}× ({}–{}, {})</td>",
-                            geomean(s).map(num).unwrap_or_default(),
-                            num(lo),
-                            num(hi),
-                            s.len()
-                        );
+    Speedups {
+        base: base.to_string(),
+        others,
+        configs,
+        speed,
+    }
+}
+
+/// The speed-up chart: per configuration the geometric mean over scenes, whiskers the smallest
+/// and largest scene.
+fn speedup_chart(s: &Speedups, out: &Path) -> Result<Figure> {
+    let series = s
+        .others
+        .iter()
+        .map(|p| {
+            let v = s
+                .configs
+                .iter()
+                .map(|c| {
+                    let v = s.of(c, p)?;
+                    let (lo, hi) = min_max(v);
+                    Some(Pt::spread(0.0, geomean(v)?, Some(lo), Some(hi)))
+                })
+                .collect();
+            (p.clone(), v)
+        })
+        .collect();
+    let bars = Bars {
+        title: format!("Speedup over {}", s.base),
+        y_label: "baseline GPU time / platform GPU time (×)".into(),
+        log_y: true,
+        categories: s.configs.clone(),
+        series,
+        reference: Some(1.0),
+    };
+    bars.draw(
+        out,
+        "compare_speedup",
+        &format!(
+            "Per configuration: geometric mean over the scenes measured on both of \
+             (GPU time on {}) / (GPU time on the platform); whiskers: the smallest and \
+             largest scene. Above 1 is faster than the baseline.",
+            s.base
+        ),
+    )
+}
+
+fn speedup_table(s: &Speedups) -> Markup {
+    html! {
+        h3 { "Speedup over " (s.base) }
+        table id="speedup" {
+            tr {
+                th { "configuration" }
+                @for p in &s.others { th { (p) " (geomean, min–max, scenes)" } }
+            }
+            @for c in &s.configs {
+                tr {
+                    td { (c) }
+                    @for p in &s.others {
+                        td {
+                            @if let Some(v) = s.of(c, p) {
+                                @let (lo, hi) = min_max(v);
+                                (geomean(v).map(num).unwrap_or_default()) "× ("
+                                (num(lo)) "–" (num(hi)) ", " (v.len()) ")"
+                            }
+                        }
                     }
-                    None => html.push_str("<td></td>"),
                 }
             }
-            html.push_str("</tr>");
         }
-        html.push_str("</table>");
     }
+}
 
-    // 3. Image agreement: the same point's images on two platforms.
-    let mut agree: Vec<(f64, f64, String, String, String, String, String)> = Vec::new();
-    let mut problems: Vec<String> = Vec::new();
-    let mut with_images = 0;
-    for k in &order {
-        let imgs: Vec<(&String, &Rec)> = by_point[k]
+/// Two platforms' images of one point, and how far apart they are.
+#[derive(Clone, Debug)]
+pub struct ImagePair {
+    pub max: f64,
+    pub rms: f64,
+    pub key: String,
+    pub a: String,
+    pub b: String,
+    /// Each image's own RMSE vs the f64 reference (as written in its row).
+    pub rmse_a: String,
+    pub rmse_b: String,
+}
+
+/// Step 3, image agreement: every pair of platforms' saved images of one point, largest
+/// difference first; images that could not be compared, with why.
+struct Agreement {
+    pairs: Vec<ImagePair>,
+    problems: Vec<String>,
+    /// Points with images on two or more platforms.
+    with_images: usize,
+}
+
+fn image_agreement(pts: &Points, run_dir: &Path) -> Agreement {
+    let mut ag = Agreement {
+        pairs: Vec::new(),
+        problems: Vec::new(),
+        with_images: 0,
+    };
+    for k in &pts.order {
+        let imgs: Vec<(&String, &Rec)> = pts.by_point[k]
             .iter()
             .filter(|(_, r)| !r.get(cols::IMAGE_FILE).is_empty())
             .map(|(p, r)| (p, *r))
@@ -342,13 +375,12 @@ pub fn compare(
         if imgs.len() < 2 {
             continue;
         }
-        with_images += 1;
+        ag.with_images += 1;
         let mut loaded = Vec::new();
         for (p, r) in &imgs {
-            let path = run_dir.join(r.get(cols::IMAGE_FILE));
-            match read_image(&path) {
+            match read_image(&run_dir.join(r.get(cols::IMAGE_FILE))) {
                 Ok(img) => loaded.push((*p, *r, img)),
-                Err(e) => problems.push(format!("{}: {e:#}", esc(p))),
+                Err(e) => ag.problems.push(format!("{p}: {e:#}")),
             }
         }
         for i in 0..loaded.len() {
@@ -356,77 +388,115 @@ pub fn compare(
                 let (pa, ra, (sa, a)) = &loaded[i];
                 let (pb, rb, (sb, b)) = &loaded[j];
                 if sa != sb {
-                    problems.push(format!(
-                        "{}: image shapes differ ({sa:?} on {}, {sb:?} on {})",
-                        esc(k),
-                        esc(pa),
-                        esc(pb)
+                    ag.problems.push(format!(
+                        "{k}: image shapes differ ({sa:?} on {pa}, {sb:?} on {pb})"
                     ));
                     continue;
                 }
                 if let Some((max, rms)) = image_diff(a, b) {
-                    agree.push((
+                    ag.pairs.push(ImagePair {
                         max,
                         rms,
-                        k.to_string(),
-                        (*pa).clone(),
-                        (*pb).clone(),
-                        ra.get(cols::RMSE).to_string(),
-                        rb.get(cols::RMSE).to_string(),
-                    ));
+                        key: k.to_string(),
+                        a: (*pa).clone(),
+                        b: (*pb).clone(),
+                        rmse_a: ra.get(cols::RMSE).to_string(),
+                        rmse_b: rb.get(cols::RMSE).to_string(),
+                    });
                 }
             }
         }
     }
-    agree.sort_by(|x, y| y.0.partial_cmp(&x.0).unwrap_or(std::cmp::Ordering::Equal));
-    html.push_str("<h3>Image agreement across platforms</h3>");
-    if agree.is_empty() {
-        html.push_str(
-            "<p>No point has saved images on two platforms (run the sweeps with \
-             <code>mfx sweep --save-images</code> and merge the folders).</p>",
-        );
-    } else {
-        let _ = write!(
-            html,
-            "<p>{with_images} points have images on two or more platforms. Difference of the \
-             premultiplied RGBA images over all pixels and channels (the same point should give \
-             the same image on every platform; each image's own RMSE vs the f64 CPU reference is \
-             beside it). Largest first.</p><table id=\"agreement\"><tr><th>point</th><th>platform \
-             A</th><th>platform B</th><th>max abs diff</th><th>RMS diff</th><th>RMSE A vs ref</th>\
-             <th>RMSE B vs ref</th></tr>"
-        );
-        for (max, rms, k, a, b, ea, eb) in &agree {
-            let _ = write!(
-                html,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                esc(k),
-                esc(a),
-                esc(b),
-                num(*max),
-                num(*rms),
-                cell(ea),
-                cell(eb)
+    ag.pairs.sort_by(|x, y| {
+        y.max
+            .partial_cmp(&x.max)
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    ag
+}
+
+fn agreement_table(ag: &Agreement) -> Markup {
+    html! {
+        h3 { "Image agreement across platforms" }
+        @if ag.pairs.is_empty() {
+            p {
+                "No point has saved images on two platforms (run the sweeps with "
+                code { "mfx sweep --save-images" } " and merge the folders)."
+            }
+        } @else {
+            p {
+                (ag.with_images) " points have images on two or more platforms. Difference of the \
+                 premultiplied RGBA images over all pixels and channels (the same point should give \
+                 the same image on every platform; each image's own RMSE vs the f64 CPU reference is \
+                 beside it). Largest first."
+            }
+            table id="agreement" {
+                tr {
+                    th { "point" } th { "platform A" } th { "platform B" } th { "max abs diff" }
+                    th { "RMS diff" } th { "RMSE A vs ref" } th { "RMSE B vs ref" }
+                }
+                @for x in &ag.pairs {
+                    tr {
+                        td { (x.key) } td { (x.a) } td { (x.b) } td { (num(x.max)) }
+                        td { (num(x.rms)) } td { (cell(&x.rmse_a)) } td { (cell(&x.rmse_b)) }
+                    }
+                }
+            }
+        }
+        @if !ag.problems.is_empty() {
+            p.failed { "Images that could not be compared (" (ag.problems.len()) "):" }
+            ul { @for p in &ag.problems { li { (p) } } }
+        }
+    }
+}
+
+/// The comparison of a run folder's rows, or `None` when they hold one platform only.
+pub fn compare(
+    runs: &Runs,
+    run_dir: &Path,
+    out: &Path,
+    baseline_name: Option<&str>,
+) -> Result<Option<Comparison>> {
+    let plats = platforms(runs);
+    if plats.len() < 2 {
+        if let Some(n) = baseline_name {
+            bail!(
+                "--baseline '{n}': the CSV holds one adapter only ({})",
+                plats.join("")
             );
         }
-        html.push_str("</table>");
+        return Ok(None);
     }
-    if !problems.is_empty() {
-        let _ = write!(
-            html,
-            "<p class=\"failed\">Images that could not be compared ({}):</p><ul>",
-            problems.len()
-        );
-        for p in &problems {
-            let _ = write!(html, "<li>{p}</li>");
+    let base = baseline(runs, baseline_name)?;
+    let pts = points(runs);
+    let labels = ConfigLabels::new(runs.rows.iter().filter(|r| r.ok()));
+    let mut figures = time_charts(&pts, &plats, &labels, out)?;
+    let speed = speedups(&pts, &plats, &base, &labels);
+    if !speed.configs.is_empty() {
+        figures.push(speedup_chart(&speed, out)?);
+    }
+    let ag = image_agreement(&pts, run_dir);
+    let page = html! {
+        h2 { "Adapters and backends: speedups and image agreement" }
+        p {
+            (plats.len()) " platforms (adapter, backend): " (plats.join("; "))
+            ". Baseline for speedups: " b { (base) }
+            @if baseline_name.is_none() {
+                " (default: the first CPU adapter; choose with "
+                code { "mfx report --baseline NAME" } ")"
+            }
+            "."
         }
-        html.push_str("</ul>");
-    }
-    let worst_image_diff = agree
+        @if !speed.configs.is_empty() { (speedup_table(&speed)) }
+        (agreement_table(&ag))
+    };
+    let worst_image_diff = ag
+        .pairs
         .first()
-        .map(|(m, _, k, a, b, _, _)| (*m, k.clone(), a.clone(), b.clone()));
+        .map(|x| (x.max, x.key.clone(), x.a.clone(), x.b.clone()));
     Ok(Some(Comparison {
         figures,
-        html,
+        html: page,
         worst_image_diff,
     }))
 }
@@ -493,30 +563,30 @@ mod tests {
         }
         // GPU over lavapipe: 20 / 0.5 = 40× for depth_peel, 1.0 / 0.1 = 10× for the floor.
         assert!(
-            c.html.contains("<td>depth_peel</td><td>40.000×"),
+            c.html.0.contains("<td>depth_peel</td><td>40.000×"),
             "{}",
-            c.html
+            c.html.0
         );
         assert!(
-            c.html.contains("<td>floor_depth</td><td>10.000×"),
+            c.html.0.contains("<td>floor_depth</td><td>10.000×"),
             "{}",
-            c.html
+            c.html.0
         );
         // Images: vulkan GPU = vulkan lavapipe exactly; GL differs by 0.25 in one of 8 channels.
         let (max, key, _, _) = c.worst_image_diff.clone().unwrap();
         assert_eq!(max, 0.25);
         assert!(key.contains("depth_peel"));
-        assert!(c.html.contains("id=\"agreement\""));
+        assert!(c.html.0.contains("id=\"agreement\""));
         assert_eq!(
-            c.html.matches("<td>0.250</td><td>0.088</td>").count(),
+            c.html.0.matches("<td>0.250</td><td>0.088</td>").count(),
             2,
             "{}",
-            c.html
+            c.html.0
         );
         assert!(
-            c.html.contains("<td>0</td><td>0</td>"),
+            c.html.0.contains("<td>0</td><td>0</td>"),
             "the identical pair is listed: {}",
-            c.html
+            c.html.0
         );
     }
 
@@ -533,13 +603,13 @@ mod tests {
             .unwrap();
         assert_eq!(c.worst_image_diff.clone().unwrap().0, 0.25);
         assert_eq!(
-            c.html.matches("<td>0.250</td><td>0.088</td>").count(),
+            c.html.0.matches("<td>0.250</td><td>0.088</td>").count(),
             2,
             "{}",
-            c.html
+            c.html.0
         );
         // It has no speed-up: it was never timed.
-        assert!(!c.html.contains("<td>0.500×"), "{}", c.html);
+        assert!(!c.html.0.contains("<td>0.500×"), "{}", c.html.0);
     }
 
     #[test]

@@ -3,12 +3,12 @@
 
 use schema::flip_worst as fw;
 use schema::Col;
-use std::fmt::Write;
 use std::path::Path;
 
 use anyhow::{Context, Result};
+use maud::{html, Markup};
 
-use crate::cells::{esc, short};
+use crate::cells::short;
 use crate::labels::scene_name;
 
 /// Columns of `flip/worst.csv` (PNG paths relative to the run folder).
@@ -16,14 +16,14 @@ pub use schema::flip_worst::ALL as WORST_COLUMNS;
 
 /// The section's HTML; `report_dir` is where the page lives (image paths are made relative to
 /// it). A run without `flip/worst.csv` gets one line saying so.
-pub fn section(run_dir: &Path, report_dir: &Path) -> Result<String> {
-    let mut h = String::from("<h2 id=\"flip\">FLIP: the worst points</h2>");
+pub fn section(run_dir: &Path, report_dir: &Path) -> Result<Markup> {
     let csv = run_dir.join("flip").join("worst.csv");
+    let head = html! { h2 id="flip" { "FLIP: the worst points" } };
     if !csv.is_file() {
-        h.push_str(
-            "<p class=\"note\">This run has no FLIP images (no flip/worst.csv in the run folder).</p>",
-        );
-        return Ok(h);
+        return Ok(html! {
+            (head)
+            p.note { "This run has no FLIP images (no flip/worst.csv in the run folder)." }
+        });
     }
     let mut rdr =
         csv::Reader::from_path(&csv).with_context(|| format!("reading {}", csv.display()))?;
@@ -36,54 +36,62 @@ pub fn section(run_dir: &Path, report_dir: &Path) -> Result<String> {
         .map(|c| c.name)
         .collect();
     if !missing.is_empty() {
-        let _ = write!(
-            h,
-            "<p class=\"failed\">{} lacks column(s) {}: FLIP images not shown.</p>",
-            esc(&csv.display().to_string()),
-            esc(&missing.join(", "))
-        );
-        return Ok(h);
+        return Ok(html! {
+            (head)
+            p.failed {
+                (csv.display().to_string()) " lacks column(s) " (missing.join(", "))
+                ": FLIP images not shown."
+            }
+        });
     }
     // From the page (run/report/…/index.html) back to the run folder.
     let up = relative_up(run_dir, report_dir);
-    h.push_str(
-        "<p class=\"note\">FLIP (NVIDIA, Andersson et al. 2020) predicts the difference a viewer sees when flipping between two images: 0 none, 1 the largest. \
-         Each row: the method's image, the ground truth (every fragment), and the per-pixel FLIP map in the magma colour map (black: no visible difference; yellow: large).</p>\
-         <table class=\"flip\" id=\"flip-worst\"><tr><th>rank</th><th>point</th><th>FLIP mean / p99</th><th>method</th><th>ground truth</th><th>FLIP map</th></tr>",
-    );
+    let mut rows = Vec::new();
     for rec in rdr.records() {
-        let rec = rec.with_context(|| format!("reading {}", csv.display()))?;
-        let get = |c: Col| rec.get(col(c).unwrap()).unwrap_or("");
-        let img = |c: Col| {
-            let p = get(c);
-            if p.is_empty() {
-                "<td>(none)</td>".to_string()
-            } else if run_dir.join(p).is_file() {
-                format!(
-                    "<td><img src=\"{}\" alt=\"{}\"></td>",
-                    esc(&format!("{up}{p}")),
-                    esc(c.name)
-                )
-            } else {
-                format!("<td class=\"failed\">missing: {}</td>", esc(p))
-            }
-        };
-        let _ = write!(
-            h,
-            "<tr><td>{}</td><td>{}<br>{}<br><small>{}</small></td><td>{} / {}</td>{}{}{}</tr>",
-            esc(get(fw::RANK)),
-            esc(get(fw::METHOD)),
-            esc(&scene_name(get(fw::SCENE_LABEL))),
-            esc(get(fw::POINT_KEY)),
-            short(get(fw::FLIP_MEAN).parse().ok()),
-            short(get(fw::FLIP_P99).parse().ok()),
-            img(fw::METHOD_PNG),
-            img(fw::TRUTH_PNG),
-            img(fw::FLIP_PNG)
-        );
+        rows.push(rec.with_context(|| format!("reading {}", csv.display()))?);
     }
-    h.push_str("</table>");
-    Ok(h)
+    let img = |rec: &csv::StringRecord, c: Col| {
+        let p = rec.get(col(c).unwrap()).unwrap_or("");
+        html! {
+            @if p.is_empty() {
+                td { "(none)" }
+            } @else if run_dir.join(p).is_file() {
+                td { img src={ (up) (p) } alt=(c.name); }
+            } @else {
+                td.failed { "missing: " (p) }
+            }
+        }
+    };
+    Ok(html! {
+        (head)
+        p.note {
+            "FLIP (NVIDIA, Andersson et al. 2020) predicts the difference a viewer sees when flipping between two images: 0 none, 1 the largest. \
+             Each row: the method's image, the ground truth (every fragment), and the per-pixel FLIP map in the magma colour map (black: no visible difference; yellow: large)."
+        }
+        table.flip id="flip-worst" {
+            tr {
+                th { "rank" } th { "point" } th { "FLIP mean / p99" } th { "method" }
+                th { "ground truth" } th { "FLIP map" }
+            }
+            @for rec in &rows {
+                @let get = |c: Col| rec.get(col(c).unwrap()).unwrap_or("");
+                tr {
+                    td { (get(fw::RANK)) }
+                    td {
+                        (get(fw::METHOD)) br; (scene_name(get(fw::SCENE_LABEL))) br;
+                        small { (get(fw::POINT_KEY)) }
+                    }
+                    td {
+                        (short(get(fw::FLIP_MEAN).parse().ok())) " / "
+                        (short(get(fw::FLIP_P99).parse().ok()))
+                    }
+                    (img(rec, fw::METHOD_PNG))
+                    (img(rec, fw::TRUTH_PNG))
+                    (img(rec, fw::FLIP_PNG))
+                }
+            }
+        }
+    })
 }
 
 /// "../" repeated for each folder `report_dir` lies below `run_dir`.
@@ -104,7 +112,7 @@ mod tests {
         let d = std::env::temp_dir().join(format!("mfx-flip-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&d);
         std::fs::create_dir_all(d.join("flip")).unwrap();
-        let h = section(&d, &d.join("report")).unwrap();
+        let h = section(&d, &d.join("report")).unwrap().into_string();
         assert!(h.contains("has no FLIP images"), "{h}");
         for f in ["m.png", "t.png", "f.png"] {
             std::fs::write(d.join("flip").join(f), b"png").unwrap();
@@ -117,7 +125,7 @@ mod tests {
             ),
         )
         .unwrap();
-        let h = section(&d, &d.join("report")).unwrap();
+        let h = section(&d, &d.join("report")).unwrap().into_string();
         assert_eq!(h.matches("<img src=\"../flip/").count(), 3, "{h}");
         assert!(h.contains("0.21 / 0.8"), "{h}");
     }

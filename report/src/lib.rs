@@ -66,20 +66,21 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
         sections.extend(studies::figures_of(&runs, &out, |p| p.across_platforms)?);
     }
     // More than one adapter or backend (a merged CSV): compare them.
-    let mut extra = String::new();
+    let mut extra = Vec::new();
     if let Some(c) = compare::compare(&runs, dir, &out, baseline)? {
         sections.push(("Adapters and backends".to_string(), c.figures));
-        extra = c.html;
+        extra.push(c.html);
     }
-    // The sources' published figures beside ours (empty unless a seeds-* suite ran).
-    extra.push_str(&reproduction::section(&runs));
+    // The sources' published figures beside ours (empty unless a seeds-* suite ran); its HTML
+    // is reproduction.rs's own, escaped there.
+    extra.push(maud::PreEscaped(reproduction::section(&runs)));
     let md = reproduction::markdown(&runs);
     if !md.is_empty() {
         let p = out.join("reproduction.md");
         std::fs::write(&p, md).with_context(|| format!("writing {}", p.display()))?;
     }
     // What bounds each point (slowest pass, floor, bandwidth): also as markdown for RUN.md.
-    extra.push_str(&bounds::section(&runs));
+    extra.push(bounds::section(&runs));
     let md = bounds::markdown(&runs);
     if !md.is_empty() {
         let p = out.join("bounds.md");
@@ -87,8 +88,8 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
     }
     // The run for a paper: numbers.tex, booktabs tables (the PDF charts sit beside the SVGs).
     latex::write(&runs, &out)?;
-    let flip = flip::section(dir, &out)?;
-    let page = html::page(&runs, &sections, &extra, &flip);
+    extra.push(flip::section(dir, &out)?);
+    let page = html::page(&runs, &sections, &extra);
     let path = out.join("index.html");
     std::fs::write(&path, page).with_context(|| format!("writing {}", path.display()))?;
     Ok(path)

@@ -9,9 +9,10 @@ use schema::{cols, Col, Status};
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
-use crate::cells::{esc, short, time_cell};
+use crate::cells::{short, time_cell};
 use crate::labels::{scene_name, ConfigLabels};
 use crate::points::{TAIL_MIN_SAMPLES, TAIL_RATIO};
+use maud::{html, Markup};
 use mfx_analysis::data::{platform, platforms, resolution, Rec, Runs};
 use mfx_analysis::verdict::{fastest, verdicts, Pick, Verdict, BUDGETS, IMAGE_STUDIES};
 
@@ -415,105 +416,82 @@ pub fn tail_lines(runs: &Runs) -> Vec<String> {
 /// The summary as HTML: the verdict table per study first, then the other studies, what did
 /// not run (folded) and the columns this CSV lacks.
 pub fn summary_html(runs: &Runs) -> String {
-    let mut h = String::from("<section id=\"summary\"><h2>Verdict</h2>");
-    for line in preamble(runs) {
-        let _ = write!(h, "<p class=\"note\">{}</p>", esc(&line));
-    }
+    summary_markup(runs).into_string()
+}
+
+/// `summary_html` as markup, for the page.
+pub fn summary_markup(runs: &Runs) -> Markup {
     let plats = platforms(runs).len();
     let vs = verdicts(runs);
-    for (key, group) in Runs::group_by_owned(&vs, |(p, v)| format!("{p}\u{0}{}", v.study)) {
-        let (p, study) = key.split_once('\u{0}').unwrap_or((&key, ""));
-        let all: Vec<&Rec> = group
-            .iter()
-            .flat_map(|(_, v)| v.rows.iter().copied())
-            .collect();
-        let labels = ConfigLabels::new(all.iter().copied());
-        let _ = write!(
-            h,
-            "<table class=\"verdict\" id=\"verdict-{}\"><caption>{}{}: the winner per scene × resolution</caption><tr><th>scene</th><th>resolution</th><th>fastest exact (by construction)</th><th>× floor_depth</th>{}<th>flagged (not counting run-wide flags)</th></tr>",
-            esc(study),
-            esc(study),
-            if plats > 1 { format!(" — {}", esc(p)) } else { String::new() },
-            BUDGETS
-                .iter()
-                .map(|b| format!("<th>fastest with RMSE ≤ {b:.0e}</th>"))
-                .collect::<String>()
-        );
-        for (_, v) in group {
-            let c = cells(v, &labels);
-            let _ = write!(
-                h,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td>{}<td>{}</td></tr>",
-                esc(&scene_title(v)),
-                esc(&v.res),
-                esc(&c.exact),
-                if c.x_floor.0.is_empty() {
-                    String::new()
-                } else {
-                    esc(&format!("{} ({})", c.x_floor.0, c.x_floor.1))
-                },
-                c.budgets
-                    .iter()
-                    .map(|b| format!("<td>{}</td>", esc(b)))
-                    .collect::<String>(),
-                esc(&c.flagged)
-            );
+    let on = |p: &str| {
+        if plats > 1 {
+            format!(" — {p}")
+        } else {
+            String::new()
         }
-        h.push_str("</table>");
-        let fixed = labels.fixed_note();
-        if !fixed.is_empty() {
-            let _ = write!(h, "<p class=\"note\">{}</p>", esc(&fixed));
-        }
-    }
-    for (p, study, lines) in other_studies(runs) {
-        let _ = write!(
-            h,
-            "<table class=\"verdict\"><caption>{}{}</caption><tr><th>scene, resolution</th><th>fastest</th><th>lowest error</th></tr>",
-            esc(&study),
-            if plats > 1 { format!(" — {}", esc(&p)) } else { String::new() }
-        );
-        for (k, f, b) in lines {
-            let _ = write!(
-                h,
-                "<tr><td>{}</td><td>{}</td><td>{}</td></tr>",
-                esc(&k),
-                esc(&f),
-                esc(&b)
-            );
-        }
-        h.push_str("</table>");
-    }
+    };
     let tails = tail_lines(runs);
-    if !tails.is_empty() {
-        let _ = write!(
-            h,
-            "<details id=\"tails\"{}><summary>Frame-time tails: {} row(s) with p99 &gt; {TAIL_RATIO}× median</summary><ul>{}</ul></details>",
-            if tails.len() <= 10 { " open" } else { "" },
-            tails.len(),
-            tails
-                .iter()
-                .map(|l| format!("<li>{}</li>", esc(l)))
-                .collect::<String>()
-        );
-    }
     let nr = not_run(runs);
-    if nr.is_empty() {
-        h.push_str("<p class=\"note\">Every point ran.</p>");
-    } else {
-        let _ = write!(
-            h,
-            "<details><summary>Not run: {} group(s) of points</summary><ul>{}</ul></details>",
-            nr.len(),
-            nr.iter()
-                .map(|l| format!("<li>{}</li>", esc(l)))
-                .collect::<String>()
-        );
+    html! {
+        section id="summary" {
+            h2 { "Verdict" }
+            @for line in preamble(runs) { p.note { (line) } }
+            @for (key, group) in Runs::group_by_owned(&vs, |(p, v)| format!("{p}\u{0}{}", v.study)) {
+                @let (p, study) = key.split_once('\u{0}').unwrap_or((&key, ""));
+                @let all: Vec<&Rec> = group.iter().flat_map(|(_, v)| v.rows.iter().copied()).collect();
+                @let labels = ConfigLabels::new(all.iter().copied());
+                table.verdict id={ "verdict-" (study) } {
+                    caption { (study) (on(p)) ": the winner per scene × resolution" }
+                    tr {
+                        th { "scene" } th { "resolution" } th { "fastest exact (by construction)" }
+                        th { "× floor_depth" }
+                        @for b in BUDGETS { th { (format!("fastest with RMSE ≤ {b:.0e}")) } }
+                        th { "flagged (not counting run-wide flags)" }
+                    }
+                    @for (_, v) in &group {
+                        @let c = cells(v, &labels);
+                        tr {
+                            td { (scene_title(v)) }
+                            td { (v.res) }
+                            td { (c.exact) }
+                            td {
+                                @if !c.x_floor.0.is_empty() { (c.x_floor.0) " (" (c.x_floor.1) ")" }
+                            }
+                            @for b in &c.budgets { td { (b) } }
+                            td { (c.flagged) }
+                        }
+                    }
+                }
+                @let fixed = labels.fixed_note();
+                @if !fixed.is_empty() { p.note { (fixed) } }
+            }
+            @for (p, study, lines) in other_studies(runs) {
+                table.verdict {
+                    caption { (study) (on(&p)) }
+                    tr { th { "scene, resolution" } th { "fastest" } th { "lowest error" } }
+                    @for (k, f, b) in &lines { tr { td { (k) } td { (f) } td { (b) } } }
+                }
+            }
+            @if !tails.is_empty() {
+                details id="tails" open[tails.len() <= 10] {
+                    summary {
+                        "Frame-time tails: " (tails.len()) " row(s) with p99 > " (TAIL_RATIO)
+                        "× median (rows with at least " (TAIL_MIN_SAMPLES) " samples)"
+                    }
+                    ul { @for l in &tails { li { (l) } } }
+                }
+            }
+            @if nr.is_empty() {
+                p.note { "Every point ran." }
+            } @else {
+                details {
+                    summary { "Not run: " (nr.len()) " group(s) of points" }
+                    ul { @for l in &nr { li { (l) } } }
+                }
+            }
+            @if let Some(m) = missing_columns(runs) { p.note { (m) } }
+        }
     }
-    if let Some(m) = missing_columns(runs) {
-        let _ = write!(h, "<p class=\"note\">{}</p>", esc(&m));
-    }
-    h.push_str("</section>");
-    h
 }
 
 /// The summary of a run as plain text (what `mfx sweep` prints at its end): the same verdicts as

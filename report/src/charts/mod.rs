@@ -29,8 +29,8 @@ pub struct Figure {
     pub caption: String,
     /// Set when no chart was drawn: the line that says why.
     pub note: Option<String>,
-    /// Set for a table or other HTML block (no chart).
-    pub html: Option<String>,
+    /// Set for a table or other HTML block (no chart), as written by its template.
+    pub html: Option<maud::Markup>,
 }
 
 impl Figure {
@@ -41,10 +41,10 @@ impl Figure {
             ..Default::default()
         }
     }
-    pub fn html(title: impl Into<String>, html: impl Into<String>) -> Figure {
+    pub fn html(title: impl Into<String>, html: maud::Markup) -> Figure {
         Figure {
             title: title.into(),
-            html: Some(html.into()),
+            html: Some(html),
             ..Default::default()
         }
     }

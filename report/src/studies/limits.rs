@@ -7,9 +7,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use anyhow::Result;
+use maud::{html, Markup};
 use schema::{cols, Status};
 
-use crate::cells::esc;
 use crate::charts::Figure;
 use mfx_analysis::data::{resolution, Rec, Runs};
 
@@ -42,7 +42,7 @@ fn same_point(r: &Rec) -> (&str, &str, &str) {
 
 /// One cell: counts of each outcome, the splits used, the split's time against the unsplit
 /// row of the same point, and every distinct skip or failure reason.
-fn cell(rows: &[&Rec], unsplit: &BTreeMap<(&str, &str, &str), f64>) -> String {
+fn cell(rows: &[&Rec], unsplit: &BTreeMap<(&str, &str, &str), f64>) -> Markup {
     let mut n: BTreeMap<&str, usize> = BTreeMap::new();
     for r in rows {
         *n.entry(outcome(r)).or_default() += 1;
@@ -92,11 +92,10 @@ fn cell(rows: &[&Rec], unsplit: &BTreeMap<(&str, &str, &str), f64>) -> String {
             why.push(w);
         }
     }
-    let mut html = esc(&parts.join(" "));
-    for w in why {
-        html += &format!("<br><small>{}</small>", esc(w));
+    html! {
+        (parts.join(" "))
+        @for w in why { br; small { (w) } }
     }
-    html
 }
 
 pub fn figures(runs: &Runs, _dir: &Path) -> Result<Vec<Figure>> {
@@ -124,26 +123,22 @@ pub fn figures(runs: &Runs, _dir: &Path) -> Result<Vec<Figure>> {
         res.sort();
         res.dedup();
         let res: Vec<String> = res.into_iter().map(|(_, r)| r).collect();
-        let mut html = String::from("<table><tr><th>method</th>");
-        for r in &res {
-            html += &format!("<th>{}</th>", esc(r));
-        }
-        html += "</tr>";
-        for (method, mrows) in
-            Runs::group_by(prow.iter().copied(), |r| r.get(cols::METHOD).to_string())
-        {
-            html += &format!("<tr><td>{}</td>", esc(&method));
-            for r in &res {
-                let here: Vec<&Rec> = mrows
-                    .iter()
-                    .copied()
-                    .filter(|x| &resolution(x) == r)
-                    .collect();
-                html += &format!("<td>{}</td>", cell(&here, &unsplit));
+        let methods = Runs::group_by(prow.iter().copied(), |r| r.get(cols::METHOD).to_string());
+        let html = html! {
+            table {
+                tr { th { "method" } @for r in &res { th { (r) } } }
+                @for (method, mrows) in &methods {
+                    tr {
+                        td { (method) }
+                        @for r in &res {
+                            @let here: Vec<&Rec> =
+                                mrows.iter().copied().filter(|x| &resolution(x) == r).collect();
+                            td { (cell(&here, &unsplit)) }
+                        }
+                    }
+                }
             }
-            html += "</tr>";
-        }
-        html += "</table>";
+        };
         let mut f = Figure::html(format!("Fits a browser? Limits profile `{profile}`"), html);
         f.stem = format!("limits-{profile}");
         f.caption = format!(
@@ -194,7 +189,7 @@ mod tests {
         assert!(applies(&runs));
         let f = figures(&runs, Path::new("/nonexistent")).unwrap();
         assert_eq!(f.len(), 1);
-        let html = f[0].html.as_deref().unwrap();
+        let html = f[0].html.as_ref().map(|m| m.0.as_str()).unwrap();
         assert!(html.contains("<th>512x512</th>"), "{html}");
         assert!(html.contains("<td>wboit</td><td>runs 1</td>"), "{html}");
         assert!(html.contains("split 1 (bindings:2)"), "{html}");
@@ -226,7 +221,7 @@ mod tests {
         };
         let f = figures(&merged, Path::new("/nonexistent")).unwrap();
         let web = f.iter().find(|f| f.stem == "limits-webgpu").unwrap();
-        let html = web.html.as_deref().unwrap();
+        let html = web.html.as_ref().map(|m| m.0.as_str()).unwrap();
         assert!(
             html.contains("×1.010 of unsplit (1.000–1.020, n = 2)"),
             "{html}"

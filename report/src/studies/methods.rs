@@ -7,12 +7,12 @@
 
 use schema::cols;
 use std::collections::BTreeMap;
-use std::fmt::Write;
 use std::path::Path;
 
 use anyhow::Result;
+use maud::{html, Markup};
 
-use crate::cells::{esc, exact_cell, short, time_cell};
+use crate::cells::{exact_cell, short, time_cell};
 use crate::charts::{Bars, Figure, Named, Pt, Series, MARKERS, XY};
 use crate::labels::{config_key, file_safe, parse_scene, scene_name, scene_names, ConfigLabels};
 use crate::pareto;
@@ -356,7 +356,7 @@ fn scene_table(
     fronts: &Fronts,
     name: &str,
     res: &str,
-) -> String {
+) -> Markup {
     let flip = runs.has(cols::FLIP_MEAN) || g.iter().any(|r| r.f(cols::FLIP_MEAN).is_some());
     let mut rows: Vec<&Rec> = g.to_vec();
     rows.sort_by(|a, b| {
@@ -364,30 +364,7 @@ fn scene_table(
             .unwrap_or(f64::INFINITY)
             .total_cmp(&b.f(cols::GPU_MS_MEDIAN).unwrap_or(f64::INFINITY))
     });
-    let mut h = String::new();
-    let _ = write!(
-        h,
-        "<table class=\"scene\"><caption>{} at {}: every configuration, fastest first. \
-         Front: on the Pareto front of RMSE vs time (T) and of RMSE vs memory (M). {}</caption>\
-         <tr><th>method</th><th>configuration</th><th>GPU ms [95 % CI] or (range, n)</th><th>× floor_depth</th><th>bytes/px</th>\
-         <th>RMSE</th>{}<th>exact</th><th>flag</th><th>front</th></tr>",
-        esc(name),
-        esc(res),
-        esc(&runs.exactness_rule()),
-        if flip { "<th>FLIP mean</th><th>FLIP p99</th>" } else { "" }
-    );
-    for r in floors {
-        let _ = write!(
-            h,
-            "<tr class=\"floor\"><td>{}</td><td>(floor)</td><td>{}</td><td></td><td>{}</td><td></td>{}<td></td><td>{}</td><td></td></tr>",
-            esc(r.get(cols::METHOD)),
-            time_cell(r),
-            short(r.bytes_per_pixel()),
-            if flip { "<td></td><td></td>" } else { "" },
-            esc(r.get(cols::FLAG))
-        );
-    }
-    for r in rows {
+    let on_front = |r: &Rec| {
         let k = config_key(r);
         let mut on = String::new();
         if fronts.time.contains(&k) {
@@ -396,37 +373,56 @@ fn scene_table(
         if fronts.memory.contains(&k) {
             on.push('M');
         }
+        on
+    };
+    let config = |r: &Rec| {
         let label = labels.get(r);
-        let cfg = label
+        label
             .strip_prefix(r.get(cols::METHOD))
             .unwrap_or(&label)
             .trim()
-            .to_string();
-        let _ = write!(
-            h,
-            "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>{}<td>{}</td><td>{}</td><td>{}</td></tr>",
-            if r.flagged() { " class=\"flagged\"" } else { "" },
-            esc(r.get(cols::METHOD)),
-            esc(&cfg),
-            time_cell(r),
-            short(r.f(cols::X_FLOOR).filter(|_| r.time_trusted())),
-            short(r.bytes_per_pixel()),
-            short(r.f(cols::RMSE)),
-            if flip {
-                format!("<td>{}</td><td>{}</td>", short(r.f(cols::FLIP_MEAN)), short(r.f(cols::FLIP_P99)))
-            } else {
-                String::new()
-            },
-            exact_cell(r),
-            esc(&r.flags().join(", ")),
-            on
-        );
+            .to_string()
+    };
+    html! {
+        table.scene {
+            caption {
+                (name) " at " (res) ": every configuration, fastest first. Front: on the Pareto \
+                 front of RMSE vs time (T) and of RMSE vs memory (M). " (runs.exactness_rule())
+            }
+            tr {
+                th { "method" } th { "configuration" } th { "GPU ms [95 % CI] or (range, n)" }
+                th { "× floor_depth" } th { "bytes/px" } th { "RMSE" }
+                @if flip { th { "FLIP mean" } th { "FLIP p99" } }
+                th { "exact" } th { "flag" } th { "front" }
+            }
+            @for r in floors {
+                tr.floor {
+                    td { (r.get(cols::METHOD)) } td { "(floor)" } td { (time_cell(r)) } td {}
+                    td { (short(r.bytes_per_pixel())) } td {}
+                    @if flip { td {} td {} }
+                    td {} td { (r.get(cols::FLAG)) } td {}
+                }
+            }
+            @for r in &rows {
+                tr class=[r.flagged().then_some("flagged")] {
+                    td { (r.get(cols::METHOD)) }
+                    td { (config(r)) }
+                    td { (time_cell(r)) }
+                    td { (short(r.f(cols::X_FLOOR).filter(|_| r.time_trusted()))) }
+                    td { (short(r.bytes_per_pixel())) }
+                    td { (short(r.f(cols::RMSE))) }
+                    @if flip {
+                        td { (short(r.f(cols::FLIP_MEAN))) }
+                        td { (short(r.f(cols::FLIP_P99))) }
+                    }
+                    td { (exact_cell(r)) }
+                    td { (r.flags().join(", ")) }
+                    td { (on_front(r)) }
+                }
+            }
+        }
+        @if !flip { p.note { "FLIP: not measured in this CSV (no flip_mean column)." } }
     }
-    h.push_str("</table>");
-    if !flip {
-        h.push_str("<p class=\"note\">FLIP: not measured in this CSV (no flip_mean column).</p>");
-    }
-    h
 }
 
 /// Scenes that differ from each other in one parameter only form a family; GPU time against

@@ -11,12 +11,11 @@
 
 use schema::{cols, Flag};
 use std::collections::BTreeMap;
-use std::fmt::Write;
 use std::path::Path;
 
 use anyhow::Result;
 
-use crate::cells::{esc, short};
+use crate::cells::short;
 use crate::charts::{Figure, Pt, Series, XY};
 use crate::labels::{parse_scene, scene_name};
 use crate::studies::methods::scene_families;
@@ -251,11 +250,8 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
         .filter_map(|r| Some((scene_res(r), r.f(cols::TRUE_FRAGMENTS)?)))
         .collect();
     let methods = Runs::distinct(rows.iter().copied(), cols::METHOD);
-    let mut table = String::from(
-        "<table><tr><th>method</th><th>sweep</th><th>x</th><th>x range</th><th>timed rows</th>\
-         <th>exponent</th><th>R²</th><th>local exponents (point to point)</th>\
-         <th>out of the linear regime</th></tr>",
-    );
+    // One line of the fits table per method and sweep.
+    let mut lines: Vec<[String; 9]> = Vec::new();
     // Rows out of the linear regime, by (method, scene, resolution): hollow in the charts.
     let mut off_rows: std::collections::BTreeSet<String> = Default::default();
     let row_key = |r: &Rec| format!("{}|{}", r.get(cols::METHOD), scene_res(r));
@@ -325,23 +321,34 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
                 }
             }
             let (lo, hi) = if by_t { (tl, th) } else { (fl, fh) };
-            let _ = write!(
-                table,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}–{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                esc(m),
-                esc(&sw.name),
-                if by_t { "triangles" } else { "true fragments" },
-                short(Some(lo)),
-                short(Some(hi)),
-                timed.len(),
-                fit.as_ref().map_or("—".into(), |f| format!("{:.2}", f.coef[1])),
+            lines.push([
+                m.clone(),
+                sw.name.clone(),
+                if by_t { "triangles" } else { "true fragments" }.into(),
+                format!("{}–{}", short(Some(lo)), short(Some(hi))),
+                timed.len().to_string(),
+                fit.as_ref()
+                    .map_or("—".into(), |f| format!("{:.2}", f.coef[1])),
                 fit.as_ref().map_or("—".into(), |f| format!("{:.3}", f.r2)),
                 local.join(", "),
-                if out.is_empty() { "none".to_string() } else { esc(&out.join("; ")) },
-            );
+                if out.is_empty() {
+                    "none".to_string()
+                } else {
+                    out.join("; ")
+                },
+            ]);
         }
     }
-    table.push_str("</table>");
+    let table = maud::html! {
+        table {
+            tr {
+                th { "method" } th { "sweep" } th { "x" } th { "x range" } th { "timed rows" }
+                th { "exponent" } th { "R²" } th { "local exponents (point to point)" }
+                th { "out of the linear regime" }
+            }
+            @for l in &lines { tr { @for c in l { td { (c) } } } }
+        }
+    };
     let mut by_f = Vec::new();
     let mut by_t = Vec::new();
     for (mi, m) in methods.iter().enumerate() {
@@ -370,16 +377,20 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     }
     let mut figs = vec![Figure::html(
         "How cost grows: exponents of GPU time per sweep",
-        format!(
-            "<p>Per method and sweep (a scene at several resolutions: fragments ∝ pixels at constant \
-             geometry; a family of scenes at one resolution that differ in one parameter: \
-             tessellation at constant fragments, or depth complexity), a least-squares fit of \
-             ln(GPU ms) against ln x, x the variable the sweep moves most (triangles or true \
-             fragments; floors take the scene's fragments). 1 is linear. The local exponents between \
-             neighbouring points show where growth bends. Out of the linear regime: a local exponent \
-             over {OFF_FIT} (the point it reaches is named), and failed, skipped or overflowing rows \
-             (memory, adapter limits, sort capacity); they are drawn hollow below.</p>{table}"
-        ),
+        maud::html! {
+            p {
+                "Per method and sweep (a scene at several resolutions: fragments ∝ pixels at \
+                 constant geometry; a family of scenes at one resolution that differ in one \
+                 parameter: tessellation at constant fragments, or depth complexity), a \
+                 least-squares fit of ln(GPU ms) against ln x, x the variable the sweep moves \
+                 most (triangles or true fragments; floors take the scene's fragments). 1 is \
+                 linear. The local exponents between neighbouring points show where growth \
+                 bends. Out of the linear regime: a local exponent over " (OFF_FIT) " (the point \
+                 it reaches is named), and failed, skipped or overflowing rows (memory, adapter \
+                 limits, sort capacity); they are drawn hollow below."
+            }
+            (table)
+        },
     )];
     for (series, x_label, stem, what) in [
         (by_f, "true fragments", "scaling_time_vs_fragments", "F"),

@@ -4,13 +4,13 @@
 //! or p99 is shown only with its n, and only where n ≥ `TAIL_MIN_SAMPLES` (with fewer it is the
 //! largest sample, not a tail).
 
-use std::fmt::Write;
 use std::path::Path;
 
 use anyhow::Result;
+use maud::html;
 use schema::cols;
 
-use crate::cells::{esc, short};
+use crate::cells::short;
 use crate::charts::{Figure, Pt, Series, XY};
 use crate::labels::{file_safe, scene_name, ConfigLabels};
 use crate::points::{TAIL_MIN_SAMPLES, TAIL_RATIO};
@@ -142,7 +142,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
 }
 
 /// Every timed row with a throughput column, highest share of peak bandwidth first.
-fn bound_table(rows: &[&Rec]) -> Option<String> {
+fn bound_table(rows: &[&Rec]) -> Option<maud::Markup> {
     let mut rows: Vec<&Rec> = rows
         .iter()
         .copied()
@@ -159,16 +159,6 @@ fn bound_table(rows: &[&Rec]) -> Option<String> {
     let has_peak = rows
         .iter()
         .any(|r| r.f(cols::PEAK_BANDWIDTH_FRAC).is_some());
-    let mut h = format!(
-        "<p class=\"note\">fragments/s: the reference's fragment count over the median GPU time; bytes/s: the frame's declared traffic (not a measured count) over it; {}. A method near the peak is bandwidth-bound; one far below it with a high fragment rate is fill- or atomic-bound.</p>\
-         <details><summary>{} rows</summary><table id=\"throughput\"><tr><th>study</th><th>scene</th><th>resolution</th><th>configuration</th><th>median ms</th><th>n</th><th>p95 / median</th><th>p99 / median</th><th>fragments/s</th><th>GB/s</th><th>of peak bandwidth</th></tr>",
-        if has_peak {
-            "of peak bandwidth: bytes/s over the adapter's peak (NVML)"
-        } else {
-            "the adapter's peak bandwidth is not known here (no NVML), so no share of it"
-        },
-        rows.len()
-    );
     // No tail without its n, none under TAIL_MIN_SAMPLES.
     let ratio = |r: &Rec, c| {
         tail_n(r)
@@ -177,27 +167,49 @@ fn bound_table(rows: &[&Rec]) -> Option<String> {
             .map(|(a, b)| format!("{:.3}", a / b))
             .unwrap_or_default()
     };
-    for r in rows {
-        let _ = write!(
-            h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-            esc(r.get(cols::STUDY)),
-            esc(&scene_name(r.get(cols::SCENE_LABEL))),
-            esc(&resolution(r)),
-            esc(&labels.get(r)),
-            short(r.f(cols::GPU_MS_P50)),
-            r.samples().map(|n| n.to_string()).unwrap_or_default(),
-            ratio(r, cols::GPU_MS_P95),
-            ratio(r, cols::GPU_MS_P99),
-            short(r.f(cols::FRAGMENTS_PER_S)),
-            short(r.f(cols::BYTES_PER_S).map(|v| v / 1e9)),
-            r.f(cols::PEAK_BANDWIDTH_FRAC)
-                .map(|v| format!("{:.1} %", v * 100.0))
-                .unwrap_or_default()
-        );
-    }
-    h.push_str("</table></details>");
-    Some(h)
+    Some(html! {
+        p.note {
+            "fragments/s: the reference's fragment count over the median GPU time; bytes/s: \
+             the frame's declared traffic (not a measured count) over it; "
+            @if has_peak {
+                "of peak bandwidth: bytes/s over the adapter's peak (NVML)"
+            } @else {
+                "the adapter's peak bandwidth is not known here (no NVML), so no share of it"
+            }
+            ". A method near the peak is bandwidth-bound; one far below it with a high \
+             fragment rate is fill- or atomic-bound. p95 and p99 are shown only for rows \
+             with at least " (TAIL_MIN_SAMPLES) " kept samples (n)."
+        }
+        details {
+            summary { (rows.len()) " rows" }
+            table id="throughput" {
+                tr {
+                    th { "study" } th { "scene" } th { "resolution" } th { "configuration" }
+                    th { "median ms" } th { "n" } th { "p95 / median" } th { "p99 / median" }
+                    th { "fragments/s" } th { "GB/s" } th { "of peak bandwidth" }
+                }
+                @for r in &rows {
+                    tr {
+                        td { (r.get(cols::STUDY)) }
+                        td { (scene_name(r.get(cols::SCENE_LABEL))) }
+                        td { (resolution(r)) }
+                        td { (labels.get(r)) }
+                        td { (short(r.f(cols::GPU_MS_P50))) }
+                        td { (r.samples().map(|n| n.to_string()).unwrap_or_default()) }
+                        td { (ratio(r, cols::GPU_MS_P95)) }
+                        td { (ratio(r, cols::GPU_MS_P99)) }
+                        td { (short(r.f(cols::FRAGMENTS_PER_S))) }
+                        td { (short(r.f(cols::BYTES_PER_S).map(|v| v / 1e9))) }
+                        td {
+                            (r.f(cols::PEAK_BANDWIDTH_FRAC)
+                                .map(|v| format!("{:.1} %", v * 100.0))
+                                .unwrap_or_default())
+                        }
+                    }
+                }
+            }
+        }
+    })
 }
 
 #[cfg(test)]
@@ -230,7 +242,11 @@ mod tests {
         // One series per scene; p99 / median on x.
         assert_eq!(l.series, 2);
         assert!(l.x.data.unwrap()[1] >= 1.35 - 1e-9);
-        let table = figs.iter().find_map(|f| f.html.clone()).expect("a table");
+        let table = figs
+            .iter()
+            .find_map(|f| f.html.clone())
+            .expect("a table")
+            .into_string();
         assert!(
             table.contains("2.1 %") && table.contains("1.350"),
             "{table}"
