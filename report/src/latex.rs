@@ -9,7 +9,8 @@
 //!   its RMSE (`rmse`), each where the row has it.
 //! - `verdict.tex`, `reproduction.tex`, `bounds.tex`: booktabs tables (`\toprule`, `\midrule`,
 //!   `\bottomrule`; `\usepackage{booktabs}`) of the verdict table, the sources' figures beside
-//!   ours and what bounds each point. Each is a bare `tabular`, to wrap in a `table` float.
+//!   ours and what bounds each point. Each is a bare `tabular` to wrap in a `table` float, or
+//!   past `LONG_ROWS` rows a `longtable` (`\usepackage{longtable}`) that breaks across pages.
 //! - `sample.tex`: a document that `\input`s all of them (the test compiles it).
 //!
 //! Every chart is also a PDF beside its SVG (`charts::output`), fonts embedded.
@@ -203,18 +204,31 @@ pub fn numbers(runs: &Runs) -> String {
     out
 }
 
-/// A booktabs `tabular` of `header` and `rows` (cells already LaTeX), `spec` its columns.
+/// Rows above which a table is a `longtable` (it breaks across pages, its header repeated; not
+/// inside a float) rather than a `tabular` (one page, fits a `table` float).
+pub const LONG_ROWS: usize = 40;
+
+/// A booktabs table of `header` and `rows` (cells already LaTeX), `spec` its columns: a
+/// `tabular`, or a `longtable` past `LONG_ROWS` rows.
 fn booktabs(spec: &str, header: &[&str], rows: &[Vec<String>]) -> String {
-    let mut t = format!("\\begin{{tabular}}{{{spec}}}\n\\toprule\n");
+    let env = if rows.len() > LONG_ROWS {
+        "longtable"
+    } else {
+        "tabular"
+    };
+    let mut t = format!("\\begin{{{env}}}{{{spec}}}\n\\toprule\n");
     let h: Vec<String> = header
         .iter()
         .map(|c| format!("\\textbf{{{}}}", tex(c)))
         .collect();
     let _ = writeln!(t, "{} \\\\\n\\midrule", h.join(" & "));
+    if env == "longtable" {
+        t.push_str("\\endhead\n");
+    }
     for r in rows {
         let _ = writeln!(t, "{} \\\\", r.join(" & "));
     }
-    t.push_str("\\bottomrule\n\\end{tabular}\n");
+    let _ = writeln!(t, "\\bottomrule\n\\end{{{env}}}");
     t
 }
 
@@ -388,6 +402,7 @@ fn sample(numbers: &str, chart: Option<&str>) -> String {
          \\usepackage[T1]{{fontenc}}\n\
          \\usepackage[utf8]{{inputenc}}\n\
          \\usepackage{{booktabs}}\n\
+         \\usepackage{{longtable}}\n\
          \\usepackage{{graphicx}}\n\
          \\usepackage[a3paper,landscape,margin=1cm]{{geometry}}\n\
          \\input{{numbers.tex}}\n\

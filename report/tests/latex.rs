@@ -75,6 +75,13 @@ fn an_h200_run_gives_numbers_tables_and_pdf_charts_that_compile() {
     );
     let bounds = std::fs::read_to_string(latex.join("bounds.tex")).unwrap();
     assert!(bounds.contains("\\midrule"), "{bounds}");
+    // Past LONG_ROWS rows a table breaks across pages (a longtable), its header repeated.
+    let rows = bounds.lines().filter(|l| l.ends_with("\\\\")).count() - 1;
+    assert_eq!(
+        bounds.contains("\\begin{longtable}") && bounds.contains("\\endhead"),
+        rows > report::latex::LONG_ROWS,
+        "{rows} rows"
+    );
     // Every SVG chart has its PDF, with a font embedded (a TrueType font file stream).
     let svgs: Vec<PathBuf> = std::fs::read_dir(&out)
         .unwrap()
