@@ -299,9 +299,72 @@ impl Sink for Progress<'_> {
     }
 }
 
+/// `mfx sweep`, in its steps: everything that can be refused is refused before the GPU starts
+/// and before any file is touched (the suite, the arguments, an occupied run folder); then the
+/// GPU, the run record, the rows, and what the run says at its end.
 pub fn sweep(a: &SweepArgs) -> Result<()> {
-    // Everything that can be refused is refused before the GPU starts and before any file is
-    // touched: the suite, the arguments, an occupied run folder.
+    let suite = suite_of(a)?;
+    let plan = plan_points(a, &suite)?;
+    if a.dry_run {
+        print_points(&suite, &plan.on_gpu, &plan.on_software);
+        return Ok(());
+    }
+    let fail_frac = check_baseline_args(a)?;
+    let mut folder = open_run_folder(a, &suite, plan.shard)?;
+
+    bench_core::interrupt::install()?;
+    let gpu = Gpu::new(&a.gpu.options())?;
+    let groups = groups_on(a, &gpu, plan)?;
+    let total = runner::rows_in(&groups);
+    std::fs::create_dir_all(&folder.out)
+        .with_context(|| format!("creating {}", folder.out.display()))?;
+    // Studies that write images (shadows) put them beside the CSV.
+    std::env::set_var("MFX_OUT_DIR", &folder.out);
+    let mut manifest = start_manifest(&gpu, &suite, &folder, total)?;
+    announce(&gpu, &suite, &groups, total, &folder);
+
+    let bar = progress_bar((total - folder.done.len().min(total)) as u64);
+    let mut sink = Progress::open(a, &folder, &groups, &bar)?;
+    let opts = RunOptions {
+        run_id: folder.run_id.clone(),
+        git_rev: runner::git_rev(),
+        shard: folder.shard,
+        save_images: a.save_images.then(|| folder.out.clone()),
+        flip: !a.no_flip,
+        done: std::mem::take(&mut folder.done),
+        interrupted: Some(bench_core::interrupt::requested),
+    };
+    let outcome = runner::run(&gpu, &suite, &groups, &opts, &mut sink);
+    bar.finish_and_clear();
+    let outcome = match outcome {
+        Ok(o) => o,
+        Err(e) => {
+            manifest.rows_written =
+                sink.ok + sink.failed.len() + sink.skipped.values().sum::<usize>();
+            manifest.finish(Some(&format!("error: {e}")));
+            manifest.write(&folder.out)?;
+            return Err(e.into());
+        }
+    };
+    if !a.no_flip && a.flip_worst > 0 && !sink.flip.is_empty() {
+        sink.flip.write(&folder.out)?;
+    }
+    finish_manifest(&gpu, &mut manifest, &sink, &outcome, total, &folder.out)?;
+    print_outcome(&sink, &outcome, &folder.csv_path);
+    if let Some(sig) = outcome.interrupted {
+        eprintln!(
+            "mfx: interrupted by {sig}: {} of {total} points have a row; resume with:\n  mfx sweep {} --out {} --resume",
+            outcome.already_done + outcome.written,
+            a.suite,
+            folder.out.display()
+        );
+        std::process::exit(if sig == "SIGTERM" { 143 } else { 130 });
+    }
+    after_run(a, &folder.out, fail_frac, &sink, total)
+}
+
+/// The suite as checked, with `--timing` and `--set` applied and checked again.
+fn suite_of(a: &SweepArgs) -> Result<scenarios::Suite> {
     let mut suite = checked_suite(&a.suite)?;
     if !a.timing.is_empty() {
         let over = scenarios::suite::timing_overrides(&a.timing, "mfx sweep")
@@ -316,12 +379,23 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
     if !a.set.is_empty() {
         apply_sets(&mut suite, &a.set)?;
     }
+    Ok(suite)
+}
+
+/// The points of this sweep on either kind of adapter.
+struct PointPlan {
+    shard: (usize, usize),
+    on_gpu: Vec<Group>,
+    on_software: Vec<Group>,
+}
+
+/// The points on either kind of adapter (the `[software]` profile may change resolutions): a
+/// filter that matches nothing on both is a typo, refused now.
+fn plan_points(a: &SweepArgs, suite: &scenarios::Suite) -> Result<PointPlan> {
     let pats = filters(&a.filter)?;
     let shard = a.shard.unwrap_or((0, 1));
-    // The points on either kind of adapter (the `[software]` profile may change resolutions):
-    // a filter that matches nothing on both is a typo, refused now.
-    let on_gpu = groups_for(&suite, false, shard, &pats).map_err(|e| usage(e.to_string()))?;
-    let on_software = groups_for(&suite, true, shard, &pats).map_err(|e| usage(e.to_string()))?;
+    let on_gpu = groups_for(suite, false, shard, &pats).map_err(|e| usage(e.to_string()))?;
+    let on_software = groups_for(suite, true, shard, &pats).map_err(|e| usage(e.to_string()))?;
     if !pats.is_empty() && on_gpu.is_empty() && on_software.is_empty() {
         return Err(usage(format!(
             "--filter {}: matches no method, scene or point key of suite '{}'{} (`--dry-run` without --filter lists them)",
@@ -330,10 +404,16 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
             if shard.1 > 1 { format!(" in shard {}/{}", shard.0, shard.1) } else { String::new() }
         )));
     }
-    if a.dry_run {
-        print_points(&suite, &on_gpu, &on_software);
-        return Ok(());
-    }
+    Ok(PointPlan {
+        shard,
+        on_gpu,
+        on_software,
+    })
+}
+
+/// `--fail-on-slower`, `--save-baseline` and `--baseline`, checked now (the baseline to
+/// compare with must exist now, not after the whole sweep); the fraction of `--fail-on-slower`.
+fn check_baseline_args(a: &SweepArgs) -> Result<Option<f64>> {
     let fail_frac = a
         .fail_on_slower
         .as_deref()
@@ -347,11 +427,35 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
             )));
         }
     }
-    // The baseline to compare with must exist now, not after the whole sweep.
     if let Some(name) = &a.baseline {
         mfx_analysis::ab::baseline_dir(&baselines_root(), name)
             .map_err(|e| usage(format!("--baseline: {e:#}")))?;
     }
+    Ok(fail_frac)
+}
+
+/// Where the rows go, and what an earlier run there already holds.
+struct RunFolder {
+    out: PathBuf,
+    csv_path: PathBuf,
+    run_id: String,
+    shard: (usize, usize),
+    /// Point keys that already have a row (`--resume`).
+    done: std::collections::HashSet<String>,
+    /// The run record of the run being resumed.
+    earlier: Option<RunManifest>,
+    /// Rows are appended (`--resume`, or points already done).
+    resume: bool,
+}
+
+/// The run folder: a new one, or with `--resume` the interrupted run's (same suite text and
+/// limits; a half-written last line dropped), or with `--force` a replaced one. A folder that
+/// holds a runs.csv is refused otherwise.
+fn open_run_folder(
+    a: &SweepArgs,
+    suite: &scenarios::Suite,
+    shard: (usize, usize),
+) -> Result<RunFolder> {
     let stamp = crate::chrono_stamp();
     let mut run_id = if shard.1 > 1 {
         format!("{stamp}-{}-shard{}of{}", suite.name, shard.0, shard.1)
@@ -420,13 +524,25 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
             out.display()
         )));
     }
+    let resume = !done.is_empty() || a.resume;
+    Ok(RunFolder {
+        out,
+        csv_path,
+        run_id,
+        shard,
+        done,
+        earlier,
+        resume,
+    })
+}
 
-    bench_core::interrupt::install()?;
-    let gpu = Gpu::new(&a.gpu.options())?;
+/// The groups this adapter runs (a software adapter takes the `[software]` profile's); none is
+/// a filter that matches nothing here.
+fn groups_on(a: &SweepArgs, gpu: &Gpu, plan: PointPlan) -> Result<Vec<Group>> {
     let groups = if gpu.facts.is_software {
-        on_software
+        plan.on_software
     } else {
-        on_gpu
+        plan.on_gpu
     };
     if groups.is_empty() {
         return Err(usage(format!(
@@ -440,27 +556,33 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
             }
         )));
     }
-    let total = runner::rows_in(&groups);
-    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    // Studies that write images (shadows) put them beside the CSV.
-    std::env::set_var("MFX_OUT_DIR", &out);
+    Ok(groups)
+}
+
+/// The run record, written before any point: the command, the suite, the adapter, and (on a
+/// GPU) the cross-GPU calibration set's time.
+fn start_manifest(
+    gpu: &Gpu,
+    suite: &scenarios::Suite,
+    folder: &RunFolder,
+    total: usize,
+) -> Result<RunManifest> {
     let mut manifest = RunManifest::new(
         std::env::args().collect(),
         &suite.name,
         &suite.source,
         &suite.text,
         AdapterInfo::of(&gpu.adapter.get_info()),
-        shard,
+        folder.shard,
     );
-    if let Some(old) = &earlier {
+    if let Some(old) = &folder.earlier {
         manifest.continue_from(old);
     }
     manifest.software_profile = gpu.facts.is_software && suite.software.is_some();
     manifest.limits = gpu.profile;
     manifest.points_total = total;
-    manifest.resumed_points = done.len();
-    // The cross-GPU calibration set, before any point (a software adapter's time says nothing
-    // of a GPU, and would cost seconds).
+    manifest.resumed_points = folder.done.len();
+    // A software adapter's time says nothing of a GPU, and would cost seconds.
     if !gpu.facts.is_software {
         let runs = bench_core::manifest::CALIBRATION_RUNS;
         manifest.calibration =
@@ -471,7 +593,18 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
                     runs,
                 });
     }
-    manifest.write(&out)?;
+    manifest.write(&folder.out)?;
+    Ok(manifest)
+}
+
+/// The line that says what runs where.
+fn announce(
+    gpu: &Gpu,
+    suite: &scenarios::Suite,
+    groups: &[Group],
+    total: usize,
+    folder: &RunFolder,
+) {
     eprintln!(
         "mfx: suite '{}' on {} ({}, {}){}: {} groups, {total} rows{} -> {}",
         suite.name,
@@ -484,95 +617,100 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
             ""
         },
         groups.len(),
-        if done.is_empty() {
+        if folder.done.is_empty() {
             String::new()
         } else {
             format!(
                 " ({} already in {}: resumed)",
-                done.len(),
-                csv_path.display()
+                folder.done.len(),
+                folder.csv_path.display()
             )
         },
-        csv_path.display()
+        folder.csv_path.display()
     );
     if let Err(why) = &gpu.monitor {
         eprintln!("mfx: no GPU clocks recorded: {why}");
     }
-    let bar = indicatif::ProgressBar::new((total - done.len().min(total)) as u64);
+}
+
+/// Whether stderr is a terminal to draw the bar on (not under CI).
+fn terminal() -> bool {
+    std::io::IsTerminal::is_terminal(&std::io::stderr()) && std::env::var_os("CI").is_none()
+}
+
+/// The progress bar; without a terminal (a log, CI) it draws nothing (`GroupLines` prints a
+/// line per finished group instead).
+fn progress_bar(len: u64) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
             "{bar:40} {pos}/{len} [{elapsed} elapsed, ETA {eta}] {msg}",
         )
         .unwrap(),
     );
-    // Without a terminal (a log, CI) the bar draws nothing: a line per finished group instead.
-    let terminal =
-        std::io::IsTerminal::is_terminal(&std::io::stderr()) && std::env::var_os("CI").is_none();
-    if !terminal {
+    if !terminal() {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
-    let owed_rows: Vec<usize> = groups
-        .iter()
-        .map(|g| owed(g, &done))
-        .filter(|&n| n > 0)
-        .collect();
-    let resume = !done.is_empty() || a.resume;
-    let mut sink = Progress {
-        lines: GroupLines {
-            rows_total: owed_rows.iter().sum(),
-            owed: owed_rows,
-            next: 0,
-            in_group: 0,
-            rows_done: 0,
-            started: std::time::Instant::now(),
-            print: !terminal,
-        },
-        csv: if resume {
-            CsvSink::append(&csv_path)?
-        } else {
-            CsvSink::create(&csv_path)?
-        },
-        samples: SamplesSink::open(&out.join("samples.csv"), resume)?,
-        flip: mfx_flip::WorstKeeper::new(if a.no_flip { 0 } else { a.flip_worst }),
-        bar: &bar,
-        ok: 0,
-        failed: Vec::new(),
-        skipped: BTreeMap::new(),
-        spent_s: [0.0; 4],
-    };
-    let opts = RunOptions {
-        run_id,
-        git_rev: runner::git_rev(),
-        shard,
-        save_images: a.save_images.then(|| out.clone()),
-        flip: !a.no_flip,
-        done,
-        interrupted: Some(bench_core::interrupt::requested),
-    };
-    let outcome = runner::run(&gpu, &suite, &groups, &opts, &mut sink);
-    bar.finish_and_clear();
-    let outcome = match outcome {
-        Ok(o) => o,
-        Err(e) => {
-            manifest.rows_written =
-                sink.ok + sink.failed.len() + sink.skipped.values().sum::<usize>();
-            manifest.finish(Some(&format!("error: {e}")));
-            manifest.write(&out)?;
-            return Err(e.into());
-        }
-    };
-    if !a.no_flip && a.flip_worst > 0 && !sink.flip.is_empty() {
-        sink.flip.write(&out)?;
+    bar
+}
+
+impl<'a> Progress<'a> {
+    /// The sinks of a run folder: runs.csv and samples.csv (appended when resuming), the FLIP
+    /// keeper, and the per-group lines.
+    fn open(
+        a: &SweepArgs,
+        folder: &RunFolder,
+        groups: &[Group],
+        bar: &'a indicatif::ProgressBar,
+    ) -> Result<Progress<'a>> {
+        let owed_rows: Vec<usize> = groups
+            .iter()
+            .map(|g| owed(g, &folder.done))
+            .filter(|&n| n > 0)
+            .collect();
+        Ok(Progress {
+            lines: GroupLines {
+                rows_total: owed_rows.iter().sum(),
+                owed: owed_rows,
+                next: 0,
+                in_group: 0,
+                rows_done: 0,
+                started: std::time::Instant::now(),
+                print: !terminal(),
+            },
+            csv: if folder.resume {
+                CsvSink::append(&folder.csv_path)?
+            } else {
+                CsvSink::create(&folder.csv_path)?
+            },
+            samples: SamplesSink::open(&folder.out.join("samples.csv"), folder.resume)?,
+            flip: mfx_flip::WorstKeeper::new(if a.no_flip { 0 } else { a.flip_worst }),
+            bar,
+            ok: 0,
+            failed: Vec::new(),
+            skipped: BTreeMap::new(),
+            spent_s: [0.0; 4],
+        })
     }
-    let skipped: usize = sink.skipped.values().sum();
+}
+
+/// The run record's counts and end, and runs.json (the context block with the GPU's clocks).
+fn finish_manifest(
+    gpu: &Gpu,
+    manifest: &mut RunManifest,
+    sink: &Progress,
+    outcome: &runner::RunOutcome,
+    total: usize,
+    out: &Path,
+) -> Result<()> {
     manifest.rows_written = outcome.written;
     manifest.rows_ok = sink.ok;
     manifest.rows_failed = sink.failed.len();
-    manifest.rows_skipped = skipped;
+    manifest.rows_skipped = sink.skipped.values().sum();
     manifest.finished =
         outcome.interrupted.is_none() && outcome.already_done + outcome.written == total;
     manifest.finish(outcome.interrupted);
-    manifest.write(&out)?;
+    manifest.write(out)?;
     let clocks = gpu.monitor.as_ref().ok().map(|m| {
         serde_json::Value::Object(
             m.context()
@@ -581,9 +719,13 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
                 .collect(),
         )
     });
-    write_runs_json(&out, &context_block(&manifest, SCHEMA_VERSION, clocks))?;
+    write_runs_json(out, &context_block(manifest, SCHEMA_VERSION, clocks))?;
+    Ok(())
+}
 
-    // What happened, in words a log keeps (no terminal needed).
+/// What happened, in words a log keeps (no terminal needed).
+fn print_outcome(sink: &Progress, outcome: &runner::RunOutcome, csv_path: &Path) {
+    let skipped: usize = sink.skipped.values().sum();
     eprintln!(
         "mfx: wrote {} rows ({} ok, {} failed, {skipped} skipped) to {}{}",
         outcome.written,
@@ -606,30 +748,32 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
     for (why, n) in &sink.skipped {
         eprintln!("  skipped ×{n}: {why}");
     }
-    if let Some(sig) = outcome.interrupted {
-        eprintln!(
-            "mfx: interrupted by {sig}: {} of {total} points have a row; resume with:\n  mfx sweep {} --out {} --resume",
-            outcome.already_done + outcome.written,
-            a.suite,
-            out.display()
-        );
-        std::process::exit(if sig == "SIGTERM" { 143 } else { 130 });
-    }
-    let runs = report::Runs::load(&csv_path)?;
+}
+
+/// The summary, the report, the baseline saved or compared with, and the exit code: failed
+/// rows (unless `--accept-failures`) and points slower than `--fail-on-slower` are errors.
+fn after_run(
+    a: &SweepArgs,
+    out: &Path,
+    fail_frac: Option<f64>,
+    sink: &Progress,
+    total: usize,
+) -> Result<()> {
+    let runs = report::Runs::load(&out.join("runs.csv"))?;
     eprintln!("\n{}", report::summary_text(&runs));
     if !a.no_report {
         let page =
-            report::build(&out, None).with_context(|| format!("report of {}", out.display()))?;
+            report::build(out, None).with_context(|| format!("report of {}", out.display()))?;
         eprintln!("mfx: report {}", page.display());
     }
     if let Some(name) = &a.save_baseline {
-        let dir = mfx_analysis::ab::save_baseline(&out, &baselines_root(), name)?;
+        let dir = mfx_analysis::ab::save_baseline(out, &baselines_root(), name)?;
         eprintln!("mfx: baseline '{name}' saved in {}", dir.display());
     }
     let mut slower = 0;
     if let Some(name) = &a.baseline {
         let base = mfx_analysis::ab::baseline_dir(&baselines_root(), name)?;
-        let cmp = mfx_analysis::ab::compare_runs(&base, &out, &Default::default())?;
+        let cmp = mfx_analysis::ab::compare_runs(&base, out, &Default::default())?;
         no_common_point(&cmp).map_err(|e| anyhow::anyhow!("--baseline {name}: {e}"))?;
         println!("{}", report::ab::markdown(&cmp));
         if let Some(f) = fail_frac {
