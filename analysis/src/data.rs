@@ -94,7 +94,7 @@ impl Rec {
     /// without an image error.
     pub fn exact_result(&self) -> Option<bool> {
         let within = self.within_tolerance()?;
-        if self.0.contains_key(EXACT_BOUND) {
+        if self.0.contains_key(cols::EXACT_BOUND.name) {
             // Within tolerance too: rows written before `depth_ties` (the H200's compute
             // A-buffer on grass) could be exact = true with matches_truth = false.
             return Some(self.get(cols::EXACT) == "true" && within);
@@ -123,7 +123,7 @@ impl Rec {
     /// Whether the row's GPU time covers the whole frame: `gpu_time_trusted`, else the absence
     /// of the `timestamps_incomplete` flag. Untrusted times are never charted or ranked.
     pub fn time_trusted(&self) -> bool {
-        match self.get_name(GPU_TIME_TRUSTED) {
+        match self.get(cols::GPU_TIME_TRUSTED) {
             "true" => true,
             "false" => false,
             _ => !self.flag_set().contains(Flag::TimestampsIncomplete),
@@ -137,7 +137,7 @@ impl Rec {
     /// the samples' min–max range. `gpu_ms_interval` where written; else "range" when `samples`
     /// is below the fewest that a distribution-free 95 % interval needs (6).
     pub fn interval(&self) -> Interval {
-        match self.get_name(GPU_MS_INTERVAL) {
+        match self.get(cols::GPU_MS_INTERVAL) {
             "range" => Interval::Range(self.samples()),
             "ci95" => Interval::Ci95,
             _ => match self.samples() {
@@ -203,11 +203,6 @@ impl Interval {
     }
 }
 
-/// Columns newer than this crate's schema (another branch declares them): read by name, with
-/// the fallbacks of `Rec::exact_result`, `time_trusted` and `interval` when absent.
-const EXACT_BOUND: &str = "exact_bound";
-const GPU_TIME_TRUSTED: &str = "gpu_time_trusted";
-const GPU_MS_INTERVAL: &str = "gpu_ms_interval";
 /// The derived cell holding a row's run-wide flags (not a CSV column: no header names it).
 const RUN_WIDE: &str = "\u{1}run_wide_flags";
 
@@ -315,7 +310,7 @@ impl Runs {
 
     /// How exactness is decided for this CSV, in one sentence.
     pub fn exactness_rule(&self) -> String {
-        if self.header.iter().any(|h| h == EXACT_BOUND) {
+        if self.header.iter().any(|h| h == cols::EXACT_BOUND.name) {
             "exact = no fragment lost or merged and the image equal to the ground truth within the f32 bound of its arithmetic (exact, exact_bound); \"within tol.\" = matches_truth only (within bad_pixel_tol)".into()
         } else if self.has(cols::MATCHES_TRUTH) {
             "exact = an exact method (exact column), matches_truth, no flag naming a lost fragment (overflow, collision, hazard, lost_coplanar, fragments_differ, image_differs) and zero overflow, collision and drop rates; \"within tol.\" = matches_truth alone".into()
