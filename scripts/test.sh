@@ -5,6 +5,8 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
 cargo test --workspace
+# The CI suites' rows against tests/golden/ (deterministic columns only): ~5 min on lavapipe.
+bash scripts/check-rows.sh
 # The `default` suite under WebGPU's default limits (--limits webgpu), [software] profile: ~1 min.
 bash scripts/test-limits.sh
 # Sharding on a one-node Slurm cluster, the cross-backend report, the report in headless Chromium.
