@@ -8,6 +8,7 @@ use anyhow::{bail, Context, Result};
 use bench_core::methods;
 use bench_core::{BackendChoice, Gpu, GpuOptions};
 use clap::{Args, Parser, Subcommand};
+use mfx::STUDIES;
 use scenarios::{ParamValue, Params, SceneSpec, Suite};
 use schema::cols;
 
@@ -265,7 +266,7 @@ pub(crate) fn usage(msg: impl Into<String>) -> anyhow::Error {
 
 /// Loads and checks a suite; every problem at once as a usage error.
 pub(crate) fn checked_suite(name: &str) -> Result<Suite> {
-    bench_core::check::load(name).map_err(|p| {
+    bench_core::check::load(STUDIES, name).map_err(|p| {
         usage(format!(
             "suite '{name}': {} problem{}:\n{}",
             p.len(),
@@ -331,13 +332,13 @@ fn run(cli: Cli) -> Result<()> {
         Cmd::Check { suites } => {
             let mut bad = 0;
             for name in &suites {
-                match bench_core::check::load(name) {
+                match bench_core::check::load(STUDIES, name) {
                     Ok(suite) => println!(
                         "ok: {name} ({}): {} studies, {} rows on a GPU, {} on a software adapter{}",
                         suite.source,
                         suite.studies.len(),
-                        bench_core::runner::rows_of(&suite, false),
-                        bench_core::runner::rows_of(&suite, true),
+                        bench_core::runner::rows_of(STUDIES, &suite, false),
+                        bench_core::runner::rows_of(STUDIES, &suite, true),
                         models_line(&suite)
                     ),
                     Err(p) => {
@@ -347,7 +348,7 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
             // The papers files point into the suites: checked on every `mfx check`.
-            let papers = bench_core::papers::check_builtin();
+            let papers = mfx::papers::check_builtin();
             if papers.is_empty() {
                 println!(
                     "ok: papers ({} files in scenarios/papers)",
@@ -586,7 +587,7 @@ fn list_json(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
         o.insert("methods".into(), v.into());
     }
     if is("studies") {
-        let v: Vec<_> = bench_core::studies::all()
+        let v: Vec<_> = STUDIES
             .iter()
             .map(|s| json!({"kind": s.kind(), "describe": s.describe()}))
             .collect();
@@ -595,22 +596,24 @@ fn list_json(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
     if is("suites") {
         let v: Vec<_> = suite_names()
             .into_iter()
-            .map(|(name, builtin)| match bench_core::check::load(&name) {
-                Ok(suite) => json!({
-                    "name": name,
-                    "built_in": builtin,
-                    "source": suite.source,
-                    "description": suite.description,
-                    "rows_gpu": bench_core::runner::rows_of(&suite, false),
-                    "rows_software": bench_core::runner::rows_of(&suite, true),
-                    "models": bench_core::check::models_needed(&suite),
-                }),
-                Err(p) => json!({
-                    "name": name,
-                    "built_in": builtin,
-                    "problems": p.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
-                }),
-            })
+            .map(
+                |(name, builtin)| match bench_core::check::load(STUDIES, &name) {
+                    Ok(suite) => json!({
+                        "name": name,
+                        "built_in": builtin,
+                        "source": suite.source,
+                        "description": suite.description,
+                        "rows_gpu": bench_core::runner::rows_of(STUDIES, &suite, false),
+                        "rows_software": bench_core::runner::rows_of(STUDIES, &suite, true),
+                        "models": bench_core::check::models_needed(&suite),
+                    }),
+                    Err(p) => json!({
+                        "name": name,
+                        "built_in": builtin,
+                        "problems": p.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
+                    }),
+                },
+            )
             .collect();
         o.insert("suites".into(), v.into());
     }
@@ -656,7 +659,7 @@ fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
     }
     if is("studies") {
         println!("studies:");
-        for s in bench_core::studies::all() {
+        for s in STUDIES {
             println!("  {:<10} {}", s.kind(), s.describe());
         }
     }
@@ -667,8 +670,8 @@ fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
                 Ok(suite) => println!(
                     "  {name:<16} {}{} rows on a GPU, {} on a software adapter{}\n  {:<16} {}",
                     if builtin { "" } else { "(file only) " },
-                    bench_core::runner::rows_of(&suite, false),
-                    bench_core::runner::rows_of(&suite, true),
+                    bench_core::runner::rows_of(STUDIES, &suite, false),
+                    bench_core::runner::rows_of(STUDIES, &suite, true),
                     models_line(&suite),
                     "",
                     suite.description
@@ -927,7 +930,7 @@ fn render(job: &RenderJob) -> Result<()> {
             ..Default::default()
         })
         .expect("a valid plan");
-        let mut measured = bench_core::measure::measure(&gpu, &gscene, m.as_ref(), point, &plan)?;
+        let mut measured = bench_core::method::measure(&gpu, &gscene, m.as_ref(), point, &plan)?;
         let mut cap = measured.prepared.readback(&gpu, &gscene)?;
         let img = cap
             .image

@@ -8,7 +8,9 @@ use std::collections::BTreeSet;
 use scenarios::papers::{self, PapersFile, PointRef};
 use scenarios::{ParamValue, Problem, Suite};
 
-use crate::studies::{self, Methods};
+use bench_core::studies::{by_kind, Methods};
+
+use crate::STUDIES;
 
 /// Every problem of the built-in papers files (empty when all hold together).
 pub fn check_builtin() -> Vec<Problem> {
@@ -93,7 +95,7 @@ fn check_point(pt: &PointRef) -> Result<(), String> {
         pt.suite, pt.method
     );
     for spec in &suite.studies {
-        let Some(study) = studies::by_kind(&spec.kind) else {
+        let Some(study) = by_kind(STUDIES, &spec.kind) else {
             continue;
         };
         let runs_method = match study.methods() {

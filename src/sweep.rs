@@ -12,6 +12,7 @@ use bench_core::runner::{self, RunOptions};
 use bench_core::studies::Group;
 use bench_core::Gpu;
 use clap::Args;
+use mfx::STUDIES;
 
 use crate::{checked_suite, usage, GpuArgs};
 
@@ -124,7 +125,7 @@ fn apply_sets(suite: &mut scenarios::Suite, sets: &[String]) -> Result<()> {
             )));
         }
     }
-    let problems = bench_core::check::check_suite(suite);
+    let problems = bench_core::check::check_suite(STUDIES, suite);
     if !problems.is_empty() {
         return Err(usage(format!(
             "--set {}: {}",
@@ -156,9 +157,10 @@ fn filter_groups(groups: Vec<Group>, pats: &[glob::Pattern]) -> Vec<Group> {
             if any(&g.scene.generator) || any(&g.scene.label()) {
                 return Some(g);
             }
-            let floor_matches = runner::FLOORS
-                .iter()
-                .any(|f| any(f) || any(&g.point_key(f, bench_core::axes::Point::empty().given())));
+            let floor_matches = runner::FLOORS.iter().any(|f| {
+                any(f.name())
+                    || any(&g.point_key(f.name(), bench_core::axes::Point::empty().given()))
+            });
             let keys: Vec<bool> = g
                 .points
                 .iter()
@@ -178,7 +180,7 @@ fn groups_for(
     shard: (usize, usize),
     pats: &[glob::Pattern],
 ) -> Result<Vec<Group>> {
-    let groups = runner::expand(suite, software)?;
+    let groups = runner::expand(STUDIES, suite, software)?;
     Ok(filter_groups(runner::shard_groups(groups, shard), pats))
 }
 
@@ -191,7 +193,7 @@ fn owed(g: &Group, done: &std::collections::HashSet<String>) -> usize {
         .count()
         + runner::FLOORS
             .iter()
-            .filter(|f| !done.contains(&g.point_key(f, empty.given())))
+            .filter(|f| !done.contains(&g.point_key(f.name(), empty.given())))
             .count()
 }
 
@@ -549,7 +551,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         done,
         interrupted: Some(bench_core::interrupt::requested),
     };
-    let outcome = runner::run(&gpu, &suite, &groups, &opts, &mut sink);
+    let outcome = runner::run(&gpu, STUDIES, &suite, &groups, &opts, &mut sink);
     bar.finish_and_clear();
     let outcome = match outcome {
         Ok(o) => o,
@@ -653,7 +655,7 @@ fn print_points(suite: &scenarios::Suite, on_gpu: &[Group], on_software: &[Group
         println!("{} {} {}x{}", g.kind, g.scene.label(), g.width, g.height);
         let empty = bench_core::axes::Point::empty();
         for f in runner::FLOORS {
-            println!("  {}", g.point_key(f, empty.given()));
+            println!("  {}", g.point_key(f.name(), empty.given()));
         }
         for p in &g.points {
             println!("  {}", g.point_key(&p.method, p.given()));

@@ -117,30 +117,7 @@ impl AaSupport {
     }
 }
 
-/// Whether `format` can be a `samples`× multisampled render target here (WebGPU guarantees 4×
-/// for most formats; 2× and 8× need the adapter's own format capabilities).
-pub fn check_msaa_format(
-    gpu: &Gpu,
-    format: wgpu::TextureFormat,
-    samples: u32,
-) -> Result<(), String> {
-    if samples <= 1 {
-        return Ok(());
-    }
-    let flags = if gpu.has(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES) {
-        gpu.adapter.get_texture_format_features(format).flags
-    } else {
-        format.guaranteed_format_features(gpu.features).flags
-    };
-    if flags.sample_count_supported(samples) {
-        Ok(())
-    } else {
-        Err(format!(
-            "{format:?} cannot be multisampled {samples}× on this adapter (it allows {:?})",
-            flags.supported_sample_counts()
-        ))
-    }
-}
+pub use crate::gpu_util::check_msaa_format;
 
 /// Whether fragment shaders may run per sample (`@builtin(sample_index)`).
 pub fn check_sample_shading(gpu: &Gpu) -> Result<(), String> {

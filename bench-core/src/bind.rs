@@ -1,8 +1,9 @@
 //! Bindings declared once (in the spirit of vello's shader table, `add_shader!(name, [Uniform,
-//! BufReadOnly, Buffer])`): a method writes its bind group as one table of (binding, kind), and
-//! the table builds both the `BindGroupLayout` and, given one resource per row in the same
-//! order, the `BindGroup`. A row and its resource cannot drift apart: `group` checks the count
-//! and the kind of each. [`pipeline_layout`] and [`render_pipeline`] make a stage a line.
+//! BufReadOnly, Buffer])`): every GPU pass (a method's, a shading path's, a shadow map's)
+//! writes its bind group as one table of (binding, kind), and the table builds both the
+//! `BindGroupLayout` and, given one resource per row in the same order, the `BindGroup`. A row
+//! and its resource cannot drift apart: `group` checks the count and the kind of each.
+//! [`pipeline_layout`] and [`render_pipeline`] make a stage a line.
 
 use crate::gpu::Gpu;
 

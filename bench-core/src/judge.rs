@@ -584,22 +584,6 @@ fn flip(truth: &[[f64; 4]], img: &[[f32; 4]], w: u32, h: u32) -> Flip {
     }
 }
 
-/// `timestamps_incomplete`: the GPU time of a frame is under 5 % of its wall-clock time and
-/// the gap exceeds 5 ms. For points whose frame is GPU work only (the methods and stability
-/// studies), this means the timestamps missed work: lavapipe's compute passes (0.3 ms of GPU
-/// time for 172 ms of wall time) trip it; on the committed H100 runs no methods/stability row
-/// does (the smallest ratio with a gap over 2 ms is 0.12: occlusion-query round trips of
-/// depth peeling).
-pub fn timestamps_incomplete(gpu_ms: f64, cpu_ms: f64) -> bool {
-    gpu_ms < 0.05 * cpu_ms && cpu_ms - gpu_ms > 5.0
-}
-
-/// Whether a row's GPU time is the time of its frame (`gpu_time_trusted`): not when the
-/// timestamps missed work. An untrusted row gets no `x_floor`, `x_blend` or `speedup_vs_*`.
-pub fn gpu_time_trusted(row: &Row) -> bool {
-    !row.has_flag(Flag::TimestampsIncomplete)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1071,22 +1055,5 @@ mod tests {
         // A difference only at the overflowing pixel is the overflow's.
         let kbuf = cap_with(l.composite_first(2), vec![2, 2], Expected::FirstK(2));
         assert!(!run(&kbuf, &l, false).flags.contains(Flag::ImageDiffers));
-    }
-
-    #[test]
-    fn the_timestamps_rule_trips_on_lavapipe_like_gaps_only() {
-        assert!(
-            timestamps_incomplete(0.30, 172.0),
-            "lavapipe compute_abuffer"
-        );
-        assert!(
-            !timestamps_incomplete(0.002, 0.085),
-            "a tiny GPU frame: the gap is overhead"
-        );
-        assert!(
-            !timestamps_incomplete(265.0, 924.0),
-            "peeling's CPU round trips: 0.29"
-        );
-        assert!(!timestamps_incomplete(31.9, 33.0));
     }
 }

@@ -5,10 +5,12 @@
 
 pub mod aa;
 pub mod axes;
+pub mod bind;
 pub mod build_info;
 pub mod check;
 pub mod clocks;
 pub mod effects;
+pub mod floors;
 pub mod gles;
 pub mod gpu;
 pub mod gpu_scene;
@@ -24,7 +26,6 @@ pub mod method;
 pub mod methods;
 pub mod metrics;
 pub mod oit;
-pub mod papers;
 pub mod record;
 pub mod reference;
 pub mod runner;

@@ -6,6 +6,7 @@
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
+use crate::measure::{measure_timed, Measured, TimingPlan};
 use crate::record::FlagSet;
 pub use crate::timed::{FrameStats, Timed};
 use crate::Result;
@@ -152,4 +153,34 @@ pub trait Prepared: Timed {
     fn judge(&mut self, cap: &mut Capture, reference: &crate::reference::FragmentLists) {
         let _ = (cap, reference);
     }
+}
+
+/// Prepares `method` (untimed), warms up, then samples frames until `plan`'s rule stops: the
+/// harness's [`crate::measure::measure_timed`] on the method's [`Prepared`] frame.
+pub fn measure(
+    gpu: &Gpu,
+    scene: &GpuScene,
+    method: &dyn Method,
+    point: &Point,
+    plan: &TimingPlan,
+) -> Result<Measured<dyn Prepared>> {
+    measure_timed(gpu, scene, &|s| method.prepare(gpu, s, point), plan)
+}
+
+/// Several methods' points of one group timed interleaved (`[timing] interleave = true`):
+/// [`crate::measure::measure_interleaved`] on their [`Prepared`] frames.
+pub fn measure_interleaved(
+    gpu: &Gpu,
+    scene: &GpuScene,
+    items: &[(&dyn Method, &Point)],
+    plan: &TimingPlan,
+) -> Vec<Result<Measured<dyn Prepared>>> {
+    type Prepare<'a> = Box<dyn Fn(&GpuScene) -> Result<Box<dyn Prepared>> + 'a>;
+    let makes: Vec<Prepare<'_>> = items
+        .iter()
+        .map(|&(m, p)| Box::new(move |s: &GpuScene| m.prepare(gpu, s, p)) as Prepare<'_>)
+        .collect();
+    let makes: Vec<&dyn Fn(&GpuScene) -> Result<Box<dyn Prepared>>> =
+        makes.iter().map(|m| m.as_ref()).collect();
+    crate::measure::measure_interleaved(gpu, scene, &makes, plan)
 }

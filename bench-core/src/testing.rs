@@ -10,8 +10,8 @@ use scenarios::{ParamValue, Params, Scene, SceneSpec};
 use crate::axes::Point;
 use crate::gpu::{Gpu, GpuOptions};
 use crate::gpu_scene::GpuScene;
-use crate::measure::{measure, TimingPlan};
-use crate::method::{supports, Capture, Expected, FrameStats, Method};
+use crate::measure::TimingPlan;
+use crate::method::{measure, supports, Capture, Expected, FrameStats, Method};
 use crate::reference::{rasterize, FragmentLists};
 
 /// The adapter tests run on, opened once per test binary.

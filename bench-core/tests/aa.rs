@@ -17,12 +17,14 @@
 //! them) with the effects tests' 2e-3 (the GPU interpolates from unsnapped vertices, the
 //! reference from snapped ones: ≤ 0.5/512 of view depth per pixel).
 
+mod common;
 use bench_core::aa::{self, AaMode};
 use bench_core::effects::EffectConfig;
 use bench_core::method::Method;
 use bench_core::methods;
 use bench_core::record::{Flag, Status};
 use bench_core::testing::{self, max_err_vs, params, point, run_truth};
+use common::STUDIES;
 use scenarios::ParamValue::{self, Int, Str};
 use scenarios::Scene;
 
@@ -380,17 +382,18 @@ fn aa_ci_runs_through_the_runner_with_no_failed_rows_and_aa_checks() {
     let text = |name: &str| BUILTIN.iter().find(|(n, _)| *n == name).unwrap().1;
     // The H200 suite is valid as a whole (what `mfx check aa` says) and expands on a GPU.
     let aa = Suite::parse(text("aa"), "(built-in) aa").unwrap();
-    let problems = bench_core::check::check_suite(&aa);
+    let problems = bench_core::check::check_suite(STUDIES, &aa);
     assert!(problems.is_empty(), "{problems:?}");
-    let groups = bench_core::runner::expand(&aa, false).unwrap();
+    let groups = bench_core::runner::expand(STUDIES, &aa, false).unwrap();
     assert_eq!(
         groups.len(),
         10,
         "four scenes at 1024² in two tables, two for stochastic"
     );
 
-    let rows = bench_core::runner::run_suite(testing::gpu(), text("aa-ci"), "(built-in) aa-ci")
-        .expect("aa-ci runs");
+    let rows =
+        bench_core::runner::run_suite(testing::gpu(), STUDIES, text("aa-ci"), "(built-in) aa-ci")
+            .expect("aa-ci runs");
     let get = |r: &bench_core::record::Row, c| r.get(c).unwrap_or("").to_string();
     let failed: Vec<String> = rows
         .iter()

@@ -3,7 +3,8 @@
 //! does not report). Off by default on a software adapter; set explicitly, it runs anywhere.
 
 use bench_core::gpu_scene::GpuScene;
-use bench_core::measure::{measure, set_timing, TimingPlan};
+use bench_core::measure::{set_timing, TimingPlan};
+use bench_core::method::measure;
 use bench_core::methods;
 use bench_core::record::{cols, Flag, Row};
 use bench_core::testing::{gpu, params, point, scene};

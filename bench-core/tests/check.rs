@@ -2,7 +2,9 @@
 //! a message naming the file, the table, the key, the value and the alternatives; a valid suite
 //! passes. (The CLI's exit code 2 and "nothing written" are tested in the root `tests/cli.rs`.)
 
+mod common;
 use bench_core::check::check_suite;
+use common::STUDIES;
 use scenarios::{problem, Problem, Suite};
 
 /// A one-study methods suite around `study` lines and `scene` lines.
@@ -14,7 +16,7 @@ fn suite(top: &str, study: &str, scene: &str) -> String {
 
 /// All problems of a suite text: the parse's and the check's.
 fn problems(text: &str) -> Vec<Problem> {
-    bench_core::check::check_text(text, "typo.toml").1
+    bench_core::check::check_text(STUDIES, text, "typo.toml").1
 }
 
 /// Asserts exactly one problem mentions every word of `words`, and returns its text.
@@ -47,7 +49,7 @@ fn a_valid_suite_has_no_problem() {
     assert!(problems(&suite("", PEEL, QUADS)).is_empty());
     for (name, _) in scenarios::suite::BUILTIN {
         let s = Suite::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
-        let p: Vec<Problem> = check_suite(&s)
+        let p: Vec<Problem> = check_suite(STUDIES, &s)
             .into_iter()
             // The model suites need meshes copied into models/ (README): named, not hidden.
             .filter(|p| !(p.key == "path" && p.message.contains("file not found")))
@@ -372,7 +374,7 @@ fn the_seeds_suites_check_without_their_models_and_skip_naming_the_fetch_script(
     assert_eq!(seeds.len(), 6, "one seeds suite per source setup");
     for name in seeds {
         let s = Suite::load(name).unwrap();
-        let p = check_suite(&s);
+        let p = check_suite(STUDIES, &s);
         assert!(p.is_empty(), "{name}:\n{}", problem::report(&p));
         assert!(
             s.software.is_some(),

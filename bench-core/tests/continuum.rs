@@ -3,6 +3,8 @@
 //! rows carry finite errors against the ground truth, so the continuum's fronts can be drawn
 //! from them. (The suite's structure is checked by `mfx check`; this runs it.)
 
+mod common;
+use common::STUDIES;
 use std::collections::BTreeSet;
 
 use bench_core::methods;
@@ -15,7 +17,8 @@ const SUITE: &str = include_str!("../../scenarios/suites/continuum-ci.toml");
 #[test]
 fn continuum_ci_runs_every_method_and_every_approximate_row_has_finite_errors() {
     let t = std::time::Instant::now();
-    let rows = run_suite(testing::gpu(), SUITE, "continuum-ci.toml").expect("the suite runs");
+    let rows =
+        run_suite(testing::gpu(), STUDIES, SUITE, "continuum-ci.toml").expect("the suite runs");
     eprintln!(
         "continuum-ci: {} rows in {:.1} s",
         rows.len(),
@@ -79,10 +82,10 @@ fn continuum_sweeps_every_method_on_the_four_scenes_at_1024_and_the_opacity_swee
     let text = include_str!("../../scenarios/suites/continuum.toml");
     let suite = scenarios::Suite::parse(text, "continuum.toml").expect("parses");
     assert!(
-        bench_core::check::check_suite(&suite).is_empty(),
+        bench_core::check::check_suite(STUDIES, &suite).is_empty(),
         "checks clean"
     );
-    let groups = expand(&suite, false).expect("expands");
+    let groups = expand(STUDIES, &suite, false).expect("expands");
     let main: Vec<_> = groups.iter().filter(|g| g.study_index == 0).collect();
     let scenes: BTreeSet<String> = main.iter().map(|g| g.scene.generator.clone()).collect();
     assert_eq!(

@@ -3,7 +3,9 @@
 //! average of its samples' f64 shading, the classified and uber rows report their edge tiles, and x2 rows
 //! run where the adapter multisamples 2× and are skipped with its reason elsewhere.
 
+mod common;
 use bench_core::record::{cols, Status};
+use common::STUDIES;
 
 #[test]
 fn msaa_rows_run_judged_against_the_averaged_reference_city_64px() {
@@ -11,6 +13,7 @@ fn msaa_rows_run_judged_against_the_averaged_reference_city_64px() {
     let x2 = bench_core::shading::msaa::supported(gpu, bench_core::shading::msaa::Mode::X2);
     let rows = bench_core::runner::run_suite(
         gpu,
+        STUDIES,
         r#"
         resolutions = [[64, 64]]
         [timing]

@@ -1,6 +1,8 @@
 //! BF3's per-phase columns on cpu_tiled rows of the deferred study.
 
+mod common;
 use bench_core::record::cols;
+use common::STUDIES;
 
 /// cpu_tiled rows carry BF3's phases (thread-summed, adding up to cpu_phases_ms) and the
 /// light loop's cost per evaluation for none and all lights diffuse-only; GPU rows none.
@@ -8,6 +10,7 @@ use bench_core::record::cols;
 fn cpu_tiled_rows_carry_the_phases_and_the_per_light_cost_64px() {
     let rows = bench_core::runner::run_suite(
         bench_core::testing::gpu(),
+        STUDIES,
         r#"
         resolutions = [[64, 64]]
         [timing]

@@ -2,12 +2,15 @@
 //! runs and stays within the study's error bound of its own (shadowed) f64 reference, the
 //! classified row reports its fade tiles, and a scene without a sun skips the shadowed points.
 
+mod common;
 use bench_core::record::{cols, Status};
+use common::STUDIES;
 
 #[test]
 fn sun_shadow_rows_run_judged_against_the_shadowed_reference_city_64px() {
     let rows = bench_core::runner::run_suite(
         bench_core::testing::gpu(),
+        STUDIES,
         r#"
         resolutions = [[64, 64]]
         [timing]

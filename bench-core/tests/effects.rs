@@ -7,11 +7,13 @@
 //! so where view_z changes fast (sphere silhouettes, ~0.5 per pixel) a fragment's view_z differs
 //! by up to 0.5/512 ≈ 1e-3, and σ·Δl ≤ 1e-3 with σ ≤ 1.
 
+mod common;
 use bench_core::effects::EffectConfig;
 use bench_core::methods;
 use bench_core::metrics::{image_error, BAD_PIXEL_TOL};
 use bench_core::reference::rasterize;
 use bench_core::testing;
+use common::STUDIES;
 use scenarios::{ParamValue, Params, SceneSpec};
 use schema::{cols, Status};
 
@@ -222,7 +224,7 @@ fn effects_differ_from_each_other() {
 // ---- the effect axis in the methods study ----
 
 fn sweep(text: &str) -> bench_core::Result<Vec<bench_core::record::Row>> {
-    bench_core::runner::run_suite(testing::gpu(), text, "test")
+    bench_core::runner::run_suite(testing::gpu(), STUDIES, text, "test")
 }
 
 #[test]

@@ -1,8 +1,10 @@
 //! The geometry study through the real runner on lavapipe: suites run end to end, bad axes are
 //! refused before any GPU work, and missing meshes become failed rows when a sweep meets them.
 
+mod common;
 use bench_core::record::{cols, Col, Row, Status, VecSink};
 use bench_core::testing;
+use common::STUDIES;
 use scenarios::Suite;
 
 /// A tiny geometry suite through the real runner on lavapipe: one row per point, declared
@@ -27,7 +29,7 @@ triangles = 800
 "#;
     let suite = Suite::parse(text, "test").unwrap();
     let gpu = testing::gpu();
-    let groups = bench_core::runner::expand(&suite, gpu.facts.is_software).unwrap();
+    let groups = bench_core::runner::expand(STUDIES, &suite, gpu.facts.is_software).unwrap();
     let mut sink = VecSink(Vec::new());
     let opts = bench_core::runner::RunOptions {
         run_id: "t".into(),
@@ -36,7 +38,7 @@ triangles = 800
         save_images: None,
         ..Default::default()
     };
-    let n = bench_core::runner::run(gpu, &suite, &groups, &opts, &mut sink)
+    let n = bench_core::runner::run(gpu, STUDIES, &suite, &groups, &opts, &mut sink)
         .unwrap()
         .written;
     assert_eq!(n, bench_core::runner::rows_in(&groups));
@@ -90,7 +92,7 @@ fn bad_axes_are_errors_naming_the_axis() {
             "name = \"x\"\n[[study]]\nkind = \"geometry\"\naxes = {{ {axes} }}\n[[study.scenes]]\ngenerator = \"mesh\"\n"
         );
         let suite = Suite::parse(&text, "t").unwrap();
-        let problems = bench_core::check::check_suite(&suite);
+        let problems = bench_core::check::check_suite(STUDIES, &suite);
         if !problems.is_empty() {
             return Err(scenarios::problem::report(&problems));
         }
@@ -122,7 +124,7 @@ fn bad_axes_are_errors_naming_the_axis() {
 fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
     let suite = Suite::load("geometry-ci").unwrap();
     let gpu = testing::gpu();
-    let groups = bench_core::runner::expand(&suite, gpu.facts.is_software).unwrap();
+    let groups = bench_core::runner::expand(STUDIES, &suite, gpu.facts.is_software).unwrap();
     let mut sink = VecSink(Vec::new());
     let opts = bench_core::runner::RunOptions {
         run_id: "t".into(),
@@ -132,7 +134,7 @@ fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
         ..Default::default()
     };
     let t0 = std::time::Instant::now();
-    let n = bench_core::runner::run(gpu, &suite, &groups, &opts, &mut sink)
+    let n = bench_core::runner::run(gpu, STUDIES, &suite, &groups, &opts, &mut sink)
         .unwrap()
         .written;
     eprintln!(
@@ -212,14 +214,14 @@ fn geometry_ci_suite_runs_every_axis_on_lavapipe() {
 fn full_size_geometry_suites_expand() {
     for (name, want) in [("geometry", 175), ("geometry-ci", 100)] {
         let suite = Suite::load(name).unwrap();
-        let groups = bench_core::runner::expand(&suite, false).unwrap();
+        let groups = bench_core::runner::expand(STUDIES, &suite, false).unwrap();
         let points: usize = groups.iter().map(|g| g.points.len()).sum();
         assert_eq!(points, want, "{name}: points");
     }
     let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../scenarios/suites/geometry-models.toml");
     let suite = Suite::load(models.to_str().unwrap()).unwrap();
-    assert!(!bench_core::runner::expand(&suite, false)
+    assert!(!bench_core::runner::expand(STUDIES, &suite, false)
         .unwrap()
         .is_empty());
 }
@@ -237,7 +239,7 @@ fn geometry_models_without_the_meshes_fails_rows_naming_the_file() {
         "the test needs a working directory without models/"
     );
     let gpu = testing::gpu();
-    let groups = bench_core::runner::expand(&suite, gpu.facts.is_software).unwrap();
+    let groups = bench_core::runner::expand(STUDIES, &suite, gpu.facts.is_software).unwrap();
     let mut sink = VecSink(Vec::new());
     let opts = bench_core::runner::RunOptions {
         run_id: "t".into(),
@@ -246,7 +248,7 @@ fn geometry_models_without_the_meshes_fails_rows_naming_the_file() {
         save_images: None,
         ..Default::default()
     };
-    let n = bench_core::runner::run(gpu, &suite, &groups, &opts, &mut sink)
+    let n = bench_core::runner::run(gpu, STUDIES, &suite, &groups, &opts, &mut sink)
         .unwrap()
         .written;
     assert_eq!(n, bench_core::runner::rows_in(&groups));

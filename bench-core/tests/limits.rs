@@ -2,14 +2,17 @@
 //! are over the largest storage binding splits them over several bindings and still matches the
 //! f64 reference as the unsplit one does; a browser's limits give `skipped` rows naming the limit.
 
+mod common;
 use bench_core::gpu::{Gpu, GpuOptions};
 use bench_core::gpu_scene::GpuScene;
 use bench_core::limits::Profile;
-use bench_core::measure::{measure, TimingPlan};
+use bench_core::measure::TimingPlan;
+use bench_core::method::measure;
 use bench_core::methods;
 use bench_core::record::Row;
 use bench_core::reference::rasterize;
 use bench_core::testing::{count_mismatch, max_err, params, point, scene};
+use common::STUDIES;
 use scenarios::ParamValue::Int;
 use schema::{cols, Status};
 
@@ -60,7 +63,7 @@ fn a_split_k_buffer_matches_the_reference_exactly_as_the_unsplit_one_does() {
 }
 
 fn rows(gpu: &Gpu, text: &str) -> Vec<Row> {
-    bench_core::runner::run_suite(gpu, text, "test").unwrap_or_else(|e| panic!("{e}"))
+    bench_core::runner::run_suite(gpu, STUDIES, text, "test").unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]

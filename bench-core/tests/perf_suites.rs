@@ -1,6 +1,8 @@
 //! The suites this work added (`perf-abuffer`, `scaling`) expand into the points their
 //! descriptions promise, with axis values the methods accept and scenes of the stated sizes.
 
+mod common;
+use common::STUDIES;
 use scenarios::suite::Suite;
 use scenarios::ParamValue::Int;
 use scenarios::SceneSpec;
@@ -15,7 +17,7 @@ fn load(name: &str) -> Vec<Group> {
         env!("CARGO_MANIFEST_DIR")
     );
     let suite = Suite::load(&path).expect("the suite parses");
-    expand(&suite, false).expect("the suite expands")
+    expand(STUDIES, &suite, false).expect("the suite expands")
 }
 
 fn int(s: &SceneSpec, k: &str) -> i64 {

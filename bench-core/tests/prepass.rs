@@ -2,13 +2,15 @@
 //! rows carry error, render-target bytes and the packing loss; impossible points are skipped
 //! with their reason; an unknown method is an error naming it.
 
+mod common;
 use bench_core::record::Row;
 use bench_core::record::{cols, Col, Status};
 use bench_core::runner::{self};
 use bench_core::testing;
+use common::STUDIES;
 
 fn run(text: &str) -> bench_core::Result<Vec<Row>> {
-    runner::run_suite(testing::gpu(), text, "test")
+    runner::run_suite(testing::gpu(), STUDIES, text, "test")
 }
 
 const SUITE: &str = r#"

@@ -1,13 +1,15 @@
 //! The runner's promises: every point gets a row; bad values are skipped or errors, not panics.
 
+mod common;
 use bench_core::record::{Row, Status};
 use bench_core::runner::{self};
 use bench_core::testing;
+use common::STUDIES;
 use scenarios::Suite;
 use schema::cols;
 
 fn run(text: &str) -> Vec<Row> {
-    runner::run_suite(testing::gpu(), text, "test").unwrap_or_else(|e| panic!("{e}"))
+    runner::run_suite(testing::gpu(), STUDIES, text, "test").unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]
@@ -27,7 +29,7 @@ fn out_of_range_axis_is_refused_before_any_gpu_work_and_a_valid_one_runs() {
         depth_complexity = 2
     "#;
     // No adapter could run max_layers = 0: a bad suite, not a skipped row.
-    let e = runner::run_suite(testing::gpu(), text, "test")
+    let e = runner::run_suite(testing::gpu(), STUDIES, text, "test")
         .unwrap_err()
         .to_string();
     assert!(
@@ -67,7 +69,7 @@ fn a_scene_that_cannot_be_built_fails_every_row_of_its_group_with_the_reason() {
         generator = "obj"
         path = "/nonexistent/mesh.obj"
     "#;
-    let e = runner::run_suite(testing::gpu(), text, "test")
+    let e = runner::run_suite(testing::gpu(), STUDIES, text, "test")
         .unwrap_err()
         .to_string();
     assert!(
@@ -75,7 +77,7 @@ fn a_scene_that_cannot_be_built_fails_every_row_of_its_group_with_the_reason() {
         "{e}"
     );
     let suite = Suite::parse(text, "test").unwrap();
-    let groups = runner::expand(&suite, true).unwrap();
+    let groups = runner::expand(STUDIES, &suite, true).unwrap();
     let mut sink = bench_core::record::VecSink::default();
     let opts = runner::RunOptions {
         run_id: "t".into(),
@@ -84,7 +86,7 @@ fn a_scene_that_cannot_be_built_fails_every_row_of_its_group_with_the_reason() {
         save_images: None,
         ..Default::default()
     };
-    runner::run(testing::gpu(), &suite, &groups, &opts, &mut sink).unwrap();
+    runner::run(testing::gpu(), STUDIES, &suite, &groups, &opts, &mut sink).unwrap();
     let rows = sink.0;
     assert_eq!(rows.len(), 5, "four floors and the point");
     for r in &rows {
@@ -102,10 +104,10 @@ fn a_scene_that_cannot_be_built_fails_every_row_of_its_group_with_the_reason() {
 #[test]
 fn unknown_method_and_study_are_errors_before_any_gpu_work() {
     let s = Suite::parse("[[study]]\nkind = \"methods\"\nmethods = [\"nope\"]\n[[study.scenes]]\ngenerator = \"quads\"\n", "t").unwrap();
-    let e = runner::expand(&s, false).unwrap_err().to_string();
+    let e = runner::expand(STUDIES, &s, false).unwrap_err().to_string();
     assert!(e.contains("unknown method 'nope'"), "{e}");
     let s = Suite::parse("[[study]]\nkind = \"nope\"\n", "t").unwrap();
-    assert!(runner::expand(&s, false)
+    assert!(runner::expand(STUDIES, &s, false)
         .unwrap_err()
         .to_string()
         .contains("unknown kind 'nope'"));
@@ -118,7 +120,7 @@ fn method_axes_override_the_shared_axes_for_one_method_only() {
                 method_axes = { kbuffer_rmw = { heuristics = [false, true] } }\n\
                 [[study.scenes]]\ngenerator = \"quads\"\n";
     let s = Suite::parse(text, "t").unwrap();
-    let groups = runner::expand(&s, false).unwrap();
+    let groups = runner::expand(STUDIES, &s, false).unwrap();
     let pts: Vec<_> = groups.iter().flat_map(|g| g.points.iter()).collect();
     let peel: Vec<_> = pts.iter().filter(|p| p.method == "depth_peel").collect();
     let kbuf: Vec<_> = pts.iter().filter(|p| p.method == "kbuffer_rmw").collect();

@@ -3,7 +3,8 @@
 //! spread in `session_spread`; one session is today's single measurement, unchanged.
 
 use bench_core::gpu_scene::GpuScene;
-use bench_core::measure::{measure, TimingPlan};
+use bench_core::measure::TimingPlan;
+use bench_core::method::measure;
 use bench_core::methods;
 use bench_core::testing::{gpu, params, point, scene};
 use scenarios::{ParamValue, TimingSpec};

@@ -1,14 +1,16 @@
 //! The shadows study through the runner, on lavapipe at 32×32: every point gets a row, a scene
 //! without an area light is a skipped row with its reason, bad study settings are errors.
 
+mod common;
 use bench_core::record::{Row, Status};
 use bench_core::runner::{self};
 use bench_core::testing;
+use common::STUDIES;
 use scenarios::Suite;
 use schema::cols;
 
 fn run(text: &str) -> Vec<Row> {
-    runner::run_suite(testing::gpu(), text, "test").unwrap_or_else(|e| panic!("{e}"))
+    runner::run_suite(testing::gpu(), STUDIES, text, "test").unwrap_or_else(|e| panic!("{e}"))
 }
 
 const HEAD: &str = r#"
@@ -81,7 +83,7 @@ fn bad_shadows_settings_are_errors_naming_the_value() {
         let head = HEAD.replace("shadow_rays = 16", "");
         let text = format!("{head}\n{extra}\n[[study.scenes]]\ngenerator = \"soft_shadow\"\n");
         let suite = Suite::parse(&text, "test").unwrap();
-        let e = scenarios::problem::report(&bench_core::check::check_suite(&suite));
+        let e = scenarios::problem::report(&bench_core::check::check_suite(STUDIES, &suite));
         assert!(e.contains(word), "{extra}: {e}");
     }
 }

@@ -2,6 +2,8 @@
 //! exactly the point keys of the unsharded run; every point lands in exactly one shard; saved
 //! images travel with the merge and hold the image of their row.
 
+mod common;
+use common::STUDIES;
 use std::path::{Path, PathBuf};
 
 use bench_core::record::{CsvSink, Status};
@@ -11,7 +13,10 @@ use scenarios::Suite;
 
 fn sweep(gpu: &bench_core::Gpu, suite: &Suite, shard: (usize, usize), out: &Path, images: bool) {
     std::fs::create_dir_all(out).unwrap();
-    let groups = runner::shard_groups(runner::expand(suite, gpu.facts.is_software).unwrap(), shard);
+    let groups = runner::shard_groups(
+        runner::expand(STUDIES, suite, gpu.facts.is_software).unwrap(),
+        shard,
+    );
     let mut sink = CsvSink::create(&out.join("runs.csv")).unwrap();
     let opts = RunOptions {
         run_id: format!("test-shard{}of{}", shard.0, shard.1),
@@ -20,7 +25,7 @@ fn sweep(gpu: &bench_core::Gpu, suite: &Suite, shard: (usize, usize), out: &Path
         save_images: images.then(|| out.to_path_buf()),
         ..Default::default()
     };
-    let n = runner::run(gpu, suite, &groups, &opts, &mut sink)
+    let n = runner::run(gpu, STUDIES, suite, &groups, &opts, &mut sink)
         .unwrap()
         .written;
     assert_eq!(n, runner::rows_in(&groups));

@@ -4,6 +4,7 @@
 //! study flags them. The suite-level flags (overflow, lost_coplanar, precision) are checked by
 //! running the stability suite's own tables through the runner at the end.
 
+mod common;
 use bench_core::effects::{signed_view_z, EffectConfig};
 use bench_core::methods::{self, Capture};
 use bench_core::metrics::{image_error, ImageError, BAD_PIXEL_TOL};
@@ -11,6 +12,7 @@ use bench_core::record::{Flag, Row, Status};
 use bench_core::reference::{rasterize, FragmentLists};
 use bench_core::runner::{self};
 use bench_core::testing;
+use common::STUDIES;
 use scenarios::{ParamValue, Params, SceneSpec, Suite};
 use schema::cols;
 
@@ -350,7 +352,7 @@ fn stability_suite_software_profile_flags_every_known_failure() {
     let gpu = testing::gpu();
     // stability_ci: the stability suite's cases with fewer passes (lavapipe pays per pass).
     let suite = Suite::load("stability_ci").unwrap();
-    let all = runner::run_checked(gpu, &suite).unwrap();
+    let all = runner::run_checked(gpu, STUDIES, &suite).unwrap();
     let rows: Vec<&Row> = all
         .iter()
         .filter(|r| !r.get(cols::METHOD).unwrap_or("").starts_with("floor_"))

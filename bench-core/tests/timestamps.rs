@@ -1,12 +1,13 @@
-//! The timestamps rule (judge::timestamps_incomplete) on measurements, not just on numbers: a
+//! The timestamps rule (measure::timestamps_incomplete) on measurements, not just on numbers: a
 //! method whose frame does most of its GPU work outside its timestamped passes (as lavapipe's
 //! timestamps once missed 99 % of compute_abuffer's) is caught; the same work timed is not.
 
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::GpuScene;
 use bench_core::gpu_util::{bind_buffers, compute_pipeline, shader, storage_entry, STORAGE_RW};
-use bench_core::judge::timestamps_incomplete;
-use bench_core::measure::{measure, TimingPlan};
+use bench_core::measure::timestamps_incomplete;
+use bench_core::measure::TimingPlan;
+use bench_core::method::measure;
 use bench_core::method::{Capture, FrameStats, Method, Prepared};
 use bench_core::testing::{gpu, point, scene};
 use bench_core::timing::GpuTimer;

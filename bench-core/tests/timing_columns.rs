@@ -3,11 +3,13 @@
 //! rule's target, the CI of the median and the per-sample tail — on lavapipe. No speed is
 //! asserted: only that the columns exist and agree with each other.
 
+mod common;
 use bench_core::record::{cols, Row};
 use bench_core::testing;
+use common::STUDIES;
 
 fn rows(text: &str) -> Vec<Row> {
-    bench_core::runner::run_suite(testing::gpu(), text, "test").unwrap()
+    bench_core::runner::run_suite(testing::gpu(), STUDIES, text, "test").unwrap()
 }
 
 fn f(r: &Row, c: bench_core::record::Col) -> f64 {

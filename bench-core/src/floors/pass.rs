@@ -1,29 +1,18 @@
-//! The floor rows: one depth-only pass (`floor_depth`), one opaque single-colour pass
-//! (`floor_opaque`) and two unsorted alpha-blended passes (`floor_blend`, `floor_blend_const`,
-//! in `blend.rs`) over exactly the scene's geometry and resolution. Every method's `x_floor` is its time over
-//! `floor_depth` of the same scene in the same run (`x_blend`: over `floor_blend_const`).
+//! The single-pass floors: one depth-only pass (`floor_depth`, with an empty fragment stage, or
+//! `floor_depth_vs` with none) and one opaque single-colour pass (`floor_opaque`).
 
-mod blend;
-pub use blend::{FloorBlend, FloorBlendConst, CONST_PREMUL};
-
-use crate::axes::Point;
-use crate::gpu_util::{camera_entry, clear_depth, depth_state, shader};
-
-use super::{Capture, FrameStats, Method, Prepared};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use crate::gpu_util::{camera_entry, clear_depth, depth_state, shader};
+use crate::timed::{FrameStats, Timed};
 use crate::timing::GpuTimer;
 use crate::Result;
 
 const WGSL: &str = include_str!("floor.wgsl");
 
-pub struct FloorDepth;
-pub struct FloorDepthVs;
-pub struct FloorOpaque;
-
 /// The three single-pass floors' pipelines.
 #[derive(Clone, Copy, PartialEq, Eq)]
-enum Kind {
+pub(super) enum Kind {
     /// Depth only, with an empty fragment stage.
     Depth,
     /// Depth only, no fragment stage.
@@ -32,58 +21,7 @@ enum Kind {
     Opaque,
 }
 
-impl Method for FloorDepth {
-    fn name(&self) -> &'static str {
-        "floor_depth"
-    }
-    fn describe(&self) -> &'static str {
-        "yardstick: one depth-only pass (positions only, an empty fragment shader); no image"
-    }
-    fn exact(&self) -> bool {
-        false
-    }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Point) -> Result<Box<dyn Prepared>> {
-        Ok(Box::new(PreparedFloor::new(gpu, scene, Kind::Depth)))
-    }
-}
-
-/// The depth-only pass without a fragment stage: `floor_depth` until 2026-12-02. Measured on
-/// the H200 (`results/reference/2026-12-02-h200-floors`): its time depended on which render
-/// pipeline the process had run last — shells(16, 256) at 1024² took 1.041 ms right after WBOIT
-/// or the compute A-buffer and 1.465 ms right after the RMW k-buffer or ADP, settled or not,
-/// pooled or dedicated memory — as if a pipeline without a fragment stage inherited state the
-/// one before it left. Kept as a method to watch that.
-impl Method for FloorDepthVs {
-    fn name(&self) -> &'static str {
-        "floor_depth_vs"
-    }
-    fn describe(&self) -> &'static str {
-        "yardstick variant: one depth-only pass with no fragment stage at all (the old floor_depth); no image"
-    }
-    fn exact(&self) -> bool {
-        false
-    }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Point) -> Result<Box<dyn Prepared>> {
-        Ok(Box::new(PreparedFloor::new(gpu, scene, Kind::DepthVs)))
-    }
-}
-
-impl Method for FloorOpaque {
-    fn name(&self) -> &'static str {
-        "floor_opaque"
-    }
-    fn describe(&self) -> &'static str {
-        "yardstick: one opaque single-colour pass (positions only, RGBA8 + depth); no image"
-    }
-    fn exact(&self) -> bool {
-        false
-    }
-    fn prepare(&self, gpu: &Gpu, scene: &GpuScene, _: &Point) -> Result<Box<dyn Prepared>> {
-        Ok(Box::new(PreparedFloor::new(gpu, scene, Kind::Opaque)))
-    }
-}
-
-struct PreparedFloor {
+pub(super) struct PreparedFloor {
     pipeline: wgpu::RenderPipeline,
     bind: wgpu::BindGroup,
     depth: wgpu::TextureView,
@@ -93,7 +31,7 @@ struct PreparedFloor {
 }
 
 impl PreparedFloor {
-    fn new(gpu: &Gpu, scene: &GpuScene, kind: Kind) -> Self {
+    pub(super) fn new(gpu: &Gpu, scene: &GpuScene, kind: Kind) -> Self {
         let with_color = kind == Kind::Opaque;
         let d = &gpu.device;
         let module = shader(gpu, "floor", WGSL);
@@ -184,7 +122,7 @@ impl PreparedFloor {
     }
 }
 
-impl crate::timed::Timed for PreparedFloor {
+impl Timed for PreparedFloor {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         {
@@ -231,11 +169,5 @@ impl crate::timed::Timed for PreparedFloor {
 
     fn bytes_allocated(&self) -> u64 {
         self.alloc.bytes
-    }
-}
-
-impl Prepared for PreparedFloor {
-    fn readback(&mut self, _: &Gpu, _: &GpuScene) -> Result<Capture> {
-        Ok(Capture::empty())
     }
 }

@@ -44,7 +44,7 @@
 //! `effects.wgsl` ([`FOLD_WGSL`]) is the effects fold. Pieces several methods build on (k slots,
 //! the counted capture, tails, buckets, packing, the bind table) live in [`shared`], named for
 //! what they are; no method folder imports another (tested: `tests/method_graph.rs`), and the
-//! yardsticks are [`floors`]. The approximate (continuum) methods' per-pixel rules have CPU
+//! yardsticks are the harness's [`crate::floors`], listed here as methods ([`floors`]). The approximate (continuum) methods' per-pixel rules have CPU
 //! twins in [`crate::oit`], which `Prepared::judge` runs on the reference fragments to fill
 //! `Capture.definition` (judged into `*_vs_k`).
 
@@ -66,16 +66,17 @@ pub mod shared;
 pub mod stochastic;
 pub mod wboit;
 
+use crate::floors::Floor;
 pub use crate::method::{supports, Capture, Expected, FrameStats, Method, Prepared, Timed};
 
 /// Every method, in listing order.
 pub fn all() -> Vec<Box<dyn Method>> {
     vec![
-        Box::new(floors::FloorDepth),
-        Box::new(floors::FloorDepthVs),
-        Box::new(floors::FloorOpaque),
-        Box::new(floors::FloorBlend),
-        Box::new(floors::FloorBlendConst),
+        Box::new(floors::FloorMethod(Floor::Depth)),
+        Box::new(floors::FloorMethod(Floor::DepthVs)),
+        Box::new(floors::FloorMethod(Floor::Opaque)),
+        Box::new(floors::FloorMethod(Floor::Blend)),
+        Box::new(floors::FloorMethod(Floor::BlendConst)),
         Box::new(depth_peel::DepthPeel),
         Box::new(dual_peel::DualPeel),
         Box::new(kbuffer_rmw::KBufferRmw),

@@ -71,7 +71,7 @@ pub fn supported(gpu: &Gpu, mode: Mode) -> std::result::Result<(), String> {
         SPEC_FORMAT,
         MAT_FORMAT,
     ] {
-        crate::aa::check_msaa_format(gpu, f, mode.samples())
+        crate::gpu_util::check_msaa_format(gpu, f, mode.samples())
             .map_err(|e| format!("msaa = {}: {e}", mode.name()))?;
     }
     Ok(())

@@ -1,16 +1,19 @@
 //! The `methods` study: every multi-fragment method on every scene, timed, and judged against
 //! the exact CPU reference; `speedup_vs_depth_peel` comes from depth_peel in the same group.
 
+use std::cell::OnceCell;
+
 use super::{Emit, GroupCtx, Methods, PointSpec, Study};
 use crate::axes::{Axis, Point};
 use crate::effects::{self, EffectConfig};
-use crate::judge;
-use crate::measure::{measure, measure_interleaved, set_timing};
-use crate::method::Method;
+use crate::judge::{self, TruthCache};
+use crate::measure::set_timing;
+use crate::method::{measure, measure_interleaved, Method, Prepared};
 use crate::methods::{self};
 use crate::record::cols;
 use crate::record::{error_row, failed_row, set_params, skipped_row};
 use crate::record::{Flag, Row};
+use crate::reference::{rasterize, FragmentLists};
 use crate::Result;
 
 pub struct MethodsStudy;
@@ -69,7 +72,53 @@ impl Study for MethodsStudy {
     }
 
     fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
-        run_methods_group(ctx, emit, &|_, _| {})
+        run_methods_group(ctx, emit, &|_, _, _| {})
+    }
+}
+
+/// The ground truth of one group (its scene at its resolution), computed once, on the first
+/// point that needs it, and shared by the group's rows: the exact fragment lists and the
+/// reference images composited from them per effect.
+pub struct GroupTruth<'a> {
+    scene: &'a scenarios::Scene,
+    width: u32,
+    height: u32,
+    lists: OnceCell<FragmentLists>,
+    /// Reference images of the lists by effect, shared by the group's rows.
+    pub images: TruthCache,
+}
+
+impl<'a> GroupTruth<'a> {
+    pub fn new(ctx: &GroupCtx<'a>) -> Self {
+        GroupTruth {
+            scene: ctx.scene,
+            width: ctx.group.width,
+            height: ctx.group.height,
+            lists: OnceCell::new(),
+            images: TruthCache::default(),
+        }
+    }
+
+    /// The exact fragment lists of this scene and resolution, computed once per group.
+    pub fn lists(&self) -> &FragmentLists {
+        self.lists.get_or_init(|| {
+            let lists = rasterize(self.scene, self.width, self.height);
+            if lists.total_fragments() == 0 {
+                // Every row of this group would compare empty images: valid, never silent.
+                eprintln!(
+                    "warning: scene {} covers no pixel at {}x{}: every image of it is the background",
+                    self.scene.spec.label(),
+                    self.width,
+                    self.height
+                );
+            }
+            lists
+        })
+    }
+
+    /// Whether the lists were computed already.
+    pub fn has_lists(&self) -> bool {
+        self.lists.get().is_some()
     }
 }
 
@@ -79,8 +128,9 @@ impl Study for MethodsStudy {
 pub fn run_methods_group(
     ctx: &GroupCtx<'_>,
     emit: &mut Emit<'_>,
-    extra: &dyn Fn(&mut Row, &PointSpec),
+    extra: &dyn Fn(&mut Row, &PointSpec, &GroupTruth<'_>),
 ) -> Result<()> {
+    let truth = GroupTruth::new(ctx);
     // depth_peel first so every other row can carry its speedup over it.
     let mut order: Vec<usize> = (0..ctx.group.points.len()).collect();
     order.sort_by_key(|&i| ctx.group.points[i].method != BASELINE);
@@ -93,7 +143,7 @@ pub fn run_methods_group(
         row.set(cols::METHOD, &pt.method)
             .set(cols::CLAIMS_EXACT, method.exact());
         set_params(&mut row, pt.point.values())?;
-        extra(&mut row, pt);
+        extra(&mut row, pt, &truth);
         let effect = match effect_of(method.as_ref(), &pt.point) {
             Ok(e) => e,
             Err(why) => {
@@ -134,13 +184,13 @@ pub fn run_methods_group(
             .collect();
         let measured = measure_interleaved(ctx.gpu, ctx.gscene, &items, &ctx.plan);
         for (r, m) in runnable.into_iter().zip(measured) {
-            finish_point(ctx, r, m, &mut peel_ms, emit)?;
+            finish_point(ctx, &truth, r, m, &mut peel_ms, emit)?;
         }
     } else {
         for r in runnable {
             let pt = &ctx.group.points[r.index];
             let m = measure(ctx.gpu, ctx.gscene, r.method.as_ref(), &pt.point, &ctx.plan);
-            finish_point(ctx, r, m, &mut peel_ms, emit)?;
+            finish_point(ctx, &truth, r, m, &mut peel_ms, emit)?;
         }
     }
     Ok(())
@@ -157,8 +207,9 @@ struct Ready {
 /// Reads back, judges and emits one measured point.
 fn finish_point(
     ctx: &GroupCtx<'_>,
+    truth: &GroupTruth<'_>,
     r: Ready,
-    measured: Result<crate::measure::Measured>,
+    measured: Result<crate::measure::Measured<dyn Prepared>>,
     peel_ms: &mut Option<f64>,
     emit: &mut Emit<'_>,
 ) -> Result<()> {
@@ -186,9 +237,9 @@ fn finish_point(
     }
     set_timing(&mut row, &m, &ctx.scene.mesh);
     // This study's frames are GPU work only: a wall time far above the GPU time means the
-    // timestamps missed work (judge::timestamps_incomplete says how far).
+    // timestamps missed work (measure::timestamps_incomplete says how far).
     if let Some(g) = m.gpu_median() {
-        if judge::timestamps_incomplete(g, m.cpu.median) {
+        if crate::measure::timestamps_incomplete(g, m.cpu.median) {
             row.add_flag(Flag::TimestampsIncomplete);
         }
     }
@@ -197,9 +248,9 @@ fn finish_point(
         cols::BYTES_PER_PIXEL,
         m.bytes_allocated as f64 / px.max(1.0),
     );
-    if !ctx.has_reference() {
+    if !truth.has_lists() {
         let t = std::time::Instant::now();
-        ctx.reference();
+        truth.lists();
         row.set_f(cols::FRAGMENT_REFERENCE_MS, t.elapsed().as_secs_f64() * 1e3);
     }
     let t_judge = std::time::Instant::now();
@@ -207,7 +258,7 @@ fn finish_point(
         Ok(c) => c,
         Err(e) => return emit(i, failed_row(row, &format!("readback: {e}"))),
     };
-    let lists = ctx.reference();
+    let lists = truth.lists();
     m.prepared.judge(&mut cap, lists);
     set_reference_columns(&mut row, lists);
     crate::measure::set_fragment_rate(&mut row, lists.total_fragments());
@@ -225,7 +276,7 @@ fn finish_point(
         effect: &effect,
         exact: method.exact(),
         flip: ctx.flip,
-        truths: Some(&ctx.truths),
+        truths: Some(&truth.images),
     };
     let j = match judge::judge(&cap, lists, cx) {
         Ok(j) => j,
@@ -237,8 +288,11 @@ fn finish_point(
     if let Some(img) = &cap.image {
         ctx.save_image(&mut row, &pt.method, pt.given(), img)?;
     }
-    // No speed-up of (or over) a GPU time that is not the frame's (judge::gpu_time_trusted).
-    if let Some(g) = m.gpu_median().filter(|_| judge::gpu_time_trusted(&row)) {
+    // No speed-up of (or over) a GPU time that is not the frame's (record::gpu_time_trusted).
+    if let Some(g) = m
+        .gpu_median()
+        .filter(|_| crate::record::gpu_time_trusted(&row))
+    {
         if pt.method == BASELINE && peel_ms.is_none() {
             *peel_ms = Some(g);
         }

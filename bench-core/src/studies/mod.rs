@@ -19,8 +19,6 @@ pub mod prepass;
 pub mod shadows;
 pub mod stability;
 
-use std::cell::OnceCell;
-
 use scenarios::suite::{axes_for_method, axis_product};
 use scenarios::{ParamValue, Params, Scene, SceneSpec, StudySpec, Suite, ValueKind};
 
@@ -30,7 +28,6 @@ use crate::gpu_scene::GpuScene;
 use crate::measure::TimingPlan;
 use crate::record::cols;
 use crate::record::Row;
-use crate::reference::{rasterize, FragmentLists};
 use crate::Result;
 
 /// One point of a group: a method (or path) name and its axis values, resolved against the
@@ -92,9 +89,6 @@ pub struct GroupCtx<'a> {
     pub blend_ms: Option<f64>,
     /// Where `save_image` writes point images (`mfx sweep --save-images`); none = not saved.
     pub images_dir: Option<std::path::PathBuf>,
-    reference: OnceCell<FragmentLists>,
-    /// Reference images of `reference` by effect, shared by the group's rows.
-    pub truths: crate::judge::TruthCache,
 }
 
 impl<'a> GroupCtx<'a> {
@@ -119,30 +113,7 @@ impl<'a> GroupCtx<'a> {
             floor_ms: None,
             blend_ms: None,
             images_dir: None,
-            reference: OnceCell::new(),
-            truths: Default::default(),
         }
-    }
-
-    /// The exact fragment lists of this scene and resolution, computed once per group.
-    pub fn reference(&self) -> &FragmentLists {
-        self.reference.get_or_init(|| {
-            let lists = rasterize(self.scene, self.group.width, self.group.height);
-            if lists.total_fragments() == 0 {
-                // Every row of this group would compare empty images: valid, never silent.
-                eprintln!(
-                    "warning: scene {} covers no pixel at {}x{}: every image of it is the background",
-                    self.scene.spec.label(),
-                    self.group.width,
-                    self.group.height
-                );
-            }
-            lists
-        })
-    }
-
-    pub fn has_reference(&self) -> bool {
-        self.reference.get().is_some()
     }
 
     /// Saves a point's image when `--save-images` is on and records it in `image_file`, so the
@@ -292,17 +263,7 @@ pub fn points(
     }
 }
 
-pub fn all() -> Vec<Box<dyn Study>> {
-    vec![
-        Box::new(methods::MethodsStudy),
-        Box::new(geometry::GeometryStudy),
-        Box::new(deferred::DeferredStudy),
-        Box::new(prepass::PrepassStudy),
-        Box::new(stability::StabilityStudy),
-        Box::new(shadows::ShadowsStudy),
-    ]
-}
-
-pub fn by_kind(kind: &str) -> Option<Box<dyn Study>> {
-    all().into_iter().find(|s| s.kind() == kind)
+/// The study of `kind` among `studies` (the binary's `STUDIES` table, or a test's own list).
+pub fn by_kind<'s>(studies: &[&'s dyn Study], kind: &str) -> Option<&'s dyn Study> {
+    studies.iter().copied().find(|s| s.kind() == kind)
 }

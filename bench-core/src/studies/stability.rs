@@ -17,7 +17,7 @@
 
 use scenarios::{ParamValue, StudySpec};
 
-use super::methods::{run_methods_group, MethodsStudy};
+use super::methods::{run_methods_group, GroupTruth, MethodsStudy};
 use super::{Emit, GroupCtx, Methods, Opt, PointSpec, Study};
 use crate::axes::{Axis, Point};
 use crate::effects;
@@ -56,13 +56,18 @@ fn as_f64(v: &ParamValue) -> Option<f64> {
 }
 
 /// The value of stiffness measure `name` for point `pt` of the group.
-pub fn stiffness_value(ctx: &GroupCtx<'_>, pt: &PointSpec, name: &str) -> Option<f64> {
+pub fn stiffness_value(
+    ctx: &GroupCtx<'_>,
+    truth: &GroupTruth<'_>,
+    pt: &PointSpec,
+    name: &str,
+) -> Option<f64> {
     let cam = &ctx.scene.camera;
     match name {
         "far_over_near" => Some(cam.far / cam.near),
         "sigma_l" => {
             let sigma = pt.point.get(effects::SIGMA.name()).and_then(as_f64)?;
-            let lists = ctx.reference();
+            let lists = truth.lists();
             let lmax = (0..lists.pixels())
                 .map(|p| {
                     lists
@@ -79,7 +84,7 @@ pub fn stiffness_value(ctx: &GroupCtx<'_>, pt: &PointSpec, name: &str) -> Option
             Some(as_f64(p.get("distance")?)? / as_f64(p.get("wall")?)?)
         }
         "depth_gap_min" => {
-            let lists = ctx.reference();
+            let lists = truth.lists();
             (0..lists.pixels())
                 .flat_map(|p| {
                     lists
@@ -90,7 +95,7 @@ pub fn stiffness_value(ctx: &GroupCtx<'_>, pt: &PointSpec, name: &str) -> Option
                 .filter(|g| *g > 0.0)
                 .min_by(f64::total_cmp)
         }
-        "depth_complexity" => Some(ctx.reference().max_depth_complexity() as f64),
+        "depth_complexity" => Some(truth.lists().max_depth_complexity() as f64),
         other => ctx
             .group
             .scene
@@ -146,10 +151,10 @@ impl Study for StabilityStudy {
     fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
         let case = CASE.text(ctx.study);
         let stiffness = STIFFNESS_OPT.text(ctx.study);
-        let add = |row: &mut Row, pt: &PointSpec| {
+        let add = |row: &mut Row, pt: &PointSpec, truth: &GroupTruth<'_>| {
             row.set(cols::STABILITY_CASE, &case)
                 .set(cols::STIFFNESS, &stiffness);
-            if let Some(v) = stiffness_value(ctx, pt, &stiffness) {
+            if let Some(v) = stiffness_value(ctx, truth, pt, &stiffness) {
                 row.set_f(cols::STIFFNESS_VALUE, v);
             }
         };

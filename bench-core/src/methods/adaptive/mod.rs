@@ -17,12 +17,12 @@
 //! Memory per pixel (race build): k × 8 B nodes + 4 B arrival count + 16 B resolve sum + 16 B
 //! image + 4 B stand-in depth.
 
-use super::shared::bind::{blended, pipeline_layout, Bindings, Kind as B, Res, ADD, FC, FLOAT};
 use super::shared::counted_capture::{PreparedAbuffer, Replay};
 use super::shared::race::judge_race;
 use super::shared::store::{dummy_depth, storage_pass, storage_pipeline};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
+use crate::bind::{blended, pipeline_layout, Bindings, Kind as B, Res, ADD, FC, FLOAT};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{

@@ -19,12 +19,12 @@
 //! height and box-filters.
 
 use super::shared::axes::{MAX_LAYERS, OCCLUSION_STOP, SPECIALISATION};
-use super::shared::bind::{
-    pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, Res, DEPTH, FLOAT, UINT,
-};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::aa::{self, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
+use crate::bind::{
+    pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, Res, DEPTH, FLOAT, UINT,
+};
 use crate::effects::{self, EffectConfig, Payload};
 use crate::effects::{FOLD_STATE_BYTES, FOLD_WGSL};
 use crate::gpu::Gpu;

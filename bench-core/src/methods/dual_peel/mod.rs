@@ -15,11 +15,11 @@
 //! and depth of field are skipped with the reason ([`effect_of`]).
 
 use super::shared::axes::{MAX_LAYERS, OCCLUSION_STOP};
-use super::shared::bind::{
-    blended, pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, Res, FLOAT,
-};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
+use crate::bind::{
+    blended, pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, Res, FLOAT,
+};
 use crate::effects::{self, Effect, EffectConfig, Payload, FOLD_STATE_BYTES, FOLD_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
@@ -461,7 +461,7 @@ mod tests {
         let gpu = crate::testing::gpu();
         let gs = GpuScene::upload(gpu, &s, 32, 32);
         let p = params(&[("max_layers", Int(64))]);
-        let m = crate::measure::measure(
+        let m = crate::method::measure(
             gpu,
             &gs,
             &DualPeel,

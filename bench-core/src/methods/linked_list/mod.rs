@@ -40,15 +40,15 @@
 
 use wgpu::util::DeviceExt;
 
-use super::shared::bind::{
-    mesh_buffers, pipeline_layout, pipeline_layout_gaps, Bindings, Kind as B, Res, FC, FLOAT,
-};
 use super::shared::counted_capture::{MASKED_PRIM_BITS, VISIBILITY_WGSL};
 use super::shared::store::storage_pass_with;
 use super::shared::tail::{self, TailTargets, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::aa::{self, AaCapture, AaConfig, AaMode, AaSupport};
 use crate::axes::{Axis, Point};
+use crate::bind::{
+    mesh_buffers, pipeline_layout, pipeline_layout_gaps, Bindings, Kind as B, Res, FC, FLOAT,
+};
 use crate::effects::{self, Effect, EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};

@@ -25,13 +25,13 @@
 //! Memory per pixel (race build): k × 20 B layers + 4 B arrival count + 16 B image + 4 B stand-in
 //! depth (+ 24 B tail targets with `tail = blend`).
 
-use super::shared::bind::{pipeline_layout, Bindings, Kind as B, Res, FC, FLOAT};
 use super::shared::counted_capture::{PreparedAbuffer, Replay};
 use super::shared::race::judge_race;
 use super::shared::store::{dummy_depth, split_buffers, storage_pass_with, storage_pipeline_with};
 use super::shared::tail::{self, TailTargets, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
+use crate::bind::{pipeline_layout, Bindings, Kind as B, Res, FC, FLOAT};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{compute_pipeline, pixel_pass, read_vec, shader, STORAGE_RW};

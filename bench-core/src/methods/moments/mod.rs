@@ -26,10 +26,10 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::shared::bind::{pipeline_layout, Bindings, Kind as B, Res, FC, FLOAT};
 use super::shared::store::{dummy_depth, storage_pass, storage_pipeline};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::axes::{Axis, Point};
+use crate::bind::{pipeline_layout, Bindings, Kind as B, Res, FC, FLOAT};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{compute_pipeline, pixel_pass, read_vec, shader, STORAGE_RW};

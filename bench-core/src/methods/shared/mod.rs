@@ -1,10 +1,10 @@
-//! Pieces several methods build on; none of them is a method. A method folder imports from here
+//! Pieces several methods build on; none of them is a method. (The binding table every study
+//! uses is the harness's: [`crate::bind`].) A method folder imports from here
 //! and from nothing else under `methods` (tested: `tests/method_graph.rs`).
 //!
 //! | module            | what it is                                                           | used by |
 //! |-------------------|----------------------------------------------------------------------|---------|
 //! | `axes`            | axes read by more than one method (`max_layers`, `occlusion_stop`, `specialisation`) | peelers, k-buffers |
-//! | `bind`            | bindings declared once: a table builds the layout and the bind group; pipeline helpers | methods as they are converted |
 //! | `bucket`          | bucket peeling's shared capture, packing and CPU twins               | `bdp`, `bdp2`, `adp` |
 //! | `counted_capture` | the exact compute A-buffer (count → scan → fill → resolve or replay) | `compute_abuffer`, `mlab_ideal`, `adaptive_ideal` |
 //! | `kslots`          | per-pixel k slots, their entries, the atomic k-slot capture          | `kbuffer_rmw`, `kbuffer_atomic`, `hybrid` |
@@ -15,7 +15,6 @@
 //! | `tail`            | the out-of-order tail (what a bounded capture does not keep)          | k-buffers, `linked_list`, `mlab`, `hybrid` |
 
 pub mod axes;
-pub mod bind;
 pub mod bucket;
 pub mod counted_capture;
 pub mod kslots;

@@ -12,12 +12,12 @@
 //! S × (4 B depth + 16 B RGBA32F sum + 4 B R32F revealage with the correction) + 16 B running
 //! sum + 16 B image. Transparency only (no fold: it never has the fragments in order).
 
-use super::shared::bind::{
-    blended, pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, ADD, FLOAT, TRANSMIT,
-};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::aa::{self, AaMode};
 use crate::axes::{Axis, Point};
+use crate::bind::{
+    blended, pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, ADD, FLOAT, TRANSMIT,
+};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::gpu_util::{clear_depth, compute_pipeline, read_vec, shader, STORAGE_RW};

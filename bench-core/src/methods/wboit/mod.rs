@@ -15,8 +15,8 @@ use crate::gpu_util::{
     STORAGE_RW,
 };
 
-use super::shared::bind::{pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, FLOAT};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
+use crate::bind::{pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, FLOAT};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use crate::timing::GpuTimer;

@@ -19,11 +19,9 @@
 //! check this GPU count against the CPU twin routing the reference fragment lists.
 
 use crate::axes::{Axis, Point};
+use crate::bind::{pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, Res, FC, FLOAT};
 use crate::effects::{Effect, EffectConfig, FOLD_STATE_BYTES};
 use crate::gpu_util::{compute_pipeline, read_vec, STORAGE_RW};
-use crate::methods::shared::bind::{
-    pipeline_layout, render_pipeline, Bindings, Kind as B, Raster, Res, FC, FLOAT,
-};
 use crate::methods::shared::packing::PACKING_WGSL;
 use crate::record::{cols, Flag};
 

@@ -55,11 +55,11 @@
 //! `transform = vertex`) and the big-triangle list (2 words per big triangle + 1 per tile).
 
 use crate::aa::{AaCapture, AaMode};
+use crate::bind::{mesh_buffers, pipeline_layout, Bindings, Kind as B, Res};
 use crate::effects::{EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::gpu_util::{check_storage_size, compute_pipeline, read_vec, shader, STORAGE_RW};
-use crate::methods::shared::bind::{mesh_buffers, pipeline_layout, Bindings, Kind as B, Res};
 use crate::methods::{Capture, Expected, FrameStats, Prepared};
 use crate::record::Flag;
 use crate::timing::GpuTimer;

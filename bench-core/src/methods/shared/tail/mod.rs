@@ -11,10 +11,10 @@
 //! replays) keeps the same sums in registers instead.
 
 use crate::axes::Axis;
+use crate::bind::{Kind, Res};
 use crate::gpu::Gpu;
 use crate::gpu_scene::{AllocCounter, GpuScene};
 use crate::gpu_util::{compute_pipeline, texture_entry};
-use crate::methods::shared::bind::{Kind, Res};
 use crate::oit::{Keep, TailMode};
 use crate::record::cols;
 
