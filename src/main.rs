@@ -5,10 +5,10 @@ mod sweep;
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
-use bench_core::methods;
 use bench_core::{BackendChoice, Gpu, GpuOptions};
 use clap::{Args, Parser, Subcommand};
 use mfx::STUDIES;
+use mfx_multifragment::methods;
 use scenarios::{ParamValue, Params, SceneSpec, Suite};
 use schema::cols;
 
@@ -472,7 +472,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             let scene = SceneSpec::new(&scene, p).build()?;
             let g = Gpu::new(&gpu.options())?;
-            let (files, legend) = bench_core::shading::debug::write_views(
+            let (files, legend) = mfx_shading::debug::write_views(
                 &g,
                 &scene,
                 width,
@@ -863,7 +863,7 @@ fn render(job: &RenderJob) -> Result<()> {
         bail!("--png and --reference-png take one method; use --reference-out DIR for several");
     }
     let need_gpu = job.png.is_some() || job.reference_out.is_some();
-    let lists = Some(bench_core::reference::rasterize(&scene, w, h));
+    let lists = Some(mfx_reference::rasterize(&scene, w, h));
     if lists.as_ref().is_some_and(|l| l.total_fragments() == 0) {
         // Not an error (an empty view is a valid question), but never silent: every image of
         // it is the background, and every method "matches" it.
@@ -930,7 +930,8 @@ fn render(job: &RenderJob) -> Result<()> {
             ..Default::default()
         })
         .expect("a valid plan");
-        let mut measured = bench_core::method::measure(&gpu, &gscene, m.as_ref(), point, &plan)?;
+        let mut measured =
+            mfx_multifragment::method::measure(&gpu, &gscene, m.as_ref(), point, &plan)?;
         let mut cap = measured.prepared.readback(&gpu, &gscene)?;
         let img = cap
             .image
@@ -960,18 +961,18 @@ fn render(job: &RenderJob) -> Result<()> {
             .as_ref()
             .expect("the reference is rasterised for every render");
         measured.prepared.judge(&mut cap, lists);
-        let folds = bench_core::effects::AXES
+        let folds = mfx_multifragment::effects::AXES
             .iter()
             .all(|e| m.axes().iter().any(|a| a.name() == e.name()));
         let effect = if folds {
-            bench_core::effects::EffectConfig::from_point(point).map_err(usage)?
+            mfx_multifragment::effects::EffectConfig::from_point(point).map_err(usage)?
         } else {
-            bench_core::effects::EffectConfig::default()
+            mfx_multifragment::effects::EffectConfig::default()
         };
-        let j = bench_core::judge::judge(
+        let j = mfx_multifragment::judge::judge(
             &cap,
             lists,
-            bench_core::judge::Context {
+            mfx_multifragment::judge::Context {
                 scene: &scene,
                 effect: &effect,
                 exact: m.exact(),

@@ -8,7 +8,7 @@ use std::collections::BTreeSet;
 use scenarios::papers::{self, PapersFile, PointRef};
 use scenarios::{ParamValue, Problem, Suite};
 
-use bench_core::studies::{by_kind, Methods};
+use bench_core::study::{by_kind, Methods};
 
 use crate::STUDIES;
 

@@ -9,7 +9,7 @@ use anyhow::{bail, Context, Result};
 use bench_core::manifest::{context_block, write_runs_json, AdapterInfo, RunManifest};
 use bench_core::record::{cols, CsvSink, Row, SamplesSink, Sink, Status, SCHEMA_VERSION};
 use bench_core::runner::{self, RunOptions};
-use bench_core::studies::Group;
+use bench_core::study::Group;
 use bench_core::Gpu;
 use clap::Args;
 use mfx::STUDIES;
@@ -100,7 +100,7 @@ fn apply_sets(suite: &mut scenarios::Suite, sets: &[String]) -> Result<()> {
         let mut known = std::collections::BTreeSet::new();
         for spec in &mut suite.studies {
             let declared = spec.methods.iter().any(|m| {
-                bench_core::methods::by_name(m).is_some_and(|m| {
+                mfx_multifragment::methods::by_name(m).is_some_and(|m| {
                     m.axes().iter().any(|a| {
                         known.insert(a.name().to_string());
                         a.name() == axis

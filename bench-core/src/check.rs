@@ -12,7 +12,7 @@ use scenarios::suite::{study_table, STUDY_KEYS};
 use scenarios::{ParamValue, Problem, SceneError, StudySpec, Suite};
 
 use crate::axes::Axis;
-use crate::studies::{by_kind, points, Methods, PointSpec, Study};
+use crate::study::{by_kind, points, Methods, PointSpec, Study};
 
 /// Every problem of `suite` (empty when it can run).
 pub fn check_suite(studies: &[&dyn Study], suite: &Suite) -> Vec<Problem> {

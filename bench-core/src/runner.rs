@@ -11,7 +11,7 @@ use crate::gpu_scene::GpuScene;
 use crate::measure::{measure_timed, set_timing, TimingPlan};
 use crate::record::{cols, Row, Sink, Status, SCHEMA_VERSION};
 pub use crate::record::{error_row, failed_row, one_line, set_params, skipped_row};
-use crate::studies::{by_kind, points, Group, GroupCtx, PointSpec, Study};
+use crate::study::{by_kind, points, Group, GroupCtx, PointSpec, Study};
 use crate::{CoreError, Result};
 
 /// Where a sweep runs and how it identifies itself.

@@ -155,7 +155,7 @@ pub mod cols {
     );
     pub const EXACT_BOUND: Col = Col::new(
         "exact_bound",
-        "the max-abs error bound `exact` was judged with: the f32 rounding of the effect's compositing over the pixel's fragments (derived in bench-core/src/judge.rs); the order of fragments at near-equal depths is not part of it (depth_ties)",
+        "the max-abs error bound `exact` was judged with: the f32 rounding of the effect's compositing over the pixel's fragments (derived in studies/multifragment/src/judge.rs); the order of fragments at near-equal depths is not part of it (depth_ties)",
     );
     pub const EFFECT: Col = Col::new(
         "effect",
