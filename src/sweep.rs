@@ -93,7 +93,8 @@ fn apply_sets(suite: &mut scenarios::Suite, sets: &[String], pats: &[glob::Patte
     } else {
         let mut keep = std::collections::BTreeSet::new();
         for software in [false, true] {
-            let groups = runner::expand(STUDIES, suite, software).map_err(|e| usage(e.to_string()))?;
+            let groups =
+                runner::expand(STUDIES, suite, software).map_err(|e| usage(e.to_string()))?;
             for g in filter_groups(groups, pats) {
                 for p in &g.points {
                     keep.insert((g.study_index, p.method.clone()));

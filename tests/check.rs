@@ -325,13 +325,13 @@ fn an_unread_axis_leaves_the_point_key_and_the_row_and_its_points_collapse() {
         "methods = [\"linked_list\"]\naxes = { pool = [\"counted\", \"fixed\"], layers = [4, 8] }",
         QUADS,
     );
-    let (Some(s), p) = bench_core::check::check_text(&text, "t.toml") else {
+    let (Some(s), p) = bench_core::check::check_text(STUDIES, &text, "t.toml") else {
         panic!("the suite parses");
     };
     assert!(p.is_empty(), "{}", problem::report(&p));
     let spec = &s.studies[0];
-    let study = bench_core::check::study_of(spec).unwrap();
-    let points = bench_core::studies::points(study.as_ref(), spec).unwrap();
+    let study = bench_core::study::by_kind(STUDIES, &spec.kind).unwrap();
+    let points = bench_core::study::points(study, spec).unwrap();
     let labels: Vec<String> = points.iter().map(|p| p.given().label()).collect();
     assert_eq!(points.len(), 3, "{labels:?}");
     let counted: Vec<_> = points
