@@ -132,7 +132,7 @@ fn check_accessors(
             fits(
                 format!("accessor {} sparse indices", a.index()),
                 &ix.view(),
-                ix.offset() as usize,
+                ix.offset(),
                 sp.count(),
                 ix_size,
             )?;
@@ -140,7 +140,7 @@ fn check_accessors(
             fits(
                 format!("accessor {} sparse values", a.index()),
                 &vals.view(),
-                vals.offset() as usize,
+                vals.offset(),
                 sp.count(),
                 elem,
             )?;

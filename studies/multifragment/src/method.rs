@@ -176,12 +176,12 @@ pub fn measure_interleaved(
     items: &[(&dyn Method, &Point)],
     plan: &TimingPlan,
 ) -> Vec<Result<Measured<dyn Prepared>>> {
-    type Prepare<'a> = Box<dyn Fn(&GpuScene) -> Result<Box<dyn Prepared>> + 'a>;
+    type Make<'a> = dyn Fn(&GpuScene) -> Result<Box<dyn Prepared>> + 'a;
+    type Prepare<'a> = Box<Make<'a>>;
     let makes: Vec<Prepare<'_>> = items
         .iter()
         .map(|&(m, p)| Box::new(move |s: &GpuScene| m.prepare(gpu, s, p)) as Prepare<'_>)
         .collect();
-    let makes: Vec<&dyn Fn(&GpuScene) -> Result<Box<dyn Prepared>>> =
-        makes.iter().map(|m| m.as_ref()).collect();
+    let makes: Vec<&Make<'_>> = makes.iter().map(|m| m.as_ref()).collect();
     bench_core::measure::measure_interleaved(gpu, scene, &makes, plan)
 }
