@@ -639,6 +639,118 @@ mod tests {
         assert_eq!(judge_order(&[]), None);
     }
 
+    /// The numerals of a text as numbers ("1,000" is 1000; "RGBA32F" gives 32).
+    fn numbers(text: &str) -> Vec<f64> {
+        let mut out = Vec::new();
+        let mut cur = String::new();
+        for c in text.chars().chain(std::iter::once(' ')) {
+            if c.is_ascii_digit() || (!cur.is_empty() && (c == '.' || c == ',')) {
+                cur.push(c);
+            } else if !cur.is_empty() {
+                let t = cur.trim_end_matches(['.', ',']).replace(',', "");
+                out.extend(t.parse::<f64>().ok());
+                cur.clear();
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn every_published_value_of_the_sources_has_an_entry() {
+        // Transcribed from the four documents in ../shared/sources/ (tables and numbers in the
+        // text): each must be the value, ratio, comparison, claim or setup of some figure of its
+        // source's papers file, reproduced or with the reason it is not.
+        let published: &[(&str, &[f64])] = &[
+            // Liu et al. Figs. 1.2 and 1.3 (fps).
+            (
+                "liu-bdp-gpupro",
+                &[256.0, 128.0, 106.0, 24.0, 212.0, 183.0, 20.0],
+            ),
+            // Bavoil: Table 3.1 (four GPUs × four modes).
+            (
+                "bavoil-2007",
+                &[
+                    0.80, 24.54, 21.07, 15.54, 7.10, 9.45, 8.31, 4.40, 7.73, 4.56, 48.4, 90.5,
+                    3.36, 7.43, 17.5, 54.8,
+                ],
+            ),
+            // Table 3.2, Table 3.3.
+            (
+                "bavoil-2007",
+                &[
+                    110.0, 119.0, 131.0, 144.0, 97.4, 107.0, 116.0, 127.0, 158.0, 161.0, 1.01,
+                    10.1, 10.8, 2.56, 0.35,
+                ],
+            ),
+            // Table 3.4 (7800 GTX then X800).
+            (
+                "bavoil-2007",
+                &[
+                    397.0, 207.0, 253.0, 41.0, 311.0, 228.0, 322.0, 237.0, 205.0, 252.0, 259.0,
+                    256.0, 5.1, 4.9, 257.0, 244.0, 243.0, 193.0, 5.4,
+                ],
+            ),
+            // Table 6.1 (MP, SP, SPwH on the Dragon, Powerplant, Lucy).
+            (
+                "bavoil-2007",
+                &[
+                    41.4, 10.3, 139.0, 3.1, 2.6, 5.1, 1.3, 20.1, 0.2, 0.4, 0.1, 1.7,
+                ],
+            ),
+            // The text: Fig. 3.1's 1M-vertex cliff and the X800's crash above 2M, the Lucy 28M
+            // crash unbatched, Fig. 3.2's 500–1,000 batches, Fig. 5.5's 4.1 and 1.2 fps at 289
+            // and 1089 samples, Fig. 5.8's 5.9 fps against 17 min, §5.5.1's 2×, Fig. 5.6's 441.
+            (
+                "bavoil-2007",
+                &[
+                    1e6, 2e6, 28e6, 500.0, 1000.0, 4.1, 1.2, 289.0, 1089.0, 5.9, 17.0, 2.0, 441.0,
+                ],
+            ),
+            // Tovey & McAuley: six SPEs, 256 KB of local store, a 128-byte release value.
+            ("lightprepass-gpupro", &[6.0, 256.0, 128.0]),
+            // Split/Second: 128 raw IDs into 32 shaders, QUAD's 4 and RECT's 3 indices,
+            // 321×181 tile vertices at 1280×720.
+            (
+                "splitsecond-geg2",
+                &[128.0, 32.0, 4.0, 3.0, 321.0, 181.0, 1280.0, 720.0],
+            ),
+            // BF3: geometry pass 6–10 ms, copy 1.3 ms, 40 ms over 5 SPUs, culling 1–4 ms for
+            // 1000+ lights, diffuse-only 2×, LUT 21 cycles, 1–6 SPUs, reload 10 s.
+            (
+                "bf3-dice",
+                &[6.0, 10.0, 1.3, 40.0, 5.0, 1.0, 4.0, 1000.0, 2.0, 21.0],
+            ),
+        ];
+        for (name, values) in published {
+            let text = BUILTIN.iter().find(|(n, _)| n == name).unwrap().1;
+            let f = parse(text).unwrap();
+            let mut found: Vec<f64> = Vec::new();
+            for fig in &f.figures {
+                found.extend(fig.value);
+                found.extend(fig.ratio);
+                let s = &fig.setup;
+                for t in [
+                    fig.against.as_deref(),
+                    fig.claim.as_deref(),
+                    Some(s.scene.as_str()),
+                    s.layers.as_deref(),
+                    Some(s.gpu.as_str()),
+                ] {
+                    found.extend(numbers(t.unwrap_or("")));
+                }
+                found.extend(s.resolution.iter().flatten().map(|x| *x as f64));
+            }
+            for v in *values {
+                assert!(
+                    found
+                        .iter()
+                        .any(|x| (x - v).abs() <= 1e-9 * v.abs().max(1.0)),
+                    "{name}: {v} has no entry"
+                );
+            }
+        }
+    }
+
     #[test]
     fn bare_numbers_are_numerals_outside_words() {
         assert_eq!(
