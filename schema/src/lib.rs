@@ -978,7 +978,7 @@ pub mod cols {
     );
     pub const DEPTH_TIE_PIXELS: Col = Col::new(
         "depth_tie_pixels",
-        "pixels whose image is off the f64 ground truth beyond the f32 bound of its arithmetic (exact_bound) but within what compositing fragments within the method's depth precision in another order can make: the truth has no defined order there (flag depth_ties); judged for methods that claim every fragment (claims_exact), at pixels within capacity; empty otherwise",
+        "pixels whose image is off the f64 ground truth beyond the f32 bound of its arithmetic (exact_bound) by what compositing fragments within the method's depth precision in another order makes: the truth has no defined order there (flag depth_ties). Transparency: every order of the pixel's near-equal-depth runs is tried (each channel held to the range of the orders beyond 5040 of them), so a fragment's colour off is not a tie however near its depths; translucency and Fresnel: none (no order changes them); csg and dof: within the order bound. Judged for methods that claim every fragment (claims_exact), at pixels within capacity; empty otherwise",
     );
     pub const FRAGMENTS_DROPPED: Col = Col::new(
         "fragments_dropped",
