@@ -370,7 +370,12 @@ impl<'g, T: Timed + ?Sized> PointTimer<'g, T> {
             gpu.settle()?;
         }
         let t0 = std::time::Instant::now();
+        gpu.take_stage_violation();
         let prepared = scoped(gpu, "prepare", || make(scene))?;
+        // A layout over a per-stage storage limit wgpu does not check (compatibility mode's).
+        if let Some(why) = gpu.take_stage_violation() {
+            return Err(CoreError::Limit(why));
+        }
         let prepare_ms = t0.elapsed().as_secs_f64() * 1e3;
         Ok(PointTimer {
             gpu,

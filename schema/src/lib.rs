@@ -108,7 +108,7 @@ pub mod cols {
     );
     pub const LIMITS: Col = Col::new(
         "limits",
-        "the limits profile the device was requested with (`mfx sweep --limits`): `adapter` (the adapter's own, the default), `webgpu` (WebGPU's default limits and optional features only) or `downlevel` (a WebGL2-class device: no compute, no storage buffers); what does not fit is a `skipped` row naming the limit",
+        "the limits profile the device was requested with (`mfx sweep --limits`): `adapter` (the adapter's own, the default), `webgpu` (WebGPU's default limits and optional features only), `webgpu-compat` (WebGPU's compatibility-mode defaults: no storage buffers in vertex shaders, 4 in fragment shaders (checked by mfx: wgpu has no per-stage limit), 128 invocations a workgroup, 4096² textures) or `downlevel` (a WebGL2-class device: no compute, no storage buffers); what does not fit is a `skipped` row naming the limit",
     );
     pub const WIDTH: Col = Col::new("width", "render target width in pixels");
     pub const HEIGHT: Col = Col::new("height", "render target height in pixels");
@@ -234,7 +234,7 @@ pub mod cols {
     );
     pub const CAPTURE: Col = Col::new(
         "capture",
-        "compute_abuffer: pixels (count → scan → fill: an 8 B fragment per pixel slot, then sort) | tiles (triangles over small_max binned to 8×8-pixel tiles instead, 8 B per tile and triangle; each tile's pixels test them and sort in workgroup memory: their fragments are never stored)",
+        "compute_abuffer: pixels (count → scan → fill: an 8 B fragment per pixel slot, then sort) | tiles (triangles over small_max binned to 8×8-pixel tiles instead, 8 B per tile and triangle; each tile's pixels test them and sort in workgroup memory: their fragments are never stored) | auto (the method's choice at prepare: tiles where the triangles over small_max make at least 4 fragments a pixel, else pixels; the notes say which)",
     );
     pub const ATTRIBUTES: Col = Col::new(
         "attributes",
@@ -242,11 +242,15 @@ pub mod cols {
     );
     pub const RESOLVE_SORT: Col = Col::new(
         "resolve_sort",
-        "compute_abuffer: workgroup (lists of up to 32 fragments sorted in workgroup memory) | private (every list in a per-thread array)",
+        "compute_abuffer: workgroup (lists of up to 32 fragments sorted in workgroup memory; 16 where workgroup memory is short, as WebGPU's 16 KiB with capture = tiles) | private (every list in a per-thread array)",
+    );
+    pub const BINDINGS: Col = Col::new(
+        "bindings",
+        "compute_abuffer: auto (native bindings where the device allows 10 storage buffers per stage, else packed) | packed (6 storage buffers: the mesh packed at prepare into one 48 B-a-vertex buffer, the work counters after the offsets, so the fragments may take 3 bindings: within WebGPU's default 8). Which one ran is in `split` (`packed`) and the notes",
     );
     pub const POOL: Col = Col::new(
         "pool",
-        "linked_list: counted (one sub-pool per 8×8-pixel tile, sized by a prepare-time count) | fixed (layers × pixels nodes, one cursor)",
+        "linked_list: counted (one sub-pool per 8×8-pixel tile, sized by a prepare-time count) | fixed (layers × pixels nodes, one cursor) | pixel (one sub-pool per pixel, sized by a prepare-time count: its nodes contiguous, so no head exchange and no link; 8 B compact nodes; single-sample)",
     );
     pub const POOL_SLACK: Col = Col::new(
         "pool_slack",
@@ -888,7 +892,7 @@ pub mod cols {
     pub const BYTES_PER_PIXEL: Col = Col::new("bytes_per_pixel", "bytes_allocated / pixels");
     pub const SPLIT: Col = Col::new(
         "split",
-        "how a buffer over the largest storage binding was split to fit (`bindings:N`: one array over N storage bindings, indexed through a switch); empty where nothing was split. Compare with the unsplit row of a larger limit for the cost",
+        "how a buffer over the largest storage binding was split to fit (`bindings:N`: one array over N storage bindings, indexed through a switch; the k-buffers' entries, MLAB's layers, the linked list's node pool, the compute A-buffer's fragments), and `packed` where the compute A-buffer packed its bindings into WebGPU's 8 (`packed,bindings:N` both); empty where nothing was. Compare with the unsplit row of a larger limit for the cost",
     );
     pub const BYTES_OVERHEAD: Col = Col::new(
         "bytes_overhead",
@@ -1102,6 +1106,7 @@ pub const GROUPS: &[Group] = &[
             cols::CAPTURE,
             cols::ATTRIBUTES,
             cols::RESOLVE_SORT,
+            cols::BINDINGS,
             cols::POOL,
             cols::POOL_SLACK,
             cols::NODE,
