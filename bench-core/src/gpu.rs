@@ -186,6 +186,10 @@ pub struct Gpu {
     /// The fixed kernel timed after each sample (`measure`'s canary rule), built on first use,
     /// with the fastest time it has taken in this process.
     canary: std::sync::OnceLock<Mutex<Canary>>,
+    /// The memory roofs (`roofs`), measured on first use ([`Gpu::roofs`]).
+    roofs: std::sync::OnceLock<Option<crate::roofs::Roofs>>,
+    /// `--timing cold=true`: the buffer cleared before each sample to flush the L2.
+    l2_flush: std::sync::OnceLock<wgpu::Buffer>,
     /// The first bind group layout made since the last [`Gpu::take_stage_violation`] that is
     /// over the profile's per-stage storage limits (`limits::check_stage_storage`), which wgpu
     /// does not check: a point that made one is skipped naming the limit.
@@ -354,6 +358,8 @@ impl Gpu {
             monitor,
             spin: std::sync::OnceLock::new(),
             canary: std::sync::OnceLock::new(),
+            roofs: std::sync::OnceLock::new(),
+            l2_flush: std::sync::OnceLock::new(),
             stage_violation: Mutex::new(None),
             texture_memory: crate::texture_memory::TextureMemory::Pooled,
             dedicated_textures: Default::default(),
@@ -768,6 +774,35 @@ impl Gpu {
         ))
     }
 
+    /// The memory roofs of this adapter, measured on the first call (`mfx sweep` makes it
+    /// before any point, as the calibration set) and kept: None without timestamp queries or
+    /// when the measurement failed (it says why on stderr; a row then has no roof).
+    pub fn roofs(&self) -> Option<&crate::roofs::Roofs> {
+        self.roofs
+            .get_or_init(|| {
+                let (max_binding, _) = crate::limits::storage_binding_limit(self.held());
+                let d = crate::roofs::Device {
+                    device: &self.device,
+                    queue: &self.queue,
+                    adapter_name: &self.facts.name,
+                    software: self.facts.is_software,
+                    max_binding,
+                    timestamps: self.has(wgpu::Features::TIMESTAMP_QUERY),
+                };
+                let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+                let r = crate::roofs::measure(&d);
+                let r = match pollster::block_on(scope.pop()) {
+                    Some(e) => Err(CoreError::Gpu(e.to_string())),
+                    None => r,
+                };
+                r.unwrap_or_else(|e| {
+                    eprintln!("mfx: memory roofs not measured: {e}");
+                    None
+                })
+            })
+            .as_ref()
+    }
+
     /// Notes a bind group layout's entries against the profile's per-stage storage limits
     /// (`limits::check_stage_storage`; only compatibility mode has them). Layout helpers call it.
     pub fn note_layout(&self, what: &str, entries: &[wgpu::BindGroupLayoutEntry]) {
@@ -779,6 +814,43 @@ impl Gpu {
     /// The per-stage storage limit a layout went over since the last call, if one did.
     pub fn take_stage_violation(&self) -> Option<String> {
         self.stage_violation.lock().unwrap().take()
+    }
+
+    /// The roofs if they were measured ([`Gpu::roofs`]), without measuring them.
+    pub fn measured_roofs(&self) -> Option<&crate::roofs::Roofs> {
+        self.roofs.get().and_then(|r| r.as_ref())
+    }
+
+    /// Bytes `--timing cold=true` clears before each sample: twice the L2 (measured or known),
+    /// else 256 MiB on hardware (16 MiB on a software adapter), within the largest buffer.
+    pub fn l2_flush_bytes(&self) -> u64 {
+        let l2 = self
+            .measured_roofs()
+            .map(|r| r.l2_bytes)
+            .or_else(|| crate::roofs::known_l2(&self.facts.name));
+        let bytes = match (l2, self.facts.is_software) {
+            (Some(l2), _) => 2 * l2,
+            (None, false) => 256 << 20,
+            (None, true) => 16 << 20,
+        };
+        bytes.max(1 << 20).min(self.limits.max_buffer_size) & !3
+    }
+
+    /// Flushes the L2 (`--timing cold=true`, nvbench's cold mode): an untimed clear of
+    /// [`Gpu::l2_flush_bytes`], waited for, so the next frame finds none of its data cached.
+    pub fn flush_l2(&self) -> Result<()> {
+        let buf = self.l2_flush.get_or_init(|| {
+            self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("L2 flush"),
+                size: self.l2_flush_bytes(),
+                usage: wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        enc.clear_buffer(buf, 0, None);
+        self.queue.submit([enc.finish()]);
+        self.wait()
     }
 
     /// One untimed busy dispatch, waited for.

@@ -27,6 +27,7 @@ pub mod oit;
 pub mod papers;
 pub mod record;
 pub mod reference;
+pub mod roofs;
 pub mod runner;
 pub mod shading;
 pub mod studies;

@@ -735,7 +735,19 @@ pub mod cols {
     );
     pub const PEAK_BANDWIDTH_FRAC: Col = Col::new(
         "peak_bandwidth_frac",
-        "bytes_per_s / the adapter's peak memory bandwidth (NVML: memory bus width × max memory clock × 2, DDR); empty where NVML does not give both",
+        "bytes_per_s / roof_bytes_per_s: the declared traffic's share of the measured roof of the row's working set (the L2's where l2_resident, else the DRAM's; run.json `roofs`); in a run without measured roofs, / the adapter's peak memory bandwidth (NVML: memory bus width × max memory clock × 2, DDR), and empty where NVML does not give both",
+    );
+    pub const WORKING_SET_BYTES: Col = Col::new(
+        "working_set_bytes",
+        "the bytes a frame touches, as declared: what the method allocated (bytes_allocated) plus the scene's geometry buffers",
+    );
+    pub const L2_RESIDENT: Col = Col::new(
+        "l2_resident",
+        "true where the declared working set fits the adapter's L2 (run.json `roofs.l2_bytes`: the adapter's published size, else the knee of the roofs' sweep) and the samples were warm: the row is read against the L2 roof; false beyond it, and with `[timing] cold = true` (the L2 flushed before each sample); empty without measured roofs",
+    );
+    pub const ROOF_BYTES_PER_S: Col = Col::new(
+        "roof_bytes_per_s",
+        "the memory roof the row is read against (peak_bandwidth_frac's denominator): the copy kernel's measured bytes per second (read + written) with its working set in the L2 (l2_resident) or far beyond it (run.json `roofs`, measured once per run); empty without measured roofs",
     );
     pub const GPU_MS_REL_NOISE: Col = Col::new(
         "gpu_ms_rel_noise",
@@ -1272,6 +1284,9 @@ pub const GROUPS: &[Group] = &[
             cols::FRAGMENTS_PER_S,
             cols::BYTES_PER_S,
             cols::PEAK_BANDWIDTH_FRAC,
+            cols::WORKING_SET_BYTES,
+            cols::L2_RESIDENT,
+            cols::ROOF_BYTES_PER_S,
             cols::GPU_MS_REL_NOISE,
             cols::GPU_MS_MEAN,
             cols::GPU_MS_CI_LO,
