@@ -183,6 +183,16 @@ fn stacked_scans_time_the_linked_list_and_the_compute_abuffer_on_two_stacked_mes
 
 #[test]
 fn perf_issue41_crosses_every_axis_of_the_ab_on_every_scene_and_resolution() {
+    let path = format!(
+        "{}/../scenarios/suites/perf-issue41.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    // Every key and axis value is declared; the stacks are baked on the device machine only.
+    let problems: Vec<_> = bench_core::check::check_suite(&Suite::load(&path).unwrap())
+        .into_iter()
+        .filter(|p| !p.message.contains("file not found"))
+        .collect();
+    assert!(problems.is_empty(), "{problems:?}");
     let groups = load("perf-issue41");
     // quads ×3, shells ×4, grass ×2, the two stacks: 11 scenes × 512², 1024², 2048².
     assert_eq!(groups.len(), 33);
