@@ -71,6 +71,10 @@ enum Cmd {
         /// Print one JSON object (a key per list) instead of text.
         #[arg(long)]
         json: bool,
+        /// Also list the internal probe suites (scenarios/suites/internal/: one question each,
+        /// kept for the runs that answered it).
+        #[arg(long)]
+        all: bool,
         #[command(flatten)]
         gpu: GpuArgs,
     },
@@ -143,14 +147,17 @@ enum Cmd {
     },
     /// Render one scene with one method to a PNG (and the CPU reference beside it).
     Render {
+        /// Scene generator (`mfx list scenes`: quads, shells, grass, …), its parameters from
+        /// --param; or give a model file with --model instead.
         #[arg(long)]
         scene: Option<String>,
         /// Scene parameter, repeatable: --param depth_complexity=8
         #[arg(long = "param")]
         params: Vec<String>,
-        /// Render an OBJ file (the `obj` scene generator).
-        #[arg(long)]
-        obj: Option<PathBuf>,
+        /// Render a model file: OBJ, PLY (.ply, .ply.gz) or glTF 2.0 (.gltf, .glb), by its
+        /// extension (the `obj` or `gltf` scene generator). `--obj` is the old name.
+        #[arg(long, alias = "obj", conflicts_with = "scene")]
+        model: Option<PathBuf>,
         /// Method, or a comma-separated list with --reference-out (one image each).
         #[arg(long, default_value = "depth_peel")]
         method: String,
@@ -207,7 +214,7 @@ enum Cmd {
         #[command(flatten)]
         gpu: GpuArgs,
     },
-    /// Load model files (OBJ, PLY, .ply.gz) as a scene would and print their triangle and vertex
+    /// Load model files (OBJ, PLY, .ply.gz, glTF .gltf/.glb) as a scene would and print their triangle and vertex
     /// counts; no GPU. A model a script fetches names the script when it is missing.
     Model {
         /// Model files, e.g. models/dragon_vrip.ply.gz
@@ -234,7 +241,7 @@ pub(crate) fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String
 pub(crate) fn parse_kv(s: &str) -> Result<(String, ParamValue)> {
     let (k, v) = s
         .split_once('=')
-        .with_context(|| format!("'{s}' is not key=value"))?;
+        .ok_or_else(|| usage(format!("'{s}' is not key=value")))?;
     let val = if let Ok(i) = v.parse::<i64>() {
         ParamValue::Int(i)
     } else if let Ok(x) = v.parse::<f64>() {
@@ -276,7 +283,21 @@ pub(crate) fn checked_suite(name: &str) -> Result<Suite> {
     })
 }
 
+/// EGL (wgpu's GL probe, Mesa's loaders) asks libwayland for a display, which prints
+/// "error: XDG_RUNTIME_DIR is invalid or not set" where the variable is missing or relative (ssh,
+/// containers, CI) although nothing needs a display. mfx renders offscreen, so it points the
+/// variable at the temp directory before any thread or GPU library starts: the probe then finds
+/// no socket and says nothing.
+fn quiet_egl_runtime_dir() {
+    let valid =
+        std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_absolute());
+    if !valid {
+        std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir());
+    }
+}
+
 fn main() {
+    quiet_egl_runtime_dir();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     if let Err(e) = run(cli) {
@@ -292,11 +313,16 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.cmd {
-        Cmd::List { what, gpu, json } => {
+        Cmd::List {
+            what,
+            gpu,
+            json,
+            all,
+        } => {
             if json {
-                list_json(what.as_deref(), &gpu)
+                list_json(what.as_deref(), &gpu, all)
             } else {
-                list(what.as_deref(), &gpu)
+                list(what.as_deref(), &gpu, all)
             }
         }
         Cmd::Sweep(a) => sweep::sweep(&a),
@@ -394,7 +420,7 @@ fn run(cli: Cli) -> Result<()> {
         Cmd::Render {
             scene,
             params,
-            obj,
+            model,
             method,
             axes,
             width,
@@ -412,13 +438,13 @@ fn run(cli: Cli) -> Result<()> {
                 let (k, v) = parse_kv(kv)?;
                 p.set(&k, v);
             }
-            let generator = match (&scene, &obj) {
+            let generator = match (&scene, &model) {
                 (_, Some(path)) => {
                     p.set("path", ParamValue::Str(path.display().to_string()));
-                    "obj".to_string()
+                    scenarios::model::generator_for(path).to_string()
                 }
                 (Some(s), None) => s.clone(),
-                (None, None) => bail!("give --scene NAME or --obj FILE"),
+                (None, None) => return Err(usage("give --scene NAME or --model FILE")),
             };
             let mut a = Params::new();
             for kv in &axes {
@@ -426,7 +452,9 @@ fn run(cli: Cli) -> Result<()> {
                 a.set(&k, v);
             }
             if png.is_none() && camera_out.is_none() && reference_out.is_none() {
-                bail!("nothing to write: give --png, --camera-out and/or --reference-out");
+                return Err(usage(
+                    "nothing to write: give --png, --camera-out and/or --reference-out",
+                ));
             }
             render(&RenderJob {
                 spec: SceneSpec::new(&generator, p),
@@ -445,7 +473,8 @@ fn run(cli: Cli) -> Result<()> {
         }
         Cmd::Model { paths } => {
             for p in &paths {
-                let m = scenarios::obj::load(p)?;
+                // A bad or missing file is bad input (exit 2), named by the loader.
+                let m = scenarios::model::load(p).map_err(|e| usage(e.to_string()))?;
                 println!(
                     "{}: {} triangles, {} vertices",
                     p.display(),
@@ -505,23 +534,30 @@ fn check_list(what: Option<&str>) -> Result<()> {
 
 /// Every suite name: the built-in ones, then the files of scenarios/suites/ that are not
 /// built in (a file of a built-in's name wins when loaded, as `Suite::load` says).
-fn suite_names() -> Vec<(String, bool)> {
+fn suite_names(internal: bool) -> Vec<(String, bool)> {
     let mut names: Vec<(String, bool)> = scenarios::suite::BUILTIN
         .iter()
         .map(|(n, _)| (n.to_string(), true))
         .collect();
-    let mut files: Vec<String> = std::fs::read_dir("scenarios/suites")
-        .map(|rd| {
-            rd.filter_map(|e| e.ok())
-                .filter_map(|e| {
-                    let p = e.path();
-                    (p.extension()? == "toml")
-                        .then(|| p.file_stem()?.to_str().map(str::to_string))?
-                })
-                .collect()
-        })
-        .unwrap_or_default();
-    files.sort();
+    let stems = |dir: &str| -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .map(|rd| {
+                rd.filter_map(|e| e.ok())
+                    .filter_map(|e| {
+                        let p = e.path();
+                        (p.extension()? == "toml")
+                            .then(|| p.file_stem()?.to_str().map(str::to_string))?
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        v.sort();
+        v
+    };
+    let mut files = stems("scenarios/suites");
+    if internal {
+        files.extend(stems("scenarios/suites/internal"));
+    }
     for f in files {
         if !names.iter().any(|(n, _)| *n == f) {
             names.push((f, false));
@@ -560,7 +596,7 @@ fn adapter_rows(gpu: &GpuArgs) -> Vec<serde_json::Value> {
 }
 
 /// `mfx list --json`: one object, a key per list asked for.
-fn list_json(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
+fn list_json(what: Option<&str>, gpu: &GpuArgs, internal: bool) -> Result<()> {
     use serde_json::json;
     check_list(what)?;
     let is = |w: &str| what.is_none() || what == Some(w);
@@ -594,7 +630,7 @@ fn list_json(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
         o.insert("studies".into(), v.into());
     }
     if is("suites") {
-        let v: Vec<_> = suite_names()
+        let v: Vec<_> = suite_names(internal)
             .into_iter()
             .map(|(name, builtin)| match bench_core::check::load(&name) {
                 Ok(suite) => json!({
@@ -632,7 +668,7 @@ fn list_json(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
     Ok(())
 }
 
-fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
+fn list(what: Option<&str>, gpu: &GpuArgs, internal: bool) -> Result<()> {
     let all = what.is_none();
     let is = |w: &str| all || what == Some(w);
     check_list(what)?;
@@ -662,8 +698,8 @@ fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
         }
     }
     if is("suites") {
-        println!("suites (built in, then files of scenarios/suites/ only; a file scenarios/suites/NAME.toml or any path wins):");
-        for (name, builtin) in suite_names() {
+        println!("suites (built in, then files of scenarios/suites/ only; a file scenarios/suites/NAME.toml or any path wins{}):", if internal { "; then the internal probes of scenarios/suites/internal/" } else { "; --all adds the internal probes" });
+        for (name, builtin) in suite_names(internal) {
             match Suite::load(&name) {
                 Ok(suite) => println!(
                     "  {name:<16} {}{} rows on a GPU, {} on a software adapter{}\n  {:<16} {}",
@@ -736,7 +772,7 @@ fn models_line(suite: &Suite) -> String {
             } else if let Some(cmd) = scenarios::obj::fetch_command(&p) {
                 format!("{p} (missing here: fetch it with `{cmd}`)")
             } else {
-                format!("{p} (missing here: copy it from ../shared/models)")
+                format!("{p} (missing here: models/README.md says where it comes from)")
             }
         })
         .collect();
@@ -777,6 +813,80 @@ fn check_side(what: &str, side: Option<u32>) -> Result<()> {
         ))),
         _ => Ok(()),
     }
+}
+
+/// Bytes a render holds at once, estimated: per pixel the reference's offsets, its f64
+/// composite and the f32 images (≈ 128 B), and per fragment one reference fragment, the count
+/// scaled up from a probe raster of the same view at 64 pixels across.
+fn render_bytes(scene: &scenarios::Scene, w: u32, h: u32) -> u64 {
+    const PER_PIXEL: u64 = 128;
+    let pixels = w as u64 * h as u64;
+    let pw = 64u32.min(w);
+    let ph = ((h as u64 * pw as u64) / w.max(1) as u64).clamp(1, 64) as u32;
+    let probe = bench_core::reference::rasterize(scene, pw, ph).total_fragments() as f64;
+    let fragments = probe * pixels as f64 / (pw as f64 * ph as f64);
+    let per_fragment = std::mem::size_of::<bench_core::reference::RefFragment>() as f64;
+    pixels * PER_PIXEL + (fragments * per_fragment) as u64
+}
+
+/// The host's available memory (MemAvailable of /proc/meminfo), where the OS says it.
+fn host_available_bytes() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let kb: u64 = info
+        .lines()
+        .find_map(|l| l.strip_prefix("MemAvailable:"))?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()?;
+    Some(kb * 1024)
+}
+
+fn gib(b: u64) -> String {
+    format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
+}
+
+/// A render whose estimate exceeds the host's available memory is a usage error (exit 2) before
+/// the reference grows; one over 1 GiB says its estimate first.
+fn check_host_memory(estimate: u64, w: u32, h: u32) -> Result<()> {
+    if let Some(avail) = host_available_bytes() {
+        if estimate > avail {
+            return Err(usage(format!(
+                "a {w}x{h} render needs about {} (reference fragments and images), more than this host's {} available: render a smaller size",
+                gib(estimate),
+                gib(avail)
+            )));
+        }
+    }
+    if estimate > 1 << 30 {
+        eprintln!(
+            "mfx: a {w}x{h} render: about {} of memory (estimate)",
+            gib(estimate)
+        );
+    }
+    Ok(())
+}
+
+/// The adapter's own limits on a render of this size: its largest texture side and its largest
+/// buffer (one RGBA f32 image is read back in one buffer).
+fn check_adapter_limits(gpu: &Gpu, w: u32, h: u32) -> Result<()> {
+    let side = gpu.limits.max_texture_dimension_2d;
+    if w > side || h > side {
+        return Err(usage(format!(
+            "{w}x{h} is over {}'s largest texture side {side}",
+            gpu.facts.name
+        )));
+    }
+    let image = w as u64 * h as u64 * 16;
+    if image > gpu.limits.max_buffer_size {
+        return Err(usage(format!(
+            "a {w}x{h} RGBA f32 image is {}, over {}'s largest buffer ({}): render a smaller size",
+            gib(image),
+            gpu.facts.name,
+            gib(gpu.limits.max_buffer_size)
+        )));
+    }
+    Ok(())
 }
 
 fn render(job: &RenderJob) -> Result<()> {
@@ -833,11 +943,11 @@ fn render(job: &RenderJob) -> Result<()> {
             (job.height, cam.height, "height"),
         ] {
             if given.is_some_and(|g| g != file) {
-                bail!(
+                return Err(usage(format!(
                     "--{what} {} differs from {}'s {what} {file}: the camera matrix is made for its own size",
                     given.unwrap_or(0),
                     path.display()
-                );
+                )));
             }
         }
         (w, h) = (cam.width, cam.height);
@@ -858,9 +968,22 @@ fn render(job: &RenderJob) -> Result<()> {
         println!("camera -> {}", p.display());
     }
     if job.methods.len() > 1 && (job.png.is_some() || job.reference_png.is_some()) {
-        bail!("--png and --reference-png take one method; use --reference-out DIR for several");
+        return Err(usage(
+            "--png and --reference-png take one method; use --reference-out DIR for several",
+        ));
     }
     let need_gpu = job.png.is_some() || job.reference_out.is_some();
+    // A big render is refused before it grows: its bytes estimated from a small probe raster,
+    // against the host's memory and (below, once the adapter is open) the adapter's limits.
+    let estimate = render_bytes(&scene, w, h);
+    check_host_memory(estimate, w, h)?;
+    let gpu = if need_gpu {
+        let gpu = Gpu::new(&job.gpu.options())?;
+        check_adapter_limits(&gpu, w, h)?;
+        Some(gpu)
+    } else {
+        None
+    };
     let lists = Some(bench_core::reference::rasterize(&scene, w, h));
     if lists.as_ref().is_some_and(|l| l.total_fragments() == 0) {
         // Not an error (an empty view is a valid question), but never silent: every image of
@@ -904,10 +1027,9 @@ fn render(job: &RenderJob) -> Result<()> {
             lists.total_fragments()
         );
     }
-    if !need_gpu {
+    let Some(gpu) = gpu else {
         return Ok(());
-    }
-    let gpu = Gpu::new(&job.gpu.options())?;
+    };
     let gscene = bench_core::gpu_scene::GpuScene::upload(&gpu, &scene, w, h);
     for (method, point) in job.methods.iter().zip(&points) {
         let m = methods::get(method);

@@ -80,9 +80,27 @@ pub fn baselines_root() -> PathBuf {
     PathBuf::from("results").join("baselines")
 }
 
-/// `--set AXIS=V1,V2`: replaces the axis in every study whose methods declare it (and in
-/// their per-method tables); an axis no study uses is refused. The caller re-checks the suite.
-fn apply_sets(suite: &mut scenarios::Suite, sets: &[String]) -> Result<()> {
+/// `--set AXIS=V1,V2`: replaces the axis for every method that reads it, among the methods
+/// `--filter` selects (the filter comes first: `--filter 'kbuffer_*' --set layers=8,16` touches
+/// the k-buffers only). A method that declares the axis but reads it at none of its points
+/// (`layers` of the linked list's counted pool) is left alone; an axis no selected method reads
+/// is refused. The caller re-checks the suite.
+fn apply_sets(suite: &mut scenarios::Suite, sets: &[String], pats: &[glob::Pattern]) -> Result<()> {
+    // (study index, method) of every point the filter keeps, on either kind of adapter.
+    let selected: Option<std::collections::BTreeSet<(usize, String)>> = if pats.is_empty() {
+        None
+    } else {
+        let mut keep = std::collections::BTreeSet::new();
+        for software in [false, true] {
+            let groups = runner::expand(suite, software).map_err(|e| usage(e.to_string()))?;
+            for g in filter_groups(groups, pats) {
+                for p in &g.points {
+                    keep.insert((g.study_index, p.method.clone()));
+                }
+            }
+        }
+        Some(keep)
+    };
     for s in sets {
         let (axis, vals) = s
             .split_once('=')
@@ -97,29 +115,83 @@ fn apply_sets(suite: &mut scenarios::Suite, sets: &[String]) -> Result<()> {
         }
         let mut used = false;
         let mut known = std::collections::BTreeSet::new();
-        for spec in &mut suite.studies {
-            let declared = spec.methods.iter().any(|m| {
-                bench_core::methods::by_name(m).is_some_and(|m| {
-                    m.axes().iter().any(|a| {
+        let mut unread = Vec::new();
+        for (si, spec) in suite.studies.iter_mut().enumerate() {
+            let Some(study) = bench_core::check::study_of(spec) else {
+                continue;
+            };
+            let points = bench_core::studies::points(study.as_ref(), spec).unwrap_or_default();
+            let chosen = |m: &str| {
+                selected
+                    .as_ref()
+                    .is_none_or(|k| k.contains(&(si, m.to_string())))
+            };
+            let mut targets = Vec::new();
+            for p in &points {
+                let Some(a) = study
+                    .axes(&p.method)
+                    .into_iter()
+                    .inspect(|a| {
                         known.insert(a.name().to_string());
-                        a.name() == axis
                     })
-                })
-            });
-            if declared || spec.axes.contains_key(axis) {
-                spec.axes.insert(axis.to_string(), values.clone());
-                for t in spec.method_axes.values_mut() {
-                    if let Some(v) = t.get_mut(axis) {
-                        *v = values.clone();
-                    }
+                    .find(|a| a.name() == axis)
+                else {
+                    continue;
+                };
+                if !chosen(&p.method) || targets.contains(&p.method) {
+                    continue;
+                }
+                match a.ignored_at(&p.point) {
+                    None => targets.push(p.method.clone()),
+                    Some(with) => unread.push(format!("{} ({with})", p.method)),
+                }
+            }
+            for m in targets {
+                unread.retain(|u| !u.starts_with(&format!("{m} (")));
+                if spec.methods_given {
+                    spec.method_axes
+                        .entry(m)
+                        .or_default()
+                        .insert(axis.to_string(), values.clone());
+                } else {
+                    // A study of one implicit method: its axes are the study's.
+                    spec.axes.insert(axis.to_string(), values.clone());
                 }
                 used = true;
             }
+            // The study's own value of the axis, now replaced for every method that read it,
+            // would name configurations that do not differ for the rest: it goes.
+            if spec.method_axes.values().any(|o| o.contains_key(axis))
+                && spec.axes.contains_key(axis)
+            {
+                let points = bench_core::studies::points(study.as_ref(), spec).unwrap_or_default();
+                let still_read = points.iter().any(|p| {
+                    !spec
+                        .method_axes
+                        .get(&p.method)
+                        .is_some_and(|o| o.contains_key(axis))
+                        && study
+                            .axes(&p.method)
+                            .iter()
+                            .any(|a| a.name() == axis && a.ignored_at(&p.point).is_none())
+                });
+                if !still_read {
+                    spec.axes.remove(axis);
+                }
+            }
         }
         if !used {
+            unread.sort();
+            unread.dedup();
             return Err(usage(format!(
-                "--set '{s}': no study of suite '{}' has a method with axis '{axis}' (axes of its methods: {})",
+                "--set '{s}': no {}method of suite '{}' reads axis '{axis}'{} (axes of its methods: {})",
+                if selected.is_some() { "selected " } else { "" },
                 suite.name,
+                if unread.is_empty() {
+                    String::new()
+                } else {
+                    format!("; declared but unread by {}", unread.join(", "))
+                },
                 known.into_iter().collect::<Vec<_>>().join(", ")
             )));
         }
@@ -313,10 +385,11 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         bench_core::measure::TimingPlan::from_spec(&suite.timing_for(false))
             .map_err(|e| usage(format!("--timing: {e}")))?;
     }
-    if !a.set.is_empty() {
-        apply_sets(&mut suite, &a.set)?;
-    }
+    // The filter first: `--set` touches only the methods it selects.
     let pats = filters(&a.filter)?;
+    if !a.set.is_empty() {
+        apply_sets(&mut suite, &a.set, &pats)?;
+    }
     let shard = a.shard.unwrap_or((0, 1));
     // The points on either kind of adapter (the `[software]` profile may change resolutions):
     // a filter that matches nothing on both is a typo, refused now.

@@ -272,9 +272,12 @@ fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
     }
 }
 
-/// An axis swept (two values or more) for a method where the method does not read it (its
-/// declaration says when it does: [`Axis::only_when`]): its points would repeat one
-/// configuration, and their noise would read as the axis's effect.
+/// An axis given for methods that read it at none of their points (its declaration says when
+/// it is read: [`Axis::only_when`]): refused alike for one value or many, since a value no
+/// point reads would name configurations that do not differ. Given in `method_axes.M`: M must
+/// read it at one of its points; given in the study's `axes`: some method of the study must.
+/// Where a point leaves an axis unread, its value is dropped from that point (empty cell, not in
+/// the point key) and points that then coincide run once ([`crate::axes::Point::resolve`]).
 fn ignored_axes(
     file: &str,
     table: &str,
@@ -283,44 +286,81 @@ fn ignored_axes(
     points: &[studies::PointSpec],
     out: &mut Vec<Problem>,
 ) {
-    let mut said = BTreeSet::new();
+    // (method, axis) → the settings that left it unread, or None once some point reads it.
+    let mut unread: std::collections::BTreeMap<(String, &'static str), Option<BTreeSet<String>>> =
+        Default::default();
     for p in points {
-        let swept = scenarios::suite::axes_for_method(spec, &p.method);
         for a in study.axes(&p.method) {
-            if swept.get(a.name()).is_none_or(|v| v.len() < 2) {
+            if a.when.is_none() {
                 continue;
             }
-            let Some(with) = a.ignored_at(&p.point) else {
-                continue;
-            };
-            if !said.insert((p.method.clone(), a.name(), with.clone())) {
-                continue;
+            let e = unread
+                .entry((p.method.clone(), a.name()))
+                .or_insert_with(|| Some(BTreeSet::new()));
+            match (a.ignored_at(&p.point), e.as_mut()) {
+                (None, _) => *e = None,
+                (Some(with), Some(set)) => {
+                    set.insert(with);
+                }
+                (Some(_), None) => {}
             }
-            let w = a.when.expect("ignored_at needs a condition");
-            let own = spec
-                .method_axes
-                .get(&p.method)
-                .is_some_and(|o| o.contains_key(a.name()));
-            let tn = if own {
-                format!("{table} › method_axes.{}", p.method)
-            } else {
-                format!("{table} › axes")
-            };
+        }
+    }
+    let never_read = |m: &str, axis: &str| -> Option<String> {
+        unread
+            .get(&(
+                m.to_string(),
+                study.axes(m).iter().find(|a| a.name() == axis)?.name(),
+            ))?
+            .as_ref()
+            .map(|w| w.iter().cloned().collect::<Vec<_>>().join(", "))
+    };
+    let why = |axis: &str, m: &str, with: &str| {
+        let w = study
+            .axes(m)
+            .iter()
+            .find(|a| a.name() == axis)
+            .and_then(|a| a.when)
+            .expect("only axes with a condition are unread");
+        format!(
+            "axis {axis} has no effect on method {m} (with {with}): it is read only with {} = {}, so a value given for it would name configurations that do not differ; give it where it is read (with {} = {}) or drop it",
+            w.axis,
+            w.values.join(" | "),
+            w.axis,
+            w.values.join(" | "),
+        )
+    };
+    for (m, over) in &spec.method_axes {
+        for k in over.keys() {
+            if let Some(with) = never_read(m, k) {
+                out.push(Problem::new(
+                    file,
+                    &format!("{table} › method_axes.{m}"),
+                    k,
+                    why(k, m, &with),
+                ));
+            }
+        }
+    }
+    let methods: BTreeSet<&str> = points.iter().map(|p| p.method.as_str()).collect();
+    for k in spec.axes.keys() {
+        let declaring: Vec<&str> = methods
+            .iter()
+            .copied()
+            .filter(|m| !spec.method_axes.get(*m).is_some_and(|o| o.contains_key(k)))
+            .filter(|m| study.axes(m).iter().any(|a| a.name() == k))
+            .collect();
+        let silent: Vec<(&str, String)> = declaring
+            .iter()
+            .filter_map(|m| never_read(m, k).map(|w| (*m, w)))
+            .collect();
+        if !declaring.is_empty() && silent.len() == declaring.len() {
+            let (m, with) = &silent[0];
             out.push(Problem::new(
                 file,
-                &tn,
-                a.name(),
-                format!(
-                    "axis {} has no effect on method {} (with {with}): it is read only with {} = {}, so its values would repeat one configuration; sweep it where it is read (method_axes.{} with {} = {}) or give {} one value",
-                    a.name(),
-                    p.method,
-                    w.axis,
-                    w.values.join(" | "),
-                    p.method,
-                    w.axis,
-                    w.values.join(" | "),
-                    p.method,
-                ),
+                &format!("{table} › axes"),
+                k,
+                why(k, m, with),
             ));
         }
     }

@@ -505,7 +505,11 @@ mod tests {
 
     #[test]
     fn resuming_into_samples_written_under_another_header_is_refused() {
-        let d = std::env::temp_dir().join(format!("mfx-samples-hdr-{}", std::process::id()));
+        let d_tmp = tempfile::Builder::new()
+            .prefix("mfx-samples-hdr-")
+            .tempdir()
+            .unwrap();
+        let d = d_tmp.path().to_path_buf();
         std::fs::create_dir_all(&d).unwrap();
         let p = d.join("samples.csv");
         // The header before `session` was recorded.

@@ -222,7 +222,7 @@ pub fn run(
                 let owed_floors = floors.iter().zip(&floors_todo).filter(|(_, t)| **t);
                 for p in owed_floors.map(|(p, _)| p).chain(group.points.iter()) {
                     let mut row = Row::new();
-                    set_params(&mut row, p.point.values())?;
+                    set_params(&mut row, &p.point.recorded())?;
                     let row = if skipped {
                         skipped_row(row, why)
                     } else {
@@ -347,7 +347,7 @@ pub fn run(
         for (i, p) in group.points.iter().enumerate() {
             if !done[i] {
                 let mut row = Row::new();
-                set_params(&mut row, p.point.values())?;
+                set_params(&mut row, &p.point.recorded())?;
                 add_scene(&mut row);
                 write(
                     sink,

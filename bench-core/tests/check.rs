@@ -165,10 +165,27 @@ fn an_axis_value_no_adapter_could_run_is_an_error_not_a_skipped_row() {
     );
 }
 
-fn temp_dir(tag: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("mfx-check-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A temp folder removed when the test ends, pass or fail (derefs to its path).
+struct Tmp(tempfile::TempDir);
+impl std::ops::Deref for Tmp {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+impl AsRef<std::path::Path> for Tmp {
+    fn as_ref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+fn tmp_dir(prefix: &str) -> Tmp {
+    Tmp(tempfile::Builder::new()
+        .prefix(&format!("{prefix}-"))
+        .tempdir()
+        .expect("a temp folder"))
+}
+fn temp_dir(tag: &str) -> Tmp {
+    tmp_dir(&format!("mfx-check-{tag}"))
 }
 
 #[test]
@@ -248,63 +265,99 @@ fn every_problem_is_reported_at_once() {
     );
 }
 
-/// An axis swept where a method does not read it (its declaration says when it does) would
-/// present noise as the axis's effect: refused, naming the method and the setting.
+/// An axis given only where it is never read (its declaration says when it is) would name
+/// configurations that do not differ: refused alike for one value or many, naming the method
+/// and the setting. Where some point reads it, the points that do not drop it (next test).
 #[test]
-fn an_axis_swept_where_a_method_ignores_it_is_a_problem() {
-    let list = "methods = [\"kbuffer_rmw\", \"linked_list\"]";
-    let m = one(
-        &suite("", &format!("{list}\naxes = {{ layers = [4, 8] }}"), QUADS),
-        &[
-            "'layers'",
-            "no effect on method linked_list (with pool=counted)",
-        ],
-    );
-    assert!(m.contains("study 0 (methods) › axes"), "{m}");
-    // Where the method reads it, or with one value, it is fine.
-    for axes in [
-        "axes = { layers = [4, 8] }\nmethod_axes = { linked_list = { pool = [\"fixed\"] } }",
-        "axes = { layers = [4, 8] }\nmethod_axes = { linked_list = { layers = [16] } }",
-        "axes = { layers = [8] }",
-    ] {
-        let p = problems(&suite("", &format!("{list}\n{axes}"), QUADS));
-        assert!(p.is_empty(), "{axes}:\n{}", problem::report(&p));
+fn an_axis_no_point_reads_is_refused_for_one_value_or_many() {
+    for values in ["[4, 8]", "[8]"] {
+        let m = one(
+            &suite(
+                "",
+                &format!("methods = [\"linked_list\"]\naxes = {{ layers = {values} }}"),
+                QUADS,
+            ),
+            &[
+                "'layers'",
+                "no effect on method linked_list (with pool=counted)",
+            ],
+        );
+        assert!(m.contains("study 0 (methods) › axes"), "{m}");
+        let m = one(
+            &suite(
+                "",
+                &format!("methods = [\"kbuffer_rmw\", \"linked_list\"]\nmethod_axes = {{ linked_list = {{ layers = {values} }} }}"),
+                QUADS,
+            ),
+            &["'layers'", "with pool=counted"],
+        );
+        assert!(m.contains("method_axes.linked_list"), "{m}");
     }
-    // Both pools swept: layers is ignored by the counted half only, and said once.
-    let m = one(
-        &suite(
-            "",
-            "methods = [\"linked_list\"]\naxes = { pool = [\"counted\", \"fixed\"], layers = [4, 8], pool_slack = [0, 50] }",
-            QUADS,
-        ),
-        &["'layers'", "with pool=counted"],
-    );
-    assert!(m.contains("pool = fixed"), "{m}");
-    one(
-        &suite(
-            "",
-            "methods = [\"linked_list\"]\naxes = { pool = [\"counted\", \"fixed\"], layers = [4, 8], pool_slack = [0, 50] }",
-            QUADS,
-        ),
-        &["'pool_slack'", "with pool=fixed"],
-    );
+    // Read somewhere: by another method of the study, or by the method at another setting.
+    for study in [
+        "methods = [\"kbuffer_rmw\", \"linked_list\"]\naxes = { layers = [4, 8] }",
+        "methods = [\"kbuffer_rmw\", \"linked_list\"]\naxes = { layers = [8] }",
+        "methods = [\"linked_list\"]\naxes = { pool = [\"counted\", \"fixed\"], layers = [4, 8], pool_slack = [0, 50] }",
+        "methods = [\"linked_list\"]\naxes = { aa = [\"none\", \"msaa4\"], aa_capture = [\"sample\", \"coverage\"] }",
+        &format!("{PEEL}\naxes = {{ effect = [\"transparency\", \"translucency\"], sigma = [0.5, 2.0] }}"),
+    ] {
+        let p = problems(&suite("", study, QUADS));
+        assert!(p.is_empty(), "{study}:\n{}", problem::report(&p));
+    }
     // The effects' own parameters: sigma is read by translucency and fresnel only.
     one(
         &suite(
             "",
-            &format!("{PEEL}\naxes = {{ effect = [\"transparency\", \"translucency\"], sigma = [0.5, 2.0] }}"),
+            &format!("{PEEL}\naxes = {{ effect = [\"transparency\"], sigma = [0.5] }}"),
             QUADS,
         ),
         &["'sigma'", "depth_peel (with effect=transparency)"],
     );
-    // The MSAA capture mode is not read without MSAA.
-    one(
-        &suite(
-            "",
-            "methods = [\"linked_list\"]\naxes = { aa = [\"none\", \"msaa4\"], aa_capture = [\"sample\", \"coverage\"] }",
-            QUADS,
-        ),
-        &["'aa_capture'", "with aa=none"],
+}
+
+/// Where a point leaves an axis unread its value is in neither its key nor its row, and points
+/// that then coincide run once: the linked list's counted pool once, the fixed pool per layers.
+#[test]
+fn an_unread_axis_leaves_the_point_key_and_the_row_and_its_points_collapse() {
+    let text = suite(
+        "",
+        "methods = [\"linked_list\"]\naxes = { pool = [\"counted\", \"fixed\"], layers = [4, 8] }",
+        QUADS,
+    );
+    let (Some(s), p) = bench_core::check::check_text(&text, "t.toml") else {
+        panic!("the suite parses");
+    };
+    assert!(p.is_empty(), "{}", problem::report(&p));
+    let spec = &s.studies[0];
+    let study = bench_core::check::study_of(spec).unwrap();
+    let points = bench_core::studies::points(study.as_ref(), spec).unwrap();
+    let labels: Vec<String> = points.iter().map(|p| p.given().label()).collect();
+    assert_eq!(points.len(), 3, "{labels:?}");
+    let counted: Vec<_> = points
+        .iter()
+        .filter(|p| {
+            p.given()
+                .get("pool")
+                .is_some_and(|v| v.to_string() == "counted")
+        })
+        .collect();
+    assert_eq!(counted.len(), 1, "{labels:?}");
+    assert!(counted[0].given().get("layers").is_none(), "{labels:?}");
+    assert!(
+        counted[0].point.recorded().get("layers").is_none(),
+        "no layers cell"
+    );
+    let fixed = points
+        .iter()
+        .find(|p| {
+            p.given()
+                .get("pool")
+                .is_some_and(|v| v.to_string() == "fixed")
+        })
+        .unwrap();
+    assert!(
+        fixed.point.recorded().get("layers").is_some(),
+        "the fixed pool reads layers"
     );
 }
 

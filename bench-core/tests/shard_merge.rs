@@ -2,7 +2,7 @@
 //! exactly the point keys of the unsharded run; every point lands in exactly one shard; saved
 //! images travel with the merge and hold the image of their row.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use bench_core::record::{CsvSink, Status};
 use bench_core::runner::{self, RunOptions};
@@ -26,10 +26,27 @@ fn sweep(gpu: &bench_core::Gpu, suite: &Suite, shard: (usize, usize), out: &Path
     assert_eq!(n, runner::rows_in(&groups));
 }
 
-fn tmp() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mfx-shard-merge-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+/// A temp folder removed when the test ends, pass or fail (derefs to its path).
+struct Tmp(tempfile::TempDir);
+impl std::ops::Deref for Tmp {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+impl AsRef<std::path::Path> for Tmp {
+    fn as_ref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+fn tmp_dir(prefix: &str) -> Tmp {
+    Tmp(tempfile::Builder::new()
+        .prefix(&format!("{prefix}-"))
+        .tempdir()
+        .expect("a temp folder"))
+}
+fn tmp() -> Tmp {
+    tmp_dir("mfx-shard-merge")
 }
 
 fn rows(p: &Path) -> Vec<csv::StringRecord> {

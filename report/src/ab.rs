@@ -1387,7 +1387,11 @@ mod tests {
 
     #[test]
     fn the_gpu_calibration_is_read_from_run_json_where_written() {
-        let d = std::env::temp_dir().join(format!("mfx-ab-gpucal-{}", std::process::id()));
+        let d_tmp = tempfile::Builder::new()
+            .prefix("mfx-ab-gpucal-")
+            .tempdir()
+            .unwrap();
+        let d = d_tmp.path().to_path_buf();
         std::fs::create_dir_all(&d).unwrap();
         let csv = d.join("runs.csv");
         assert_eq!(gpu_calibration_ms(&csv), None, "no run.json");

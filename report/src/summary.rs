@@ -696,7 +696,11 @@ mod tests {
 
     fn runs(name: &str, rows: &[&str]) -> Runs {
         let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,gpu_ms_ci_lo,gpu_ms_ci_hi,samples,x_floor,rmse,bad_pixel_frac,matches_truth,exact,overflow_rate,flag";
-        let d = std::env::temp_dir().join(format!("mfx-summary-{name}-{}", std::process::id()));
+        let d_tmp = tempfile::Builder::new()
+            .prefix(&format!("mfx-summary-{name}-"))
+            .tempdir()
+            .unwrap();
+        let d = d_tmp.path().to_path_buf();
         std::fs::create_dir_all(&d).unwrap();
         let p = d.join("runs.csv");
         std::fs::write(&p, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
@@ -869,7 +873,11 @@ mod tests {
     #[test]
     fn a_tail_is_said_when_p99_exceeds_the_median_by_a_fifth_and_not_otherwise() {
         let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,gpu_ms_p50,gpu_ms_p95,gpu_ms_p99,samples,flag";
-        let d = std::env::temp_dir().join(format!("mfx-summary-tail-{}", std::process::id()));
+        let d_tmp = tempfile::Builder::new()
+            .prefix("mfx-summary-tail-")
+            .tempdir()
+            .unwrap();
+        let d = d_tmp.path().to_path_buf();
         std::fs::create_dir_all(&d).unwrap();
         let p = d.join("runs.csv");
         let rows = [

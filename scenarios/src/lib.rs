@@ -5,6 +5,7 @@
 
 pub mod camera;
 pub mod gltf;
+pub mod model;
 pub mod obj;
 pub mod papers;
 pub mod params;

@@ -141,6 +141,8 @@ impl Suite {
         let candidates = [
             p.to_path_buf(),
             PathBuf::from(format!("scenarios/suites/{name_or_path}.toml")),
+            // Probes of one question (`mfx list suites --all`), run by name like the others.
+            PathBuf::from(format!("scenarios/suites/internal/{name_or_path}.toml")),
         ];
         for c in &candidates {
             if c.is_dir() {

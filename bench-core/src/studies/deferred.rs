@@ -304,7 +304,7 @@ impl Study for DeferredStudy {
             let mut row = Row::new();
             row.set(cols::METHOD, &pt.method)
                 .set(cols::LIGHT_COUNT, scene.lights.len());
-            set_params(&mut row, pt.point.values())?;
+            set_params(&mut row, &pt.point.recorded())?;
             let tau = threshold(&pt.point);
             row.set(cols::CLAIMS_EXACT, tau == 0.0);
             let frac = pt.point.float(&DIFFUSE_ONLY_FRAC);

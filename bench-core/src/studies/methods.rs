@@ -92,7 +92,7 @@ pub fn run_methods_group(
         let mut row = Row::new();
         row.set(cols::METHOD, &pt.method)
             .set(cols::CLAIMS_EXACT, method.exact());
-        set_params(&mut row, pt.point.values())?;
+        set_params(&mut row, &pt.point.recorded())?;
         extra(&mut row, pt);
         let effect = match effect_of(method.as_ref(), &pt.point) {
             Ok(e) => e,

@@ -276,6 +276,14 @@ pub fn points(
                         problems.push(format!("{method} at {}: {why}", given.label()));
                         continue;
                     }
+                    // Values of an axis this point leaves unread are dropped from it, so points
+                    // that differed only there are one configuration: run once.
+                    if out
+                        .iter()
+                        .any(|o: &PointSpec| o.method == method && o.point.given() == point.given())
+                    {
+                        continue;
+                    }
                     out.push(PointSpec {
                         method: method.clone(),
                         point,

@@ -151,7 +151,7 @@ impl Study for PrepassStudy {
             row.set(cols::METHOD, &pt.method)
                 .set(cols::LIGHT_COUNT, scene.lights.len())
                 .set(cols::CLAIMS_EXACT, false);
-            set_params(&mut row, pt.point.values())?;
+            set_params(&mut row, &pt.point.recorded())?;
             match self.run_point(ctx, &pt.method, &pt.point, &mut row) {
                 Ok(Some((img, is_prepass))) => {
                     let e = image_error(&exact, &img, BAD_PIXEL_TOL);

@@ -1715,11 +1715,28 @@ mod tests {
         }
     }
 
-    fn tmp(name: &str) -> std::path::PathBuf {
-        let d = std::env::temp_dir().join(format!("mfx-charts-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
+    /// A temp folder removed when the test ends, pass or fail (derefs to its path).
+    struct Tmp(tempfile::TempDir);
+    impl std::ops::Deref for Tmp {
+        type Target = std::path::Path;
+        fn deref(&self) -> &std::path::Path {
+            self.0.path()
+        }
+    }
+    impl AsRef<std::path::Path> for Tmp {
+        fn as_ref(&self) -> &std::path::Path {
+            self.0.path()
+        }
+    }
+    fn tmp_dir(prefix: &str) -> Tmp {
+        Tmp(tempfile::Builder::new()
+            .prefix(&format!("{prefix}-"))
+            .tempdir()
+            .expect("a temp folder"))
+    }
+
+    fn tmp(name: &str) -> Tmp {
+        tmp_dir(&format!("mfx-charts-{name}"))
     }
 
     fn read_layout(d: &Path, stem: &str) -> Layout {

@@ -282,3 +282,19 @@ pub(crate) fn normalisation(mesh: &Mesh) -> (DVec3, f64) {
     };
     (centre, s)
 }
+
+/// Deterministic colour for index `i` (golden-ratio hue walk), with the given alpha.
+pub fn palette(i: u32, alpha: f32) -> [f32; 4] {
+    let h = (i as f32 * 0.618_034).fract() * 6.0;
+    let x = 1.0 - (h % 2.0 - 1.0).abs();
+    let (r, g, b) = match h as u32 {
+        0 => (1.0, x, 0.0),
+        1 => (x, 1.0, 0.0),
+        2 => (0.0, 1.0, x),
+        3 => (0.0, x, 1.0),
+        4 => (x, 0.0, 1.0),
+        _ => (1.0, 0.0, x),
+    };
+    // Keep channels away from 0 and 1 so compositing errors show in every channel.
+    [0.15 + 0.7 * r, 0.15 + 0.7 * g, 0.15 + 0.7 * b, alpha]
+}

@@ -1,6 +1,6 @@
 //! `compute_abuffer`: the exact A-buffer rasterised in compute (Maule et al. 2012's dynamic
 //! fragment buffer, count → scan → fill → sort and fold). The capture itself is
-//! `shared::counted_capture` (its doc and `PERF.md` say how and what the speed axes trade),
+//! `shared::counted_capture` (its doc and results/reference/2026-12-03-h200-resolve/perf-abuffer/PERF.md say how and what the speed axes trade),
 //! which `mlab_ideal` and `adaptive_ideal` replay; this module is the method: its axes, what it
 //! needs of the adapter, and `prepare`.
 

@@ -823,7 +823,7 @@ impl Study for GeometryStudy {
         for (i, pt) in ctx.group.points.iter().enumerate() {
             let mut row = Row::new();
             row.set(cols::METHOD, "geometry");
-            set_params(&mut row, pt.point.values())?;
+            set_params(&mut row, &pt.point.recorded())?;
             let spec = FeedSpec::from_point(&pt.point);
             spec.set_columns(&mut row);
             if let Some(why) = spec.unsupported(gpu, mesh) {

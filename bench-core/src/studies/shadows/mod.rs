@@ -102,7 +102,7 @@ impl Study for ShadowsStudy {
         let base_row = |point: &Point| -> Result<Row> {
             let mut row = Row::new();
             row.set(cols::METHOD, METHOD).set(cols::CLAIMS_EXACT, false);
-            set_params(&mut row, point.values())?;
+            set_params(&mut row, &point.recorded())?;
             row.set(cols::SHADOW_RAYS, set.rays_per_axis * set.rays_per_axis);
             Ok(row)
         };

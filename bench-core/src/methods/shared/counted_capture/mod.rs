@@ -14,7 +14,7 @@
 //! counts again and a fragment beyond the allocation is counted as lost (flag `overflow`), never
 //! silent — a dynamic scene would grow the array from that count, as engines do.
 //!
-//! Speed axes (each exact; what they trade is in `PERF.md` beside this file):
+//! Speed axes (each exact; what they trade is in results/reference/2026-12-03-h200-resolve/perf-abuffer/PERF.md, beside the run that measured them):
 //! - `transform = vertex|triangle`: `vertex` (default) transforms every vertex once into a
 //!   16 B-per-vertex clip buffer that count, fill and resolve read; `triangle` transforms each
 //!   triangle's corners in every kernel (the first version).
