@@ -40,8 +40,9 @@ pub(crate) struct GpuArgs {
     #[arg(long)]
     texture_memory: Option<bench_core::texture_memory::TextureMemory>,
     /// Limits the device is requested with: adapter (its own, the default), webgpu (WebGPU's
-    /// default limits: what a browser grants) or downlevel (a WebGL2-class device). What does
-    /// not fit is a `skipped` row naming the limit; k-buffers split their entries to fit.
+    /// default limits: what a browser grants), webgpu-compat (WebGPU's compatibility mode) or
+    /// downlevel (a WebGL2-class device). What does not fit is a `skipped` row naming the limit;
+    /// k-buffers split their entries to fit.
     #[arg(long, default_value = "adapter")]
     limits: bench_core::limits::Profile,
 }

@@ -547,6 +547,9 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
                     runs,
                 });
     }
+    // The memory roofs every row is read against (`roof_bytes_per_s`), before any point: on a
+    // software adapter too (its sweep is small), so every run records them.
+    manifest.roofs = gpu.roofs().cloned();
     manifest.write(&out)?;
     eprintln!(
         "mfx: suite '{}' on {} ({}, {}){}: {} groups, {total} rows{} -> {}",

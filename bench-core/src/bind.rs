@@ -137,6 +137,7 @@ impl Bindings {
     /// The layout of `rows` (binding, kind), visible to `stages` (the camera to all).
     pub fn new(gpu: &Gpu, label: &str, stages: wgpu::ShaderStages, rows: &[(u32, Kind)]) -> Self {
         let entries: Vec<_> = rows.iter().map(|&(b, k)| k.entry(b, stages)).collect();
+        gpu.note_layout(label, &entries);
         let layout = gpu
             .device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

@@ -27,6 +27,7 @@ pub mod manifest;
 pub mod measure;
 pub mod merge;
 pub mod record;
+pub mod roofs;
 pub mod runner;
 pub mod study;
 /// Test helpers (a shared adapter, small scenes): built for this crate's unit tests and,

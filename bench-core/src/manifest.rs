@@ -181,6 +181,10 @@ pub struct RunManifest {
     /// before issue 33, and on software adapters).
     #[serde(default)]
     pub calibration: Option<GpuCalibration>,
+    /// The adapter's memory roofs measured before the points (`roofs`: a copy kernel in and far
+    /// beyond the L2; absent in runs before issue 41 and without timestamp queries).
+    #[serde(default)]
+    pub roofs: Option<crate::roofs::Roofs>,
     /// The machine of the latest call (absent in run.json files older than this field).
     #[serde(default)]
     pub host: HostInfo,
@@ -269,6 +273,7 @@ impl RunManifest {
             finished: false,
             interrupted: None,
             calibration: None,
+            roofs: None,
             host: HostInfo::here(),
             build: BuildInfo::this(),
             software_profile: false,

@@ -49,6 +49,10 @@ pub struct TimingPlan {
     /// floor's history-dependent time did not move with it (1.041 / 1.465 ms settled or not),
     /// so it is off unless asked for.
     pub settle: bool,
+    /// `[timing] cold = true` (nvbench's cold mode): before each timed sample the L2 is flushed
+    /// by an untimed clear of twice its size ([`Gpu::flush_l2`]), so the frame finds none of
+    /// its data cached; its row is read against the DRAM roof (`l2_resident` false).
+    pub cold: bool,
 }
 
 impl Default for TimingPlan {
@@ -62,6 +66,7 @@ impl Default for TimingPlan {
             sessions: 1,
             canary_max_ratio: None,
             settle: false,
+            cold: false,
         }
     }
 }
@@ -92,6 +97,7 @@ impl TimingPlan {
             sessions: 1,
             canary_max_ratio: Some(0.0),
             settle: false,
+            cold: false,
         }
     }
 
@@ -145,6 +151,7 @@ impl TimingPlan {
             sessions: spec.sessions.map_or(d.sessions, |n| n as usize),
             canary_max_ratio: spec.canary_max_ratio.or(d.canary_max_ratio),
             settle: spec.settle.unwrap_or(d.settle),
+            cold: spec.cold.unwrap_or(d.cold),
         })
     }
 
@@ -174,6 +181,11 @@ impl TimingPlan {
         };
         let d = if self.settle {
             format!("{d}; GPU settled before each point")
+        } else {
+            d
+        };
+        let d = if self.cold {
+            format!("{d}; cold: L2 flushed before each sample (an untimed clear of twice its size)")
         } else {
             d
         };
@@ -208,6 +220,12 @@ pub struct Measured<T: ?Sized> {
     pub bytes_moved: u64,
     /// The adapter's peak memory bandwidth in bytes/s (NVML), where known.
     pub peak_bandwidth: Option<f64>,
+    /// The adapter's measured memory roofs, where this run measured them ([`Gpu::roofs`]).
+    pub roofs: Option<crate::roofs::Roofs>,
+    /// The frame's declared working set: its allocations and the scene's geometry.
+    pub working_set: u64,
+    /// Sampled cold (the L2 flushed before each sample).
+    pub cold: bool,
     /// The frame's own parts ([`Timed::parts`]) per kept sample, in sample order.
     pub parts: BTreeMap<&'static str, Vec<f64>>,
     pub prepared: Box<T>,
@@ -358,7 +376,12 @@ impl<'g, T: Timed + ?Sized> PointTimer<'g, T> {
             gpu.settle()?;
         }
         let t0 = std::time::Instant::now();
+        gpu.take_stage_violation();
         let prepared = scoped(gpu, "prepare", || make(scene))?;
+        // A layout over a per-stage storage limit wgpu does not check (compatibility mode's).
+        if let Some(why) = gpu.take_stage_violation() {
+            return Err(CoreError::Limit(why));
+        }
         let prepare_ms = t0.elapsed().as_secs_f64() * 1e3;
         Ok(PointTimer {
             gpu,
@@ -469,6 +492,9 @@ impl<'g, T: Timed + ?Sized> PointTimer<'g, T> {
     pub fn sample(&mut self) -> Result<Option<StopReason>> {
         if let Some(r) = self.stopped {
             return Ok(Some(r));
+        }
+        if self.plan.cold {
+            self.gpu.flush_l2()?;
         }
         let t0 = std::time::Instant::now();
         let (gpu, scene) = (self.gpu, self.scene);
@@ -598,6 +624,9 @@ impl<'g, T: Timed + ?Sized> PointTimer<'g, T> {
                 .as_ref()
                 .ok()
                 .and_then(|m| m.peak_bandwidth()),
+            roofs: self.gpu.measured_roofs().cloned(),
+            working_set: self.bytes_allocated + self.scene.bytes,
+            cold: self.plan.cold,
             parts: self.parts,
             prepared: self.prepared,
             warmup_frames: self.warmup_frames,
@@ -846,7 +875,20 @@ pub fn set_timing<T: ?Sized>(row: &mut Row, m: &Measured<T>, mesh: &scenarios::M
         if g.median > 0.0 && m.bytes_moved > 0 {
             let bps = m.bytes_moved as f64 / (g.median * 1e-3);
             row.set_f(cols::BYTES_PER_S, bps);
-            if let Some(peak) = m.peak_bandwidth.filter(|p| *p > 0.0) {
+            // Against the measured roof of the working set; the NVML spec only without one.
+            let roof = match &m.roofs {
+                Some(r) => {
+                    row.set(cols::L2_RESIDENT, !m.cold && r.resident(m.working_set));
+                    Some(r.roof(m.working_set, m.cold)).filter(|p| *p > 0.0)
+                }
+                None => m.peak_bandwidth,
+            };
+            if m.roofs.is_some() {
+                if let Some(r) = roof {
+                    row.set_f(cols::ROOF_BYTES_PER_S, r);
+                }
+            }
+            if let Some(peak) = roof.filter(|p| *p > 0.0) {
                 row.set_f(cols::PEAK_BANDWIDTH_FRAC, bps / peak);
             }
         }
@@ -898,7 +940,8 @@ pub fn set_timing<T: ?Sized>(row: &mut Row, m: &Measured<T>, mesh: &scenarios::M
     }
     row.samples = m.samples.clone();
     row.set(cols::GEOMETRY_PASSES, m.frame.geometry_passes)
-        .set(cols::BYTES_ALLOCATED, m.bytes_allocated);
+        .set(cols::BYTES_ALLOCATED, m.bytes_allocated)
+        .set(cols::WORKING_SET_BYTES, m.working_set);
     if let Some(o) = m.bytes_overhead {
         row.set(cols::BYTES_OVERHEAD, o);
     }

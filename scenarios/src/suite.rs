@@ -248,6 +248,7 @@ pub const SOFTWARE_KEYS: &[&str] = &[
     "sessions",
     "canary_max_ratio",
     "settle",
+    "cold",
 ];
 /// Keys of the `[timing]` table (also accepted in `[software]`, as overrides).
 pub const TIMING_KEYS: &[&str] = &[
@@ -264,6 +265,7 @@ pub const TIMING_KEYS: &[&str] = &[
     "sessions",
     "canary_max_ratio",
     "settle",
+    "cold",
 ];
 
 /// How the points of a suite are timed: each unset key takes the harness's default
@@ -299,6 +301,8 @@ pub struct TimingSpec {
     /// Wait for the GPU to finish and free what earlier points dropped before each point is
     /// prepared (default false).
     pub settle: Option<bool>,
+    /// Flush the L2 before each timed sample (nvbench's cold mode; default false).
+    pub cold: Option<bool>,
 }
 
 impl TimingSpec {
@@ -318,6 +322,7 @@ impl TimingSpec {
             sessions: over.sessions.or(self.sessions),
             canary_max_ratio: over.canary_max_ratio.or(self.canary_max_ratio),
             settle: over.settle.or(self.settle),
+            cold: over.cold.or(self.cold),
         }
     }
 }
@@ -559,6 +564,7 @@ fn timing_spec(cx: &mut Ctx<'_>, t: &toml::Table, tn: &str) -> TimingSpec {
     };
     let interleave = boolean(cx, "interleave");
     let settle = boolean(cx, "settle");
+    let cold = boolean(cx, "cold");
     let spec = TimingSpec {
         min_samples: int(cx, "min_samples", 1, 1_000_000).map(|i| i as u32),
         max_samples: int(cx, "max_samples", 1, 1_000_000).map(|i| i as u32),
@@ -573,6 +579,7 @@ fn timing_spec(cx: &mut Ctx<'_>, t: &toml::Table, tn: &str) -> TimingSpec {
         sessions: int(cx, "sessions", 1, 100).map(|i| i as u32),
         canary_max_ratio: float(cx, "canary_max_ratio", 0.0, 100.0),
         settle,
+        cold,
     };
     if let Some(r) = spec.canary_max_ratio {
         if r > 0.0 && r <= 1.0 {

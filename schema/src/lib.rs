@@ -108,7 +108,7 @@ pub mod cols {
     );
     pub const LIMITS: Col = Col::new(
         "limits",
-        "the limits profile the device was requested with (`mfx sweep --limits`): `adapter` (the adapter's own, the default), `webgpu` (WebGPU's default limits and optional features only) or `downlevel` (a WebGL2-class device: no compute, no storage buffers); what does not fit is a `skipped` row naming the limit",
+        "the limits profile the device was requested with (`mfx sweep --limits`): `adapter` (the adapter's own, the default), `webgpu` (WebGPU's default limits and optional features only), `webgpu-compat` (WebGPU's compatibility-mode defaults: no storage buffers in vertex shaders, 4 in fragment shaders (checked by mfx: wgpu has no per-stage limit), 128 invocations a workgroup, 4096² textures) or `downlevel` (a WebGL2-class device: no compute, no storage buffers); what does not fit is a `skipped` row naming the limit",
     );
     pub const WIDTH: Col = Col::new("width", "render target width in pixels");
     pub const HEIGHT: Col = Col::new("height", "render target height in pixels");
@@ -234,7 +234,7 @@ pub mod cols {
     );
     pub const CAPTURE: Col = Col::new(
         "capture",
-        "compute_abuffer: pixels (count → scan → fill: an 8 B fragment per pixel slot, then sort) | tiles (triangles over small_max binned to 8×8-pixel tiles instead, 8 B per tile and triangle; each tile's pixels test them and sort in workgroup memory: their fragments are never stored)",
+        "compute_abuffer: pixels (count → scan → fill: an 8 B fragment per pixel slot, then sort) | tiles (triangles over small_max binned to 8×8-pixel tiles instead, 8 B per tile and triangle; each tile's pixels test them and sort in workgroup memory: their fragments are never stored) | auto (the method's choice at prepare: tiles where the triangles over small_max make at least 4 fragments a pixel, else pixels; the notes say which)",
     );
     pub const ATTRIBUTES: Col = Col::new(
         "attributes",
@@ -242,11 +242,15 @@ pub mod cols {
     );
     pub const RESOLVE_SORT: Col = Col::new(
         "resolve_sort",
-        "compute_abuffer: workgroup (lists of up to 32 fragments sorted in workgroup memory) | private (every list in a per-thread array)",
+        "compute_abuffer: workgroup (lists of up to 32 fragments sorted in workgroup memory; 16 where workgroup memory is short, as WebGPU's 16 KiB with capture = tiles) | private (every list in a per-thread array)",
+    );
+    pub const BINDINGS: Col = Col::new(
+        "bindings",
+        "compute_abuffer: auto (native bindings where the device allows 10 storage buffers per stage, else packed) | packed (6 storage buffers: the mesh packed at prepare into one 48 B-a-vertex buffer, the work counters after the offsets, so the fragments may take 3 bindings: within WebGPU's default 8). Which one ran is in `split` (`packed`) and the notes",
     );
     pub const POOL: Col = Col::new(
         "pool",
-        "linked_list: counted (one sub-pool per 8×8-pixel tile, sized by a prepare-time count) | fixed (layers × pixels nodes, one cursor)",
+        "linked_list: counted (one sub-pool per 8×8-pixel tile, sized by a prepare-time count) | fixed (layers × pixels nodes, one cursor) | pixel (one sub-pool per pixel, sized by a prepare-time count: its nodes contiguous, so no head exchange and no link; 8 B compact nodes; single-sample)",
     );
     pub const POOL_SLACK: Col = Col::new(
         "pool_slack",
@@ -731,7 +735,19 @@ pub mod cols {
     );
     pub const PEAK_BANDWIDTH_FRAC: Col = Col::new(
         "peak_bandwidth_frac",
-        "bytes_per_s / the adapter's peak memory bandwidth (NVML: memory bus width × max memory clock × 2, DDR); empty where NVML does not give both",
+        "bytes_per_s / roof_bytes_per_s: the declared traffic's share of the measured roof of the row's working set (the L2's where l2_resident, else the DRAM's; run.json `roofs`); in a run without measured roofs, / the adapter's peak memory bandwidth (NVML: memory bus width × max memory clock × 2, DDR), and empty where NVML does not give both",
+    );
+    pub const WORKING_SET_BYTES: Col = Col::new(
+        "working_set_bytes",
+        "the bytes a frame touches, as declared: what the method allocated (bytes_allocated) plus the scene's geometry buffers",
+    );
+    pub const L2_RESIDENT: Col = Col::new(
+        "l2_resident",
+        "true where the declared working set fits the adapter's L2 (run.json `roofs.l2_bytes`: the adapter's published size, else the knee of the roofs' sweep) and the samples were warm: the row is read against the L2 roof; false beyond it, and with `[timing] cold = true` (the L2 flushed before each sample); empty without measured roofs",
+    );
+    pub const ROOF_BYTES_PER_S: Col = Col::new(
+        "roof_bytes_per_s",
+        "the memory roof the row is read against (peak_bandwidth_frac's denominator): the copy kernel's measured bytes per second (read + written) with its working set in the L2 (l2_resident) or far beyond it (run.json `roofs`, measured once per run); empty without measured roofs",
     );
     pub const GPU_MS_REL_NOISE: Col = Col::new(
         "gpu_ms_rel_noise",
@@ -892,7 +908,7 @@ pub mod cols {
     pub const BYTES_PER_PIXEL: Col = Col::new("bytes_per_pixel", "bytes_allocated / pixels");
     pub const SPLIT: Col = Col::new(
         "split",
-        "how a buffer over the largest storage binding was split to fit (`bindings:N`: one array over N storage bindings, indexed through a switch); empty where nothing was split. Compare with the unsplit row of a larger limit for the cost",
+        "how a buffer over the largest storage binding was split to fit (`bindings:N`: one array over N storage bindings, indexed through a switch; the k-buffers' entries, MLAB's layers, the linked list's node pool, the compute A-buffer's fragments), and `packed` where the compute A-buffer packed its bindings into WebGPU's 8 (`packed,bindings:N` both); empty where nothing was. Compare with the unsplit row of a larger limit for the cost",
     );
     pub const BYTES_OVERHEAD: Col = Col::new(
         "bytes_overhead",
@@ -982,7 +998,7 @@ pub mod cols {
     );
     pub const DEPTH_TIE_PIXELS: Col = Col::new(
         "depth_tie_pixels",
-        "pixels whose image is off the f64 ground truth beyond the f32 bound of its arithmetic (exact_bound) but within what compositing fragments within the method's depth precision in another order can make: the truth has no defined order there (flag depth_ties); judged for methods that claim every fragment (claims_exact), at pixels within capacity; empty otherwise",
+        "pixels whose image is off the f64 ground truth beyond the f32 bound of its arithmetic (exact_bound) by what compositing fragments within the method's depth precision in another order makes: the truth has no defined order there (flag depth_ties). Transparency: every order of the pixel's near-equal-depth runs is tried (each channel held to the range of the orders beyond 5040 of them), so a fragment's colour off is not a tie however near its depths; translucency and Fresnel: none (no order changes them); csg and dof: within the order bound. Judged for methods that claim every fragment (claims_exact), at pixels within capacity; empty otherwise",
     );
     pub const FRAGMENTS_DROPPED: Col = Col::new(
         "fragments_dropped",
@@ -1106,6 +1122,7 @@ pub const GROUPS: &[Group] = &[
             cols::CAPTURE,
             cols::ATTRIBUTES,
             cols::RESOLVE_SORT,
+            cols::BINDINGS,
             cols::POOL,
             cols::POOL_SLACK,
             cols::NODE,
@@ -1271,6 +1288,9 @@ pub const GROUPS: &[Group] = &[
             cols::FRAGMENTS_PER_S,
             cols::BYTES_PER_S,
             cols::PEAK_BANDWIDTH_FRAC,
+            cols::WORKING_SET_BYTES,
+            cols::L2_RESIDENT,
+            cols::ROOF_BYTES_PER_S,
             cols::GPU_MS_REL_NOISE,
             cols::GPU_MS_MEAN,
             cols::GPU_MS_CI_LO,

@@ -181,3 +181,40 @@ fn stacked_scans_time_the_linked_list_and_the_compute_abuffer_on_two_stacked_mes
         assert_eq!(methods, want, "{}", g.scene.label());
     }
 }
+
+#[test]
+fn perf_issue41_crosses_every_axis_of_the_ab_on_every_scene_and_resolution() {
+    let path = format!(
+        "{}/../../scenarios/suites/perf-issue41.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    // Every key and axis value is declared; the stacks are baked on the device machine only.
+    let problems: Vec<_> = bench_core::check::check_suite(STUDIES, &Suite::load(&path).unwrap())
+        .into_iter()
+        .filter(|p| !p.message.contains("not found"))
+        .collect();
+    assert!(problems.is_empty(), "{problems:?}");
+    let groups = load("perf-issue41");
+    // quads ×3, shells ×4, grass ×2, the two stacks: 11 scenes × 512², 1024², 2048².
+    assert_eq!(groups.len(), 33);
+    for g in &groups {
+        let of = |m: &'static str| g.points.iter().filter(move |p| p.method == m);
+        let ca: std::collections::BTreeSet<String> = of("compute_abuffer")
+            .map(|p| {
+                ["attributes", "bindings", "capture"]
+                    .map(|k| p.point.get(k).map(|v| v.to_string()).unwrap_or_default())
+                    .join(",")
+            })
+            .collect();
+        assert_eq!(ca.len(), 2 * 2 * 3, "{}: {ca:?}", g.scene.label());
+        let pools: std::collections::BTreeSet<String> = of("linked_list")
+            .map(|p| {
+                p.point
+                    .get("pool")
+                    .map(|v| v.to_string())
+                    .unwrap_or_default()
+            })
+            .collect();
+        assert_eq!(pools.len(), 2, "{}: {pools:?}", g.scene.label());
+    }
+}

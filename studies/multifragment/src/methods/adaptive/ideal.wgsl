@@ -17,20 +17,20 @@ fn replay_adaptive(@builtin(global_invocation_id) id: vec3<u32>) {
     var s: Nodes;
     s.n = 0u;
     for (var i = r.x; i < r.y; i = i + 1u) {
-        let e = frags[i];
+        let e = frags_load(i);
         let f = fragment(bitcast<f32>(e.x), e.y, ndc, id.xy);
         _ = at_insert(&s, f.view_z, f.color.a);
     }
     var c = vec3<f32>(0.0);
     for (var i = r.x; i < r.y; i = i + 1u) {
-        let e = frags[i];
+        let e = frags_load(i);
         let f = fragment(bitcast<f32>(e.x), e.y, ndc, id.xy);
         c = c + f.color.rgb * (visibility(&s, f.view_z) * f.color.a);
     }
     out_image[p] = vec4<f32>(c, 1.0 - total_transmittance(&s));
     let n = r.y - r.x;
     if n > K {
-        atomicAdd(&work[W_REPLAY], 1u);
-        atomicAdd(&work[W_REPLAY + 1u], n - K);
+        work_add(W_REPLAY, 1u);
+        work_add(W_REPLAY + 1u, n - K);
     }
 }

@@ -32,6 +32,11 @@ const VARIANTS: &[&[(&str, &str)]] = &[
     &[("capture", "tiles"), ("resolve_sort", "private")],
     &[("attributes", "snapped")],
     &[("attributes", "snapped"), ("capture", "tiles")],
+    // The snapped weights without the clip buffer (screen positions computed per fragment).
+    &[("attributes", "snapped"), ("transform", "triangle")],
+    // Within WebGPU's 8 storage buffers: mesh packed, work after the offsets.
+    &[("bindings", "packed")],
+    &[("bindings", "packed"), ("capture", "tiles")],
 ];
 
 fn variant_params(v: &[(&str, &str)], small: i64) -> (String, Params) {

@@ -5,7 +5,8 @@
 // folds, Fresnel included, and ties are ordered by primitive as the reference orders them.
 // The module starts with `enable primitive_index;` (added by the Rust side: it must come first).
 
-const NODE_WORDS: u32 = 3u;
+// 2 with pixel pools (no link: 8 B nodes), else 3.
+override NODE_WORDS: u32 = 3u;
 const NEXT: u32 = 2u;
 
 @group(1) @binding(0) var<storage, read> positions: array<f32>;
@@ -24,8 +25,8 @@ fn fs_append(
     if n == NO_NODE {
         return;
     }
-    nodes[n * NODE_WORDS] = bitcast<u32>(pos.z);
-    nodes[n * NODE_WORDS + 1u] = prim | select(0u, 0x80000000u, ff);
+    nodes_store(n * NODE_WORDS, bitcast<u32>(pos.z));
+    nodes_store(n * NODE_WORDS + 1u, prim | select(0u, 0x80000000u, ff));
     push_node(pos, n);
 }
 
@@ -42,8 +43,8 @@ fn fs_append_mask(
     if n == NO_NODE {
         return;
     }
-    nodes[n * NODE_WORDS] = bitcast<u32>(pos.z);
-    nodes[n * NODE_WORDS + 1u] = prim | ((mask & 0xffu) << TAG_PRIM_BITS) | select(0u, 0x80000000u, ff);
+    nodes_store(n * NODE_WORDS, bitcast<u32>(pos.z));
+    nodes_store(n * NODE_WORDS + 1u, prim | ((mask & 0xffu) << TAG_PRIM_BITS) | select(0u, 0x80000000u, ff));
     push_node(pos, n);
 }
 
@@ -59,18 +60,18 @@ fn fs_append_tail(
     if n == NO_NODE {
         return tail_of(in.color.rgb * in.color.a, in.color.a);
     }
-    nodes[n * NODE_WORDS] = bitcast<u32>(in.clip.z);
-    nodes[n * NODE_WORDS + 1u] = prim | select(0u, 0x80000000u, ff);
+    nodes_store(n * NODE_WORDS, bitcast<u32>(in.clip.z));
+    nodes_store(n * NODE_WORDS + 1u, prim | select(0u, 0x80000000u, ff));
     push_node(in.clip, n);
     return tail_none();
 }
 
 fn node_depth(ni: u32) -> f32 {
-    return bitcast<f32>(nodes[ni * NODE_WORDS]);
+    return bitcast<f32>(nodes_load(ni * NODE_WORDS));
 }
 
 fn node_key(ni: u32) -> u32 {
-    return nodes[ni * NODE_WORDS + 1u];
+    return nodes_load(ni * NODE_WORDS + 1u);
 }
 
 fn list_before(za: f32, ka: u32, zb: f32, kb: u32) -> bool {

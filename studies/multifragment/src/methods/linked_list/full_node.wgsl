@@ -25,19 +25,19 @@ fn append(in: Varyings, ff: bool) -> bool {
         return false;
     }
     let b = n * NODE_WORDS;
-    nodes[b] = bitcast<u32>(in.color.r);
-    nodes[b + 1u] = bitcast<u32>(in.color.g);
-    nodes[b + 2u] = bitcast<u32>(in.color.b);
-    nodes[b + 3u] = bitcast<u32>(in.color.a);
-    nodes[b + 4u] = bitcast<u32>(in.clip.z);
-    nodes[b + 5u] = bitcast<u32>(in.view_z);
-    nodes[b + 6u] = (in.object_id & 0x7fffffffu) | select(0u, 0x80000000u, ff);
+    nodes_store(b, bitcast<u32>(in.color.r));
+    nodes_store(b + 1u, bitcast<u32>(in.color.g));
+    nodes_store(b + 2u, bitcast<u32>(in.color.b));
+    nodes_store(b + 3u, bitcast<u32>(in.color.a));
+    nodes_store(b + 4u, bitcast<u32>(in.clip.z));
+    nodes_store(b + 5u, bitcast<u32>(in.view_z));
+    nodes_store(b + 6u, (in.object_id & 0x7fffffffu) | select(0u, 0x80000000u, ff));
     push_node(in.clip, n);
     return true;
 }
 
 fn node_depth(ni: u32) -> f32 {
-    return bitcast<f32>(nodes[ni * NODE_WORDS + 4u]);
+    return bitcast<f32>(nodes_load(ni * NODE_WORDS + 4u));
 }
 
 // The sort key is the node itself (its payload is read again by the fold).
@@ -57,7 +57,7 @@ fn node_mask(ni: u32) -> u32 {
 
 fn list_frag(z: f32, ni: u32, ndc: vec2<f32>) -> Frag {
     let b = ni * NODE_WORDS;
-    let c = vec4<f32>(bitcast<f32>(nodes[b]), bitcast<f32>(nodes[b + 1u]), bitcast<f32>(nodes[b + 2u]), bitcast<f32>(nodes[b + 3u]));
-    let oid = nodes[b + 6u];
-    return Frag(z, bitcast<f32>(nodes[b + 5u]), c, vec3<f32>(0.0), oid & 0x7fffffffu, (oid >> 31u) != 0u);
+    let c = vec4<f32>(bitcast<f32>(nodes_load(b)), bitcast<f32>(nodes_load(b + 1u)), bitcast<f32>(nodes_load(b + 2u)), bitcast<f32>(nodes_load(b + 3u)));
+    let oid = nodes_load(b + 6u);
+    return Frag(z, bitcast<f32>(nodes_load(b + 5u)), c, vec3<f32>(0.0), oid & 0x7fffffffu, (oid >> 31u) != 0u);
 }

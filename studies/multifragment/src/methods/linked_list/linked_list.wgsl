@@ -13,6 +13,9 @@
 // re-derives attributes from the primitive, as compute_abuffer does).
 
 override TILED: bool = false;
+// pool = pixel: one pool per pixel, sized by a prepare-time count of its fragments, so its
+// nodes lie one after another: no head to exchange, no link to write or follow (single-sample).
+override PIXEL_POOLS: bool = false;
 // MSAA (aa = msaa*): samples per pixel (1: none). COVERAGE: one node per pixel-rate fragment with
 // its coverage mask in the tag (compact nodes, aa_capture = coverage), lists per pixel; else
 // with SAMPLES > 1 every fragment entry runs per sample (gpu_util::per_sample_source sets SAMPLE)
@@ -30,7 +33,9 @@ const NO_NODE: u32 = 0xffffffffu;
 // sample (aa_capture = sample).
 @group(0) @binding(1) var<storage, read_write> heads: array<atomic<u32>>;
 // NODE_WORDS words per node (layout in the variant file); word NEXT: next node index + 1, 0 ends.
-@group(0) @binding(2) var<storage, read_write> nodes: array<u32>;
+// `nodes` (binding 2), and where the pool is over the largest storage binding its further parts
+// (bindings 16, 17, …), are declared by the Rust side (`limits::Split::wgsl`) with the word
+// accessors `nodes_load(w)` / `nodes_store(w, v)`; a node's words lie in one part.
 @group(0) @binding(3) var<storage, read_write> out_image: array<vec4<f32>>;
 // 0: overflowed pixels, 1: lost fragments (pool full or over SORT_MAX)
 @group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>>;
@@ -46,6 +51,9 @@ fn pixel_of(pos: vec4<f32>) -> u32 {
 }
 
 fn pool_of(pos: vec4<f32>) -> u32 {
+    if PIXEL_POOLS {
+        return pixel_of(pos);
+    }
     if !TILED {
         return 0u;
     }
@@ -70,13 +78,37 @@ fn lists_per_pixel() -> u32 {
     return select(1u, SAMPLES, SAMPLES > 1u && !COVERAGE);
 }
 
-// Links node `n` (payload written) at the head of its pixel's (or sample's) list.
+// Links node `n` (payload written) at the head of its pixel's (or sample's) list; with pixel
+// pools its place in its pixel's pool is the link.
 fn push_node(pos: vec4<f32>, n: u32) {
+    if PIXEL_POOLS {
+        return;
+    }
     let h = pixel_of(pos) * lists_per_pixel() + select(0u, u32(SAMPLE), lists_per_pixel() > 1u);
-    nodes[n * NODE_WORDS + NEXT] = atomicExchange(&heads[h], n + 1u);
+    nodes_store(n * NODE_WORDS + NEXT, atomicExchange(&heads[h], n + 1u));
 }
 
-// Prepare-time sizing of counted pools: fragments per tile.
+// Nodes of pixel pool h this frame (within its pool).
+fn pool_used(h: u32) -> u32 {
+    return min(atomicLoad(&cursors[h]), ranges[h].y);
+}
+
+// List h's first node + 1 (0: empty), and the node after node ni + 1 (0: the end).
+fn list_first(h: u32) -> u32 {
+    if PIXEL_POOLS {
+        return select(0u, ranges[h].x + 1u, pool_used(h) > 0u);
+    }
+    return atomicLoad(&heads[h]);
+}
+
+fn list_next(ni: u32, h: u32) -> u32 {
+    if PIXEL_POOLS {
+        return select(0u, ni + 2u, ni + 1u < ranges[h].x + pool_used(h));
+    }
+    return nodes_load(ni * NODE_WORDS + NEXT);
+}
+
+// Prepare-time sizing of counted pools: fragments per tile (or per pixel).
 @fragment
 fn fs_count(@builtin(position) pos: vec4<f32>) {
     atomicAdd(&cursors[pool_of(pos)], 1u);
@@ -107,7 +139,7 @@ var<workgroup> short_k: array<u32, 2048>;
 // List `head` sorted nearest first into lane li's slots; SHORT_CAP + 1 when it is longer.
 fn sort_short(head: u32, li: u32) -> u32 {
     var n = 0u;
-    var cur = atomicLoad(&heads[head]);
+    var cur = list_first(head);
     loop {
         if cur == 0u {
             break;
@@ -118,7 +150,7 @@ fn sort_short(head: u32, li: u32) -> u32 {
         let ni = cur - 1u;
         let z = node_depth(ni);
         let k = node_key(ni);
-        cur = nodes[ni * NODE_WORDS + NEXT];
+        cur = list_next(ni, head);
         var j = n;
         loop {
             let q = (j - 1u) * 64u + li;
@@ -173,7 +205,7 @@ fn sort_list(
     sort_key: ptr<function, array<u32, SORT_MAX>>,
 ) -> u32 {
     var n = 0u;
-    var cur = atomicLoad(&heads[head]);
+    var cur = list_first(head);
     loop {
         if cur == 0u {
             break;
@@ -181,7 +213,7 @@ fn sort_list(
         let ni = cur - 1u;
         let z = node_depth(ni);
         let k = node_key(ni);
-        cur = nodes[ni * NODE_WORDS + NEXT];
+        cur = list_next(ni, head);
         if n == SORT_MAX {
             sort_dropped = sort_dropped + 1u;
             if !list_before(z, k, (*sort_d)[n - 1u], (*sort_key)[n - 1u]) {

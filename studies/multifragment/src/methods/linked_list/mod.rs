@@ -11,7 +11,12 @@
 //!   to the true fragments and a frame's allocations spread over one counter per tile instead of
 //!   one for the screen; the lists stay dynamic (a fragment may land anywhere within its tile's
 //!   sub-pool), and a frame with more fragments than prepare counted loses the extra ones,
-//!   counted and flagged. `fixed`: one pool of `layers` × pixels nodes, one cursor.
+//!   counted and flagged. `fixed`: one pool of `layers` × pixels nodes, one cursor. `pixel`
+//!   (issue 41: the append pass is most of the frame on stacked scans): a counted pool per
+//!   pixel, so a pixel's nodes lie one after another and the append pass takes a node (one
+//!   returning atomic on the pixel's own cursor) and writes it, with no head exchange and no
+//!   link (compact nodes of 8 B); the resolve reads the pixel's nodes in order. Single-sample;
+//!   4 B a pixel of cursor and 8 B of range beside the heads.
 //! - `pool_slack` (percent, default 0; counted pools): spare nodes per tile for scenes that
 //!   change after prepare. 0 suffices for the static scenes measured here (the frame rasterises
 //!   exactly the fragments prepare counted).
@@ -41,7 +46,7 @@
 use wgpu::util::DeviceExt;
 
 use super::shared::counted_capture::{MASKED_PRIM_BITS, VISIBILITY_WGSL};
-use super::shared::store::storage_pass_with;
+use super::shared::store::{self, storage_pass_with};
 use super::shared::tail::{self, TailTargets, TAIL_WGSL};
 use super::{Capture, Expected, FrameStats, Method, Prepared};
 use crate::aa::{self, AaCapture, AaConfig, AaMode, AaSupport};
@@ -53,9 +58,10 @@ use bench_core::bind::{
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use bench_core::gpu_util::{
-    check_storage_size, compute_pipeline, multisample, per_sample_source, read_vec, shader_source,
-    COMMON_WGSL, STORAGE_RW,
+    compute_pipeline, multisample, per_sample_source, read_vec, shader_source, COMMON_WGSL,
+    STORAGE_RW,
 };
+use bench_core::limits::{self, Split};
 use bench_core::record::{cols, Flag};
 use bench_core::timing::GpuTimer;
 use bench_core::{CoreError, Result};
@@ -70,8 +76,9 @@ pub const SORT_MAX: u32 = 128;
 pub const TILE_SIDE: u32 = 8;
 /// Bytes of a `full` node (`NODE_WORDS` × 4 in full_node.wgsl).
 pub const FULL_NODE_BYTES: u64 = 32;
-/// Bytes of a `compact` node (compact_node.wgsl).
+/// Bytes of a `compact` node (compact_node.wgsl), and of one in a pixel pool (no link).
 pub const COMPACT_NODE_BYTES: u64 = 12;
+pub const PIXEL_NODE_BYTES: u64 = 8;
 /// Storage buffers bound in the fragment stage (group 0) and in the compact resolve (+ mesh).
 const STORAGE_BUFFERS: u32 = 7;
 const MESH_BUFFERS: u32 = 5;
@@ -88,9 +95,9 @@ const LAYERS: Axis = Axis::int(
 .only_when(&POOL, &["fixed"]);
 const POOL: Axis = Axis::choice(
     cols::POOL,
-    "counted: per-8×8-tile sub-pools sized by a prepare-time count; fixed: layers × pixels nodes",
+    "counted: per-8×8-tile sub-pools sized by a prepare-time count; fixed: layers × pixels nodes; pixel: a pool per pixel sized by a prepare-time count, its nodes contiguous (no links; single-sample)",
     "counted",
-    &["counted", "fixed"],
+    &["counted", "fixed", "pixel"],
 );
 const POOL_SLACK: Axis = Axis::int(
     cols::POOL_SLACK,
@@ -99,7 +106,7 @@ const POOL_SLACK: Axis = Axis::int(
     0,
     400,
 )
-.only_when(&POOL, &["counted"]);
+.only_when(&POOL, &["counted", "pixel"]);
 const NODE: Axis = Axis::choice(
     cols::NODE,
     "compact: 12 B nodes, attributes re-derived from the primitive; full: 32 B nodes",
@@ -129,6 +136,11 @@ impl Method for LinkedList {
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
         AA_SUPPORT.check(self.name(), AaConfig::from_point(point))?;
         let c = list_config(point);
+        if c.pixel && c.aa.msaa() > 1 {
+            return Err(
+                "pool = pixel keeps one list a pixel: single-sample (aa = none or ssaa2x2)".into(),
+            );
+        }
         let e = effect_config(point, c.compact)?;
         if c.aa.msaa() > 1 {
             if c.tail {
@@ -190,8 +202,10 @@ const AA_SUPPORT: AaSupport = AaSupport {
 /// The pool, node, tail and aa axes (module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct ListConfig {
-    /// `pool = counted`: per-tile sub-pools sized by a prepare-time count.
+    /// `pool = counted` or `pixel`: sub-pools sized by a prepare-time count.
     counted: bool,
+    /// `pool = pixel`: one sub-pool per pixel, its nodes contiguous (no head, no links).
+    pixel: bool,
     /// `pool_slack`: spare nodes per counted tile, percent of its count.
     slack_pct: u64,
     /// `node = compact`: 12 B nodes, attributes re-derived from the primitive.
@@ -215,7 +229,8 @@ impl ListConfig {
 
 fn list_config(point: &Point) -> ListConfig {
     ListConfig {
-        counted: point.choice(&POOL) == "counted",
+        counted: point.choice(&POOL) != "fixed",
+        pixel: point.choice(&POOL) == "pixel",
         slack_pct: point.int(&POOL_SLACK) as u64,
         compact: point.choice(&NODE) == "compact",
         tail: tail::tail_mode(point) == mfx_reference::oit::TailMode::Blend,
@@ -301,14 +316,19 @@ struct PreparedList {
     pool_lost: Vec<u32>,
     /// MSAA: the mode and capture the rows report (`None`: single-sample).
     aa: Option<AaConfig>,
+    /// How the node pool lies over storage bindings (the `split` column).
+    split: Split,
+    /// The node pool's parts (bound in `bind`).
+    _nodes: Vec<wgpu::Buffer>,
     alloc: AllocCounter,
     #[allow(dead_code)]
     overhead: u64,
 }
 
-/// The module's source: the list, the node variant (compact nodes re-derive attributes from
-/// the primitive), the fold and the tail; per sample when a list is kept per sample.
-fn list_source(c: &ListConfig) -> String {
+/// The module's source: the node pool's bindings over `split` (word accessors), the list, the
+/// node variant (compact nodes re-derive attributes from the primitive), the fold and the tail;
+/// per sample when a list is kept per sample.
+fn list_source(c: &ListConfig, split: &Split) -> String {
     let variant = if c.compact {
         format!("{COMPACT_WGSL}\n{VISIBILITY_WGSL}")
     } else {
@@ -320,8 +340,9 @@ fn list_source(c: &ListConfig) -> String {
     } else {
         ""
     };
+    let pool = split.words().wgsl("nodes", "u32", 2);
     let src = format!(
-        "{enable}{COMMON_WGSL}\n{WGSL}\n{variant}\n{EFFECTS_WGSL}\n{TAIL_WGSL}\n{TAIL_RESOLVE_WGSL}"
+        "{enable}{COMMON_WGSL}\n{pool}\n{WGSL}\n{variant}\n{EFFECTS_WGSL}\n{TAIL_WGSL}\n{TAIL_RESOLVE_WGSL}"
     );
     // Per-sample capture: every fragment entry runs per sample (SAMPLE = its index).
     if c.lists_per_pixel() > 1 {
@@ -355,6 +376,15 @@ fn flag(b: bool) -> f64 {
     }
 }
 
+/// Bytes of one node: full, compact, or compact without a link (pixel pools).
+fn node_bytes(c: &ListConfig) -> u64 {
+    match (c.compact, c.pixel) {
+        (false, _) => FULL_NODE_BYTES,
+        (true, false) => COMPACT_NODE_BYTES,
+        (true, true) => PIXEL_NODE_BYTES,
+    }
+}
+
 /// Coverage-mask tags keep [`MASKED_PRIM_BITS`] bits of primitive: refuse larger scenes.
 fn check_tags(scene: &GpuScene, coverage: bool) -> Result<()> {
     let ntri = scene.index_count / 3;
@@ -372,10 +402,12 @@ fn shared_constants(c: &ListConfig, coverage: bool) -> Vec<(&'static str, f64)> 
     let mut shared = vec![
         ("SAMPLES", c.aa.msaa() as f64),
         ("COVERAGE", flag(coverage)),
+        ("PIXEL_POOLS", flag(c.pixel)),
     ];
     if c.compact {
         let bits = if coverage { MASKED_PRIM_BITS } else { 31 };
         shared.push(("TAG_PRIM_BITS", bits as f64));
+        shared.push(("NODE_WORDS", (node_bytes(c) / 4) as f64));
     }
     shared
 }
@@ -455,8 +487,13 @@ fn pool_plan(
                 (true, true) => format!(" (pixel-rate, {samples}× coverage masks)"),
                 (true, false) => format!(" ({samples} samples each, a list per sample)"),
             };
+            let into = if c.pixel {
+                format!("{pools} pixel pools (nodes contiguous, no links)")
+            } else {
+                format!("{pools} tiles of {TILE_SIDE}×{TILE_SIDE} px")
+            };
             let note = format!(
-                "counted pool: {true_frags} fragments{what} at prepare in {pools} tiles of {TILE_SIDE}×{TILE_SIDE} px, {} % slack",
+                "counted pool: {true_frags} fragments{what} at prepare in {into}, {} % slack",
                 c.slack_pct
             );
             (counted_ranges(counts, c.slack_pct), note)
@@ -480,6 +517,79 @@ fn pool_plan(
     Ok((ranges, note))
 }
 
+/// What depends on how the node pool lies over storage bindings: the module (its `nodes`
+/// declarations), group 0's table and the append and resolve pipelines.
+struct Stages {
+    module: wgpu::ShaderModule,
+    table: Bindings,
+    raster_layout: wgpu::PipelineLayout,
+    append: wgpu::RenderPipeline,
+    resolve: wgpu::ComputePipeline,
+}
+
+/// Everything a split leaves alone: the configuration, the effect, the resolve's other groups.
+struct StageInputs<'a> {
+    c: &'a ListConfig,
+    effect: &'a EffectConfig,
+    coverage: bool,
+    mesh_table: Option<&'a Bindings>,
+    tail_table: Option<&'a Bindings>,
+}
+
+impl Stages {
+    fn new(gpu: &Gpu, i: &StageInputs<'_>, split: &Split) -> Stages {
+        let c = i.c;
+        let module = shader_source(gpu, "linked_list", list_source(c, split));
+        // Group 0: camera, heads, nodes, image, counters, lost + resolved counts, pool cursors,
+        // pool ranges (read only); the pool's further parts at limits::SPLIT_BINDING + 0, 1, ….
+        let mut rows = vec![(0, B::Camera)];
+        rows.extend((1..7).map(|b| (b, B::Storage)));
+        rows.push((7, B::StorageRo));
+        rows.extend(split.more_bindings().map(|b| (b, B::Storage)));
+        let table = Bindings::new(gpu, "linked_list", FC, &rows);
+        let raster_layout = pipeline_layout(gpu, "linked_list append", &[&table.layout]);
+        // The compact resolve's group 1 (the mesh) and tail = blend's group 2 (its textures).
+        let groups = [
+            Some(&table.layout),
+            i.mesh_table.map(|t| &t.layout),
+            i.tail_table.map(|t| &t.layout),
+        ];
+        let resolve_layout = pipeline_layout_gaps(gpu, "linked_list resolve", &groups);
+        let shared = shared_constants(c, i.coverage);
+        let ((vs, attrs), (fs, targets)) = append_stage(c, i.coverage);
+        let append = list_pipeline(
+            gpu,
+            "linked_list append",
+            &raster_layout,
+            &module,
+            (vs, attrs),
+            (fs, &targets),
+            (&raster_constants(c, &shared), c.aa.msaa()),
+        );
+        let resolve = resolve_kernel(gpu, (&module, &resolve_layout), c, i.effect, &shared);
+        Stages {
+            module,
+            table,
+            raster_layout,
+            append,
+            resolve,
+        }
+    }
+}
+
+/// The raster stages' overrides: tiled pools and what the resolve shares.
+fn raster_constants(c: &ListConfig, shared: &[(&'static str, f64)]) -> Vec<(&'static str, f64)> {
+    let mut v = vec![("TILED", flag(c.counted))];
+    v.extend_from_slice(shared);
+    v
+}
+
+/// Storage buffers beside the node pool in its busiest stage: group 0's other six, and the
+/// compact resolve's mesh.
+fn others_beside_pool(c: &ListConfig) -> u32 {
+    STORAGE_BUFFERS - 1 + if c.compact { MESH_BUFFERS } else { 0 }
+}
+
 impl PreparedList {
     fn new(
         gpu: &Gpu,
@@ -490,53 +600,30 @@ impl PreparedList {
     ) -> Result<Self> {
         let d = &gpu.device;
         let px = scene.pixels() as u64;
-        let node_bytes = if c.compact {
-            COMPACT_NODE_BYTES
-        } else {
-            FULL_NODE_BYTES
-        };
+        let node_bytes = node_bytes(&c);
         let samples = c.aa.msaa();
         let coverage = samples > 1 && c.aa.capture == AaCapture::Coverage;
         let lists = c.lists_per_pixel();
         check_tags(scene, coverage)?;
-        let module = shader_source(gpu, "linked_list", list_source(&c));
-        // Group 0: camera, heads, nodes, image, counters, lost + resolved counts, pool cursors,
-        // pool ranges (read only).
-        let mut rows = vec![B::Camera];
-        rows.extend([B::Storage; 6]);
-        rows.push(B::StorageRo);
-        let table = Bindings::seq(gpu, "linked_list", FC, &rows);
         // Group 1 of the compact resolve: the mesh, to re-derive attributes.
         let mesh_rows = [B::StorageRo; MESH_BUFFERS as usize];
         let cs = wgpu::ShaderStages::COMPUTE;
         let mesh_table = c
             .compact
             .then(|| Bindings::seq(gpu, "linked_list mesh", cs, &mesh_rows));
-        let raster_layout = pipeline_layout(gpu, "linked_list append", &[&table.layout]);
         // tail = blend: the tail textures as group 2 of the resolve only (the append pass
         // renders into them).
         let tail_rows = TailTargets::rows(0, B::Texture(FLOAT));
         let tail_table = c
             .tail
             .then(|| Bindings::new(gpu, "linked_list tail", cs, &tail_rows));
-        let mesh_layout = mesh_table.as_ref().map(|t| &t.layout);
-        let tail_layout = tail_table.as_ref().map(|t| &t.layout);
-        let groups = [Some(&table.layout), mesh_layout, tail_layout];
-        let resolve_layout = pipeline_layout_gaps(gpu, "linked_list resolve", &groups);
-        let shared = shared_constants(&c, coverage);
-        let mut raster_constants = vec![("TILED", flag(c.counted))];
-        raster_constants.extend_from_slice(&shared);
-        let ((vs, attrs), (fs, targets)) = append_stage(&c, coverage);
-        let append = list_pipeline(
-            gpu,
-            "linked_list append",
-            &raster_layout,
-            &module,
-            (vs, attrs),
-            (fs, &targets),
-            (&raster_constants, samples),
-        );
-        let resolve = resolve_kernel(gpu, (&module, &resolve_layout), &c, effect, &shared);
+        let inputs = StageInputs {
+            c: &c,
+            effect,
+            coverage,
+            mesh_table: mesh_table.as_ref(),
+            tail_table: tail_table.as_ref(),
+        };
         let images = effect.effect.image_count();
         let mut alloc = AllocCounter::default();
         let depth = super::shared::store::dummy_depth_ms(gpu, &mut alloc, scene, samples);
@@ -545,35 +632,62 @@ impl PreparedList {
         let counters = alloc.buffer(gpu, "list counters", 16, STORAGE_RW);
         let pix = alloc.buffer(gpu, "list lost + resolved counts", px * 8, STORAGE_RW);
         let tiles_x = scene.width.div_ceil(TILE_SIDE);
-        let pools = if c.counted {
-            (tiles_x * scene.height.div_ceil(TILE_SIDE)) as usize
-        } else {
-            1
+        let pools = match (c.counted, c.pixel) {
+            (true, true) => px as usize,
+            (true, false) => (tiles_x * scene.height.div_ceil(TILE_SIDE)) as usize,
+            (false, _) => 1,
         };
         let cursors = alloc.buffer(gpu, "list pool cursors", pools as u64 * 4, STORAGE_RW);
-        let bind_with = |nodes: &wgpu::Buffer, ranges: &wgpu::Buffer| {
-            let lists = [&scene.camera, &heads, nodes, &image];
+        let bind_with = |table: &Bindings, nodes: &[wgpu::Buffer], ranges: &wgpu::Buffer| {
+            let lists = [&scene.camera, &heads, &nodes[0], &image];
             let pools = [&counters, &pix, &cursors, ranges];
-            let res: Vec<Res> = lists.into_iter().chain(pools).map(Res::Buf).collect();
+            let res: Vec<Res> = lists
+                .into_iter()
+                .chain(pools)
+                .chain(&nodes[1..])
+                .map(Res::Buf)
+                .collect();
             table.group(gpu, &res)
         };
-        // Pool ranges: (first node, nodes) per pool.
+        // Pool ranges: (first node, nodes) per pool; a counted pool is counted with the pool
+        // unsplit (the count touches only the cursors).
+        let mut counting = None;
         let counts = match c.counted {
-            true => Some(count_tiles(
-                gpu,
-                scene,
-                (&module, &raster_layout, &raster_constants, samples),
-                &depth,
-                &cursors,
-                |n, r| bind_with(n, r),
-            )?),
+            true => {
+                let st = Stages::new(gpu, &inputs, &Split::whole(1, node_bytes));
+                let shared = shared_constants(&c, coverage);
+                let counts = count_tiles(
+                    gpu,
+                    scene,
+                    (
+                        &st.module,
+                        &st.raster_layout,
+                        &raster_constants(&c, &shared),
+                        samples,
+                    ),
+                    &depth,
+                    &cursors,
+                    |n, r| bind_with(&st.table, std::slice::from_ref(n), r),
+                )?;
+                counting = Some(st);
+                Some(counts)
+            }
             false => None,
         };
         let (ranges, pool_note) = pool_plan(counts.as_deref(), &c, layers, px)?;
         let pool: u64 = ranges.iter().map(|r| r[1] as u64).sum();
+        let split = limits::split_storage(
+            gpu.held(),
+            "linked_list node pool",
+            (pool.max(1), node_bytes),
+            others_beside_pool(&c),
+        )?;
+        let stages = match counting {
+            Some(st) if split.parts == 1 => st,
+            _ => Stages::new(gpu, &inputs, &split),
+        };
         let node_buffer_bytes = pool.max(1) * node_bytes;
-        check_storage_size(gpu, "linked_list node pool", node_buffer_bytes)?;
-        let nodes = alloc.buffer(gpu, "list nodes", node_buffer_bytes, STORAGE_RW);
+        let nodes = store::split_buffers(gpu, &mut alloc, "list nodes", &split);
         let range_bytes: &[u8] = bytemuck::cast_slice(&ranges);
         alloc.bytes += range_bytes.len() as u64;
         let ranges_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -581,7 +695,7 @@ impl PreparedList {
             contents: range_bytes,
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let bind = bind_with(&nodes, &ranges_buf);
+        let bind = bind_with(&stages.table, &nodes, &ranges_buf);
         let mesh_bind = mesh_table
             .as_ref()
             .map(|t| t.group(gpu, &mesh_buffers(scene).map(Res::Buf)));
@@ -592,11 +706,11 @@ impl PreparedList {
         });
         let overhead = alloc.bytes - node_buffer_bytes;
         Ok(PreparedList {
-            append,
-            resolve,
+            append: stages.append,
+            resolve: stages.resolve,
             bind,
             mesh_bind,
-            attrs,
+            attrs: append_stage(&c, coverage).0 .1,
             depth,
             heads,
             image,
@@ -609,6 +723,8 @@ impl PreparedList {
             tail,
             pool_lost: Vec::new(),
             aa: (samples > 1).then_some(c.aa),
+            split,
+            _nodes: nodes,
             alloc,
             overhead,
         })
@@ -812,6 +928,10 @@ impl Prepared for PreparedList {
     fn image_buffer(&self) -> Option<&wgpu::Buffer> {
         Some(&self.image)
     }
+
+    fn split(&self) -> Option<String> {
+        self.split.column()
+    }
 }
 
 #[cfg(test)]
@@ -830,7 +950,7 @@ mod tests {
     /// re-derive attributes in f32 from the primitive, as compute_abuffer does).
     const IMAGE_TOL: f64 = 5e-5;
 
-    const POOLS: [&str; 2] = ["counted", "fixed"];
+    const POOLS: [&str; 3] = ["counted", "fixed", "pixel"];
     const NODES: [&str; 2] = ["compact", "full"];
 
     fn list_params(pool: &str, node: &str, layers: i64) -> Params {
@@ -879,9 +999,9 @@ mod tests {
             &list_params("counted", "compact", 16),
         );
         assert!(lists.max_depth_complexity() > 32 && lists.max_depth_complexity() < SORT_MAX);
-        let points: Vec<Params> = NODES
+        let points: Vec<Params> = ["counted", "pixel"]
             .iter()
-            .map(|node| list_params("counted", node, 16))
+            .flat_map(|pool| NODES.iter().map(move |node| list_params(pool, node, 16)))
             .collect();
         assert_matches_reference(
             &LinkedList,

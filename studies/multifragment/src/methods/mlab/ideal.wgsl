@@ -21,7 +21,7 @@ fn replay_mlab(@builtin(global_invocation_id) id: vec3<u32>) {
     var trans = 1.0;
     var count = 0.0;
     for (var i = r.x; i < r.y; i = i + 1u) {
-        let e = frags[i];
+        let e = frags_load(i);
         let f = fragment(bitcast<f32>(e.x), e.y, ndc, id.xy);
         let ins = mlab_insert(&s, f.view_z, f.color);
         if ins.fell {
@@ -38,7 +38,7 @@ fn replay_mlab(@builtin(global_invocation_id) id: vec3<u32>) {
     out_image[p] = o;
     let n = r.y - r.x;
     if n > K {
-        atomicAdd(&work[W_REPLAY], 1u);
-        atomicAdd(&work[W_REPLAY + 1u], n - K);
+        work_add(W_REPLAY, 1u);
+        work_add(W_REPLAY + 1u, n - K);
     }
 }

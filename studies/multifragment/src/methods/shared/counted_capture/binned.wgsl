@@ -43,14 +43,14 @@ fn tile_word(t: u32) -> u32 {
 fn bin_emit(tile: u32, entry: u32) {
     let w = tile_word(tile);
     if FILL {
-        let slot = atomicAdd(&offs[w], 1u);
+        let slot = offs_add(w, 1u);
         if slot < sizes.capacity {
-            frags[slot] = vec2<u32>(entry, 0u);
+            frags_store(slot, vec2<u32>(entry, 0u));
         } else {
-            atomicAdd(&work[W_LOST], 1u);
+            work_add(W_LOST, 1u);
         }
     } else {
-        atomicAdd(&offs[w], 1u);
+        offs_add(w, 1u);
     }
 }
 
@@ -80,11 +80,11 @@ fn bin_triangle(p: Poly, bb: vec4<i32>, prim: u32) {
     let nt = u32(tb.z - tb.x + 1) * u32(tb.w - tb.y + 1);
     if p.n != 3u || nt > BIN_SMALL {
         if !FILL {
-            let k = atomicAdd(&work[W_BIG], 1u);
+            let k = work_add(W_BIG, 1u);
             if k < sizes.big_cap {
-                atomicStore(&work[list_at(k)], prim);
+                work_store(list_at(k), prim);
             } else {
-                atomicAdd(&work[W_BIG_LOST], 1u);
+                work_add(W_BIG_LOST, 1u);
             }
         }
         return;
@@ -118,8 +118,8 @@ fn bin_big(
     if li == 0u {
         wb_ok = 0u;
         let k = wg.x + wg.y * nw.x;
-        if k < min(atomicLoad(&work[W_BIG]), sizes.big_cap) {
-            let prim = atomicLoad(&work[list_at(k)]);
+        if k < min(work_load(W_BIG), sizes.big_cap) {
+            let prim = work_load(list_at(k));
             wb_poly = setup(prim);
             wb_prim = prim;
             wb_ok = 1u;
@@ -250,7 +250,7 @@ fn load_entry(li: u32, entry: u32, o: vec2<i32>) {
 // tile centre (`be_ord`). Called by the whole workgroup.
 fn load_chunk(li: u32, base: u32, m: u32, o: vec2<i32>) {
     if li < m {
-        load_entry(li, frags[base + li].x, o);
+        load_entry(li, frags_load(base + li).x, o);
     }
     workgroupBarrier();
     if li < m {
@@ -284,7 +284,7 @@ fn entry_hit(j: u32, lid: vec2<u32>, x: i32, y: i32) -> bool {
 
 // Pixel p's fold and its fragment count (after the tiles' words).
 fn store_binned(p: u32, st: FoldState, n: u32) {
-    atomicStore(&offs[sizes.npix + p], n);
+    offs_store(sizes.npix + p, n);
     store_fold(p, st);
 }
 
@@ -304,7 +304,7 @@ fn resolve_binned_private(li: u32, lid: vec2<u32>, px: vec2<u32>, range: vec2<u3
     if mine {
         let r = stored_range(p);
         for (var s = r.x; s < r.y; s = s + 1u) {
-            let e = frags[s];
+            let e = frags_load(s);
             private_insert(&d, &t, &n, &dropped, bitcast<f32>(e.x), e.y);
         }
     }
@@ -329,8 +329,8 @@ fn resolve_binned_private(li: u32, lid: vec2<u32>, px: vec2<u32>, range: vec2<u3
     }
     store_binned(p, fs, n + dropped);
     if dropped > 0u {
-        atomicAdd(&work[W_OVF_PIXELS], 1u);
-        atomicAdd(&work[W_DROPPED], dropped);
+        work_add(W_OVF_PIXELS, 1u);
+        work_add(W_DROPPED, dropped);
     }
 }
 
@@ -346,7 +346,7 @@ fn resolve_binned(
     if li == 0u {
         // The tiles' words follow the pixels': tile 0 starts where the last pixel ends.
         let tw = tile_word(tile);
-        bt_range = vec2<u32>(min(atomicLoad(&offs[tw - 1u]), sizes.capacity), min(atomicLoad(&offs[tw]), sizes.capacity));
+        bt_range = vec2<u32>(min(offs_load(tw - 1u), sizes.capacity), min(offs_load(tw), sizes.capacity));
         atomicStore(&bt_over, 0u);
     }
     let range = workgroupUniformLoad(&bt_range);
@@ -372,7 +372,7 @@ fn resolve_binned(
                 over = true;
                 break;
             }
-            let e = frags[s];
+            let e = frags_load(s);
             ring_insert(li, &head, n, bitcast<f32>(e.x), e.y);
             n = n + 1u;
         }

@@ -57,6 +57,11 @@ struct Sizes {
     // Largest bounding box (pixels) one thread rasterises.
     small_max: u32,
     nvert: u32,
+    // Word of the work counters in their buffer (0, or after the offsets with packed bindings).
+    work_base: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 };
 @group(0) @binding(10) var<uniform> sizes: Sizes;
 // Per-pixel sort capacity of the resolve (a register/local array; WGSL needs a constant size).
@@ -70,8 +75,8 @@ const SMALL_EXTENT: i32 = 32256;
 // Pixels of a big triangle's tiles: 64 threads × 16 pixels; at most TILE_W wide.
 const TILE_PIXELS: u32 = 1024u;
 const TILE_W: u32 = 32u;
-// Resolve: fragments per pixel sorted in workgroup memory (64 pixels × WG_CAP × 8 B = 16 KiB).
-const WG_CAP: u32 = 32u;
+// Resolve: fragments per pixel sorted in workgroup memory (64 pixels × WG_CAP × 8 B: 16 KiB at
+// the plan's WG_CAP of 32, 8 KiB at 16 where workgroup memory is short).
 const RING: u32 = WG_CAP - 1u; // WG_CAP is a power of two: slot arithmetic by mask
 
 // `work` layout (u32 words): counters, the scan's block sums, the big-triangle list, the tiles.
@@ -97,16 +102,11 @@ fn owner_at(c: u32) -> u32 {
     return W_BLOCKS + sizes.nblocks + 2u * sizes.big_cap + c;
 }
 
-@group(0) @binding(1) var<storage, read> positions: array<f32>;
-@group(0) @binding(2) var<storage, read> normals: array<f32>;
-@group(0) @binding(3) var<storage, read> colors: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read> object_ids: array<u32>;
-@group(0) @binding(5) var<storage, read> indices: array<u32>;
-// Per pixel: count (after Count) → first slot (after Scan) → one past the last slot (after Fill).
-@group(0) @binding(6) var<storage, read_write> offs: array<atomic<u32>>;
-// Per fragment: (window depth bits, primitive | front << 31).
-@group(0) @binding(7) var<storage, read_write> frags: array<vec2<u32>>;
-@group(0) @binding(8) var<storage, read_write> work: array<atomic<u32>>;
+// The mesh, the per-pixel offsets (per pixel: count after Count, first slot after Scan, one past
+// the last slot after Fill), the work counters and the fragments (per fragment: window depth bits,
+// primitive | front << 31) are declared by the binding plan (plan.rs: native.wgsl or packed.wgsl,
+// and the fragments' split), with the accessors offs_*, work_*, frags_load/frags_store and the
+// mesh's (visibility.wgsl); WG_CAP, the workgroup ring's capacity, too.
 @group(0) @binding(9) var<storage, read_write> out_image: array<vec4<f32>>;
 // Per vertex, three elements (written by `transform`; three in all when PRETRANSFORM is off): the
 // clip position's (x, y) and (z, w), then the snapped screen position (`screen_of`).
@@ -126,13 +126,22 @@ fn screen_at(i: u32) -> vec2<f32> {
     return screen_of(i);
 }
 
-@compute @workgroup_size(256)
+// The screen position of a vertex outside the depth range or the guard band (`transform`): no
+// triangle of it is drawn unclipped, which is the only case that reads its snapped position, so
+// `snapped_weights` needs no clip position to know its triangle was clipped.
+const SCREEN_NONE: f32 = -3.0e38;
+
+@compute @workgroup_size(WIDE)
 fn transform(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
-    for (var i = gid.x; i < sizes.nvert; i = i + nw.x * 256u) {
+    for (var i = gid.x; i < sizes.nvert; i = i + nw.x * WIDE) {
         let c = clip_of(i);
         clipv[3u * i] = c.xy;
         clipv[3u * i + 1u] = c.zw;
-        clipv[3u * i + 2u] = screen_of(i);
+        var s = vec2<f32>(SCREEN_NONE);
+        if in_depth_range(c) && !outside_guard(c) {
+            s = screen_of(i);
+        }
+        clipv[3u * i + 2u] = s;
     }
 }
 
@@ -517,18 +526,18 @@ fn emit(x: i32, y: i32, depth: f32, prim: u32, front: bool) {
 fn emit_mask(x: i32, y: i32, depth: f32, prim: u32, front: bool, mask: u32) {
     let p = u32(y) * u32(camera.viewport.x) + u32(x);
     if FILL {
-        let slot = atomicAdd(&offs[p], 1u);
+        let slot = offs_add(p, 1u);
         if slot < sizes.capacity {
             // Single-sample tags have no mask bits: a full tile's all-samples mask (1) would land
             // on bit 31, the front-facing bit (TAG_PRIM_BITS = 31).
             let m = select(0u, mask, AA_SAMPLES > 1u);
             let tag = prim | (m << TAG_PRIM_BITS) | select(0u, 0x80000000u, front);
-            frags[slot] = vec2<u32>(bitcast<u32>(depth), tag);
+            frags_store(slot, vec2<u32>(bitcast<u32>(depth), tag));
         } else {
-            atomicAdd(&work[W_LOST], 1u);
+            work_add(W_LOST, 1u);
         }
     } else {
-        atomicAdd(&offs[p], 1u);
+        offs_add(p, 1u);
     }
 }
 
@@ -641,18 +650,18 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
                 continue;
             }
             if !FILL {
-                let k = atomicAdd(&work[W_BIG], 1u);
+                let k = work_add(W_BIG, 1u);
                 let grid = tile_grid(bb);
                 let nch = grid.x * grid.y;
-                let first = atomicAdd(&work[W_CHUNKS], nch);
+                let first = work_add(W_CHUNKS, nch);
                 if k < sizes.big_cap && first + nch <= sizes.chunk_cap {
-                    atomicStore(&work[list_at(k)], prim);
-                    atomicStore(&work[list_at(k) + 1u], first);
+                    work_store(list_at(k), prim);
+                    work_store(list_at(k) + 1u, first);
                     for (var c = 0u; c < nch; c = c + 1u) {
-                        atomicStore(&work[owner_at(first + c)], k);
+                        work_store(owner_at(first + c), k);
                     }
                 } else {
-                    atomicAdd(&work[W_BIG_LOST], 1u);
+                    work_add(W_BIG_LOST, 1u);
                 }
             }
             continue;
@@ -727,11 +736,11 @@ fn raster_big(
     if li == 0u {
         wg_tile = vec2<i32>(-1, 0);
         let c = wg.x + wg.y * nw.x;
-        if c < min(atomicLoad(&work[W_CHUNKS]), sizes.chunk_cap) {
-            let k = atomicLoad(&work[owner_at(c)]);
-            if k < min(atomicLoad(&work[W_BIG]), sizes.big_cap) {
-                let prim = atomicLoad(&work[list_at(k)]);
-                let first = atomicLoad(&work[list_at(k) + 1u]);
+        if c < min(work_load(W_CHUNKS), sizes.chunk_cap) {
+            let k = work_load(owner_at(c));
+            if k < min(work_load(W_BIG), sizes.big_cap) {
+                let prim = work_load(list_at(k));
+                let first = work_load(list_at(k) + 1u);
                 let p = setup(prim);
                 let bb = bounds(p);
                 // A stale table entry (only after a listing overflow, which is flagged) is
@@ -803,7 +812,7 @@ fn raster_big(
         // wg_cls is rewritten for the next fan triangle.
         workgroupBarrier();
         if !FILL && li == 0u {
-            atomicAdd(&work[select(select(W_TILE_PARTIAL, W_TILE_FULL, full), W_TILE_EMPTY, empty)], 1u);
+            work_add(select(select(W_TILE_PARTIAL, W_TILE_FULL, full), W_TILE_EMPTY, empty), 1u);
         }
         // No `continue` on a per-thread condition: the next fan triangle's barrier must stay in
         // uniform control flow.
@@ -820,11 +829,14 @@ fn raster_big(
 }
 
 // Exclusive prefix sum of `offs` (`npix` counts) in three dispatches: blocks of 1,024, the block
-// sums (one workgroup, in chunks of 256 with a carry), then each block's offset added back.
-var<workgroup> sh: array<u32, 256>;
+// sums (one workgroup, in chunks of WIDE with a carry), then each block's offset added back.
+// WIDE (the plan's): threads of these kernels and `transform`, 256, or 128 where the device
+// allows no more (WebGPU's compatibility mode); a thread takes 1024 / WIDE of a block.
+const PER_THREAD: u32 = 1024u / WIDE;
+var<workgroup> sh: array<u32, WIDE>;
 
 fn scan_shared(li: u32) {
-    for (var off = 1u; off < 256u; off = off * 2u) {
+    for (var off = 1u; off < WIDE; off = off * 2u) {
         var t = 0u;
         if li >= off {
             t = sh[li - off];
@@ -835,16 +847,16 @@ fn scan_shared(li: u32) {
     }
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WIDE)
 fn scan_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let base = wg.x * 1024u + li * 4u;
-    var v: array<u32, 4>;
+    let base = wg.x * 1024u + li * PER_THREAD;
+    var v: array<u32, PER_THREAD>;
     var s = 0u;
-    for (var k = 0u; k < 4u; k = k + 1u) {
+    for (var k = 0u; k < PER_THREAD; k = k + 1u) {
         let i = base + k;
         var x = 0u;
         if i < sizes.npix {
-            x = atomicLoad(&offs[i]);
+            x = offs_load(i);
         }
         v[k] = s;
         s = s + x;
@@ -853,48 +865,48 @@ fn scan_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_i
     workgroupBarrier();
     scan_shared(li);
     let before = sh[li] - s;
-    for (var k = 0u; k < 4u; k = k + 1u) {
+    for (var k = 0u; k < PER_THREAD; k = k + 1u) {
         let i = base + k;
         if i < sizes.npix {
-            atomicStore(&offs[i], v[k] + before);
+            offs_store(i, v[k] + before);
         }
     }
-    if li == 255u {
-        atomicStore(&work[W_BLOCKS + wg.x], sh[255]);
+    if li == WIDE - 1u {
+        work_store(W_BLOCKS + wg.x, sh[WIDE - 1u]);
     }
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WIDE)
 fn scan_sums(@builtin(local_invocation_index) li: u32) {
     var carry = 0u;
-    for (var c = 0u; c < sizes.nblocks; c = c + 256u) {
+    for (var c = 0u; c < sizes.nblocks; c = c + WIDE) {
         let i = c + li;
         var x = 0u;
         if i < sizes.nblocks {
-            x = atomicLoad(&work[W_BLOCKS + i]);
+            x = work_load(W_BLOCKS + i);
         }
         sh[li] = x;
         workgroupBarrier();
         scan_shared(li);
         if i < sizes.nblocks {
-            atomicStore(&work[W_BLOCKS + i], carry + sh[li] - x);
+            work_store(W_BLOCKS + i, carry + sh[li] - x);
         }
-        carry = carry + sh[255];
+        carry = carry + sh[WIDE - 1u];
         workgroupBarrier();
     }
     if li == 0u {
-        atomicStore(&work[W_TOTAL], carry);
+        work_store(W_TOTAL, carry);
     }
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WIDE)
 fn scan_add(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let add = atomicLoad(&work[W_BLOCKS + wg.x]);
-    let base = wg.x * 1024u + li * 4u;
-    for (var k = 0u; k < 4u; k = k + 1u) {
+    let add = work_load(W_BLOCKS + wg.x);
+    let base = wg.x * 1024u + li * PER_THREAD;
+    for (var k = 0u; k < PER_THREAD; k = k + 1u) {
         let i = base + k;
         if i < sizes.npix {
-            atomicAdd(&offs[i], add);
+            offs_add(i, add);
         }
     }
 }
@@ -902,8 +914,8 @@ fn scan_add(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_inde
 
 // Workgroup-memory sort slots: pixel li's slot j at j·64 + li (consecutive lanes, consecutive
 // banks).
-var<workgroup> sort_d: array<f32, 2048>;
-var<workgroup> sort_t: array<u32, 2048>;
+var<workgroup> sort_d: array<f32, 64u * WG_CAP>;
+var<workgroup> sort_t: array<u32, 64u * WG_CAP>;
 
 // Pixel li's ring (`resolve_sort = workgroup`): a ring of WG_CAP slots whose logical entry i (in
 // depth order) is at slot (head + i) & RING. A fragment goes in from the nearer end of the list,
@@ -982,64 +994,76 @@ fn private_insert(
     *n = *n + 1u;
 }
 
+// Vertex i's snapped screen position and clip w; x = SCREEN_NONE where it lies outside the depth
+// range or the guard band (so its triangles are clipped). With PRETRANSFORM two 8 B loads of the
+// clip buffer, the same count as the clip-space weights' (x, y) and (z, w).
+fn snapped_vertex(i: u32) -> vec3<f32> {
+    if PRETRANSFORM {
+        return vec3<f32>(clipv[3u * i + 2u], clipv[3u * i + 1u].y);
+    }
+    let c = clip_of(i);
+    if !in_depth_range(c) || outside_guard(c) {
+        return vec3<f32>(SCREEN_NONE, 0.0, 0.0);
+    }
+    return vec3<f32>(screen_of(i), c.w);
+}
+
 // The weights of the snapped screen triangle `i` at pixel `xy`'s centre, perspective-corrected
 // (what the reference computes in f64, and a hardware rasteriser from its snapped positions),
 // from exact i32 edge functions; (0, 0, 0, 0) where they do not apply: a triangle the capture
 // clipped (its fan triangles are other triangles), one over SMALL_EXTENT (i32 would overflow),
-// or one degenerate once snapped.
-fn snapped_weights(i: vec3<u32>, c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, xy: vec2<u32>) -> vec4<f32> {
-    let c = array<vec4<f32>, 3>(c0, c1, c2);
-    for (var k = 0u; k < 3u; k = k + 1u) {
-        if !in_depth_range(c[k]) || outside_guard(c[k]) {
-            return vec4<f32>(0.0);
-        }
+// or one degenerate once snapped. The reference's (e_k / area) / w_k normalised is
+// e_k·w_l·w_m normalised (area and the product of the w cancel): one division, not seven.
+fn snapped_weights(i: vec3<u32>, xy: vec2<u32>) -> vec4<f32> {
+    let v0 = snapped_vertex(i.x);
+    let v1 = snapped_vertex(i.y);
+    let v2 = snapped_vertex(i.z);
+    if min(min(v0.x, v1.x), v2.x) == SCREEN_NONE {
+        return vec4<f32>(0.0);
     }
-    let a = vec2<i32>(screen_at(i.x) * SUB);
-    let b = vec2<i32>(screen_at(i.y) * SUB);
-    let d = vec2<i32>(screen_at(i.z) * SUB);
+    let a = vec2<i32>(v0.xy * SUB);
+    let b = vec2<i32>(v1.xy * SUB);
+    let d = vec2<i32>(v2.xy * SUB);
     if !spans_fit_i32(a, b, d) {
         return vec4<f32>(0.0);
     }
     let p = centre_units(i32(xy.x), i32(xy.y));
     let e = vec3<i32>(edge_i32(b, d, p), edge_i32(d, a, p), edge_i32(a, b, p));
-    let area = e.x + e.y + e.z;
-    if area == 0 {
+    if e.x + e.y + e.z == 0 {
         return vec4<f32>(0.0);
     }
-    let pw = (vec3<f32>(e) / f32(area)) / vec3<f32>(c0.w, c1.w, c2.w);
+    let pw = vec3<f32>(e) * vec3<f32>(v1.z * v2.z, v2.z * v0.z, v0.z * v1.z);
     let sum = pw.x + pw.y + pw.z;
-    if !(sum > 0.0) {
+    // Zero or not finite (w products beyond f32): the clip-space weights instead.
+    if !(abs(sum) > 0.0 && abs(sum) < 3.0e38) {
         return vec4<f32>(0.0);
     }
-    return vec4<f32>(pw / sum, 1.0);
+    return vec4<f32>(pw * (1.0 / sum), 1.0);
 }
 
 // The fragment (depth, tag) at pixel `xy` (NDC `ndc`): attributes weighted as the snapped
 // screen triangle's (axis `attributes = snapped`) or by the 2D homogeneous weights of the
 // unsnapped clip-space triangle (`clip`; also where the snapped ones do not apply). The two
 // differ on slivers thinner than a pixel, where snapping moves a vertex by a fair share of the
-// triangle's width.
+// triangle's width. Snapped, the clip positions are loaded only where the weights fall back.
 fn fragment(depth: f32, tag: u32, ndc: vec2<f32>, xy: vec2<u32>) -> Frag {
     let i = tri_indices(tag_prim(tag));
-    let c0 = clip_at(i.x);
-    let c1 = clip_at(i.y);
-    let c2 = clip_at(i.z);
     if SNAPPED_ATTRS {
-        let w = snapped_weights(i, c0, c1, c2, xy);
+        let w = snapped_weights(i, xy);
         if w.w > 0.0 {
             return frag_weighted(depth, tag, i, w.xyz);
         }
     }
-    return frag_from(depth, tag, ndc, i, c0, c1, c2);
+    return frag_from(depth, tag, ndc, i, clip_at(i.x), clip_at(i.y), clip_at(i.z));
 }
 
 // The pixel's stored fragments' slot range.
 fn stored_range(p: u32) -> vec2<u32> {
     var start = 0u;
     if p > 0u {
-        start = min(atomicLoad(&offs[p - 1u]), sizes.capacity);
+        start = min(offs_load(p - 1u), sizes.capacity);
     }
-    return vec2<u32>(start, min(atomicLoad(&offs[p]), sizes.capacity));
+    return vec2<u32>(start, min(offs_load(p), sizes.capacity));
 }
 
 // Pixel p's folds written: one image per fold image, the mean over the samples with MSAA.
@@ -1090,7 +1114,7 @@ fn resolve_private(xy: vec2<u32>, p: u32, start: u32, end: u32) {
     var n = 0u;
     var dropped = 0u;
     for (var s = start; s < end; s = s + 1u) {
-        let e = frags[s];
+        let e = frags_load(s);
         private_insert(&d, &t, &n, &dropped, bitcast<f32>(e.x), e.y);
     }
     let ndc = pixel_ndc(xy);
@@ -1109,8 +1133,8 @@ fn resolve_private(xy: vec2<u32>, p: u32, start: u32, end: u32) {
         store_fold(p, st);
     }
     if dropped > 0u {
-        atomicAdd(&work[W_OVF_PIXELS], 1u);
-        atomicAdd(&work[W_DROPPED], dropped);
+        work_add(W_OVF_PIXELS, 1u);
+        work_add(W_DROPPED, dropped);
     }
 }
 
@@ -1133,7 +1157,7 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocati
     var head = 0u;
     var n = 0u;
     for (var s = start; s < end; s = s + 1u) {
-        let e = frags[s];
+        let e = frags_load(s);
         ring_insert(li, &head, n, bitcast<f32>(e.x), e.y);
         n = n + 1u;
     }

@@ -38,9 +38,20 @@
 //!   triangle; `clip` (default) weights them by the 2D homogeneous weights of the unsnapped
 //!   clip-space triangle, `snapped` by the perspective-corrected barycentrics of the snapped
 //!   screen triangle from exact i32 edge functions, as the reference does (clip-space weights
-//!   where a triangle was clipped or spans over 126 px). They differ on slivers thinner than a
+//!   where a triangle was clipped or spans over 126 px). Snapped reads each vertex's screen
+//!   position and clip w (two 8 B loads, as many as the clip-space weights' x, y and z, w; the
+//!   transform marks a vertex outside the depth range or guard band, so no clip test is made
+//!   per fragment) and divides once (e·w·w normalised: the area and the w cancel). They differ on slivers thinner than a
 //!   pixel: on the ogre at 512² (lavapipe) `clip` is `image_differs` at 2 pixels and off at 347
 //!   more within their order bound, `snapped` at none and 2. Not yet timed on a GPU.
+//!
+//! - `bindings = auto|packed` (plan.rs): `auto` keeps the native ten storage buffers per stage
+//!   where the device allows them and packs them into six where it does not (WebGPU's default
+//!   eight: the mesh packed at prepare into one 48 B-a-vertex buffer, the work counters after the
+//!   offsets), so the fragments can take three bindings of WebGPU's 128 MiB; `packed` forces it.
+//!   Where workgroup memory is short (WebGPU's 16 KiB with `capture = tiles`) the resolve's ring
+//!   holds 16 fragments instead of 32; where a workgroup may have only 128 threads (WebGPU's
+//!   compatibility mode) the transform and the scan run 128 wide.
 //!
 //! Antialiasing (`aa`): `aa_capture = coverage` tests coverage at the MSAA sample positions
 //! (Vulkan's standard locations) by the same exact integer rule, in the count and fill passes
@@ -56,6 +67,7 @@
 
 use crate::aa::{AaCapture, AaMode};
 use crate::effects::{EffectConfig, FOLD_WGSL as EFFECTS_WGSL};
+use crate::methods::shared::store;
 use crate::methods::{Capture, Expected, FrameStats, Prepared};
 use bench_core::bind::{mesh_buffers, pipeline_layout, Bindings, Kind as B, Res};
 use bench_core::gpu::Gpu;
@@ -64,12 +76,22 @@ use bench_core::gpu_util::{check_storage_size, compute_pipeline, read_vec, shade
 use bench_core::record::Flag;
 use bench_core::timing::GpuTimer;
 use bench_core::{CoreError, Result};
+use plan::Plan;
+
+pub(crate) mod plan;
 
 const WGSL: &str = include_str!("compute_abuffer.wgsl");
 /// `capture = tiles`: triangles binned to 8×8 tiles, fragments kept in workgroup memory.
 const BINNED_WGSL: &str = include_str!("binned.wgsl");
-/// Attribute re-derivation from a primitive id (also used by `linked_list`'s compact nodes).
-pub const VISIBILITY_WGSL: &str = include_str!("visibility.wgsl");
+/// Attribute re-derivation from a primitive id, over the scene's own mesh buffers (for
+/// `linked_list`'s compact nodes; the capture's own mesh accessors come with its binding plan).
+pub const VISIBILITY_WGSL: &str = concat!(
+    include_str!("visibility.wgsl"),
+    "\n",
+    include_str!("mesh.wgsl")
+);
+/// Attribute re-derivation without the mesh accessors (the binding plan gives them).
+const VISIBILITY_CORE_WGSL: &str = include_str!("visibility.wgsl");
 /// Double-f32 arithmetic (error-free transformations), for the snapped screen positions.
 pub const DF32_WGSL: &str = include_str!("df32.wgsl");
 /// Helpers of replay kernels (a pixel's slots, sorted into primitive order in place).
@@ -101,10 +123,6 @@ const MAX_GROUPS: u32 = 65_535;
 /// WGSL; a narrower box gets narrower, taller tiles, so no tile is under 32 px tall).
 const TILE_PIXELS: u32 = 1024;
 pub(crate) const TILE_W: u32 = 32;
-/// Storage buffers the kernels bind.
-pub(crate) const STORAGE_BUFFERS: u32 = 10;
-/// Workgroup memory of the resolve's `resolve_sort = workgroup` (2 × 2048 words).
-const WG_SORT_BYTES: u32 = 16 * 1024;
 /// Bytes per vertex of the clip buffer (`transform = vertex`): clip position and snapped screen
 /// position.
 pub(crate) const CLIP_BYTES: u64 = 24;
@@ -128,6 +146,11 @@ pub(crate) struct Variants {
     pub binned: bool,
     /// `attributes = snapped`: attributes weighted as the snapped screen triangle's.
     pub snapped_attrs: bool,
+    /// `bindings = packed`: within eight storage buffers per stage on any adapter (plan.rs).
+    pub packed: bool,
+    /// Fragments a pixel's workgroup ring holds ([`plan::RING`], or [`plan::RING_SHORT`]
+    /// where workgroup memory is short).
+    pub ring: u32,
 }
 
 /// Pixels per side of a bin tile (`BIN` in binned.wgsl; one resolve workgroup).
@@ -148,11 +171,21 @@ impl Variants {
     /// Workgroup memory the resolve needs: the sort rings (any binned resolve declares them),
     /// and the binned resolve's triangle entries.
     pub(crate) fn workgroup_bytes(&self) -> u32 {
+        let rings = plan::ring_bytes(self.ring);
         match (self.binned, self.wg_sort) {
-            (true, _) => WG_SORT_BYTES + BIN_ENTRY_BYTES,
-            (false, true) => WG_SORT_BYTES,
+            (true, _) => rings + BIN_ENTRY_BYTES,
+            (false, true) => rings,
             (false, false) => 0,
         }
+    }
+
+    /// These variants with the largest workgroup ring that fits `have` bytes of workgroup memory
+    /// ([`plan::RING`], else [`plan::RING_SHORT`]); None where neither does.
+    pub(crate) fn fit_workgroup(self, have: u32) -> Option<Variants> {
+        [plan::RING, plan::RING_SHORT]
+            .into_iter()
+            .map(|ring| Variants { ring, ..self })
+            .find(|v| v.workgroup_bytes() <= have)
     }
 
     /// The axis value that needs [`Self::workgroup_bytes`], for a skip reason.
@@ -196,6 +229,9 @@ struct Sizes {
     chunk_cap: u32,
     small_max: u32,
     nvert: u32,
+    /// Word of the work counters in their buffer (after the offsets where packed).
+    work_base: u32,
+    _pad: [u32; 3],
 }
 
 /// The two raster kernels of one mode (count or fill).
@@ -211,10 +247,15 @@ pub(crate) struct PreparedAbuffer {
     scan: [wgpu::ComputePipeline; 3],
     resolve: wgpu::ComputePipeline,
     bind: wgpu::BindGroup,
+    /// The offsets, and the buffer holding the work counters from word `work_base` (the same
+    /// buffer where packed).
     offs: wgpu::Buffer,
     work: wgpu::Buffer,
+    work_base: u64,
     image: wgpu::Buffer,
     capacity: u64,
+    /// The bindings the capture was prepared with (the `split` column).
+    plan: Plan,
     /// Workgroups of `raster_small` (one thread per triangle).
     small_groups: (u32, u32),
     /// Workgroups of `raster_big`: one per chunk of the prepare-time big triangles.
@@ -227,7 +268,8 @@ pub(crate) struct PreparedAbuffer {
     shape: ScanShape,
     binned: bool,
     _sizes: wgpu::Buffer,
-    _clipv: wgpu::Buffer,
+    /// The clip buffer, the fragments and (packed) the packed mesh, kept for the bind group.
+    _kept: Vec<wgpu::Buffer>,
     alloc: AllocCounter,
     #[allow(dead_code)]
     overhead: u64,
@@ -237,6 +279,8 @@ struct Layout {
     module: wgpu::ShaderModule,
     table: Bindings,
     pipeline: wgpu::PipelineLayout,
+    /// The plan's `WIDE` (threads a transform and scan workgroup).
+    wide: u32,
 }
 
 /// What the scan runs over and how `offs` is laid out: every pixel's fragment count (the pixel
@@ -289,75 +333,257 @@ fn check_scene(scene: &GpuScene, v: Variants) -> Result<ScanShape> {
 }
 
 impl Layout {
-    /// The module (with `replay`'s kernel), its one bind group's table and pipeline layout.
-    fn new(gpu: &Gpu, replay: Option<&Replay>) -> Layout {
+    /// The module (with `replay`'s kernel) over `plan`'s bindings, its one bind group's table
+    /// and pipeline layout.
+    fn new(gpu: &Gpu, replay: Option<&Replay>, plan: &Plan) -> Layout {
         let extra = replay.map_or(String::new(), |r| format!("{REPLAY_WGSL}\n{}", r.wgsl));
         let src = format!(
-            "{WGSL}\n{BINNED_WGSL}\n{DF32_WGSL}\n{VISIBILITY_WGSL}\n{EFFECTS_WGSL}\n{extra}"
+            "{}\n{WGSL}\n{BINNED_WGSL}\n{DF32_WGSL}\n{VISIBILITY_CORE_WGSL}\n{EFFECTS_WGSL}\n{extra}",
+            plan.wgsl()
         );
         let module = shader(gpu, "compute_abuffer", &src);
-        // Camera; the mesh (positions, normals, colours, object ids, indices); offsets,
-        // fragments, work, image; sizes; clip buffer.
-        let mut rows = vec![B::Camera];
-        rows.extend([B::StorageRo; 5]);
-        rows.extend([B::Storage; 4]);
-        rows.extend([B::Uniform, B::Storage]);
-        let table = Bindings::seq(gpu, "compute_abuffer", wgpu::ShaderStages::COMPUTE, &rows);
+        let rows = plan.rows();
+        let table = Bindings::new(gpu, "compute_abuffer", wgpu::ShaderStages::COMPUTE, &rows);
         let pipeline = pipeline_layout(gpu, "compute_abuffer", &[&table.layout]);
         Layout {
             module,
             table,
             pipeline,
+            wide: plan.wide,
         }
     }
+}
+
+/// The offsets and the work counters: two buffers, or (packed) one with the counters after
+/// the offsets.
+struct Counters {
+    offs: wgpu::Buffer,
+    work: wgpu::Buffer,
+    /// Word of the counters in `work`.
+    base: u64,
+}
+
+impl Counters {
+    /// `offs_words` of offsets and `work_words` of work, as `plan` lays them; Err names a
+    /// binding over the limit.
+    fn new(
+        gpu: &Gpu,
+        alloc: &mut AllocCounter,
+        plan: &Plan,
+        (offs_words, work_words): (u64, u64),
+    ) -> Result<Counters> {
+        if plan.packed {
+            let bytes = (offs_words + work_words) * 4;
+            check_storage_size(gpu, "compute_abuffer offsets and work", bytes)?;
+            let b = alloc.buffer(gpu, "abuffer offsets and work", bytes, STORAGE_RW);
+            return Ok(Counters {
+                offs: b.clone(),
+                work: b,
+                base: offs_words,
+            });
+        }
+        check_storage_size(gpu, "compute_abuffer work", work_words * 4)?;
+        Ok(Counters {
+            offs: alloc.buffer(gpu, "abuffer offsets", offs_words * 4, STORAGE_RW),
+            work: alloc.buffer(gpu, "abuffer work", work_words * 4, STORAGE_RW),
+            base: 0,
+        })
+    }
+}
+
+/// The scene's mesh packed for `bindings = packed` (pack.wgsl), counted in `alloc`.
+fn packed_mesh(
+    gpu: &Gpu,
+    alloc: &mut AllocCounter,
+    scene: &GpuScene,
+    nvert: u32,
+) -> Result<wgpu::Buffer> {
+    let bytes = nvert.max(1) as u64 * plan::PACKED_VERTEX_BYTES;
+    check_storage_size(gpu, "compute_abuffer packed mesh", bytes)?;
+    let verts = alloc.buffer(gpu, "abuffer packed mesh", bytes, STORAGE_RW);
+    let module = shader(gpu, "compute_abuffer pack", plan::PACK_WGSL);
+    let rows: Vec<(u32, B)> = (0..4)
+        .map(|b| (b, B::StorageRo))
+        .chain([(4, B::Storage)])
+        .collect();
+    let table = Bindings::new(gpu, "abuffer pack", wgpu::ShaderStages::COMPUTE, &rows);
+    let layout = pipeline_layout(gpu, "abuffer pack", &[&table.layout]);
+    let p = compute_pipeline(gpu, "pack_mesh", &layout, &module, "pack_mesh", &[], false);
+    let [pos, nrm, col, ids, _] = mesh_buffers(scene);
+    let bind = table.group(gpu, &[pos, nrm, col, ids, &verts].map(Res::Buf));
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    let groups = [(&p, (nvert.div_ceil(64).clamp(1, MAX_GROUPS), 1))];
+    dispatch(&mut enc, None, "pack mesh", &bind, &groups);
+    gpu.queue.submit([enc.finish()]);
+    Ok(verts)
+}
+
+/// A uniform buffer the size of `T`, written later.
+fn uniform_of<T>(gpu: &Gpu, label: &str) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: std::mem::size_of::<T>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// The clip buffer (`transform = vertex`: written each frame), or a one-vertex stand-in.
+fn clip_buffer(
+    gpu: &Gpu,
+    alloc: &mut AllocCounter,
+    v: Variants,
+    nvert: u32,
+) -> Result<wgpu::Buffer> {
+    let bytes = if v.pretransform {
+        nvert.max(1) as u64 * CLIP_BYTES
+    } else {
+        CLIP_BYTES
+    };
+    check_storage_size(gpu, "compute_abuffer clip buffer", bytes)?;
+    Ok(alloc.buffer(gpu, "abuffer clip positions", bytes, STORAGE_RW))
+}
+
+/// What every bind group of one capture shares: the scene (or its packed mesh), the sizes and
+/// the clip buffer.
+struct Fixed<'a> {
+    scene: &'a GpuScene,
+    verts: Option<&'a wgpu::Buffer>,
+    sizes: &'a wgpu::Buffer,
+    clipv: &'a wgpu::Buffer,
+}
+
+impl Fixed<'_> {
+    /// The bind group of `l` (its plan's rows) over `frags`' parts, `c` and `image`.
+    fn group(
+        &self,
+        gpu: &Gpu,
+        l: &Layout,
+        frags: &[wgpu::Buffer],
+        c: &Counters,
+        image: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        let mut bufs = vec![&self.scene.camera];
+        match self.verts {
+            Some(vs) => bufs.extend([vs, &self.scene.indices, &c.offs, &frags[0], image]),
+            None => {
+                bufs.extend(mesh_buffers(self.scene));
+                bufs.extend([&c.offs, &frags[0], &c.work, image]);
+            }
+        }
+        bufs.extend([self.sizes, self.clipv]);
+        bufs.extend(&frags[1..]);
+        let res: Vec<Res> = bufs.into_iter().map(Res::Buf).collect();
+        l.table.group(gpu, &res)
+    }
+}
+
+/// The kernels of a frame that run before the fill, on one layout.
+struct Front {
+    transform: Option<(wgpu::ComputePipeline, (u32, u32))>,
+    count: Kernels,
+    scan: [wgpu::ComputePipeline; 3],
+}
+
+impl Front {
+    fn new(gpu: &Gpu, l: &Layout, v: Variants, nvert: u32) -> Front {
+        let scan = ["scan_blocks", "scan_sums", "scan_add"]
+            .map(|e| compute_pipeline(gpu, e, &l.pipeline, &l.module, e, &[], false));
+        let transform = v.pretransform.then(|| {
+            let (pl, m) = (&l.pipeline, &l.module);
+            let p = compute_pipeline(gpu, "transform", pl, m, "transform", &[], false);
+            (p, (nvert.div_ceil(l.wide).clamp(1, MAX_GROUPS), 1))
+        });
+        Front {
+            transform,
+            count: kernels(gpu, l, false, v),
+            scan,
+        }
+    }
+
+    fn pre(&self) -> Vec<Job<'_>> {
+        self.transform.iter().map(|(p, g)| (p, *g)).collect()
+    }
+}
+
+/// Reads `count` words of `buf` from word `at`.
+fn read_words_at(gpu: &Gpu, buf: &wgpu::Buffer, at: u64, count: u64) -> Result<Vec<u32>> {
+    let tmp = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("abuffer counters read-back"),
+        size: count * 4,
+        usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(buf, at * 4, &tmp, 0, count * 4);
+    gpu.queue.submit([enc.finish()]);
+    read_vec::<u32>(gpu, &tmp, count as usize)
 }
 
 /// A kernel and its workgroups (x, y).
 type Job<'a> = (&'a wgpu::ComputePipeline, (u32, u32));
 
-/// A prepare-time count: clears the offsets and `counted`, runs `jobs` (label, dispatches),
-/// waits, and reads back the counters at the head of `counted`.
+/// A prepare-time count: clears the offsets and the counters, runs `jobs` (label, dispatches),
+/// waits, and reads back the counters.
 fn sizing_count(
     gpu: &Gpu,
     bind: &wgpu::BindGroup,
-    [offs, counted]: [&wgpu::Buffer; 2],
+    c: &Counters,
     jobs: &[(&str, &[Job])],
 ) -> Result<Vec<u32>> {
     let mut enc = gpu.device.create_command_encoder(&Default::default());
-    enc.clear_buffer(offs, 0, None);
-    enc.clear_buffer(counted, 0, None);
+    enc.clear_buffer(&c.offs, 0, None);
+    enc.clear_buffer(&c.work, 0, None);
     for (label, job) in jobs {
         dispatch(&mut enc, None, label, bind, job);
     }
     gpu.queue.submit([enc.finish()]);
-    read_vec::<u32>(gpu, counted, COUNTERS as usize)
+    read_words_at(gpu, &c.work, c.base, COUNTERS)
 }
 
-/// The fragment array for `total` counted slots of 8 B (fragments, and with `capture = tiles`
-/// bin entries): (capacity, buffer); Err where the slot indices or the adapter's binding limit
-/// cannot hold it.
-fn fragment_buffer(gpu: &Gpu, alloc: &mut AllocCounter, total: u64) -> Result<(u64, wgpu::Buffer)> {
+/// The fragment slots for `total` counted slots of 8 B (fragments, and with `capture = tiles`
+/// bin entries) over `plan`'s bindings: (capacity, the plan sized, its buffers); Err where the
+/// slot indices or the adapter's bindings cannot hold them.
+fn fragment_buffers(
+    gpu: &Gpu,
+    alloc: &mut AllocCounter,
+    plan: &Plan,
+    total: u64,
+) -> Result<(u64, Plan, Vec<wgpu::Buffer>)> {
     let capacity = total.max(1);
     if capacity >= u32::MAX as u64 {
         return Err(CoreError::OutOfMemory(format!(
             "compute_abuffer: {total} fragments do not fit 32-bit slot indices"
         )));
     }
-    check_storage_size(gpu, "compute_abuffer fragments", capacity * FRAG_BYTES)?;
-    let usage = wgpu::BufferUsages::STORAGE;
-    let frags = alloc.buffer(gpu, "abuffer fragments", capacity * FRAG_BYTES, usage);
-    Ok((capacity, frags))
+    let plan = plan.sized(gpu, capacity)?;
+    let frags = store::split_buffers(gpu, alloc, "abuffer fragments", &plan.frags);
+    Ok((capacity, plan, frags))
 }
 
 /// What the prepare-time counts found, for the rows' notes.
-fn prep_note(v: Variants, total: u64, (nbig, nchunks): (u64, u64), freed: u64) -> String {
+fn prep_note(
+    v: Variants,
+    plan: &Plan,
+    total: u64,
+    (nbig, nchunks): (u64, u64),
+    freed: u64,
+) -> String {
+    let bindings = match (plan.packed, plan.frags.parts) {
+        (false, 1) => String::new(),
+        (p, n) => format!(
+            "; bindings {} (fragments over {n})",
+            if p { "packed" } else { "native" }
+        ),
+    };
+    let ring = format!("; workgroup ring of {}", v.ring);
     if v.binned {
         return format!(
-            "sized by prepare-time counts: {total} slots of 8 B (small triangles' fragments and the other triangles' entries in {BIN}×{BIN}-px tiles), {nbig} polygons binned by workgroups (big or clipped), {freed} B of sizing scratch freed"
+            "sized by prepare-time counts: {total} slots of 8 B (small triangles' fragments and the other triangles' entries in {BIN}×{BIN}-px tiles), {nbig} polygons binned by workgroups (big or clipped), {freed} B of sizing scratch freed{bindings}{ring}"
         );
     }
     format!(
-        "sized by prepare-time counts: {total} fragments, {nbig} shared (big or clipped) triangles in {nchunks} tiles of {TILE_PIXELS} px (≤ {TILE_W} wide), {freed} B of sizing scratch freed"
+        "sized by prepare-time counts: {total} fragments, {nbig} shared (big or clipped) triangles in {nchunks} tiles of {TILE_PIXELS} px (≤ {TILE_W} wide), {freed} B of sizing scratch freed{bindings}{ring}"
     )
 }
 
@@ -463,13 +689,15 @@ impl PreparedAbuffer {
             aa_samples: 1,
             binned: false,
             snapped_attrs: false,
+            packed: false,
+            ring: plan::RING,
         };
         Self::new(gpu, scene, 256, &EffectConfig::default(), v, Some(replay))
     }
 
     /// The replay kernel's counters (`work[W_REPLAY..W_REPLAY + 6]`) after the last frame.
     pub(crate) fn replay_counters(&self, gpu: &Gpu) -> Result<[u32; 6]> {
-        let c = read_vec::<u32>(gpu, &self.work, W_REPLAY + 6)?;
+        let c = read_words_at(gpu, &self.work, self.work_base, W_REPLAY as u64 + 6)?;
         Ok(std::array::from_fn(|i| c[W_REPLAY + i]))
     }
 
@@ -481,14 +709,14 @@ impl PreparedAbuffer {
         v: Variants,
         replay: Option<&Replay>,
     ) -> Result<Self> {
-        let d = &gpu.device;
         let px = scene.pixels() as u64;
         let shape = check_scene(scene, v)?;
         let nblocks = shape.nblocks;
         let ntri = scene.index_count / 3;
         let nvert = (scene.positions.size() / 12) as u32;
-        let l = Layout::new(gpu, replay);
-        let sizes = |capacity: u64, big_cap: u64, chunk_cap: u64| Sizes {
+        let plan = Plan::before_sizing(gpu, v);
+        let mut l = Layout::new(gpu, replay, &plan);
+        let sizes = |capacity: u64, big_cap: u64, chunk_cap: u64, work_base: u64| Sizes {
             ntri,
             npix: shape.scanned as u32,
             nblocks: nblocks as u32,
@@ -497,112 +725,116 @@ impl PreparedAbuffer {
             chunk_cap: chunk_cap as u32,
             small_max,
             nvert,
+            work_base: work_base as u32,
+            _pad: [0; 3],
         };
-        let sizes_buf = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("abuffer sizes"),
-            size: std::mem::size_of::<Sizes>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let sizes_buf = uniform_of::<Sizes>(gpu, "abuffer sizes");
         let set_sizes = |s: Sizes| {
             gpu.queue
                 .write_buffer(&sizes_buf, 0, bytemuck::bytes_of(&s))
         };
         let scan_groups = [(nblocks as u32, 1), (1, 1), (nblocks as u32, 1)];
-        let scan = ["scan_blocks", "scan_sums", "scan_add"]
-            .map(|e| compute_pipeline(gpu, e, &l.pipeline, &l.module, e, &[], false));
-        let count = kernels(gpu, &l, false, v);
+        let mut front = Front::new(gpu, &l, v, nvert);
         let small_groups = (ntri.div_ceil(64).clamp(1, MAX_GROUPS), 1);
         let mut alloc = AllocCounter::default();
-        // The clip buffer is kept (written each frame); a one-vertex stand-in when unused.
-        let clip_bytes = if v.pretransform {
-            nvert.max(1) as u64 * CLIP_BYTES
-        } else {
-            CLIP_BYTES
+        let clipv = clip_buffer(gpu, &mut alloc, v, nvert)?;
+        let verts = match plan.packed {
+            true => Some(packed_mesh(gpu, &mut alloc, scene, nvert)?),
+            false => None,
         };
-        check_storage_size(gpu, "compute_abuffer clip buffer", clip_bytes)?;
-        let clipv = alloc.buffer(gpu, "abuffer clip positions", clip_bytes, STORAGE_RW);
-        let transform = v.pretransform.then(|| {
-            let (pl, m) = (&l.pipeline, &l.module);
-            let p = compute_pipeline(gpu, "transform", pl, m, "transform", &[], false);
-            (p, (nvert.div_ceil(256).clamp(1, MAX_GROUPS), 1))
-        });
-        let pre: Vec<(&wgpu::ComputePipeline, (u32, u32))> =
-            transform.iter().map(|(p, g)| (p, *g)).collect();
+        let images = effect.effect.image_count();
+        let image_bytes = px * 16 * images as u64;
+        check_storage_size(gpu, "compute_abuffer image", image_bytes)?;
+        let fixed = Fixed {
+            scene,
+            verts: verts.as_ref(),
+            sizes: &sizes_buf,
+            clipv: &clipv,
+        };
+        let bind_with = |l: &Layout, frags: &[wgpu::Buffer], c: &Counters, image: &wgpu::Buffer| {
+            fixed.group(gpu, l, frags, c, image)
+        };
 
         // Sizing, in two counts read back: (1) list the big triangles (a list as long as the
         // scene, no chunk table) for their number and chunks; (2) with the exact list and table,
         // count every fragment. Each frame then runs (2) again before filling.
         let mut scratch = AllocCounter::default();
-        let offs_bytes = shape.offs_words * 4;
-        let offs = scratch.buffer(gpu, "abuffer offsets", offs_bytes, STORAGE_RW);
         let work_words =
             |big: u64, chunks: u64| COUNTERS + nblocks + 2 * big.max(1) + chunks.max(1);
-        let listing_bytes = work_words(ntri as u64, 0) * 4;
-        check_storage_size(gpu, "compute_abuffer work", listing_bytes)?;
-        let label = "abuffer big-triangle listing (sizing)";
-        let listing = scratch.buffer(gpu, label, listing_bytes, STORAGE_RW);
-        let dummy = scratch.buffer(gpu, "abuffer fragments (sizing)", 8, STORAGE_RW);
-        let images = effect.effect.image_count();
-        let image_bytes = px * 16 * images as u64;
-        let dummy_image = scratch.buffer(gpu, "abuffer image (sizing)", 16, STORAGE_RW);
-        let bind_with = |frags: &wgpu::Buffer, work: &wgpu::Buffer, image: &wgpu::Buffer| {
-            let mut bufs = vec![&scene.camera];
-            bufs.extend(mesh_buffers(scene));
-            bufs.extend([&offs, frags, work, image, &sizes_buf, &clipv]);
-            let res: Vec<Res> = bufs.into_iter().map(Res::Buf).collect();
-            l.table.group(gpu, &res)
-        };
-        set_sizes(sizes(0, ntri as u64, 0));
-        let listing_bind = bind_with(&dummy, &listing, &dummy_image);
-        let small = [(&count.small, small_groups)];
+        let stand_in =
+            |s: &mut AllocCounter, what: &str, bytes| s.buffer(gpu, what, bytes, STORAGE_RW);
+        let dummy = vec![stand_in(&mut scratch, "abuffer fragments (sizing)", 8)];
+        let dummy_image = stand_in(&mut scratch, "abuffer image (sizing)", 16);
+        let listing = Counters::new(
+            gpu,
+            &mut scratch,
+            &plan,
+            (shape.offs_words, work_words(ntri as u64, 0)),
+        )?;
+        set_sizes(sizes(0, ntri as u64, 0, listing.base));
+        let listing_bind = bind_with(&l, &dummy, &listing, &dummy_image);
+        let pre = front.pre();
+        let small = [(&front.count.small, small_groups)];
         let jobs = [("sizing: transform", &pre[..]), ("sizing: list", &small)];
-        let c = sizing_count(gpu, &listing_bind, [&offs, &listing], &jobs)?;
+        let c = sizing_count(gpu, &listing_bind, &listing, &jobs)?;
         let (nbig, nchunks) = (c[0] as u64, c[6] as u64);
-        drop(listing_bind);
-        drop(listing);
+        drop((listing_bind, listing));
 
-        alloc.bytes += offs_bytes; // the offsets (allocated above, kept)
-        let work_bytes = work_words(nbig, nchunks) * 4;
-        check_storage_size(gpu, "compute_abuffer work", work_bytes)?;
-        let work = alloc.buffer(gpu, "abuffer work", work_bytes, STORAGE_RW);
+        let counters = Counters::new(
+            gpu,
+            &mut alloc,
+            &plan,
+            (shape.offs_words, work_words(nbig, nchunks)),
+        )?;
         let (big_cap, chunk_cap) = (nbig.max(1), nchunks.max(1));
-        set_sizes(sizes(0, big_cap, chunk_cap));
+        set_sizes(sizes(0, big_cap, chunk_cap, counters.base));
         // Shared raster tiles, or (binned) one workgroup per listed triangle.
         let big_groups = groups_2d(if v.binned { nbig } else { nchunks } as u32);
-        let sizing_bind = bind_with(&dummy, &work, &dummy_image);
-        let counts = [(&count.small, small_groups), (&count.big, big_groups)];
-        let scan_jobs: Vec<_> = scan.iter().zip(scan_groups).collect();
+        let sizing_bind = bind_with(&l, &dummy, &counters, &dummy_image);
+        let counts = [
+            (&front.count.small, small_groups),
+            (&front.count.big, big_groups),
+        ];
+        let scan_jobs: Vec<_> = front.scan.iter().zip(scan_groups).collect();
         let jobs = [
             ("sizing: transform", &pre[..]),
             ("sizing: count", &counts),
             ("sizing: scan", &scan_jobs),
         ];
-        let c = sizing_count(gpu, &sizing_bind, [&offs, &work], &jobs)?;
+        let c = sizing_count(gpu, &sizing_bind, &counters, &jobs)?;
         let total = c[4] as u64;
-        drop(sizing_bind);
-        drop((dummy, dummy_image));
+        drop((sizing_bind, pre, dummy, dummy_image));
 
-        let (capacity, frags) = fragment_buffer(gpu, &mut alloc, total)?;
+        let (capacity, plan, frags) = fragment_buffers(gpu, &mut alloc, &plan, total)?;
+        if plan.frags.parts > 1 {
+            // More bindings than the sizing module declared: the kernels again over them.
+            l = Layout::new(gpu, replay, &plan);
+            front = Front::new(gpu, &l, v, nvert);
+        }
         let image = alloc.buffer(gpu, "abuffer image", image_bytes, STORAGE_RW);
-        let bind = bind_with(&frags, &work, &image);
-        set_sizes(sizes(capacity, big_cap, chunk_cap));
+        let bind = bind_with(&l, &frags, &counters, &image);
+        set_sizes(sizes(capacity, big_cap, chunk_cap, counters.base));
         let fill = kernels(gpu, &l, true, v);
         let resolve = resolve_kernel(gpu, &l, effect, v, replay);
-        let prep_note = prep_note(v, total, (nbig, nchunks), scratch.bytes - offs_bytes);
-        drop(pre);
+        let prep_note = prep_note(v, &plan, total, (nbig, nchunks), scratch.bytes);
+        let offs_bytes = shape.offs_words * 4;
         let overhead = offs_bytes + (COUNTERS + nblocks) * 4 + image_bytes;
+        let mut kept = vec![clipv];
+        kept.extend(frags);
+        kept.extend(verts);
         Ok(PreparedAbuffer {
-            transform,
-            count,
+            transform: front.transform,
+            count: front.count,
             fill,
-            scan,
+            scan: front.scan,
             resolve,
             bind,
-            offs,
-            work,
+            offs: counters.offs,
+            work: counters.work,
+            work_base: counters.base,
             image,
             capacity,
+            plan,
             small_groups,
             big_groups,
             scan_groups,
@@ -612,7 +844,7 @@ impl PreparedAbuffer {
             shape,
             binned: v.binned,
             _sizes: sizes_buf,
-            _clipv: clipv,
+            _kept: kept,
             alloc,
             overhead,
         })
@@ -622,8 +854,8 @@ impl PreparedAbuffer {
 impl bench_core::timed::Timed for PreparedAbuffer {
     fn frame(&mut self, gpu: &Gpu, scene: &GpuScene, timer: &mut GpuTimer) -> Result<FrameStats> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.clear_buffer(&self.offs, 0, None);
-        enc.clear_buffer(&self.work, 0, Some(COUNTERS * 4));
+        enc.clear_buffer(&self.offs, 0, Some(self.shape.offs_words * 4));
+        enc.clear_buffer(&self.work, self.work_base * 4, Some(COUNTERS * 4));
         if let Some((p, g)) = &self.transform {
             dispatch(&mut enc, Some(timer), "transform", &self.bind, &[(p, *g)]);
         }
@@ -705,6 +937,31 @@ impl PreparedAbuffer {
     }
 }
 
+impl PreparedAbuffer {
+    /// Appends to the rows' notes (what `capture = auto` chose).
+    pub(crate) fn add_note(&mut self, note: &str) {
+        self.prep_note = format!("{}; {note}", self.prep_note);
+    }
+
+    /// `capture = tiles`: one untimed frame's fragments, (all, stored by pixel slots): those of
+    /// the triangles `raster_small` took, the rest being the binned triangles'.
+    pub(crate) fn fragment_census(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<(u64, u64)> {
+        assert!(self.binned, "a census of the binned capture");
+        let mut timer = GpuTimer::new(gpu);
+        bench_core::timed::Timed::frame(self, gpu, scene, &mut timer)?;
+        let px = scene.pixels();
+        let words = read_vec::<u32>(gpu, &self.offs, self.shape.offs_words as usize)?;
+        // After the fill, the last pixel's word is one past the pixels' slots (they come first);
+        // the resolve wrote every pixel's fragment total after the tiles' words.
+        let stored = words[px - 1].min(self.capacity as u32) as u64;
+        let all = words[self.shape.scanned as usize..][..px]
+            .iter()
+            .map(|&n| n as u64)
+            .sum();
+        Ok((all, stored))
+    }
+}
+
 impl Prepared for PreparedAbuffer {
     fn readback(&mut self, gpu: &Gpu, scene: &GpuScene) -> Result<Capture> {
         let n = scene.pixels();
@@ -721,7 +978,7 @@ impl Prepared for PreparedAbuffer {
         } else {
             cap.counts = Some(counts);
         }
-        let c = read_vec::<u32>(gpu, &self.work, COUNTERS as usize)?;
+        let c = read_words_at(gpu, &self.work, self.work_base, COUNTERS)?;
         let (lost, ovf_px, dropped, total, big_lost) = (
             c[1] as u64,
             c[2] as u64,
@@ -748,5 +1005,9 @@ impl Prepared for PreparedAbuffer {
 
     fn image_buffer(&self) -> Option<&wgpu::Buffer> {
         Some(&self.image)
+    }
+
+    fn split(&self) -> Option<String> {
+        self.plan.column()
     }
 }

@@ -8,9 +8,9 @@ const W_REPLAY: u32 = 10u;
 fn replay_range(p: u32) -> vec2<u32> {
     var start = 0u;
     if p > 0u {
-        start = min(atomicLoad(&offs[p - 1u]), sizes.capacity);
+        start = min(offs_load(p - 1u), sizes.capacity);
     }
-    return vec2<u32>(start, min(atomicLoad(&offs[p]), sizes.capacity));
+    return vec2<u32>(start, min(offs_load(p), sizes.capacity));
 }
 
 // Sorts the slots [r.x, r.y) by primitive id, in place (insertion sort: the fill leaves them
@@ -18,20 +18,20 @@ fn replay_range(p: u32) -> vec2<u32> {
 // pixel centre at most once, so the ids are distinct.
 fn sort_by_primitive(r: vec2<u32>) {
     for (var i = r.x + 1u; i < r.y; i = i + 1u) {
-        let e = frags[i];
+        let e = frags_load(i);
         let key = e.y & 0x7fffffffu;
         var j = i;
         loop {
             if j == r.x {
                 break;
             }
-            let prev = frags[j - 1u];
+            let prev = frags_load(j - 1u);
             if (prev.y & 0x7fffffffu) <= key {
                 break;
             }
-            frags[j] = prev;
+            frags_store(j, prev);
             j = j - 1u;
         }
-        frags[j] = e;
+        frags_store(j, e);
     }
 }

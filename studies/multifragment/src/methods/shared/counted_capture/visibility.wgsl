@@ -1,7 +1,8 @@
 // Visibility-buffer re-derivation, shared by compute_abuffer and linked_list's compact nodes: a
 // stored fragment is only (window depth, primitive | front << 31); its attributes are derived
-// again at the pixel centre from the primitive's three vertices. The including shader declares
-// the mesh bindings `positions`, `normals`, `colors`, `object_ids` and `indices` (and the camera).
+// again at the pixel centre from the primitive's three vertices. The including shader gives the
+// mesh accessors `position`, `vertex_normal`, `vertex_color`, `vertex_object` and `tri_indices`
+// (mesh.wgsl over the scene's own buffers, or compute_abuffer's packed vertices) and the camera.
 
 // Bits of a stored tag that hold the primitive (below them: nothing else; above: a coverage
 // mask under MSAA, then bit 31 front facing). 31 unless a method packs a mask (23: 8 samples).
@@ -16,16 +17,8 @@ fn tag_prim(tag: u32) -> u32 {
     return tag & ((1u << TAG_PRIM_BITS) - 1u);
 }
 
-fn position(i: u32) -> vec3<f32> {
-    return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
-}
-
 fn clip_of(i: u32) -> vec4<f32> {
     return camera.clip_from_world * vec4<f32>(position(i), 1.0);
-}
-
-fn tri_indices(prim: u32) -> vec3<u32> {
-    return vec3<u32>(indices[3u * prim], indices[3u * prim + 1u], indices[3u * prim + 2u]);
 }
 
 // Perspective-correct weights of a triangle's three vertices at NDC point `ndc` (2D homogeneous
@@ -75,15 +68,12 @@ fn frag_weighted(depth: f32, tag: u32, i: vec3<u32>, b: vec3<f32>) -> Frag {
         (v * vec4<f32>(position(i.y), 1.0)).z,
         (v * vec4<f32>(position(i.z), 1.0)).z,
     );
-    let n0 = vec3<f32>(normals[3u * i.x], normals[3u * i.x + 1u], normals[3u * i.x + 2u]);
-    let n1 = vec3<f32>(normals[3u * i.y], normals[3u * i.y + 1u], normals[3u * i.y + 2u]);
-    let n2 = vec3<f32>(normals[3u * i.z], normals[3u * i.z + 1u], normals[3u * i.z + 2u]);
     return Frag(
         depth,
         dot(b, vz),
-        b.x * colors[i.x] + b.y * colors[i.y] + b.z * colors[i.z],
-        b.x * n0 + b.y * n1 + b.z * n2,
-        object_ids[i.x],
+        b.x * vertex_color(i.x) + b.y * vertex_color(i.y) + b.z * vertex_color(i.z),
+        b.x * vertex_normal(i.x) + b.y * vertex_normal(i.y) + b.z * vertex_normal(i.z),
+        vertex_object(i.x),
         (tag >> 31u) != 0u,
     );
 }

@@ -210,10 +210,12 @@ pub enum Races {
 
 /// Bind group layout shared by the insert and resolve stages: camera, keys, entries, image.
 pub fn kslots_layout(gpu: &Gpu, extra: u32, split: &Split) -> wgpu::BindGroupLayout {
+    let entries = kslots_entries(extra, split);
+    gpu.note_layout("k-buffer", &entries);
     gpu.device
         .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("k-buffer"),
-            entries: &kslots_entries(extra, split),
+            entries: &entries,
         })
 }
 

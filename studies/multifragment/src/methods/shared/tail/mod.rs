@@ -308,6 +308,7 @@ pub fn resolve_layout(
         5,
         wgpu::ShaderStages::COMPUTE | wgpu::ShaderStages::FRAGMENT,
     ));
+    gpu.note_layout("k-buffer tail resolve", &entries);
     gpu.device
         .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("k-buffer tail resolve"),
