@@ -30,6 +30,7 @@ pub mod reference;
 pub mod runner;
 pub mod shading;
 pub mod studies;
+pub mod temporal;
 /// Test helpers (a shared adapter, scenes, run-and-compare): built for this crate's unit tests
 /// and, through the `testing` feature its dev-dependency on itself turns on, for its
 /// integration tests; not part of the release library.

@@ -11,6 +11,7 @@
 //! | `prepass` | light pre-pass vs deferred; light buffer on CPU cores, overlapped     |
 //! | `stability` | stiff/extreme inputs: methods study + case, stiffness, lost fragments |
 //! | `shadows` | layered soft shadow maps from an area light vs a ray-traced reference |
+//! | `views`   | methods study along each scene's camera path: flicker, popping, time per view |
 
 pub mod deferred;
 pub mod geometry;
@@ -18,6 +19,7 @@ pub mod methods;
 pub mod prepass;
 pub mod shadows;
 pub mod stability;
+pub mod views;
 
 use std::cell::OnceCell;
 
@@ -239,6 +241,11 @@ pub trait Study: Sync {
     fn options(&self) -> Vec<Opt> {
         Vec::new()
     }
+    /// Whether the study renders its scenes' camera paths (`camera_path`, `scenarios::path`);
+    /// elsewhere a path is a problem `mfx check` names (it would run at one view).
+    fn moves_camera(&self) -> bool {
+        false
+    }
     /// Problems of a study table that its declarations cannot say (one message each).
     fn check_table(&self, spec: &StudySpec) -> Vec<String> {
         let _ = spec;
@@ -307,6 +314,7 @@ pub fn all() -> Vec<Box<dyn Study>> {
         Box::new(deferred::DeferredStudy),
         Box::new(prepass::PrepassStudy),
         Box::new(stability::StabilityStudy),
+        Box::new(views::ViewsStudy),
         Box::new(shadows::ShadowsStudy),
     ]
 }
