@@ -9,6 +9,8 @@ tmp="${TMPDIR:-/tmp}"
 stamp="$(mktemp -t mfxteststamp.XXXXXX)"
 trap 'rm -f "$stamp"' EXIT
 cargo test --workspace
+# The CI suites' rows against tests/golden/ (deterministic columns only): ~5 min on lavapipe.
+bash scripts/check-rows.sh
 # README.md is a door of at most 200 lines, and every `mfx …` line in it runs.
 lines=$(wc -l <README.md)
 [ "$lines" -le 200 ] || { echo "README.md has $lines lines (at most 200)" >&2; exit 1; }

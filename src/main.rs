@@ -5,9 +5,10 @@ mod sweep;
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
-use bench_core::methods;
 use bench_core::{BackendChoice, Gpu, GpuOptions};
 use clap::{Args, Parser, Subcommand};
+use mfx::STUDIES;
+use mfx_multifragment::methods;
 use scenarios::{ParamValue, Params, SceneSpec, Suite};
 use schema::cols;
 
@@ -272,7 +273,7 @@ pub(crate) fn usage(msg: impl Into<String>) -> anyhow::Error {
 
 /// Loads and checks a suite; every problem at once as a usage error.
 pub(crate) fn checked_suite(name: &str) -> Result<Suite> {
-    bench_core::check::load(name).map_err(|p| {
+    bench_core::check::load(STUDIES, name).map_err(|p| {
         usage(format!(
             "suite '{name}': {} problem{}:\n{}",
             p.len(),
@@ -357,13 +358,13 @@ fn run(cli: Cli) -> Result<()> {
         Cmd::Check { suites } => {
             let mut bad = 0;
             for name in &suites {
-                match bench_core::check::load(name) {
+                match bench_core::check::load(STUDIES, name) {
                     Ok(suite) => println!(
                         "ok: {name} ({}): {} studies, {} rows on a GPU, {} on a software adapter{}",
                         suite.source,
                         suite.studies.len(),
-                        bench_core::runner::rows_of(&suite, false),
-                        bench_core::runner::rows_of(&suite, true),
+                        bench_core::runner::rows_of(STUDIES, &suite, false),
+                        bench_core::runner::rows_of(STUDIES, &suite, true),
                         models_line(&suite)
                     ),
                     Err(p) => {
@@ -373,7 +374,7 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
             // The papers files point into the suites: checked on every `mfx check`.
-            let papers = bench_core::papers::check_builtin();
+            let papers = mfx::papers::check_builtin();
             if papers.is_empty() {
                 println!(
                     "ok: papers ({} files in scenarios/papers)",
@@ -500,7 +501,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             let scene = SceneSpec::new(&scene, p).build()?;
             let g = Gpu::new(&gpu.options())?;
-            let (files, legend) = bench_core::shading::debug::write_views(
+            let (files, legend) = mfx_shading::debug::write_views(
                 &g,
                 &scene,
                 width,
@@ -622,7 +623,7 @@ fn list_json(what: Option<&str>, gpu: &GpuArgs, internal: bool) -> Result<()> {
         o.insert("methods".into(), v.into());
     }
     if is("studies") {
-        let v: Vec<_> = bench_core::studies::all()
+        let v: Vec<_> = STUDIES
             .iter()
             .map(|s| json!({"kind": s.kind(), "describe": s.describe()}))
             .collect();
@@ -631,22 +632,24 @@ fn list_json(what: Option<&str>, gpu: &GpuArgs, internal: bool) -> Result<()> {
     if is("suites") {
         let v: Vec<_> = suite_names(internal)
             .into_iter()
-            .map(|(name, builtin)| match bench_core::check::load(&name) {
-                Ok(suite) => json!({
-                    "name": name,
-                    "built_in": builtin,
-                    "source": suite.source,
-                    "description": suite.description,
-                    "rows_gpu": bench_core::runner::rows_of(&suite, false),
-                    "rows_software": bench_core::runner::rows_of(&suite, true),
-                    "models": bench_core::check::models_needed(&suite),
-                }),
-                Err(p) => json!({
-                    "name": name,
-                    "built_in": builtin,
-                    "problems": p.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
-                }),
-            })
+            .map(
+                |(name, builtin)| match bench_core::check::load(STUDIES, &name) {
+                    Ok(suite) => json!({
+                        "name": name,
+                        "built_in": builtin,
+                        "source": suite.source,
+                        "description": suite.description,
+                        "rows_gpu": bench_core::runner::rows_of(STUDIES, &suite, false),
+                        "rows_software": bench_core::runner::rows_of(STUDIES, &suite, true),
+                        "models": bench_core::check::models_needed(&suite),
+                    }),
+                    Err(p) => json!({
+                        "name": name,
+                        "built_in": builtin,
+                        "problems": p.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
+                    }),
+                },
+            )
             .collect();
         o.insert("suites".into(), v.into());
     }
@@ -692,7 +695,7 @@ fn list(what: Option<&str>, gpu: &GpuArgs, internal: bool) -> Result<()> {
     }
     if is("studies") {
         println!("studies:");
-        for s in bench_core::studies::all() {
+        for s in STUDIES {
             println!("  {:<10} {}", s.kind(), s.describe());
         }
     }
@@ -703,8 +706,8 @@ fn list(what: Option<&str>, gpu: &GpuArgs, internal: bool) -> Result<()> {
                 Ok(suite) => println!(
                     "  {name:<16} {}{} rows on a GPU, {} on a software adapter{}\n  {:<16} {}",
                     if builtin { "" } else { "(file only) " },
-                    bench_core::runner::rows_of(&suite, false),
-                    bench_core::runner::rows_of(&suite, true),
+                    bench_core::runner::rows_of(STUDIES, &suite, false),
+                    bench_core::runner::rows_of(STUDIES, &suite, true),
                     models_line(&suite),
                     "",
                     suite.description
@@ -822,9 +825,9 @@ fn render_bytes(scene: &scenarios::Scene, w: u32, h: u32) -> u64 {
     let pixels = w as u64 * h as u64;
     let pw = 64u32.min(w);
     let ph = ((h as u64 * pw as u64) / w.max(1) as u64).clamp(1, 64) as u32;
-    let probe = bench_core::reference::rasterize(scene, pw, ph).total_fragments() as f64;
+    let probe = mfx_reference::rasterize(scene, pw, ph).total_fragments() as f64;
     let fragments = probe * pixels as f64 / (pw as f64 * ph as f64);
-    let per_fragment = std::mem::size_of::<bench_core::reference::RefFragment>() as f64;
+    let per_fragment = std::mem::size_of::<mfx_reference::RefFragment>() as f64;
     pixels * PER_PIXEL + (fragments * per_fragment) as u64
 }
 
@@ -983,7 +986,7 @@ fn render(job: &RenderJob) -> Result<()> {
     } else {
         None
     };
-    let lists = Some(bench_core::reference::rasterize(&scene, w, h));
+    let lists = Some(mfx_reference::rasterize(&scene, w, h));
     if lists.as_ref().is_some_and(|l| l.total_fragments() == 0) {
         // Not an error (an empty view is a valid question), but never silent: every image of
         // it is the background, and every method "matches" it.
@@ -1049,7 +1052,8 @@ fn render(job: &RenderJob) -> Result<()> {
             ..Default::default()
         })
         .expect("a valid plan");
-        let mut measured = bench_core::measure::measure(&gpu, &gscene, m.as_ref(), point, &plan)?;
+        let mut measured =
+            mfx_multifragment::method::measure(&gpu, &gscene, m.as_ref(), point, &plan)?;
         let mut cap = measured.prepared.readback(&gpu, &gscene)?;
         let img = cap
             .image
@@ -1079,18 +1083,18 @@ fn render(job: &RenderJob) -> Result<()> {
             .as_ref()
             .expect("the reference is rasterised for every render");
         measured.prepared.judge(&mut cap, lists);
-        let folds = bench_core::effects::AXES
+        let folds = mfx_multifragment::effects::AXES
             .iter()
             .all(|e| m.axes().iter().any(|a| a.name() == e.name()));
         let effect = if folds {
-            bench_core::effects::EffectConfig::from_point(point).map_err(usage)?
+            mfx_multifragment::effects::EffectConfig::from_point(point).map_err(usage)?
         } else {
-            bench_core::effects::EffectConfig::default()
+            mfx_multifragment::effects::EffectConfig::default()
         };
-        let j = bench_core::judge::judge(
+        let j = mfx_multifragment::judge::judge(
             &cap,
             lists,
-            bench_core::judge::Context {
+            mfx_multifragment::judge::Context {
                 scene: &scene,
                 effect: &effect,
                 exact: m.exact(),

@@ -9,9 +9,10 @@ use anyhow::{bail, Context, Result};
 use bench_core::manifest::{context_block, write_runs_json, AdapterInfo, RunManifest};
 use bench_core::record::{cols, CsvSink, Row, SamplesSink, Sink, Status, SCHEMA_VERSION};
 use bench_core::runner::{self, RunOptions};
-use bench_core::studies::Group;
+use bench_core::study::Group;
 use bench_core::Gpu;
 use clap::Args;
+use mfx::STUDIES;
 
 use crate::{checked_suite, usage, GpuArgs};
 
@@ -92,7 +93,8 @@ fn apply_sets(suite: &mut scenarios::Suite, sets: &[String], pats: &[glob::Patte
     } else {
         let mut keep = std::collections::BTreeSet::new();
         for software in [false, true] {
-            let groups = runner::expand(suite, software).map_err(|e| usage(e.to_string()))?;
+            let groups =
+                runner::expand(STUDIES, suite, software).map_err(|e| usage(e.to_string()))?;
             for g in filter_groups(groups, pats) {
                 for p in &g.points {
                     keep.insert((g.study_index, p.method.clone()));
@@ -117,10 +119,10 @@ fn apply_sets(suite: &mut scenarios::Suite, sets: &[String], pats: &[glob::Patte
         let mut known = std::collections::BTreeSet::new();
         let mut unread = Vec::new();
         for (si, spec) in suite.studies.iter_mut().enumerate() {
-            let Some(study) = bench_core::check::study_of(spec) else {
+            let Some(study) = bench_core::study::by_kind(STUDIES, &spec.kind) else {
                 continue;
             };
-            let points = bench_core::studies::points(study.as_ref(), spec).unwrap_or_default();
+            let points = bench_core::study::points(study, spec).unwrap_or_default();
             let chosen = |m: &str| {
                 selected
                     .as_ref()
@@ -164,7 +166,7 @@ fn apply_sets(suite: &mut scenarios::Suite, sets: &[String], pats: &[glob::Patte
             if spec.method_axes.values().any(|o| o.contains_key(axis))
                 && spec.axes.contains_key(axis)
             {
-                let points = bench_core::studies::points(study.as_ref(), spec).unwrap_or_default();
+                let points = bench_core::study::points(study, spec).unwrap_or_default();
                 let still_read = points.iter().any(|p| {
                     !spec
                         .method_axes
@@ -196,7 +198,7 @@ fn apply_sets(suite: &mut scenarios::Suite, sets: &[String], pats: &[glob::Patte
             )));
         }
     }
-    let problems = bench_core::check::check_suite(suite);
+    let problems = bench_core::check::check_suite(STUDIES, suite);
     if !problems.is_empty() {
         return Err(usage(format!(
             "--set {}: {}",
@@ -228,9 +230,10 @@ fn filter_groups(groups: Vec<Group>, pats: &[glob::Pattern]) -> Vec<Group> {
             if any(&g.scene.generator) || any(&g.scene.label()) {
                 return Some(g);
             }
-            let floor_matches = runner::FLOORS
-                .iter()
-                .any(|f| any(f) || any(&g.point_key(f, bench_core::axes::Point::empty().given())));
+            let floor_matches = runner::FLOORS.iter().any(|f| {
+                any(f.name())
+                    || any(&g.point_key(f.name(), bench_core::axes::Point::empty().given()))
+            });
             let keys: Vec<bool> = g
                 .points
                 .iter()
@@ -250,7 +253,7 @@ fn groups_for(
     shard: (usize, usize),
     pats: &[glob::Pattern],
 ) -> Result<Vec<Group>> {
-    let groups = runner::expand(suite, software)?;
+    let groups = runner::expand(STUDIES, suite, software)?;
     Ok(filter_groups(runner::shard_groups(groups, shard), pats))
 }
 
@@ -263,7 +266,7 @@ fn owed(g: &Group, done: &std::collections::HashSet<String>) -> usize {
         .count()
         + runner::FLOORS
             .iter()
-            .filter(|f| !done.contains(&g.point_key(f, empty.given())))
+            .filter(|f| !done.contains(&g.point_key(f.name(), empty.given())))
             .count()
 }
 
@@ -622,7 +625,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         done,
         interrupted: Some(bench_core::interrupt::requested),
     };
-    let outcome = runner::run(&gpu, &suite, &groups, &opts, &mut sink);
+    let outcome = runner::run(&gpu, STUDIES, &suite, &groups, &opts, &mut sink);
     bar.finish_and_clear();
     let outcome = match outcome {
         Ok(o) => o,
@@ -726,7 +729,7 @@ fn print_points(suite: &scenarios::Suite, on_gpu: &[Group], on_software: &[Group
         println!("{} {} {}x{}", g.kind, g.scene.label(), g.width, g.height);
         let empty = bench_core::axes::Point::empty();
         for f in runner::FLOORS {
-            println!("  {}", g.point_key(f, empty.given()));
+            println!("  {}", g.point_key(f.name(), empty.given()));
         }
         for p in &g.points {
             println!("  {}", g.point_key(&p.method, p.given()));

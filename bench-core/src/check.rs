@@ -12,10 +12,10 @@ use scenarios::suite::{study_table, STUDY_KEYS};
 use scenarios::{ParamValue, Problem, SceneError, StudySpec, Suite};
 
 use crate::axes::Axis;
-use crate::studies::{self, Methods, Study};
+use crate::study::{by_kind, points, Methods, PointSpec, Study};
 
 /// Every problem of `suite` (empty when it can run).
-pub fn check_suite(suite: &Suite) -> Vec<Problem> {
+pub fn check_suite(studies: &[&dyn Study], suite: &Suite) -> Vec<Problem> {
     let mut out = Vec::new();
     for (software, table) in [(false, "[timing]"), (true, "[software]")] {
         if software && suite.software.is_none() {
@@ -26,17 +26,17 @@ pub fn check_suite(suite: &Suite) -> Vec<Problem> {
         }
     }
     for spec in &suite.studies {
-        check_study(suite, spec, &mut out);
+        check_study(studies, suite, spec, &mut out);
     }
     out
 }
 
 /// Loads a suite and checks it: `Err` holds every problem (structure and meaning) of every
 /// table.
-pub fn load(name_or_path: &str) -> Result<Suite, Vec<Problem>> {
+pub fn load(studies: &[&dyn Study], name_or_path: &str) -> Result<Suite, Vec<Problem>> {
     let (text, source) = Suite::read(name_or_path)
         .map_err(|e| vec![Problem::new(name_or_path, "suite", "", e.to_string())])?;
-    match check_text(&text, &source) {
+    match check_text(studies, &text, &source) {
         (Some(suite), problems) if problems.is_empty() => Ok(suite),
         (_, problems) => Err(problems),
     }
@@ -44,13 +44,17 @@ pub fn load(name_or_path: &str) -> Result<Suite, Vec<Problem>> {
 
 /// Parses and checks a suite's text: every problem of every table at once. A structural problem
 /// (`Suite::parse_partial`) leaves its value at the default, and the rest is still checked.
-pub fn check_text(text: &str, source: &str) -> (Option<Suite>, Vec<Problem>) {
+pub fn check_text(
+    studies: &[&dyn Study],
+    text: &str,
+    source: &str,
+) -> (Option<Suite>, Vec<Problem>) {
     let (suite, mut problems) = Suite::parse_partial(text, source);
     if let Some(suite) = &suite {
         // A timing table's own problems are already named by the parse: its plan's check would
         // only say the same again.
         let parsed = problems.clone();
-        problems.extend(check_suite(suite).into_iter().filter(|p| {
+        problems.extend(check_suite(studies, suite).into_iter().filter(|p| {
             !(p.key.is_empty()
                 && ["[timing]", "[software]"].contains(&p.table.as_str())
                 && parsed.iter().any(|q| q.table == p.table))
@@ -59,11 +63,11 @@ pub fn check_text(text: &str, source: &str) -> (Option<Suite>, Vec<Problem>) {
     (suite, problems)
 }
 
-fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
+fn check_study(studies: &[&dyn Study], suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
     let file = suite.source.as_str();
     let table = study_table(spec.index, &spec.kind);
     let before = out.len();
-    let Some(study) = studies::by_kind(&spec.kind) else {
+    let Some(study) = by_kind(studies, &spec.kind) else {
         out.push(
             Problem::new(
                 file,
@@ -72,11 +76,10 @@ fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
                 "unknown study kind",
             )
             .value(&spec.kind)
-            .known(studies::all().iter().map(|s| s.kind())),
+            .known(studies.iter().map(|s| s.kind())),
         );
         return;
     };
-    let study = study.as_ref();
 
     // The table's own options.
     let options = study.options();
@@ -236,7 +239,7 @@ fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
     }
     // Cross-axis rules of every point, once the values themselves are right.
     if out.len() == before {
-        match studies::points(study, spec) {
+        match points(study, spec) {
             Err(msgs) => {
                 for m in msgs {
                     out.push(Problem::new(file, &table, "", m));
@@ -265,7 +268,10 @@ fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
         // A study that renders one view would run a path at its first view only: refused,
         // never silently narrowed.
         if !study.moves_camera()
-            && scene.params.get(scenarios::path::CAMERA_PATH.name).is_some()
+            && scene
+                .params
+                .get(scenarios::path::CAMERA_PATH.name)
+                .is_some()
             && seen.insert(format!("{tn} camera_path"))
         {
             out.push(Problem::new(
@@ -299,7 +305,7 @@ fn ignored_axes(
     table: &str,
     spec: &StudySpec,
     study: &dyn Study,
-    points: &[studies::PointSpec],
+    points: &[PointSpec],
     out: &mut Vec<Problem>,
 ) {
     // (method, axis) → the settings that left it unread, or None once some point reads it.
@@ -455,9 +461,4 @@ pub fn models_needed(suite: &Suite) -> Vec<String> {
         }
     }
     out.into_iter().collect()
-}
-
-/// The study a table names, if known (for callers that already checked).
-pub fn study_of(spec: &StudySpec) -> Option<Box<dyn Study>> {
-    studies::by_kind(&spec.kind)
 }

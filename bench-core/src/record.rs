@@ -499,6 +499,12 @@ impl Sink for VecSink {
     }
 }
 
+/// Whether a row's GPU time is the time of its frame (`gpu_time_trusted`): not when the
+/// timestamps missed work. An untrusted row gets no `x_floor`, `x_blend` or `speedup_vs_*`.
+pub fn gpu_time_trusted(row: &Row) -> bool {
+    !row.has_flag(Flag::TimestampsIncomplete)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -12,7 +12,10 @@ use std::path::PathBuf;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let obj = PathBuf::from(args.next().unwrap_or_else(|| "models/teapot.obj".into()));
-    let out = PathBuf::from(args.next().unwrap_or_else(|| "models/teapot-trio.glb".into()));
+    let out = PathBuf::from(
+        args.next()
+            .unwrap_or_else(|| "models/teapot-trio.glb".into()),
+    );
     let mesh = scenarios::obj::load(&obj)?;
     if mesh.vertex_count() > u16::MAX as usize {
         return Err(format!("{}: over 65535 vertices (u16 indices)", obj.display()).into());
@@ -22,7 +25,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut accessors: Vec<String> = Vec::new();
     // Appends a buffer view (4-byte aligned) and one accessor over it.
     let mut push = |bytes: &[u8], accessor: String| {
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         views.push(format!(
@@ -41,10 +44,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         format!(
             r#"{{"bufferView":VIEW,"componentType":5126,"count":{},"type":"VEC3","min":[{},{},{}],"max":[{},{},{}]}}"#,
             mesh.vertex_count(),
-            lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+            lo.x,
+            lo.y,
+            lo.z,
+            hi.x,
+            hi.y,
+            hi.z
         ),
     );
-    let idx: Vec<u8> = mesh.indices.iter().flat_map(|&i| (i as u16).to_le_bytes()).collect();
+    let idx: Vec<u8> = mesh
+        .indices
+        .iter()
+        .flat_map(|&i| (i as u16).to_le_bytes())
+        .collect();
     let ind = push(
         &idx,
         format!(
@@ -62,7 +74,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ),
     );
     let floor_ind = push(
-        &[0u16, 2, 1, 0, 3, 2].iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>(),
+        &[0u16, 2, 1, 0, 3, 2]
+            .iter()
+            .flat_map(|i| i.to_le_bytes())
+            .collect::<Vec<u8>>(),
         r#"{"bufferView":VIEW,"componentType":5123,"count":6,"type":"SCALAR"}"#.into(),
     );
     // One turn of the pivot about +y: quaternions (0, sin(θ/2), 0, cos(θ/2)) at θ = 0, 45°, …
@@ -95,7 +110,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ]
     .join(",");
     let teapot = |m: u32| {
-        format!(r#"{{"primitives":[{{"attributes":{{"POSITION":{pos}}},"indices":{ind},"material":{m}}}]}}"#)
+        format!(
+            r#"{{"primitives":[{{"attributes":{{"POSITION":{pos}}},"indices":{ind},"material":{m}}}]}}"#
+        )
     };
     let meshes = [
         teapot(0),
@@ -134,7 +151,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     while j.len() % 4 != 0 {
         j.push(b' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + j.len() + 8 + bin.len();
@@ -149,6 +166,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     glb.extend_from_slice(&0x004E_4942u32.to_le_bytes());
     glb.extend_from_slice(&bin);
     std::fs::write(&out, glb)?;
-    println!("{}: {} B, {} triangles per teapot", out.display(), total, mesh.triangle_count());
+    println!(
+        "{}: {} B, {} triangles per teapot",
+        out.display(),
+        total,
+        mesh.triangle_count()
+    );
     Ok(())
 }

@@ -132,7 +132,7 @@ fn check_accessors(
             fits(
                 format!("accessor {} sparse indices", a.index()),
                 &ix.view(),
-                ix.offset() as usize,
+                ix.offset(),
                 sp.count(),
                 ix_size,
             )?;
@@ -140,7 +140,7 @@ fn check_accessors(
             fits(
                 format!("accessor {} sparse values", a.index()),
                 &vals.view(),
-                vals.offset() as usize,
+                vals.offset(),
                 sp.count(),
                 elem,
             )?;
@@ -534,7 +534,13 @@ impl Track {
     fn at(&self, t: f64) -> [f64; 4] {
         use ::gltf::animation::Interpolation as I;
         let cubic = self.interpolation == I::CubicSpline;
-        let value = |k: usize| if cubic { self.values[3 * k + 1] } else { self.values[k] };
+        let value = |k: usize| {
+            if cubic {
+                self.values[3 * k + 1]
+            } else {
+                self.values[k]
+            }
+        };
         let n = self.times.len();
         if t <= self.times[0] {
             return value(0);
@@ -672,7 +678,8 @@ pub fn camera_animation(path: &Path, views: u32) -> Result<Vec<FileCamera>> {
             ::gltf::animation::Interpolation::CubicSpline => 3,
             _ => 1,
         };
-        if values.len() != times.len() * per_key || values.iter().flatten().any(|v| !v.is_finite()) {
+        if values.len() != times.len() * per_key || values.iter().flatten().any(|v| !v.is_finite())
+        {
             return Err(err(
                 path,
                 format!(
@@ -690,7 +697,10 @@ pub fn camera_animation(path: &Path, views: u32) -> Result<Vec<FileCamera>> {
             values,
         });
     }
-    let t0 = tracks.iter().map(|t| t.times[0]).fold(f64::INFINITY, f64::min);
+    let t0 = tracks
+        .iter()
+        .map(|t| t.times[0])
+        .fold(f64::INFINITY, f64::min);
     let t1 = tracks
         .iter()
         .map(|t| t.times[t.times.len() - 1])
@@ -709,9 +719,15 @@ pub fn camera_animation(path: &Path, views: u32) -> Result<Vec<FileCamera>> {
                 for track in tracks.iter().filter(|k| k.node == node.index()) {
                     let v = track.at(t);
                     match track.property {
-                        ::gltf::animation::Property::Translation => tr = glam::DVec3::new(v[0], v[1], v[2]),
-                        ::gltf::animation::Property::Rotation => rot = glam::DQuat::from_xyzw(v[0], v[1], v[2], v[3]),
-                        ::gltf::animation::Property::Scale => sc = glam::DVec3::new(v[0], v[1], v[2]),
+                        ::gltf::animation::Property::Translation => {
+                            tr = glam::DVec3::new(v[0], v[1], v[2])
+                        }
+                        ::gltf::animation::Property::Rotation => {
+                            rot = glam::DQuat::from_xyzw(v[0], v[1], v[2], v[3])
+                        }
+                        ::gltf::animation::Property::Scale => {
+                            sc = glam::DVec3::new(v[0], v[1], v[2])
+                        }
                         ::gltf::animation::Property::MorphTargetWeights => {}
                     }
                 }
@@ -723,7 +739,10 @@ pub fn camera_animation(path: &Path, views: u32) -> Result<Vec<FileCamera>> {
             if !(eye.is_finite() && target.is_finite()) || (target - eye).length() < 1e-12 {
                 return Err(err(
                     path,
-                    format!("camera node {} at time {t}: its transform is degenerate", cam_node.index()),
+                    format!(
+                        "camera node {} at time {t}: its transform is degenerate",
+                        cam_node.index()
+                    ),
                 ));
             }
             Ok(FileCamera {

@@ -461,7 +461,11 @@ fn file_error(path: &Path, line: Option<usize>, why: impl Into<String>) -> Scene
 /// file and its line.
 pub fn read_keyframes(path: &Path) -> crate::Result<Vec<Keyframe>> {
     if path.is_dir() {
-        return Err(file_error(path, None, "is a directory, not a keyframe file"));
+        return Err(file_error(
+            path,
+            None,
+            "is a directory, not a keyframe file",
+        ));
     }
     let text = std::fs::read_to_string(path).map_err(|e| file_error(path, None, e.to_string()))?;
     parse_keyframes(&text, path)
@@ -542,7 +546,11 @@ pub fn parse_keyframes(text: &str, path: &Path) -> crate::Result<Vec<Keyframe>> 
         keys.push(key);
     }
     if keys.is_empty() {
-        return Err(file_error(path, None, "no keyframes (every line empty or a comment)"));
+        return Err(file_error(
+            path,
+            None,
+            "no keyframes (every line empty or a comment)",
+        ));
     }
     Ok(keys)
 }

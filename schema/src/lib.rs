@@ -155,7 +155,7 @@ pub mod cols {
     );
     pub const EXACT_BOUND: Col = Col::new(
         "exact_bound",
-        "the max-abs error bound `exact` was judged with: the f32 rounding of the effect's compositing over the pixel's fragments (derived in bench-core/src/judge.rs); the order of fragments at near-equal depths is not part of it (depth_ties)",
+        "the max-abs error bound `exact` was judged with: the f32 rounding of the effect's compositing over the pixel's fragments (derived in studies/multifragment/src/judge.rs); the order of fragments at near-equal depths is not part of it (depth_ties)",
     );
     pub const EFFECT: Col = Col::new(
         "effect",
@@ -472,12 +472,14 @@ pub mod cols {
         "rmse_path_worst",
         "views: the largest RMSE of a view against its own truth (rmse is the mean over the views)",
     );
-    pub const RMSE_WORST_VIEW: Col = Col::new("rmse_worst_view", "views: the view of rmse_path_worst");
+    pub const RMSE_WORST_VIEW: Col =
+        Col::new("rmse_worst_view", "views: the view of rmse_path_worst");
     pub const FLIP_PATH_WORST: Col = Col::new(
         "flip_path_worst",
         "views: the largest FLIP mean of a view (flip_mean is the mean over the views)",
     );
-    pub const FLIP_WORST_VIEW: Col = Col::new("flip_worst_view", "views: the view of flip_path_worst");
+    pub const FLIP_WORST_VIEW: Col =
+        Col::new("flip_worst_view", "views: the view of flip_path_worst");
     pub const VIEWS_EXACT: Col = Col::new(
         "views_exact",
         "views: views judged exact (exact = every view exact)",

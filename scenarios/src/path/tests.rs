@@ -31,7 +31,11 @@ fn an_orbit_of_quads_turns_about_the_target_at_the_scene_cameras_distance_view_b
     let scene = sp.build().unwrap();
     assert_eq!(scene.views.len(), 8);
     assert_eq!(scene.camera, scene.views[0]);
-    assert!(scene.label().contains("camera_path=orbit"), "{}", scene.label());
+    assert!(
+        scene.label().contains("camera_path=orbit"),
+        "{}",
+        scene.label()
+    );
     let target = DVec3::from(plain.camera.target);
     let d0 = (DVec3::from(plain.camera.eye) - target).length();
     // View 0 is the scene camera's eye and target; each later view 45° further about +y.
@@ -88,11 +92,20 @@ fn a_fly_through_moves_eye_and_target_together_along_the_view() {
     );
     let plain = spec("shells", &[("count", V::Int(2))]).build().unwrap();
     let scene = sp.build().unwrap();
-    let (e0, t0) = (DVec3::from(plain.camera.eye), DVec3::from(plain.camera.target));
+    let (e0, t0) = (
+        DVec3::from(plain.camera.eye),
+        DVec3::from(plain.camera.target),
+    );
     for (i, v) in scene.views.iter().enumerate() {
         let step = (t0 - e0) * 0.5 * i as f64 / 4.0;
-        assert!((DVec3::from(v.eye) - (e0 + step)).length() < 1e-9, "view {i}");
-        assert!((DVec3::from(v.target) - (t0 + step)).length() < 1e-9, "view {i}");
+        assert!(
+            (DVec3::from(v.eye) - (e0 + step)).length() < 1e-9,
+            "view {i}"
+        );
+        assert!(
+            (DVec3::from(v.target) - (t0 + step)).length() < 1e-9,
+            "view {i}"
+        );
         assert_eq!(v.fovy, plain.camera.fovy);
     }
 }
@@ -128,8 +141,16 @@ fn keyframes_are_sampled_evenly_in_time_and_interpolated() {
 fn a_bad_keyframe_line_is_an_error_naming_the_file_and_the_line() {
     let cases = [
         ("0 0 0 4 0 0 0\n1 0 0 4 0 0\n", 2, "6 fields"),
-        ("0 0 0 4 0 0 0\n1 0 0 x 0 0 0\n", 2, "eye z 'x' is not a finite number"),
-        ("0 0 0 4 0 0 0\n\n0 0 0 5 0 0 0\n", 3, "is not after the previous keyframe's 0 (line 1)"),
+        (
+            "0 0 0 4 0 0 0\n1 0 0 x 0 0 0\n",
+            2,
+            "eye z 'x' is not a finite number",
+        ),
+        (
+            "0 0 0 4 0 0 0\n\n0 0 0 5 0 0 0\n",
+            3,
+            "is not after the previous keyframe's 0 (line 1)",
+        ),
         ("0 1 1 1 1 1 1\n", 1, "the target is the eye"),
         ("0 0 0 4 0 0 0 200\n", 1, "fov 200 is outside"),
         ("0 0 0 inf 0 0 0\n", 1, "not a finite number"),
@@ -138,7 +159,10 @@ fn a_bad_keyframe_line_is_an_error_naming_the_file_and_the_line() {
         let e = parse_keyframes(text, Path::new("dir/keys.txt"))
             .unwrap_err()
             .to_string();
-        assert!(e.contains(&format!("'dir/keys.txt':{line}:")), "{text:?}: {e}");
+        assert!(
+            e.contains(&format!("'dir/keys.txt':{line}:")),
+            "{text:?}: {e}"
+        );
         assert!(e.contains(says), "{text:?}: {e}");
     }
     let e = parse_keyframes("# only a comment\n", Path::new("k")).unwrap_err();
@@ -159,7 +183,7 @@ fn a_scene_reading_a_bad_keyframe_file_is_refused_by_its_check_naming_file_and_l
     );
     let p: Vec<String> = sp.check().iter().map(|e| e.to_string()).collect();
     assert_eq!(p.len(), 1, "{p:?}");
-    assert!(p[0].contains(&format!("{}:3:", f.display())), "{p:?}");
+    assert!(p[0].contains(&format!("{}':3:", f.display())), "{p:?}");
     // A good file builds: views along the keyframes.
     std::fs::write(&f, "0 0 0 4 0 0 0\n1 0 0 3 0 0 0\n").unwrap();
     assert!(sp.check().is_empty());
@@ -190,8 +214,12 @@ fn every_problem_of_the_path_keys_is_reported_at_once() {
         ],
     ));
     assert_eq!(p.len(), 3, "{p:?}");
-    assert!(p.iter().any(|m| m.contains("path_views") && m.contains("2..=4096")));
-    assert!(p.iter().any(|m| m.contains("orbit_step") && m.contains("only with camera_path = orbit")));
+    assert!(p
+        .iter()
+        .any(|m| m.contains("path_views") && m.contains("2..=4096")));
+    assert!(p
+        .iter()
+        .any(|m| m.contains("orbit_step") && m.contains("only with camera_path = orbit")));
     assert!(p.iter().any(|m| m.contains("fly_depth")));
     let p = problems(&spec("quads", &[("camera_path", s("spiral"))]));
     assert!(p[0].contains("orbit, fly, file, at_rest"), "{p:?}");
@@ -218,7 +246,10 @@ fn animated_gltf(dir: &Path, interpolation: &str, animated: bool) -> PathBuf {
     use base64::Engine as _;
     let mut bin: Vec<u8> = Vec::new();
     let f32s = |bin: &mut Vec<u8>, v: &[f32]| v.iter().for_each(|x| bin.extend(x.to_le_bytes()));
-    f32s(&mut bin, &[-1., -1., 0., 1., -1., 0., 1., 1., 0., -1., 1., 0.]);
+    f32s(
+        &mut bin,
+        &[-1., -1., 0., 1., -1., 0., 1., 1., 0., -1., 1., 0.],
+    );
     for i in [0u16, 1, 2, 0, 2, 3] {
         bin.extend(i.to_le_bytes());
     }
@@ -254,11 +285,15 @@ fn a_gltf_scene_plays_its_files_camera_animation_in_the_normalised_space() {
     let cams = crate::gltf::camera_animation(&f, 5).unwrap();
     for (i, c) in cams.iter().enumerate() {
         let z = 3.0 + 0.5 * i as f64;
-        assert!((c.eye - DVec3::new(0.0, 0.0, z)).length() < 1e-6, "view {i}: {c:?}");
+        assert!(
+            (c.eye - DVec3::new(0.0, 0.0, z)).length() < 1e-6,
+            "view {i}: {c:?}"
+        );
         assert!((c.target - DVec3::new(0.0, 0.0, z - 1.0)).length() < 1e-6);
         assert!((c.yfov_deg - 0.8f64.to_degrees()).abs() < 1e-5);
     }
     // STEP holds the first value until the last key.
+    std::fs::create_dir(dir.path().join("step")).unwrap();
     let f2 = animated_gltf(&dir.path().join("step"), "STEP", true);
     let step = crate::gltf::camera_animation(&f2, 3).unwrap();
     assert!((step[1].eye.z - 3.0).abs() < 1e-6 && (step[2].eye.z - 5.0).abs() < 1e-6);

@@ -182,6 +182,8 @@ pub struct Scene {
     /// The views of the scene's camera path (`crate::path`), `camera` being the first; empty
     /// when the scene has no path (one view: `camera`).
     pub views: Vec<Camera>,
+    /// The path `views` came from (None: one view).
+    pub path: Option<crate::path::CameraPath>,
     /// A model scene's file space → this scene's (p' = (p − centre) · scale), for cameras the
     /// file gives (a glTF camera animation); None for generated scenes.
     pub file_normalisation: Option<(DVec3, f64)>,
@@ -200,6 +202,7 @@ impl Scene {
             sun: None,
             area_light: None,
             views: Vec::new(),
+            path: None,
             file_normalisation: None,
         }
     }
