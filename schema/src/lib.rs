@@ -491,7 +491,7 @@ pub mod cols {
     pub const FLICKER_MAX: Col = Col::new("flicker_max", "views: the largest step's flicker");
     pub const FLICKER_WORST_VIEW: Col = Col::new(
         "flicker_worst_view",
-        "views: the view t of the step t−1 → t with flicker_max",
+        "views: the view t of the step t−1 → t with flicker_max (empty when no step flickered)",
     );
     pub const FLICKER_BOUND_MEAN: Col = Col::new(
         "flicker_bound_mean",
@@ -508,7 +508,7 @@ pub mod cols {
     pub const POPPING_MAX: Col = Col::new("popping_max", "views: the largest step's popping share");
     pub const POPPING_WORST_VIEW: Col = Col::new(
         "popping_worst_view",
-        "views: the view t of the step t−1 → t with popping_max",
+        "views: the view t of the step t−1 → t with popping_max (empty when no pixel popped)",
     );
     pub const AT_REST_CHANGED_MEAN: Col = Col::new(
         "at_rest_changed_mean",

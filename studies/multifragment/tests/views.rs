@@ -384,3 +384,73 @@ fn a_bad_keyframe_file_is_refused_before_any_gpu_work_naming_file_and_line() {
         "{p:?}"
     );
 }
+
+#[test]
+fn the_views_ci_suite_runs_and_its_exact_rows_neither_flicker_nor_pop_where_tails_do() {
+    // The built-in suite as CI runs it: every path kind (orbit, the glTF file's camera
+    // animation, at rest) on lavapipe at 48².
+    let (text, _) = Suite::read("views-ci").unwrap();
+    // Tests run in the crate's folder: the committed glTF scene is the repository's.
+    let glb = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/teapot-trio.glb");
+    let rows = run_suite(&text.replace("models/teapot-trio.glb", glb));
+    let rows = study_rows(&rows);
+    assert_eq!(rows.len(), 21);
+    for r in &rows {
+        let m = r.get(cols::METHOD).unwrap();
+        let scene = r.get(cols::SCENE_LABEL).unwrap();
+        assert_eq!(
+            r.status(),
+            Some(Status::Ok),
+            "{m} on {scene}: {:?}",
+            r.get(cols::REASON)
+        );
+        let views: usize = r.get(cols::PATH_VIEWS).unwrap().parse().unwrap();
+        assert_eq!(series(r, "rmse").len(), views, "{m} on {scene}");
+        // An exact row (every view within its f32 bound) has no pixel whose unexplained
+        // change exceeds the two views' bounds, so none pops.
+        if r.get_bool(cols::EXACT) == Some(true) {
+            assert_eq!(
+                r.get(cols::FLICKER_BEYOND_BOUND),
+                Some("0"),
+                "{m} on {scene}"
+            );
+            assert_eq!(r.get_f(cols::POPPING_MAX), Some(0.0), "{m} on {scene}");
+            assert_eq!(r.get(cols::POPPING_WORST_VIEW), None, "{m} on {scene}");
+        }
+    }
+    // On the teapots' animation the compute A-buffer is exact at every view, and the k-buffer
+    // keeping 2 of up to 11 layers, its tail blended, pops.
+    let on_teapots = |m: &str| {
+        *rows
+            .iter()
+            .find(|r| {
+                r.get(cols::METHOD) == Some(m)
+                    && r.get(cols::SCENE_LABEL).unwrap().starts_with("gltf")
+            })
+            .unwrap()
+    };
+    let exact = on_teapots("compute_abuffer");
+    assert_eq!(exact.get(cols::CAMERA_PATH), Some("file"));
+    assert_eq!(exact.get(cols::VIEWS_EXACT), Some("6"));
+    let k = on_teapots("kbuffer_atomic");
+    let pops = k.get_f(cols::POPPING_MAX).unwrap();
+    assert!(
+        pops > 0.0,
+        "kbuffer_atomic layers=2 tail=blend did not pop on the teapots"
+    );
+    assert!(k.get(cols::POPPING_WORST_VIEW).is_some());
+    assert!(k.get_f(cols::FLICKER_MEAN).unwrap() > exact.get_f(cols::FLICKER_MEAN).unwrap());
+    // At rest the measure is reported for every row; the atomic k-buffer has no hazard, so
+    // its frames repeat exactly.
+    let at_rest: Vec<&&Row> = rows
+        .iter()
+        .filter(|r| r.get(cols::CAMERA_PATH) == Some("at_rest"))
+        .collect();
+    assert_eq!(at_rest.len(), 3);
+    for r in at_rest {
+        assert!(r.get_f(cols::AT_REST_CHANGED_MEAN).is_some());
+        if r.get(cols::METHOD) == Some("kbuffer_atomic") {
+            assert_eq!(r.get_f(cols::AT_REST_CHANGED_MAX), Some(0.0));
+        }
+    }
+}

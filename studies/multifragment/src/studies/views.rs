@@ -557,8 +557,11 @@ fn finish(
     }
     if let Some(f) = temporal::over_path(&flicker) {
         row.set_f(cols::FLICKER_MEAN, f.mean)
-            .set_f(cols::FLICKER_MAX, f.worst)
-            .set(cols::FLICKER_WORST_VIEW, f.worst_view);
+            .set_f(cols::FLICKER_MAX, f.worst);
+        // No worst view where no step flickered (every view would be "the worst").
+        if f.worst > 0.0 {
+            row.set(cols::FLICKER_WORST_VIEW, f.worst_view);
+        }
     }
     let steps: Vec<Step> = r.views.iter().filter_map(|v| v.step).collect();
     let bounds: Vec<f64> = steps.iter().filter_map(|s| s.flicker_bound).collect();
@@ -574,8 +577,10 @@ fn finish(
     }
     if let Some(p) = temporal::over_path(&popping) {
         row.set_f(cols::POPPING_MEAN, p.mean)
-            .set_f(cols::POPPING_MAX, p.worst)
-            .set(cols::POPPING_WORST_VIEW, p.worst_view);
+            .set_f(cols::POPPING_MAX, p.worst);
+        if p.worst > 0.0 {
+            row.set(cols::POPPING_WORST_VIEW, p.worst_view);
+        }
     }
     if path.at_rest() {
         if let Some(c) = temporal::over_path(&changed) {
