@@ -33,7 +33,10 @@ use glam::DVec3;
 use crate::{Camera, ParamValue, Params, Scene, SceneError, SceneSpec, ValueKind};
 
 /// The path kinds `camera_path` may name.
-pub const KINDS: &[&str] = &["orbit", "fly", "file", "at_rest"];
+pub const KINDS: &[&str] = &["orbit", "fly", "file", AT_REST];
+
+/// The path kind whose views are one camera repeated (the at-rest measures apply).
+pub const AT_REST: &str = "at_rest";
 
 /// One declared path key: its name, what it means, its type and range, and the path kinds that
 /// read it (a key given for another kind is a problem: it would change nothing).
@@ -267,7 +270,7 @@ impl CameraPath {
             "fly" => Some(PathKind::Fly {
                 depth: float("fly_depth").unwrap_or(1.0),
             }),
-            "at_rest" => Some(PathKind::AtRest),
+            AT_REST => Some(PathKind::AtRest),
             "file" => match (get("path_file"), spec.params.get("path")) {
                 (Some(ParamValue::Str(f)), _) => match read_keyframes(Path::new(&f)) {
                     Ok(keys) => Some(PathKind::Keyframes {
@@ -313,7 +316,7 @@ impl CameraPath {
             PathKind::Orbit { .. } => "orbit",
             PathKind::Fly { .. } => "fly",
             PathKind::Keyframes { .. } | PathKind::GltfAnimation { .. } => "file",
-            PathKind::AtRest => "at_rest",
+            PathKind::AtRest => AT_REST,
         }
     }
 

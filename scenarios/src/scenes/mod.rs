@@ -100,7 +100,7 @@ impl SceneSpec {
                 .expect("a scene with path keys has a path or problems");
             scene.views = path.cameras(&scene)?;
             scene.camera = scene.views[0].clone();
-            scene.path = Some(path);
+            scene.path = Some(path.name());
             return Ok(scene);
         }
         Ok(match self.generator.as_str() {

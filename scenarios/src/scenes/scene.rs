@@ -182,8 +182,9 @@ pub struct Scene {
     /// The views of the scene's camera path (`crate::path`), `camera` being the first; empty
     /// when the scene has no path (one view: `camera`).
     pub views: Vec<Camera>,
-    /// The path `views` came from (None: one view).
-    pub path: Option<crate::path::CameraPath>,
+    /// The kind of camera path `views` came from (`CameraPath::name`: orbit, fly, file,
+    /// at_rest); None: one view. A name, not the path, so this file stays below `path`.
+    pub path: Option<&'static str>,
     /// A model scene's file space → this scene's (p' = (p − centre) · scale), for cameras the
     /// file gives (a glTF camera animation); None for generated scenes.
     pub file_normalisation: Option<(DVec3, f64)>,

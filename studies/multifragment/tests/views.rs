@@ -132,7 +132,7 @@ fn crossing_quads() -> Scene {
     };
     scene.views = path.cameras(&scene).unwrap();
     scene.camera = scene.views[0].clone();
-    scene.path = Some(path);
+    scene.path = Some(path.name());
     scene
 }
 

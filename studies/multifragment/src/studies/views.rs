@@ -227,7 +227,7 @@ pub fn run_views_group(ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
     let cameras = ctx.scene.views.clone();
     let truth = GroupTruth::new(ctx);
     let ready = ready_points(ctx, &truth, emit, &|_, _, _| {})?;
-    let Some(path) = ctx.scene.path.clone().filter(|_| !cameras.is_empty()) else {
+    let Some(path) = ctx.scene.path.filter(|_| !cameras.is_empty()) else {
         for r in ready {
             let why = "the scene has no camera_path: the views study renders a path";
             emit(r.index, failed_row(r.row, why))?;
@@ -345,7 +345,7 @@ pub fn run_views_group(ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
             Some(row) => row,
             None => finish(
                 ctx,
-                &path,
+                path,
                 r,
                 eps,
                 first.then_some(reference_ms),
@@ -473,7 +473,7 @@ fn apply(r: &mut PathRow, o: Outcome) {
 /// The row of a path that ran to its end.
 fn finish(
     ctx: &GroupCtx<'_>,
-    path: &CameraPath,
+    path: &str,
     r: PathRow,
     eps: f64,
     reference_ms: Option<f64>,
@@ -490,7 +490,7 @@ fn finish(
     let flicker = pick(&|v| v.step.map(|s| s.flicker));
     let popping = pick(&|v| v.step.map(|s| s.popping));
     let changed = pick(&|v| v.step.map(|s| s.changed));
-    row.set(cols::CAMERA_PATH, path.name())
+    row.set(cols::CAMERA_PATH, path)
         .set(cols::PATH_VIEWS, r.views.len())
         .set_f(cols::POP_EPSILON, eps);
     if let Some(t) = temporal::over_path(&gpu) {
@@ -582,7 +582,8 @@ fn finish(
             row.set(cols::POPPING_WORST_VIEW, p.worst_view);
         }
     }
-    if path.at_rest() {
+    // Every view the same camera: the changed pixels are the at-rest measure.
+    if path == scenarios::path::AT_REST {
         if let Some(c) = temporal::over_path(&changed) {
             row.set_f(cols::AT_REST_CHANGED_MEAN, c.mean)
                 .set_f(cols::AT_REST_CHANGED_MAX, c.worst);
