@@ -452,5 +452,12 @@ fn the_views_ci_suite_runs_and_its_exact_rows_neither_flicker_nor_pop_where_tail
         if r.get(cols::METHOD) == Some("kbuffer_atomic") {
             assert_eq!(r.get_f(cols::AT_REST_CHANGED_MAX), Some(0.0));
         }
+        // A static path: an exact, race-free method draws the same image every frame and the
+        // truth does not move, so nothing is unexplained.
+        if r.get(cols::METHOD) == Some("depth_peel") {
+            assert_eq!(r.get_bool(cols::EXACT), Some(true));
+            assert_eq!(r.get_f(cols::FLICKER_MAX), Some(0.0));
+            assert_eq!(r.get_f(cols::AT_REST_CHANGED_MAX), Some(0.0));
+        }
     }
 }
