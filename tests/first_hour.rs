@@ -283,7 +283,13 @@ fn an_embedded_gltf_sweeps_to_the_same_rows_as_its_gltf_bin_twin() {
         "every method and the floors: {:?}",
         rows[0]
     );
-    assert!(rows[0].iter().all(|r| r[1] == "ok"), "{:?}", rows[0]);
+    assert!(
+        rows[0]
+            .iter()
+            .all(|r| r[1] == schema::Status::Ok.to_string()),
+        "{:?}",
+        rows[0]
+    );
     assert_eq!(rows[0], rows[1], "embedded vs separate");
     assert_eq!(rows[0], rows[2], "glb vs separate");
 }

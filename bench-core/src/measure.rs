@@ -198,6 +198,9 @@ pub struct Measured<T: ?Sized> {
     /// Median ms per pass label over the kept samples (passes with one label in one frame are
     /// summed).
     pub pass_ms: BTreeMap<String, f64>,
+    /// 95 % interval of each pass's median (as the GPU time's: [`median_interval`]), so a claim
+    /// about one pass can be ruled with an interval (`pass_ms_ci`).
+    pub pass_ci: BTreeMap<String, (f64, f64)>,
     pub frame: FrameStats,
     pub bytes_allocated: u64,
     pub bytes_overhead: Option<u64>,
@@ -567,6 +570,11 @@ impl<'g, T: Timed + ?Sized> PointTimer<'g, T> {
         let cpu = summary(&cpu_kept)
             .or_else(|| summary(&self.samples.iter().map(|s| s.cpu_ms).collect::<Vec<_>>()))
             .ok_or_else(|| CoreError::Gpu("no frame was timed".into()))?;
+        let pass_ci = self
+            .per_label
+            .iter()
+            .filter_map(|(l, v)| Some((l.clone(), median_interval(&summary(v)?).1)))
+            .collect();
         Ok(Measured {
             gpu: if !kept.is_empty() && gpu_kept.len() == kept.len() {
                 summary(&gpu_kept)
@@ -579,6 +587,7 @@ impl<'g, T: Timed + ?Sized> PointTimer<'g, T> {
                 .into_iter()
                 .map(|(l, v)| (l, median(&v).unwrap_or(0.0)))
                 .collect(),
+            pass_ci,
             frame: self.frame,
             bytes_allocated: self.bytes_allocated,
             bytes_overhead: self.bytes_overhead,
@@ -856,6 +865,15 @@ pub fn set_timing<T: ?Sized>(row: &mut Row, m: &Measured<T>, mesh: &scenarios::M
     row.set(
         cols::PASS_MS,
         serde_json::to_string(&m.pass_ms).unwrap_or_default(),
+    );
+    let pass_ci: BTreeMap<&str, [f64; 2]> = m
+        .pass_ci
+        .iter()
+        .map(|(l, (lo, hi))| (l.as_str(), [*lo, *hi]))
+        .collect();
+    row.set(
+        cols::PASS_MS_CI,
+        serde_json::to_string(&pass_ci).unwrap_or_default(),
     );
     row.set(cols::SAMPLES, m.samples.len() - m.discarded())
         .set(cols::SAMPLES_DISCARDED, m.discarded())

@@ -71,8 +71,9 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
         extra = c.html;
     }
     // The sources' published figures beside ours (empty unless a seeds-* suite ran).
-    extra.push_str(&reproduction::section(&runs));
-    let md = reproduction::markdown(&runs);
+    let bands = reproduction::Bands::for_run(dir)?;
+    extra.push_str(&reproduction::section_with(&runs, &bands));
+    let md = reproduction::markdown_with(&runs, &bands);
     if !md.is_empty() {
         let p = out.join("reproduction.md");
         std::fs::write(&p, md).with_context(|| format!("writing {}", p.display()))?;

@@ -962,6 +962,10 @@ pub mod cols {
         "pass_ms",
         "median GPU ms per pass label, JSON object (e.g. {\"peel\":1.2,\"composite\":0.1})",
     );
+    pub const PASS_MS_CI: Col = Col::new(
+        "pass_ms_ci",
+        "95 % interval of each pass's median ms, JSON object label → [lo, hi] (the bootstrap CI of the median from 6 samples, else the min–max range, as gpu_ms_ci_lo/hi): what a claim about one pass is ruled with",
+    );
     pub const GEOMETRY_PASSES: Col = Col::new(
         "geometry_passes",
         "geometry passes per frame (times the scene was rasterized)",
@@ -1424,6 +1428,7 @@ pub const GROUPS: &[Group] = &[
             cols::THROTTLE_REASONS,
             cols::CLOCK_SOURCE,
             cols::PASS_MS,
+            cols::PASS_MS_CI,
             cols::GEOMETRY_PASSES,
             cols::LAYERS_CAPTURED_MAX,
             cols::BYTES_ALLOCATED,

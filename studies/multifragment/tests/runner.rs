@@ -45,10 +45,26 @@ fn out_of_range_axis_is_refused_before_any_gpu_work_and_a_valid_one_runs() {
     assert_eq!(good[0].get(cols::MAX_LAYERS), Some("4"));
     // Axes the suite left out are written with their defaults.
     assert_eq!(good[0].get(cols::OCCLUSION_STOP), Some("true"));
-    assert!(
-        good[0].get(cols::X_FLOOR).is_some(),
-        "x_floor is filled from the floor rows"
-    );
+    // x_floor is the row's median over the depth-only floor's, wherever both exist (a floor
+    // pass on a 16² lavapipe target can time at 0 ms: then no ratio is a result).
+    let floor = rows
+        .iter()
+        .find(|r| r.get(cols::METHOD) == Some("floor_depth"))
+        .expect("the group's floor row");
+    let floor_ms = floor.get_f(cols::GPU_MS_MEDIAN).filter(|f| *f > 0.0);
+    let g = good[0].get_f(cols::GPU_MS_MEDIAN).expect("a timed row");
+    match floor_ms.filter(|_| bench_core::record::gpu_time_trusted(good[0])) {
+        Some(f) => {
+            let x = good[0]
+                .get_f(cols::X_FLOOR)
+                .expect("x_floor filled from the floor row");
+            assert!(
+                (x - g / f).abs() <= 1e-6 * (g / f).abs().max(1.0),
+                "{x} vs {g}/{f}"
+            );
+        }
+        None => assert_eq!(good[0].get(cols::X_FLOOR), None, "no floor time, no ratio"),
+    }
 }
 
 #[test]

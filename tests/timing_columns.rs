@@ -4,8 +4,8 @@
 //! asserted: only that the columns exist and agree with each other.
 
 use bench_core::record::{cols, Row};
-use mfx_multifragment::testing;
-use mfx_multifragment::STUDIES;
+use bench_core::testing;
+use mfx::STUDIES;
 
 fn rows(text: &str) -> Vec<Row> {
     bench_core::runner::run_suite(testing::gpu(), STUDIES, text, "test").unwrap()
