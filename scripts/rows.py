@@ -45,7 +45,7 @@ EXCLUDED = [
     "peak_bandwidth_frac", "samples", "samples_discarded", "warmup_frames", "stop_reason",
     "target_reached", "canary_*", "clock_lift_*", "session_spread", "sm_clock_*",
     "mem_clock_*", "gpu_temp_*", "gpu_power_*", "throttle_reasons", "clock_source",
-    "lit_within_frame", "gpu_time_trusted",
+    "lit_within_frame", "gpu_time_trusted", "pass_ms_ci", "l2_resident",
 ]
 
 # Flags set by the timing rules (how fast the adapter was, not what the point computed).

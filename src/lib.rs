@@ -11,6 +11,7 @@
 //! | `prepass` | light pre-pass vs deferred; light buffer on CPU cores, overlapped     |
 //! | `stability` | stiff/extreme inputs: methods study + case, stiffness, lost fragments |
 //! | `shadows` | layered soft shadow maps from an area light vs a ray-traced reference |
+//! | `views`   | the methods study along each scene's camera path: flicker, popping, time per view |
 
 pub mod papers;
 
@@ -18,6 +19,7 @@ use bench_core::study::Study;
 use mfx_geometry::GeometryStudy;
 use mfx_multifragment::studies::methods::MethodsStudy;
 use mfx_multifragment::studies::stability::StabilityStudy;
+use mfx_multifragment::studies::views::ViewsStudy;
 use mfx_shading::studies::deferred::DeferredStudy;
 use mfx_shading::studies::prepass::PrepassStudy;
 use mfx_shadows::ShadowsStudy;
@@ -29,5 +31,6 @@ pub const STUDIES: &[&dyn Study] = &[
     &DeferredStudy,
     &PrepassStudy,
     &StabilityStudy,
+    &ViewsStudy,
     &ShadowsStudy,
 ];

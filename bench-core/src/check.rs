@@ -265,6 +265,25 @@ fn check_study(studies: &[&dyn Study], suite: &Suite, spec: &StudySpec, out: &mu
     let mut seen = BTreeSet::new();
     for (scene, &j) in spec.scenes.iter().zip(&spec.scene_tables) {
         let tn = format!("{table} › scene {j} ({})", scene.generator);
+        // A study that renders one view would run a path at its first view only: refused,
+        // never silently narrowed.
+        if !study.moves_camera()
+            && scene
+                .params
+                .get(scenarios::path::CAMERA_PATH.name)
+                .is_some()
+            && seen.insert(format!("{tn} camera_path"))
+        {
+            out.push(Problem::new(
+                file,
+                &tn,
+                scenarios::path::CAMERA_PATH.name,
+                format!(
+                    "the {} study renders one view per scene: a camera path runs in a `views` study",
+                    spec.kind
+                ),
+            ));
+        }
         for e in scene.check() {
             for p in scene_problems(file, &tn, e) {
                 if seen.insert(p.to_string()) {
@@ -417,6 +436,15 @@ fn scene_problems(file: &str, table: &str, e: SceneError) -> Vec<Problem> {
         SceneError::ModelMissing { .. } => Vec::new(),
         SceneError::Gltf { path, why } => {
             vec![Problem::new(file, table, "path", format!("glTF file: {why}")).value(path)]
+        }
+        SceneError::CameraFile { path, line, why } => {
+            let at = line.map(|l| format!(":{l}")).unwrap_or_default();
+            vec![Problem::new(
+                file,
+                table,
+                "path_file",
+                format!("{path}{at}: {why}"),
+            )]
         }
         other => vec![Problem::new(file, table, "", other.to_string())],
     }

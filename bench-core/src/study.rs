@@ -196,6 +196,11 @@ pub trait Study: Sync {
     fn options(&self) -> Vec<Opt> {
         Vec::new()
     }
+    /// Whether the study renders its scenes' camera paths (`camera_path`, `scenarios::path`);
+    /// elsewhere a path is a problem `mfx check` names (it would run at one view).
+    fn moves_camera(&self) -> bool {
+        false
+    }
     /// Problems of a study table that its declarations cannot say (one message each).
     fn check_table(&self, spec: &StudySpec) -> Vec<String> {
         let _ = spec;

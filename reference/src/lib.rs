@@ -1,6 +1,7 @@
 //! mfx-reference, the exact CPU reference: every fragment of every pixel, in f64, depth-sorted;
 //! the error metrics images are judged by ([`metrics`]); and the CPU twins of the
-//! order-dependent rules ([`oit`]). GPU-free: no wgpu, tested without an adapter.
+//! order-dependent rules ([`oit`]); what only a sequence of views has, flicker and popping against
+//! each view's truth ([`temporal`], for camera paths). GPU-free: no wgpu, tested without an adapter.
 //!
 //! It projects with the same f32 matrix the GPU receives (widened to f64), clips against the
 //! depth range 0 ≤ z ≤ w like Vulkan, snaps screen positions to the GPU's 8 sub-pixel bits,
@@ -13,6 +14,7 @@ pub mod metrics;
 pub mod multisample;
 pub mod oit;
 pub mod raster;
+pub mod temporal;
 
 pub use multisample::AaMode;
 pub use raster::{rasterize, rasterize_with, RefFragment, Sampling, SUBPIXEL_BITS};

@@ -205,8 +205,8 @@ fn sample(img: &::gltf::image::Data, sampler: &::gltf::texture::Sampler, uv: [f3
     }
 }
 
-/// [`load`] without printing: the mesh and what a user should be told.
-pub fn load_with_warnings(path: &Path) -> Result<(Mesh, Vec<String>)> {
+/// The file's document and its buffers, every accessor checked to lie inside its buffer.
+fn open(path: &Path) -> Result<(::gltf::Gltf, Vec<::gltf::buffer::Data>)> {
     if !path.exists() {
         return Err(err(path, "file not found"));
     }
@@ -237,6 +237,13 @@ pub fn load_with_warnings(path: &Path) -> Result<(Mesh, Vec<String>)> {
         buffers.push(data);
     }
     check_accessors(path, &gltf.document, &buffers)?;
+    Ok((gltf, buffers))
+}
+
+/// [`load`] without printing: the mesh and what a user should be told.
+pub fn load_with_warnings(path: &Path) -> Result<(Mesh, Vec<String>)> {
+    let (gltf, buffers) = open(path)?;
+    let dir = path.parent().unwrap_or(Path::new("."));
     let mut images: HashMap<usize, ::gltf::image::Data> = HashMap::new();
     let mut warnings = Vec::new();
     let mut unmaterialled = 0usize;
@@ -458,6 +465,7 @@ pub fn build(spec: &SceneSpec) -> Result<Scene> {
         .collect();
     let mut scene = Scene::new(spec.clone(), mesh, camera);
     scene.objects = objects;
+    scene.file_normalisation = Some((centre, scale));
     Ok(scene)
 }
 
@@ -499,6 +507,252 @@ pub fn file_camera(path: &Path) -> Result<(glam::DVec3, glam::DVec3, glam::DVec3
         path,
         "camera = \"file\": the file has no perspective camera in its scene",
     ))
+}
+
+/// A camera of a glTF file at one moment, in the file's world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FileCamera {
+    pub eye: glam::DVec3,
+    /// One unit down the camera's −z.
+    pub target: glam::DVec3,
+    pub up: glam::DVec3,
+    pub yfov_deg: f64,
+}
+
+/// One animated property of a node: its keyframe times and values (x, y, z[, w]).
+struct Track {
+    node: usize,
+    property: ::gltf::animation::Property,
+    interpolation: ::gltf::animation::Interpolation,
+    times: Vec<f64>,
+    /// Per key; a cubic spline's are (in-tangent, value, out-tangent) triples.
+    values: Vec<[f64; 4]>,
+}
+
+impl Track {
+    /// The value at time `t` (held before the first key and after the last).
+    fn at(&self, t: f64) -> [f64; 4] {
+        use ::gltf::animation::Interpolation as I;
+        let cubic = self.interpolation == I::CubicSpline;
+        let value = |k: usize| {
+            if cubic {
+                self.values[3 * k + 1]
+            } else {
+                self.values[k]
+            }
+        };
+        let n = self.times.len();
+        if t <= self.times[0] {
+            return value(0);
+        }
+        if t >= self.times[n - 1] {
+            return value(n - 1);
+        }
+        let k = self.times.partition_point(|&x| x <= t) - 1;
+        let dt = self.times[k + 1] - self.times[k];
+        let u = (t - self.times[k]) / dt;
+        let rotation = self.property == ::gltf::animation::Property::Rotation;
+        let out = match self.interpolation {
+            I::Step => value(k),
+            I::Linear if rotation => {
+                let q = |v: [f64; 4]| glam::DQuat::from_xyzw(v[0], v[1], v[2], v[3]);
+                let r = q(value(k)).slerp(q(value(k + 1)), u);
+                [r.x, r.y, r.z, r.w]
+            }
+            I::Linear => std::array::from_fn(|c| value(k)[c] + (value(k + 1)[c] - value(k)[c]) * u),
+            // glTF 2.0 Appendix C: the cubic Hermite spline with tangents scaled by the interval.
+            I::CubicSpline => {
+                let (u2, u3) = (u * u, u * u * u);
+                let (v0, b0) = (self.values[3 * k + 1], self.values[3 * k + 2]);
+                let (a1, v1) = (self.values[3 * (k + 1)], self.values[3 * (k + 1) + 1]);
+                std::array::from_fn(|c| {
+                    (2.0 * u3 - 3.0 * u2 + 1.0) * v0[c]
+                        + (u3 - 2.0 * u2 + u) * dt * b0[c]
+                        + (-2.0 * u3 + 3.0 * u2) * v1[c]
+                        + (u3 - u2) * dt * a1[c]
+                })
+            }
+        };
+        if rotation {
+            let q = glam::DQuat::from_xyzw(out[0], out[1], out[2], out[3]).normalize();
+            return [q.x, q.y, q.z, q.w];
+        }
+        out
+    }
+}
+
+/// The file's first perspective camera (as [`file_camera`] finds it) played by the file's first
+/// animation that moves it or a node above it: `views` cameras at evenly spaced times from that
+/// animation's first keyframe to its last. An error names the file and what is missing (no
+/// camera, no animation of it, a sampler whose times are not increasing).
+pub fn camera_animation(path: &Path, views: u32) -> Result<Vec<FileCamera>> {
+    let (gltf, buffers) = open(path)?;
+    let doc = &gltf.document;
+    let scene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .ok_or_else(|| err(path, "no scene"))?;
+    // The chain of nodes from a root to the first perspective camera, depth first in file order.
+    let mut chain: Option<Vec<::gltf::Node>> = None;
+    let mut stack: Vec<Vec<::gltf::Node>> = scene.nodes().map(|n| vec![n]).collect();
+    stack.reverse();
+    while let Some(nodes) = stack.pop() {
+        let node = nodes.last().expect("non-empty").clone();
+        if let Some(cam) = node.camera() {
+            if matches!(cam.projection(), ::gltf::camera::Projection::Perspective(_)) {
+                chain = Some(nodes);
+                break;
+            }
+        }
+        for c in node.children().collect::<Vec<_>>().into_iter().rev() {
+            let mut next = nodes.clone();
+            next.push(c);
+            stack.push(next);
+        }
+    }
+    let chain = chain.ok_or_else(|| {
+        err(
+            path,
+            "camera_path = \"file\": the file has no perspective camera in its scene",
+        )
+    })?;
+    let cam_node = chain.last().expect("non-empty");
+    let yfov = match cam_node.camera().as_ref().map(|c| c.projection()) {
+        Some(::gltf::camera::Projection::Perspective(p)) => p.yfov() as f64,
+        _ => unreachable!("found as a perspective camera"),
+    };
+    let in_chain = |n: usize| chain.iter().any(|c| c.index() == n);
+    let animation = doc
+        .animations()
+        .find(|a| a.channels().any(|c| in_chain(c.target().node().index())))
+        .ok_or_else(|| {
+            err(
+                path,
+                format!(
+                    "camera_path = \"file\": no animation moves camera node {} or a node above it",
+                    cam_node.index()
+                ),
+            )
+        })?;
+    let mut tracks = Vec::new();
+    for ch in animation.channels() {
+        let node = ch.target().node().index();
+        let property = ch.target().property();
+        if !in_chain(node) || property == ::gltf::animation::Property::MorphTargetWeights {
+            continue;
+        }
+        let at = format!(
+            "animation {} channel {} (node {node})",
+            animation.index(),
+            ch.index()
+        );
+        let reader = ch.reader(|b| buffers.get(b.index()).map(|d| d.0.as_slice()));
+        let times: Vec<f64> = reader
+            .read_inputs()
+            .ok_or_else(|| err(path, format!("{at}: no input times")))?
+            .map(f64::from)
+            .collect();
+        if times.is_empty() || times.iter().any(|t| !t.is_finite()) {
+            return Err(err(path, format!("{at}: no finite input times")));
+        }
+        if let Some(w) = times.windows(2).position(|w| w[1] <= w[0]) {
+            return Err(err(
+                path,
+                format!(
+                    "{at}: input time {} at key {} is not after {}: times must increase",
+                    times[w + 1],
+                    w + 1,
+                    times[w]
+                ),
+            ));
+        }
+        use ::gltf::animation::util::ReadOutputs as O;
+        let widen3 = |v: [f32; 3]| [v[0] as f64, v[1] as f64, v[2] as f64, 0.0];
+        let values: Vec<[f64; 4]> = match reader.read_outputs() {
+            Some(O::Translations(it)) | Some(O::Scales(it)) => it.map(widen3).collect(),
+            Some(O::Rotations(r)) => r.into_f32().map(|q| q.map(f64::from)).collect(),
+            _ => return Err(err(path, format!("{at}: no output values"))),
+        };
+        let interpolation = ch.sampler().interpolation();
+        let per_key = match interpolation {
+            ::gltf::animation::Interpolation::CubicSpline => 3,
+            _ => 1,
+        };
+        if values.len() != times.len() * per_key || values.iter().flatten().any(|v| !v.is_finite())
+        {
+            return Err(err(
+                path,
+                format!(
+                    "{at}: {} finite output values for {} input times ({per_key} a key)",
+                    values.len(),
+                    times.len()
+                ),
+            ));
+        }
+        tracks.push(Track {
+            node,
+            property,
+            interpolation,
+            times,
+            values,
+        });
+    }
+    let t0 = tracks
+        .iter()
+        .map(|t| t.times[0])
+        .fold(f64::INFINITY, f64::min);
+    let t1 = tracks
+        .iter()
+        .map(|t| t.times[t.times.len() - 1])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let n = views.max(1) as usize;
+    (0..n)
+        .map(|i| {
+            let t = t0 + (t1 - t0) * i as f64 / (n - 1).max(1) as f64;
+            let mut world = glam::DMat4::IDENTITY;
+            for node in &chain {
+                let (tr, rot, sc) = node.transform().decomposed();
+                let mut tr = glam::DVec3::from(tr.map(f64::from));
+                let r = rot.map(f64::from);
+                let mut rot = glam::DQuat::from_xyzw(r[0], r[1], r[2], r[3]);
+                let mut sc = glam::DVec3::from(sc.map(f64::from));
+                for track in tracks.iter().filter(|k| k.node == node.index()) {
+                    let v = track.at(t);
+                    match track.property {
+                        ::gltf::animation::Property::Translation => {
+                            tr = glam::DVec3::new(v[0], v[1], v[2])
+                        }
+                        ::gltf::animation::Property::Rotation => {
+                            rot = glam::DQuat::from_xyzw(v[0], v[1], v[2], v[3])
+                        }
+                        ::gltf::animation::Property::Scale => {
+                            sc = glam::DVec3::new(v[0], v[1], v[2])
+                        }
+                        ::gltf::animation::Property::MorphTargetWeights => {}
+                    }
+                }
+                world *= glam::DMat4::from_scale_rotation_translation(sc, rot, tr);
+            }
+            let eye = world.transform_point3(glam::DVec3::ZERO);
+            let target = world.transform_point3(glam::DVec3::NEG_Z);
+            let up = world.transform_vector3(glam::DVec3::Y).normalize_or_zero();
+            if !(eye.is_finite() && target.is_finite()) || (target - eye).length() < 1e-12 {
+                return Err(err(
+                    path,
+                    format!(
+                        "camera node {} at time {t}: its transform is degenerate",
+                        cam_node.index()
+                    ),
+                ));
+            }
+            Ok(FileCamera {
+                eye,
+                target,
+                up,
+                yfov_deg: yfov.to_degrees(),
+            })
+        })
+        .collect()
 }
 
 /// How [`write_example_as`] stores the buffer: as users ship glTF.

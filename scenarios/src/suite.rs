@@ -53,6 +53,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("continuum-ci", include_str!("../suites/continuum-ci.toml")),
     ("aa", include_str!("../suites/aa.toml")),
     ("aa-ci", include_str!("../suites/aa-ci.toml")),
+    ("views", include_str!("../suites/views.toml")),
+    ("views-ci", include_str!("../suites/views-ci.toml")),
     // The sources' own setups (issue 30), one per source; scenarios/papers/*.toml points here.
     (
         "seeds-buckets",

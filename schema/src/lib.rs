@@ -450,6 +450,95 @@ pub mod cols {
         "fragments within the method's capacity that it did not capture (sum over pixels; coplanar loss when the reference has depth ties)",
     );
 
+    // ---- The views study (camera paths) ----
+    pub const CAMERA_PATH: Col = Col::new(
+        "camera_path",
+        "views: the scene's camera path (orbit | fly | file | at_rest; its keys are in scene_label)",
+    );
+    pub const PATH_VIEWS: Col = Col::new("path_views", "views: views rendered along the path");
+    pub const POP_EPSILON: Col = Col::new(
+        "pop_epsilon",
+        "views: ε of popping (a pixel pops when its max-channel error against the truth changes by more than ε between consecutive views)",
+    );
+    pub const GPU_MS_PATH_P99: Col = Col::new(
+        "gpu_ms_path_p99",
+        "views: nearest-rank 99th percentile over the views of each view's median GPU ms (gpu_ms_median is the median over the views)",
+    );
+    pub const GPU_MS_PATH_WORST: Col = Col::new(
+        "gpu_ms_path_worst",
+        "views: the slowest view's median GPU ms",
+    );
+    pub const GPU_MS_WORST_VIEW: Col = Col::new(
+        "gpu_ms_worst_view",
+        "views: the slowest view (index along the path, from 0)",
+    );
+    pub const RMSE_PATH_WORST: Col = Col::new(
+        "rmse_path_worst",
+        "views: the largest RMSE of a view against its own truth (rmse is the mean over the views)",
+    );
+    pub const RMSE_WORST_VIEW: Col =
+        Col::new("rmse_worst_view", "views: the view of rmse_path_worst");
+    pub const FLIP_PATH_WORST: Col = Col::new(
+        "flip_path_worst",
+        "views: the largest FLIP mean of a view (flip_mean is the mean over the views)",
+    );
+    pub const FLIP_WORST_VIEW: Col =
+        Col::new("flip_worst_view", "views: the view of flip_path_worst");
+    pub const VIEWS_EXACT: Col = Col::new(
+        "views_exact",
+        "views: views judged exact (exact = every view exact)",
+    );
+    pub const FLICKER_MEAN: Col = Col::new(
+        "flicker_mean",
+        "views: mean over consecutive views t−1 → t of the mean over pixels of max-channel |(I_t − I_{t−1}) − (T_t − T_{t−1})|: the frame-to-frame change of the method's image that its truth's change does not explain (0 for an exact method, within flicker_bound_mean)",
+    );
+    pub const FLICKER_MAX: Col = Col::new("flicker_max", "views: the largest step's flicker");
+    pub const FLICKER_WORST_VIEW: Col = Col::new(
+        "flicker_worst_view",
+        "views: the view t of the step t−1 → t with flicker_max (empty when no step flickered)",
+    );
+    pub const FLICKER_BOUND_MEAN: Col = Col::new(
+        "flicker_bound_mean",
+        "views: mean over steps of the mean over pixels of b_{t−1} + b_t, each view's f32 bound of an exact composite (exact_bound's per pixel): the flicker an exact method stays within",
+    );
+    pub const FLICKER_BEYOND_BOUND: Col = Col::new(
+        "flicker_beyond_bound",
+        "views: pixels, summed over steps, whose unexplained change exceeds b_{t−1} + b_t (0 for an exact method)",
+    );
+    pub const POPPING_MEAN: Col = Col::new(
+        "popping_mean",
+        "views: mean over steps of the share of pixels whose error against the truth changes by more than pop_epsilon",
+    );
+    pub const POPPING_MAX: Col = Col::new("popping_max", "views: the largest step's popping share");
+    pub const POPPING_WORST_VIEW: Col = Col::new(
+        "popping_worst_view",
+        "views: the view t of the step t−1 → t with popping_max (empty when no pixel popped)",
+    );
+    pub const AT_REST_CHANGED_MEAN: Col = Col::new(
+        "at_rest_changed_mean",
+        "views, camera_path = at_rest: mean over consecutive repeated frames of the share of pixels whose value differs (0 without timing-dependent hazards)",
+    );
+    pub const AT_REST_CHANGED_MAX: Col = Col::new(
+        "at_rest_changed_max",
+        "views, camera_path = at_rest: the largest such share",
+    );
+    pub const PATH_SERIES: Col = Col::new(
+        "path_series",
+        "views: every view's numbers, JSON arrays indexed by view: gpu_ms, rmse, flip, flicker, popping, changed (the step arriving at the view; null at view 0), exact",
+    );
+    pub const PATH_IMAGES: Col = Col::new(
+        "path_images",
+        "views, with --save-images: prefix of the row's PNG crops (views/<hash>-worst-{method,truth,flip}.png of the worst view; views/<hash>-pop-{method-before,method-after,truth-before,truth-after,popped}.png of its largest pop)",
+    );
+    pub const PATH_IMAGES_WORST_VIEW: Col = Col::new(
+        "path_images_worst_view",
+        "views: the view of the -worst- crops",
+    );
+    pub const PATH_IMAGES_POP_VIEW: Col = Col::new(
+        "path_images_pop_view",
+        "views: the view t of the -pop- crops (the step t−1 → t)",
+    );
+
     // ---- The deferred-shading study ----
     pub const LIGHT_COUNT: Col = Col::new(
         "light_count",
@@ -1194,6 +1283,37 @@ pub const GROUPS: &[Group] = &[
             cols::STIFFNESS,
             cols::STIFFNESS_VALUE,
             cols::LOST_FRAGMENTS,
+        ],
+    },
+    Group {
+        name: "views",
+        title: "The views study (camera paths)",
+        cols: &[
+            cols::CAMERA_PATH,
+            cols::PATH_VIEWS,
+            cols::POP_EPSILON,
+            cols::GPU_MS_PATH_P99,
+            cols::GPU_MS_PATH_WORST,
+            cols::GPU_MS_WORST_VIEW,
+            cols::RMSE_PATH_WORST,
+            cols::RMSE_WORST_VIEW,
+            cols::FLIP_PATH_WORST,
+            cols::FLIP_WORST_VIEW,
+            cols::VIEWS_EXACT,
+            cols::FLICKER_MEAN,
+            cols::FLICKER_MAX,
+            cols::FLICKER_WORST_VIEW,
+            cols::FLICKER_BOUND_MEAN,
+            cols::FLICKER_BEYOND_BOUND,
+            cols::POPPING_MEAN,
+            cols::POPPING_MAX,
+            cols::POPPING_WORST_VIEW,
+            cols::AT_REST_CHANGED_MEAN,
+            cols::AT_REST_CHANGED_MAX,
+            cols::PATH_SERIES,
+            cols::PATH_IMAGES,
+            cols::PATH_IMAGES_WORST_VIEW,
+            cols::PATH_IMAGES_POP_VIEW,
         ],
     },
     Group {

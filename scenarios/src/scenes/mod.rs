@@ -53,6 +53,9 @@ impl SceneSpec {
             )];
         }
         let mut problems = crate::params::check_params(|| self.build_unchecked());
+        if let Err(p) = crate::path::CameraPath::of(self) {
+            problems.extend(p);
+        }
         if let Some(crate::ParamValue::Str(path)) = self.params.get("path") {
             let path = std::path::Path::new(path);
             let loaded = match self.generator.as_str() {
@@ -82,6 +85,24 @@ impl SceneSpec {
     }
 
     fn build_unchecked(&self) -> Result<Scene> {
+        // The path keys are every scene's, not the generator's: it builds without them, and the
+        // scene then takes its path's views (the first becoming its camera).
+        let path_keys = self.params.0.keys().any(|k| crate::path::is_path_key(k));
+        if path_keys {
+            let own = SceneSpec::new(&self.generator, crate::path::generator_params(&self.params));
+            let mut scene = own.build_unchecked()?;
+            scene.spec = self.clone();
+            let path = crate::path::CameraPath::of(self)
+                .map_err(|mut p| match p.len() {
+                    1 => p.remove(0),
+                    _ => SceneError::Many(p),
+                })?
+                .expect("a scene with path keys has a path or problems");
+            scene.views = path.cameras(&scene)?;
+            scene.camera = scene.views[0].clone();
+            scene.path = Some(path.name());
+            return Ok(scene);
+        }
         Ok(match self.generator.as_str() {
             "grass" => grass::build(self)?,
             "shells" => shells::build(self)?,

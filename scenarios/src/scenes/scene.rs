@@ -179,6 +179,15 @@ pub struct Scene {
     pub sun: Option<Sun>,
     /// The square area light of soft-shadow scenes (None elsewhere).
     pub area_light: Option<AreaLight>,
+    /// The views of the scene's camera path (`crate::path`), `camera` being the first; empty
+    /// when the scene has no path (one view: `camera`).
+    pub views: Vec<Camera>,
+    /// The kind of camera path `views` came from (`CameraPath::name`: orbit, fly, file,
+    /// at_rest); None: one view. A name, not the path, so this file stays below `path`.
+    pub path: Option<&'static str>,
+    /// A model scene's file space → this scene's (p' = (p − centre) · scale), for cameras the
+    /// file gives (a glTF camera animation); None for generated scenes.
+    pub file_normalisation: Option<(DVec3, f64)>,
 }
 
 impl Scene {
@@ -193,6 +202,9 @@ impl Scene {
             lights: Vec::new(),
             sun: None,
             area_light: None,
+            views: Vec::new(),
+            path: None,
+            file_normalisation: None,
         }
     }
     pub fn name(&self) -> &str {

@@ -131,6 +131,37 @@ pub fn run_methods_group(
     extra: &dyn Fn(&mut Row, &PointSpec, &GroupTruth<'_>),
 ) -> Result<()> {
     let truth = GroupTruth::new(ctx);
+    let runnable = ready_points(ctx, &truth, emit, extra)?;
+    let mut peel_ms: Option<f64> = None;
+    if ctx.plan.interleave {
+        // All points prepared and sampled in a seeded interleaved order, then judged.
+        let items: Vec<(&dyn Method, &bench_core::axes::Point)> = runnable
+            .iter()
+            .map(|r| (r.method.as_ref(), &ctx.group.points[r.index].point))
+            .collect();
+        let measured = measure_interleaved(ctx.gpu, ctx.gscene, &items, &ctx.plan);
+        for (r, m) in runnable.into_iter().zip(measured) {
+            finish_point(ctx, &truth, r, m, &mut peel_ms, emit)?;
+        }
+    } else {
+        for r in runnable {
+            let pt = &ctx.group.points[r.index];
+            let m = measure(ctx.gpu, ctx.gscene, r.method.as_ref(), &pt.point, &ctx.plan);
+            finish_point(ctx, &truth, r, m, &mut peel_ms, emit)?;
+        }
+    }
+    Ok(())
+}
+
+/// The points of a methods-like group that can run, each with its row so far (method, axes,
+/// effect, payload, `extra`'s columns); a point that cannot (an effect its method does not fold,
+/// an adapter without what it needs) is emitted here as a `skipped` row. `depth_peel` first.
+pub fn ready_points(
+    ctx: &GroupCtx<'_>,
+    truth: &GroupTruth<'_>,
+    emit: &mut Emit<'_>,
+    extra: &dyn Fn(&mut Row, &PointSpec, &GroupTruth<'_>),
+) -> Result<Vec<Ready>> {
     // depth_peel first so every other row can carry its speedup over it.
     let mut order: Vec<usize> = (0..ctx.group.points.len()).collect();
     order.sort_by_key(|&i| ctx.group.points[i].method != BASELINE);
@@ -143,7 +174,7 @@ pub fn run_methods_group(
         row.set(cols::METHOD, &pt.method)
             .set(cols::CLAIMS_EXACT, method.exact());
         set_params(&mut row, &pt.point.recorded())?;
-        extra(&mut row, pt, &truth);
+        extra(&mut row, pt, truth);
         let effect = match effect_of(method.as_ref(), &pt.point) {
             Ok(e) => e,
             Err(why) => {
@@ -175,33 +206,16 @@ pub fn run_methods_group(
             row,
         });
     }
-    let mut peel_ms: Option<f64> = None;
-    if ctx.plan.interleave {
-        // All points prepared and sampled in a seeded interleaved order, then judged.
-        let items: Vec<(&dyn Method, &bench_core::axes::Point)> = runnable
-            .iter()
-            .map(|r| (r.method.as_ref(), &ctx.group.points[r.index].point))
-            .collect();
-        let measured = measure_interleaved(ctx.gpu, ctx.gscene, &items, &ctx.plan);
-        for (r, m) in runnable.into_iter().zip(measured) {
-            finish_point(ctx, &truth, r, m, &mut peel_ms, emit)?;
-        }
-    } else {
-        for r in runnable {
-            let pt = &ctx.group.points[r.index];
-            let m = measure(ctx.gpu, ctx.gscene, r.method.as_ref(), &pt.point, &ctx.plan);
-            finish_point(ctx, &truth, r, m, &mut peel_ms, emit)?;
-        }
-    }
-    Ok(())
+    Ok(runnable)
 }
 
 /// A point that can run, with its row so far.
-struct Ready {
-    index: usize,
-    method: Box<dyn Method>,
-    effect: EffectConfig,
-    row: Row,
+pub struct Ready {
+    /// The point's index in its group.
+    pub index: usize,
+    pub method: Box<dyn Method>,
+    pub effect: EffectConfig,
+    pub row: Row,
 }
 
 /// Reads back, judges and emits one measured point.
