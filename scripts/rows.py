@@ -40,7 +40,7 @@ EXCLUDED = [
     "run_id", "git_rev", "timestamp_utc", "adapter", "driver", "driver_info", "device_type",
     "adapter_features",
     # clocks and what follows from them
-    "gpu_ms_*", "cpu_ms_*", "*_ms", "*_per_s", "shade_ns_per_light_quad",
+    "gpu_ms_*", "cpu_ms_*", "*_ms", "*_per_s", "shade_ns_per_light_quad*",
     "x_floor", "x_blend", "speedup_vs_*", "gpu_wall_ratio", "raster_bound_ratio",
     "peak_bandwidth_frac", "samples", "samples_discarded", "warmup_frames", "stop_reason",
     "target_reached", "canary_*", "clock_lift_*", "session_spread", "sm_clock_*",

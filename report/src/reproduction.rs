@@ -195,7 +195,10 @@ fn value(r: &Rec, col: &str, pass: Option<&str>) -> Result<Value, String> {
     } else if EXACT.iter().any(|c| c.name == col) {
         Some((v, v))
     } else {
-        None
+        // A sampled CPU metric whose row carries its own interval (`<col>_ci_lo`, `<col>_ci_hi`,
+        // e.g. shade_ns_per_light_quad over repeated phase-clock frames).
+        r.f_name(&format!("{col}_ci_lo"))
+            .zip(r.f_name(&format!("{col}_ci_hi")))
     };
     Ok(Value { v, interval })
 }

@@ -652,6 +652,18 @@ pub mod cols {
         "shade_ns_per_light_quad",
         "CPU tile path, the phase-clock frame: light-loop ns per (light, 4×4 quad) evaluation (sun excluded): the per-light cost BF3 compares for diffuse-only and specular lights",
     );
+    pub const SHADE_NS_PER_LIGHT_QUAD_CI_LO: Col = Col::new(
+        "shade_ns_per_light_quad_ci_lo",
+        "CPU tile path: lower end of the 95 % interval of the median of shade_ns_per_light_quad over the phase-clock frames (phase_reps ≥ 6; empty below)",
+    );
+    pub const SHADE_NS_PER_LIGHT_QUAD_CI_HI: Col = Col::new(
+        "shade_ns_per_light_quad_ci_hi",
+        "CPU tile path: upper end of that interval",
+    );
+    pub const LIGHT_LOOP: Col = Col::new(
+        "light_loop",
+        "CPU tile path's light loop: bf3 (DICE's: every light evaluated on all 16 SoA lanes of a 4×4 quad with masks, no per-lane early-outs, after a whole-quad branch on the attenuation) | mfx (per-lane early-outs on N·L and attenuation); same image bit for bit",
+    );
     pub const QUAD_SKIP_FRAC: Col = Col::new(
         "quad_skip_frac",
         "CPU path: fraction of (light, 4×4 quad) pairs skipped because all 16 attenuations were 0",
@@ -1348,6 +1360,9 @@ pub const GROUPS: &[Group] = &[
             cols::CPU_PACK_MS,
             cols::CPU_PHASES_MS,
             cols::SHADE_NS_PER_LIGHT_QUAD,
+            cols::SHADE_NS_PER_LIGHT_QUAD_CI_LO,
+            cols::SHADE_NS_PER_LIGHT_QUAD_CI_HI,
+            cols::LIGHT_LOOP,
             cols::QUAD_SKIP_FRAC,
             cols::SPEEDUP_VS_NAIVE,
             cols::REL_ERR_MAX,

@@ -15,6 +15,22 @@
 //! - `diffuse_skip`: a diffuse-only light (the model's flag) is shaded without the specular
 //!   term; off, the term is evaluated and thrown away (the cost the flag saves).
 //!
+//! `light_loop`: the loop over a quad's lights. [`LightLoop::Bf3`] (the default) is DICE's
+//! (slides "SPU Shading - 4x4 Pixel Quads": "Operates on 16 pixels at a time … Unpack source
+//! data to Structure of Arrays (SoA) format"; "Algorithmic optimization #4: Branch on 4x4 pixel
+//! tile intersection with light based on the calculated lighting attenuation term … if (all 16
+//! pixels have an attenuation value of 0 or less) continue on to next light"): a light that
+//! passes the whole-quad branch is evaluated on all 16 lanes, N·L, half vector and BF3's
+//! energy-conserving specular ("Specular power LUT": `pow(2, 1+smoothness*10)`, normalised by
+//! `(specularPower+8)/8`, Sloan & Hoffman) included, with lanes masked by selects instead of
+//! per-lane branches; diffuse-only lights and quads without specular albedo take a second,
+//! diffuse-only loop ("Adds additional lighting loop"). [`LightLoop::Mfx`] is mfx's earlier
+//! loop: the same whole-quad branch, then per-lane early-outs on N·L ≤ 0 and a zero
+//! attenuation. Both add the same terms in the same order, and a masked lane adds +0.0, so the
+//! images are bit-identical. The slides also list a Fresnel term and a spherical-Gaussian
+//! specular (optimisation #6) without their formulas: neither is built (the f64 reference has
+//! neither).
+//!
 //! `phase_times`: BF3's per-phase costs (its slides give culling as 1–4 ms of a 40 ms budget),
 //! summed over worker threads: cull (tile and sub-tile frusta, the cone cull), unpack (G-buffer
 //! reads, position reconstruction, the quads' SoA lanes), shade (the light loop, then the sun)
@@ -38,8 +54,37 @@ use super::{sphere_outside, tile_planes, GBuffer, GpuLight, ShadeSetup, AMBIENT,
 /// dropped light's sign (f32 direction errors are ~1e-6 rad at the distances the cull allows).
 pub const CONE_MARGIN: f64 = 0.01;
 
+/// The light loop of a 4×4 quad (see the module doc).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightLoop {
+    /// DICE's: all 16 lanes per light, masked, after the whole-quad attenuation branch.
+    #[default]
+    Bf3,
+    /// mfx's earlier loop: per-lane early-outs.
+    Mfx,
+}
+
+impl LightLoop {
+    pub const NAMES: &'static [&'static str] = &["bf3", "mfx"];
+    pub fn parse(s: &str) -> Option<LightLoop> {
+        match s {
+            "bf3" => Some(LightLoop::Bf3),
+            "mfx" => Some(LightLoop::Mfx),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            LightLoop::Bf3 => "bf3",
+            LightLoop::Mfx => "mfx",
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 pub struct CpuOptions {
+    /// The light loop (see the module doc).
+    pub light_loop: LightLoop,
     /// Tile side (BF3: 64).
     pub tile: u32,
     /// Sub-tile size for the second culling level (BF3: 32×16); `None`: one level.
@@ -70,6 +115,7 @@ pub struct CpuOptions {
 impl Default for CpuOptions {
     fn default() -> Self {
         CpuOptions {
+            light_loop: LightLoop::Bf3,
             tile: 64,
             sub: Some((32, 16)),
             threads: 1,
@@ -408,6 +454,7 @@ fn shade_tile(
                         opts.spec_skip && !opts.light_buffer,
                         opts.diffuse_skip,
                         opts.light_buffer,
+                        opts.light_loop,
                         &mut out,
                         &mut lap,
                     );
@@ -438,6 +485,7 @@ fn shade_quad(
     spec_skip: bool,
     diffuse_skip: bool,
     light_buffer: bool,
+    light_loop: LightLoop,
     out: &mut TileOut,
     lap: &mut Lap,
 ) {
@@ -564,6 +612,24 @@ fn shade_quad(
         let d_only = l.diffuse_only();
         out.diffuse_skips += (d_only && diffuse_skip && !no_spec) as u64;
         let color = [l.color_cos[0], l.color_cos[1], l.color_cos[2]];
+        if light_loop == LightLoop::Bf3 {
+            bf3_light(
+                &BfLanes {
+                    n: [&nx, &ny, &nz],
+                    v: [&vx, &vy, &vz],
+                    pw: &pw,
+                    norm: &norm,
+                },
+                [&lx, &ly, &lz],
+                &att,
+                color,
+                no_spec || (d_only && diffuse_skip),
+                d_only,
+                &mut diff,
+                &mut spec,
+            );
+            continue;
+        }
         for k in 0..N {
             if att[k] > 0.0 {
                 add(
@@ -614,6 +680,77 @@ fn shade_quad(
         o[3] = 1.0;
     }
     lap.lap(&mut out.phases.pack);
+}
+
+/// A quad's SoA lanes that BF3's light loop reads.
+struct BfLanes<'a> {
+    n: [&'a [f32; 16]; 3],
+    v: [&'a [f32; 16]; 3],
+    pw: &'a [f32; 16],
+    norm: &'a [f32; 16],
+}
+
+/// One light on all 16 lanes of a quad, BF3's way: no per-lane branch; a lane outside the
+/// light (attenuation 0) or facing away (N·L ≤ 0) is masked by selects and adds +0.0, which
+/// leaves its sums bit-identical to the per-lane loop's. `diffuse_only`: BF3's second loop
+/// (no specular evaluation). `d_only` without it: the specular term is evaluated on every lane
+/// and thrown away (the cost the diffuse-only skip saves).
+#[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
+#[inline(never)]
+fn bf3_light(
+    q: &BfLanes<'_>,
+    l: [&[f32; 16]; 3],
+    att: &[f32; 16],
+    color: [f32; 3],
+    diffuse_only: bool,
+    d_only: bool,
+    diff: &mut [[f32; 3]; 16],
+    spec: &mut [[f32; 4]; 16],
+) {
+    const N: usize = 16;
+    let [nx, ny, nz] = q.n;
+    let [lx, ly, lz] = l;
+    let mut s = [0f32; N];
+    let mut lit = [false; N];
+    for k in 0..N {
+        let ndl = nx[k] * lx[k] + ny[k] * ly[k] + nz[k] * lz[k];
+        lit[k] = ndl > 0.0 && att[k] > 0.0;
+        s[k] = if lit[k] { att[k] * ndl } else { 0.0 };
+    }
+    if diffuse_only {
+        for k in 0..N {
+            for j in 0..3 {
+                diff[k][j] += color[j] * s[k];
+            }
+        }
+        return;
+    }
+    let [vx, vy, vz] = q.v;
+    let mut st = [0f32; N];
+    for k in 0..N {
+        let (hx, hy, hz) = (lx[k] + vx[k], ly[k] + vy[k], lz[k] + vz[k]);
+        let hl = 1.0 / (hx * hx + hy * hy + hz * hz).sqrt();
+        let ndh = ((nx[k] * hx + ny[k] * hy + nz[k] * hz) * hl).max(0.0);
+        let e = q.norm[k] * ndh.powf(q.pw[k]);
+        st[k] = if lit[k] && ndh > 0.0 { e } else { 0.0 };
+    }
+    if d_only {
+        std::hint::black_box(&st);
+        for k in 0..N {
+            for j in 0..3 {
+                diff[k][j] += color[j] * s[k];
+            }
+        }
+        return;
+    }
+    for k in 0..N {
+        let c = [color[0] * s[k], color[1] * s[k], color[2] * s[k]];
+        for j in 0..3 {
+            diff[k][j] += c[j];
+            spec[k][j] += c[j] * st[k];
+        }
+        spec[k][3] += (c[0] * 0.2126 + c[1] * 0.7152 + c[2] * 0.0722) * st[k];
+    }
 }
 
 /// BF3's normal-cone cull of one region `sub` (tile-relative) of tile `rect`: keeps the lights

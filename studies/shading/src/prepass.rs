@@ -702,6 +702,31 @@ impl PrePass {
         } = &self.kind
         {
             let (w, h) = (gscene.width, gscene.height);
+            // BF3's "Z + G-buffer copy" to Cell memory, timed as its own pass (`readback`):
+            // wgpu times passes only, so two empty compute passes bracket the copies, the
+            // first writing the label's start, the second its end. Vulkan writes both at
+            // BOTTOM_OF_PIPE (wgpu-hal), i.e. once every earlier command has finished: the
+            // start follows the pre-pass, the end the copies.
+            let bracket = timer.compute_pass("readback").map(|t| {
+                (
+                    t.query_set.clone(),
+                    t.beginning_of_pass_write_index,
+                    t.end_of_pass_write_index,
+                )
+            });
+            let mark = |enc: &mut wgpu::CommandEncoder, begin: bool| {
+                if let Some((set, b, e)) = &bracket {
+                    enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("readback bracket"),
+                        timestamp_writes: Some(wgpu::ComputePassTimestampWrites {
+                            query_set: set,
+                            beginning_of_pass_write_index: if begin { *b } else { None },
+                            end_of_pass_write_index: if begin { None } else { *e },
+                        }),
+                    });
+                }
+            };
+            mark(&mut enc, true);
             copy_to(
                 &mut enc,
                 &self.gbuf.depth,
@@ -716,6 +741,7 @@ impl PrePass {
                 8,
                 wgpu::TextureAspect::All,
             );
+            mark(&mut enc, false);
             let idx = gpu.queue.submit([enc.finish()]);
             if *overlap {
                 self.submit_view2(gpu, timer);

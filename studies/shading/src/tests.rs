@@ -493,6 +493,57 @@ fn diffuse_only_lights_match_reference_in_every_path() {
     assert!(m < PATH_TOL, "light buffer spec_lum: {m}");
 }
 
+/// BF3's light loop (all 16 lanes per light, masked, no per-lane early-out) against mfx's
+/// (per-lane early-outs): the same image bit for bit and the same counts, within the f64
+/// reference's tolerance, for combinations of the skips, the light buffer and diffuse-only
+/// lights. Masked lanes carry NaN directions (a pixel at the light) and unlit specular terms:
+/// a mask that let one through would show here as a differing or non-finite pixel.
+#[test]
+fn bf3_light_loop_matches_mfx_loop_bitwise_and_the_reference() {
+    use cpu_tiled::LightLoop;
+    let s = city(64, false);
+    let base = run(&s, 80, Path::Naive, 0.0, false);
+    for frac in [0.0, 0.5] {
+        let setup = base.setup.clone().with_diffuse_only(frac);
+        let reference = reference::shade(&setup, &base.gb);
+        let lights = setup.gpu_lights(0.0);
+        for (spec_skip, diffuse_skip, light_buffer) in [
+            (true, true, false),
+            (false, false, false),
+            (true, false, false),
+            (false, true, true),
+        ] {
+            let shade = |light_loop| {
+                let o = CpuOptions {
+                    light_loop,
+                    threads: 2,
+                    spec_skip,
+                    diffuse_skip,
+                    light_buffer,
+                    ..Default::default()
+                };
+                cpu_tiled::shade(&setup, &base.gb, &lights, &o)
+            };
+            let bf3 = shade(LightLoop::Bf3);
+            let mfx = shade(LightLoop::Mfx);
+            let what = format!(
+                "frac {frac} spec_skip {spec_skip} diffuse_skip {diffuse_skip} lb {light_buffer}"
+            );
+            assert_eq!(differing(&bf3.image, &mfx.image), 0, "{what}");
+            assert_eq!(
+                (bf3.quad_evals, bf3.quad_skips, bf3.diffuse_skips),
+                (mfx.quad_evals, mfx.quad_skips, mfx.diffuse_skips),
+                "{what}"
+            );
+            assert!(bf3.quad_evals > 0 && bf3.quad_skips > 0, "{what}");
+            if !light_buffer {
+                let e = max_rel_err(&reference, &bf3.image);
+                assert!(e < PATH_TOL, "{what}: {e}");
+            }
+        }
+    }
+}
+
 #[test]
 fn classified_lists_every_tile_once_and_matches_uber() {
     for room in [false, true] {

@@ -83,6 +83,16 @@ fn prepass_rows_are_complete_and_impossible_points_are_skipped() {
                 assert!(ready > 0.0 && ready <= latency, "{ready} vs {latency}");
                 assert_eq!(get(r, cols::LIT_WITHIN_FRAME), "true");
             }
+            // BF3's Z + G-buffer copy to host memory is its own timed pass beside the
+            // pre-pass (bf3-gbuffer-copy), only where there is a copy (the CPU path).
+            let passes = get(r, cols::PASS_MS);
+            if passes.contains("\"prepass\"") {
+                assert_eq!(
+                    passes.contains("\"readback\""),
+                    m == "prepass_cpu",
+                    "{m}: {passes}"
+                );
+            }
             ok += 1;
         }
     }

@@ -116,6 +116,21 @@ const DIFFUSE_SKIP: Axis = Axis::bool(
     "skip the specular term of diffuse-only lights",
     true,
 );
+const LIGHT_LOOP: Axis = Axis::choice(
+    cols::LIGHT_LOOP,
+    "cpu_tiled: the light loop of a 4×4 quad: bf3 (DICE's SoA loop, all 16 lanes per light with masks after a whole-quad attenuation branch) or mfx (per-lane early-outs); same image",
+    "bf3",
+    cpu_tiled::LightLoop::NAMES,
+);
+const PHASE_REPS: Opt = Opt {
+    name: "phase_reps",
+    doc: "cpu_tiled: phase-clock frames per point (the cpu_*_ms phases and shade_ns_per_light_quad are their medians; from 6 on, shade_ns_per_light_quad carries its 95 % interval)",
+    kind: scenarios::ValueKind::Int {
+        default: 1,
+        min: 1,
+        max: 10_000,
+    },
+};
 const CPU_REPS: Opt = Opt {
     name: "cpu_reps",
     doc: "timed repetitions of the CPU lighting paths",
@@ -140,6 +155,7 @@ fn axes_of(path: &str) -> Vec<Axis> {
             CONE_CULL,
             DIFFUSE_SKIP,
             DIFFUSE_ONLY_FRAC,
+            LIGHT_LOOP,
         ],
         "naive" | "classified" | "uber" => vec![DIFFUSE_ONLY_FRAC, SUN_SHADOW, MSAA],
         _ => vec![DIFFUSE_ONLY_FRAC],
@@ -269,7 +285,7 @@ impl Study for DeferredStudy {
         axes_of(path)
     }
     fn options(&self) -> Vec<Opt> {
-        vec![CPU_REPS]
+        vec![CPU_REPS, PHASE_REPS]
     }
 
     fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
@@ -296,6 +312,7 @@ impl Study for DeferredStudy {
             None
         };
         let cpu_reps = CPU_REPS.int(ctx.study) as u32;
+        let phase_reps = PHASE_REPS.int(ctx.study) as usize;
         let mut order: Vec<usize> = (0..ctx.group.points.len()).collect();
         order.sort_by_key(|&i| ctx.group.points[i].method != "naive");
         let mut naive_by_frac: HashMap<ImageKey, f64> = HashMap::new();
@@ -376,6 +393,10 @@ impl Study for DeferredStudy {
                 let spec_skip = pt.point.bool(&SPEC_SKIP);
                 let cone_cull = pt.point.bool(&CONE_CULL);
                 let diffuse_skip = pt.point.bool(&DIFFUSE_SKIP);
+                // Checked against NAMES with the suite, before any GPU work.
+                let light_loop =
+                    cpu_tiled::LightLoop::parse(&pt.point.choice(&LIGHT_LOOP)).unwrap_or_default();
+                row.set(cols::LIGHT_LOOP, light_loop.name());
                 row.set(cols::TILE_SIZE, 64)
                     .set(cols::QUAD_SKIP, quad_skip)
                     .set(cols::SPEC_SKIP, spec_skip)
@@ -383,6 +404,7 @@ impl Study for DeferredStudy {
                     .set(cols::DIFFUSE_SKIP, diffuse_skip);
                 let lights = setup.gpu_lights(tau);
                 let o = CpuOptions {
+                    light_loop,
                     tile: 64,
                     sub: (levels == 2).then_some((32, 16)),
                     threads,
@@ -406,18 +428,22 @@ impl Study for DeferredStudy {
                 }
                 let r = last.expect("at least one frame");
                 let st = Stats::of(&samples).unwrap_or_default();
-                let timed = cpu_tiled::shade(
-                    setup,
-                    &gb,
-                    &lights,
-                    &CpuOptions {
-                        phase_times: true,
-                        ..o
-                    },
-                );
-                if let Some(ph) = timed.phases {
-                    set_phases(&mut row, &ph, timed.quad_evals);
-                }
+                // Phase-clock frames after the timed ones (the clocks stay out of cpu_light_ms).
+                let phased: Vec<(cpu_tiled::Phases, u64)> = (0..phase_reps)
+                    .filter_map(|_| {
+                        let r = cpu_tiled::shade(
+                            setup,
+                            &gb,
+                            &lights,
+                            &CpuOptions {
+                                phase_times: true,
+                                ..o
+                            },
+                        );
+                        Some((r.phases?, r.quad_evals))
+                    })
+                    .collect();
+                set_phases(&mut row, &phased);
                 // No GPU frame to time: CPU lighting of a G-buffer read back once, timed by its
                 // own fixed count (a single-thread 4K frame takes seconds, too long for the
                 // stopping rule's samples), so the row says that instead of the plan's rule.
@@ -452,7 +478,11 @@ impl Study for DeferredStudy {
                 set_error(&mut row, reference, &r.image);
                 row.set(
                     cols::NOTES,
-                    format!("cpu_reps={cpu_reps}; G-buffer read back once, untimed; cpu_*_ms phases from one more frame with phase clocks"),
+                    if phase_reps == 1 {
+                        format!("cpu_reps={cpu_reps}; G-buffer read back once, untimed; cpu_*_ms phases from one more frame with phase clocks")
+                    } else {
+                        format!("cpu_reps={cpu_reps}; G-buffer read back once, untimed; cpu_*_ms phases and shade_ns_per_light_quad: medians of {phase_reps} more frames with phase clocks")
+                    },
                 );
                 emit(i, row)?;
                 continue;
@@ -536,19 +566,39 @@ impl Study for DeferredStudy {
     }
 }
 
-/// The phase-clock frame's columns (ns → ms; per-evaluation cost in ns).
-fn set_phases(row: &mut Row, ph: &cpu_tiled::Phases, evals: u64) {
-    let ms = |ns: u64| ns as f64 * 1e-6;
-    row.set_f(cols::CPU_CULL_MS, ms(ph.cull))
-        .set_f(cols::CPU_UNPACK_MS, ms(ph.unpack))
-        .set_f(cols::CPU_SHADE_MS, ms(ph.shade()))
-        .set_f(cols::CPU_PACK_MS, ms(ph.pack))
-        .set_f(cols::CPU_PHASES_MS, ms(ph.total()));
-    if evals > 0 {
-        row.set_f(
-            cols::SHADE_NS_PER_LIGHT_QUAD,
-            ph.lights as f64 / evals as f64,
-        );
+/// The phase-clock frames' columns (ns → ms; per-evaluation cost in ns): each the median over
+/// the frames (one frame: its value), and the per-evaluation cost's 95 % interval of the median
+/// from 6 frames on (issue 45 item 1: a verdict on a CPU metric carries an interval).
+fn set_phases(row: &mut Row, frames: &[(cpu_tiled::Phases, u64)]) {
+    if frames.is_empty() {
+        return;
+    }
+    let med = |f: &dyn Fn(&cpu_tiled::Phases) -> u64| {
+        let mut v: Vec<f64> = frames.iter().map(|(p, _)| f(p) as f64 * 1e-6).collect();
+        v.sort_by(|a, b| a.total_cmp(b));
+        mfx_stats::median_of_sorted(&v)
+    };
+    row.set_f(cols::CPU_CULL_MS, med(&|p| p.cull))
+        .set_f(cols::CPU_UNPACK_MS, med(&|p| p.unpack))
+        .set_f(cols::CPU_SHADE_MS, med(&|p| p.shade()))
+        .set_f(cols::CPU_PACK_MS, med(&|p| p.pack))
+        .set_f(cols::CPU_PHASES_MS, med(&|p| p.total()));
+    let mut per: Vec<f64> = frames
+        .iter()
+        .filter(|(_, evals)| *evals > 0)
+        .map(|(p, evals)| p.lights as f64 / *evals as f64)
+        .collect();
+    if per.is_empty() {
+        return;
+    }
+    per.sort_by(|a, b| a.total_cmp(b));
+    row.set_f(
+        cols::SHADE_NS_PER_LIGHT_QUAD,
+        mfx_stats::median_of_sorted(&per),
+    );
+    if let Some((lo, hi)) = mfx_stats::median_ci_order(&per) {
+        row.set_f(cols::SHADE_NS_PER_LIGHT_QUAD_CI_LO, lo)
+            .set_f(cols::SHADE_NS_PER_LIGHT_QUAD_CI_HI, hi);
     }
 }
 
