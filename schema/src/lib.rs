@@ -216,6 +216,10 @@ pub mod cols {
         "bucket_pairing",
         "bucket methods: single (one fragment per bucket) | paired (nearest and farthest of each bucket)",
     );
+    pub const RANGE_PASS: Col = Col::new(
+        "range_pass",
+        "bucket methods: what the per-pixel depth-range pre-pass draws: mesh (every triangle) | bounding_box (the scene's 12-triangle box, GPU Pro ch. 1 §1.3)",
+    );
     pub const HIST_BINS: Col = Col::new(
         "hist_bins",
         "adaptive bucket peeling: bins of the per-pixel depth-occupancy histogram (256/1024/2048)",
@@ -1216,6 +1220,7 @@ pub const GROUPS: &[Group] = &[
             cols::BUCKET_COUNT,
             cols::BUCKET_MODE,
             cols::BUCKET_PAIRING,
+            cols::RANGE_PASS,
             cols::HIST_BINS,
             cols::SMALL_MAX,
             cols::TRANSFORM,

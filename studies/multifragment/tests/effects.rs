@@ -350,17 +350,23 @@ fn bucket_translucency_and_fresnel_48px_match_reference_where_nothing_collided()
         ("adp", "translucency"),
         ("adp", "fresnel"),
     ];
-    for &(method, effect) in runs {
-        let p = Params::new()
-            .with("effect", s(effect))
-            .with("sigma", ParamValue::Float(0.8))
-            .with("bucket_count", ParamValue::Int(16));
-        let judged = bucket_err(method, &shells(), &p, 2e-3);
-        // 3 shells, ≤ 6 layers in 16 buckets (adp: 1024 bins): most pixels collide nowhere.
-        assert!(
-            judged >= 0.5,
-            "{method} {effect}: only {judged} of covered pixels judged"
-        );
+    // Both depth-range passes: seeds-buckets' Fig. 1.3 point is bdp translucency with 16
+    // single buckets and the bounding-box range (GPU Pro ch. 1 §1.3).
+    for range in ["mesh", "bounding_box"] {
+        for &(method, effect) in runs {
+            let p = Params::new()
+                .with("effect", s(effect))
+                .with("sigma", ParamValue::Float(0.8))
+                .with("bucket_count", ParamValue::Int(16))
+                .with("bucket_pairing", s("single"))
+                .with("range_pass", s(range));
+            let judged = bucket_err(method, &shells(), &p, 2e-3);
+            // 3 shells, ≤ 6 layers in 16 buckets (adp: 1024 bins): most pixels collide nowhere.
+            assert!(
+                judged >= 0.5,
+                "{method} {effect} {range}: only {judged} of covered pixels judged"
+            );
+        }
     }
 }
 

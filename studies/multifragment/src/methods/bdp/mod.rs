@@ -59,7 +59,7 @@ impl Method for Bdp {
         false
     }
     fn axes(&self) -> Vec<Axis> {
-        let mut v = vec![bucket::BUCKET_COUNT, PAIRING, MODE];
+        let mut v = vec![bucket::BUCKET_COUNT, PAIRING, MODE, bucket::RANGE_PASS];
         v.extend_from_slice(effects::AXES);
         v
     }
@@ -73,7 +73,14 @@ impl Method for Bdp {
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let cfg = config(point).map_err(CoreError::Param)?;
         let fx = fx(point).map_err(CoreError::Param)?;
-        Ok(Box::new(PreparedBucket::new_fx(gpu, scene, cfg, WGSL, fx)?))
+        Ok(Box::new(PreparedBucket::with_range(
+            gpu,
+            scene,
+            cfg,
+            WGSL,
+            fx,
+            bucket::RangePass::read(point),
+        )?))
     }
 }
 

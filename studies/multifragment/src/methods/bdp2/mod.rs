@@ -53,7 +53,7 @@ impl Method for Bdp2 {
         false
     }
     fn axes(&self) -> Vec<Axis> {
-        let mut v = vec![bucket::BUCKET_COUNT, MODE];
+        let mut v = vec![bucket::BUCKET_COUNT, MODE, bucket::RANGE_PASS];
         v.extend_from_slice(effects::AXES);
         v
     }
@@ -67,7 +67,14 @@ impl Method for Bdp2 {
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let cfg = config(point).map_err(CoreError::Param)?;
         let fx = fx(point).map_err(CoreError::Param)?;
-        Ok(Box::new(PreparedBucket::new_fx(gpu, scene, cfg, WGSL, fx)?))
+        Ok(Box::new(PreparedBucket::with_range(
+            gpu,
+            scene,
+            cfg,
+            WGSL,
+            fx,
+            bucket::RangePass::read(point),
+        )?))
     }
 }
 

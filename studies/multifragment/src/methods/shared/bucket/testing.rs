@@ -4,7 +4,9 @@
 use glam::{DVec3, Vec3};
 use scenarios::{Camera, Mesh, ParamValue, Params, Scene, SceneSpec};
 
-use super::{captured_in_pixel, route_pixel, Config, PreparedBucket};
+use super::{
+    box_quads, captured_in_pixel, padded_box, route_pixel_in, Config, Fx, PreparedBucket, RangePass,
+};
 use crate::methods::{Capture, Prepared, Timed};
 use bench_core::gpu_scene::GpuScene;
 use bench_core::timing::GpuTimer;
@@ -50,14 +52,52 @@ pub struct Run {
     pub gscene: GpuScene,
     pub lists: FragmentLists,
     pub geometry_passes: u32,
+    /// `range_pass = bounding_box`: each pixel's (zmin, zmax) from the reference rasterizer's
+    /// fragments of the same padded box (f64, rounded to f32 as the range target stores it);
+    /// None where the box covers nothing.
+    pub box_ranges: Option<Vec<Option<(f32, f32)>>>,
+}
+
+/// The reference per-pixel range of the scene's padded bounding box: its 6 faces rasterized by
+/// the f64 reference under the scene's camera, nearest and farthest depth per pixel.
+pub fn box_ranges(scene: &Scene, size: u32) -> Vec<Option<(f32, f32)>> {
+    let (lo, hi) = padded_box(&scene.mesh.positions);
+    let mut m = Mesh::default();
+    for q in box_quads(lo, hi) {
+        m.push_quad(q.map(Vec3::from), [1.0; 4], 0);
+    }
+    let boxed = Scene::new(
+        SceneSpec::new("box", Params::new()),
+        m,
+        scene.camera.clone(),
+    );
+    let lists = reference::rasterize(&boxed, size, size);
+    (0..lists.pixels())
+        .map(|p| {
+            let ds = lists.pixel(p).iter().map(|f| f.depth);
+            let lo = ds.clone().fold(f64::INFINITY, f64::min);
+            let hi = ds.fold(f64::NEG_INFINITY, f64::max);
+            (lo <= hi).then_some((lo as f32, hi as f32))
+        })
+        .collect()
 }
 
 /// Prepares, renders one frame and reads it back under a validation scope; rasterizes the reference.
 pub fn run(cfg: Config, wgsl: &str, scene: &Scene, size: u32) -> Run {
+    run_range(cfg, wgsl, scene, size, RangePass::Mesh)
+}
+
+/// As [`run`], the depth range drawn from `range`.
+pub fn run_range(cfg: Config, wgsl: &str, scene: &Scene, size: u32, range: RangePass) -> Run {
     let gpu = gpu();
     let gscene = GpuScene::upload(gpu, scene, size, size);
     let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let mut prepared = PreparedBucket::new(gpu, &gscene, cfg, wgsl).expect("prepare");
+    let fx = Fx {
+        effect: Default::default(),
+        pairs: false,
+    };
+    let mut prepared =
+        PreparedBucket::with_range(gpu, &gscene, cfg, wgsl, fx, range).expect("prepare");
     let mut timer = GpuTimer::new(gpu);
     timer.begin_frame();
     let stats = prepared.frame(gpu, &gscene, &mut timer).expect("frame");
@@ -67,12 +107,14 @@ pub fn run(cfg: Config, wgsl: &str, scene: &Scene, size: u32) -> Run {
         panic!("wgpu validation error: {e}");
     }
     let lists = reference::rasterize(scene, size, size);
+    let box_ranges = (range == RangePass::BoundingBox).then(|| box_ranges(scene, size));
     Run {
         prepared,
         capture,
         gscene,
         lists,
         geometry_passes: stats.geometry_passes,
+        box_ranges,
     }
 }
 
@@ -95,7 +137,21 @@ impl Run {
                 truth[p],
                 frags.len()
             );
-            let routed = route_pixel(cfg, frags, self.lists.reversed_z);
+            let range = self
+                .box_ranges
+                .as_ref()
+                .filter(|_| !frags.is_empty())
+                .map(|b| {
+                    b[p].unwrap_or_else(|| {
+                        panic!(
+                            "pixel ({}, {}): {} fragments where the reference box covers nothing",
+                            p % w,
+                            p / w,
+                            frags.len()
+                        )
+                    })
+                });
+            let routed = route_pixel_in(cfg, frags, self.lists.reversed_z, range);
             let want = captured_in_pixel(cfg, &routed);
             assert_eq!(
                 counts[p],

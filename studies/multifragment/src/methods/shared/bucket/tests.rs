@@ -115,3 +115,75 @@ fn twin_capacity_per_bucket_single_paired_two_pass() {
     );
     assert_eq!(captured_in_pixel(&cfg(Kind::TwoPass), &tied), 1);
 }
+
+#[test]
+fn box_clipped_is_true_only_when_a_corner_leaves_the_near_or_far_plane() {
+    // The quads' camera sits at z = 10 (near 1, far 100), looking at the origin.
+    let scene = testing::quads_at(&[0.0, 1.0], 0.5);
+    let cam = bench_core::gpu_scene::camera_uniform(&scene, 32, 32).clip_from_world;
+    assert!(!box_clipped(&cam, [-1.0; 3], [1.0; 3]));
+    // Around the eye, and beyond the far plane.
+    assert!(box_clipped(&cam, [-1.0, -1.0, 0.0], [1.0, 1.0, 11.0]));
+    assert!(box_clipped(&cam, [-1.0, -1.0, -200.0], [1.0, 1.0, 0.0]));
+}
+
+#[test]
+fn padded_box_contains_every_position_with_room() {
+    let ps = [[0.0, 0.0, 0.0], [2.0, -1.0, 0.5], [1.0, 1.0, 0.0]];
+    let (lo, hi) = padded_box(&ps);
+    for p in ps {
+        for a in 0..3 {
+            assert!(
+                lo[a] < p[a] && p[a] < hi[a],
+                "{p:?} not strictly inside {lo:?}..{hi:?}"
+            );
+        }
+    }
+    assert_eq!(box_triangles(lo, hi).len(), 36);
+}
+
+/// §1.3's premise, on the f64 reference: every fragment of the scene lies in its pixel's box
+/// range, and every pixel with a fragment is covered by the box. Tilted shells (many depths per
+/// pixel, silhouettes everywhere) and quads under both depth conventions.
+#[test]
+fn bounding_box_range_contains_every_reference_fragment_depth() {
+    let shells = {
+        let p = scenarios::Params::new()
+            .with("count", scenarios::ParamValue::Int(3))
+            .with("segments", scenarios::ParamValue::Int(12));
+        scenarios::SceneSpec::new("shells", p)
+            .build()
+            .expect("shells")
+    };
+    for (name, scene) in [
+        ("shells", shells),
+        ("quads", testing::quads(6, 4)),
+        ("quads reversed", testing::quads_z(6, 4, true)),
+    ] {
+        let size = 48;
+        let lists = mfx_reference::rasterize(&scene, size, size);
+        let ranges = testing::box_ranges(&scene, size);
+        let mut covered = 0;
+        for p in 0..lists.pixels() {
+            let frags = lists.pixel(p);
+            if frags.is_empty() {
+                continue;
+            }
+            let (lo, hi) = ranges[p].unwrap_or_else(|| {
+                panic!("{name}: pixel {p} has {} fragments, no box", frags.len())
+            });
+            for f in frags {
+                assert!(
+                    lo as f64 <= f.depth + 1e-7 && f.depth <= hi as f64 + 1e-7,
+                    "{name}: pixel {p}: depth {} outside the box range [{lo}, {hi}]",
+                    f.depth
+                );
+            }
+            covered += 1;
+        }
+        assert!(
+            covered > 100,
+            "{name}: only {covered} pixels hold fragments"
+        );
+    }
+}
