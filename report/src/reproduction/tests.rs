@@ -227,7 +227,7 @@ fn a_point_measured_under_two_keys_is_one_point_and_two_points_are_ambiguous() {
 fn the_markdown_has_the_html_tables_rows_and_the_tally() {
     let r = runs(vec![
         rec("depth_peel", &DP, "40.0", Status::Ok),
-        rec("bdp2", &BDP2, "20.0", Status::Ok),
+        rec("bdp2", &bdp2("bounding_box"), "20.0", Status::Ok),
     ]);
     let (h, m) = (section(&r), markdown(&r));
     let rows = |text: &str, start: &str| text.matches(start).count();
