@@ -163,7 +163,8 @@ const PER_GPU_MS: &[schema::Col] = &[
 ];
 
 /// One side's value and its 95 % interval (None: a sampled metric the row gives no interval
-/// for: CPU clocks, hazard rates, pass times without `pass_ms_ci`, the small-viewport time).
+/// for: CPU clocks, hazard rates of one capture, pass times without `pass_ms_ci`, the
+/// small-viewport time).
 struct Value {
     v: f64,
     interval: Option<(f64, f64)>,
@@ -195,7 +196,10 @@ fn value(r: &Rec, col: &str, pass: Option<&str>) -> Result<Value, String> {
     } else if EXACT.iter().any(|c| c.name == col) {
         Some((v, v))
     } else {
-        None
+        // A sampled metric whose row carries its own interval (hazard_rate over repeated
+        // captures: hazard_rate_ci_lo/hi).
+        r.f_name(&format!("{col}_ci_lo"))
+            .zip(r.f_name(&format!("{col}_ci_hi")))
     };
     Ok(Value { v, interval })
 }
