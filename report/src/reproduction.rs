@@ -163,7 +163,8 @@ const PER_GPU_MS: &[schema::Col] = &[
 ];
 
 /// One side's value and its 95 % interval (None: a sampled metric the row gives no interval
-/// for: CPU clocks, hazard rates, pass times without `pass_ms_ci`, the small-viewport time).
+/// for: CPU clocks, hazard rates of one capture, pass times without `pass_ms_ci`, the
+/// small-viewport time).
 struct Value {
     v: f64,
     interval: Option<(f64, f64)>,
@@ -195,8 +196,9 @@ fn value(r: &Rec, col: &str, pass: Option<&str>) -> Result<Value, String> {
     } else if EXACT.iter().any(|c| c.name == col) {
         Some((v, v))
     } else {
-        // A sampled CPU metric whose row carries its own interval (`<col>_ci_lo`, `<col>_ci_hi`,
-        // e.g. shade_ns_per_light_quad over repeated phase-clock frames).
+        // A sampled metric whose row carries its own interval (`<col>_ci_lo`, `<col>_ci_hi`):
+        // shade_ns_per_light_quad over repeated phase-clock frames, hazard_rate over repeated
+        // captures.
         r.f_name(&format!("{col}_ci_lo"))
             .zip(r.f_name(&format!("{col}_ci_hi")))
     };

@@ -194,7 +194,11 @@ pub mod cols {
     );
     pub const HEURISTICS: Col = Col::new(
         "heuristics",
-        "kbuffer_rmw: true to apply the thesis's heuristics (depth-sorted draw order, flushes between batches) against read-modify-write hazards",
+        "kbuffer_rmw: the thesis's heuristics against read-modify-write hazards: false (mesh order) | sort (centroid-sorted order) | sort_flush (sorted on the CPU every frame, 32-triangle batches, a flush after each) | true (sorted once, batches as draws of one pass, no flush)",
+    );
+    pub const HAZARD_CAPTURES: Col = Col::new(
+        "hazard_captures",
+        "kbuffer_rmw: frames captured and judged for hazards after timing (1: the one capture; more give hazard_rate_ci_lo/hi)",
     );
     pub const TIEBREAK: Col = Col::new(
         "tiebreak",
@@ -1121,6 +1125,14 @@ pub mod cols {
         "hazard_rate",
         "unguarded read-modify-write captures: k-buffer: fraction of pixels whose captured set differs from the true k nearest, excluding pixels with an f32 depth tie among their k + 1 nearest (those are flagged lost_coplanar and counted in notes); mlab, adaptive: fraction of pixels whose image differs from the ideal-order (primitive order) twin by more than 1e-4",
     );
+    pub const HAZARD_RATE_CI_LO: Col = Col::new(
+        "hazard_rate_ci_lo",
+        "with hazard_captures > 1: the lowest hazard rate of the captures (hazard_rate is the first's); with 5 or more captures [lo, hi] holds the median hazard rate with ≥ 94 % confidence",
+    );
+    pub const HAZARD_RATE_CI_HI: Col = Col::new(
+        "hazard_rate_ci_hi",
+        "with hazard_captures > 1: the highest hazard rate of the captures",
+    );
     pub const COLLISION_RATE: Col = Col::new(
         "collision_rate",
         "buckets: fraction of true fragments merged or lost by bucket collisions",
@@ -1215,6 +1227,7 @@ pub const GROUPS: &[Group] = &[
             cols::OCCLUSION_STOP,
             cols::SPECIALISATION,
             cols::HEURISTICS,
+            cols::HAZARD_CAPTURES,
             cols::TIEBREAK,
             cols::THICKNESS,
             cols::BUCKET_COUNT,
@@ -1501,6 +1514,8 @@ pub const GROUPS: &[Group] = &[
             cols::FRAGMENTS_TAILED,
             cols::LAYER_COUNT_ACCURACY,
             cols::HAZARD_RATE,
+            cols::HAZARD_RATE_CI_LO,
+            cols::HAZARD_RATE_CI_HI,
             cols::COLLISION_RATE,
             cols::OVERFLOW_RATE,
             cols::TRIANGLES_PER_S,

@@ -497,3 +497,34 @@ fn every_why_differs_number_is_a_number_of_the_committed_run() {
     assert!(facts > 40, "{facts}");
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
+
+#[test]
+fn a_hazard_rate_over_repeated_captures_carries_their_interval() {
+    // Issue 45 item 8: one capture gives no interval (never a hold); hazard_captures > 1 gives
+    // the captures' min–max, which a verdict on Fig. 4.2 is ruled with.
+    let p = PointRef {
+        suite: String::new(),
+        method: String::new(),
+        scene: String::new(),
+        resolution: [1, 1],
+        axes: Default::default(),
+    };
+    let one = synthetic(&p, &[(cols::HAZARD_RATE.name, 0.2)], &[]);
+    assert!(value(&one, cols::HAZARD_RATE.name, None)
+        .unwrap()
+        .interval
+        .is_none());
+    let five = synthetic(
+        &p,
+        &[
+            (cols::HAZARD_RATE.name, 0.2),
+            (cols::HAZARD_RATE_CI_LO.name, 0.15),
+            (cols::HAZARD_RATE_CI_HI.name, 0.3),
+        ],
+        &[],
+    );
+    assert_eq!(
+        value(&five, cols::HAZARD_RATE.name, None).unwrap().interval,
+        Some((0.15, 0.3))
+    );
+}

@@ -154,6 +154,11 @@ pub trait Prepared: Timed {
     fn judge(&mut self, cap: &mut Capture, reference: &mfx_reference::FragmentLists) {
         let _ = (cap, reference);
     }
+    /// Frames to capture and judge for hazards in all (kbuffer_rmw's `hazard_captures`): the
+    /// study runs and judges the extra ones after the first, for an interval on hazard_rate.
+    fn hazard_captures(&self) -> u32 {
+        1
+    }
 }
 
 /// Prepares `method` (untimed), warms up, then samples frames until `plan`'s rule stops: the

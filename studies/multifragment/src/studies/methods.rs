@@ -297,6 +297,9 @@ fn finish_point(
         Err(why) => return emit(i, failed_row(row, &why)),
     };
     j.write(&mut row);
+    if let Err(e) = recapture_hazards(&mut row, &mut *m.prepared, ctx.gpu, ctx.gscene, lists) {
+        return emit(i, failed_row(row, &format!("hazard recapture: {e}")));
+    }
     // Read-back and judging, the group's fragment lists aside (their own column).
     row.set_f(cols::JUDGE_MS, t_judge.elapsed().as_secs_f64() * 1e3);
     if let Some(img) = &cap.image {
@@ -317,6 +320,39 @@ fn finish_point(
         }
     }
     emit(i, row)
+}
+
+/// `hazard_captures` > 1 (issue 45 item 8: a verdict on hazard_rate needs an interval): runs,
+/// reads back and judges that many frames in all, the timed one's capture first, and writes the
+/// lowest and highest hazard rate. Untimed (after the samples); hazard_rate stays the first's.
+fn recapture_hazards(
+    row: &mut Row,
+    prepared: &mut dyn Prepared,
+    gpu: &bench_core::gpu::Gpu,
+    scene: &bench_core::gpu_scene::GpuScene,
+    lists: &FragmentLists,
+) -> Result<()> {
+    let n = prepared.hazard_captures();
+    let Some(first) = row.get_f(cols::HAZARD_RATE).filter(|_| n > 1) else {
+        return Ok(());
+    };
+    let px = lists.pixels().max(1) as f64;
+    let mut timer = bench_core::timing::GpuTimer::new(gpu);
+    let (mut lo, mut hi) = (first, first);
+    for _ in 1..n {
+        timer.begin_frame();
+        prepared.frame(gpu, scene, &mut timer)?;
+        gpu.wait()?;
+        let mut cap = prepared.readback(gpu, scene)?;
+        prepared.judge(&mut cap, lists);
+        let r = cap.hazard_pixels.unwrap_or(0) as f64 / px;
+        lo = lo.min(r);
+        hi = hi.max(r);
+    }
+    row.set(cols::HAZARD_CAPTURES, n)
+        .set_f(cols::HAZARD_RATE_CI_LO, lo)
+        .set_f(cols::HAZARD_RATE_CI_HI, hi);
+    Ok(())
 }
 
 /// True if some pixel holds two fragments at exactly the same window depth.

@@ -123,3 +123,14 @@ fn resolve_tail(@builtin(global_invocation_id) id: vec3<u32>) {
     let p = id.y * w + id.x;
     out_image[p] = with_tail(id.xy, fold_finish(fold_kept(p * K, vec2<f32>(id.xy) + 0.5)));
 }
+
+// heuristics = sort_flush: the thesis's flush, a full-screen triangle with colour writes off
+// (§4.3.2: "rendering a full-screen quadrilateral with a GL_FALSE color mask").
+@vertex
+fn vs_flush(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.5, 1.0);
+}
+
+@fragment
+fn fs_flush() {}
