@@ -776,6 +776,14 @@ pub mod cols {
         "hsm",
         "shadows: true if the search region is refined by two iterations over the min-depth pyramid",
     );
+    pub const SEARCH_START: Col = Col::new(
+        "search_start",
+        "shadows: where the search region starts: near (kr(n), the light's near plane: §5.3.2's initial region) | global_min (kr of the pyramid's global minimum depth, with a lit early-out: mfx's first choice)",
+    );
+    pub const BIAS_MAX: Col = Col::new(
+        "bias_max",
+        "shadows: maximum of the layers' midpoint bias, world units (§5.2.2's maximum depth bias); 0 = no maximum",
+    );
     pub const SHADOW_RAYS: Col = Col::new(
         "shadow_rays",
         "shadows: reference rays per pixel (m×m jittered strata on the light square)",
@@ -1418,6 +1426,8 @@ pub const GROUPS: &[Group] = &[
             cols::GSCALE,
             cols::GMAX,
             cols::HSM,
+            cols::SEARCH_START,
+            cols::BIAS_MAX,
             cols::SHADOW_RAYS,
             cols::SHADOW_PIXELS,
             cols::VIS_RMSE,

@@ -188,6 +188,10 @@ fn layer_bias(d: vec4<f32>, s: vec4<f32>, j: u32) -> f32 {
     if j + 1u < light.cfg.x && d[j + 1u] < FAR * 0.5 {
         mid = 0.5 * (d[j + 1u] - d[j]);
     }
+    // bias_max (light.bias.w > 0): §5.2.2's maximum depth bias on the midpoint.
+    if light.bias.w > 0.0 {
+        mid = min(mid, light.bias.w);
+    }
     let slope = min(gscale * s[j], gmax);
     switch light.cfg.z {
         case 0u: {
@@ -238,11 +242,16 @@ fn shade_point(g: vec4<f32>) -> f32 {
     // kr(z_min) = r·l·(n/w)·(1/z_min − 1/z) texels, with n/w = f/2: the light square seen from
     // the receiver, cut at depth z_min and projected onto the near plane.
     let kscale = r * l * f * 0.5;
-    var zmin = pyramid[level_offset(u32(light.bias.z))];
-    if zmin >= z {
-        return 1.0;
+    // §5.3.2: the initial region is kr(n), from the light's near plane; search_start =
+    // global_min (cfg.w bit 1) starts from the pyramid's top instead, lit when it is behind z.
+    var zmin = n;
+    if (light.cfg.w & 2u) != 0u {
+        zmin = pyramid[level_offset(u32(light.bias.z))];
+        if zmin >= z {
+            return 1.0;
+        }
     }
-    if light.cfg.w != 0u {
+    if (light.cfg.w & 1u) != 0u {
         // HSM: the min over a smaller region raises z_min, which shrinks the region (twice).
         for (var it = 0; it < 2; it++) {
             let kr = min(kscale * (1.0 / zmin - 1.0 / z), 2.0 * r);

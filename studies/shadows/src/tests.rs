@@ -120,6 +120,16 @@ fn cpu_twin_matches_gpu_shading_on_every_case() {
             .with("hsm", ParamValue::Bool(false))
             .with("max_nspp", ParamValue::Int(169)),
         cfg(96, 2).with("bias_mode", ParamValue::Str("midpoint".into())),
+        // §5.3.2's near-plane start, with and without the HSM, and §5.2.2's maximum bias.
+        cfg(64, 3)
+            .with("max_nspp", ParamValue::Int(25))
+            .with("search_start", ParamValue::Str("near".into()))
+            .with("bias_max", ParamValue::Float(0.05)),
+        cfg(96, 2)
+            .with("bias_mode", ParamValue::Str("midpoint".into()))
+            .with("search_start", ParamValue::Str("near".into()))
+            .with("hsm", ParamValue::Bool(false))
+            .with("bias_max", ParamValue::Float(0.1)),
     ];
     for case in ["quad", "spheres", "leaves", "slabs", "tangent"] {
         let scene = scene(case);
@@ -211,19 +221,86 @@ fn hsm_never_drops_an_occluder_at_stride_one() {
         let scene = scene(case);
         let gs = GpuScene::upload(gpu, &scene, W, W);
         let method = LayeredSsm::new(scene.area_light.clone().unwrap());
-        let vis = |hsm: bool| {
-            let p = cfg(64, 3)
-                .with("max_nspp", ParamValue::Int(65536))
-                .with("hsm", ParamValue::Bool(hsm));
-            visibility(gpu, &gs, &method, &point(&method, &p))
-        };
-        let (on, off) = (vis(true), vis(false));
-        let worst = on
-            .iter()
-            .zip(&off)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0f32, f32::max);
-        // f32 rounding of region edges only.
-        assert!(worst <= 1e-4, "{case}: HSM on/off differ by {worst}");
+        // Both starts: the near plane's region kr(n) (§5.3.2) and the pyramid's global minimum.
+        for start in ["near", "global_min"] {
+            let vis = |hsm: bool| {
+                let p = cfg(64, 3)
+                    .with("max_nspp", ParamValue::Int(65536))
+                    .with("search_start", ParamValue::Str(start.into()))
+                    .with("hsm", ParamValue::Bool(hsm));
+                visibility(gpu, &gs, &method, &point(&method, &p))
+            };
+            let (on, off) = (vis(true), vis(false));
+            let worst = on
+                .iter()
+                .zip(&off)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0f32, f32::max);
+            // f32 rounding of region edges only.
+            assert!(
+                worst <= 1e-4,
+                "{case} {start}: HSM on/off differ by {worst}"
+            );
+        }
+    }
+}
+
+#[test]
+fn hsm_shrinks_the_near_plane_region_on_the_wide_light_quad() {
+    // §5.5.1's scene (a quad under a wide light, light_size = 3): started from the near plane
+    // (§5.3.2), the HSM's two refinements must shrink the mean search region well below kr(n)
+    // (here: under half), or the scene cannot show the thesis's speed-up; and the global-minimum
+    // start, mfx's first choice, must already be smaller than kr(n) (why it hid the effect).
+    let gpu = testing::gpu();
+    let scene = SceneSpec::new(
+        "soft_shadow",
+        Params::new()
+            .with("case", ParamValue::Str("quad".into()))
+            .with("light_size", ParamValue::Float(3.0)),
+    )
+    .build()
+    .unwrap();
+    let gs = GpuScene::upload(gpu, &scene, W, W);
+    let method = LayeredSsm::new(scene.area_light.clone().unwrap());
+    let p = cfg(128, 3).with("search_start", ParamValue::Str("near".into()));
+    let mut prep = method.prepare_ssm(gpu, &gs, &point(&method, &p)).unwrap();
+    let mut timer = bench_core::timing::GpuTimer::new(gpu);
+    timer.begin_frame();
+    bench_core::timed::Timed::frame(&mut prep, gpu, &gs, &mut timer).unwrap();
+    gpu.wait().unwrap();
+    let mut maps = prep.read_maps(gpu).unwrap();
+    let pts: Vec<[f32; 4]> = prep
+        .read_points(gpu, &gs)
+        .unwrap()
+        .iter()
+        .filter_map(|p| p.map(|p| [p[0], p[1], p[2], 1.0]))
+        .collect();
+    let mut mean = |flags: u32| {
+        maps.light.cfg[3] = flags;
+        let w: Vec<f32> = pts.iter().filter_map(|g| maps.search_width(*g)).collect();
+        assert!(w.len() > 1000, "{}", w.len());
+        w.iter().map(|&x| x as f64).sum::<f64>() / w.len() as f64
+    };
+    let (near, near_hsm, global) = (mean(0), mean(1), mean(2));
+    eprintln!("mean region: near {near}, near + HSM {near_hsm}, global min {global}");
+    assert!(
+        near_hsm < 0.5 * near,
+        "HSM: {near_hsm} against kr(n) {near}"
+    );
+    assert!(global < near, "global min {global} against kr(n) {near}");
+}
+
+#[test]
+fn search_start_and_bias_max_are_checked_axes() {
+    let method = LayeredSsm::new(scene("quad").area_light.unwrap());
+    for (key, v) in [
+        ("search_start", ParamValue::Str("far".into())),
+        ("bias_max", ParamValue::Float(-0.1)),
+    ] {
+        let e = Point::resolve(&method.axes(), &cfg(64, 3).with(key, v))
+            .err()
+            .unwrap_or_else(|| panic!("{key} accepted"))
+            .join("; ");
+        assert!(e.contains(key), "{key}: {e}");
     }
 }

@@ -67,12 +67,51 @@ impl Maps {
         if j + 1 < self.light.cfg[0] as usize && d[j + 1] < FAR * 0.5 {
             mid = 0.5 * (d[j + 1] - d[j]);
         }
+        if self.light.bias[3] > 0.0 {
+            mid = mid.min(self.light.bias[3]);
+        }
         let slope = (gscale * s[j]).min(gmax);
         match self.light.cfg[2] {
             0 => mid,
             1 => slope,
             _ => mid.max(slope),
         }
+    }
+
+    /// The width in texels of the region `shade_point` samples for `g` (0 where it returns lit
+    /// before sampling), or None where it cannot be evaluated: what the HSM shrinks (§5.3.2).
+    pub fn search_width(&self, g: [f32; 4]) -> Option<f32> {
+        if g[3] == 0.0 {
+            return None;
+        }
+        let [r, n, f, l] = self.light.map;
+        let pv = Mat4::from_cols_array_2d(&self.light.view_from_world)
+            * Vec4::new(g[0], g[1], g[2], 1.0);
+        let p = Vec2::new(pv.x, pv.y);
+        let z = -pv.z;
+        let ndc = p * f / z;
+        if z <= n || ndc.x.abs() > 1.0 || ndc.y.abs() > 1.0 {
+            return None;
+        }
+        let c = Vec2::new((ndc.x * 0.5 + 0.5) * r, (0.5 - ndc.y * 0.5) * r);
+        let kscale = r * l * f * 0.5;
+        let mut zmin = n;
+        if self.light.cfg[3] & 2 != 0 {
+            zmin = self.pyramid[self.level_offset(self.light.bias[2] as u32) as usize];
+        }
+        if self.light.cfg[3] & 1 != 0 {
+            for _ in 0..2 {
+                if zmin >= z {
+                    break;
+                }
+                let kr = (kscale * (1.0 / zmin - 1.0 / z)).min(2.0 * r);
+                zmin = zmin.max(self.hsm_min(c - 0.5 * kr, c + 0.5 * kr));
+            }
+        }
+        if zmin >= z {
+            return Some(0.0);
+        }
+        Some((kscale * (1.0 / zmin - 1.0 / z)).min(2.0 * r))
     }
 
     /// Visibility of the light from G-buffer point `g` (w = 0: no surface), or −1.
@@ -94,11 +133,14 @@ impl Maps {
         }
         let c = Vec2::new((ndc.x * 0.5 + 0.5) * r, (0.5 - ndc.y * 0.5) * r);
         let kscale = r * l * f * 0.5;
-        let mut zmin = self.pyramid[self.level_offset(self.light.bias[2] as u32) as usize];
-        if zmin >= z {
-            return 1.0;
+        let mut zmin = n;
+        if self.light.cfg[3] & 2 != 0 {
+            zmin = self.pyramid[self.level_offset(self.light.bias[2] as u32) as usize];
+            if zmin >= z {
+                return 1.0;
+            }
         }
-        if self.light.cfg[3] != 0 {
+        if self.light.cfg[3] & 1 != 0 {
             for _ in 0..2 {
                 let kr = (kscale * (1.0 / zmin - 1.0 / z)).min(2.0 * r);
                 zmin = zmin.max(self.hsm_min(c - 0.5 * kr, c + 0.5 * kr));
