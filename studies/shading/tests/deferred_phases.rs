@@ -90,8 +90,7 @@ fn light_loop_is_an_axis_and_the_per_light_cost_carries_an_interval_64px() {
         &LOOP_SUITE.replace("\"mfx\"]", "\"mfx\", \"spu\"]"),
         "test",
     )
-    .err()
-    .expect("an unknown light loop is an error")
+    .expect_err("an unknown light loop is an error")
     .to_string();
     assert!(
         e.contains("light_loop") && e.contains("spu") && e.contains("bf3"),

@@ -164,12 +164,12 @@ fn bounding_box_range_contains_every_reference_fragment_depth() {
         let lists = mfx_reference::rasterize(&scene, size, size);
         let ranges = testing::box_ranges(&scene, size);
         let mut covered = 0;
-        for p in 0..lists.pixels() {
+        for (p, range) in ranges.iter().enumerate().take(lists.pixels()) {
             let frags = lists.pixel(p);
             if frags.is_empty() {
                 continue;
             }
-            let (lo, hi) = ranges[p].unwrap_or_else(|| {
+            let (lo, hi) = range.unwrap_or_else(|| {
                 panic!("{name}: pixel {p} has {} fragments, no box", frags.len())
             });
             for f in frags {
