@@ -2,7 +2,7 @@
 # The `default` suite under WebGPU's default limits (`--limits webgpu`) on this machine's adapter
 # (lavapipe in CI, its [software] profile: ~1 min): every row carries the profile, nothing
 # fails, what does not fit is a skipped row naming the limit, and the report has its
-# "Fits a browser?" table. Splitting itself is tested in bench-core/tests/limits.rs (a lowered
+# "Fits a browser?" table. Splitting itself is tested in studies/multifragment/tests/limits.rs (a lowered
 # binding limit on small scenes, judged against the f64 reference).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)

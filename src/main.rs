@@ -5,9 +5,10 @@ mod sweep;
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
-use bench_core::methods;
 use bench_core::{BackendChoice, Gpu, GpuOptions};
 use clap::{Args, Parser, Subcommand};
+use mfx::STUDIES;
+use mfx_multifragment::methods;
 use scenarios::{ParamValue, Params, SceneSpec, Suite};
 use schema::cols;
 
@@ -39,8 +40,9 @@ pub(crate) struct GpuArgs {
     #[arg(long)]
     texture_memory: Option<bench_core::texture_memory::TextureMemory>,
     /// Limits the device is requested with: adapter (its own, the default), webgpu (WebGPU's
-    /// default limits: what a browser grants) or downlevel (a WebGL2-class device). What does
-    /// not fit is a `skipped` row naming the limit; k-buffers split their entries to fit.
+    /// default limits: what a browser grants), webgpu-compat (WebGPU's compatibility mode) or
+    /// downlevel (a WebGL2-class device). What does not fit is a `skipped` row naming the limit;
+    /// k-buffers split their entries to fit.
     #[arg(long, default_value = "adapter")]
     limits: bench_core::limits::Profile,
 }
@@ -70,6 +72,10 @@ enum Cmd {
         /// Print one JSON object (a key per list) instead of text.
         #[arg(long)]
         json: bool,
+        /// Also list the internal probe suites (scenarios/suites/internal/: one question each,
+        /// kept for the runs that answered it).
+        #[arg(long)]
+        all: bool,
         #[command(flatten)]
         gpu: GpuArgs,
     },
@@ -149,14 +155,17 @@ enum Cmd {
     },
     /// Render one scene with one method to a PNG (and the CPU reference beside it).
     Render {
+        /// Scene generator (`mfx list scenes`: quads, shells, grass, …), its parameters from
+        /// --param; or give a model file with --model instead.
         #[arg(long)]
         scene: Option<String>,
         /// Scene parameter, repeatable: --param depth_complexity=8
         #[arg(long = "param")]
         params: Vec<String>,
-        /// Render an OBJ file (the `obj` scene generator).
-        #[arg(long)]
-        obj: Option<PathBuf>,
+        /// Render a model file: OBJ, PLY (.ply, .ply.gz) or glTF 2.0 (.gltf, .glb), by its
+        /// extension (the `obj` or `gltf` scene generator). `--obj` is the old name.
+        #[arg(long, alias = "obj", conflicts_with = "scene")]
+        model: Option<PathBuf>,
         /// Method, or a comma-separated list with --reference-out (one image each).
         #[arg(long, default_value = "depth_peel")]
         method: String,
@@ -213,7 +222,7 @@ enum Cmd {
         #[command(flatten)]
         gpu: GpuArgs,
     },
-    /// Load model files (OBJ, PLY, .ply.gz) as a scene would and print their triangle and vertex
+    /// Load model files (OBJ, PLY, .ply.gz, glTF .gltf/.glb) as a scene would and print their triangle and vertex
     /// counts; no GPU. A model a script fetches names the script when it is missing.
     Model {
         /// Model files, e.g. models/dragon_vrip.ply.gz
@@ -240,7 +249,7 @@ pub(crate) fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String
 pub(crate) fn parse_kv(s: &str) -> Result<(String, ParamValue)> {
     let (k, v) = s
         .split_once('=')
-        .with_context(|| format!("'{s}' is not key=value"))?;
+        .ok_or_else(|| usage(format!("'{s}' is not key=value")))?;
     let val = if let Ok(i) = v.parse::<i64>() {
         ParamValue::Int(i)
     } else if let Ok(x) = v.parse::<f64>() {
@@ -272,7 +281,7 @@ pub(crate) fn usage(msg: impl Into<String>) -> anyhow::Error {
 
 /// Loads and checks a suite; every problem at once as a usage error.
 pub(crate) fn checked_suite(name: &str) -> Result<Suite> {
-    bench_core::check::load(name).map_err(|p| {
+    bench_core::check::load(STUDIES, name).map_err(|p| {
         usage(format!(
             "suite '{name}': {} problem{}:\n{}",
             p.len(),
@@ -282,7 +291,21 @@ pub(crate) fn checked_suite(name: &str) -> Result<Suite> {
     })
 }
 
+/// EGL (wgpu's GL probe, Mesa's loaders) asks libwayland for a display, which prints
+/// "error: XDG_RUNTIME_DIR is invalid or not set" where the variable is missing or relative (ssh,
+/// containers, CI) although nothing needs a display. mfx renders offscreen, so it points the
+/// variable at the temp directory before any thread or GPU library starts: the probe then finds
+/// no socket and says nothing.
+fn quiet_egl_runtime_dir() {
+    let valid =
+        std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_absolute());
+    if !valid {
+        std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir());
+    }
+}
+
 fn main() {
+    quiet_egl_runtime_dir();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     if let Err(e) = run(cli) {
@@ -298,11 +321,16 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.cmd {
-        Cmd::List { what, gpu, json } => {
+        Cmd::List {
+            what,
+            gpu,
+            json,
+            all,
+        } => {
             if json {
-                list_json(what.as_deref(), &gpu)
+                list_json(what.as_deref(), &gpu, all)
             } else {
-                list(what.as_deref(), &gpu)
+                list(what.as_deref(), &gpu, all)
             }
         }
         Cmd::Sweep(a) => sweep::sweep(&a),
@@ -338,13 +366,13 @@ fn run(cli: Cli) -> Result<()> {
         Cmd::Check { suites } => {
             let mut bad = 0;
             for name in &suites {
-                match bench_core::check::load(name) {
+                match bench_core::check::load(STUDIES, name) {
                     Ok(suite) => println!(
                         "ok: {name} ({}): {} studies, {} rows on a GPU, {} on a software adapter{}",
                         suite.source,
                         suite.studies.len(),
-                        bench_core::runner::rows_of(&suite, false),
-                        bench_core::runner::rows_of(&suite, true),
+                        bench_core::runner::rows_of(STUDIES, &suite, false),
+                        bench_core::runner::rows_of(STUDIES, &suite, true),
                         models_line(&suite)
                     ),
                     Err(p) => {
@@ -354,7 +382,7 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
             // The papers files point into the suites: checked on every `mfx check`.
-            let papers = bench_core::papers::check_builtin();
+            let papers = mfx::papers::check_builtin();
             if papers.is_empty() {
                 println!(
                     "ok: papers ({} files in scenarios/papers)",
@@ -400,7 +428,7 @@ fn run(cli: Cli) -> Result<()> {
         Cmd::Render {
             scene,
             params,
-            obj,
+            model,
             method,
             axes,
             width,
@@ -418,13 +446,13 @@ fn run(cli: Cli) -> Result<()> {
                 let (k, v) = parse_kv(kv)?;
                 p.set(&k, v);
             }
-            let generator = match (&scene, &obj) {
+            let generator = match (&scene, &model) {
                 (_, Some(path)) => {
                     p.set("path", ParamValue::Str(path.display().to_string()));
-                    "obj".to_string()
+                    scenarios::model::generator_for(path).to_string()
                 }
                 (Some(s), None) => s.clone(),
-                (None, None) => bail!("give --scene NAME or --obj FILE"),
+                (None, None) => return Err(usage("give --scene NAME or --model FILE")),
             };
             let mut a = Params::new();
             for kv in &axes {
@@ -432,7 +460,9 @@ fn run(cli: Cli) -> Result<()> {
                 a.set(&k, v);
             }
             if png.is_none() && camera_out.is_none() && reference_out.is_none() {
-                bail!("nothing to write: give --png, --camera-out and/or --reference-out");
+                return Err(usage(
+                    "nothing to write: give --png, --camera-out and/or --reference-out",
+                ));
             }
             render(&RenderJob {
                 spec: SceneSpec::new(&generator, p),
@@ -451,7 +481,8 @@ fn run(cli: Cli) -> Result<()> {
         }
         Cmd::Model { paths } => {
             for p in &paths {
-                let m = scenarios::obj::load(p)?;
+                // A bad or missing file is bad input (exit 2), named by the loader.
+                let m = scenarios::model::load(p).map_err(|e| usage(e.to_string()))?;
                 println!(
                     "{}: {} triangles, {} vertices",
                     p.display(),
@@ -478,7 +509,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             let scene = SceneSpec::new(&scene, p).build()?;
             let g = Gpu::new(&gpu.options())?;
-            let (files, legend) = bench_core::shading::debug::write_views(
+            let (files, legend) = mfx_shading::debug::write_views(
                 &g,
                 &scene,
                 width,
@@ -511,23 +542,30 @@ fn check_list(what: Option<&str>) -> Result<()> {
 
 /// Every suite name: the built-in ones, then the files of scenarios/suites/ that are not
 /// built in (a file of a built-in's name wins when loaded, as `Suite::load` says).
-fn suite_names() -> Vec<(String, bool)> {
+fn suite_names(internal: bool) -> Vec<(String, bool)> {
     let mut names: Vec<(String, bool)> = scenarios::suite::BUILTIN
         .iter()
         .map(|(n, _)| (n.to_string(), true))
         .collect();
-    let mut files: Vec<String> = std::fs::read_dir("scenarios/suites")
-        .map(|rd| {
-            rd.filter_map(|e| e.ok())
-                .filter_map(|e| {
-                    let p = e.path();
-                    (p.extension()? == "toml")
-                        .then(|| p.file_stem()?.to_str().map(str::to_string))?
-                })
-                .collect()
-        })
-        .unwrap_or_default();
-    files.sort();
+    let stems = |dir: &str| -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .map(|rd| {
+                rd.filter_map(|e| e.ok())
+                    .filter_map(|e| {
+                        let p = e.path();
+                        (p.extension()? == "toml")
+                            .then(|| p.file_stem()?.to_str().map(str::to_string))?
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        v.sort();
+        v
+    };
+    let mut files = stems("scenarios/suites");
+    if internal {
+        files.extend(stems("scenarios/suites/internal"));
+    }
     for f in files {
         if !names.iter().any(|(n, _)| *n == f) {
             names.push((f, false));
@@ -566,7 +604,7 @@ fn adapter_rows(gpu: &GpuArgs) -> Vec<serde_json::Value> {
 }
 
 /// `mfx list --json`: one object, a key per list asked for.
-fn list_json(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
+fn list_json(what: Option<&str>, gpu: &GpuArgs, internal: bool) -> Result<()> {
     use serde_json::json;
     check_list(what)?;
     let is = |w: &str| what.is_none() || what == Some(w);
@@ -593,31 +631,33 @@ fn list_json(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
         o.insert("methods".into(), v.into());
     }
     if is("studies") {
-        let v: Vec<_> = bench_core::studies::all()
+        let v: Vec<_> = STUDIES
             .iter()
             .map(|s| json!({"kind": s.kind(), "describe": s.describe()}))
             .collect();
         o.insert("studies".into(), v.into());
     }
     if is("suites") {
-        let v: Vec<_> = suite_names()
+        let v: Vec<_> = suite_names(internal)
             .into_iter()
-            .map(|(name, builtin)| match bench_core::check::load(&name) {
-                Ok(suite) => json!({
-                    "name": name,
-                    "built_in": builtin,
-                    "source": suite.source,
-                    "description": suite.description,
-                    "rows_gpu": bench_core::runner::rows_of(&suite, false),
-                    "rows_software": bench_core::runner::rows_of(&suite, true),
-                    "models": bench_core::check::models_needed(&suite),
-                }),
-                Err(p) => json!({
-                    "name": name,
-                    "built_in": builtin,
-                    "problems": p.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
-                }),
-            })
+            .map(
+                |(name, builtin)| match bench_core::check::load(STUDIES, &name) {
+                    Ok(suite) => json!({
+                        "name": name,
+                        "built_in": builtin,
+                        "source": suite.source,
+                        "description": suite.description,
+                        "rows_gpu": bench_core::runner::rows_of(STUDIES, &suite, false),
+                        "rows_software": bench_core::runner::rows_of(STUDIES, &suite, true),
+                        "models": bench_core::check::models_needed(&suite),
+                    }),
+                    Err(p) => json!({
+                        "name": name,
+                        "built_in": builtin,
+                        "problems": p.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
+                    }),
+                },
+            )
             .collect();
         o.insert("suites".into(), v.into());
     }
@@ -638,7 +678,7 @@ fn list_json(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
     Ok(())
 }
 
-fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
+fn list(what: Option<&str>, gpu: &GpuArgs, internal: bool) -> Result<()> {
     let all = what.is_none();
     let is = |w: &str| all || what == Some(w);
     check_list(what)?;
@@ -663,19 +703,19 @@ fn list(what: Option<&str>, gpu: &GpuArgs) -> Result<()> {
     }
     if is("studies") {
         println!("studies:");
-        for s in bench_core::studies::all() {
+        for s in STUDIES {
             println!("  {:<10} {}", s.kind(), s.describe());
         }
     }
     if is("suites") {
-        println!("suites (built in, then files of scenarios/suites/ only; a file scenarios/suites/NAME.toml or any path wins):");
-        for (name, builtin) in suite_names() {
+        println!("suites (built in, then files of scenarios/suites/ only; a file scenarios/suites/NAME.toml or any path wins{}):", if internal { "; then the internal probes of scenarios/suites/internal/" } else { "; --all adds the internal probes" });
+        for (name, builtin) in suite_names(internal) {
             match Suite::load(&name) {
                 Ok(suite) => println!(
                     "  {name:<16} {}{} rows on a GPU, {} on a software adapter{}\n  {:<16} {}",
                     if builtin { "" } else { "(file only) " },
-                    bench_core::runner::rows_of(&suite, false),
-                    bench_core::runner::rows_of(&suite, true),
+                    bench_core::runner::rows_of(STUDIES, &suite, false),
+                    bench_core::runner::rows_of(STUDIES, &suite, true),
                     models_line(&suite),
                     "",
                     suite.description
@@ -742,7 +782,7 @@ fn models_line(suite: &Suite) -> String {
             } else if let Some(cmd) = scenarios::obj::fetch_command(&p) {
                 format!("{p} (missing here: fetch it with `{cmd}`)")
             } else {
-                format!("{p} (missing here: copy it from ../shared/models)")
+                format!("{p} (missing here: models/README.md says where it comes from)")
             }
         })
         .collect();
@@ -783,6 +823,80 @@ fn check_side(what: &str, side: Option<u32>) -> Result<()> {
         ))),
         _ => Ok(()),
     }
+}
+
+/// Bytes a render holds at once, estimated: per pixel the reference's offsets, its f64
+/// composite and the f32 images (≈ 128 B), and per fragment one reference fragment, the count
+/// scaled up from a probe raster of the same view at 64 pixels across.
+fn render_bytes(scene: &scenarios::Scene, w: u32, h: u32) -> u64 {
+    const PER_PIXEL: u64 = 128;
+    let pixels = w as u64 * h as u64;
+    let pw = 64u32.min(w);
+    let ph = ((h as u64 * pw as u64) / w.max(1) as u64).clamp(1, 64) as u32;
+    let probe = mfx_reference::rasterize(scene, pw, ph).total_fragments() as f64;
+    let fragments = probe * pixels as f64 / (pw as f64 * ph as f64);
+    let per_fragment = std::mem::size_of::<mfx_reference::RefFragment>() as f64;
+    pixels * PER_PIXEL + (fragments * per_fragment) as u64
+}
+
+/// The host's available memory (MemAvailable of /proc/meminfo), where the OS says it.
+fn host_available_bytes() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let kb: u64 = info
+        .lines()
+        .find_map(|l| l.strip_prefix("MemAvailable:"))?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()?;
+    Some(kb * 1024)
+}
+
+fn gib(b: u64) -> String {
+    format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
+}
+
+/// A render whose estimate exceeds the host's available memory is a usage error (exit 2) before
+/// the reference grows; one over 1 GiB says its estimate first.
+fn check_host_memory(estimate: u64, w: u32, h: u32) -> Result<()> {
+    if let Some(avail) = host_available_bytes() {
+        if estimate > avail {
+            return Err(usage(format!(
+                "a {w}x{h} render needs about {} (reference fragments and images), more than this host's {} available: render a smaller size",
+                gib(estimate),
+                gib(avail)
+            )));
+        }
+    }
+    if estimate > 1 << 30 {
+        eprintln!(
+            "mfx: a {w}x{h} render: about {} of memory (estimate)",
+            gib(estimate)
+        );
+    }
+    Ok(())
+}
+
+/// The adapter's own limits on a render of this size: its largest texture side and its largest
+/// buffer (one RGBA f32 image is read back in one buffer).
+fn check_adapter_limits(gpu: &Gpu, w: u32, h: u32) -> Result<()> {
+    let side = gpu.limits.max_texture_dimension_2d;
+    if w > side || h > side {
+        return Err(usage(format!(
+            "{w}x{h} is over {}'s largest texture side {side}",
+            gpu.facts.name
+        )));
+    }
+    let image = w as u64 * h as u64 * 16;
+    if image > gpu.limits.max_buffer_size {
+        return Err(usage(format!(
+            "a {w}x{h} RGBA f32 image is {}, over {}'s largest buffer ({}): render a smaller size",
+            gib(image),
+            gpu.facts.name,
+            gib(gpu.limits.max_buffer_size)
+        )));
+    }
+    Ok(())
 }
 
 fn render(job: &RenderJob) -> Result<()> {
@@ -839,11 +953,11 @@ fn render(job: &RenderJob) -> Result<()> {
             (job.height, cam.height, "height"),
         ] {
             if given.is_some_and(|g| g != file) {
-                bail!(
+                return Err(usage(format!(
                     "--{what} {} differs from {}'s {what} {file}: the camera matrix is made for its own size",
                     given.unwrap_or(0),
                     path.display()
-                );
+                )));
             }
         }
         (w, h) = (cam.width, cam.height);
@@ -864,10 +978,23 @@ fn render(job: &RenderJob) -> Result<()> {
         println!("camera -> {}", p.display());
     }
     if job.methods.len() > 1 && (job.png.is_some() || job.reference_png.is_some()) {
-        bail!("--png and --reference-png take one method; use --reference-out DIR for several");
+        return Err(usage(
+            "--png and --reference-png take one method; use --reference-out DIR for several",
+        ));
     }
     let need_gpu = job.png.is_some() || job.reference_out.is_some();
-    let lists = Some(bench_core::reference::rasterize(&scene, w, h));
+    // A big render is refused before it grows: its bytes estimated from a small probe raster,
+    // against the host's memory and (below, once the adapter is open) the adapter's limits.
+    let estimate = render_bytes(&scene, w, h);
+    check_host_memory(estimate, w, h)?;
+    let gpu = if need_gpu {
+        let gpu = Gpu::new(&job.gpu.options())?;
+        check_adapter_limits(&gpu, w, h)?;
+        Some(gpu)
+    } else {
+        None
+    };
+    let lists = Some(mfx_reference::rasterize(&scene, w, h));
     if lists.as_ref().is_some_and(|l| l.total_fragments() == 0) {
         // Not an error (an empty view is a valid question), but never silent: every image of
         // it is the background, and every method "matches" it.
@@ -910,10 +1037,9 @@ fn render(job: &RenderJob) -> Result<()> {
             lists.total_fragments()
         );
     }
-    if !need_gpu {
+    let Some(gpu) = gpu else {
         return Ok(());
-    }
-    let gpu = Gpu::new(&job.gpu.options())?;
+    };
     let gscene = bench_core::gpu_scene::GpuScene::upload(&gpu, &scene, w, h);
     for (method, point) in job.methods.iter().zip(&points) {
         let m = methods::get(method);
@@ -934,7 +1060,8 @@ fn render(job: &RenderJob) -> Result<()> {
             ..Default::default()
         })
         .expect("a valid plan");
-        let mut measured = bench_core::measure::measure(&gpu, &gscene, m.as_ref(), point, &plan)?;
+        let mut measured =
+            mfx_multifragment::method::measure(&gpu, &gscene, m.as_ref(), point, &plan)?;
         let mut cap = measured.prepared.readback(&gpu, &gscene)?;
         let img = cap
             .image
@@ -964,18 +1091,18 @@ fn render(job: &RenderJob) -> Result<()> {
             .as_ref()
             .expect("the reference is rasterised for every render");
         measured.prepared.judge(&mut cap, lists);
-        let folds = bench_core::effects::AXES
+        let folds = mfx_multifragment::effects::AXES
             .iter()
             .all(|e| m.axes().iter().any(|a| a.name() == e.name()));
         let effect = if folds {
-            bench_core::effects::EffectConfig::from_point(point).map_err(usage)?
+            mfx_multifragment::effects::EffectConfig::from_point(point).map_err(usage)?
         } else {
-            bench_core::effects::EffectConfig::default()
+            mfx_multifragment::effects::EffectConfig::default()
         };
-        let j = bench_core::judge::judge(
+        let j = mfx_multifragment::judge::judge(
             &cap,
             lists,
-            bench_core::judge::Context {
+            mfx_multifragment::judge::Context {
                 scene: &scene,
                 effect: &effect,
                 exact: m.exact(),

@@ -9,9 +9,10 @@ use anyhow::{bail, Context, Result};
 use bench_core::manifest::{context_block, write_runs_json, AdapterInfo, RunManifest};
 use bench_core::record::{cols, CsvSink, Row, SamplesSink, Sink, Status, SCHEMA_VERSION};
 use bench_core::runner::{self, RunOptions};
-use bench_core::studies::Group;
+use bench_core::study::Group;
 use bench_core::Gpu;
 use clap::Args;
+use mfx::STUDIES;
 
 use crate::{checked_suite, usage, GpuArgs};
 
@@ -80,9 +81,28 @@ pub fn baselines_root() -> PathBuf {
     PathBuf::from("results").join("baselines")
 }
 
-/// `--set AXIS=V1,V2`: replaces the axis in every study whose methods declare it (and in
-/// their per-method tables); an axis no study uses is refused. The caller re-checks the suite.
-fn apply_sets(suite: &mut scenarios::Suite, sets: &[String]) -> Result<()> {
+/// `--set AXIS=V1,V2`: replaces the axis for every method that reads it, among the methods
+/// `--filter` selects (the filter comes first: `--filter 'kbuffer_*' --set layers=8,16` touches
+/// the k-buffers only). A method that declares the axis but reads it at none of its points
+/// (`layers` of the linked list's counted pool) is left alone; an axis no selected method reads
+/// is refused. The caller re-checks the suite.
+fn apply_sets(suite: &mut scenarios::Suite, sets: &[String], pats: &[glob::Pattern]) -> Result<()> {
+    // (study index, method) of every point the filter keeps, on either kind of adapter.
+    let selected: Option<std::collections::BTreeSet<(usize, String)>> = if pats.is_empty() {
+        None
+    } else {
+        let mut keep = std::collections::BTreeSet::new();
+        for software in [false, true] {
+            let groups =
+                runner::expand(STUDIES, suite, software).map_err(|e| usage(e.to_string()))?;
+            for g in filter_groups(groups, pats) {
+                for p in &g.points {
+                    keep.insert((g.study_index, p.method.clone()));
+                }
+            }
+        }
+        Some(keep)
+    };
     for s in sets {
         let (axis, vals) = s
             .split_once('=')
@@ -97,34 +117,88 @@ fn apply_sets(suite: &mut scenarios::Suite, sets: &[String]) -> Result<()> {
         }
         let mut used = false;
         let mut known = std::collections::BTreeSet::new();
-        for spec in &mut suite.studies {
-            let declared = spec.methods.iter().any(|m| {
-                bench_core::methods::by_name(m).is_some_and(|m| {
-                    m.axes().iter().any(|a| {
+        let mut unread = Vec::new();
+        for (si, spec) in suite.studies.iter_mut().enumerate() {
+            let Some(study) = bench_core::study::by_kind(STUDIES, &spec.kind) else {
+                continue;
+            };
+            let points = bench_core::study::points(study, spec).unwrap_or_default();
+            let chosen = |m: &str| {
+                selected
+                    .as_ref()
+                    .is_none_or(|k| k.contains(&(si, m.to_string())))
+            };
+            let mut targets = Vec::new();
+            for p in &points {
+                let Some(a) = study
+                    .axes(&p.method)
+                    .into_iter()
+                    .inspect(|a| {
                         known.insert(a.name().to_string());
-                        a.name() == axis
                     })
-                })
-            });
-            if declared || spec.axes.contains_key(axis) {
-                spec.axes.insert(axis.to_string(), values.clone());
-                for t in spec.method_axes.values_mut() {
-                    if let Some(v) = t.get_mut(axis) {
-                        *v = values.clone();
-                    }
+                    .find(|a| a.name() == axis)
+                else {
+                    continue;
+                };
+                if !chosen(&p.method) || targets.contains(&p.method) {
+                    continue;
+                }
+                match a.ignored_at(&p.point) {
+                    None => targets.push(p.method.clone()),
+                    Some(with) => unread.push(format!("{} ({with})", p.method)),
+                }
+            }
+            for m in targets {
+                unread.retain(|u| !u.starts_with(&format!("{m} (")));
+                if spec.methods_given {
+                    spec.method_axes
+                        .entry(m)
+                        .or_default()
+                        .insert(axis.to_string(), values.clone());
+                } else {
+                    // A study of one implicit method: its axes are the study's.
+                    spec.axes.insert(axis.to_string(), values.clone());
                 }
                 used = true;
             }
+            // The study's own value of the axis, now replaced for every method that read it,
+            // would name configurations that do not differ for the rest: it goes.
+            if spec.method_axes.values().any(|o| o.contains_key(axis))
+                && spec.axes.contains_key(axis)
+            {
+                let points = bench_core::study::points(study, spec).unwrap_or_default();
+                let still_read = points.iter().any(|p| {
+                    !spec
+                        .method_axes
+                        .get(&p.method)
+                        .is_some_and(|o| o.contains_key(axis))
+                        && study
+                            .axes(&p.method)
+                            .iter()
+                            .any(|a| a.name() == axis && a.ignored_at(&p.point).is_none())
+                });
+                if !still_read {
+                    spec.axes.remove(axis);
+                }
+            }
         }
         if !used {
+            unread.sort();
+            unread.dedup();
             return Err(usage(format!(
-                "--set '{s}': no study of suite '{}' has a method with axis '{axis}' (axes of its methods: {})",
+                "--set '{s}': no {}method of suite '{}' reads axis '{axis}'{} (axes of its methods: {})",
+                if selected.is_some() { "selected " } else { "" },
                 suite.name,
+                if unread.is_empty() {
+                    String::new()
+                } else {
+                    format!("; declared but unread by {}", unread.join(", "))
+                },
                 known.into_iter().collect::<Vec<_>>().join(", ")
             )));
         }
     }
-    let problems = bench_core::check::check_suite(suite);
+    let problems = bench_core::check::check_suite(STUDIES, suite);
     if !problems.is_empty() {
         return Err(usage(format!(
             "--set {}: {}",
@@ -156,9 +230,10 @@ fn filter_groups(groups: Vec<Group>, pats: &[glob::Pattern]) -> Vec<Group> {
             if any(&g.scene.generator) || any(&g.scene.label()) {
                 return Some(g);
             }
-            let floor_matches = runner::FLOORS
-                .iter()
-                .any(|f| any(f) || any(&g.point_key(f, bench_core::axes::Point::empty().given())));
+            let floor_matches = runner::FLOORS.iter().any(|f| {
+                any(f.name())
+                    || any(&g.point_key(f.name(), bench_core::axes::Point::empty().given()))
+            });
             let keys: Vec<bool> = g
                 .points
                 .iter()
@@ -178,7 +253,7 @@ fn groups_for(
     shard: (usize, usize),
     pats: &[glob::Pattern],
 ) -> Result<Vec<Group>> {
-    let groups = runner::expand(suite, software)?;
+    let groups = runner::expand(STUDIES, suite, software)?;
     Ok(filter_groups(runner::shard_groups(groups, shard), pats))
 }
 
@@ -191,7 +266,7 @@ fn owed(g: &Group, done: &std::collections::HashSet<String>) -> usize {
         .count()
         + runner::FLOORS
             .iter()
-            .filter(|f| !done.contains(&g.point_key(f, empty.given())))
+            .filter(|f| !done.contains(&g.point_key(f.name(), empty.given())))
             .count()
 }
 
@@ -334,7 +409,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         done: std::mem::take(&mut folder.done),
         interrupted: Some(bench_core::interrupt::requested),
     };
-    let outcome = runner::run(&gpu, &suite, &groups, &opts, &mut sink);
+    let outcome = runner::run(&gpu, STUDIES, &suite, &groups, &opts, &mut sink);
     bar.finish_and_clear();
     let outcome = match outcome {
         Ok(o) => o,
@@ -376,8 +451,10 @@ fn suite_of(a: &SweepArgs) -> Result<scenarios::Suite> {
         bench_core::measure::TimingPlan::from_spec(&suite.timing_for(false))
             .map_err(|e| usage(format!("--timing: {e}")))?;
     }
+    // The filter first: `--set` touches only the methods it selects.
     if !a.set.is_empty() {
-        apply_sets(&mut suite, &a.set)?;
+        let pats = filters(&a.filter)?;
+        apply_sets(&mut suite, &a.set, &pats)?;
     }
     Ok(suite)
 }
@@ -593,6 +670,9 @@ fn start_manifest(
                     runs,
                 });
     }
+    // The memory roofs every row is read against (`roof_bytes_per_s`), before any point: on a
+    // software adapter too (its sweep is small), so every run records them.
+    manifest.roofs = gpu.roofs().cloned();
     manifest.write(&folder.out)?;
     Ok(manifest)
 }
@@ -798,7 +878,7 @@ fn print_points(suite: &scenarios::Suite, on_gpu: &[Group], on_software: &[Group
         println!("{} {} {}x{}", g.kind, g.scene.label(), g.width, g.height);
         let empty = bench_core::axes::Point::empty();
         for f in runner::FLOORS {
-            println!("  {}", g.point_key(f, empty.given()));
+            println!("  {}", g.point_key(f.name(), empty.given()));
         }
         for p in &g.points {
             println!("  {}", g.point_key(&p.method, p.given()));

@@ -14,6 +14,11 @@ fn exists(token: &str) -> bool {
     let bases = [
         "",
         "bench-core",
+        "reference",
+        "studies/multifragment",
+        "studies/shading",
+        "studies/shadows",
+        "studies/geometry",
         "report",
         "scenarios",
         "schema",
@@ -33,7 +38,8 @@ fn exists(token: &str) -> bool {
         bases.iter().any(|b| root().join(b).join(n).exists())
             || [
                 "bench-core/src",
-                "bench-core/src/methods",
+                "studies/multifragment/src",
+                "studies/multifragment/src/methods",
                 "report/src",
                 "scenarios/src",
             ]

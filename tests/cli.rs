@@ -1,7 +1,6 @@
 //! The CLI's contract with scripts: a bad suite or bad arguments exit 2 before any GPU work and
 //! write nothing; `mfx check` reports every problem; a valid suite checks clean.
 
-use std::path::PathBuf;
 use std::process::{Command, Output};
 
 use schema::Status;
@@ -22,11 +21,27 @@ fn text(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr)
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mfx-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A temp folder removed when the test ends, pass or fail (derefs to its path).
+struct Tmp(tempfile::TempDir);
+impl std::ops::Deref for Tmp {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+impl AsRef<std::path::Path> for Tmp {
+    fn as_ref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+fn tmp_dir(prefix: &str) -> Tmp {
+    Tmp(tempfile::Builder::new()
+        .prefix(&format!("{prefix}-"))
+        .tempdir()
+        .expect("a temp folder"))
+}
+fn tmp(name: &str) -> Tmp {
+    tmp_dir(&format!("mfx-cli-{name}"))
 }
 
 /// Each typo class of a new user, as a suite file.
@@ -286,6 +301,7 @@ fn a_timing_override_is_checked_like_the_suites_own_keys_before_any_gpu_work() {
         ("setle=false", "'setle'"),
         ("settle=maybe", "not a TOML value"),
         ("settle=3", "must be true or false"),
+        ("cold=1", "must be true or false"),
         ("max_noise=2", "'max_noise' = 2"),
         ("sessions", "must be KEY=VALUE"),
     ] {
@@ -332,6 +348,8 @@ fn a_timing_override_reaches_every_row_and_the_texture_memory_is_recorded() {
         "settle=true",
         "--timing",
         "max_samples=2",
+        "--timing",
+        "cold=true",
         "--texture-memory",
         "dedicated",
         "--out",
@@ -347,7 +365,7 @@ fn a_timing_override_reaches_every_row_and_the_texture_memory_is_recorded() {
     for r in rd.records() {
         let r = r.unwrap();
         assert!(
-            r[rule].contains("GPU settled before each point"),
+            r[rule].contains("GPU settled before each point") && r[rule].contains("cold: L2"),
             "{}",
             &r[rule]
         );
@@ -527,6 +545,13 @@ fn a_filter_runs_exactly_the_matching_points_the_dry_run_lists() {
         j["software_profile"],
         serde_json::Value::Bool(false),
         "smoke has no [software]"
+    );
+    // The memory roofs, measured before the points on any adapter with timestamps (values are
+    // the adapter's: lavapipe's say nothing of a GPU, so none is asserted).
+    let roofs = j["roofs"]["points"].as_array().expect("roofs recorded");
+    assert!(
+        !roofs.is_empty() && j["roofs"]["l2_bytes"].as_u64() > Some(0),
+        "{j}"
     );
     let calls = j["calls"].as_array().unwrap();
     assert_eq!(calls.len(), 2, "{j}");

@@ -2,7 +2,7 @@
 //! lavapipe: the files exist with the documented dtypes and shapes, the depth complexity is the
 //! reference's, and the camera JSON maps the OBJ file's own coordinates to the right pixels.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 fn mfx(args: &[&str]) -> String {
@@ -20,11 +20,27 @@ fn mfx(args: &[&str]) -> String {
     text
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mfx-render-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A temp folder removed when the test ends, pass or fail (derefs to its path).
+struct Tmp(tempfile::TempDir);
+impl std::ops::Deref for Tmp {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+impl AsRef<std::path::Path> for Tmp {
+    fn as_ref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+fn tmp_dir(prefix: &str) -> Tmp {
+    Tmp(tempfile::Builder::new()
+        .prefix(&format!("{prefix}-"))
+        .tempdir()
+        .expect("a temp folder"))
+}
+fn tmp(name: &str) -> Tmp {
+    tmp_dir(&format!("mfx-render-{name}"))
 }
 
 /// Two axis-aligned 4×4 squares at z = 5 and z = 7 in the file's own (off-centre) coordinates.

@@ -3,7 +3,7 @@
 //! set, the commit recorded is mfx's own, and `mfx compare` calls what it sees.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
 fn cmd(args: &[&str]) -> Command {
@@ -31,11 +31,27 @@ fn ok(args: &[&str]) -> String {
     text(&o)
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mfx-sweeps-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A temp folder removed when the test ends, pass or fail (derefs to its path).
+struct Tmp(tempfile::TempDir);
+impl std::ops::Deref for Tmp {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+impl AsRef<std::path::Path> for Tmp {
+    fn as_ref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+fn tmp_dir(prefix: &str) -> Tmp {
+    Tmp(tempfile::Builder::new()
+        .prefix(&format!("{prefix}-"))
+        .tempdir()
+        .expect("a temp folder"))
+}
+fn tmp(name: &str) -> Tmp {
+    tmp_dir(&format!("mfx-sweeps-{name}"))
 }
 
 fn s(p: &Path) -> &str {
@@ -59,7 +75,8 @@ fn number_after(out: &str, label: &str) -> f64 {
 
 /// rmse vs the ground truth and vs the method's own definition, as `mfx render` prints them.
 fn render_errors(args: &[&str]) -> (f64, Option<f64>) {
-    let png = std::env::temp_dir().join(format!("mfx-sweeps-{}.png", std::process::id()));
+    let png_dir = tmp_dir("mfx-sweeps-png");
+    let png = png_dir.join("render.png");
     let mut all = vec![
         "render",
         "--width",

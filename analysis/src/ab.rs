@@ -875,8 +875,8 @@ mod tests {
 
     #[test]
     fn the_gpu_calibration_is_read_from_run_json_where_written() {
-        let d = std::env::temp_dir().join(format!("mfx-ab-gpucal-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
         let csv = d.join("runs.csv");
         assert_eq!(gpu_calibration_ms(&csv), None, "no run.json");
         std::fs::write(d.join("run.json"), r#"{"calibration": null}"#).unwrap();
@@ -891,6 +891,5 @@ mod tests {
         )
         .unwrap();
         assert_eq!(gpu_calibration_ms(&csv), Some(0.125));
-        std::fs::remove_dir_all(&d).unwrap();
     }
 }

@@ -126,6 +126,10 @@ pub fn find<'a>(axes: &'a [Axis], name: &str) -> Option<&'a Axis> {
 pub struct Point {
     given: Params,
     values: Params,
+    /// Declared axes this point leaves unread ([`Axis::only_when`]): their value stays in
+    /// `values` for whoever reads it, but neither the row nor the point key (`given`) records it
+    /// as if it mattered.
+    unread: Vec<&'static str>,
 }
 
 impl Point {
@@ -153,10 +157,21 @@ impl Point {
             }
         }
         if problems.is_empty() {
-            Ok(Point {
+            let mut p = Point {
                 given: given.clone(),
                 values,
-            })
+                unread: Vec::new(),
+            };
+            p.unread = axes
+                .iter()
+                .filter(|a| a.ignored_at(&p).is_some())
+                .map(|a| a.name())
+                .collect();
+            // A value the point does not read names nothing: out of its key as out of its row.
+            for k in &p.unread {
+                p.given.0.remove(*k);
+            }
+            Ok(p)
         } else {
             Err(problems)
         }
@@ -172,9 +187,21 @@ impl Point {
         &self.given
     }
 
-    /// Every declared axis's value, defaults included (written to the row).
+    /// Every declared axis's value, defaults included.
     pub fn values(&self) -> &Params {
         &self.values
+    }
+
+    /// The values a row records: every declared axis this point reads, defaults included; an
+    /// axis it leaves unread (`layers` of a counted pool) has an empty cell.
+    pub fn recorded(&self) -> Params {
+        let mut p = Params::new();
+        for (k, v) in &self.values.0 {
+            if !self.unread.contains(&k.as_str()) {
+                p.set(k, v.clone());
+            }
+        }
+        p
     }
 
     fn value(&self, axis: &Axis) -> ParamValue {

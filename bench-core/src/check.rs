@@ -12,10 +12,10 @@ use scenarios::suite::{study_table, STUDY_KEYS};
 use scenarios::{ParamValue, Problem, SceneError, StudySpec, Suite};
 
 use crate::axes::Axis;
-use crate::studies::{self, Methods, Study};
+use crate::study::{by_kind, points, Methods, PointSpec, Study};
 
 /// Every problem of `suite` (empty when it can run).
-pub fn check_suite(suite: &Suite) -> Vec<Problem> {
+pub fn check_suite(studies: &[&dyn Study], suite: &Suite) -> Vec<Problem> {
     let mut out = Vec::new();
     for (software, table) in [(false, "[timing]"), (true, "[software]")] {
         if software && suite.software.is_none() {
@@ -26,17 +26,17 @@ pub fn check_suite(suite: &Suite) -> Vec<Problem> {
         }
     }
     for spec in &suite.studies {
-        check_study(suite, spec, &mut out);
+        check_study(studies, suite, spec, &mut out);
     }
     out
 }
 
 /// Loads a suite and checks it: `Err` holds every problem (structure and meaning) of every
 /// table.
-pub fn load(name_or_path: &str) -> Result<Suite, Vec<Problem>> {
+pub fn load(studies: &[&dyn Study], name_or_path: &str) -> Result<Suite, Vec<Problem>> {
     let (text, source) = Suite::read(name_or_path)
         .map_err(|e| vec![Problem::new(name_or_path, "suite", "", e.to_string())])?;
-    match check_text(&text, &source) {
+    match check_text(studies, &text, &source) {
         (Some(suite), problems) if problems.is_empty() => Ok(suite),
         (_, problems) => Err(problems),
     }
@@ -44,13 +44,17 @@ pub fn load(name_or_path: &str) -> Result<Suite, Vec<Problem>> {
 
 /// Parses and checks a suite's text: every problem of every table at once. A structural problem
 /// (`Suite::parse_partial`) leaves its value at the default, and the rest is still checked.
-pub fn check_text(text: &str, source: &str) -> (Option<Suite>, Vec<Problem>) {
+pub fn check_text(
+    studies: &[&dyn Study],
+    text: &str,
+    source: &str,
+) -> (Option<Suite>, Vec<Problem>) {
     let (suite, mut problems) = Suite::parse_partial(text, source);
     if let Some(suite) = &suite {
         // A timing table's own problems are already named by the parse: its plan's check would
         // only say the same again.
         let parsed = problems.clone();
-        problems.extend(check_suite(suite).into_iter().filter(|p| {
+        problems.extend(check_suite(studies, suite).into_iter().filter(|p| {
             !(p.key.is_empty()
                 && ["[timing]", "[software]"].contains(&p.table.as_str())
                 && parsed.iter().any(|q| q.table == p.table))
@@ -59,11 +63,11 @@ pub fn check_text(text: &str, source: &str) -> (Option<Suite>, Vec<Problem>) {
     (suite, problems)
 }
 
-fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
+fn check_study(studies: &[&dyn Study], suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
     let file = suite.source.as_str();
     let table = study_table(spec.index, &spec.kind);
     let before = out.len();
-    let Some(study) = studies::by_kind(&spec.kind) else {
+    let Some(study) = by_kind(studies, &spec.kind) else {
         out.push(
             Problem::new(
                 file,
@@ -72,11 +76,10 @@ fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
                 "unknown study kind",
             )
             .value(&spec.kind)
-            .known(studies::all().iter().map(|s| s.kind())),
+            .known(studies.iter().map(|s| s.kind())),
         );
         return;
     };
-    let study = study.as_ref();
 
     // The table's own options.
     let options = study.options();
@@ -236,7 +239,7 @@ fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
     }
     // Cross-axis rules of every point, once the values themselves are right.
     if out.len() == before {
-        match studies::points(study, spec) {
+        match points(study, spec) {
             Err(msgs) => {
                 for m in msgs {
                     out.push(Problem::new(file, &table, "", m));
@@ -262,6 +265,25 @@ fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
     let mut seen = BTreeSet::new();
     for (scene, &j) in spec.scenes.iter().zip(&spec.scene_tables) {
         let tn = format!("{table} › scene {j} ({})", scene.generator);
+        // A study that renders one view would run a path at its first view only: refused,
+        // never silently narrowed.
+        if !study.moves_camera()
+            && scene
+                .params
+                .get(scenarios::path::CAMERA_PATH.name)
+                .is_some()
+            && seen.insert(format!("{tn} camera_path"))
+        {
+            out.push(Problem::new(
+                file,
+                &tn,
+                scenarios::path::CAMERA_PATH.name,
+                format!(
+                    "the {} study renders one view per scene: a camera path runs in a `views` study",
+                    spec.kind
+                ),
+            ));
+        }
         for e in scene.check() {
             for p in scene_problems(file, &tn, e) {
                 if seen.insert(p.to_string()) {
@@ -272,55 +294,95 @@ fn check_study(suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
     }
 }
 
-/// An axis swept (two values or more) for a method where the method does not read it (its
-/// declaration says when it does: [`Axis::only_when`]): its points would repeat one
-/// configuration, and their noise would read as the axis's effect.
+/// An axis given for methods that read it at none of their points (its declaration says when
+/// it is read: [`Axis::only_when`]): refused alike for one value or many, since a value no
+/// point reads would name configurations that do not differ. Given in `method_axes.M`: M must
+/// read it at one of its points; given in the study's `axes`: some method of the study must.
+/// Where a point leaves an axis unread, its value is dropped from that point (empty cell, not in
+/// the point key) and points that then coincide run once ([`crate::axes::Point::resolve`]).
 fn ignored_axes(
     file: &str,
     table: &str,
     spec: &StudySpec,
     study: &dyn Study,
-    points: &[studies::PointSpec],
+    points: &[PointSpec],
     out: &mut Vec<Problem>,
 ) {
-    let mut said = BTreeSet::new();
+    // (method, axis) → the settings that left it unread, or None once some point reads it.
+    let mut unread: std::collections::BTreeMap<(String, &'static str), Option<BTreeSet<String>>> =
+        Default::default();
     for p in points {
-        let swept = scenarios::suite::axes_for_method(spec, &p.method);
         for a in study.axes(&p.method) {
-            if swept.get(a.name()).is_none_or(|v| v.len() < 2) {
+            if a.when.is_none() {
                 continue;
             }
-            let Some(with) = a.ignored_at(&p.point) else {
-                continue;
-            };
-            if !said.insert((p.method.clone(), a.name(), with.clone())) {
-                continue;
+            let e = unread
+                .entry((p.method.clone(), a.name()))
+                .or_insert_with(|| Some(BTreeSet::new()));
+            match (a.ignored_at(&p.point), e.as_mut()) {
+                (None, _) => *e = None,
+                (Some(with), Some(set)) => {
+                    set.insert(with);
+                }
+                (Some(_), None) => {}
             }
-            let w = a.when.expect("ignored_at needs a condition");
-            let own = spec
-                .method_axes
-                .get(&p.method)
-                .is_some_and(|o| o.contains_key(a.name()));
-            let tn = if own {
-                format!("{table} › method_axes.{}", p.method)
-            } else {
-                format!("{table} › axes")
-            };
+        }
+    }
+    let never_read = |m: &str, axis: &str| -> Option<String> {
+        unread
+            .get(&(
+                m.to_string(),
+                study.axes(m).iter().find(|a| a.name() == axis)?.name(),
+            ))?
+            .as_ref()
+            .map(|w| w.iter().cloned().collect::<Vec<_>>().join(", "))
+    };
+    let why = |axis: &str, m: &str, with: &str| {
+        let w = study
+            .axes(m)
+            .iter()
+            .find(|a| a.name() == axis)
+            .and_then(|a| a.when)
+            .expect("only axes with a condition are unread");
+        format!(
+            "axis {axis} has no effect on method {m} (with {with}): it is read only with {} = {}, so a value given for it would name configurations that do not differ; give it where it is read (with {} = {}) or drop it",
+            w.axis,
+            w.values.join(" | "),
+            w.axis,
+            w.values.join(" | "),
+        )
+    };
+    for (m, over) in &spec.method_axes {
+        for k in over.keys() {
+            if let Some(with) = never_read(m, k) {
+                out.push(Problem::new(
+                    file,
+                    &format!("{table} › method_axes.{m}"),
+                    k,
+                    why(k, m, &with),
+                ));
+            }
+        }
+    }
+    let methods: BTreeSet<&str> = points.iter().map(|p| p.method.as_str()).collect();
+    for k in spec.axes.keys() {
+        let declaring: Vec<&str> = methods
+            .iter()
+            .copied()
+            .filter(|m| !spec.method_axes.get(*m).is_some_and(|o| o.contains_key(k)))
+            .filter(|m| study.axes(m).iter().any(|a| a.name() == k))
+            .collect();
+        let silent: Vec<(&str, String)> = declaring
+            .iter()
+            .filter_map(|m| never_read(m, k).map(|w| (*m, w)))
+            .collect();
+        if !declaring.is_empty() && silent.len() == declaring.len() {
+            let (m, with) = &silent[0];
             out.push(Problem::new(
                 file,
-                &tn,
-                a.name(),
-                format!(
-                    "axis {} has no effect on method {} (with {with}): it is read only with {} = {}, so its values would repeat one configuration; sweep it where it is read (method_axes.{} with {} = {}) or give {} one value",
-                    a.name(),
-                    p.method,
-                    w.axis,
-                    w.values.join(" | "),
-                    p.method,
-                    w.axis,
-                    w.values.join(" | "),
-                    p.method,
-                ),
+                &format!("{table} › axes"),
+                k,
+                why(k, m, with),
             ));
         }
     }
@@ -375,6 +437,15 @@ fn scene_problems(file: &str, table: &str, e: SceneError) -> Vec<Problem> {
         SceneError::Gltf { path, why } => {
             vec![Problem::new(file, table, "path", format!("glTF file: {why}")).value(path)]
         }
+        SceneError::CameraFile { path, line, why } => {
+            let at = line.map(|l| format!(":{l}")).unwrap_or_default();
+            vec![Problem::new(
+                file,
+                table,
+                "path_file",
+                format!("{path}{at}: {why}"),
+            )]
+        }
         other => vec![Problem::new(file, table, "", other.to_string())],
     }
 }
@@ -390,9 +461,4 @@ pub fn models_needed(suite: &Suite) -> Vec<String> {
         }
     }
     out.into_iter().collect()
-}
-
-/// The study a table names, if known (for callers that already checked).
-pub fn study_of(spec: &StudySpec) -> Option<Box<dyn Study>> {
-    studies::by_kind(&spec.kind)
 }

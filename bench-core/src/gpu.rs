@@ -186,6 +186,14 @@ pub struct Gpu {
     /// The fixed kernel timed after each sample (`measure`'s canary rule), built on first use,
     /// with the fastest time it has taken in this process.
     canary: std::sync::OnceLock<Mutex<Canary>>,
+    /// The memory roofs (`roofs`), measured on first use ([`Gpu::roofs`]).
+    roofs: std::sync::OnceLock<Option<crate::roofs::Roofs>>,
+    /// `--timing cold=true`: the buffer cleared before each sample to flush the L2.
+    l2_flush: std::sync::OnceLock<wgpu::Buffer>,
+    /// The first bind group layout made since the last [`Gpu::take_stage_violation`] that is
+    /// over the profile's per-stage storage limits (`limits::check_stage_storage`), which wgpu
+    /// does not check: a point that made one is skipped naming the limit.
+    stage_violation: Mutex<Option<String>>,
     /// Where render targets' memory comes from (`texture_memory` column); see
     /// [`crate::texture_memory`]. Set before any method prepares.
     pub texture_memory: crate::texture_memory::TextureMemory,
@@ -350,6 +358,9 @@ impl Gpu {
             monitor,
             spin: std::sync::OnceLock::new(),
             canary: std::sync::OnceLock::new(),
+            roofs: std::sync::OnceLock::new(),
+            l2_flush: std::sync::OnceLock::new(),
+            stage_violation: Mutex::new(None),
             texture_memory: crate::texture_memory::TextureMemory::Pooled,
             dedicated_textures: Default::default(),
             gles: None,
@@ -560,7 +571,7 @@ struct Kernel {
 /// dependent FMAs for a few ms (about 2 ms on an H200 at 1980 MHz, by its FMA rate).
 const SPIN_WGSL: &str = "
 @group(0) @binding(0) var<storage, read_write> sink: array<f32>;
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var x = f32(id.x & 255u) * 1e-3;
     for (var i = 0u; i < 65536u; i = i + 1u) {
@@ -573,8 +584,16 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 }";
 
 impl Kernel {
-    /// Entry `main` of `wgsl` with its one storage buffer (`bytes`, zeroed) at group 0, binding 0.
+    /// Entry `main` of `wgsl` with its one storage buffer (`bytes`, zeroed) at group 0, binding 0,
+    /// in workgroups of `WG` = 256 threads, or the device's most where that is fewer (WebGPU's
+    /// compatibility mode allows 128).
     fn new(device: &wgpu::Device, label: &str, wgsl: &str, bytes: u64) -> Kernel {
+        let l = device.limits();
+        let wg = 256
+            .min(l.max_compute_invocations_per_workgroup)
+            .min(l.max_compute_workgroup_size_x)
+            .max(1);
+        let wgsl = format!("const WG: u32 = {wg}u;\n{wgsl}");
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(label),
             source: wgpu::ShaderSource::Wgsl(wgsl.into()),
@@ -635,10 +654,10 @@ struct Canary {
 
 const CANARY_WGSL: &str = "
 @group(0) @binding(0) var<storage, read_write> buf: array<vec4<f32>>;
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
     let n = arrayLength(&buf);
-    let stride = nw.x * 256u;
+    let stride = nw.x * WG;
     var acc = vec4<f32>(0.0);
     for (var i = id.x; i < n; i = i + stride) {
         acc = acc + buf[i];
@@ -753,6 +772,85 @@ impl Gpu {
         Ok(Some(
             ticks as f64 * self.queue.get_timestamp_period() as f64 * 1e-6,
         ))
+    }
+
+    /// The memory roofs of this adapter, measured on the first call (`mfx sweep` makes it
+    /// before any point, as the calibration set) and kept: None without timestamp queries or
+    /// when the measurement failed (it says why on stderr; a row then has no roof).
+    pub fn roofs(&self) -> Option<&crate::roofs::Roofs> {
+        self.roofs
+            .get_or_init(|| {
+                let (max_binding, _) = crate::limits::storage_binding_limit(self.held());
+                let d = crate::roofs::Device {
+                    device: &self.device,
+                    queue: &self.queue,
+                    adapter_name: &self.facts.name,
+                    software: self.facts.is_software,
+                    max_binding,
+                    timestamps: self.has(wgpu::Features::TIMESTAMP_QUERY),
+                };
+                let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+                let r = crate::roofs::measure(&d);
+                let r = match pollster::block_on(scope.pop()) {
+                    Some(e) => Err(CoreError::Gpu(e.to_string())),
+                    None => r,
+                };
+                r.unwrap_or_else(|e| {
+                    eprintln!("mfx: memory roofs not measured: {e}");
+                    None
+                })
+            })
+            .as_ref()
+    }
+
+    /// Notes a bind group layout's entries against the profile's per-stage storage limits
+    /// (`limits::check_stage_storage`; only compatibility mode has them). Layout helpers call it.
+    pub fn note_layout(&self, what: &str, entries: &[wgpu::BindGroupLayoutEntry]) {
+        if let Err(why) = crate::limits::check_stage_storage(self.profile, what, entries) {
+            self.stage_violation.lock().unwrap().get_or_insert(why);
+        }
+    }
+
+    /// The per-stage storage limit a layout went over since the last call, if one did.
+    pub fn take_stage_violation(&self) -> Option<String> {
+        self.stage_violation.lock().unwrap().take()
+    }
+
+    /// The roofs if they were measured ([`Gpu::roofs`]), without measuring them.
+    pub fn measured_roofs(&self) -> Option<&crate::roofs::Roofs> {
+        self.roofs.get().and_then(|r| r.as_ref())
+    }
+
+    /// Bytes `--timing cold=true` clears before each sample: twice the L2 (measured or known),
+    /// else 256 MiB on hardware (16 MiB on a software adapter), within the largest buffer.
+    pub fn l2_flush_bytes(&self) -> u64 {
+        let l2 = self
+            .measured_roofs()
+            .map(|r| r.l2_bytes)
+            .or_else(|| crate::roofs::known_l2(&self.facts.name));
+        let bytes = match (l2, self.facts.is_software) {
+            (Some(l2), _) => 2 * l2,
+            (None, false) => 256 << 20,
+            (None, true) => 16 << 20,
+        };
+        bytes.max(1 << 20).min(self.limits.max_buffer_size) & !3
+    }
+
+    /// Flushes the L2 (`--timing cold=true`, nvbench's cold mode): an untimed clear of
+    /// [`Gpu::l2_flush_bytes`], waited for, so the next frame finds none of its data cached.
+    pub fn flush_l2(&self) -> Result<()> {
+        let buf = self.l2_flush.get_or_init(|| {
+            self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("L2 flush"),
+                size: self.l2_flush_bytes(),
+                usage: wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        enc.clear_buffer(buf, 0, None);
+        self.queue.submit([enc.finish()]);
+        self.wait()
     }
 
     /// One untimed busy dispatch, waited for.

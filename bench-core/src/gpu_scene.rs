@@ -199,6 +199,33 @@ impl GpuScene {
         }
     }
 
+    /// The same scene (vertex and index buffers shared) seen by `cam`: its own camera uniform.
+    /// A camera path renders each view through one of these, every method prepared on it.
+    pub fn with_camera(&self, gpu: &Gpu, cam: &scenarios::Camera) -> GpuScene {
+        let camera_data = camera_uniform_of(cam, self.width, self.height);
+        let camera = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("camera (view)"),
+                contents: bytemuck::bytes_of(&camera_data),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            });
+        GpuScene {
+            positions: self.positions.clone(),
+            normals: self.normals.clone(),
+            colors: self.colors.clone(),
+            object_ids: self.object_ids.clone(),
+            indices: self.indices.clone(),
+            index_count: self.index_count,
+            camera,
+            camera_data,
+            width: self.width,
+            height: self.height,
+            reversed_z: cam.reversed_z,
+            bytes: self.bytes,
+        }
+    }
+
     /// Vertex buffer layouts for the attributes `a` (slot order: position, then the enabled ones).
     pub fn layouts(a: Attrs) -> Vec<wgpu::VertexBufferLayout<'static>> {
         let mut v = vec![wgpu::VertexBufferLayout {
@@ -250,8 +277,12 @@ impl GpuScene {
 }
 
 pub fn camera_uniform(scene: &Scene, width: u32, height: u32) -> CameraUniform {
+    camera_uniform_of(&scene.camera, width, height)
+}
+
+/// The uniform of `cam` at width × height.
+pub fn camera_uniform_of(cam: &scenarios::Camera, width: u32, height: u32) -> CameraUniform {
     let aspect = width as f64 / height as f64;
-    let cam = &scene.camera;
     CameraUniform {
         clip_from_world: cam.clip_from_world_gpu(aspect).to_cols_array_2d(),
         view_from_world: cam.view().as_mat4().to_cols_array_2d(),

@@ -247,3 +247,28 @@ pub fn pixel_pass(
     pass.set_bind_group(0, bind, &[]);
     pass.dispatch_workgroups(scene.width.div_ceil(8), scene.height.div_ceil(8), 1);
 }
+
+/// Whether `format` can be a `samples`× multisampled render target here (WebGPU guarantees 4×
+/// for most formats; 2× and 8× need the adapter's own format capabilities).
+pub fn check_msaa_format(
+    gpu: &Gpu,
+    format: wgpu::TextureFormat,
+    samples: u32,
+) -> Result<(), String> {
+    if samples <= 1 {
+        return Ok(());
+    }
+    let flags = if gpu.has(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES) {
+        gpu.adapter.get_texture_format_features(format).flags
+    } else {
+        format.guaranteed_format_features(gpu.features).flags
+    };
+    if flags.sample_count_supported(samples) {
+        Ok(())
+    } else {
+        Err(format!(
+            "{format:?} cannot be multisampled {samples}× on this adapter (it allows {:?})",
+            flags.supported_sample_counts()
+        ))
+    }
+}

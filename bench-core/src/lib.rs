@@ -1,38 +1,37 @@
-//! bench-core: the GPU context, timing, the multi-fragment methods, the exact CPU reference,
-//! error metrics, CSV records and the sweep runner. Reading order for a newcomer:
-//! `methods/mod.rs` (what is measured), `reference/mod.rs` (what it is judged against),
-//! `record.rs` (what is written), `runner.rs` (how a suite becomes rows).
+//! bench-core: the harness. It opens the device ([`Gpu`]), uploads a scene ([`gpu_scene::GpuScene`]),
+//! times any frame a study hands it ([`timed::Timed`] driven by [`measure::measure_timed`] under a
+//! suite's [`measure::TimingPlan`], passes stamped by [`timing::GpuTimer`]), measures its own
+//! yardsticks ([`floors`]), writes rows ([`record::Row`] to a [`record::Sink`]) and runs a suite
+//! ([`runner`]) through whatever studies the caller registers ([`study::Study`], given a
+//! [`study::GroupCtx`] and an [`study::Emit`]). It names no study: the study families are crates
+//! on top of it (`studies/*`), and the binary holds the table of them (`mfx::STUDIES`).
+//!
+//! Reading order for a newcomer: `study.rs` (what a study implements), `timed.rs` and
+//! `measure.rs` (how a frame is timed), `record.rs` (what is written), `runner.rs` (how a suite
+//! becomes rows), `bind.rs` (how a pass declares its bindings).
 
-pub mod aa;
 pub mod axes;
+pub mod bind;
 pub mod build_info;
 pub mod check;
 pub mod clocks;
-pub mod effects;
+pub mod floors;
 pub mod gles;
 pub mod gpu;
 pub mod gpu_scene;
 pub mod gpu_util;
 pub mod image_io;
 pub mod interrupt;
-pub mod judge;
 pub mod limits;
 pub mod manifest;
 pub mod measure;
 pub mod merge;
-pub mod method;
-pub mod methods;
-pub mod metrics;
-pub mod oit;
-pub mod papers;
 pub mod record;
-pub mod reference;
+pub mod roofs;
 pub mod runner;
-pub mod shading;
-pub mod studies;
-/// Test helpers (a shared adapter, scenes, run-and-compare): built for this crate's unit tests
-/// and, through the `testing` feature its dev-dependency on itself turns on, for its
-/// integration tests; not part of the release library.
+pub mod study;
+/// Test helpers (a shared adapter, small scenes): built for this crate's unit tests and,
+/// through the `testing` feature, for the study crates' tests; not part of the release library.
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 pub mod texture_memory;

@@ -25,6 +25,14 @@ pub enum Profile {
     /// A WebGL2-class device (`wgpu::Limits::downlevel_webgl2_defaults()`): no compute shaders,
     /// no storage buffers in any stage, 2048² textures, 4 colour attachments.
     Downlevel,
+    /// WebGPU's compatibility mode (OpenGL ES 3.1 / D3D11-class devices), its defaults as the
+    /// WebGPU specification gives them ("compatibility mode default", gpuweb `spec/index.bs`,
+    /// since gpuweb#5295, 2025-09): no storage buffers in the vertex stage, 4 in the fragment
+    /// stage (8 in compute, as WebGPU), 4 colour attachments, 128 invocations a workgroup
+    /// (128 × 128 × 64), 15 inter-stage variables, 4096² textures, 16 KiB uniform bindings.
+    /// wgpu has no per-stage storage limits: mfx checks those itself ([`check_stage_storage`]).
+    #[serde(rename = "webgpu-compat")]
+    WebGpuCompat,
 }
 
 /// Every profile with its name (the `--limits` value and the `limits` column) and one line.
@@ -43,6 +51,11 @@ pub const PROFILES: &[(Profile, &str, &str)] = &[
         Profile::Downlevel,
         "downlevel",
         "a WebGL2-class device: no compute shaders, no storage buffers, 2048² textures",
+    ),
+    (
+        Profile::WebGpuCompat,
+        "webgpu-compat",
+        "WebGPU's compatibility mode defaults: WebGPU's, with no storage buffers in vertex shaders, 4 in fragment shaders, 128 invocations a workgroup, 4 colour attachments, 4096² textures",
     ),
 ];
 
@@ -85,6 +98,7 @@ impl Profile {
             Profile::Adapter => "the adapter's",
             Profile::WebGpu => "WebGPU's default",
             Profile::Downlevel => "WebGL2's (downlevel)",
+            Profile::WebGpuCompat => "WebGPU compatibility mode's default",
         }
     }
 
@@ -94,6 +108,7 @@ impl Profile {
             Profile::Adapter => "the adapter",
             Profile::WebGpu => "WebGPU's default limit set",
             Profile::Downlevel => "WebGL2's (downlevel) limit set",
+            Profile::WebGpuCompat => "WebGPU compatibility mode's default limit set",
         }
     }
 
@@ -103,14 +118,34 @@ impl Profile {
             Profile::Adapter => adapter.clone(),
             Profile::WebGpu => wgpu::Limits::defaults(),
             Profile::Downlevel => wgpu::Limits::downlevel_webgl2_defaults(),
+            Profile::WebGpuCompat => wgpu::Limits {
+                max_color_attachments: 4,
+                max_compute_invocations_per_workgroup: 128,
+                max_compute_workgroup_size_x: 128,
+                max_compute_workgroup_size_y: 128,
+                max_inter_stage_shader_variables: 15,
+                max_texture_dimension_1d: 4096,
+                max_texture_dimension_2d: 4096,
+                max_uniform_buffer_binding_size: 16 << 10,
+                ..wgpu::Limits::defaults()
+            },
         }
+    }
+
+    /// Storage buffers a pipeline may make visible to the vertex and to the fragment stage,
+    /// where the profile sets them below `maxStorageBuffersPerShaderStage` (compatibility
+    /// mode's `maxStorageBuffersInVertexStage` 0 and `maxStorageBuffersInFragmentStage` 4).
+    pub fn stage_storage(self) -> Option<(u32, u32)> {
+        (self == Profile::WebGpuCompat).then_some((0, 4))
     }
 
     /// The features to request out of `wanted` (what the adapter has of mfx's list).
     pub fn features(self, wanted: wgpu::Features) -> wgpu::Features {
         match self {
             Profile::Adapter => wanted,
-            Profile::WebGpu => wanted & (wgpu::Features::all_webgpu_mask() | HARNESS_FEATURES),
+            Profile::WebGpu | Profile::WebGpuCompat => {
+                wanted & (wgpu::Features::all_webgpu_mask() | HARNESS_FEATURES)
+            }
             // WebGL2 has none of WebGPU's optional features (no float32 blending, no f16).
             Profile::Downlevel => wanted & HARNESS_FEATURES,
         }
@@ -121,6 +156,10 @@ impl Profile {
     pub fn downlevel(self, adapter: wgpu::DownlevelCapabilities) -> wgpu::DownlevelCapabilities {
         match self {
             Profile::Adapter | Profile::WebGpu => adapter,
+            Profile::WebGpuCompat => wgpu::DownlevelCapabilities {
+                flags: adapter.flags - wgpu::DownlevelFlags::VERTEX_STORAGE,
+                ..adapter
+            },
             Profile::Downlevel => wgpu::DownlevelCapabilities {
                 flags: adapter.flags
                     - (wgpu::DownlevelFlags::COMPUTE_SHADERS
@@ -191,6 +230,61 @@ fn no_storage((limits, profile): Held<'_>, what: &str) -> CoreError {
     ))
 }
 
+/// Whether a bind group layout's `entries` stay within `profile`'s per-stage storage limits
+/// ([`Profile::stage_storage`]); Err names the limit, the stage and the layout. wgpu checks
+/// only `maxStorageBuffersPerShaderStage`, so mfx's layout helpers call this (counted per bind
+/// group layout: every mfx pipeline keeps its vertex and fragment storage in one group).
+pub fn check_stage_storage(
+    profile: Profile,
+    what: &str,
+    entries: &[wgpu::BindGroupLayoutEntry],
+) -> std::result::Result<(), String> {
+    let Some((vertex, fragment)) = profile.stage_storage() else {
+        return Ok(());
+    };
+    let storage = |stage: wgpu::ShaderStages| {
+        entries
+            .iter()
+            .filter(|e| e.visibility.contains(stage))
+            .filter(|e| {
+                matches!(
+                    e.ty,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { .. },
+                        ..
+                    }
+                )
+            })
+            .count() as u32
+    };
+    for (stage, name, limit) in [
+        (
+            wgpu::ShaderStages::VERTEX,
+            "maxStorageBuffersInVertexStage",
+            vertex,
+        ),
+        (
+            wgpu::ShaderStages::FRAGMENT,
+            "maxStorageBuffersInFragmentStage",
+            fragment,
+        ),
+    ] {
+        let n = storage(stage);
+        if n > limit {
+            return Err(format!(
+                "{what} binds {n} storage buffers to the {} stage, over {} {name} of {limit}",
+                if stage == wgpu::ShaderStages::VERTEX {
+                    "vertex"
+                } else {
+                    "fragment"
+                },
+                profile.owner()
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A split buffer is spread over at most this many storage bindings: WebGPU's whole
 /// per-stage allowance (8), and 8 × 2 GiB covers 16 layers of 32 B entries at 4K with 4 samples.
 pub const MAX_PARTS: u32 = 8;
@@ -224,6 +318,18 @@ impl Split {
     pub fn part_elems(&self, i: u32) -> u64 {
         let start = self.per_part * i as u64;
         self.elems.saturating_sub(start).min(self.per_part)
+    }
+
+    /// The same split over 4-byte words (`elem_bytes` a multiple of 4), for WGSL that indexes
+    /// an `array<u32>`: every element's words stay in one part.
+    pub fn words(&self) -> Split {
+        let k = self.elem_bytes / 4;
+        Split {
+            parts: self.parts,
+            per_part: self.per_part * k,
+            elems: self.elems * k,
+            elem_bytes: 4,
+        }
     }
 
     /// Bindings of the parts after the first ([`SPLIT_BINDING`] + 0, 1, …).
@@ -347,6 +453,49 @@ mod tests {
         assert!(!Profile::Downlevel
             .features(wanted)
             .contains(wgpu::Features::FLOAT32_BLENDABLE));
+        // Compatibility mode (the WebGPU spec's "compatibility mode default" column).
+        let c = Profile::WebGpuCompat.limits(&wgpu::Limits::unlimited());
+        assert_eq!(c.max_storage_buffers_per_shader_stage, 8);
+        assert_eq!(c.max_compute_invocations_per_workgroup, 128);
+        assert_eq!(c.max_texture_dimension_2d, 4096);
+        assert_eq!(c.max_color_attachments, 4);
+        assert_eq!(Profile::WebGpuCompat.stage_storage(), Some((0, 4)));
+        assert_eq!(Profile::WebGpu.stage_storage(), None);
+        assert_eq!(
+            "webgpu-compat".parse::<Profile>().unwrap(),
+            Profile::WebGpuCompat
+        );
+    }
+
+    #[test]
+    fn compatibility_mode_counts_storage_per_stage_and_names_the_limit() {
+        let st = |b, vis| wgpu::BindGroupLayoutEntry {
+            binding: b,
+            visibility: vis,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
+        let four: Vec<_> = (0..4).map(|b| st(b, fc)).collect();
+        let five: Vec<_> = (0..5).map(|b| st(b, fc)).collect();
+        let compute: Vec<_> = (0..8).map(|b| st(b, wgpu::ShaderStages::COMPUTE)).collect();
+        let c = Profile::WebGpuCompat;
+        assert!(check_stage_storage(c, "k", &four).is_ok());
+        assert!(check_stage_storage(c, "compute", &compute).is_ok());
+        let why = check_stage_storage(c, "linked_list", &five).unwrap_err();
+        assert!(
+            why.contains("maxStorageBuffersInFragmentStage of 4") && why.contains("5"),
+            "{why}"
+        );
+        let vertex = [st(0, wgpu::ShaderStages::VERTEX)];
+        let why = check_stage_storage(c, "v", &vertex).unwrap_err();
+        assert!(why.contains("maxStorageBuffersInVertexStage of 0"), "{why}");
+        // Other profiles leave it to wgpu's per-stage limit.
+        assert!(check_stage_storage(Profile::WebGpu, "linked_list", &five).is_ok());
     }
 
     #[test]
@@ -369,6 +518,15 @@ mod tests {
         assert_eq!(s.part_elems(2), 5);
         assert_eq!(s.column().as_deref(), Some("bindings:3"));
         assert_eq!(Split::whole(25, 4).column(), None);
+        // Over words, a 12 B element's three words stay in one part.
+        let w = Split::whole(25, 12).words();
+        assert_eq!((w.parts, w.per_part, w.elems, w.elem_bytes), (1, 75, 75, 4));
+        let w = Split {
+            elem_bytes: 12,
+            ..s
+        }
+        .words();
+        assert_eq!((w.per_part, w.elems, w.part_elems(2)), (30, 75, 15));
         let w = s.wgsl("entries", "Entry", 2);
         assert!(w.contains("@binding(16) var<storage, read_write> entries_1"));
         assert!(w.contains("@binding(17) var<storage, read_write> entries_2"));

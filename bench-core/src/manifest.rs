@@ -181,6 +181,10 @@ pub struct RunManifest {
     /// before issue 33, and on software adapters).
     #[serde(default)]
     pub calibration: Option<GpuCalibration>,
+    /// The adapter's memory roofs measured before the points (`roofs`: a copy kernel in and far
+    /// beyond the L2; absent in runs before issue 41 and without timestamp queries).
+    #[serde(default)]
+    pub roofs: Option<crate::roofs::Roofs>,
     /// The machine of the latest call (absent in run.json files older than this field).
     #[serde(default)]
     pub host: HostInfo,
@@ -269,6 +273,7 @@ impl RunManifest {
             finished: false,
             interrupted: None,
             calibration: None,
+            roofs: None,
             host: HostInfo::here(),
             build: BuildInfo::this(),
             software_profile: false,
@@ -475,11 +480,28 @@ pub fn write_runs_json(dir: &Path, context: &Value) -> Result<()> {
 mod tests {
     use super::*;
 
-    fn temp(name: &str) -> std::path::PathBuf {
-        let d = std::env::temp_dir().join(format!("mfx-manifest-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
+    /// A temp folder removed when the test ends, pass or fail (derefs to its path).
+    struct Tmp(tempfile::TempDir);
+    impl std::ops::Deref for Tmp {
+        type Target = std::path::Path;
+        fn deref(&self) -> &std::path::Path {
+            self.0.path()
+        }
+    }
+    impl AsRef<std::path::Path> for Tmp {
+        fn as_ref(&self) -> &std::path::Path {
+            self.0.path()
+        }
+    }
+    fn tmp_dir(prefix: &str) -> Tmp {
+        Tmp(tempfile::Builder::new()
+            .prefix(&format!("{prefix}-"))
+            .tempdir()
+            .expect("a temp folder"))
+    }
+
+    fn temp(name: &str) -> Tmp {
+        tmp_dir(&format!("mfx-manifest-{name}"))
     }
 
     fn sample() -> RunManifest {

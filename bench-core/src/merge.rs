@@ -474,11 +474,28 @@ mod tests {
         d
     }
 
-    fn tmp(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("mfx-merge-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
+    /// A temp folder removed when the test ends, pass or fail (derefs to its path).
+    struct Tmp(tempfile::TempDir);
+    impl std::ops::Deref for Tmp {
+        type Target = std::path::Path;
+        fn deref(&self) -> &std::path::Path {
+            self.0.path()
+        }
+    }
+    impl AsRef<std::path::Path> for Tmp {
+        fn as_ref(&self) -> &std::path::Path {
+            self.0.path()
+        }
+    }
+    fn tmp_dir(prefix: &str) -> Tmp {
+        Tmp(tempfile::Builder::new()
+            .prefix(&format!("{prefix}-"))
+            .tempdir()
+            .expect("a temp folder"))
+    }
+
+    fn tmp(name: &str) -> Tmp {
+        tmp_dir(&format!("mfx-merge-{name}"))
     }
 
     const H: &str = "schema,point_key,adapter,backend,status\n";

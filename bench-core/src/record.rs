@@ -499,13 +499,23 @@ impl Sink for VecSink {
     }
 }
 
+/// Whether a row's GPU time is the time of its frame (`gpu_time_trusted`): not when the
+/// timestamps missed work. An untrusted row gets no `x_floor`, `x_blend` or `speedup_vs_*`.
+pub fn gpu_time_trusted(row: &Row) -> bool {
+    !row.has_flag(Flag::TimestampsIncomplete)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn resuming_into_samples_written_under_another_header_is_refused() {
-        let d = std::env::temp_dir().join(format!("mfx-samples-hdr-{}", std::process::id()));
+        let d_tmp = tempfile::Builder::new()
+            .prefix("mfx-samples-hdr-")
+            .tempdir()
+            .unwrap();
+        let d = d_tmp.path().to_path_buf();
         std::fs::create_dir_all(&d).unwrap();
         let p = d.join("samples.csv");
         // The header before `session` was recorded.

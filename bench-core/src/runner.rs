@@ -5,13 +5,13 @@
 use scenarios::{Params, Scene, Suite};
 
 use crate::axes::Point;
+use crate::floors::Floor;
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
-use crate::measure::{measure, set_timing, TimingPlan};
-use crate::methods;
+use crate::measure::{measure_timed, set_timing, TimingPlan};
 use crate::record::{cols, Row, Sink, Status, SCHEMA_VERSION};
 pub use crate::record::{error_row, failed_row, one_line, set_params, skipped_row};
-use crate::studies::{self, Group, GroupCtx, PointSpec};
+use crate::study::{by_kind, points, Group, GroupCtx, PointSpec, Study};
 use crate::{CoreError, Result};
 
 /// Where a sweep runs and how it identifies itself.
@@ -33,22 +33,22 @@ pub struct RunOptions {
 
 /// Expands every study of the suite into groups, in suite order (deterministic: the shard
 /// assignment is group index mod N).
-pub fn expand(suite: &Suite, software: bool) -> Result<Vec<Group>> {
+pub fn expand(studies: &[&dyn Study], suite: &Suite, software: bool) -> Result<Vec<Group>> {
     let mut groups = Vec::new();
     for (si, spec) in suite.studies.iter().enumerate() {
-        let study = studies::by_kind(&spec.kind).ok_or_else(|| {
+        let study = by_kind(studies, &spec.kind).ok_or_else(|| {
             CoreError::Param(format!(
                 "suite '{}' study {si}: unknown kind '{}' (known: {})",
                 suite.name,
                 spec.kind,
-                studies::all()
+                studies
                     .iter()
                     .map(|s| s.kind())
                     .collect::<Vec<_>>()
                     .join(", ")
             ))
         })?;
-        let points = studies::points(study.as_ref(), spec).map_err(|e| {
+        let points = points(study, spec).map_err(|e| {
             CoreError::Param(format!(
                 "suite '{}' study {si} ({}): {}",
                 suite.name,
@@ -88,17 +88,9 @@ pub fn shard_groups(groups: Vec<Group>, shard: (usize, usize)) -> Vec<Group> {
         .collect()
 }
 
-/// Rows per group: the floors plus the study's points. (`floor_blend_const`: every fragment
-/// blended unordered in hardware, positions only: what an engine without OIT pays at least, the
-/// ratio LucidRaster reports and `x_blend`'s yardstick; `floor_blend`: the same through the
-/// methods' own vertex stage.)
-pub const FLOORS: &[&str] = &[
-    "floor_depth",
-    "floor_opaque",
-    "floor_blend",
-    "floor_blend_const",
-];
+pub use crate::floors::FLOORS;
 
+/// Rows per group: the floors plus the study's points.
 pub fn rows_in(groups: &[Group]) -> usize {
     groups.iter().map(|g| g.points.len() + FLOORS.len()).sum()
 }
@@ -126,6 +118,7 @@ pub fn timing_plan(suite: &Suite, software: bool) -> Result<TimingPlan> {
 /// after the row in flight when `opts.interrupted` says so.
 pub fn run(
     gpu: &Gpu,
+    studies: &[&dyn Study],
     suite: &Suite,
     groups: &[Group],
     opts: &RunOptions,
@@ -187,7 +180,7 @@ pub fn run(
         let floors: Vec<PointSpec> = FLOORS
             .iter()
             .map(|f| PointSpec {
-                method: f.to_string(),
+                method: f.name().to_string(),
                 point: Point::empty(),
             })
             .collect();
@@ -222,7 +215,7 @@ pub fn run(
                 let owed_floors = floors.iter().zip(&floors_todo).filter(|(_, t)| **t);
                 for p in owed_floors.map(|(p, _)| p).chain(group.points.iter()) {
                     let mut row = Row::new();
-                    set_params(&mut row, p.point.values())?;
+                    set_params(&mut row, &p.point.recorded())?;
                     let row = if skipped {
                         skipped_row(row, why)
                     } else {
@@ -274,30 +267,30 @@ pub fn run(
         // Floors first: they are every other row's yardstick (re-measured on a resumed run
         // whose floor rows exist, but not written again).
         for (f, owed) in FLOORS.iter().zip(&floors_todo) {
-            let method = methods::by_name(f).expect("floor methods exist");
             let mut row = Row::new();
-            row.set(cols::METHOD, *f).set(cols::CLAIMS_EXACT, false);
+            row.set(cols::METHOD, f.name())
+                .set(cols::CLAIMS_EXACT, false);
             add_scene(&mut row);
-            let row = match measure(gpu, &gscene, method.as_ref(), &Point::empty(), &plan) {
+            let make = |s: &GpuScene| Ok::<_, CoreError>(Box::new(f.prepare(gpu, s)));
+            let row = match measure_timed(gpu, &gscene, &make, &plan) {
                 Ok(m) => {
                     set_timing(&mut row, &m, &scene.mesh);
-                    if *f == "floor_depth" {
-                        ctx.floor_ms = m.gpu_median();
-                    }
-                    if *f == "floor_blend_const" {
-                        ctx.blend_ms = m.gpu_median();
+                    match f {
+                        Floor::Depth => ctx.floor_ms = m.gpu_median(),
+                        Floor::BlendConst => ctx.blend_ms = m.gpu_median(),
+                        _ => {}
                     }
                     row
                 }
                 Err(e) => error_row(row, &e),
             };
             if *owed {
-                let mut row = meta(row, f, &Params::new());
+                let mut row = meta(row, f.name(), &Params::new());
                 set_x_floor(&mut row, ctx.floor_ms, ctx.blend_ms);
                 write(sink, &row, &mut out)?;
             }
         }
-        let study = studies::by_kind(&group.kind).expect("checked in expand");
+        let study = by_kind(studies, &group.kind).expect("checked in expand");
         let mut done = vec![false; group.points.len()];
         let mut sink_err: Option<CoreError> = None;
         let (floor_ms, blend_ms) = (ctx.floor_ms, ctx.blend_ms);
@@ -347,7 +340,7 @@ pub fn run(
         for (i, p) in group.points.iter().enumerate() {
             if !done[i] {
                 let mut row = Row::new();
-                set_params(&mut row, p.point.values())?;
+                set_params(&mut row, &p.point.recorded())?;
                 add_scene(&mut row);
                 write(
                     sink,
@@ -370,7 +363,7 @@ fn set_x_floor(row: &mut Row, floor_ms: Option<f64>, blend_ms: Option<f64>) {
     if !row.is_ok() {
         return;
     }
-    let trusted = crate::judge::gpu_time_trusted(row);
+    let trusted = crate::record::gpu_time_trusted(row);
     row.set_bool(cols::GPU_TIME_TRUSTED, trusted);
     if !trusted {
         return;
@@ -389,18 +382,18 @@ pub fn git_rev() -> String {
 
 /// Parses, checks and runs a suite's text on `gpu`, unsharded, and returns every row (tests and
 /// tools). A suite with problems is an error listing them all; the row count is checked.
-pub fn run_suite(gpu: &Gpu, text: &str, source: &str) -> Result<Vec<Row>> {
+pub fn run_suite(gpu: &Gpu, studies: &[&dyn Study], text: &str, source: &str) -> Result<Vec<Row>> {
     let suite = Suite::parse(text, source)?;
-    let problems = crate::check::check_suite(&suite);
+    let problems = crate::check::check_suite(studies, &suite);
     if !problems.is_empty() {
         return Err(CoreError::Param(scenarios::problem::report(&problems)));
     }
-    run_checked(gpu, &suite)
+    run_checked(gpu, studies, &suite)
 }
 
 /// Runs a checked suite on `gpu`, unsharded, into memory.
-pub fn run_checked(gpu: &Gpu, suite: &Suite) -> Result<Vec<Row>> {
-    let groups = expand(suite, gpu.facts.is_software)?;
+pub fn run_checked(gpu: &Gpu, studies: &[&dyn Study], suite: &Suite) -> Result<Vec<Row>> {
+    let groups = expand(studies, suite, gpu.facts.is_software)?;
     let mut sink = crate::record::VecSink::default();
     let opts = RunOptions {
         run_id: "test".into(),
@@ -409,7 +402,7 @@ pub fn run_checked(gpu: &Gpu, suite: &Suite) -> Result<Vec<Row>> {
         flip: true,
         ..Default::default()
     };
-    let written = run(gpu, suite, &groups, &opts, &mut sink)?.written;
+    let written = run(gpu, studies, suite, &groups, &opts, &mut sink)?.written;
     if written != rows_in(&groups) || sink.0.len() != written {
         return Err(CoreError::Schema(format!(
             "{} rows written for {} points",
@@ -421,8 +414,10 @@ pub fn run_checked(gpu: &Gpu, suite: &Suite) -> Result<Vec<Row>> {
 }
 
 /// Rows a suite sweeps on a GPU (`software = false`) or a software adapter (for `mfx list`).
-pub fn rows_of(suite: &Suite, software: bool) -> usize {
-    expand(suite, software).map(|g| rows_in(&g)).unwrap_or(0)
+pub fn rows_of(studies: &[&dyn Study], suite: &Suite, software: bool) -> usize {
+    expand(studies, suite, software)
+        .map(|g| rows_in(&g))
+        .unwrap_or(0)
 }
 
 #[cfg(test)]

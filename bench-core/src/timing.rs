@@ -82,6 +82,19 @@ impl GpuTimer {
         Some((2 * i, 2 * i + 1))
     }
 
+    /// One label timed across several passes (kbuffer_rmw's `sort_flush` records a render
+    /// pass per 32-triangle batch, tens of thousands a frame, past [`MAX_TIMED_PASSES`]): the
+    /// query indices (beginning, end) for the first pass's beginning and the last pass's end
+    /// to write through [`GpuTimer::query_set`]. `None` without timestamps or when full.
+    pub fn reserve(&mut self, label: &str) -> Option<(u32, u32)> {
+        self.next(label)
+    }
+
+    /// The frame's timestamp query set (for [`GpuTimer::reserve`]d indices).
+    pub fn query_set(&self) -> Option<&wgpu::QuerySet> {
+        self.set.as_ref()
+    }
+
     pub fn render_pass(&mut self, label: &str) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
         let (b, e) = self.next(label)?;
         Some(wgpu::RenderPassTimestampWrites {

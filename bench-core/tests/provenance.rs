@@ -11,11 +11,27 @@ use bench_core::build_info;
 mod build_git;
 
 /// A fresh folder under the system temp dir, unique to this test process and `name`.
-fn temp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mfx-provenance-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A temp folder removed when the test ends, pass or fail (derefs to its path).
+struct Tmp(tempfile::TempDir);
+impl std::ops::Deref for Tmp {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+impl AsRef<std::path::Path> for Tmp {
+    fn as_ref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+fn tmp_dir(prefix: &str) -> Tmp {
+    Tmp(tempfile::Builder::new()
+        .prefix(&format!("{prefix}-"))
+        .tempdir()
+        .expect("a temp folder"))
+}
+fn temp(name: &str) -> Tmp {
+    tmp_dir(&format!("mfx-provenance-{name}"))
 }
 
 fn git(dir: &Path, args: &[&str]) -> String {

@@ -233,7 +233,11 @@ mod tests {
 
     #[test]
     fn writes_images_and_csv() {
-        let dir = std::env::temp_dir().join(format!("mfx-flip-worst-{}", std::process::id()));
+        let dir_tmp = tempfile::Builder::new()
+            .prefix("mfx-flip-worst-")
+            .tempdir()
+            .unwrap();
+        let dir = dir_tmp.path().to_path_buf();
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(dir.join("flip")).unwrap();
         // A stale rank image from an earlier write goes; other files stay.

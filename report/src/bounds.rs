@@ -39,8 +39,11 @@ pub struct Bound {
     pub floor_ms: Option<f64>,
     pub fragments_per_s: Option<f64>,
     pub bytes_per_s: Option<f64>,
-    /// bytes_per_s / the adapter's peak memory bandwidth.
+    /// bytes_per_s / the roof the row is read against (`peak_bandwidth_frac`).
     pub peak_frac: Option<f64>,
+    /// The measured roof it is read against: Some(true) the L2's, Some(false) the DRAM's; None
+    /// for runs without measured roofs (NVML's spec bandwidth).
+    pub l2_resident: Option<bool>,
 }
 
 impl Bound {
@@ -58,9 +61,14 @@ impl Bound {
             }
             _ => "no floor in this run".into(),
         };
+        let roof = match self.l2_resident {
+            Some(true) => "the measured L2 roof (its working set fits the L2)",
+            Some(false) => "the measured memory roof",
+            None => "peak bandwidth",
+        };
         match self.peak_frac {
             Some(p) if p > 0.0 => format!(
-                "{floor}; declared traffic at {} % of peak bandwidth ({}× from the memory bound)",
+                "{floor}; declared traffic at {} % of {roof} ({}× from the memory bound)",
                 short(Some(100.0 * p)),
                 short(Some(1.0 / p))
             ),
@@ -145,6 +153,11 @@ pub fn bounds(runs: &Runs) -> Vec<Bound> {
             fragments_per_s: r.f(cols::FRAGMENTS_PER_S),
             bytes_per_s: r.f(cols::BYTES_PER_S),
             peak_frac: r.f(cols::PEAK_BANDWIDTH_FRAC),
+            l2_resident: match r.get(cols::L2_RESIDENT) {
+                "true" => Some(true),
+                "false" => Some(false),
+                _ => None,
+            },
         });
     }
     out
@@ -277,6 +290,14 @@ mod tests {
         let v = b[0].verdict();
         assert!(v.contains("1.8× the depth-only floor"), "{v}");
         assert!(v.contains("100× from the memory bound"), "{v}");
+        assert!(v.contains("of peak bandwidth"), "no roofs measured: {v}");
+        // A run with measured roofs names the one the row is read against.
+        let mut l2 = r.rows[1].clone();
+        l2.0.insert("l2_resident".into(), "true".into());
+        let v = bounds(&runs(vec![r.rows[0].clone(), l2]))
+            .remove(0)
+            .verdict();
+        assert!(v.contains("1 % of the measured L2 roof"), "{v}");
     }
 
     #[test]

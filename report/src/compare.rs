@@ -519,9 +519,28 @@ mod tests {
 
     const H: &str = "schema,point_key,study,scene,scene_label,width,height,method,max_layers,adapter,backend,device_type,status,gpu_ms_median,gpu_ms_min,gpu_ms_max,rmse,image_file";
 
-    fn setup(name: &str) -> std::path::PathBuf {
-        let d = std::env::temp_dir().join(format!("mfx-compare-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
+    /// A temp folder removed when the test ends, pass or fail (derefs to its path).
+    struct Tmp(tempfile::TempDir);
+    impl std::ops::Deref for Tmp {
+        type Target = std::path::Path;
+        fn deref(&self) -> &std::path::Path {
+            self.0.path()
+        }
+    }
+    impl AsRef<std::path::Path> for Tmp {
+        fn as_ref(&self) -> &std::path::Path {
+            self.0.path()
+        }
+    }
+    fn tmp_dir(prefix: &str) -> Tmp {
+        Tmp(tempfile::Builder::new()
+            .prefix(&format!("{prefix}-"))
+            .tempdir()
+            .expect("a temp folder"))
+    }
+
+    fn setup(name: &str) -> Tmp {
+        let d = tmp_dir(&format!("mfx-compare-{name}"));
         std::fs::create_dir_all(d.join("images")).unwrap();
         std::fs::create_dir_all(d.join("report")).unwrap();
         let rows = [

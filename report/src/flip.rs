@@ -109,7 +109,11 @@ mod tests {
 
     #[test]
     fn without_worst_csv_one_line_and_with_it_three_images_per_row() {
-        let d = std::env::temp_dir().join(format!("mfx-flip-{}", std::process::id()));
+        let d_tmp = tempfile::Builder::new()
+            .prefix("mfx-flip-")
+            .tempdir()
+            .unwrap();
+        let d = d_tmp.path().to_path_buf();
         let _ = std::fs::remove_dir_all(&d);
         std::fs::create_dir_all(d.join("flip")).unwrap();
         let h = section(&d, &d.join("report")).unwrap().into_string();

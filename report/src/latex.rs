@@ -315,8 +315,8 @@ pub fn verdict_table(runs: &Runs) -> String {
 }
 
 /// `reproduction.tex`: the sources' figures beside ours, one table per papers file.
-pub fn reproduction_table(runs: &Runs) -> String {
-    let tables = crate::reproduction::tables(runs);
+pub fn reproduction_table(runs: &Runs, bands: &crate::reproduction::Bands) -> String {
+    let tables = crate::reproduction::tables(runs, bands);
     if tables.is_empty() {
         return empty("row of a suite a papers file points to");
     }
@@ -324,9 +324,9 @@ pub fn reproduction_table(runs: &Runs) -> String {
     for t in &tables {
         let _ = writeln!(out, "% {}", t.heading);
         let rows: Vec<Vec<String>> = t
-            .rows
+            .lines
             .iter()
-            .map(|r| r.iter().map(|c| tex(c)).collect())
+            .map(|l| l.cells.iter().map(|c| tex(c)).collect())
             .collect();
         out.push_str(&booktabs(
             "lllllllp{6cm}",
@@ -417,7 +417,7 @@ fn sample(numbers: &str, chart: Option<&str>) -> String {
 }
 
 /// Writes `out/latex/` (see the module notes); returns the folder.
-pub fn write(runs: &Runs, out: &Path) -> Result<PathBuf> {
+pub fn write(runs: &Runs, bands: &crate::reproduction::Bands, out: &Path) -> Result<PathBuf> {
     let dir = out.join("latex");
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     let numbers = numbers(runs);
@@ -436,7 +436,7 @@ pub fn write(runs: &Runs, out: &Path) -> Result<PathBuf> {
         ),
         ("numbers.tex", numbers),
         ("verdict.tex", verdict_table(runs)),
-        ("reproduction.tex", reproduction_table(runs)),
+        ("reproduction.tex", reproduction_table(runs, bands)),
         ("bounds.tex", bounds_table(runs)),
     ];
     for (name, text) in files {

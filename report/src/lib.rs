@@ -73,8 +73,9 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
     }
     // The sources' published figures beside ours (empty unless a seeds-* suite ran); its HTML
     // is reproduction.rs's own, escaped there.
-    extra.push(maud::PreEscaped(reproduction::section(&runs)));
-    let md = reproduction::markdown(&runs);
+    let bands = reproduction::Bands::for_run(dir)?;
+    extra.push(maud::PreEscaped(reproduction::section_with(&runs, &bands)));
+    let md = reproduction::markdown_with(&runs, &bands);
     if !md.is_empty() {
         let p = out.join("reproduction.md");
         std::fs::write(&p, md).with_context(|| format!("writing {}", p.display()))?;
@@ -87,7 +88,7 @@ pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
         std::fs::write(&p, md).with_context(|| format!("writing {}", p.display()))?;
     }
     // The run for a paper: numbers.tex, booktabs tables (the PDF charts sit beside the SVGs).
-    latex::write(&runs, &out)?;
+    latex::write(&runs, &bands, &out)?;
     extra.push(flip::section(dir, &out)?);
     let page = html::page(&runs, &sections, &extra);
     let path = out.join("index.html");

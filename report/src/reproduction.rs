@@ -1,31 +1,111 @@
 //! "Reproduction": the sources' published figures (`scenarios/papers/*.toml`) beside ours, read
 //! from the rows the papers files point to. One table per source: figure, paper value, the
-//! paper's ratio, ours (the measured ratio r = baseline / ours of the rule's column), and whether
-//! it holds by the declared rule; a figure that cannot be reproduced says why. Empty when the run
-//! holds no suite a papers file points to.
+//! paper's ratio, ours (the measured ratio r = baseline / ours of the rule's column, with its
+//! 95 % interval), and the verdict by the declared rule ([`papers::judge`]: an effect inside the
+//! point's noise band is no measurable effect, a sampled metric without an interval is not a
+//! hold, an order holds only whole). A figure whose faithful setup is not built says what it
+//! needs, and mfx's own variants follow it on rows of their own, never counted as its verdict.
+//! A figure that cannot be reproduced says why. Empty when the run holds no suite a papers file
+//! points to.
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write;
+use std::path::Path;
 
-use scenarios::papers::{self, Figure, PointRef};
+use scenarios::papers::{self, Fact, Figure, PointRef, Rule, RuleKind, Verdict};
+use schema::cols;
 
+use mfx_analysis::bands::Calibration;
 use crate::cells::esc;
 use crate::data::{Rec, Runs};
 
-/// The row a point names: same suite, method, scene label, resolution and axis values; an ok row
-/// first (a point measured twice, e.g. by two studies, reads the first ok one).
-fn find<'a>(runs: &'a Runs, p: &PointRef) -> Option<&'a Rec> {
+/// The noise band of a point: `mfx compare`'s SAME band, from a calibration where the run has
+/// one (`calibration.json` beside `runs.csv`, written by `mfx calibrate`), else the fixed ±2 %.
+#[derive(Default)]
+pub struct Bands {
+    calibration: Option<Calibration>,
+}
+
+impl Bands {
+    /// The fixed band for every point.
+    pub fn fixed() -> Bands {
+        Bands::default()
+    }
+    /// The run folder's `calibration.json` if there is one (an unreadable one is an error).
+    pub fn for_run(dir: &Path) -> anyhow::Result<Bands> {
+        let p = dir.join("calibration.json");
+        Ok(Bands {
+            calibration: if p.exists() {
+                Some(Calibration::load(&p)?)
+            } else {
+                None
+            },
+        })
+    }
+    /// The band of a row (by its point key).
+    pub fn of(&self, r: &Rec) -> f64 {
+        let floor = mfx_stats::VerdictOptions::default().noise_band;
+        match &self.calibration {
+            Some(c) => c.band_for(r.get(cols::POINT_KEY), floor).0,
+            None => floor,
+        }
+    }
+}
+
+/// What the rows say for a point.
+enum Found<'a> {
+    /// The row (the first ok one where the point was measured more than once).
+    One(&'a Rec),
+    None,
+    /// Rows of different points match: their keys.
+    Ambiguous(Vec<String>),
+}
+
+/// The axis names a point key lists (`study|scene|WxH|method|k=v,k=v`).
+fn key_axes(key: &str) -> impl Iterator<Item = &str> {
+    key.rsplit('|')
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .filter_map(|kv| kv.split_once('=').map(|(k, _)| k))
+}
+
+/// The rows a point names: same suite, method, scene label, resolution and axis values. Rows
+/// whose cells agree on every axis any of their keys lists are one point measured more than
+/// once (two study tables giving it differently); rows that disagree are different points.
+fn find<'a>(runs: &'a Runs, p: &PointRef) -> Found<'a> {
     let res = [p.resolution[0].to_string(), p.resolution[1].to_string()];
-    let matches = |r: &&Rec| {
-        r.get_name("suite") == p.suite
-            && r.get_name("method") == p.method
-            && r.get_name("scene_label") == p.scene
-            && r.get_name("width") == res[0]
-            && r.get_name("height") == res[1]
-            && p.axes.iter().all(|(k, v)| same(r.get_name(k), v))
+    let hits: Vec<&Rec> = runs
+        .rows
+        .iter()
+        .filter(|r| {
+            r.get(cols::SUITE) == p.suite
+                && r.get(cols::METHOD) == p.method
+                && r.get(cols::SCENE_LABEL) == p.scene
+                && r.get(cols::WIDTH) == res[0]
+                && r.get(cols::HEIGHT) == res[1]
+                && p.axes.iter().all(|(k, v)| same(r.get_name(k), v))
+        })
+        .collect();
+    let Some(first) = hits.first() else {
+        return Found::None;
     };
-    let mut hits = runs.rows.iter().filter(matches);
-    let first = hits.clone().next();
-    hits.find(|r| r.ok()).or(first)
+    let axes: BTreeSet<&str> = hits
+        .iter()
+        .flat_map(|r| key_axes(r.get(cols::POINT_KEY)))
+        .collect();
+    let identity =
+        |r: &Rec| -> Vec<String> { axes.iter().map(|a| r.get_name(a).to_string()).collect() };
+    let points: BTreeSet<Vec<String>> = hits.iter().map(|r| identity(r)).collect();
+    if points.len() > 1 {
+        let keys: BTreeSet<String> = hits
+            .iter()
+            .map(|r| r.get(cols::POINT_KEY).to_string())
+            .collect();
+        return Found::Ambiguous(keys.into_iter().collect());
+    }
+    let row = hits.iter().find(|r| r.ok()).unwrap_or(first);
+    Found::One(row)
 }
 
 /// A CSV cell equals a TOML value (numbers compared as numbers: "1" is 1.0).
@@ -51,23 +131,321 @@ fn num(x: f64) -> String {
     }
 }
 
-/// What the two rows' GPU times are made of, measured (their slowest pass and its share of
-/// the frame), for a figure ruled on a time: the reason a ratio holds or differs, from the run.
-fn measured(f: &Figure, rows: Option<(&Rec, &Rec)>) -> String {
-    let (Some(rule), Some((ro, rb))) = (&f.holds, rows) else {
-        return String::new();
+/// The pass times of a row (`pass_ms`), or of their intervals (`pass_ms_ci`: label → [lo, hi]).
+fn pass_json(r: &Rec, col: schema::Col) -> Option<serde_json::Map<String, serde_json::Value>> {
+    match serde_json::from_str(r.get(col)) {
+        Ok(serde_json::Value::Object(m)) => Some(m),
+        _ => None,
+    }
+}
+
+/// Columns whose value is exact for a build (errors against the reference, bytes, counts): a
+/// ratio of them needs no interval.
+const EXACT: &[schema::Col] = &[
+    cols::VIS_BLEED_MEAN,
+    cols::VIS_OVERSHADOW_MEAN,
+    cols::VIS_RMSE,
+    cols::VIS_BIAS,
+    cols::VIS_MAX_ABS_ERR,
+    cols::RMSE,
+    cols::BYTES_PER_PIXEL,
+    cols::BYTES_ALLOCATED,
+    cols::GEOMETRY_PASSES,
+    cols::COLLISION_RATE,
+    cols::OVERFLOW_RATE,
+];
+
+/// Rates computed as a count over the median GPU time: their interval is the time's, inverted.
+const PER_GPU_MS: &[schema::Col] = &[
+    cols::TRIANGLES_PER_S,
+    cols::VERTICES_PER_S,
+    cols::FRAGMENTS_PER_S,
+];
+
+/// One side's value and its 95 % interval (None: a sampled metric the row gives no interval
+/// for: CPU clocks, hazard rates of one capture, pass times without `pass_ms_ci`, the
+/// small-viewport time).
+struct Value {
+    v: f64,
+    interval: Option<(f64, f64)>,
+}
+
+/// A row's value of a column or pass: `Err` says what the row lacks.
+fn value(r: &Rec, col: &str, pass: Option<&str>) -> Result<Value, String> {
+    if let Some(p) = pass {
+        let v = pass_json(r, cols::PASS_MS)
+            .and_then(|m| m.get(p)?.as_f64())
+            .ok_or_else(|| format!("the rows have no pass '{p}'"))?;
+        let interval = pass_json(r, cols::PASS_MS_CI).and_then(|m| {
+            let a = m.get(p)?.as_array()?;
+            Some((a.first()?.as_f64()?, a.get(1)?.as_f64()?))
+        });
+        return Ok(Value { v, interval });
+    }
+    let v = r
+        .f_name(col)
+        .ok_or_else(|| format!("no {col} in the rows"))?;
+    let ci = || Some((r.f(cols::GPU_MS_CI_LO)?, r.f(cols::GPU_MS_CI_HI)?));
+    let med = r.f(cols::GPU_MS_MEDIAN);
+    let interval = if col == cols::GPU_MS_MEDIAN.name {
+        ci()
+    } else if PER_GPU_MS.iter().any(|c| c.name == col) {
+        ci().zip(med)
+            .filter(|((lo, _), m)| *lo > 0.0 && *m > 0.0)
+            .map(|((lo, hi), m)| (v * m / hi, v * m / lo))
+    } else if EXACT.iter().any(|c| c.name == col) {
+        Some((v, v))
+    } else {
+        // A sampled metric whose row carries its own interval (`<col>_ci_lo`, `<col>_ci_hi`):
+        // shade_ns_per_light_quad over repeated phase-clock frames, hazard_rate over repeated
+        // captures.
+        r.f_name(&format!("{col}_ci_lo"))
+            .zip(r.f_name(&format!("{col}_ci_hi")))
     };
-    if !rule.column().ends_with("_ms_median") {
+    Ok(Value { v, interval })
+}
+
+/// What one comparison says.
+#[derive(Clone, Debug, PartialEq)]
+enum Outcome {
+    /// A ruled verdict and the cell "r = … (interval)".
+    Ruled(Verdict, String),
+    /// The rows are not in this run: why (the suite that makes them).
+    NotRun(String),
+    /// The rows exist but cannot be compared (skipped, failed, ambiguous, a missing column).
+    NotMeasured(String),
+}
+
+/// The rows of a figure's or variant's points, each found or not.
+fn rows_of<'a>(runs: &'a Runs, points: &[&PointRef]) -> Result<Vec<&'a Rec>, Outcome> {
+    let mut out = Vec::new();
+    for p in points {
+        match find(runs, p) {
+            Found::One(r) => out.push(r),
+            Found::None => return Err(Outcome::NotRun(format!("not run (suite {})", p.suite))),
+            Found::Ambiguous(keys) => {
+                return Err(Outcome::NotMeasured(format!(
+                    "ambiguous: {} points match ({})",
+                    keys.len(),
+                    keys.join("; ")
+                )))
+            }
+        }
+    }
+    for r in &out {
+        if !r.ok() {
+            return Err(Outcome::NotMeasured(format!(
+                "{}: {}",
+                r.get(cols::STATUS),
+                r.get(cols::REASON)
+            )));
+        }
+    }
+    Ok(out)
+}
+
+/// A measured ratio: r = baseline / ours, its 95 % interval (None: a side has none), and the
+/// pair's noise band (the wider of the two points').
+struct Ratio {
+    r: f64,
+    interval: Option<(f64, f64)>,
+    band: f64,
+}
+
+/// The ratio of the rule's column (or pass) between two rows.
+fn ratio(rule: &Rule, ro: &Rec, rb: &Rec, bands: &Bands) -> Result<Ratio, String> {
+    let o = value(ro, rule.column(), rule.pass.as_deref())?;
+    let b = value(rb, rule.baseline_column(), rule.baseline_pass())?;
+    let r = b.v / o.v;
+    let interval = match (o.interval, b.interval) {
+        (Some((olo, ohi)), Some((blo, bhi))) if olo > 0.0 && ohi >= olo && bhi >= blo => {
+            Some((blo / ohi, bhi / olo))
+        }
+        _ => None,
+    };
+    Ok(Ratio {
+        r,
+        interval,
+        band: bands.of(ro).max(bands.of(rb)),
+    })
+}
+
+/// Rules the points (`[ours, baseline]`, or an order) by `rule`.
+fn rule_points(
+    runs: &Runs,
+    bands: &Bands,
+    rule: &Rule,
+    paper: Option<f64>,
+    points: &[&PointRef],
+) -> Outcome {
+    if points.len() < 2 {
+        return Outcome::NotMeasured("no points declared".into());
+    }
+    let rows = match rows_of(runs, points) {
+        Ok(r) => r,
+        Err(o) => return o,
+    };
+    let mut verdicts = Vec::new();
+    let mut cells = Vec::new();
+    for pair in rows.windows(2) {
+        let Ratio { r, interval, band } = match ratio(rule, pair[0], pair[1], bands) {
+            Ok(x) => x,
+            Err(why) => {
+                let suite = &points[0].suite;
+                return if why.starts_with("the rows have no pass") {
+                    Outcome::NotRun(format!("not run: {why} (suite {suite})"))
+                } else {
+                    Outcome::NotMeasured(why)
+                };
+            }
+        };
+        let Some(v) = papers::judge(rule, paper, r, interval, band) else {
+            return Outcome::NotMeasured(format!("r = {r} cannot be ruled"));
+        };
+        verdicts.push(v);
+        cells.push(match interval {
+            Some((lo, hi)) if lo != hi => format!("r = {} ({}–{})", num(r), num(lo), num(hi)),
+            Some(_) => format!("r = {} (exact)", num(r)),
+            None => format!("r = {} (no interval)", num(r)),
+        });
+    }
+    let v = if rule.rule == RuleKind::Order {
+        papers::judge_order(&verdicts)
+    } else {
+        verdicts.first().copied()
+    };
+    match v {
+        Some(v) => Outcome::Ruled(v, cells.join("; ")),
+        None => Outcome::NotMeasured("nothing to rule".into()),
+    }
+}
+
+/// A figure's verdict, for its row and for the tally.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Kind {
+    Ruled(Verdict),
+    /// The faithful setup is not built (`needs`).
+    NotBuilt,
+    NotRun,
+    /// Skipped, failed, ambiguous or missing a column.
+    NotMeasured,
+    NotReproducible,
+}
+
+impl Kind {
+    pub fn word(self) -> &'static str {
+        match self {
+            Kind::Ruled(v) => v.word(),
+            Kind::NotBuilt => "not built",
+            Kind::NotRun => "not run",
+            Kind::NotMeasured => "not measured",
+            Kind::NotReproducible => "not reproducible",
+        }
+    }
+}
+
+/// One table row's cells (row, figure, setup, paper, paper ratio, ours, verdict, measured and
+/// why) and, for a figure's own row, its kind.
+pub(crate) struct Line {
+    pub(crate) cells: [String; 8],
+    pub(crate) kind: Option<Kind>,
+}
+
+fn kind_of(o: &Outcome) -> (Kind, String, String) {
+    match o {
+        Outcome::Ruled(v, cell) => (Kind::Ruled(*v), cell.clone(), v.word().to_string()),
+        Outcome::NotRun(why) => (Kind::NotRun, "—".into(), why.clone()),
+        Outcome::NotMeasured(why) => (Kind::NotMeasured, "—".into(), why.clone()),
+    }
+}
+
+/// The named rows of a figure (`ours`, `variant:baseline`, …) found in the run.
+fn named_rows<'a>(runs: &'a Runs, fig: &Figure) -> BTreeMap<String, &'a Rec> {
+    fig.named_points()
+        .into_iter()
+        .filter_map(|(n, p)| match find(runs, p) {
+            Found::One(r) => Some((n, r)),
+            _ => None,
+        })
+        .collect()
+}
+
+/// A fact's value from the named rows (`Err`: what is missing).
+pub(crate) fn fact_value(
+    fig: &Figure,
+    rows: &BTreeMap<String, &Rec>,
+    name: &str,
+    depth: usize,
+) -> Result<f64, String> {
+    let f: &Fact = fig
+        .facts
+        .get(name)
+        .ok_or_else(|| format!("no fact '{name}'"))?;
+    let r = rows
+        .get(&f.row)
+        .ok_or_else(|| format!("facts.{name}: row '{}' is not in the run", f.row))?;
+    let mut v = match (&f.column, &f.pass) {
+        (Some(c), _) => r
+            .f_name(c)
+            .ok_or_else(|| format!("facts.{name}: no {c} in row '{}'", f.row))?,
+        (None, Some(p)) => pass_json(r, cols::PASS_MS)
+            .and_then(|m| m.get(p)?.as_f64())
+            .ok_or_else(|| format!("facts.{name}: no pass '{p}' in row '{}'", f.row))?,
+        (None, None) => return Err(format!("facts.{name}: no column or pass")),
+    };
+    if let Some(per) = &f.per {
+        v /= r
+            .f_name(per)
+            .ok_or_else(|| format!("facts.{name}: no {per} in row '{}'", f.row))?;
+    }
+    if let Some(o) = &f.over {
+        if depth > 8 {
+            return Err(format!("facts.{name}: `over` loops"));
+        }
+        v /= fact_value(fig, rows, o, depth + 1)?;
+    }
+    if f.percent {
+        v *= 100.0;
+    }
+    Ok(v)
+}
+
+/// `why_differs` with its facts filled from the rows (a fact the rows lack reads "?").
+fn why_text(fig: &Figure, rows: &BTreeMap<String, &Rec>) -> Option<String> {
+    let mut text = fig.why_differs.clone()?;
+    for name in fig.placeholders() {
+        let shown = match (fact_value(fig, rows, name, 0), fig.facts.get(name)) {
+            (Ok(v), Some(f)) => format!(
+                "{}{}{}",
+                // A count (passes, bytes) reads as one.
+                if v.fract() == 0.0 {
+                    format!("{v:.0}")
+                } else {
+                    num(v)
+                },
+                if f.percent { " %" } else { "" },
+                f.unit.as_deref().unwrap_or("")
+            ),
+            _ => "?".into(),
+        };
+        text = text.replacen(&format!("{{{name}}}"), &shown, 1);
+    }
+    Some(text)
+}
+
+/// What two rows' GPU times are made of (their slowest pass and its share of the frame).
+fn measured(rule: &Rule, ro: &Rec, rb: &Rec) -> String {
+    if !rule.column().ends_with("_ms_median") && rule.pass.is_none() {
         return String::new();
     }
     let one = |r: &Rec| -> Option<String> {
         let (pass, ms, share) = crate::bounds::slowest_pass(r)?;
         Some(format!(
             "{}: {} {} of {} ms ({} %)",
-            r.get_name("method"),
+            r.get(cols::METHOD),
             pass,
             num(ms),
-            num(r.f_name(rule.column())?),
+            num(r.f(cols::GPU_MS_MEDIAN)?),
             (100.0 * share).round()
         ))
     };
@@ -77,157 +455,12 @@ fn measured(f: &Figure, rows: Option<(&Rec, &Rec)>) -> String {
     }
 }
 
-/// The measured passes, then the figure's declared `why_differs` where the verdict is "differs"
-/// or "within noise" (a figure that holds needs no excuse).
-fn measured_and_why(f: &Figure, rows: Option<(&Rec, &Rec)>, verdict: &str) -> String {
-    let m = measured(f, rows);
-    let differs = verdict.starts_with("differs") || verdict.starts_with("within noise");
-    match (&f.why_differs, differs) {
-        (Some(why), true) if m.is_empty() => format!("why: {why}"),
-        (Some(why), true) => format!("{m}. Why: {why}"),
-        _ => m,
-    }
-}
-
-/// The rows of a figure's point and its baseline, where the run holds both.
-fn rows_of<'a>(runs: &'a Runs, f: &Figure) -> Option<(&'a Rec, &'a Rec)> {
-    Some((
-        find(runs, f.ours.as_ref()?)?,
-        find(runs, f.baseline.as_ref()?)?,
-    ))
-}
-
-/// What the run says for one figure (`rows`: [`rows_of`]): (ours, verdict).
-fn ours(f: &Figure, rows: Option<(&Rec, &Rec)>) -> (String, String) {
-    if !f.reproducible {
-        return (
-            "—".into(),
-            format!("not reproducible: {}", f.reason.as_deref().unwrap_or("")),
-        );
-    }
-    let (Some(o), Some(_), Some(rule)) = (&f.ours, &f.baseline, &f.holds) else {
-        return ("—".into(), "no point declared".into());
-    };
-    let Some((ro, rb)) = rows else {
-        return ("—".into(), format!("not in this run (suite {})", o.suite));
-    };
-    for r in [ro, rb] {
-        if !r.ok() {
-            return (
-                "—".into(),
-                format!("{}: {}", r.get_name("status"), r.get_name("reason")),
-            );
-        }
-    }
-    let (Some(vo), Some(vb)) = (ro.f_name(rule.column()), rb.f_name(rule.baseline_column())) else {
-        return ("—".into(), format!("no {} in the rows", rule.column()));
-    };
-    let r = vb / vo;
-    let interval = ratio_interval(rule.column(), rule.baseline_column(), ro, rb);
-    let verdict = match interval {
-        Some((lo, hi)) => verdict_over(rule, lo, hi, f.ratio),
-        None => match rule.holds(r, f.ratio) {
-            Some(true) => "holds",
-            Some(false) => "differs",
-            None => "undecided",
-        },
-    };
-    let ours = match interval {
-        Some((lo, hi)) => format!("r = {} ({}–{})", num(r), num(lo), num(hi)),
-        None => format!("r = {}", num(r)),
-    };
-    (ours, format!("{verdict} ({})", rule.describe(f.ratio)))
-}
-
-/// The 95 % interval of r = baseline ÷ ours where both columns are median GPU times with their
-/// bootstrap intervals (the other columns have none): r's ends pair one row's low end with the
-/// other's high end.
-fn ratio_interval(col: &str, base_col: &str, ro: &Rec, rb: &Rec) -> Option<(f64, f64)> {
-    if col != "gpu_ms_median" || base_col != "gpu_ms_median" {
-        return None;
-    }
-    let (olo, ohi) = (ro.f_name("gpu_ms_ci_lo")?, ro.f_name("gpu_ms_ci_hi")?);
-    let (blo, bhi) = (rb.f_name("gpu_ms_ci_lo")?, rb.f_name("gpu_ms_ci_hi")?);
-    (olo > 0.0 && ohi >= olo && bhi >= blo).then(|| (blo / ohi, bhi / olo))
-}
-
-/// A rule's verdict over an interval of r: "holds" or "differs" only when the whole interval
-/// does; one that straddles the rule's boundary is "within noise" (a ratio of 1.00 against
-/// "r > 1" flipped between two H200 runs of the same build before this).
-fn verdict_over(rule: &papers::Rule, lo: f64, hi: f64, paper: Option<f64>) -> &'static str {
-    let outside_within = match (rule.rule, paper, rule.factor) {
-        (papers::RuleKind::RatioWithin, Some(p), Some(f)) => Some(hi < p / f || lo > p * f),
-        _ => None,
-    };
-    match (rule.holds(lo, paper), rule.holds(hi, paper), outside_within) {
-        (Some(true), Some(true), _) => "holds",
-        (_, _, Some(true)) => "differs",
-        (Some(false), Some(false), None) => "differs",
-        (None, _, _) | (_, None, _) => "undecided",
-        _ => "within noise",
-    }
-}
-
-/// One source's table: its heading, its papers file's name, and a row of cells per figure
-/// (row, figure, setup, paper, paper ratio, ours, verdict, measured and why).
-pub(crate) struct Table {
-    pub(crate) heading: String,
-    pub(crate) name: String,
-    pub(crate) rows: Vec<[String; 8]>,
-}
-
-/// The columns of every table.
-pub(crate) const HEADER: [&str; 8] = [
-    "row",
-    "figure",
-    "setup",
-    "paper",
-    "paper ratio",
-    "ours",
-    "holds / differs",
-    "measured: slowest pass (ours; baseline), and why ours differs",
-];
-
-/// The note under the heading.
-pub(crate) const NOTE: &str = "r = baseline ÷ ours of the rule's column (for times, ours' speed-up); the rule is declared in scenarios/papers/*.toml.";
-
-/// Every source's table, or none when no row of `runs` is from a suite a papers file points to.
-pub(crate) fn tables(runs: &Runs) -> Vec<Table> {
-    let files: Vec<(&str, papers::PapersFile)> = papers::BUILTIN
-        .iter()
-        .filter_map(|(n, t)| papers::parse(t).ok().map(|f| (*n, f)))
-        .collect();
-    let suites: Vec<&str> = files
-        .iter()
-        .flat_map(|(_, f)| f.figures.iter())
-        .flat_map(|f| f.ours.iter().chain(f.baseline.iter()))
-        .map(|p| p.suite.as_str())
-        .collect();
-    if !runs
-        .rows
-        .iter()
-        .any(|r| suites.contains(&r.get_name("suite")))
-    {
-        return Vec::new();
-    }
-    files
-        .iter()
-        .map(|(name, f)| Table {
-            heading: format!(
-                "{} — {} ({})",
-                f.source.title, f.source.authors, f.source.venue
-            ),
-            name: name.to_string(),
-            rows: f.figures.iter().map(|fig| cells(runs, fig)).collect(),
-        })
-        .collect()
-}
-
-/// One figure's cells.
-fn cells(runs: &Runs, fig: &Figure) -> [String; 8] {
+/// A figure's rows: its own, then one per variant.
+fn lines(runs: &Runs, bands: &Bands, fig: &Figure) -> Vec<Line> {
     let paper = match (fig.value, &fig.against, &fig.claim) {
         (Some(v), Some(a), _) => format!("{} {} vs {}", num(v), fig.metric, a),
-        (Some(v), None, _) => format!("{} {}", num(v), fig.metric),
+        (Some(v), None, Some(c)) => format!("{} {}: {}", num(v), fig.metric, c),
+        (Some(v), None, None) => format!("{} {}", num(v), fig.metric),
         (None, _, Some(c)) => c.clone(),
         _ => fig.metric.clone(),
     };
@@ -247,30 +480,197 @@ fn cells(runs: &Runs, fig: &Figure) -> [String; 8] {
             .map(|l| format!(", {l}"))
             .unwrap_or_default()
     );
-    let rows = rows_of(runs, fig);
-    let (o, verdict) = ours(fig, rows);
-    let why = measured_and_why(fig, rows, &verdict);
-    [
-        fig.row.to_string(),
-        format!("{} {} ({})", fig.table, fig.section, fig.id),
-        setup,
-        paper,
-        fig.ratio.map(num).unwrap_or_else(|| "—".into()),
-        o,
-        verdict,
-        why,
-    ]
+    let rows = named_rows(runs, fig);
+    let (kind, ours, verdict, why) = if !fig.reproducible {
+        (
+            Kind::NotReproducible,
+            "—".to_string(),
+            format!("not reproducible: {}", fig.reason.as_deref().unwrap_or("")),
+            String::new(),
+        )
+    } else if let (Some(n), Some(rule)) = (&fig.needs, &fig.holds) {
+        let why = why_text(fig, &rows)
+            .map(|w| format!(" Measured in mfx's variant: {w}"))
+            .unwrap_or_default();
+        (
+            Kind::NotBuilt,
+            "—".to_string(),
+            format!("not built ({})", rule.describe(fig.ratio)),
+            format!("needs {}: {}{why}", n.variant, n.why),
+        )
+    } else if let Some(rule) = &fig.holds {
+        let o = rule_points(runs, bands, rule, fig.ratio, &fig.points());
+        let (kind, cell, word) = kind_of(&o);
+        let verdict = match kind {
+            Kind::Ruled(_) => format!("{word} ({})", rule.describe(fig.ratio)),
+            _ => word,
+        };
+        let mut why = match (fig.ours.as_ref(), fig.baseline.as_ref()) {
+            (Some(_), Some(_)) if matches!(kind, Kind::Ruled(_)) => rows
+                .get("ours")
+                .zip(rows.get("baseline"))
+                .map(|(a, b)| measured(rule, a, b))
+                .unwrap_or_default(),
+            _ => String::new(),
+        };
+        if kind != Kind::Ruled(Verdict::Holds) {
+            if let Some(w) = why_text(fig, &rows) {
+                why = if why.is_empty() {
+                    format!("why: {w}")
+                } else {
+                    format!("{why}. Why: {w}")
+                };
+            }
+        }
+        (kind, cell, verdict, why)
+    } else {
+        (
+            Kind::NotMeasured,
+            "—".into(),
+            "no rule declared".into(),
+            String::new(),
+        )
+    };
+    let mut out = vec![Line {
+        cells: [
+            fig.row.to_string(),
+            format!("{} {} ({})", fig.table, fig.section, fig.id),
+            setup,
+            paper,
+            fig.ratio.map(num).unwrap_or_else(|| "—".into()),
+            ours,
+            verdict,
+            why,
+        ],
+        kind: Some(kind),
+    }];
+    for v in &fig.variants {
+        let Some(rule) = v.holds.as_ref().or(fig.holds.as_ref()) else {
+            continue;
+        };
+        let o = rule_points(runs, bands, rule, fig.ratio, &v.points());
+        let (kind, cell, word) = kind_of(&o);
+        let verdict = match kind {
+            Kind::Ruled(_) => format!("{word} ({})", rule.describe(fig.ratio)),
+            _ => word,
+        };
+        let ours_row = rows.get(&format!("{}:ours", v.name));
+        let measured = match (ours_row, rows.get(&format!("{}:baseline", v.name))) {
+            (Some(a), Some(b)) if matches!(kind, Kind::Ruled(_)) => measured(rule, a, b),
+            _ => String::new(),
+        };
+        out.push(Line {
+            cells: [
+                fig.row.to_string(),
+                format!("↳ {} variant '{}': {}", fig.id, v.name, v.what),
+                String::new(),
+                String::new(),
+                String::new(),
+                cell,
+                format!("mfx's variant {verdict}"),
+                measured,
+            ],
+            kind: None,
+        });
+    }
+    out
+}
+
+/// One source's table: its heading, its papers file's name, and its lines.
+pub(crate) struct Table {
+    pub(crate) heading: String,
+    pub(crate) name: String,
+    pub(crate) lines: Vec<Line>,
+}
+
+/// The columns of every table.
+pub(crate) const HEADER: [&str; 8] = [
+    "row",
+    "figure",
+    "setup",
+    "paper",
+    "paper ratio",
+    "ours",
+    "verdict",
+    "measured: slowest pass (ours; baseline), and why ours differs",
+];
+
+/// The note under the heading.
+pub(crate) const NOTE: &str = "r = baseline ÷ ours of the rule's column (for times, ours' speed-up), with its 95 % interval; the rule is declared in scenarios/papers/*.toml. An effect within a point's noise band (mfx compare's SAME band: calibrated, else ±2 %) is no measurable effect, never a hold; a hold needs the whole interval to pass the rule; a sampled metric whose rows carry no interval is not a hold; an order holds only whole. A figure whose faithful setup mfx does not build yet is 'not built' and says what it needs; mfx's own variants follow it (↳) and are not counted.";
+
+/// Every source's table, or none when no row of `runs` is from a suite a papers file points to.
+pub(crate) fn tables(runs: &Runs, bands: &Bands) -> Vec<Table> {
+    let files = papers::builtin();
+    let suites: BTreeSet<&str> = files
+        .iter()
+        .flat_map(|(_, f)| f.figures.iter())
+        .flat_map(|f| {
+            f.named_points()
+                .into_iter()
+                .map(|(_, p)| p.suite.as_str())
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    if !runs
+        .rows
+        .iter()
+        .any(|r| suites.contains(r.get(cols::SUITE)))
+    {
+        return Vec::new();
+    }
+    files
+        .iter()
+        .map(|(name, f)| Table {
+            heading: format!(
+                "{} — {} ({})",
+                f.source.title, f.source.authors, f.source.venue
+            ),
+            name: name.to_string(),
+            lines: f
+                .figures
+                .iter()
+                .flat_map(|fig| lines(runs, bands, fig))
+                .collect(),
+        })
+        .collect()
+}
+
+/// The count of figures per verdict (figures' own rows only, never their variants).
+fn tally_of(tables: &[Table]) -> BTreeMap<Kind, usize> {
+    let mut t = BTreeMap::new();
+    for k in tables.iter().flat_map(|t| &t.lines).filter_map(|l| l.kind) {
+        *t.entry(k).or_insert(0) += 1;
+    }
+    t
+}
+
+/// The tally as one sentence ("67 figures: 5 hold, …").
+fn tally_text(t: &BTreeMap<Kind, usize>) -> String {
+    let total: usize = t.values().sum();
+    let parts: Vec<String> = t.iter().map(|(k, n)| format!("{n} {}", k.word())).collect();
+    format!("{total} figures: {}.", parts.join(", "))
+}
+
+/// The verdict counts of a run's Reproduction tables (empty when it has none).
+pub fn tally(runs: &Runs) -> BTreeMap<Kind, usize> {
+    tally_of(&tables(runs, &Bands::fixed()))
+}
+
+/// The section's HTML with the fixed band, or "" (see [`section_with`]).
+pub fn section(runs: &Runs) -> String {
+    section_with(runs, &Bands::fixed())
 }
 
 /// The section's HTML, or "" when no row of `runs` is from a suite a papers file points to.
-pub fn section(runs: &Runs) -> String {
-    let tables = tables(runs);
+pub fn section_with(runs: &Runs, bands: &Bands) -> String {
+    let tables = tables(runs, bands);
     if tables.is_empty() {
         return String::new();
     }
     let mut h = format!(
-        "<h2 id=\"reproduction\">Reproduction: the sources' published figures beside ours</h2><p class=\"note\">{}</p>",
-        esc(NOTE)
+        "<h2 id=\"reproduction\">Reproduction: the sources' published figures beside ours</h2><p class=\"note\">{}</p><p>{}</p>",
+        esc(NOTE),
+        esc(&tally_text(&tally_of(&tables)))
     );
     for t in &tables {
         let _ = write!(
@@ -283,9 +683,13 @@ pub fn section(runs: &Runs) -> String {
             let _ = write!(h, "<th>{}</th>", esc(c));
         }
         h.push_str("</tr>");
-        for r in &t.rows {
-            h.push_str("<tr>");
-            for c in r {
+        for l in &t.lines {
+            h.push_str(if l.kind.is_some() {
+                "<tr>"
+            } else {
+                "<tr class=\"variant\">"
+            });
+            for c in &l.cells {
                 let _ = write!(h, "<td>{}</td>", esc(c));
             }
             h.push_str("</tr>");
@@ -295,20 +699,28 @@ pub fn section(runs: &Runs) -> String {
     h
 }
 
-/// The same tables as markdown (`reproduction.md` beside the report, for a RUN.md), or "".
+/// The markdown with the fixed band, or "" (see [`markdown_with`]).
 pub fn markdown(runs: &Runs) -> String {
-    let tables = tables(runs);
+    markdown_with(runs, &Bands::fixed())
+}
+
+/// The same tables as markdown (`reproduction.md` beside the report, for a RUN.md), or "".
+pub fn markdown_with(runs: &Runs, bands: &Bands) -> String {
+    let tables = tables(runs, bands);
     if tables.is_empty() {
         return String::new();
     }
     let cell = |c: &str| c.replace('|', "\\|").replace('\n', " ");
-    let mut m = format!("### Reproduction: the sources' published figures beside ours\n\n{NOTE}\n");
+    let mut m = format!(
+        "### Reproduction: the sources' published figures beside ours\n\n{NOTE}\n\n{}\n",
+        tally_text(&tally_of(&tables))
+    );
     for t in &tables {
         let _ = write!(m, "\n#### {}\n\n| {} |\n|", t.heading, HEADER.join(" | "));
         m.push_str(&"---|".repeat(HEADER.len()));
         m.push('\n');
-        for r in &t.rows {
-            let row: Vec<String> = r.iter().map(|c| cell(c)).collect();
+        for l in &t.lines {
+            let row: Vec<String> = l.cells.iter().map(|c| cell(c)).collect();
             let _ = writeln!(m, "| {} |", row.join(" | "));
         }
     }
@@ -316,211 +728,4 @@ pub fn markdown(runs: &Runs) -> String {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use schema::Status;
-
-    const D: &str = "obj(path=models/dragon_vrip.ply.gz)";
-
-    fn rec(method: &str, axes: &[(&str, &str)], ms: &str, status: Status) -> Rec {
-        let mut m = std::collections::BTreeMap::new();
-        for (k, v) in [
-            ("suite", "seeds-buckets"),
-            ("method", method),
-            ("scene_label", D),
-            ("width", "512"),
-            ("height", "512"),
-            ("status", status.name()),
-            ("gpu_ms_median", ms),
-            (
-                "reason",
-                if status == Status::Ok {
-                    ""
-                } else {
-                    "scene: model file 'models/dragon_vrip.ply.gz' not found: fetch it with `bash scripts/fetch-dragon.sh`"
-                },
-            ),
-        ] {
-            m.insert(k.to_string(), v.to_string());
-        }
-        for (k, v) in axes {
-            m.insert(k.to_string(), v.to_string());
-        }
-        Rec(m)
-    }
-
-    fn runs(rows: Vec<Rec>) -> Runs {
-        Runs {
-            header: Vec::new(),
-            rows,
-            sources: Vec::new(),
-        }
-    }
-
-    #[test]
-    fn each_figure_gets_ours_the_ratio_and_the_verdict_of_its_rule() {
-        let r = runs(vec![
-            rec("depth_peel", &[("max_layers", "256")], "40.0", Status::Ok),
-            // 40 / 5 = 8: within 2× of 10.7 (holds).
-            rec(
-                "bdp",
-                &[("bucket_count", "16"), ("bucket_pairing", "paired")],
-                "5.0",
-                Status::Ok,
-            ),
-            // 40 / 20 = 2: not within 2× of 5.3 (differs).
-            rec("bdp2", &[("bucket_count", "32")], "20.0", Status::Ok),
-        ]);
-        let h = section(&r);
-        let row = |id: &str| {
-            let i = h
-                .find(&format!("({id})"))
-                .unwrap_or_else(|| panic!("{id} in {h}"));
-            h[i..].split("</tr>").next().unwrap().to_string()
-        };
-        assert!(
-            row("fig1.2-bdp").contains("r = 8.00") && row("fig1.2-bdp").contains("holds"),
-            "{}",
-            row("fig1.2-bdp")
-        );
-        assert!(row("fig1.2-bdp2").contains("r = 2.00") && row("fig1.2-bdp2").contains("differs"));
-        // bdp over bdp2: 20 / 5 = 4 > 1.
-        assert!(
-            row("fig1.2-bdp-over-bdp2").contains("r = 4.00")
-                && row("fig1.2-bdp-over-bdp2").contains("holds")
-        );
-        assert!(row("fig1.2-adp").contains("not in this run"));
-        assert!(row("fig1.4-adp-fresnel").contains("not reproducible: An image only"));
-        // Without pass times there is nothing measured to say; with them, each side's slowest pass.
-        assert!(
-            !row("fig1.2-bdp2").contains("slowest"),
-            "{}",
-            row("fig1.2-bdp2")
-        );
-        let mut timed = r.clone();
-        for x in &mut timed.rows {
-            let passes = match x.get_name("method") {
-                "depth_peel" => r#"{"peel": 36.0, "composite": 4.0}"#,
-                _ => r#"{"route": 18.0, "resolve": 2.0}"#,
-            };
-            x.0.insert("pass_ms".into(), passes.into());
-        }
-        let h = section(&timed);
-        let i = h.find("(fig1.2-bdp2)").unwrap();
-        let row = h[i..].split("</tr>").next().unwrap();
-        assert!(
-            row.contains("ours bdp2: route 18.00 of 20.00 ms (90 %); baseline depth_peel: peel 36.00 of 40.00 ms (90 %)"),
-            "{row}"
-        );
-        // Every source has its table, every figure its row.
-        for (name, text) in papers::BUILTIN {
-            assert!(h.contains(&format!("id=\"repro-{name}\"")), "{name}");
-            for fig in papers::parse(text).unwrap().figures {
-                assert!(h.contains(&format!("({})", fig.id)), "{}", fig.id);
-            }
-        }
-    }
-
-    #[test]
-    fn a_ratio_whose_interval_straddles_the_rule_is_within_noise_not_a_verdict() {
-        // fig1.2-bdp-over-bdp2 rules r > 1 on bdp2 ÷ bdp. Medians 10.0 vs 9.9 (r = 1.01) whose
-        // intervals overlap: within noise; 10.0 vs 8.0 with tight intervals: holds.
-        let with_ci = |method: &str, axes: &[(&str, &str)], ms: &str, lo: &str, hi: &str| {
-            let mut r = rec(method, axes, ms, Status::Ok);
-            r.0.insert("gpu_ms_ci_lo".into(), lo.into());
-            r.0.insert("gpu_ms_ci_hi".into(), hi.into());
-            r
-        };
-        let bdp = [("bucket_count", "16"), ("bucket_pairing", "paired")];
-        let bdp2 = [("bucket_count", "32")];
-        let row_of = |h: &str| {
-            let at = h.find("(fig1.2-bdp-over-bdp2)").unwrap();
-            h[at..at + h[at..].find("</tr>").unwrap()].to_string()
-        };
-        let close = section(&runs(vec![
-            with_ci("bdp", &bdp, "9.9", "9.7", "10.1"),
-            with_ci("bdp2", &bdp2, "10.0", "9.8", "10.2"),
-        ]));
-        let row = row_of(&close);
-        assert!(row.contains("within noise (r &gt; 1)"), "{row}");
-        assert!(row.contains("r = 1.01 (0.97–1.05)"), "{row}");
-        let apart = section(&runs(vec![
-            with_ci("bdp", &bdp, "8.0", "7.9", "8.1"),
-            with_ci("bdp2", &bdp2, "10.0", "9.9", "10.1"),
-        ]));
-        assert!(
-            row_of(&apart).contains("holds (r &gt; 1)"),
-            "{}",
-            row_of(&apart)
-        );
-    }
-
-    #[test]
-    fn a_figure_that_differs_shows_why_and_one_that_holds_does_not() {
-        // fig1.2-bdp declares why_differs: r = 40 / 20 = 2 is not within 2× of 10.7 (differs),
-        // r = 40 / 5 = 8 is (holds).
-        let row = |bdp_ms: &str| {
-            let h = section(&runs(vec![
-                rec("depth_peel", &[("max_layers", "256")], "40.0", Status::Ok),
-                rec(
-                    "bdp",
-                    &[("bucket_count", "16"), ("bucket_pairing", "paired")],
-                    bdp_ms,
-                    Status::Ok,
-                ),
-            ]));
-            let at = h.find("(fig1.2-bdp)").unwrap();
-            h[at..at + h[at..].find("</tr>").unwrap()].to_string()
-        };
-        assert!(
-            row("20.0").contains("differs") && row("20.0").contains("why: "),
-            "{}",
-            row("20.0")
-        );
-        assert!(
-            row("5.0").contains("holds") && !row("5.0").contains("why"),
-            "{}",
-            row("5.0")
-        );
-    }
-
-    #[test]
-    fn the_markdown_has_the_html_tables_rows() {
-        let r = runs(vec![
-            rec("depth_peel", &[("max_layers", "256")], "40.0", Status::Ok),
-            rec("bdp2", &[("bucket_count", "32")], "20.0", Status::Ok),
-        ]);
-        let (h, m) = (section(&r), markdown(&r));
-        let rows = |text: &str, start: &str| text.matches(start).count();
-        assert_eq!(
-            rows(&h, "<tr><td>"),
-            rows(&m, "\n| ") - 5,
-            "one markdown row per figure (plus 5 header rows)"
-        );
-        assert!(
-            m.contains("| r = 2.00 | differs (r within 2× of 5.3) |"),
-            "{m}"
-        );
-        assert_eq!(markdown(&runs(vec![])), "");
-    }
-
-    #[test]
-    fn a_skipped_point_shows_its_reason_and_a_run_of_other_suites_has_no_section() {
-        let r = runs(vec![
-            rec("depth_peel", &[("max_layers", "256")], "", Status::Skipped),
-            rec(
-                "bdp",
-                &[("bucket_count", "16"), ("bucket_pairing", "paired")],
-                "",
-                Status::Skipped,
-            ),
-        ]);
-        assert!(
-            section(&r).contains("skipped: scene: model file"),
-            "fetch reason shown"
-        );
-        let mut other = rec("bdp", &[], "1.0", Status::Ok);
-        other.0.insert("suite".into(), "buckets".into());
-        assert_eq!(section(&runs(vec![other])), "");
-    }
-}
+mod tests;

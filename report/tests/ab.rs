@@ -3,17 +3,33 @@
 //! schema versions are refused, moved errors are listed, baselines round-trip.
 
 use std::fmt::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use mfx_analysis::ab::{baseline_dir, compare_runs, parse_fraction, save_baseline, AbOptions};
 use mfx_stats::{Summary, Verdict};
 use report::ab::{markdown, rule_text, write_html};
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mfx-ab-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A temp folder removed when the test ends, pass or fail (derefs to its path).
+struct Tmp(tempfile::TempDir);
+impl std::ops::Deref for Tmp {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+impl AsRef<std::path::Path> for Tmp {
+    fn as_ref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+fn tmp_dir(prefix: &str) -> Tmp {
+    Tmp(tempfile::Builder::new()
+        .prefix(&format!("{prefix}-"))
+        .tempdir()
+        .expect("a temp folder"))
+}
+fn tmp(name: &str) -> Tmp {
+    tmp_dir(&format!("mfx-ab-{name}"))
 }
 
 /// Deterministic noise in [−1, 1) (splitmix64 of the index).
@@ -127,7 +143,7 @@ fn write_run(dir: &Path, s: &Spec) {
     }
 }
 
-fn run(name: &str, s: Spec) -> PathBuf {
+fn run(name: &str, s: Spec) -> Tmp {
     let d = tmp(name);
     write_run(&d, &s);
     d

@@ -2,16 +2,32 @@
 //! carries the summary `summary_text` writes, FLIP columns and images show when measured, and
 //! every committed reference CSV still renders.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use report::charts::{layout, Layout};
 use schema::{Flag, FlagSet};
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mfx-report-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A temp folder removed when the test ends, pass or fail (derefs to its path).
+struct Tmp(tempfile::TempDir);
+impl std::ops::Deref for Tmp {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+impl AsRef<std::path::Path> for Tmp {
+    fn as_ref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+fn tmp_dir(prefix: &str) -> Tmp {
+    Tmp(tempfile::Builder::new()
+        .prefix(&format!("{prefix}-"))
+        .tempdir()
+        .expect("a temp folder"))
+}
+fn tmp(name: &str) -> Tmp {
+    tmp_dir(&format!("mfx-report-{name}"))
 }
 
 /// Every `*.layout.json` under `dir`, checked; returns how many there were.
@@ -211,4 +227,49 @@ fn a_merged_limits_run_shows_the_split_s_cost_against_the_adapter_s_row() {
     let html = std::fs::read_to_string(&page).unwrap();
     assert!(html.contains("×1.020 of unsplit"), "{html}");
     assert!(html.contains("H200 (vulkan, webgpu limits)"), "{html}");
+}
+
+#[test]
+fn a_views_run_draws_flicker_against_time_and_error_and_popping_along_the_path() {
+    let d = tmp("views");
+    let header = "schema,run_id,suite,study,scene,scene_label,width,height,method,point_key,adapter,backend,device_type,status,gpu_ms_median,gpu_ms_path_p99,rmse,exact,layers,camera_path,pop_epsilon,flicker_mean,popping_mean,path_series";
+    let scene = "shells(camera_path=orbit,path_views=4)";
+    // One exact row (no flicker, no popping: drawn in the zero band) and a k-buffer whose
+    // tail pops at view 2.
+    let series = |rmse: [f64; 4], popping: [f64; 3]| {
+        format!(
+            "\"{{\"\"gpu_ms\"\":[1,1,1,1],\"\"rmse\"\":{rmse:?},\"\"flip\"\":[null,null,null,null],\"\"flicker\"\":[null,0,0,0],\"\"popping\"\":[null,{},{},{}],\"\"changed\"\":[null,0.5,0.5,0.5],\"\"exact\"\":[true,true,true,true]}}\"",
+            popping[0], popping[1], popping[2]
+        )
+    };
+    let rows = [
+        format!(
+            "1,r,views,views,shells,\"{scene}\",64,64,depth_peel,\"views|{scene}|64x64|depth_peel|\",lavapipe,vulkan,cpu,ok,2.0,2.5,0,true,,orbit,0.01,0,0,{}",
+            series([0.0; 4], [0.0; 3])
+        ),
+        format!(
+            "1,r,views,views,shells,\"{scene}\",64,64,kbuffer_atomic,\"views|{scene}|64x64|kbuffer_atomic|layers=2\",lavapipe,vulkan,cpu,ok,1.0,1.4,0.01,false,2,orbit,0.01,0.002,0.05,{}",
+            series([0.01, 0.012, 0.03, 0.011], [0.0, 0.15, 0.01])
+        ),
+    ];
+    std::fs::write(
+        d.join("runs.csv"),
+        format!("{header}\n{}\n", rows.join("\n")),
+    )
+    .unwrap();
+    let page = report::build(&d, None).unwrap();
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.contains("Views that move"), "the views section");
+    check_layouts(&d.join("report"));
+    let names: Vec<String> = std::fs::read_dir(d.join("report"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with("views_") && n.ends_with(".png"))
+        .collect();
+    for kind in ["_flicker.png", "_error.png", "_popping.png"] {
+        assert!(
+            names.iter().any(|n| n.ends_with(kind)),
+            "no {kind} in {names:?}"
+        );
+    }
 }

@@ -5,9 +5,11 @@
 
 pub mod camera;
 pub mod gltf;
+pub mod model;
 pub mod obj;
 pub mod papers;
 pub mod params;
+pub mod path;
 pub mod ply;
 pub mod problem;
 pub mod scenes;
@@ -59,6 +61,13 @@ pub enum SceneError {
     ModelMissing { path: String, fetch: String },
     #[error("glTF file '{path}': {why}")]
     Gltf { path: String, why: String },
+    /// A camera path's keyframe file that cannot be used (`file:line: what is wrong`).
+    #[error("camera path file '{path}'{}: {why}", .line.map(|l| format!(":{l}")).unwrap_or_default())]
+    CameraFile {
+        path: String,
+        line: Option<usize>,
+        why: String,
+    },
     #[error("suite file '{path}': {why}")]
     Suite { path: String, why: String },
     /// Every problem found in a suite, one per line.

@@ -7,13 +7,22 @@ use std::path::Path;
 use glam::{DMat4, DVec3, Vec3};
 
 use crate::scenes::scene::{
-    face_normals, frame_sphere, normalisation, normalise, Mesh, ObjectInfo, Scene, SceneSpec,
+    face_normals, normalisation, normalise, Mesh, ObjectInfo, Scene, SceneSpec,
 };
 use crate::{Result, SceneError};
 
 /// Model files this repository's scripts fetch (they are not committed): a path starting with
 /// the prefix, when missing, is [`SceneError::ModelMissing`] naming the command.
-pub const FETCHABLE: &[(&str, &str)] = &[("models/dragon_vrip", "bash scripts/fetch-dragon.sh")];
+pub const FETCHABLE: &[(&str, &str)] = &[
+    ("models/dragon_vrip", "bash scripts/fetch-dragon.sh"),
+    ("models/ogre.obj", "bash scripts/fetch-models.sh"),
+    ("models/cow.obj", "bash scripts/fetch-models.sh"),
+    ("models/bunny-stack16.obj", "bash scripts/bake-bunny-stack.sh"),
+    (
+        "models/ogre-stack16.obj",
+        "bash scripts/fetch-models.sh && bash scripts/bake-bunny-stack.sh models/ogre.obj models/ogre-stack16.obj",
+    ),
+];
 
 /// The command that fetches `path`, if a script of this repository provides it.
 pub fn fetch_command(path: &str) -> Option<&'static str> {
@@ -441,6 +450,7 @@ pub fn build(spec: &SceneSpec) -> Result<Scene> {
     // The published scene this one stands in for (e.g. "powerplant-12.7M" for the Dragon ×15):
     // it only names the scene, so the rows' label says what they stand in for.
     r.opt_string("stand_in")?;
+    let camera = crate::scenes::model_camera::read(&mut r, &label)?;
     r.finish()?;
     let path = path.unwrap_or_default();
     let mut mesh = load(Path::new(&path))?;
@@ -462,7 +472,7 @@ pub fn build(spec: &SceneSpec) -> Result<Scene> {
             closed: false,
         })
         .collect();
-    let mut scene = Scene::new(spec.clone(), mesh, frame_sphere(1.0, 45.0));
+    let mut scene = Scene::new(spec.clone(), mesh, camera.camera());
     scene.objects = objects;
     Ok(scene)
 }
@@ -473,12 +483,43 @@ mod tests {
     use crate::{ParamValue, Params};
 
     /// Writes `text` as `name` in a fresh directory of this test (`tag`) and returns its path.
-    fn file(tag: &str, name: &str, text: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("mfx-objunit-{}-{tag}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+    /// A temp folder removed when the test ends, pass or fail (derefs to its path).
+    struct Tmp(tempfile::TempDir);
+    impl std::ops::Deref for Tmp {
+        type Target = std::path::Path;
+        fn deref(&self) -> &std::path::Path {
+            self.0.path()
+        }
+    }
+    impl AsRef<std::path::Path> for Tmp {
+        fn as_ref(&self) -> &std::path::Path {
+            self.0.path()
+        }
+    }
+    fn tmp_dir(prefix: &str) -> Tmp {
+        Tmp(tempfile::Builder::new()
+            .prefix(&format!("{prefix}-"))
+            .tempdir()
+            .expect("a temp folder"))
+    }
+
+    fn file(tag: &str, name: &str, text: &str) -> TmpFile {
+        let dir = tmp_dir(&format!("mfx-objunit-{tag}"));
         let p = dir.join(name);
         std::fs::write(&p, text).unwrap();
-        p
+        TmpFile { _dir: dir, path: p }
+    }
+
+    /// A file in a temp folder removed with it (derefs to the file's path).
+    struct TmpFile {
+        _dir: Tmp,
+        path: std::path::PathBuf,
+    }
+    impl std::ops::Deref for TmpFile {
+        type Target = std::path::Path;
+        fn deref(&self) -> &std::path::Path {
+            &self.path
+        }
     }
 
     fn spec(path: &Path) -> SceneSpec {

@@ -125,6 +125,13 @@ impl ValueKind {
                 }
                 Ok(v.clone())
             }
+            // A choice that grew out of a boolean (kbuffer_rmw's `heuristics`: false, true,
+            // sort, sort_flush) still takes the suites' and papers files' `true` and `false`.
+            (ValueKind::Choice { choices, .. }, ParamValue::Bool(b))
+                if choices.contains(&b.to_string().as_str()) =>
+            {
+                Ok(ParamValue::Str(b.to_string()))
+            }
             (ValueKind::Text { .. }, ParamValue::Str(_)) => Ok(v.clone()),
             _ => bad(),
         }

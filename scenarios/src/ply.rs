@@ -309,7 +309,11 @@ mod tests {
     #[test]
     fn a_gzipped_file_reads_like_the_plain_one() {
         use std::io::Write;
-        let dir = std::env::temp_dir().join(format!("mfx-ply-{}", std::process::id()));
+        let dir_tmp = tempfile::Builder::new()
+            .prefix("mfx-ply-")
+            .tempdir()
+            .unwrap();
+        let dir = dir_tmp.path().to_path_buf();
         std::fs::create_dir_all(&dir).unwrap();
         let plain = dir.join("q.ply");
         std::fs::write(&plain, ASCII).unwrap();

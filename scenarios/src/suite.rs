@@ -53,6 +53,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("continuum-ci", include_str!("../suites/continuum-ci.toml")),
     ("aa", include_str!("../suites/aa.toml")),
     ("aa-ci", include_str!("../suites/aa-ci.toml")),
+    ("views", include_str!("../suites/views.toml")),
+    ("views-ci", include_str!("../suites/views-ci.toml")),
     // The sources' own setups (issue 30), one per source; scenarios/papers/*.toml points here.
     (
         "seeds-buckets",
@@ -141,6 +143,8 @@ impl Suite {
         let candidates = [
             p.to_path_buf(),
             PathBuf::from(format!("scenarios/suites/{name_or_path}.toml")),
+            // Probes of one question (`mfx list suites --all`), run by name like the others.
+            PathBuf::from(format!("scenarios/suites/internal/{name_or_path}.toml")),
         ];
         for c in &candidates {
             if c.is_dir() {
@@ -246,6 +250,7 @@ pub const SOFTWARE_KEYS: &[&str] = &[
     "sessions",
     "canary_max_ratio",
     "settle",
+    "cold",
 ];
 /// Keys of the `[timing]` table (also accepted in `[software]`, as overrides).
 pub const TIMING_KEYS: &[&str] = &[
@@ -262,6 +267,7 @@ pub const TIMING_KEYS: &[&str] = &[
     "sessions",
     "canary_max_ratio",
     "settle",
+    "cold",
 ];
 
 /// How the points of a suite are timed: each unset key takes the harness's default
@@ -297,6 +303,8 @@ pub struct TimingSpec {
     /// Wait for the GPU to finish and free what earlier points dropped before each point is
     /// prepared (default false).
     pub settle: Option<bool>,
+    /// Flush the L2 before each timed sample (nvbench's cold mode; default false).
+    pub cold: Option<bool>,
 }
 
 impl TimingSpec {
@@ -316,6 +324,7 @@ impl TimingSpec {
             sessions: over.sessions.or(self.sessions),
             canary_max_ratio: over.canary_max_ratio.or(self.canary_max_ratio),
             settle: over.settle.or(self.settle),
+            cold: over.cold.or(self.cold),
         }
     }
 }
@@ -557,6 +566,7 @@ fn timing_spec(cx: &mut Ctx<'_>, t: &toml::Table, tn: &str) -> TimingSpec {
     };
     let interleave = boolean(cx, "interleave");
     let settle = boolean(cx, "settle");
+    let cold = boolean(cx, "cold");
     let spec = TimingSpec {
         min_samples: int(cx, "min_samples", 1, 1_000_000).map(|i| i as u32),
         max_samples: int(cx, "max_samples", 1, 1_000_000).map(|i| i as u32),
@@ -571,6 +581,7 @@ fn timing_spec(cx: &mut Ctx<'_>, t: &toml::Table, tn: &str) -> TimingSpec {
         sessions: int(cx, "sessions", 1, 100).map(|i| i as u32),
         canary_max_ratio: float(cx, "canary_max_ratio", 0.0, 100.0),
         settle,
+        cold,
     };
     if let Some(r) = spec.canary_max_ratio {
         if r > 0.0 && r <= 1.0 {

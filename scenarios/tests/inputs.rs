@@ -2,12 +2,29 @@
 
 use scenarios::{ParamValue, Params, SceneSpec, Suite};
 
-fn obj(text: &str) -> String {
-    let dir = std::env::temp_dir().join(format!("mfx-obj-{}-{}", std::process::id(), text.len()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join("m.obj");
+/// A model file in a temp folder that is removed with it (derefs to the file's path).
+struct TmpFile {
+    _dir: tempfile::TempDir,
+    path: String,
+}
+impl std::ops::Deref for TmpFile {
+    type Target = String;
+    fn deref(&self) -> &String {
+        &self.path
+    }
+}
+
+fn obj(text: &str) -> TmpFile {
+    let dir = tempfile::Builder::new()
+        .prefix("mfx-obj-")
+        .tempdir()
+        .unwrap();
+    let p = dir.path().join("m.obj");
     std::fs::write(&p, text).unwrap();
-    p.display().to_string()
+    TmpFile {
+        path: p.display().to_string(),
+        _dir: dir,
+    }
 }
 
 fn build(path: &str) -> Result<scenarios::Scene, String> {
@@ -32,21 +49,21 @@ fn missing_obj_names_the_file() {
 fn obj_without_faces_is_an_error() {
     let p = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\n");
     let e = build(&p).unwrap_err();
-    assert!(e.contains(&p) && e.contains("no triangles"), "{e}");
+    assert!(e.contains(p.as_str()) && e.contains("no triangles"), "{e}");
 }
 
 #[test]
 fn obj_with_nan_vertex_is_an_error() {
     let p = obj("v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
     let e = build(&p).unwrap_err();
-    assert!(e.contains(&p), "{e}");
+    assert!(e.contains(p.as_str()), "{e}");
 }
 
 #[test]
 fn malformed_obj_is_an_error() {
     let p = obj("v 0 0 0\nf 1 2 7\n");
     let e = build(&p).unwrap_err();
-    assert!(e.contains(&p), "{e}");
+    assert!(e.contains(p.as_str()), "{e}");
 }
 
 #[test]

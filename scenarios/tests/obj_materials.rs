@@ -2,14 +2,31 @@
 
 use scenarios::{ParamValue, Params, SceneSpec};
 
-/// Writes `files` (name, text) into a fresh directory and returns the path of the first.
-fn write(tag: &str, files: &[(&str, &str)]) -> String {
-    let dir = std::env::temp_dir().join(format!("mfx-mtl-{}-{tag}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    for (name, text) in files {
-        std::fs::write(dir.join(name), text).unwrap();
+/// A model file in a temp folder that is removed with it (derefs to the file's path).
+struct TmpFile {
+    _dir: tempfile::TempDir,
+    path: String,
+}
+impl std::ops::Deref for TmpFile {
+    type Target = String;
+    fn deref(&self) -> &String {
+        &self.path
     }
-    dir.join(files[0].0).display().to_string()
+}
+
+/// Writes `files` (name, text) into a fresh directory and returns the path of the first.
+fn write(tag: &str, files: &[(&str, &str)]) -> TmpFile {
+    let dir = tempfile::Builder::new()
+        .prefix(&format!("mfx-mtl-{tag}-"))
+        .tempdir()
+        .unwrap();
+    for (name, text) in files {
+        std::fs::write(dir.path().join(name), text).unwrap();
+    }
+    TmpFile {
+        path: dir.path().join(files[0].0).display().to_string(),
+        _dir: dir,
+    }
 }
 
 fn build(path: &str, alpha: Option<f64>) -> Result<scenarios::Scene, String> {
@@ -90,7 +107,7 @@ fn bad_mtl_opacity_is_an_error_naming_file_and_material() {
     );
     let e = build(&p, None).unwrap_err();
     assert!(
-        e.contains(&p) && e.contains("half") && e.contains("1.5"),
+        e.contains(p.as_str()) && e.contains("half") && e.contains("1.5"),
         "{e}"
     );
     let p = write(

@@ -108,7 +108,7 @@ pub mod cols {
     );
     pub const LIMITS: Col = Col::new(
         "limits",
-        "the limits profile the device was requested with (`mfx sweep --limits`): `adapter` (the adapter's own, the default), `webgpu` (WebGPU's default limits and optional features only) or `downlevel` (a WebGL2-class device: no compute, no storage buffers); what does not fit is a `skipped` row naming the limit",
+        "the limits profile the device was requested with (`mfx sweep --limits`): `adapter` (the adapter's own, the default), `webgpu` (WebGPU's default limits and optional features only), `webgpu-compat` (WebGPU's compatibility-mode defaults: no storage buffers in vertex shaders, 4 in fragment shaders (checked by mfx: wgpu has no per-stage limit), 128 invocations a workgroup, 4096² textures) or `downlevel` (a WebGL2-class device: no compute, no storage buffers); what does not fit is a `skipped` row naming the limit",
     );
     pub const WIDTH: Col = Col::new("width", "render target width in pixels");
     pub const HEIGHT: Col = Col::new("height", "render target height in pixels");
@@ -155,7 +155,7 @@ pub mod cols {
     );
     pub const EXACT_BOUND: Col = Col::new(
         "exact_bound",
-        "the max-abs error bound `exact` was judged with: the f32 rounding of the effect's compositing over the pixel's fragments (derived in bench-core/src/judge.rs); the order of fragments at near-equal depths is not part of it (depth_ties)",
+        "the max-abs error bound `exact` was judged with: the f32 rounding of the effect's compositing over the pixel's fragments (derived in studies/multifragment/src/judge.rs); the order of fragments at near-equal depths is not part of it (depth_ties)",
     );
     pub const EFFECT: Col = Col::new(
         "effect",
@@ -194,7 +194,11 @@ pub mod cols {
     );
     pub const HEURISTICS: Col = Col::new(
         "heuristics",
-        "kbuffer_rmw: true to apply the thesis's heuristics (depth-sorted draw order, flushes between batches) against read-modify-write hazards",
+        "kbuffer_rmw: the thesis's heuristics against read-modify-write hazards: false (mesh order) | sort (centroid-sorted order) | sort_flush (sorted on the CPU every frame, 32-triangle batches, a flush after each) | true (sorted once, batches as draws of one pass, no flush)",
+    );
+    pub const HAZARD_CAPTURES: Col = Col::new(
+        "hazard_captures",
+        "kbuffer_rmw: frames captured and judged for hazards after timing (1: the one capture; more give hazard_rate_ci_lo/hi)",
     );
     pub const TIEBREAK: Col = Col::new(
         "tiebreak",
@@ -216,6 +220,10 @@ pub mod cols {
         "bucket_pairing",
         "bucket methods: single (one fragment per bucket) | paired (nearest and farthest of each bucket)",
     );
+    pub const RANGE_PASS: Col = Col::new(
+        "range_pass",
+        "bucket methods: what the per-pixel depth-range pre-pass draws: mesh (every triangle) | bounding_box (the scene's 12-triangle box, GPU Pro ch. 1 §1.3)",
+    );
     pub const HIST_BINS: Col = Col::new(
         "hist_bins",
         "adaptive bucket peeling: bins of the per-pixel depth-occupancy histogram (256/1024/2048)",
@@ -234,7 +242,7 @@ pub mod cols {
     );
     pub const CAPTURE: Col = Col::new(
         "capture",
-        "compute_abuffer: pixels (count → scan → fill: an 8 B fragment per pixel slot, then sort) | tiles (triangles over small_max binned to 8×8-pixel tiles instead, 8 B per tile and triangle; each tile's pixels test them and sort in workgroup memory: their fragments are never stored)",
+        "compute_abuffer: pixels (count → scan → fill: an 8 B fragment per pixel slot, then sort) | tiles (triangles over small_max binned to 8×8-pixel tiles instead, 8 B per tile and triangle; each tile's pixels test them and sort in workgroup memory: their fragments are never stored) | auto (the method's choice at prepare: tiles where the triangles over small_max make at least 4 fragments a pixel, else pixels; the notes say which)",
     );
     pub const ATTRIBUTES: Col = Col::new(
         "attributes",
@@ -242,11 +250,15 @@ pub mod cols {
     );
     pub const RESOLVE_SORT: Col = Col::new(
         "resolve_sort",
-        "compute_abuffer: workgroup (lists of up to 32 fragments sorted in workgroup memory) | private (every list in a per-thread array)",
+        "compute_abuffer: workgroup (lists of up to 32 fragments sorted in workgroup memory; 16 where workgroup memory is short, as WebGPU's 16 KiB with capture = tiles) | private (every list in a per-thread array)",
+    );
+    pub const BINDINGS: Col = Col::new(
+        "bindings",
+        "compute_abuffer: auto (native bindings where the device allows 10 storage buffers per stage, else packed) | packed (6 storage buffers: the mesh packed at prepare into one 48 B-a-vertex buffer, the work counters after the offsets, so the fragments may take 3 bindings: within WebGPU's default 8). Which one ran is in `split` (`packed`) and the notes",
     );
     pub const POOL: Col = Col::new(
         "pool",
-        "linked_list: counted (one sub-pool per 8×8-pixel tile, sized by a prepare-time count) | fixed (layers × pixels nodes, one cursor)",
+        "linked_list: counted (one sub-pool per 8×8-pixel tile, sized by a prepare-time count) | fixed (layers × pixels nodes, one cursor) | pixel (one sub-pool per pixel, sized by a prepare-time count: its nodes contiguous, so no head exchange and no link; 8 B compact nodes; single-sample)",
     );
     pub const POOL_SLACK: Col = Col::new(
         "pool_slack",
@@ -446,6 +458,95 @@ pub mod cols {
         "fragments within the method's capacity that it did not capture (sum over pixels; coplanar loss when the reference has depth ties)",
     );
 
+    // ---- The views study (camera paths) ----
+    pub const CAMERA_PATH: Col = Col::new(
+        "camera_path",
+        "views: the scene's camera path (orbit | fly | file | at_rest; its keys are in scene_label)",
+    );
+    pub const PATH_VIEWS: Col = Col::new("path_views", "views: views rendered along the path");
+    pub const POP_EPSILON: Col = Col::new(
+        "pop_epsilon",
+        "views: ε of popping (a pixel pops when its max-channel error against the truth changes by more than ε between consecutive views)",
+    );
+    pub const GPU_MS_PATH_P99: Col = Col::new(
+        "gpu_ms_path_p99",
+        "views: nearest-rank 99th percentile over the views of each view's median GPU ms (gpu_ms_median is the median over the views)",
+    );
+    pub const GPU_MS_PATH_WORST: Col = Col::new(
+        "gpu_ms_path_worst",
+        "views: the slowest view's median GPU ms",
+    );
+    pub const GPU_MS_WORST_VIEW: Col = Col::new(
+        "gpu_ms_worst_view",
+        "views: the slowest view (index along the path, from 0)",
+    );
+    pub const RMSE_PATH_WORST: Col = Col::new(
+        "rmse_path_worst",
+        "views: the largest RMSE of a view against its own truth (rmse is the mean over the views)",
+    );
+    pub const RMSE_WORST_VIEW: Col =
+        Col::new("rmse_worst_view", "views: the view of rmse_path_worst");
+    pub const FLIP_PATH_WORST: Col = Col::new(
+        "flip_path_worst",
+        "views: the largest FLIP mean of a view (flip_mean is the mean over the views)",
+    );
+    pub const FLIP_WORST_VIEW: Col =
+        Col::new("flip_worst_view", "views: the view of flip_path_worst");
+    pub const VIEWS_EXACT: Col = Col::new(
+        "views_exact",
+        "views: views judged exact (exact = every view exact)",
+    );
+    pub const FLICKER_MEAN: Col = Col::new(
+        "flicker_mean",
+        "views: mean over consecutive views t−1 → t of the mean over pixels of max-channel |(I_t − I_{t−1}) − (T_t − T_{t−1})|: the frame-to-frame change of the method's image that its truth's change does not explain (0 for an exact method, within flicker_bound_mean)",
+    );
+    pub const FLICKER_MAX: Col = Col::new("flicker_max", "views: the largest step's flicker");
+    pub const FLICKER_WORST_VIEW: Col = Col::new(
+        "flicker_worst_view",
+        "views: the view t of the step t−1 → t with flicker_max (empty when no step flickered)",
+    );
+    pub const FLICKER_BOUND_MEAN: Col = Col::new(
+        "flicker_bound_mean",
+        "views: mean over steps of the mean over pixels of b_{t−1} + b_t, each view's f32 bound of an exact composite (exact_bound's per pixel): the flicker an exact method stays within",
+    );
+    pub const FLICKER_BEYOND_BOUND: Col = Col::new(
+        "flicker_beyond_bound",
+        "views: pixels, summed over steps, whose unexplained change exceeds b_{t−1} + b_t (0 for an exact method)",
+    );
+    pub const POPPING_MEAN: Col = Col::new(
+        "popping_mean",
+        "views: mean over steps of the share of pixels whose error against the truth changes by more than pop_epsilon",
+    );
+    pub const POPPING_MAX: Col = Col::new("popping_max", "views: the largest step's popping share");
+    pub const POPPING_WORST_VIEW: Col = Col::new(
+        "popping_worst_view",
+        "views: the view t of the step t−1 → t with popping_max (empty when no pixel popped)",
+    );
+    pub const AT_REST_CHANGED_MEAN: Col = Col::new(
+        "at_rest_changed_mean",
+        "views, camera_path = at_rest: mean over consecutive repeated frames of the share of pixels whose value differs (0 without timing-dependent hazards)",
+    );
+    pub const AT_REST_CHANGED_MAX: Col = Col::new(
+        "at_rest_changed_max",
+        "views, camera_path = at_rest: the largest such share",
+    );
+    pub const PATH_SERIES: Col = Col::new(
+        "path_series",
+        "views: every view's numbers, JSON arrays indexed by view: gpu_ms, rmse, flip, flicker, popping, changed (the step arriving at the view; null at view 0), exact",
+    );
+    pub const PATH_IMAGES: Col = Col::new(
+        "path_images",
+        "views, with --save-images: prefix of the row's PNG crops (views/<hash>-worst-{method,truth,flip}.png of the worst view; views/<hash>-pop-{method-before,method-after,truth-before,truth-after,popped}.png of its largest pop)",
+    );
+    pub const PATH_IMAGES_WORST_VIEW: Col = Col::new(
+        "path_images_worst_view",
+        "views: the view of the -worst- crops",
+    );
+    pub const PATH_IMAGES_POP_VIEW: Col = Col::new(
+        "path_images_pop_view",
+        "views: the view t of the -pop- crops (the step t−1 → t)",
+    );
+
     // ---- The deferred-shading study ----
     pub const LIGHT_COUNT: Col = Col::new(
         "light_count",
@@ -559,6 +660,18 @@ pub mod cols {
         "shade_ns_per_light_quad",
         "CPU tile path, the phase-clock frame: light-loop ns per (light, 4×4 quad) evaluation (sun excluded): the per-light cost BF3 compares for diffuse-only and specular lights",
     );
+    pub const SHADE_NS_PER_LIGHT_QUAD_CI_LO: Col = Col::new(
+        "shade_ns_per_light_quad_ci_lo",
+        "CPU tile path: lower end of the 95 % interval of the median of shade_ns_per_light_quad over the phase-clock frames (phase_reps ≥ 6; empty below)",
+    );
+    pub const SHADE_NS_PER_LIGHT_QUAD_CI_HI: Col = Col::new(
+        "shade_ns_per_light_quad_ci_hi",
+        "CPU tile path: upper end of that interval",
+    );
+    pub const LIGHT_LOOP: Col = Col::new(
+        "light_loop",
+        "CPU tile path's light loop: bf3 (DICE's: every light evaluated on all 16 SoA lanes of a 4×4 quad with masks, no per-lane early-outs, after a whole-quad branch on the attenuation) | mfx (per-lane early-outs on N·L and attenuation); same image bit for bit",
+    );
     pub const QUAD_SKIP_FRAC: Col = Col::new(
         "quad_skip_frac",
         "CPU path: fraction of (light, 4×4 quad) pairs skipped because all 16 attenuations were 0",
@@ -663,6 +776,14 @@ pub mod cols {
         "hsm",
         "shadows: true if the search region is refined by two iterations over the min-depth pyramid",
     );
+    pub const SEARCH_START: Col = Col::new(
+        "search_start",
+        "shadows: where the search region starts: near (kr(n), the light's near plane: §5.3.2's initial region) | global_min (kr of the pyramid's global minimum depth, with a lit early-out: mfx's first choice)",
+    );
+    pub const BIAS_MAX: Col = Col::new(
+        "bias_max",
+        "shadows: maximum of the layers' midpoint bias, world units (§5.2.2's maximum depth bias); 0 = no maximum",
+    );
     pub const SHADOW_RAYS: Col = Col::new(
         "shadow_rays",
         "shadows: reference rays per pixel (m×m jittered strata on the light square)",
@@ -731,7 +852,19 @@ pub mod cols {
     );
     pub const PEAK_BANDWIDTH_FRAC: Col = Col::new(
         "peak_bandwidth_frac",
-        "bytes_per_s / the adapter's peak memory bandwidth (NVML: memory bus width × max memory clock × 2, DDR); empty where NVML does not give both",
+        "bytes_per_s / roof_bytes_per_s: the declared traffic's share of the measured roof of the row's working set (the L2's where l2_resident, else the DRAM's; run.json `roofs`); in a run without measured roofs, / the adapter's peak memory bandwidth (NVML: memory bus width × max memory clock × 2, DDR), and empty where NVML does not give both",
+    );
+    pub const WORKING_SET_BYTES: Col = Col::new(
+        "working_set_bytes",
+        "the bytes a frame touches, as declared: what the method allocated (bytes_allocated) plus the scene's geometry buffers",
+    );
+    pub const L2_RESIDENT: Col = Col::new(
+        "l2_resident",
+        "true where the declared working set fits the adapter's L2 (run.json `roofs.l2_bytes`: the adapter's published size, else the knee of the roofs' sweep) and the samples were warm: the row is read against the L2 roof; false beyond it, and with `[timing] cold = true` (the L2 flushed before each sample); empty without measured roofs",
+    );
+    pub const ROOF_BYTES_PER_S: Col = Col::new(
+        "roof_bytes_per_s",
+        "the memory roof the row is read against (peak_bandwidth_frac's denominator): the copy kernel's measured bytes per second (read + written) with its working set in the L2 (l2_resident) or far beyond it (run.json `roofs`, measured once per run); empty without measured roofs",
     );
     pub const GPU_MS_REL_NOISE: Col = Col::new(
         "gpu_ms_rel_noise",
@@ -873,6 +1006,10 @@ pub mod cols {
         "pass_ms",
         "median GPU ms per pass label, JSON object (e.g. {\"peel\":1.2,\"composite\":0.1})",
     );
+    pub const PASS_MS_CI: Col = Col::new(
+        "pass_ms_ci",
+        "95 % interval of each pass's median ms, JSON object label → [lo, hi] (the bootstrap CI of the median from 6 samples, else the min–max range, as gpu_ms_ci_lo/hi): what a claim about one pass is ruled with",
+    );
     pub const GEOMETRY_PASSES: Col = Col::new(
         "geometry_passes",
         "geometry passes per frame (times the scene was rasterized)",
@@ -888,7 +1025,7 @@ pub mod cols {
     pub const BYTES_PER_PIXEL: Col = Col::new("bytes_per_pixel", "bytes_allocated / pixels");
     pub const SPLIT: Col = Col::new(
         "split",
-        "how a buffer over the largest storage binding was split to fit (`bindings:N`: one array over N storage bindings, indexed through a switch); empty where nothing was split. Compare with the unsplit row of a larger limit for the cost",
+        "how a buffer over the largest storage binding was split to fit (`bindings:N`: one array over N storage bindings, indexed through a switch; the k-buffers' entries, MLAB's layers, the linked list's node pool, the compute A-buffer's fragments), and `packed` where the compute A-buffer packed its bindings into WebGPU's 8 (`packed,bindings:N` both); empty where nothing was. Compare with the unsplit row of a larger limit for the cost",
     );
     pub const BYTES_OVERHEAD: Col = Col::new(
         "bytes_overhead",
@@ -978,7 +1115,7 @@ pub mod cols {
     );
     pub const DEPTH_TIE_PIXELS: Col = Col::new(
         "depth_tie_pixels",
-        "pixels whose image is off the f64 ground truth beyond the f32 bound of its arithmetic (exact_bound) but within what compositing fragments within the method's depth precision in another order can make: the truth has no defined order there (flag depth_ties); judged for methods that claim every fragment (claims_exact), at pixels within capacity; empty otherwise",
+        "pixels whose image is off the f64 ground truth beyond the f32 bound of its arithmetic (exact_bound) by what compositing fragments within the method's depth precision in another order makes: the truth has no defined order there (flag depth_ties). Transparency: every order of the pixel's near-equal-depth runs is tried (each channel held to the range of the orders beyond 5040 of them), so a fragment's colour off is not a tie however near its depths; translucency and Fresnel: none (no order changes them); csg and dof: within the order bound. Judged for methods that claim every fragment (claims_exact), at pixels within capacity; empty otherwise",
     );
     pub const FRAGMENTS_DROPPED: Col = Col::new(
         "fragments_dropped",
@@ -995,6 +1132,14 @@ pub mod cols {
     pub const HAZARD_RATE: Col = Col::new(
         "hazard_rate",
         "unguarded read-modify-write captures: k-buffer: fraction of pixels whose captured set differs from the true k nearest, excluding pixels with an f32 depth tie among their k + 1 nearest (those are flagged lost_coplanar and counted in notes); mlab, adaptive: fraction of pixels whose image differs from the ideal-order (primitive order) twin by more than 1e-4",
+    );
+    pub const HAZARD_RATE_CI_LO: Col = Col::new(
+        "hazard_rate_ci_lo",
+        "with hazard_captures > 1: the lowest hazard rate of the captures (hazard_rate is the first's); with 5 or more captures [lo, hi] holds the median hazard rate with ≥ 94 % confidence",
+    );
+    pub const HAZARD_RATE_CI_HI: Col = Col::new(
+        "hazard_rate_ci_hi",
+        "with hazard_captures > 1: the highest hazard rate of the captures",
     );
     pub const COLLISION_RATE: Col = Col::new(
         "collision_rate",
@@ -1090,11 +1235,13 @@ pub const GROUPS: &[Group] = &[
             cols::OCCLUSION_STOP,
             cols::SPECIALISATION,
             cols::HEURISTICS,
+            cols::HAZARD_CAPTURES,
             cols::TIEBREAK,
             cols::THICKNESS,
             cols::BUCKET_COUNT,
             cols::BUCKET_MODE,
             cols::BUCKET_PAIRING,
+            cols::RANGE_PASS,
             cols::HIST_BINS,
             cols::SMALL_MAX,
             cols::TRANSFORM,
@@ -1102,6 +1249,7 @@ pub const GROUPS: &[Group] = &[
             cols::CAPTURE,
             cols::ATTRIBUTES,
             cols::RESOLVE_SORT,
+            cols::BINDINGS,
             cols::POOL,
             cols::POOL_SLACK,
             cols::NODE,
@@ -1176,6 +1324,37 @@ pub const GROUPS: &[Group] = &[
         ],
     },
     Group {
+        name: "views",
+        title: "The views study (camera paths)",
+        cols: &[
+            cols::CAMERA_PATH,
+            cols::PATH_VIEWS,
+            cols::POP_EPSILON,
+            cols::GPU_MS_PATH_P99,
+            cols::GPU_MS_PATH_WORST,
+            cols::GPU_MS_WORST_VIEW,
+            cols::RMSE_PATH_WORST,
+            cols::RMSE_WORST_VIEW,
+            cols::FLIP_PATH_WORST,
+            cols::FLIP_WORST_VIEW,
+            cols::VIEWS_EXACT,
+            cols::FLICKER_MEAN,
+            cols::FLICKER_MAX,
+            cols::FLICKER_WORST_VIEW,
+            cols::FLICKER_BOUND_MEAN,
+            cols::FLICKER_BEYOND_BOUND,
+            cols::POPPING_MEAN,
+            cols::POPPING_MAX,
+            cols::POPPING_WORST_VIEW,
+            cols::AT_REST_CHANGED_MEAN,
+            cols::AT_REST_CHANGED_MAX,
+            cols::PATH_SERIES,
+            cols::PATH_IMAGES,
+            cols::PATH_IMAGES_WORST_VIEW,
+            cols::PATH_IMAGES_POP_VIEW,
+        ],
+    },
+    Group {
         name: "deferred",
         title: "The deferred-shading study",
         cols: &[
@@ -1207,6 +1386,9 @@ pub const GROUPS: &[Group] = &[
             cols::CPU_PACK_MS,
             cols::CPU_PHASES_MS,
             cols::SHADE_NS_PER_LIGHT_QUAD,
+            cols::SHADE_NS_PER_LIGHT_QUAD_CI_LO,
+            cols::SHADE_NS_PER_LIGHT_QUAD_CI_HI,
+            cols::LIGHT_LOOP,
             cols::QUAD_SKIP_FRAC,
             cols::SPEEDUP_VS_NAIVE,
             cols::REL_ERR_MAX,
@@ -1244,6 +1426,8 @@ pub const GROUPS: &[Group] = &[
             cols::GSCALE,
             cols::GMAX,
             cols::HSM,
+            cols::SEARCH_START,
+            cols::BIAS_MAX,
             cols::SHADOW_RAYS,
             cols::SHADOW_PIXELS,
             cols::VIS_RMSE,
@@ -1267,6 +1451,9 @@ pub const GROUPS: &[Group] = &[
             cols::FRAGMENTS_PER_S,
             cols::BYTES_PER_S,
             cols::PEAK_BANDWIDTH_FRAC,
+            cols::WORKING_SET_BYTES,
+            cols::L2_RESIDENT,
+            cols::ROOF_BYTES_PER_S,
             cols::GPU_MS_REL_NOISE,
             cols::GPU_MS_MEAN,
             cols::GPU_MS_CI_LO,
@@ -1304,6 +1491,7 @@ pub const GROUPS: &[Group] = &[
             cols::THROTTLE_REASONS,
             cols::CLOCK_SOURCE,
             cols::PASS_MS,
+            cols::PASS_MS_CI,
             cols::GEOMETRY_PASSES,
             cols::LAYERS_CAPTURED_MAX,
             cols::BYTES_ALLOCATED,
@@ -1336,6 +1524,8 @@ pub const GROUPS: &[Group] = &[
             cols::FRAGMENTS_TAILED,
             cols::LAYER_COUNT_ACCURACY,
             cols::HAZARD_RATE,
+            cols::HAZARD_RATE_CI_LO,
+            cols::HAZARD_RATE_CI_HI,
             cols::COLLISION_RATE,
             cols::OVERFLOW_RATE,
             cols::TRIANGLES_PER_S,

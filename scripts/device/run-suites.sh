@@ -67,8 +67,8 @@ need_bunny=0
 need_ogre=0
 for job in "$@"; do
   job=${job%%,*}
-  case "${job%@*}" in perf-abuffer* | perf-binned* | exp-binned* | *bunny* | stacked-scans*) need_bunny=1 ;; esac
-  case "${job%@*}" in stacked-scans*) need_ogre=1 ;; esac
+  case "${job%@*}" in perf-abuffer* | perf-binned* | exp-binned* | *bunny* | stacked-scans* | perf-issue41* | views | views,*) need_bunny=1 ;; esac
+  case "${job%@*}" in stacked-scans* | perf-issue41*) need_ogre=1 ;; esac
 done
 if [ "$need_bunny" = 1 ] && [ ! -f models/bunny-stack16.obj ]; then
   bash scripts/bake-bunny-stack.sh models/stanford-bunny.obj models/bunny-stack16.obj \

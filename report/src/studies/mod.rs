@@ -12,6 +12,7 @@ pub mod scaling;
 pub mod shadows;
 pub mod stability;
 pub mod tail;
+pub mod views;
 
 use std::path::Path;
 
@@ -64,6 +65,12 @@ pub const PAGES: &[StudyPage] = &[
         heading: "Effects and stability",
         applies: |r| has(r, "stability") || has(r, "methods"),
         figures: stability::figures,
+        across_platforms: false,
+    },
+    StudyPage {
+        heading: "Views that move (camera paths: flicker, popping, time per view)",
+        applies: |r| has(r, "views"),
+        figures: views::figures,
         across_platforms: false,
     },
     StudyPage {

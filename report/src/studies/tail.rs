@@ -219,7 +219,11 @@ mod tests {
 
     #[test]
     fn the_tail_chart_and_the_throughput_table_are_drawn_from_the_columns() {
-        let d = std::env::temp_dir().join(format!("mfx-tail-{}", std::process::id()));
+        let d_tmp = tempfile::Builder::new()
+            .prefix("mfx-tail-")
+            .tempdir()
+            .unwrap();
+        let d = d_tmp.path().to_path_buf();
         std::fs::create_dir_all(&d).unwrap();
         let p = d.join("runs.csv");
         let header = "schema,run_id,study,scene_label,width,height,method,point_key,adapter,backend,status,reason,gpu_ms_median,gpu_ms_p50,gpu_ms_p95,gpu_ms_p99,gpu_ms_max,fragments_per_s,bytes_per_s,peak_bandwidth_frac,samples,flag";

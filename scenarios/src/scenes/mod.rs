@@ -23,6 +23,7 @@ pub mod city;
 pub mod grass;
 pub mod hair;
 pub mod mesh;
+pub mod model_camera;
 pub mod particles;
 pub mod quads;
 pub mod scene;
@@ -35,8 +36,8 @@ pub mod stiff;
 use glam::Vec3;
 
 pub use scene::{
-    face_normals, frame_sphere, normalise, AreaLight, Light, LightKind, Material, Mesh, ObjectInfo,
-    Scene, SceneSpec, Sun,
+    face_normals, frame_sphere, normalise, palette, AreaLight, Light, LightKind, Material, Mesh,
+    ObjectInfo, Scene, SceneSpec, Sun,
 };
 
 use crate::{obj, Result, SceneError};
@@ -52,6 +53,9 @@ impl SceneSpec {
             )];
         }
         let mut problems = crate::params::check_params(|| self.build_unchecked());
+        if let Err(p) = crate::path::CameraPath::of(self) {
+            problems.extend(p);
+        }
         if let Some(crate::ParamValue::Str(path)) = self.params.get("path") {
             let path = std::path::Path::new(path);
             let loaded = match self.generator.as_str() {
@@ -81,6 +85,24 @@ impl SceneSpec {
     }
 
     fn build_unchecked(&self) -> Result<Scene> {
+        // The path keys are every scene's, not the generator's: it builds without them, and the
+        // scene then takes its path's views (the first becoming its camera).
+        let path_keys = self.params.0.keys().any(|k| crate::path::is_path_key(k));
+        if path_keys {
+            let own = SceneSpec::new(&self.generator, crate::path::generator_params(&self.params));
+            let mut scene = own.build_unchecked()?;
+            scene.spec = self.clone();
+            let path = crate::path::CameraPath::of(self)
+                .map_err(|mut p| match p.len() {
+                    1 => p.remove(0),
+                    _ => SceneError::Many(p),
+                })?
+                .expect("a scene with path keys has a path or problems");
+            scene.views = path.cameras(&scene)?;
+            scene.camera = scene.views[0].clone();
+            scene.path = Some(path.name());
+            return Ok(scene);
+        }
         Ok(match self.generator.as_str() {
             "grass" => grass::build(self)?,
             "shells" => shells::build(self)?,
@@ -133,8 +155,8 @@ pub fn describe(generator: &str) -> &'static str {
         "shells" => "count, shape=sphere|box, segments, alpha, seed: nested closed shells, max depth complexity 2·count",
         "quads" => "depth_complexity=d, alpha, tilt, seed: d quads over the centre at distinct depths",
         "mesh" => "triangles=N, shape=sphere|grid, alpha: a procedural large mesh with shared vertices (geometry study)",
-        "obj" => "path, instances, alpha, stand_in (the published scene it stands in for; a name only): an OBJ file via tobj or a PLY file (.ply, .ply.gz; ASCII or binary) via ply-rs-bw, normalised, instanced on a grid; alpha × the MTL dissolve (d, or 1 − Tr) where the file has materials",
-        "gltf" => "path, alpha: a glTF 2.0 file (.gltf + .bin, or .glb) via the gltf crate: node transforms and instancing, normalised like obj; BLEND = transparent (baseColorFactor alpha × alpha), MASK = alpha-tested opaque, OPAQUE = occluder",
+        "obj" => "path, instances, alpha, stand_in (the published scene it stands in for; a name only), eye, target, fov (the camera: \"x,y,z\" in the normalised scene, degrees): an OBJ file via tobj or a PLY file (.ply, .ply.gz; ASCII or binary) via ply-rs-bw, normalised, instanced on a grid; alpha × the MTL dissolve (d, or 1 − Tr) where the file has materials",
+        "gltf" => "path, alpha, camera=frame|file, eye, target, fov: a glTF 2.0 file (.gltf + .bin, data: URIs or .glb) via the gltf crate: node transforms and instancing, normalised like obj; BLEND = transparent (baseColorFactor × baseColorTexture alpha per vertex × alpha), MASK = alpha-tested opaque per triangle, OPAQUE = occluder, KHR_materials_transmission = see-through (× 1 − transmission), no material = palette colour; camera = file takes the file's first perspective camera",
         "city" => "lights=N, blocks, room, sun, kinds=mixed|point|spot|line, range, seed: box city (or closed room) with N finite-range lights and materials",
         "slabs" => "count, tiles, distance, wall, alpha, reversed_z, seed: tiles² stacks of count nested thin closed boxes far away (thickness cancellation)",
         "csg_pair" => "offset, segments, shape=sphere|box, alpha: two overlapping closed solids, ids 0 (A) and 1 (B)",
@@ -146,22 +168,6 @@ pub fn describe(generator: &str) -> &'static str {
         "slivers" => "count, width, alpha, span, distance, seed: thin needles crossing the view at distinct depths, nearly every covered pixel an edge (antialiasing)",
         _ => "",
     }
-}
-
-/// Deterministic colour for index `i` (golden-ratio hue walk), with the given alpha.
-pub fn palette(i: u32, alpha: f32) -> [f32; 4] {
-    let h = (i as f32 * 0.618_034).fract() * 6.0;
-    let x = 1.0 - (h % 2.0 - 1.0).abs();
-    let (r, g, b) = match h as u32 {
-        0 => (1.0, x, 0.0),
-        1 => (x, 1.0, 0.0),
-        2 => (0.0, 1.0, x),
-        3 => (0.0, x, 1.0),
-        4 => (x, 0.0, 1.0),
-        _ => (1.0, 0.0, x),
-    };
-    // Keep channels away from 0 and 1 so compositing errors show in every channel.
-    [0.15 + 0.7 * r, 0.15 + 0.7 * g, 0.15 + 0.7 * b, alpha]
 }
 
 /// True if every vertex of `scene` projects inside the view (|NDC x, y| ≤ 1, depth in [0, 1]) at

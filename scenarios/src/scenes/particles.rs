@@ -9,7 +9,7 @@
 //! stratified: particle i gets its own slot of the column's depth span (slot width
 //! 2·spread/count, position jittered inside the middle half), so no two quads share a depth: at
 //! the defaults any two differ by ≥ 1e-4 world units, over 10 f32 steps of window depth
-//! (checked in bench-core/tests/continuum_scenes.rs), so a GPU method comparing f32 depths can
+//! (checked in reference/tests/continuum_scenes.rs), so a GPU method comparing f32 depths can
 //! always order them. Quads are parallel to the image plane (the camera looks down −z), so each
 //! has one view depth.
 //!

@@ -179,6 +179,15 @@ pub struct Scene {
     pub sun: Option<Sun>,
     /// The square area light of soft-shadow scenes (None elsewhere).
     pub area_light: Option<AreaLight>,
+    /// The views of the scene's camera path (`crate::path`), `camera` being the first; empty
+    /// when the scene has no path (one view: `camera`).
+    pub views: Vec<Camera>,
+    /// The kind of camera path `views` came from (`CameraPath::name`: orbit, fly, file,
+    /// at_rest); None: one view. A name, not the path, so this file stays below `path`.
+    pub path: Option<&'static str>,
+    /// A model scene's file space → this scene's (p' = (p − centre) · scale), for cameras the
+    /// file gives (a glTF camera animation); None for generated scenes.
+    pub file_normalisation: Option<(DVec3, f64)>,
 }
 
 impl Scene {
@@ -193,6 +202,9 @@ impl Scene {
             lights: Vec::new(),
             sun: None,
             area_light: None,
+            views: Vec::new(),
+            path: None,
+            file_normalisation: None,
         }
     }
     pub fn name(&self) -> &str {
@@ -281,4 +293,20 @@ pub(crate) fn normalisation(mesh: &Mesh) -> (DVec3, f64) {
         1.0
     };
     (centre, s)
+}
+
+/// Deterministic colour for index `i` (golden-ratio hue walk), with the given alpha.
+pub fn palette(i: u32, alpha: f32) -> [f32; 4] {
+    let h = (i as f32 * 0.618_034).fract() * 6.0;
+    let x = 1.0 - (h % 2.0 - 1.0).abs();
+    let (r, g, b) = match h as u32 {
+        0 => (1.0, x, 0.0),
+        1 => (x, 1.0, 0.0),
+        2 => (0.0, 1.0, x),
+        3 => (0.0, x, 1.0),
+        4 => (x, 0.0, 1.0),
+        _ => (1.0, 0.0, x),
+    };
+    // Keep channels away from 0 and 1 so compositing errors show in every channel.
+    [0.15 + 0.7 * r, 0.15 + 0.7 * g, 0.15 + 0.7 * b, alpha]
 }
