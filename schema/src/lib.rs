@@ -8,7 +8,9 @@
 
 use std::fmt;
 
+mod types;
 mod values;
+pub use types::{cell_type, cell_type_of, CellType};
 pub use values::{Flag, FlagSet, GpuMsInterval, ParseError, PointKey, Status, MIN_SAMPLES_CI95};
 
 /// Bumped when a column is renamed or changes meaning; `mfx merge` and `mfx compare` refuse to
@@ -37,6 +39,11 @@ pub struct Col {
 impl Col {
     pub const fn new(name: &'static str, doc: &'static str) -> Col {
         Col { name, doc }
+    }
+
+    /// The type of this column's cells (declared in `types.rs`).
+    pub fn cell_type(self) -> CellType {
+        types::cell_type(self)
     }
 }
 
@@ -1464,13 +1471,14 @@ pub fn markdown() -> String {
     let mut s = String::new();
     for g in GROUPS {
         s.push_str(&format!(
-            "\n**{}**\n\n| column | meaning |\n|---|---|\n",
+            "\n**{}**\n\n| column | type | meaning |\n|---|---|---|\n",
             g.title
         ));
         for c in g.cols {
             s.push_str(&format!(
-                "| `{}` | {} |\n",
+                "| `{}` | {} | {} |\n",
                 c.name,
+                c.cell_type(),
                 c.doc.replace('|', "\\|")
             ));
         }
