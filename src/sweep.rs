@@ -25,6 +25,11 @@ pub struct SweepArgs {
     /// Run shard I of N (e.g. 0/4): every scene group lands in exactly one shard.
     #[arg(long, value_parser = crate::parse_shard)]
     pub shard: Option<(usize, usize)>,
+    /// With --shard: balance the shards by each group's time in this earlier run (a run folder,
+    /// a folder of shard folders, or a runs table) instead of group index mod N. Give every shard
+    /// of a job the same run.
+    #[arg(long, value_name = "RUN", requires = "shard")]
+    pub balance_from: Option<PathBuf>,
     /// Continue the run in --out: only the points without a row are run, appended.
     #[arg(long, conflicts_with = "force")]
     pub resume: bool,
@@ -171,15 +176,22 @@ fn filter_groups(groups: Vec<Group>, pats: &[glob::Pattern]) -> Vec<Group> {
         .collect()
 }
 
-/// The groups of this sweep on an adapter of this kind: expanded, sharded, filtered.
+/// The groups of this sweep on an adapter of this kind: expanded, sharded (by index mod N, or
+/// balanced by a previous run's times), filtered; and each shard's estimated seconds when
+/// balanced.
 fn groups_for(
     suite: &scenarios::Suite,
     software: bool,
     shard: (usize, usize),
+    balance: Option<&bench_core::shard::PreviousTimes>,
     pats: &[glob::Pattern],
-) -> Result<Vec<Group>> {
+) -> Result<(Vec<Group>, Vec<f64>)> {
     let groups = runner::expand(suite, software)?;
-    Ok(filter_groups(runner::shard_groups(groups, shard), pats))
+    let (mine, load) = match balance {
+        Some(prev) => bench_core::shard::balanced(groups, shard, prev),
+        None => (runner::shard_groups(groups, shard), Vec::new()),
+    };
+    Ok((filter_groups(mine, pats), load))
 }
 
 /// Rows a group still owes: its points and floors without a row in `done`.
@@ -318,10 +330,18 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
     }
     let pats = filters(&a.filter)?;
     let shard = a.shard.unwrap_or((0, 1));
+    let balance = a
+        .balance_from
+        .as_deref()
+        .map(bench_core::shard::PreviousTimes::read)
+        .transpose()
+        .map_err(|e| usage(format!("--balance-from: {e}")))?;
     // The points on either kind of adapter (the `[software]` profile may change resolutions):
     // a filter that matches nothing on both is a typo, refused now.
-    let on_gpu = groups_for(&suite, false, shard, &pats).map_err(|e| usage(e.to_string()))?;
-    let on_software = groups_for(&suite, true, shard, &pats).map_err(|e| usage(e.to_string()))?;
+    let (on_gpu, load_gpu) = groups_for(&suite, false, shard, balance.as_ref(), &pats)
+        .map_err(|e| usage(e.to_string()))?;
+    let (on_software, load_software) = groups_for(&suite, true, shard, balance.as_ref(), &pats)
+        .map_err(|e| usage(e.to_string()))?;
     if !pats.is_empty() && on_gpu.is_empty() && on_software.is_empty() {
         return Err(usage(format!(
             "--filter {}: matches no method, scene or point key of suite '{}'{} (`--dry-run` without --filter lists them)",
@@ -332,6 +352,21 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
     }
     if a.dry_run {
         print_points(&suite, &on_gpu, &on_software);
+        if !load_gpu.is_empty() {
+            let fmt = |l: &[f64]| {
+                l.iter()
+                    .enumerate()
+                    .map(|(i, s)| format!("{i}: {s:.0} s"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            println!(
+                "shards balanced by {}'s times, estimated seconds per shard on a GPU: {}; on a software adapter: {}",
+                a.balance_from.as_deref().unwrap_or(Path::new("?")).display(),
+                fmt(&load_gpu),
+                fmt(&load_software)
+            );
+        }
         return Ok(());
     }
     let fail_frac = a
@@ -423,10 +458,10 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
 
     bench_core::interrupt::install()?;
     let gpu = Gpu::new(&a.gpu.options())?;
-    let groups = if gpu.facts.is_software {
-        on_software
+    let (groups, load) = if gpu.facts.is_software {
+        (on_software, load_software)
     } else {
-        on_gpu
+        (on_gpu, load_gpu)
     };
     if groups.is_empty() {
         return Err(usage(format!(
@@ -458,6 +493,15 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
     manifest.software_profile = gpu.facts.is_software && suite.software.is_some();
     manifest.limits = gpu.profile;
     manifest.points_total = total;
+    manifest.gpu = bench_core::manifest::GpuIdentity::of(&gpu);
+    manifest.shard_balance =
+        a.balance_from
+            .as_ref()
+            .map(|from| bench_core::manifest::ShardBalance {
+                from: from.display().to_string(),
+                rule: bench_core::shard::RULE.to_string(),
+                estimated_s: load.clone(),
+            });
     manifest.resumed_points = done.len();
     // The cross-GPU calibration set, before any point (a software adapter's time says nothing
     // of a GPU, and would cost seconds).
@@ -548,6 +592,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         flip: !a.no_flip,
         done,
         interrupted: Some(bench_core::interrupt::requested),
+        row_cells: bench_core::manifest::row_cells(&manifest.gpu, &manifest.job),
     };
     let outcome = runner::run(&gpu, &suite, &groups, &opts, &mut sink);
     bar.finish_and_clear();
@@ -582,6 +627,14 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         )
     });
     write_runs_json(&out, &context_block(&manifest, SCHEMA_VERSION, clocks))?;
+    // The typed twin: every column as schema declares it, run.json in its metadata.
+    let typed = mfx_table::write_runs_parquet(&out)?;
+    if !typed.text_fallback.is_empty() {
+        eprintln!(
+            "mfx: warning: a cell off its column's declared type (a bug to report):\n{}",
+            typed.describe()
+        );
+    }
 
     // What happened, in words a log keeps (no terminal needed).
     eprintln!(

@@ -19,6 +19,7 @@ fn exists(token: &str) -> bool {
         "schema",
         "stats",
         "flip",
+        "table",
     ];
     // `packing.rs/.wgsl` names two files.
     let names: Vec<String> = match t.split_once("/.") {

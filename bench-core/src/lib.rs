@@ -29,6 +29,7 @@ pub mod record;
 pub mod reference;
 pub mod runner;
 pub mod shading;
+pub mod shard;
 pub mod studies;
 /// Test helpers (a shared adapter, scenes, run-and-compare): built for this crate's unit tests
 /// and, through the `testing` feature its dev-dependency on itself turns on, for its

@@ -149,6 +149,7 @@ const INT: &[Col] = &[
     cols::FRAGMENTS_TAILED,
     cols::VS_INVOCATIONS,
     cols::PS_INVOCATIONS,
+    cols::GPU_OTHER_PROCESSES,
 ];
 
 /// Unsigned integer columns: seeds that use all 64 bits.
