@@ -17,6 +17,8 @@ lines=$(wc -l <README.md)
 bash scripts/check-readme-commands.sh
 # The `default` suite under WebGPU's default limits (--limits webgpu), [software] profile: ~1 min.
 bash scripts/test-limits.sh
+# runs.parquet and the reference dataset read by polars (pip) with their types: ~1 min.
+bash scripts/test-parquet.sh
 # Sharding on a one-node Slurm cluster, the cross-backend report, the report in headless Chromium.
 bash scripts/test-distrib.sh
 left=$(find "$tmp" -maxdepth 1 -name 'mfx-*' -newer "$stamp" | sort)

@@ -1,5 +1,6 @@
 //! `mfx`: sweep multi-fragment methods on a GPU, log tidy CSV, and report.
 
+mod bundle;
 mod sweep;
 
 use std::path::PathBuf;
@@ -146,12 +147,35 @@ enum Cmd {
         #[arg(long)]
         strict: bool,
     },
-    /// Turn a run folder's runs.csv into PNG/SVG plots and an HTML page.
+    /// Turn a run folder's runs.csv (or runs.parquet) into PNG/SVG plots and an HTML page; a
+    /// bundle (`mfx bundle`) is unpacked first, into --out (default: its name without .tar.gz).
     Report {
         dir: PathBuf,
         /// Adapter name (substring) used as the baseline of cross-adapter speedups.
         #[arg(long)]
         baseline: Option<String>,
+        /// Where a bundle is unpacked and reported (bundles only).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// One attachable file of a run: runs.parquet, run.json, samples, summary, report (a
+    /// .tar.gz that `mfx report` and `mfx compare` read where they read a run folder).
+    Bundle {
+        run: PathBuf,
+        /// The bundle file (default: <run folder name>.mfx.tar.gz here).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Stack every run folder under ROOT into one Parquet file (a `run_folder` column says
+    /// which), for history queries in pandas, polars or DuckDB.
+    Dataset {
+        #[arg(default_value = "results/reference")]
+        root: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        /// Keep folders holding merged_from.txt (merges of runs stored beside them).
+        #[arg(long)]
+        with_merged: bool,
     },
     /// Render one scene with one method to a PNG (and the CPU reference beside it).
     Render {
@@ -419,12 +443,31 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Cmd::Report { dir, baseline } => {
-            let page = report::build(&dir, baseline.as_deref())
-                .with_context(|| format!("report of {}", dir.display()))?;
+        Cmd::Report { dir, baseline, out } => {
+            let page = if mfx_table::bundle::is_bundle(&dir) {
+                bundle::report_of_bundle(&dir, out.as_deref(), baseline.as_deref())?
+            } else if out.is_some() {
+                return Err(usage(format!(
+                    "--out is for a bundle; {} is not one (its report goes in its report/)",
+                    dir.display()
+                )));
+            } else {
+                report::build(&dir, baseline.as_deref())
+                    .with_context(|| format!("report of {}", dir.display()))?
+            };
             println!("report: {}", page.display());
             Ok(())
         }
+        Cmd::Bundle { run, out } => {
+            let file = bundle::bundle(&run, out.as_deref())?;
+            println!("bundle: {}", file.display());
+            Ok(())
+        }
+        Cmd::Dataset {
+            root,
+            out,
+            with_merged,
+        } => bundle::dataset(&root, &out, with_merged),
         Cmd::Render {
             scene,
             params,

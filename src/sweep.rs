@@ -26,6 +26,11 @@ pub struct SweepArgs {
     /// Run shard I of N (e.g. 0/4): every scene group lands in exactly one shard.
     #[arg(long, value_parser = crate::parse_shard)]
     pub shard: Option<(usize, usize)>,
+    /// With --shard: balance the shards by each group's time in this earlier run (a run folder,
+    /// a folder of shard folders, or a runs table) instead of group index mod N. Give every shard
+    /// of a job the same run.
+    #[arg(long, value_name = "RUN", requires = "shard")]
+    pub balance_from: Option<PathBuf>,
     /// Continue the run in --out: only the points without a row are run, appended.
     #[arg(long, conflicts_with = "force")]
     pub resume: bool,
@@ -246,15 +251,22 @@ fn filter_groups(groups: Vec<Group>, pats: &[glob::Pattern]) -> Vec<Group> {
         .collect()
 }
 
-/// The groups of this sweep on an adapter of this kind: expanded, sharded, filtered.
+/// The groups of this sweep on an adapter of this kind: expanded, sharded (by index mod N, or
+/// balanced by a previous run's times), filtered; and each shard's estimated seconds when
+/// balanced.
 fn groups_for(
     suite: &scenarios::Suite,
     software: bool,
     shard: (usize, usize),
+    balance: Option<&bench_core::shard::PreviousTimes>,
     pats: &[glob::Pattern],
-) -> Result<Vec<Group>> {
+) -> Result<(Vec<Group>, Vec<f64>)> {
     let groups = runner::expand(STUDIES, suite, software)?;
-    Ok(filter_groups(runner::shard_groups(groups, shard), pats))
+    let (mine, load) = match balance {
+        Some(prev) => bench_core::shard::balanced(groups, shard, prev),
+        None => (runner::shard_groups(groups, shard), Vec::new()),
+    };
+    Ok((filter_groups(mine, pats), load))
 }
 
 /// Rows a group still owes: its points and floors without a row in `done`.
@@ -382,6 +394,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
     let plan = plan_points(a, &suite)?;
     if a.dry_run {
         print_points(&suite, &plan.on_gpu, &plan.on_software);
+        print_balance(a, &plan);
         return Ok(());
     }
     let fail_frac = check_baseline_args(a)?;
@@ -389,13 +402,13 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
 
     bench_core::interrupt::install()?;
     let gpu = Gpu::new(&a.gpu.options())?;
-    let groups = groups_on(a, &gpu, plan)?;
+    let (groups, load) = groups_on(a, &gpu, plan)?;
     let total = runner::rows_in(&groups);
     std::fs::create_dir_all(&folder.out)
         .with_context(|| format!("creating {}", folder.out.display()))?;
     // Studies that write images (shadows) put them beside the CSV.
     std::env::set_var("MFX_OUT_DIR", &folder.out);
-    let mut manifest = start_manifest(&gpu, &suite, &folder, total)?;
+    let mut manifest = start_manifest(a, &gpu, &suite, &folder, total, &load)?;
     announce(&gpu, &suite, &groups, total, &folder);
 
     let bar = progress_bar((total - folder.done.len().min(total)) as u64);
@@ -408,6 +421,7 @@ pub fn sweep(a: &SweepArgs) -> Result<()> {
         flip: !a.no_flip,
         done: std::mem::take(&mut folder.done),
         interrupted: Some(bench_core::interrupt::requested),
+        row_cells: bench_core::manifest::row_cells(&manifest.gpu, &manifest.job),
     };
     let outcome = runner::run(&gpu, STUDIES, &suite, &groups, &opts, &mut sink);
     bar.finish_and_clear();
@@ -464,6 +478,9 @@ struct PointPlan {
     shard: (usize, usize),
     on_gpu: Vec<Group>,
     on_software: Vec<Group>,
+    /// Estimated seconds per shard when balanced by a previous run (else empty).
+    load_gpu: Vec<f64>,
+    load_software: Vec<f64>,
 }
 
 /// The points on either kind of adapter (the `[software]` profile may change resolutions): a
@@ -471,8 +488,16 @@ struct PointPlan {
 fn plan_points(a: &SweepArgs, suite: &scenarios::Suite) -> Result<PointPlan> {
     let pats = filters(&a.filter)?;
     let shard = a.shard.unwrap_or((0, 1));
-    let on_gpu = groups_for(suite, false, shard, &pats).map_err(|e| usage(e.to_string()))?;
-    let on_software = groups_for(suite, true, shard, &pats).map_err(|e| usage(e.to_string()))?;
+    let balance = a
+        .balance_from
+        .as_deref()
+        .map(bench_core::shard::PreviousTimes::read)
+        .transpose()
+        .map_err(|e| usage(format!("--balance-from: {e}")))?;
+    let (on_gpu, load_gpu) = groups_for(suite, false, shard, balance.as_ref(), &pats)
+        .map_err(|e| usage(e.to_string()))?;
+    let (on_software, load_software) = groups_for(suite, true, shard, balance.as_ref(), &pats)
+        .map_err(|e| usage(e.to_string()))?;
     if !pats.is_empty() && on_gpu.is_empty() && on_software.is_empty() {
         return Err(usage(format!(
             "--filter {}: matches no method, scene or point key of suite '{}'{} (`--dry-run` without --filter lists them)",
@@ -485,7 +510,29 @@ fn plan_points(a: &SweepArgs, suite: &scenarios::Suite) -> Result<PointPlan> {
         shard,
         on_gpu,
         on_software,
+        load_gpu,
+        load_software,
     })
+}
+
+/// The estimated seconds per shard of a balanced sharding (`--balance-from`), for `--dry-run`.
+fn print_balance(a: &SweepArgs, plan: &PointPlan) {
+    if plan.load_gpu.is_empty() {
+        return;
+    }
+    let fmt = |l: &[f64]| {
+        l.iter()
+            .enumerate()
+            .map(|(i, s)| format!("{i}: {s:.0} s"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    println!(
+        "shards balanced by {}'s times, estimated seconds per shard on a GPU: {}; on a software adapter: {}",
+        a.balance_from.as_deref().unwrap_or(Path::new("?")).display(),
+        fmt(&plan.load_gpu),
+        fmt(&plan.load_software)
+    );
 }
 
 /// `--fail-on-slower`, `--save-baseline` and `--baseline`, checked now (the baseline to
@@ -613,13 +660,13 @@ fn open_run_folder(
     })
 }
 
-/// The groups this adapter runs (a software adapter takes the `[software]` profile's); none is
-/// a filter that matches nothing here.
-fn groups_on(a: &SweepArgs, gpu: &Gpu, plan: PointPlan) -> Result<Vec<Group>> {
-    let groups = if gpu.facts.is_software {
-        plan.on_software
+/// The groups this adapter runs (a software adapter takes the `[software]` profile's), and
+/// the estimated seconds per shard where balanced; none is a filter that matches nothing here.
+fn groups_on(a: &SweepArgs, gpu: &Gpu, plan: PointPlan) -> Result<(Vec<Group>, Vec<f64>)> {
+    let (groups, load) = if gpu.facts.is_software {
+        (plan.on_software, plan.load_software)
     } else {
-        plan.on_gpu
+        (plan.on_gpu, plan.load_gpu)
     };
     if groups.is_empty() {
         return Err(usage(format!(
@@ -633,16 +680,18 @@ fn groups_on(a: &SweepArgs, gpu: &Gpu, plan: PointPlan) -> Result<Vec<Group>> {
             }
         )));
     }
-    Ok(groups)
+    Ok((groups, load))
 }
 
 /// The run record, written before any point: the command, the suite, the adapter, and (on a
 /// GPU) the cross-GPU calibration set's time.
 fn start_manifest(
+    a: &SweepArgs,
     gpu: &Gpu,
     suite: &scenarios::Suite,
     folder: &RunFolder,
     total: usize,
+    load: &[f64],
 ) -> Result<RunManifest> {
     let mut manifest = RunManifest::new(
         std::env::args().collect(),
@@ -658,8 +707,18 @@ fn start_manifest(
     manifest.software_profile = gpu.facts.is_software && suite.software.is_some();
     manifest.limits = gpu.profile;
     manifest.points_total = total;
+    manifest.gpu = bench_core::manifest::GpuIdentity::of(gpu);
+    manifest.shard_balance =
+        a.balance_from
+            .as_ref()
+            .map(|from| bench_core::manifest::ShardBalance {
+                from: from.display().to_string(),
+                rule: bench_core::shard::RULE.to_string(),
+                estimated_s: load.to_vec(),
+            });
     manifest.resumed_points = folder.done.len();
-    // A software adapter's time says nothing of a GPU, and would cost seconds.
+    // The cross-GPU calibration set, before any point (a software adapter's time says nothing
+    // of a GPU, and would cost seconds).
     if !gpu.facts.is_software {
         let runs = bench_core::manifest::CALIBRATION_RUNS;
         manifest.calibration =
@@ -800,6 +859,14 @@ fn finish_manifest(
         )
     });
     write_runs_json(out, &context_block(manifest, SCHEMA_VERSION, clocks))?;
+    // The typed twin: every column as schema declares it, run.json in its metadata.
+    let typed = mfx_table::write_runs_parquet(out)?;
+    if !typed.text_fallback.is_empty() {
+        eprintln!(
+            "mfx: warning: a cell off its column's declared type (a bug to report):\n{}",
+            typed.describe()
+        );
+    }
     Ok(())
 }
 

@@ -25,6 +25,7 @@ fn exists(token: &str) -> bool {
         "stats",
         "analysis",
         "flip",
+        "table",
     ];
     // `packing.rs/.wgsl` names two files.
     let names: Vec<String> = match t.split_once("/.") {

@@ -171,11 +171,12 @@ fn distinct(rows: &[Rec], f: impl Fn(&Rec) -> String) -> Vec<String> {
     out
 }
 
-/// `runs.csv` of a folder or the path itself, and `samples.csv` (or `samples.csv.gz`) beside it
-/// when present.
+/// `runs.csv` (else `runs.parquet`) of a folder or the path itself, and `samples.csv` (or
+/// `samples.csv.gz`) beside it when present.
 fn locate(p: &Path) -> Result<(PathBuf, Option<PathBuf>)> {
     let csv = if p.is_dir() {
-        p.join("runs.csv")
+        mfx_table::in_folder(p)
+            .with_context(|| format!("{}: no runs.csv or runs.parquet there", p.display()))?
     } else {
         p.to_path_buf()
     };
@@ -332,6 +333,18 @@ impl AbReport {
 }
 
 pub(crate) fn load_side(p: &Path) -> Result<(Side, Runs, Option<SampleMap>)> {
+    // A bundle (`mfx bundle`) is read through a temporary folder; the side names the bundle.
+    if mfx_table::bundle::is_bundle(p) {
+        let opened = mfx_table::bundle::open(p)?;
+        let (mut side, runs, samples) = load_side(opened.dir())?;
+        side.runs_csv = p.join(side.runs_csv.file_name().unwrap_or_default());
+        side.samples_csv = side
+            .samples_csv
+            .as_deref()
+            .and_then(Path::file_name)
+            .map(|n| p.join(n));
+        return Ok((side, runs, samples));
+    }
     let (csv, samples_csv) = locate(p)?;
     let runs = Runs::load(&csv)?;
     let schemas = distinct(&runs.rows, |r| r.get(cols::SCHEMA).to_string());

@@ -229,30 +229,22 @@ pub struct Runs {
 }
 
 impl Runs {
+    /// Reads a runs table: `runs.csv` or `runs.parquet` (typed cells read back as the CSV's
+    /// text, so both give the same rows).
     pub fn load(path: &Path) -> Result<Runs> {
-        let mut rdr =
-            csv::Reader::from_path(path).with_context(|| format!("reading {}", path.display()))?;
-        let header: Vec<String> = rdr
-            .headers()
-            .with_context(|| format!("{}: no header", path.display()))?
-            .iter()
-            .map(String::from)
-            .collect();
+        let t = mfx_table::read(path).with_context(|| format!("reading {}", path.display()))?;
+        let header = t.header;
         if !header.iter().any(|h| h == cols::SCHEMA.name) {
             bail!(
-                "{}: not an mfx runs.csv (no 'schema' column)",
+                "{}: not an mfx runs table (no 'schema' column)",
                 path.display()
             );
         }
-        let mut rows = Vec::new();
-        for (i, rec) in rdr.records().enumerate() {
-            let rec = rec.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
-            rows.push(Rec(header
-                .iter()
-                .cloned()
-                .zip(rec.iter().map(String::from))
-                .collect()));
-        }
+        let rows = t
+            .rows
+            .into_iter()
+            .map(|r| Rec(header.iter().cloned().zip(r).collect()))
+            .collect();
         let mut runs = Runs {
             header,
             rows,

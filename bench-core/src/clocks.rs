@@ -61,6 +61,9 @@ pub struct MonitorSample {
     pub temp_c: Option<f64>,
     pub power_w: Option<f64>,
     pub throttle_reasons: Vec<&'static str>,
+    /// Processes other than this one holding the GPU ([`other_processes`]); `None` without a
+    /// process list or when it could not be read.
+    pub other_processes: Option<u32>,
 }
 
 impl MonitorSample {
@@ -91,6 +94,61 @@ pub fn parse_pci_bus_id(s: &str) -> Option<(u32, u32, u32, u32)> {
     Some((hex(domain)?, hex(bus)?, hex(dev)?, hex(func)?))
 }
 
+/// Where the processes holding the GPU come from: NVML's lists on an NVIDIA GPU; a test feeds
+/// its own (the GPU's process list cannot be faked through NVML).
+pub trait ProcessList: Send + Sync {
+    /// The ids of every process holding the GPU now (this one included, where listed).
+    fn pids(&self) -> Result<Vec<u32>, String>;
+}
+
+/// A fixed list (tests): every read returns `pids`.
+#[derive(Clone, Debug)]
+pub struct FixedProcesses(pub Vec<u32>);
+
+impl ProcessList for FixedProcesses {
+    fn pids(&self) -> Result<Vec<u32>, String> {
+        Ok(self.0.clone())
+    }
+}
+
+/// This process's ids: `std::process::id()` and, where `/proc/self/status` has an `NSpid`
+/// line, its id in every pid namespace it can see.
+pub fn own_pids() -> Vec<u32> {
+    static OWN: std::sync::OnceLock<Vec<u32>> = std::sync::OnceLock::new();
+    OWN.get_or_init(read_own_pids).clone()
+}
+
+fn read_own_pids() -> Vec<u32> {
+    let mut own = vec![std::process::id()];
+    if let Ok(status) = std::fs::read_to_string("/proc/self/status") {
+        if let Some(line) = status.lines().find_map(|l| l.strip_prefix("NSpid:")) {
+            own.extend(
+                line.split_whitespace()
+                    .filter_map(|p| p.parse::<u32>().ok()),
+            );
+        }
+    }
+    own.sort_unstable();
+    own.dedup();
+    own
+}
+
+/// How many processes other than this one `pids` (a GPU's process list) holds. Where none of
+/// `own` is listed, NVML reports ids of another pid namespace (this process runs in a
+/// container and NVML lists host pids), so one listed process is taken for this one and the
+/// others are the rest; a list that does not show this process at all misses at most one other.
+pub fn other_processes(pids: &[u32], own: &[u32]) -> u32 {
+    let mut listed = pids.to_vec();
+    listed.sort_unstable();
+    listed.dedup();
+    let others = listed.iter().filter(|p| !own.contains(p)).count();
+    if others == listed.len() {
+        others.saturating_sub(1) as u32
+    } else {
+        others as u32
+    }
+}
+
 /// An open NVML device.
 pub struct GpuMonitor {
     nvml: Nvml,
@@ -98,6 +156,10 @@ pub struct GpuMonitor {
     name: String,
     bus_id: String,
     driver: String,
+    /// `GPU-…` (empty where NVML gives none).
+    uuid: String,
+    /// The board serial (empty where NVML gives none).
+    serial: String,
     default_sm_mhz: Option<f64>,
     max_sm_mhz: Option<f64>,
     /// Peak memory bandwidth in bytes/s ([`peak_bandwidth`]).
@@ -171,6 +233,8 @@ impl GpuMonitor {
             .device_by_index(index)
             .map_err(|e| format!("NVML device {index}: {e}"))?;
         let name = d.name().unwrap_or_default();
+        let uuid = d.uuid().unwrap_or_default();
+        let serial = d.serial().unwrap_or_default();
         let default_sm_mhz = d.default_applications_clock(Clock::SM).ok().map(f64::from);
         let max_sm_mhz = d.max_clock_info(Clock::SM).ok().map(f64::from);
         let peak_bandwidth = match (d.memory_bus_width(), d.max_clock_info(Clock::Memory)) {
@@ -184,6 +248,8 @@ impl GpuMonitor {
             name,
             bus_id,
             driver,
+            uuid,
+            serial,
             default_sm_mhz,
             max_sm_mhz,
             peak_bandwidth,
@@ -211,7 +277,17 @@ impl GpuMonitor {
             temp_c: d.temperature(TemperatureSensor::Gpu).ok().map(f64::from),
             power_w: d.power_usage().ok().map(|mw| mw as f64 / 1000.0),
             throttle_reasons: reasons,
+            other_processes: None,
         }
+    }
+
+    /// The GPU's UUID (`GPU-…`; empty where NVML gives none).
+    pub fn uuid(&self) -> &str {
+        &self.uuid
+    }
+    /// The board serial (empty where NVML gives none).
+    pub fn serial(&self) -> &str {
+        &self.serial
     }
 
     /// The default SM clock (NVML's default application clock), the throttle rule's reference.
@@ -242,10 +318,31 @@ impl GpuMonitor {
             ("nvml_device", self.name.clone()),
             ("nvml_pci_bus_id", self.bus_id.clone()),
             ("nvml_driver_version", self.driver.clone()),
+            ("gpu_uuid", self.uuid.clone()),
+            ("gpu_serial", self.serial.clone()),
             ("sm_clock_mhz_default", f(self.default_sm_mhz)),
             ("sm_clock_mhz_max", f(self.max_sm_mhz)),
             ("peak_bandwidth_bytes_per_s", f(self.peak_bandwidth)),
         ]
+    }
+}
+
+/// NVML's compute and graphics process lists of the device (a Vulkan process is listed as
+/// graphics, a CUDA one as compute); one list that cannot be read is left out, both is an error.
+impl ProcessList for GpuMonitor {
+    fn pids(&self) -> Result<Vec<u32>, String> {
+        let d = self
+            .nvml
+            .device_by_index(self.index)
+            .map_err(|e| format!("NVML device {}: {e}", self.index))?;
+        let (c, g) = (
+            d.running_compute_processes(),
+            d.running_graphics_processes(),
+        );
+        if let (Err(a), Err(b)) = (&c, &g) {
+            return Err(format!("NVML process lists: compute: {a}; graphics: {b}"));
+        }
+        Ok(c.into_iter().chain(g).flatten().map(|p| p.pid).collect())
     }
 }
 
@@ -261,6 +358,8 @@ pub struct PointClocks {
     power_sum: f64,
     power_n: usize,
     reasons: BTreeSet<&'static str>,
+    /// The most other processes seen at once (`None`: no process list read).
+    others_max: Option<u32>,
 }
 
 impl PointClocks {
@@ -289,6 +388,7 @@ impl PointClocks {
             power_sum: 0.0,
             power_n: 0,
             reasons: BTreeSet::new(),
+            others_max: None,
         }
     }
 
@@ -320,10 +420,13 @@ impl PointClocks {
         self.power_sum += other.power_sum;
         self.power_n += other.power_n;
         self.reasons.extend(other.reasons);
+        self.others_max = self.others_max.max(other.others_max);
     }
 
-    /// A discarded (throttled) sample's reading: only its reasons and temperature count.
+    /// A discarded (throttled) sample's reading: only its reasons, temperature and other
+    /// processes count (the point was still measured while they held the GPU).
     pub fn push_discarded(&mut self, s: &MonitorSample) {
+        self.others_max = self.others_max.max(s.other_processes);
         if let Some(t) = s.temp_c {
             self.temp_max = Some(self.temp_max.map_or(t, |m| m.max(t)));
         }
@@ -337,6 +440,10 @@ impl PointClocks {
 
     pub fn sm_mean(&self) -> Option<f64> {
         (!self.sm.is_empty()).then(|| self.sm.iter().sum::<f64>() / self.sm.len() as f64)
+    }
+    /// Whether another process held the GPU during a reading (→ flag `gpu_shared`).
+    pub fn gpu_shared(&self) -> bool {
+        self.others_max.is_some_and(|n| n > 0)
     }
     /// Whether any reading saw a slowdown reason (→ flag `throttled`).
     pub fn slowdown(&self) -> bool {
@@ -373,6 +480,10 @@ impl PointClocks {
                 self.reasons.iter().copied().collect::<Vec<_>>().join("|"),
             ),
             (cols::CLOCK_SOURCE, source),
+            (
+                cols::GPU_OTHER_PROCESSES,
+                self.others_max.map(|n| n.to_string()).unwrap_or_default(),
+            ),
         ]
     }
 }
@@ -421,6 +532,7 @@ mod tests {
             temp_c: Some(t),
             power_w: Some(300.0),
             throttle_reasons: reasons,
+            other_processes: None,
         };
         p.push(&r(1980.0, 40.0, vec!["gpu_idle"]));
         p.push(&r(1950.0, 45.0, vec!["sw_power_cap"]));
@@ -439,7 +551,8 @@ mod tests {
         );
         assert_eq!(cells["clock_source"], "nvml");
         assert!(p.slowdown());
-        assert_eq!(cells.len(), 8);
+        assert_eq!(cells.len(), 9);
+        assert_eq!(cells["gpu_other_processes"], "", "no process list read");
     }
 
     #[test]
@@ -455,6 +568,45 @@ mod tests {
         }
         assert!(!p.slowdown());
         assert_eq!(p.sm_mean(), None);
+    }
+
+    #[test]
+    fn other_processes_leave_this_one_out_also_under_another_pid_namespace() {
+        let own = [4242, 17];
+        assert_eq!(other_processes(&[], &own), 0);
+        assert_eq!(other_processes(&[4242], &own), 0, "only this process");
+        assert_eq!(
+            other_processes(&[4242, 4242, 900], &own),
+            1,
+            "listed twice: once"
+        );
+        assert_eq!(
+            other_processes(&[17, 900, 901], &own),
+            2,
+            "its id in another namespace"
+        );
+        // NVML lists host pids and this process runs in a container: one is taken for it.
+        assert_eq!(other_processes(&[800], &own), 0);
+        assert_eq!(other_processes(&[800, 900], &own), 1);
+        assert!(own_pids().contains(&std::process::id()));
+    }
+
+    #[test]
+    fn a_reading_with_another_process_marks_the_point_shared() {
+        let mut p = PointClocks::unavailable("no NVML");
+        let s = |n| MonitorSample {
+            other_processes: n,
+            ..Default::default()
+        };
+        p.push(&s(Some(0)));
+        assert!(!p.gpu_shared());
+        let mut later = PointClocks::unavailable("no NVML");
+        later.push_discarded(&s(Some(2)));
+        p.merge(later);
+        assert!(p.gpu_shared(), "a discarded sample counts too");
+        let cells: std::collections::BTreeMap<&str, String> =
+            p.to_cells().into_iter().map(|(c, v)| (c.name, v)).collect();
+        assert_eq!(cells["gpu_other_processes"], "2");
     }
 
     #[test]

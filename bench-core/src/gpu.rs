@@ -181,6 +181,9 @@ pub struct Gpu {
     /// NVML for this adapter's clocks, temperature, power and throttle reasons, or why not
     /// (no NVIDIA driver, not an NVIDIA adapter): every point's `clock_source` says which.
     pub monitor: std::result::Result<crate::clocks::GpuMonitor, String>,
+    /// Where the processes holding the GPU are read after every timed frame (flag
+    /// `gpu_shared`): `None` reads NVML's lists through `monitor`; a test sets its own.
+    pub process_list: Option<Box<dyn crate::clocks::ProcessList>>,
     /// The busy kernel that lifts a lowered SM clock (`measure`), built on first use.
     spin: std::sync::OnceLock<Kernel>,
     /// The fixed kernel timed after each sample (`measure`'s canary rule), built on first use,
@@ -356,6 +359,7 @@ impl Gpu {
             profile,
             lost,
             monitor,
+            process_list: None,
             spin: std::sync::OnceLock::new(),
             canary: std::sync::OnceLock::new(),
             roofs: std::sync::OnceLock::new(),
@@ -365,6 +369,28 @@ impl Gpu {
             dedicated_textures: Default::default(),
             gles: None,
         })
+    }
+
+    /// How many processes other than this one hold the GPU now (`process_list`, else NVML's
+    /// lists); `None` without a list or when it cannot be read.
+    pub fn other_processes(&self) -> Option<u32> {
+        let pids = match &self.process_list {
+            Some(l) => l.pids(),
+            None => match &self.monitor {
+                Ok(m) => crate::clocks::ProcessList::pids(m),
+                Err(_) => return None,
+            },
+        };
+        match pids {
+            Ok(p) => Some(crate::clocks::other_processes(
+                &p,
+                &crate::clocks::own_pids(),
+            )),
+            Err(e) => {
+                log::warn!("GPU process list: {e}");
+                None
+            }
+        }
     }
 
     /// A texture, its memory placed as `texture_memory` says (every method's textures go

@@ -29,6 +29,7 @@ pub mod merge;
 pub mod record;
 pub mod roofs;
 pub mod runner;
+pub mod shard;
 pub mod study;
 /// Test helpers (a shared adapter, small scenes): built for this crate's unit tests and,
 /// through the `testing` feature, for the study crates' tests; not part of the release library.

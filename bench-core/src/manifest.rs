@@ -45,6 +45,125 @@ impl AdapterInfo {
     }
 }
 
+/// Which physical GPU ran the points: NVML's identity where NVML has the device, else what
+/// wgpu's adapter info says (`run.json`'s `gpu`; its `uuid`, `serial` and `pci_bus_id` are also
+/// row columns, so a merge of shards from several GPUs says which row ran where).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct GpuIdentity {
+    /// `GPU-…` from NVML; empty without it.
+    pub uuid: String,
+    /// The board serial from NVML; empty where NVML has none.
+    pub serial: String,
+    /// domain:bus:device.function: NVML's, else wgpu's; empty where neither says.
+    pub pci_bus_id: String,
+    /// PCI vendor and device ids from wgpu's adapter info (0 where the backend gives none).
+    pub vendor_id: u32,
+    pub device_id: u32,
+    /// `nvml` or `wgpu adapter info (…why not NVML)`.
+    pub source: String,
+    /// How the processes holding the GPU are read for `gpu_shared`, and what the first read
+    /// saw of this process (see `clocks::other_processes`).
+    pub process_list: String,
+}
+
+impl GpuIdentity {
+    /// The identity of `gpu`'s device, and one read of its process list.
+    pub fn of(gpu: &crate::gpu::Gpu) -> Self {
+        let info = gpu.adapter.get_info();
+        let mut id = GpuIdentity {
+            pci_bus_id: info.device_pci_bus_id.clone(),
+            vendor_id: info.vendor,
+            device_id: info.device,
+            ..Default::default()
+        };
+        match &gpu.monitor {
+            Ok(m) => {
+                id.uuid = m.uuid().to_string();
+                id.serial = m.serial().to_string();
+                if !m.bus_id().is_empty() {
+                    id.pci_bus_id = m.bus_id().to_string();
+                }
+                id.source = "nvml".into();
+            }
+            Err(why) => id.source = format!("wgpu adapter info ({why})"),
+        }
+        let own = crate::clocks::own_pids();
+        let pids = match (&gpu.process_list, &gpu.monitor) {
+            (Some(l), _) => l.pids().map(|p| ("a given list", p)),
+            (None, Ok(m)) => crate::clocks::ProcessList::pids(m).map(|p| ("nvml", p)),
+            (None, Err(why)) => Err(why.clone()),
+        };
+        id.process_list = match pids {
+            Err(why) => format!("none: {why} (gpu_other_processes stays empty)"),
+            Ok((src, p)) if p.iter().any(|x| own.contains(x)) => format!(
+                "{src}: this process is listed (pid {:?}); {} other(s) at the start",
+                own,
+                crate::clocks::other_processes(&p, &own)
+            ),
+            Ok((src, p)) if !p.is_empty() => format!(
+                "{src}: this process is not listed by its own ids {own:?} (the list has another pid namespace's): one listed process is taken for it; {} other(s) at the start",
+                crate::clocks::other_processes(&p, &own)
+            ),
+            Ok((src, _)) => format!(
+                "{src}: no process listed at the start, this one neither (a list that hides this process may hide one other)"
+            ),
+        };
+        id
+    }
+}
+
+/// The batch job a run ran in (`run.json`'s `job`; also row columns): Slurm's environment
+/// variables, empty outside Slurm.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct JobInfo {
+    pub slurm_job_id: String,
+    pub slurm_array_job_id: String,
+    pub slurm_array_task_id: String,
+    /// `SLURM_JOB_NODELIST`: the node(s) of the job.
+    pub slurm_job_nodelist: String,
+}
+
+impl JobInfo {
+    /// From this process's environment.
+    pub fn from_env() -> Self {
+        Self::from_vars(|k| std::env::var(k).ok())
+    }
+    /// From any variable lookup (tests).
+    pub fn from_vars(var: impl Fn(&str) -> Option<String>) -> Self {
+        let v = |k: &str| var(k).unwrap_or_default().trim().to_string();
+        JobInfo {
+            slurm_job_id: v("SLURM_JOB_ID"),
+            slurm_array_job_id: v("SLURM_ARRAY_JOB_ID"),
+            slurm_array_task_id: v("SLURM_ARRAY_TASK_ID"),
+            slurm_job_nodelist: v("SLURM_JOB_NODELIST"),
+        }
+    }
+}
+
+/// The cells every row of a run carries from its GPU identity and job (`RunOptions::row_cells`).
+pub fn row_cells(gpu: &GpuIdentity, job: &JobInfo) -> Vec<(schema::Col, String)> {
+    vec![
+        (cols::GPU_UUID, gpu.uuid.clone()),
+        (cols::GPU_SERIAL, gpu.serial.clone()),
+        (cols::PCI_BUS_ID, gpu.pci_bus_id.clone()),
+        (cols::SLURM_JOB_ID, job.slurm_job_id.clone()),
+        (cols::SLURM_ARRAY_JOB_ID, job.slurm_array_job_id.clone()),
+        (cols::SLURM_ARRAY_TASK_ID, job.slurm_array_task_id.clone()),
+    ]
+}
+
+/// How `--shard I/N` chose this shard's groups (`run.json`'s `shard_balance`; absent: index
+/// mod N).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ShardBalance {
+    /// The run whose times balanced the shards (`--balance-from`), as given.
+    pub from: String,
+    /// The rule, in words.
+    pub rule: String,
+    /// Estimated seconds of each shard's groups, shard 0 first.
+    pub estimated_s: Vec<f64>,
+}
+
 /// A fixed kernel timed on a shard's GPU before its points, so a merge of shards from several
 /// GPUs can say how far the GPUs differ (identical GPUs differ by 8 % on average, Sinha et al.,
 /// SC'22).
@@ -201,6 +320,15 @@ pub struct RunManifest {
     /// command line, times and counts are the latest call's (counts: of the whole folder).
     #[serde(default)]
     pub calls: Vec<Call>,
+    /// The physical GPU of the latest call (absent in run.json files older than this field).
+    #[serde(default)]
+    pub gpu: GpuIdentity,
+    /// The batch job of the latest call (empty outside Slurm).
+    #[serde(default)]
+    pub job: JobInfo,
+    /// How the shard's groups were chosen when `--balance-from` balanced them.
+    #[serde(default)]
+    pub shard_balance: Option<ShardBalance>,
     #[serde(skip)]
     clock: Option<Instant>,
 }
@@ -279,6 +407,9 @@ impl RunManifest {
             software_profile: false,
             limits: Default::default(),
             calls: vec![call],
+            gpu: GpuIdentity::default(),
+            job: JobInfo::from_env(),
+            shard_balance: None,
             clock: Some(Instant::now()),
         }
     }
@@ -346,6 +477,8 @@ pub fn context_block(manifest: &RunManifest, schema_version: u32, clocks: Option
             "sha256": m.suite_sha256,
         },
         "adapter": m.adapter,
+        "gpu": m.gpu,
+        "job": m.job,
         "host": m.host,
         "build": m.build,
         "software_profile": m.software_profile,
@@ -663,6 +796,48 @@ mod tests {
         assert_eq!(b["reason"], "out of memory, 2 GiB");
         assert_eq!(b["code"], "12");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_job_comes_from_slurm_variables_and_lands_in_every_row_cell() {
+        let env = |k: &str| match k {
+            "SLURM_JOB_ID" => Some("4711".to_string()),
+            "SLURM_ARRAY_JOB_ID" => Some("4700".to_string()),
+            "SLURM_ARRAY_TASK_ID" => Some(" 3\n".to_string()),
+            _ => None,
+        };
+        let job = JobInfo::from_vars(env);
+        assert_eq!(job.slurm_array_task_id, "3");
+        assert_eq!(job.slurm_job_nodelist, "");
+        let gpu = GpuIdentity {
+            uuid: "GPU-8a1e".into(),
+            pci_bus_id: "00000000:19:00.0".into(),
+            ..Default::default()
+        };
+        let cells: std::collections::BTreeMap<&str, String> = row_cells(&gpu, &job)
+            .into_iter()
+            .map(|(c, v)| (c.name, v))
+            .collect();
+        assert_eq!(cells["gpu_uuid"], "GPU-8a1e");
+        assert_eq!(cells["pci_bus_id"], "00000000:19:00.0");
+        assert_eq!(cells["slurm_job_id"], "4711");
+        assert_eq!(cells["slurm_array_job_id"], "4700");
+        assert_eq!(cells["slurm_array_task_id"], "3");
+        assert_eq!(cells["gpu_serial"], "");
+        // run.json and runs.json's context carry both; an older run.json without them reads.
+        let mut m = sample();
+        m.gpu = gpu.clone();
+        m.job = job.clone();
+        let ctx = context_block(&m, 3, None);
+        assert_eq!(ctx["gpu"]["uuid"], "GPU-8a1e");
+        assert_eq!(ctx["job"]["slurm_job_id"], "4711");
+        let mut old = serde_json::to_value(&m).unwrap();
+        for k in ["gpu", "job", "shard_balance"] {
+            old.as_object_mut().unwrap().remove(k);
+        }
+        let old: RunManifest = serde_json::from_value(old).unwrap();
+        assert_eq!(old.gpu, GpuIdentity::default());
+        assert!(old.shard_balance.is_none());
     }
 
     #[test]

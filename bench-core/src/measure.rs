@@ -308,10 +308,11 @@ fn one_frame<T: Timed + ?Sized>(
     let cpu = t0.elapsed().as_secs_f64() * 1e3;
     let spans = timer.read_spans(gpu)?;
     gpu.check_lost()?;
-    let clocks = match &gpu.monitor {
+    let mut clocks = match &gpu.monitor {
         Ok(m) => m.sample(),
         Err(_) => MonitorSample::default(),
     };
+    clocks.other_processes = gpu.other_processes();
     let parts = prepared.parts(&spans);
     let passes = spans.into_iter().map(|(l, a, b)| (l, b - a)).collect();
     Ok((passes, cpu, clocks, parts))
@@ -950,6 +951,9 @@ pub fn set_timing<T: ?Sized>(row: &mut Row, m: &Measured<T>, mesh: &scenarios::M
     }
     if m.discarded() > 0 || m.clocks.slowdown() {
         row.add_flag(crate::record::Flag::Throttled);
+    }
+    if m.clocks.gpu_shared() {
+        row.add_flag(crate::record::Flag::GpuShared);
     }
     if let Some((ms, before, after)) = m.clock_lift {
         row.set_f(cols::CLOCK_LIFT_MS, ms)

@@ -60,7 +60,14 @@ pub struct Merged {
     pub gpus: Vec<GpuRatio>,
     /// Inputs without one (older runs, software adapters, CSV files without a run folder).
     pub uncalibrated: usize,
+    /// Columns of `runs.parquet` written as text because a cell is off its declared type (one
+    /// line each; empty when every column is typed).
+    pub parquet_fallback: String,
 }
+
+/// The key of the merged `runs.parquet`'s metadata that lists the inputs, each with its
+/// `run.json` (`[{"file": …, "run.json": {…} | null}, …]`).
+pub const MERGED_FROM_KEY: &str = "mfx.merged_from";
 
 impl Merged {
     /// The largest `|ratio − 1|` over the calibrated GPUs (0 with fewer than two).
@@ -87,6 +94,9 @@ impl Merged {
             self.rows,
             self.out_csv.display()
         );
+        if !self.parquet_fallback.is_empty() {
+            s.push_str(&format!("\nruns.parquet: {}", self.parquet_fallback));
+        }
         if self.images_copied > 0 {
             s.push_str(&format!("; {} images copied", self.images_copied));
         }
@@ -133,8 +143,9 @@ impl Merged {
     }
 }
 
-/// The `runs.csv` files an input names: a CSV file, a run folder, or the run folders one level
-/// below it (sorted, so the merge order is stable).
+/// The runs tables an input names: a `runs.csv` or `runs.parquet` file, a run folder, or the
+/// run folders one level below it (sorted, so the merge order is stable). A folder's table is
+/// its `runs.csv`, else its `runs.parquet` (`mfx_table::in_folder`).
 pub fn input_files(input: &Path) -> Result<Vec<PathBuf>> {
     if input.is_file() {
         return Ok(vec![input.to_path_buf()]);
@@ -145,20 +156,18 @@ pub fn input_files(input: &Path) -> Result<Vec<PathBuf>> {
             input.display()
         )));
     }
-    let direct = input.join("runs.csv");
-    if direct.is_file() {
+    if let Some(direct) = mfx_table::in_folder(input) {
         return Ok(vec![direct]);
     }
     let mut found: Vec<PathBuf> = std::fs::read_dir(input)
         .map_err(|e| CoreError::Io(format!("{}: {e}", input.display())))?
         .filter_map(|e| e.ok())
-        .map(|e| e.path().join("runs.csv"))
-        .filter(|p| p.is_file())
+        .filter_map(|e| mfx_table::in_folder(&e.path()))
         .collect();
     found.sort();
     if found.is_empty() {
         return Err(CoreError::Io(format!(
-            "{}: holds no runs.csv (neither directly nor in a sub-folder)",
+            "{}: holds no runs.csv or runs.parquet (neither directly nor in a sub-folder)",
             input.display()
         )));
     }
@@ -198,21 +207,17 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
     // Read everything first: nothing is written unless every input is compatible.
     let mut header: Option<(Vec<String>, PathBuf)> = None;
     let mut schema: Option<(String, PathBuf)> = None;
-    let mut tables: Vec<(PathBuf, Vec<csv::StringRecord>)> = Vec::new();
+    let mut tables: Vec<(PathBuf, Vec<Vec<String>>)> = Vec::new();
+    let mut run_jsons: Vec<Option<String>> = Vec::new();
     for f in &files {
-        let mut rdr = csv::Reader::from_path(f).map_err(|e| io(f, e))?;
-        let h: Vec<String> = rdr
-            .headers()
-            .map_err(|e| io(f, e))?
-            .iter()
-            .map(String::from)
-            .collect();
+        let t = mfx_table::read(f).map_err(|e| CoreError::Io(e.to_string()))?;
+        let h = t.header;
         let schema_col = h
             .iter()
             .position(|c| c == cols::SCHEMA.name)
             .ok_or_else(|| {
                 CoreError::Schema(format!(
-                    "{}: not an mfx runs.csv (no 'schema' column)",
+                    "{}: not an mfx runs table (no 'schema' column)",
                     f.display()
                 ))
             })?;
@@ -234,10 +239,8 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
             }
             _ => {}
         }
-        let mut rows = Vec::new();
-        for (n, rec) in rdr.records().enumerate() {
-            let rec = rec.map_err(|e| io(f, format!("row {}: {e}", n + 2)))?;
-            let v = rec.get(schema_col).unwrap_or("").to_string();
+        for (n, rec) in t.rows.iter().enumerate() {
+            let v = rec.get(schema_col).cloned().unwrap_or_default();
             match &schema {
                 None => schema = Some((v, f.clone())),
                 Some((v0, f0)) if *v0 != v => {
@@ -254,9 +257,20 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
                 }
                 _ => {}
             }
-            rows.push(rec);
         }
-        tables.push((f.clone(), rows));
+        // The run.json beside the table, else the one a runs.parquet carries.
+        let dir = f.parent().unwrap_or(Path::new("."));
+        run_jsons.push(
+            std::fs::read_to_string(dir.join(crate::manifest::MANIFEST_FILE))
+                .ok()
+                .or_else(|| {
+                    t.metadata
+                        .iter()
+                        .find(|(k, _)| k == mfx_table::RUN_JSON_KEY)
+                        .map(|(_, v)| v.clone())
+                }),
+        );
+        tables.push((f.clone(), t.rows));
     }
     let (header, _) = header.expect("at least one file");
     let col = |name: &str| header.iter().position(|c| c == name);
@@ -271,11 +285,10 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
     let mut w = csv::Writer::from_path(&out_csv).map_err(|e| io(&out_csv, e))?;
     w.write_record(&header).map_err(|e| io(&out_csv, e))?;
     let mut seen: HashMap<(String, String, String, String), PathBuf> = HashMap::new();
-    let mut dups: Vec<(PathBuf, csv::StringRecord, Duplicate)> = Vec::new();
-    let mut rows = 0;
-    let cell = |r: &csv::StringRecord, i: Option<usize>| {
-        i.and_then(|i| r.get(i)).unwrap_or("").to_string()
-    };
+    let mut dups: Vec<(PathBuf, Vec<String>, Duplicate)> = Vec::new();
+    let mut merged_rows: Vec<Vec<String>> = Vec::new();
+    let cell =
+        |r: &[String], i: Option<usize>| i.and_then(|i| r.get(i)).cloned().unwrap_or_default();
     for (f, recs) in &tables {
         for r in recs {
             let limits = match cell(r, kl) {
@@ -300,10 +313,11 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
             }
             seen.insert(key, f.clone());
             w.write_record(r).map_err(|e| io(&out_csv, e))?;
-            rows += 1;
+            merged_rows.push(r.clone());
         }
     }
     w.flush().map_err(|e| io(&out_csv, e))?;
+    let rows = merged_rows.len();
     let dup_csv = out.join("duplicates.csv");
     if dups.is_empty() {
         // A stale duplicates.csv from an earlier merge into the same folder would mislead.
@@ -315,12 +329,12 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
         w.write_record(&h).map_err(|e| io(&dup_csv, e))?;
         for (f, r, _) in &dups {
             let mut rec = vec![f.display().to_string()];
-            rec.extend(r.iter().map(String::from));
+            rec.extend(r.iter().cloned());
             w.write_record(&rec).map_err(|e| io(&dup_csv, e))?;
         }
         w.flush().map_err(|e| io(&dup_csv, e))?;
     }
-    let (gpus, uncalibrated) = gpu_ratios(&files);
+    let (gpus, uncalibrated) = gpu_ratios(&files, &run_jsons);
     let cal_csv = out.join("gpu_calibration.csv");
     if gpus.is_empty() {
         let _ = std::fs::remove_file(&cal_csv);
@@ -346,6 +360,31 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
         }
         w.flush().map_err(|e| io(&cal_csv, e))?;
     }
+    // The typed twin of the merged rows, with every input's run.json in its metadata.
+    let inputs: Vec<serde_json::Value> = files
+        .iter()
+        .zip(&run_jsons)
+        .map(|(f, j)| {
+            serde_json::json!({
+                "file": f.display().to_string(),
+                "run.json": j.as_deref().and_then(|j| serde_json::from_str::<serde_json::Value>(j).ok()),
+            })
+        })
+        .collect();
+    let table = mfx_table::Table {
+        header: header.clone(),
+        rows: merged_rows,
+        metadata: Vec::new(),
+    };
+    let written = mfx_table::write_parquet(
+        &out.join(mfx_table::RUNS_PARQUET),
+        &table,
+        &[(
+            MERGED_FROM_KEY.to_string(),
+            serde_json::Value::Array(inputs).to_string(),
+        )],
+    )
+    .map_err(|e| CoreError::Io(e.to_string()))?;
     let images_copied = copy_images(&files, out)?;
     let images_missing = missing_images(&out_csv, out)?;
     let mut log = std::fs::File::create(out.join("merged_from.txt")).map_err(|e| io(out, e))?;
@@ -361,18 +400,19 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<Merged> {
         out_csv,
         gpus,
         uncalibrated,
+        parquet_fallback: written.describe(),
     })
 }
 
-/// Each input's calibration set (from `run.json` beside its `runs.csv`) and its ratio to the
-/// median of all; and how many inputs had none.
-fn gpu_ratios(files: &[PathBuf]) -> (Vec<GpuRatio>, usize) {
+/// Each input's calibration set (from its `run.json`) and its ratio to the median of all; and
+/// how many inputs had none.
+fn gpu_ratios(files: &[PathBuf], run_jsons: &[Option<String>]) -> (Vec<GpuRatio>, usize) {
     let mut gpus = Vec::new();
     let mut none = 0;
-    for f in files {
-        let dir = f.parent().unwrap_or(Path::new("."));
-        match crate::manifest::RunManifest::read(dir)
-            .ok()
+    for (f, j) in files.iter().zip(run_jsons) {
+        match j
+            .as_deref()
+            .and_then(|j| serde_json::from_str::<crate::manifest::RunManifest>(j).ok())
             .and_then(|m| Some((m.calibration?, m.adapter)))
         {
             Some((c, a)) if c.canary_ms.is_finite() && c.canary_ms > 0.0 => gpus.push(GpuRatio {
@@ -442,23 +482,13 @@ fn missing_images(csv_path: &Path, out: &Path) -> Result<Vec<String>> {
     Ok(missing)
 }
 
-/// The distinct point keys of a runs.csv (for shard/merge equality checks).
-pub fn point_keys(csv_path: &Path) -> Result<Vec<String>> {
-    let mut rdr = csv::Reader::from_path(csv_path).map_err(|e| io(csv_path, e))?;
-    let h = rdr.headers().map_err(|e| io(csv_path, e))?.clone();
-    let i = h
-        .iter()
-        .position(|c| c == cols::POINT_KEY.name)
-        .ok_or_else(|| CoreError::Schema(format!("{}: no point_key column", csv_path.display())))?;
-    let mut keys = Vec::new();
-    for r in rdr.records() {
-        keys.push(
-            r.map_err(|e| io(csv_path, e))?
-                .get(i)
-                .unwrap_or("")
-                .to_string(),
-        );
-    }
+/// The point keys of a runs table (CSV or Parquet), sorted (for shard/merge equality checks).
+pub fn point_keys(path: &Path) -> Result<Vec<String>> {
+    let t = mfx_table::read(path).map_err(|e| CoreError::Io(e.to_string()))?;
+    let i = t
+        .col(cols::POINT_KEY.name)
+        .ok_or_else(|| CoreError::Schema(format!("{}: no point_key column", path.display())))?;
+    let mut keys: Vec<String> = t.rows.into_iter().map(|mut r| r.swap_remove(i)).collect();
     keys.sort();
     Ok(keys)
 }
@@ -591,6 +621,38 @@ mod tests {
         );
         let keys = point_keys(&t.join("out/runs.csv")).unwrap();
         assert_eq!(keys, ["k1", "k2", "k2"]);
+    }
+
+    #[test]
+    fn a_parquet_run_merges_with_a_csv_run_into_a_typed_runs_parquet() {
+        let t = tmp("parquet");
+        let a = write(&t, "a", &format!("{H}3,k1,gpu,vulkan,ok\n"));
+        // b holds only runs.parquet (a run read back from a bundle, or its CSV deleted).
+        let b = write(
+            &t,
+            "b",
+            &format!("{H}3,k2,gpu,vulkan,ok\n3,k3,gpu,vulkan,ok\n"),
+        );
+        manifest(&b, "H200", "0000:02:00.0", Some(1.0));
+        mfx_table::write_runs_parquet(&b).unwrap();
+        std::fs::remove_file(b.join("runs.csv")).unwrap();
+        std::fs::remove_file(b.join("run.json")).unwrap();
+        assert_eq!(input_files(&b).unwrap(), [b.join("runs.parquet")]);
+        let m = merge(&[a, b.clone()], &t.join("out")).unwrap();
+        assert_eq!(m.rows, 3, "{}", m.summary());
+        assert_eq!(m.gpus.len(), 1, "run.json read from the parquet's metadata");
+        let back = mfx_table::read(&t.join("out/runs.parquet")).unwrap();
+        let csv = mfx_table::read(&t.join("out/runs.csv")).unwrap();
+        assert_eq!(back.rows, csv.rows);
+        let from: serde_json::Value =
+            serde_json::from_str(back.meta(MERGED_FROM_KEY).unwrap()).unwrap();
+        assert_eq!(from.as_array().unwrap().len(), 2);
+        assert_eq!(from[1]["run.json"]["adapter"]["name"], "H200");
+        assert_eq!(
+            point_keys(&t.join("out/runs.parquet")).unwrap(),
+            ["k1", "k2", "k3"]
+        );
+        std::fs::remove_dir_all(&t).unwrap();
     }
 
     #[test]

@@ -29,6 +29,8 @@ pub struct RunOptions {
     pub done: std::collections::HashSet<String>,
     /// Asked between rows: `Some(signal)` stops the run after the row in flight.
     pub interrupted: Option<fn() -> Option<&'static str>>,
+    /// Cells every row carries (the GPU's identity and the batch job: `manifest::row_cells`).
+    pub row_cells: Vec<(schema::Col, String)>,
 }
 
 /// Expands every study of the suite into groups, in suite order (deterministic: the shard
@@ -163,6 +165,9 @@ pub fn run(
                 .set(cols::SCENE_LABEL, group.scene.label());
             if plan.interleave {
                 row.set(cols::ORDER_SEED, plan.seed);
+            }
+            for (c, v) in opts.row_cells.iter().filter(|(_, v)| !v.is_empty()) {
+                row.set(*c, v);
             }
             if row.get(cols::METHOD).is_none() {
                 row.set(cols::METHOD, method);

@@ -29,10 +29,11 @@ pub use mfx_analysis::data;
 pub use mfx_analysis::{Rec, Runs};
 pub use summary::summary_text;
 
-/// Builds the report of a run folder; returns the page's path.
+/// Builds the report of a run folder (its `runs.csv` or `runs.parquet`); returns the page's path.
 pub fn build(dir: &Path, baseline: Option<&str>) -> Result<PathBuf> {
-    let csv = dir.join("runs.csv");
-    let runs = Runs::load(&csv)?;
+    // runs.csv, else runs.parquet (a run folder unpacked from a bundle holds only the latter).
+    let table = mfx_table::locate(dir)?;
+    let runs = Runs::load(&table)?;
     let out = dir.join("report");
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     clear_charts(&out)?;

@@ -15,9 +15,9 @@ use std::path::Path;
 use scenarios::papers::{self, Fact, Figure, PointRef, Rule, RuleKind, Verdict};
 use schema::cols;
 
-use mfx_analysis::bands::Calibration;
 use crate::cells::esc;
 use crate::data::{Rec, Runs};
+use mfx_analysis::bands::Calibration;
 
 /// The noise band of a point: `mfx compare`'s SAME band, from a calibration where the run has
 /// one (`calibration.json` beside `runs.csv`, written by `mfx calibrate`), else the fixed ±2 %.

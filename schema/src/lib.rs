@@ -8,7 +8,9 @@
 
 use std::fmt;
 
+mod types;
 mod values;
+pub use types::{cell_type, cell_type_of, CellType};
 pub use values::{Flag, FlagSet, GpuMsInterval, ParseError, PointKey, Status, MIN_SAMPLES_CI95};
 
 /// Bumped when a column is renamed or changes meaning; `mfx merge` and `mfx compare` refuse to
@@ -37,6 +39,11 @@ pub struct Col {
 impl Col {
     pub const fn new(name: &'static str, doc: &'static str) -> Col {
         Col { name, doc }
+    }
+
+    /// The type of this column's cells (declared in `types.rs`).
+    pub fn cell_type(self) -> CellType {
+        types::cell_type(self)
     }
 }
 
@@ -98,6 +105,30 @@ pub mod cols {
     );
     pub const DRIVER: Col = Col::new("driver", "driver name");
     pub const DRIVER_INFO: Col = Col::new("driver_info", "driver version string");
+    pub const GPU_UUID: Col = Col::new(
+        "gpu_uuid",
+        "the physical GPU's UUID as NVML reports it (`GPU-…`, as `nvidia-smi -L`); empty without NVML (lavapipe, other vendors)",
+    );
+    pub const GPU_SERIAL: Col = Col::new(
+        "gpu_serial",
+        "the board's serial number as NVML reports it; empty where NVML has none (most non-datacentre boards) or without NVML",
+    );
+    pub const PCI_BUS_ID: Col = Col::new(
+        "pci_bus_id",
+        "the adapter's PCI address (domain:bus:device.function): NVML's where it has the device, else wgpu's adapter info; empty where neither says (lavapipe)",
+    );
+    pub const SLURM_JOB_ID: Col = Col::new(
+        "slurm_job_id",
+        "the Slurm job that ran the sweep (`SLURM_JOB_ID`); empty outside Slurm",
+    );
+    pub const SLURM_ARRAY_JOB_ID: Col = Col::new(
+        "slurm_array_job_id",
+        "the Slurm job array the job belongs to (`SLURM_ARRAY_JOB_ID`); empty outside an array",
+    );
+    pub const SLURM_ARRAY_TASK_ID: Col = Col::new(
+        "slurm_array_task_id",
+        "the task of that array (`SLURM_ARRAY_TASK_ID`; scripts/slurm runs shard I as task I); empty outside an array",
+    );
     pub const ADAPTER_FEATURES: Col = Col::new(
         "adapter_features",
         "optional wgpu features granted, `|`-separated",
@@ -168,7 +199,7 @@ pub mod cols {
     );
     pub const FLAG: Col = Col::new(
         "flag",
-        "known failure modes of this row, |-joined: overflow, hazard, collision, precision, lost_coplanar, fragments_differ, image_differs, depth_ties, timestamps_incomplete, noisy, throttled (empty if none; each is defined in results/README.md)",
+        "known failure modes of this row, |-joined: overflow, hazard, collision, precision, lost_coplanar, fragments_differ, image_differs, depth_ties, timestamps_incomplete, noisy, throttled, gpu_shared (empty if none; each is defined in results/README.md)",
     );
 
     // ---- Sweep axes shared by several methods (empty where an axis does not apply) ----
@@ -1002,6 +1033,10 @@ pub mod cols {
         "clock_source",
         "nvml, or none: <why no clock was read> (then the clock columns are empty)",
     );
+    pub const GPU_OTHER_PROCESSES: Col = Col::new(
+        "gpu_other_processes",
+        "the most processes other than this one that held the GPU at once while the point was timed (NVML's compute and graphics process lists, read after every timed frame; flag gpu_shared when above 0); empty without a process list",
+    );
     pub const PASS_MS: Col = Col::new(
         "pass_ms",
         "median GPU ms per pass label, JSON object (e.g. {\"peel\":1.2,\"composite\":0.1})",
@@ -1195,6 +1230,12 @@ pub const GROUPS: &[Group] = &[
             cols::DEVICE_TYPE,
             cols::DRIVER,
             cols::DRIVER_INFO,
+            cols::GPU_UUID,
+            cols::GPU_SERIAL,
+            cols::PCI_BUS_ID,
+            cols::SLURM_JOB_ID,
+            cols::SLURM_ARRAY_JOB_ID,
+            cols::SLURM_ARRAY_TASK_ID,
             cols::ADAPTER_FEATURES,
             cols::TEXTURE_MEMORY,
             cols::LIMITS,
@@ -1490,6 +1531,7 @@ pub const GROUPS: &[Group] = &[
             cols::GPU_POWER_W_MEAN,
             cols::THROTTLE_REASONS,
             cols::CLOCK_SOURCE,
+            cols::GPU_OTHER_PROCESSES,
             cols::PASS_MS,
             cols::PASS_MS_CI,
             cols::GEOMETRY_PASSES,
@@ -1654,13 +1696,14 @@ pub fn markdown() -> String {
     let mut s = String::new();
     for g in GROUPS {
         s.push_str(&format!(
-            "\n**{}**\n\n| column | meaning |\n|---|---|\n",
+            "\n**{}**\n\n| column | type | meaning |\n|---|---|---|\n",
             g.title
         ));
         for c in g.cols {
             s.push_str(&format!(
-                "| `{}` | {} |\n",
+                "| `{}` | {} | {} |\n",
                 c.name,
+                c.cell_type(),
                 c.doc.replace('|', "\\|")
             ));
         }

@@ -122,6 +122,10 @@ words! {
         Noisy = "noisy",
         /// A sample was taken below 75 % of the reference SM clock, or NVML reported a slowdown.
         Throttled = "throttled",
+        /// Another process held the GPU while the point was timed (NVML's process lists, read
+        /// after every timed frame: `gpu_other_processes` > 0): its times may include that
+        /// process's work.
+        GpuShared = "gpu_shared",
     }
 }
 
