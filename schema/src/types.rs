@@ -150,6 +150,18 @@ const INT: &[Col] = &[
     cols::VS_INVOCATIONS,
     cols::PS_INVOCATIONS,
     cols::GPU_OTHER_PROCESSES,
+    cols::FLICKER_BEYOND_BOUND,
+    cols::FLICKER_WORST_VIEW,
+    cols::POPPING_WORST_VIEW,
+    cols::FLIP_WORST_VIEW,
+    cols::GPU_MS_WORST_VIEW,
+    cols::RMSE_WORST_VIEW,
+    cols::PATH_IMAGES_POP_VIEW,
+    cols::PATH_IMAGES_WORST_VIEW,
+    cols::HAZARD_CAPTURES,
+    cols::PATH_VIEWS,
+    cols::VIEWS_EXACT,
+    cols::WORKING_SET_BYTES,
 ];
 
 /// Unsigned integer columns: seeds that use all 64 bits.
@@ -160,7 +172,6 @@ const BOOL: &[Col] = &[
     cols::CLAIMS_EXACT,
     cols::EXACT,
     cols::OCCLUSION_STOP,
-    cols::HEURISTICS,
     cols::TIEBREAK,
     cols::MOMENT_NORMALIZE,
     cols::ST_CORRECTION,
@@ -176,6 +187,7 @@ const BOOL: &[Col] = &[
     cols::TARGET_REACHED,
     cols::GPU_TIME_TRUSTED,
     cols::MATCHES_TRUTH,
+    cols::L2_RESIDENT,
 ];
 
 /// Float columns: times, rates, fractions, ratios, errors, clocks, float axes.
@@ -285,6 +297,24 @@ const FLOAT: &[Col] = &[
     cols::OVERFLOW_RATE,
     cols::TRIANGLES_PER_S,
     cols::VERTICES_PER_S,
+    cols::AT_REST_CHANGED_MAX,
+    cols::AT_REST_CHANGED_MEAN,
+    cols::BIAS_MAX,
+    cols::FLICKER_BOUND_MEAN,
+    cols::FLICKER_MAX,
+    cols::FLICKER_MEAN,
+    cols::FLIP_PATH_WORST,
+    cols::GPU_MS_PATH_P99,
+    cols::GPU_MS_PATH_WORST,
+    cols::HAZARD_RATE_CI_HI,
+    cols::HAZARD_RATE_CI_LO,
+    cols::POP_EPSILON,
+    cols::POPPING_MAX,
+    cols::POPPING_MEAN,
+    cols::RMSE_PATH_WORST,
+    cols::ROOF_BYTES_PER_S,
+    cols::SHADE_NS_PER_LIGHT_QUAD_CI_HI,
+    cols::SHADE_NS_PER_LIGHT_QUAD_CI_LO,
 ];
 
 /// The type of `col`'s cells ([`CellType::Text`] for a column not declared numeric, boolean or
