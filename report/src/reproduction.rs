@@ -173,8 +173,19 @@ struct Value {
 /// A row's value of a column or pass: `Err` says what the row lacks.
 fn value(r: &Rec, col: &str, pass: Option<&str>) -> Result<Value, String> {
     if let Some(p) = pass {
-        let v = pass_json(r, cols::PASS_MS)
-            .and_then(|m| m.get(p)?.as_f64())
+        let passes = pass_json(r, cols::PASS_MS).unwrap_or_default();
+        if passes.is_empty() && r.f(cols::SAMPLES) == Some(0.0) {
+            // Every sample was discarded (a throttled or noisy clock): the row times no pass,
+            // which is not the same as a study that never writes the pass.
+            return Err(format!(
+                "the row kept no samples ({} discarded, flag {}): no pass times",
+                r.get(cols::SAMPLES_DISCARDED),
+                r.get(cols::FLAG)
+            ));
+        }
+        let v = passes
+            .get(p)
+            .and_then(|v| v.as_f64())
             .ok_or_else(|| format!("the rows have no pass '{p}'"))?;
         let interval = pass_json(r, cols::PASS_MS_CI).and_then(|m| {
             let a = m.get(p)?.as_array()?;

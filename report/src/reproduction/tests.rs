@@ -528,3 +528,29 @@ fn a_hazard_rate_over_repeated_captures_carries_their_interval() {
         Some((0.15, 0.3))
     );
 }
+
+#[test]
+fn a_row_that_kept_no_samples_is_not_a_row_without_the_pass() {
+    // The committed H100 run's bf3-gbuffer-copy point kept none of its samples (throttled):
+    // its pass_ms is empty, which must not read as "the study writes no such pass".
+    let mut r = rec("prepass_cpu", &[], "11.3", Status::Ok);
+    for (c, v) in [
+        (cols::PASS_MS, "{}"),
+        (cols::SAMPLES, "0"),
+        (cols::SAMPLES_DISCARDED, "9"),
+        (cols::FLAG, "noisy|throttled"),
+    ] {
+        r.0.insert(c.name.into(), v.into());
+    }
+    let e = value(&r, "", Some("readback")).err().unwrap();
+    assert!(
+        e.contains("kept no samples") && e.contains("throttled"),
+        "{e}"
+    );
+    // A row with passes but not this one names the pass as missing.
+    r.0.insert(cols::PASS_MS.name.into(), r#"{"prepass":0.6}"#.into());
+    r.0.insert(cols::SAMPLES.name.into(), "9".into());
+    let e = value(&r, "", Some("readback")).err().unwrap();
+    assert!(e.starts_with("the rows have no pass 'readback'"), "{e}");
+    assert_eq!(value(&r, "", Some("prepass")).ok().map(|v| v.v), Some(0.6));
+}
