@@ -104,7 +104,23 @@ fn find<'a>(runs: &'a Runs, p: &PointRef) -> Found<'a> {
             .collect();
         return Found::Ambiguous(keys.into_iter().collect());
     }
-    let row = hits.iter().find(|r| r.ok()).unwrap_or(first);
+    // Of one point measured under two keys, the row whose key names most of the axes the
+    // figure names is the table that studies them (seeds-deferred gives BF3's default point in
+    // a thread table with one phase-clock frame and in the diffuse table with nine and their
+    // interval); the first ok row among equals.
+    let named = |r: &Rec| {
+        key_axes(r.get(cols::POINT_KEY))
+            .filter(|a| p.axes.contains_key(*a))
+            .count()
+    };
+    let most = hits.iter().map(|r| named(r)).max().unwrap_or(0);
+    let best: Vec<&Rec> = hits.iter().copied().filter(|r| named(r) == most).collect();
+    let row = best
+        .iter()
+        .copied()
+        .find(|r| r.ok())
+        .or_else(|| hits.iter().copied().find(|r| r.ok()))
+        .unwrap_or(first);
     Found::One(row)
 }
 
