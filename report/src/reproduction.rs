@@ -104,7 +104,23 @@ fn find<'a>(runs: &'a Runs, p: &PointRef) -> Found<'a> {
             .collect();
         return Found::Ambiguous(keys.into_iter().collect());
     }
-    let row = hits.iter().find(|r| r.ok()).unwrap_or(first);
+    // Of one point measured under two keys, the row whose key names most of the axes the
+    // figure names is the table that studies them (seeds-deferred gives BF3's default point in
+    // a thread table with one phase-clock frame and in the diffuse table with nine and their
+    // interval); the first ok row among equals.
+    let named = |r: &Rec| {
+        key_axes(r.get(cols::POINT_KEY))
+            .filter(|a| p.axes.contains_key(*a))
+            .count()
+    };
+    let most = hits.iter().map(|r| named(r)).max().unwrap_or(0);
+    let best: Vec<&Rec> = hits.iter().copied().filter(|r| named(r) == most).collect();
+    let row = best
+        .iter()
+        .copied()
+        .find(|r| r.ok())
+        .or_else(|| hits.iter().copied().find(|r| r.ok()))
+        .unwrap_or(first);
     Found::One(row)
 }
 
@@ -173,8 +189,19 @@ struct Value {
 /// A row's value of a column or pass: `Err` says what the row lacks.
 fn value(r: &Rec, col: &str, pass: Option<&str>) -> Result<Value, String> {
     if let Some(p) = pass {
-        let v = pass_json(r, cols::PASS_MS)
-            .and_then(|m| m.get(p)?.as_f64())
+        let passes = pass_json(r, cols::PASS_MS).unwrap_or_default();
+        if passes.is_empty() && r.f(cols::SAMPLES) == Some(0.0) {
+            // Every sample was discarded (a throttled or noisy clock): the row times no pass,
+            // which is not the same as a study that never writes the pass.
+            return Err(format!(
+                "the row kept no samples ({} discarded, flag {}): no pass times",
+                r.get(cols::SAMPLES_DISCARDED),
+                r.get(cols::FLAG)
+            ));
+        }
+        let v = passes
+            .get(p)
+            .and_then(|v| v.as_f64())
             .ok_or_else(|| format!("the rows have no pass '{p}'"))?;
         let interval = pass_json(r, cols::PASS_MS_CI).and_then(|m| {
             let a = m.get(p)?.as_array()?;

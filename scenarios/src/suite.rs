@@ -65,6 +65,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
         include_str!("../suites/seeds-kbuffer.toml"),
     ),
     (
+        "seeds-kbuffer-flush",
+        include_str!("../suites/seeds-kbuffer-flush.toml"),
+    ),
+    (
         "seeds-geometry",
         include_str!("../suites/seeds-geometry.toml"),
     ),

@@ -1,5 +1,6 @@
 //! The Reproduction section's rules on synthetic rows (every figure: no effect differs, the
-//! paper's effect holds), its cells, and its `why_differs` facts against the committed H200 run.
+//! paper's effect holds), its cells, and its `why_differs` facts against the newest committed run
+//! (an H100).
 
 use super::*;
 use schema::Status;
@@ -458,10 +459,10 @@ fn every_figure_differs_on_rows_with_no_effect_and_holds_on_the_paper_s_effect()
     );
 }
 
-// ---- why_differs against the committed H200 run ----
+// ---- why_differs against the newest committed run (an H100) ----
 
 /// The committed run whose rows the papers files' `why_differs` were written from.
-const COMMITTED: &str = "../results/reference/2026-12-03-h200-sources-b/merged/runs.csv";
+const COMMITTED: &str = "../results/reference/2026-12-05-h100-sources/merged/runs.csv";
 
 #[test]
 fn every_why_differs_number_is_a_number_of_the_committed_run() {
@@ -469,10 +470,15 @@ fn every_why_differs_number_is_a_number_of_the_committed_run() {
     let runs = Runs::load(&path).unwrap();
     let mut problems = Vec::new();
     let mut facts = 0;
-    for (_, f) in papers::builtin() {
+    for (source, f) in papers::builtin() {
         for fig in &f.figures {
-            if fig.why_differs.is_none() {
+            let Some(why) = &fig.why_differs else {
                 continue;
+            };
+            // The committed run is an H100's: a statement of its numbers says so (Liu's texts
+            // are revised apart, issue 45).
+            if source != "liu-bdp-gpupro" && !why.contains("H100") {
+                problems.push(format!("{}: why_differs does not name the H100", fig.id));
             }
             let rows = named_rows(&runs, fig);
             for name in fig.facts.keys() {
@@ -527,4 +533,68 @@ fn a_hazard_rate_over_repeated_captures_carries_their_interval() {
         value(&five, cols::HAZARD_RATE.name, None).unwrap().interval,
         Some((0.15, 0.3))
     );
+}
+
+#[test]
+fn a_row_that_kept_no_samples_is_not_a_row_without_the_pass() {
+    // The committed H100 run's bf3-gbuffer-copy point kept none of its samples (throttled):
+    // its pass_ms is empty, which must not read as "the study writes no such pass".
+    let mut r = rec("prepass_cpu", &[], "11.3", Status::Ok);
+    for (c, v) in [
+        (cols::PASS_MS, "{}"),
+        (cols::SAMPLES, "0"),
+        (cols::SAMPLES_DISCARDED, "9"),
+        (cols::FLAG, "noisy|throttled"),
+    ] {
+        r.0.insert(c.name.into(), v.into());
+    }
+    let e = value(&r, "", Some("readback")).err().unwrap();
+    assert!(
+        e.contains("kept no samples") && e.contains("throttled"),
+        "{e}"
+    );
+    // A row with passes but not this one names the pass as missing.
+    r.0.insert(cols::PASS_MS.name.into(), r#"{"prepass":0.6}"#.into());
+    r.0.insert(cols::SAMPLES.name.into(), "9".into());
+    let e = value(&r, "", Some("readback")).err().unwrap();
+    assert!(e.starts_with("the rows have no pass 'readback'"), "{e}");
+    assert_eq!(value(&r, "", Some("prepass")).ok().map(|v| v.v), Some(0.6));
+}
+
+#[test]
+fn of_one_point_under_two_keys_the_key_naming_the_figure_s_axes_is_read() {
+    // seeds-deferred measures BF3's default point twice: in the thread table (key without the
+    // diffuse axes, one phase-clock frame) and in the diffuse table (its key names them, with
+    // an interval). A figure naming the diffuse axes reads the diffuse table's row.
+    let a = [("thread_count", "5"), ("diffuse_only_frac", "0")];
+    let mut thin = rec("cpu_tiled", &a, "1.0", Status::Ok);
+    thin.0.insert(
+        cols::POINT_KEY.name.into(),
+        format!("deferred|{D}|512x512|cpu_tiled|thread_count=5"),
+    );
+    let full = rec("cpu_tiled", &a, "2.0", Status::Ok);
+    let r = runs(vec![thin, full]);
+    let point = |axes: &[(&str, toml::Value)]| PointRef {
+        suite: "seeds-buckets".into(),
+        method: "cpu_tiled".into(),
+        scene: D.into(),
+        resolution: [512, 512],
+        axes: axes
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.clone()))
+            .collect(),
+    };
+    let named = point(&[
+        ("thread_count", toml::Value::Integer(5)),
+        ("diffuse_only_frac", toml::Value::Float(0.0)),
+    ]);
+    let Found::One(row) = find(&r, &named) else {
+        panic!("one point")
+    };
+    assert_eq!(row.get(cols::GPU_MS_MEDIAN), "2.0");
+    // A figure naming only what both keys name reads the first.
+    let Found::One(row) = find(&r, &point(&[("thread_count", toml::Value::Integer(5))])) else {
+        panic!("one point")
+    };
+    assert_eq!(row.get(cols::GPU_MS_MEDIAN), "1.0");
 }

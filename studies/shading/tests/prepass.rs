@@ -107,3 +107,63 @@ fn unknown_prepass_method_is_an_error_naming_it() {
     };
     assert!(e.to_string().contains("prepass_gpu"), "{e}");
 }
+
+#[test]
+fn the_passes_bf3_gbuffer_copy_names_are_passes_the_study_writes() {
+    // bf3-gbuffer-copy is ruled on two labels of `pass_ms` (the copy and the pre-pass): a label
+    // the study does not write leaves the figure unruled in every run. Run the figure's own
+    // point (method and axes from the papers file) on a small city and read its labels.
+    let (_, file) = scenarios::papers::builtin()
+        .into_iter()
+        .find(|(n, _)| *n == "bf3-dice")
+        .expect("the BF3 papers file");
+    let fig = file
+        .figures
+        .iter()
+        .find(|f| f.id == "bf3-gbuffer-copy")
+        .expect("bf3-gbuffer-copy");
+    let rule = fig.holds.as_ref().expect("a rule");
+    let ours = fig.ours.as_ref().expect("ours");
+    let axes: Vec<String> = ours
+        .axes
+        .iter()
+        .map(|(k, v)| format!("{k} = [{v}]"))
+        .collect();
+    let suite = format!(
+        r#"
+        resolutions = [[48, 32]]
+        [timing]
+        min_samples = 2
+        max_samples = 2
+        warmup_frames = 0
+        [[study]]
+        kind = "prepass"
+        methods = ["{}"]
+        axes = {{ light_buffer_format = ["rgba16f"], {} }}
+        [[study.scenes]]
+        generator = "city"
+        blocks = 2
+        lights = 24
+        "#,
+        ours.method,
+        axes.join(", ")
+    );
+    let rows = run(&suite).unwrap();
+    let get = |r: &Row, c: Col| r.get(c).unwrap_or("").to_string();
+    let row = rows
+        .iter()
+        .find(|r| get(r, cols::METHOD) == ours.method)
+        .expect("a row of the figure's method");
+    assert_eq!(row.status(), Some(Status::Ok), "{}", get(row, cols::REASON));
+    let passes: serde_json::Map<String, serde_json::Value> =
+        serde_json::from_str(&get(row, cols::PASS_MS)).unwrap();
+    for label in [rule.pass.as_deref(), rule.baseline_pass()]
+        .into_iter()
+        .flatten()
+    {
+        assert!(
+            passes.get(label).and_then(|v| v.as_f64()).is_some(),
+            "pass '{label}' named by bf3-gbuffer-copy is not in the row's pass_ms: {passes:?}"
+        );
+    }
+}
