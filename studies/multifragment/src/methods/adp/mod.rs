@@ -9,14 +9,14 @@
 //! Geometry passes: 2 + ⌈max occupied bins / bucket_count⌉; memory per pixel: hist_bins/8 B
 //! histogram + 4·K B bounds + K·4 B buckets.
 
-use super::shared::bucket::{self, Config, Kind, PreparedBucket};
+use super::shared::bucket::{self, Config, Kind};
 use super::{Method, Prepared};
 use crate::effects;
 use bench_core::axes::{Axis, Point};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::GpuScene;
 use bench_core::record::cols;
-use bench_core::{CoreError, Result};
+use bench_core::Result;
 
 /// adp's WGSL, for the registry's test that holds it against bdp.
 #[cfg(test)]
@@ -27,6 +27,12 @@ pub(crate) fn tests_wgsl() -> &'static str {
 const WGSL: &str = include_str!("adp.wgsl");
 
 pub struct Adp;
+
+const SPEC: bucket::Spec = bucket::Spec {
+    config,
+    fx,
+    wgsl: WGSL,
+};
 
 const MODE: Axis = Axis::choice(
     cols::BUCKET_MODE,
@@ -85,23 +91,13 @@ impl Method for Adp {
         Ok(())
     }
     fn required_features(&self) -> wgpu::Features {
-        wgpu::Features::FLOAT32_BLENDABLE
+        SPEC.required_features()
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
-        let fx = fx(point)?;
-        bucket::supports_targets_fx(gpu, &config(point)?, fx.pairs)
+        SPEC.supports(gpu, point)
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
-        let cfg = config(point).map_err(CoreError::Param)?;
-        let fx = fx(point).map_err(CoreError::Param)?;
-        Ok(Box::new(PreparedBucket::with_range(
-            gpu,
-            scene,
-            cfg,
-            WGSL,
-            fx,
-            bucket::RangePass::read(point),
-        )?))
+        SPEC.prepare(gpu, scene, point)
     }
 }
 

@@ -4,18 +4,24 @@
 //! bucket holds two fragments and a collision needs three (or two within 1/127 of a bucket).
 //! 3 geometry passes (depth range + 2); two sets of `bucket_count` channels.
 
-use super::shared::bucket::{self, Config, Kind, PreparedBucket};
+use super::shared::bucket::{self, Config, Kind};
 use super::{Method, Prepared};
 use crate::effects;
 use bench_core::axes::{Axis, Point};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::GpuScene;
 use bench_core::record::cols;
-use bench_core::{CoreError, Result};
+use bench_core::Result;
 
 const WGSL: &str = include_str!("bdp2.wgsl");
 
 pub struct Bdp2;
+
+const SPEC: bucket::Spec = bucket::Spec {
+    config,
+    fx,
+    wgsl: WGSL,
+};
 
 const MODE: Axis = Axis::choice(
     cols::BUCKET_MODE,
@@ -58,23 +64,13 @@ impl Method for Bdp2 {
         v
     }
     fn required_features(&self) -> wgpu::Features {
-        wgpu::Features::FLOAT32_BLENDABLE
+        SPEC.required_features()
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
-        let fx = fx(point)?;
-        bucket::supports_targets_fx(gpu, &config(point)?, fx.pairs)
+        SPEC.supports(gpu, point)
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
-        let cfg = config(point).map_err(CoreError::Param)?;
-        let fx = fx(point).map_err(CoreError::Param)?;
-        Ok(Box::new(PreparedBucket::with_range(
-            gpu,
-            scene,
-            cfg,
-            WGSL,
-            fx,
-            bucket::RangePass::read(point),
-        )?))
+        SPEC.prepare(gpu, scene, point)
     }
 }
 

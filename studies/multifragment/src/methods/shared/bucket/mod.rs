@@ -300,6 +300,46 @@ pub fn supports_targets_fx(gpu: &Gpu, cfg: &Config, fx: bool) -> std::result::Re
     Ok(())
 }
 
+/// What `bdp`, `bdp2` and `adp` share as [`crate::methods::Method`]s: the point's [`Config`]
+/// and [`Fx`] (each method's own rules), the method's WGSL, and from those the features, the
+/// adapter check and the prepared frame, written once.
+pub struct Spec {
+    pub config: fn(&Point) -> std::result::Result<Config, String>,
+    pub fx: fn(&Point) -> std::result::Result<Fx, String>,
+    pub wgsl: &'static str,
+}
+
+impl Spec {
+    /// Every bucket method MAX-blends 32-bit float targets.
+    pub fn required_features(&self) -> wgpu::Features {
+        wgpu::Features::FLOAT32_BLENDABLE
+    }
+
+    /// The point's own refusals (config, effect), then the adapter's targets.
+    pub fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        let fx = (self.fx)(point)?;
+        supports_targets_fx(gpu, &(self.config)(point)?, fx.pairs)
+    }
+
+    pub fn prepare(
+        &self,
+        gpu: &Gpu,
+        scene: &GpuScene,
+        point: &Point,
+    ) -> Result<Box<dyn crate::methods::Prepared>> {
+        let cfg = (self.config)(point).map_err(bench_core::CoreError::Param)?;
+        let fx = (self.fx)(point).map_err(bench_core::CoreError::Param)?;
+        Ok(Box::new(PreparedBucket::with_range(
+            gpu,
+            scene,
+            cfg,
+            self.wgsl,
+            fx,
+            RangePass::read(point),
+        )?))
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // CPU twins (same names and f32 arithmetic as the WGSL).
 
