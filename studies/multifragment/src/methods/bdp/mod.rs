@@ -130,7 +130,7 @@ mod tests {
             let scene = quads_z(4, 5, reversed);
             for (kind, wgsl) in [
                 (Kind::Uniform { paired: true }, WGSL),
-                (Kind::TwoPass, bdp2_wgsl),
+                (Kind::TwoPass { paired: false }, bdp2_wgsl),
             ] {
                 let cfg = Config { kind, buckets: 8 };
                 let r = run(cfg, wgsl, &scene, 48);
