@@ -73,16 +73,24 @@ fn bdp(range: &'static str) -> [(&'static str, &'static str); 4] {
         ("effect", "transparency"),
     ]
 }
-fn bdp2(range: &'static str) -> [(&'static str, &'static str); 3] {
+/// fig1.2's BDP2: §1.4's 16 bucket pairs on the faithful (bounding-box) rows, mfx's 32 single
+/// buckets on its full-mesh variant.
+fn bdp2(range: &'static str) -> [(&'static str, &'static str); 4] {
+    let (count, pairing) = match range {
+        "bounding_box" => ("16", "paired"),
+        _ => ("32", "single"),
+    };
     [
-        ("bucket_count", "32"),
+        ("bucket_count", count),
+        ("bucket_pairing", pairing),
         ("range_pass", range),
         ("effect", "transparency"),
     ]
 }
-fn adp(range: &'static str) -> [(&'static str, &'static str); 4] {
+fn adp(range: &'static str) -> [(&'static str, &'static str); 5] {
     [
         ("bucket_count", "32"),
+        ("bucket_pairing", "single"),
         ("hist_bins", "1024"),
         ("range_pass", range),
         ("effect", "transparency"),

@@ -28,8 +28,9 @@
 //! | `hybrid`       | Maule et al. 2013, hybrid transparency: the atomic k-buffer's k nearest exact + a mean-alpha weighted tail behind them | approximate (exact for n ≤ k), order-independent | 2 (+ resolve) | k × 40 B + 16 B image + 24 B tail |
 //! | `stochastic`   | Enderton et al. 2010 stochastic transparency (random α·S sample masks, MSAA depth test, passes averaged, alpha correction) | approximate: unbiased without the correction, noise ∝ 1/√(S·passes); judged vs the S-sample truth | 2 per pass (+1 for the correction) | S × (4 B depth + 16 B RGBA32F + 4 B R32F) + 32 B |
 //! | `bdp`          | Liu et al., GPU Pro ch. 1, uniform bucket depth peeling; transparency, and translucency / fresnel on (depth, normal) bucket pairs | approximate: exact iff ≤1 fragment per bucket (2 if paired); collisions counted | 2 | 8 B range + 4 B × channels (≤32) + 68 B resolve |
-//! | `bdp2`         | Liu et al., GPU Pro ch. 1, two-pass BDP | approximate: 2 fragments per bucket; collisions counted | 3 | 8 B range + 2 × 4 B × K + 68 B resolve |
-//! | `adp`          | Liu et al., GPU Pro ch. 1, adaptive (histogram-equalised) BDP | approximate: fragments sharing a histogram bin collide | 2 + ⌈occupied bins / K⌉ | hist_bins/8 B + 8 B × K + 8 B range + 68 B resolve |
+//! | `bdp2`         | Liu et al., GPU Pro ch. 1, two-pass BDP; `bucket_pairing = paired` is §1.4's (a pair per bucket a pass) | approximate: 2 fragments per bucket (4 paired); collisions counted | 3 | 8 B range + 2 × 4 B × channels + 68 B resolve |
+//! | `bdpn`         | Liu et al., GPU Pro ch. 1 §1.4, multi-pass BDP: bucket pairs until an occlusion query counts nothing | approximate: exact up to RGBA6 unless two fragments share an in-bucket key; collisions counted | 1 + passes + 1 | 8 B range + 2 × 8 B × K + 8 B × K × max_layers + 68 B resolve |
+//! | `adp`          | Liu et al., GPU Pro ch. 1, adaptive (histogram-equalised) BDP; `bucket_pairing = paired`: a (near, far) pair per occupied bin (§1.5) | approximate: fragments sharing a histogram bin collide (a third, paired) | 2 + ⌈occupied bins / K⌉ | hist_bins/8 B + 8 B × K + 8 B range + 68 B resolve |
 //!
 //! Every method implements [`Method`] (what it is, which axes and features it needs, and
 //! `prepare`, which creates every GPU object) and [`Prepared`] (`frame`, the timed per-frame
@@ -52,6 +53,7 @@ pub mod adaptive;
 pub mod adp;
 pub mod bdp;
 pub mod bdp2;
+pub mod bdpn;
 pub mod compute_abuffer;
 pub mod depth_peel;
 pub mod dual_peel;
@@ -93,6 +95,7 @@ pub fn all() -> Vec<Box<dyn Method>> {
         Box::new(stochastic::Stochastic),
         Box::new(bdp::Bdp),
         Box::new(bdp2::Bdp2),
+        Box::new(bdpn::Bdpn),
         Box::new(adp::Adp),
     ]
 }
@@ -129,7 +132,10 @@ mod tests {
         // buckets put the cluster in one or two buckets, equalised ones give each its own.
         let scene = quads_at(&[3.0, 0.25, 0.2, 0.15, 0.1, 0.05, 0.0, -3.0], 0.4);
         let cfg = Config {
-            kind: Kind::Adaptive { hist_bins: 1024 },
+            kind: Kind::Adaptive {
+                hist_bins: 1024,
+                paired: false,
+            },
             buckets: 8,
         };
         let a = run(cfg, adp::tests_wgsl(), &scene, 48);

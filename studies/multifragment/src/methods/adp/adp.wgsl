@@ -75,5 +75,12 @@ fn fs_route(in: Varyings, @builtin(front_facing) ff: bool) -> BucketOut {
     if FX {
         return fx_emit(lo, in, ff);
     }
+    // MODE 5 (bucket_pairing = paired), §1.5: "we can further reduce collisions by binding the
+    // buckets into pairs and performing dual depth peeling within each non-empty subinterval":
+    // the bin's pair keeps max(126 − key) and max(key), its nearest and farthest fragment.
+    if MODE == 5u {
+        let k = bin_key(rel_position(in.clip.z, zr), bin);
+        return emit(2u * lo, pack_keyed(126u - k, in.color), 2u * lo + 1u, pack_keyed(k, in.color));
+    }
     return emit(lo, pack_color(in.color), NO_CHANNEL, 0.0);
 }

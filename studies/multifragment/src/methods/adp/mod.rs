@@ -9,14 +9,14 @@
 //! Geometry passes: 2 + ⌈max occupied bins / bucket_count⌉; memory per pixel: hist_bins/8 B
 //! histogram + 4·K B bounds + K·4 B buckets.
 
-use super::shared::bucket::{self, Config, Kind, PreparedBucket};
+use super::shared::bucket::{self, Config, Kind};
 use super::{Method, Prepared};
 use crate::effects;
 use bench_core::axes::{Axis, Point};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::GpuScene;
 use bench_core::record::cols;
-use bench_core::{CoreError, Result};
+use bench_core::Result;
 
 /// adp's WGSL, for the registry's test that holds it against bdp.
 #[cfg(test)]
@@ -27,6 +27,12 @@ pub(crate) fn tests_wgsl() -> &'static str {
 const WGSL: &str = include_str!("adp.wgsl");
 
 pub struct Adp;
+
+const SPEC: bucket::Spec = bucket::Spec {
+    config,
+    fx,
+    wgsl: WGSL,
+};
 
 const MODE: Axis = Axis::choice(
     cols::BUCKET_MODE,
@@ -49,9 +55,12 @@ pub fn config(point: &Point) -> std::result::Result<Config, String> {
             "hist_bins = {hist_bins} must be a multiple of 32 (32-bit words)"
         ));
     }
+    // §1.5: "we can further reduce collisions by binding the buckets into pairs and performing
+    // dual depth peeling within each non-empty subinterval" (bucket_pairing = paired).
+    let paired = bucket::pairing_of(point)?;
     Ok(Config {
-        kind: Kind::Adaptive { hist_bins },
-        buckets: bucket::buckets_fx(point, false)?.0,
+        kind: Kind::Adaptive { hist_bins, paired },
+        buckets: bucket::buckets_fx(point, paired)?.0,
     })
 }
 
@@ -71,7 +80,13 @@ impl Method for Adp {
         false
     }
     fn axes(&self) -> Vec<Axis> {
-        let mut v = vec![bucket::BUCKET_COUNT, HIST_BINS, MODE, bucket::RANGE_PASS];
+        let mut v = vec![
+            bucket::BUCKET_COUNT,
+            bucket::PAIRING_TEXT,
+            HIST_BINS,
+            MODE,
+            bucket::RANGE_PASS,
+        ];
         v.extend_from_slice(effects::AXES);
         v
     }
@@ -82,38 +97,86 @@ impl Method for Adp {
                 "hist_bins = {bins} must be a multiple of 32 (32-bit words)"
             ));
         }
-        Ok(())
+        bucket::pairing_of(point).map(|_| ())
     }
     fn required_features(&self) -> wgpu::Features {
-        wgpu::Features::FLOAT32_BLENDABLE
+        SPEC.required_features()
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
-        let fx = fx(point)?;
-        bucket::supports_targets_fx(gpu, &config(point)?, fx.pairs)
+        SPEC.supports(gpu, point)
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
-        let cfg = config(point).map_err(CoreError::Param)?;
-        let fx = fx(point).map_err(CoreError::Param)?;
-        Ok(Box::new(PreparedBucket::with_range(
-            gpu,
-            scene,
-            cfg,
-            WGSL,
-            fx,
-            bucket::RangePass::read(point),
-        )?))
+        SPEC.prepare(gpu, scene, point)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::shared::bucket::testing::{gpu, quads, quantised_reference, run};
-    use crate::methods::shared::bucket::{adp_equalise, pack_color, route_pixel, unpack_color};
+    use crate::methods::shared::bucket::testing::{gpu, quads, quads_at, quantised_reference, run};
+    use crate::methods::shared::bucket::{
+        adp_equalise, keyed_color, pack_color, pack_keyed, route_pixel, twin_collisions,
+        unpack_color,
+    };
+    use scenarios::{ParamValue, Params};
+
+    #[test]
+    fn adp_paired_quads_at_close_layers_48px_keeps_both_fragments_of_a_shared_bin() {
+        // §1.5: "collisions might still happen when two close layers ... are routed to the same
+        // bucket ... we can further reduce collisions by binding the buckets into pairs". Two
+        // layers 0.01 apart share one of 32 bins: single buckets lose one, pairs keep both, and
+        // the image is the f64 reference with the keyed packing's colours.
+        let scene = quads_at(&[1.0, 0.99, 0.0, -1.0], 0.5);
+        let cfg = Config {
+            kind: Kind::Adaptive {
+                hist_bins: 32,
+                paired: true,
+            },
+            buckets: 4,
+        };
+        let r = run(cfg, WGSL, &scene, 48);
+        assert!(
+            twin_collisions(&adp(4, 32), &r.lists) > 0,
+            "precondition: two layers share a bin"
+        );
+        assert_eq!(r.assert_counts_match_twin(&cfg), 0);
+        assert!(r.capture.flag.is_empty(), "{}", r.capture.flag);
+        let want = quantised_reference(&r.lists, |c| keyed_color(pack_keyed(0, c)));
+        let (e, p) = r.max_err(&want);
+        assert!(e < 1e-5, "pixel {p}: {e} from the keyed reference");
+    }
+
+    #[test]
+    fn adp_paired_quads40_48px_runs_passes_of_8_pairs_and_counts_equal_the_twin() {
+        let cfg = Config {
+            kind: Kind::Adaptive {
+                hist_bins: 256,
+                paired: true,
+            },
+            buckets: 8,
+        };
+        let r = run(cfg, WGSL, &quads(40, 3), 48);
+        assert!(r.prepared.last_passes >= 2);
+        assert_eq!(r.geometry_passes, 2 + r.prepared.last_passes);
+        let lost = r.assert_counts_match_twin(&cfg);
+        assert!(lost <= twin_collisions(&adp(8, 256), &r.lists));
+    }
+
+    #[test]
+    fn adp_bucket_pairing_is_checked_naming_the_axis() {
+        let axes = Adp.axes();
+        let given = Params::new().with("bucket_pairing", ParamValue::Str("both".into()));
+        let point = bench_core::axes::Point::resolve(&axes, &given).unwrap();
+        let e = Adp.validate(&point).unwrap_err();
+        assert!(e.contains("bucket_pairing") && e.contains("both"), "{e}");
+    }
 
     fn adp(buckets: u32, hist_bins: u32) -> Config {
         Config {
-            kind: Kind::Adaptive { hist_bins },
+            kind: Kind::Adaptive {
+                hist_bins,
+                paired: false,
+            },
             buckets,
         }
     }

@@ -7,18 +7,24 @@
 //! `bucket_pairing = paired` keeps the nearest and the farthest fragment of each bucket (two
 //! channels per bucket, so at most 16 buckets). Shared machinery and CPU twins: `methods::shared::bucket`.
 
-use super::shared::bucket::{self, Config, Kind, PreparedBucket};
+use super::shared::bucket::{self, Config, Kind};
 use super::{Method, Prepared};
 use crate::effects;
 use bench_core::axes::{Axis, Point};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::GpuScene;
 use bench_core::record::cols;
-use bench_core::{CoreError, Result};
+use bench_core::Result;
 
 const WGSL: &str = include_str!("bdp.wgsl");
 
 pub struct Bdp;
+
+const SPEC: bucket::Spec = bucket::Spec {
+    config,
+    fx,
+    wgsl: WGSL,
+};
 
 const MODE: Axis = Axis::choice(
     cols::BUCKET_MODE,
@@ -64,23 +70,13 @@ impl Method for Bdp {
         v
     }
     fn required_features(&self) -> wgpu::Features {
-        wgpu::Features::FLOAT32_BLENDABLE
+        SPEC.required_features()
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
-        let fx = fx(point)?;
-        bucket::supports_targets_fx(gpu, &config(point)?, fx.pairs)
+        SPEC.supports(gpu, point)
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
-        let cfg = config(point).map_err(CoreError::Param)?;
-        let fx = fx(point).map_err(CoreError::Param)?;
-        Ok(Box::new(PreparedBucket::with_range(
-            gpu,
-            scene,
-            cfg,
-            WGSL,
-            fx,
-            bucket::RangePass::read(point),
-        )?))
+        SPEC.prepare(gpu, scene, point)
     }
 }
 
@@ -134,7 +130,7 @@ mod tests {
             let scene = quads_z(4, 5, reversed);
             for (kind, wgsl) in [
                 (Kind::Uniform { paired: true }, WGSL),
-                (Kind::TwoPass, bdp2_wgsl),
+                (Kind::TwoPass { paired: false }, bdp2_wgsl),
             ] {
                 let cfg = Config { kind, buckets: 8 };
                 let r = run(cfg, wgsl, &scene, 48);

@@ -4,18 +4,24 @@
 //! bucket holds two fragments and a collision needs three (or two within 1/127 of a bucket).
 //! 3 geometry passes (depth range + 2); two sets of `bucket_count` channels.
 
-use super::shared::bucket::{self, Config, Kind, PreparedBucket};
+use super::shared::bucket::{self, Config, Kind};
 use super::{Method, Prepared};
 use crate::effects;
 use bench_core::axes::{Axis, Point};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::GpuScene;
 use bench_core::record::cols;
-use bench_core::{CoreError, Result};
+use bench_core::Result;
 
 const WGSL: &str = include_str!("bdp2.wgsl");
 
 pub struct Bdp2;
+
+const SPEC: bucket::Spec = bucket::Spec {
+    config,
+    fx,
+    wgsl: WGSL,
+};
 
 const MODE: Axis = Axis::choice(
     cols::BUCKET_MODE,
@@ -24,10 +30,14 @@ const MODE: Axis = Axis::choice(
     &["uniform"],
 );
 
+/// The configuration a point asks for, or the reason it cannot run. `bucket_pairing = paired` is
+/// §1.4's two-pass BDP as the chapter describes it (16 bucket pairs a pass); unset or `single`
+/// is mfx's two-pass of single buckets (the farthest, then the next below it).
 pub fn config(point: &Point) -> std::result::Result<Config, String> {
+    let paired = bucket::pairing_of(point)?;
     Ok(Config {
-        kind: Kind::TwoPass,
-        buckets: bucket::buckets_fx(point, false)?.0,
+        kind: Kind::TwoPass { paired },
+        buckets: bucket::buckets_fx(point, paired)?.0,
     })
 }
 
@@ -53,41 +63,127 @@ impl Method for Bdp2 {
         false
     }
     fn axes(&self) -> Vec<Axis> {
-        let mut v = vec![bucket::BUCKET_COUNT, MODE, bucket::RANGE_PASS];
+        let mut v = vec![
+            bucket::BUCKET_COUNT,
+            bucket::PAIRING_TEXT,
+            MODE,
+            bucket::RANGE_PASS,
+        ];
         v.extend_from_slice(effects::AXES);
         v
     }
+    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+        bucket::pairing_of(point).map(|_| ())
+    }
     fn required_features(&self) -> wgpu::Features {
-        wgpu::Features::FLOAT32_BLENDABLE
+        SPEC.required_features()
     }
     fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
-        let fx = fx(point)?;
-        bucket::supports_targets_fx(gpu, &config(point)?, fx.pairs)
+        SPEC.supports(gpu, point)
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
-        let cfg = config(point).map_err(CoreError::Param)?;
-        let fx = fx(point).map_err(CoreError::Param)?;
-        Ok(Box::new(PreparedBucket::with_range(
-            gpu,
-            scene,
-            cfg,
-            WGSL,
-            fx,
-            bucket::RangePass::read(point),
-        )?))
+        SPEC.prepare(gpu, scene, point)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::shared::bucket::testing::{quads, run};
-    use crate::methods::shared::bucket::twin_collisions;
+    use crate::methods::shared::bucket::testing::{quads, quads_at, quantised_reference, run};
+    use crate::methods::shared::bucket::{keyed_color, pack_keyed, twin_collisions};
+    use bench_core::record::Flag;
+    use scenarios::{ParamValue, Params};
+
+    fn paired(buckets: u32) -> Config {
+        Config {
+            kind: Kind::TwoPass { paired: true },
+            buckets,
+        }
+    }
+
+    #[test]
+    fn bdp2_paired_quads_at_8_layers_48px_2_buckets_captures_four_per_bucket_and_matches_the_reference(
+    ) {
+        // §1.4: pass 1 keeps each bucket's nearest and farthest, pass 2 the nearest and farthest
+        // strictly between them. Eight layers in two buckets: one pass of pairs must lose some,
+        // the two passes of pairs none, and the image is then the f64 reference with the keyed
+        // packing's RGBA6 colours, only if the resolve walks dmin¹, dmin², dmax², dmax¹.
+        let zs: Vec<f32> = (0..8).map(|i| 1.5 - 0.4 * i as f32).collect();
+        let scene = quads_at(&zs, 0.4);
+        let cfg = paired(2);
+        let r = run(cfg, WGSL, &scene, 48);
+        assert_eq!(r.geometry_passes, 3);
+        let one_pass = Config {
+            kind: Kind::Uniform { paired: true },
+            buckets: 2,
+        };
+        assert!(
+            twin_collisions(&one_pass, &r.lists) > 0,
+            "precondition: one pass of pairs must lose fragments here"
+        );
+        assert_eq!(
+            r.assert_counts_match_twin(&cfg),
+            0,
+            "precondition: ≤ 4 distinct keys per bucket"
+        );
+        assert!(r.capture.flag.is_empty(), "{}", r.capture.flag);
+        let want = quantised_reference(&r.lists, |c| keyed_color(pack_keyed(0, c)));
+        let (e, p) = r.max_err(&want);
+        assert!(e < 1e-5, "pixel {p}: {e} from the keyed reference");
+    }
+
+    #[test]
+    fn bdp2_paired_quads16_48px_4_buckets_collision_count_equals_the_twin_and_beats_single() {
+        let scene = quads(16, 1);
+        let r = run(paired(4), WGSL, &scene, 48);
+        let lost = r.assert_counts_match_twin(&paired(4));
+        let single = Config {
+            kind: Kind::TwoPass { paired: false },
+            buckets: 4,
+        };
+        let lost_single = twin_collisions(&single, &r.lists);
+        assert!(lost_single > 0, "16 layers in 4 buckets of 2 must collide");
+        assert!(
+            lost < lost_single,
+            "paired lost {lost}, single {lost_single}"
+        );
+        if lost > 0 {
+            assert_eq!(r.capture.flag, Flag::Collision.into());
+        }
+    }
+
+    #[test]
+    fn bdp2_bucket_pairing_is_checked_naming_the_axis() {
+        let axes = Bdp2.axes();
+        let point = |v: &str| {
+            let given = Params::new().with("bucket_pairing", ParamValue::Str(v.into()));
+            bench_core::axes::Point::resolve(&axes, &given).unwrap()
+        };
+        let e = Bdp2.validate(&point("pairs")).unwrap_err();
+        assert!(e.contains("bucket_pairing") && e.contains("pairs"), "{e}");
+        assert!(Bdp2.validate(&point("paired")).is_ok());
+        assert_eq!(
+            config(&point("paired")).unwrap().kind,
+            Kind::TwoPass { paired: true }
+        );
+        let unset = bench_core::axes::Point::resolve(&axes, &Params::new()).unwrap();
+        assert_eq!(
+            config(&unset).unwrap().kind,
+            Kind::TwoPass { paired: false }
+        );
+        // 32 pairs need 64 channels: refused by the point's config (a skipped row), not the axis.
+        let big = Params::new()
+            .with("bucket_pairing", ParamValue::Str("paired".into()))
+            .with("bucket_count", ParamValue::Int(32));
+        let big = bench_core::axes::Point::resolve(&axes, &big).unwrap();
+        assert!(Bdp2.validate(&big).is_ok());
+        assert!(config(&big).unwrap_err().contains("64 float channels"));
+    }
 
     #[test]
     fn bdp2_quads16_48px_8_buckets_collision_count_equals_the_twin_and_beats_one_pass() {
         let cfg = Config {
-            kind: Kind::TwoPass,
+            kind: Kind::TwoPass { paired: false },
             buckets: 8,
         };
         let r = run(cfg, WGSL, &quads(16, 1), 48);

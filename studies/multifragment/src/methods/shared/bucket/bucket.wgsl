@@ -11,9 +11,14 @@
 override K: u32 = 8u;
 // Resolve layout: 0 = one pack_color per bucket (bdp single), 1 = near/far pack_keyed pair per
 // bucket (bdp paired), 2 = pack_keyed farthest in slots_a and the next one in slots_b (bdp2),
-// 3 = one pack_color per bucket, bucket j holding occupied histogram bin adp_bounds[j] (adp).
+// 3 = one pack_color per bucket, bucket j holding occupied histogram bin adp_bounds[j] (adp),
+// 4 = a near/far pair per bucket in slots_a and the next pair inside it in slots_b (bdp2 paired,
+// §1.4), 5 = a near/far pair per bucket of occupied bin adp_bounds[j] (adp paired, §1.5).
 override MODE: u32 = 0u;
 override HIST_BINS: u32 = 1024u;
+// 6 = multi-pass BDP (bdpn, §1.4's loop): pass p's pairs gathered into adp_bounds' buffer at
+// ((i·K + b)·MAX_PASSES + p)·2 (near, far bits); occupied_max[0] holds the passes filled.
+override MAX_PASSES: u32 = 1u;
 // Effects on (depth, normal) bucket pairs (translucency, fresnel; GPU Pro ch. 1 §1.6.2–1.6.3):
 // bucket b owns channels 2b (pack_viewz_facing) and 2b + 1 (pack_normal_f32), MAX-blended.
 override FX: bool = false;
@@ -173,6 +178,36 @@ fn keyed_t(b: u32, key: u32) -> f32 {
     return (f32(b) + (f32(key) + 0.5) / 127.0) / f32(K);
 }
 
+// Position inside histogram bin `bin` quantised to 0..126 (adp paired's order key; CPU twin:
+// bucket_key(t, bin, hist_bins)).
+fn bin_key(t: f32, bin: u32) -> u32 {
+    let r = t * f32(HIST_BINS) - f32(bin);
+    return min(u32(max(r, 0.0) * 127.0), 126u);
+}
+
+// Folds one (near, far) keyed pair of sub-interval `b` of `scale` (K buckets, or HIST_BINS bins):
+// the nearer first; a pair whose two slots hold one value (one fragment, or all of one key) is
+// one fragment. Returns how many fragments it folded; `near` is 0 where the bucket is empty.
+fn fold_pair(s: ptr<function, FoldState>, near: f32, far: f32, b: u32, scale: f32, zr: vec2<f32>) -> u32 {
+    if near == 0.0 {
+        return 0u;
+    }
+    let kn = 126u - keyed_key(near);
+    fold_step(s, frag_at(keyed_color(near), pair_t(b, kn, scale), zr));
+    let kf = keyed_key(far);
+    let same_color = (bitcast<u32>(near) & 0xffffffu) == (bitcast<u32>(far) & 0xffffffu);
+    if kf == kn && same_color {
+        return 1u;
+    }
+    fold_step(s, frag_at(keyed_color(far), pair_t(b, kf, scale), zr));
+    return 2u;
+}
+
+// keyed_t over `scale` sub-intervals (the same f32 arithmetic for scale = K).
+fn pair_t(b: u32, key: u32, scale: f32) -> f32 {
+    return (f32(b) + (f32(key) + 0.5) / 127.0) / scale;
+}
+
 @compute @workgroup_size(8, 8)
 fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = u32(camera.viewport.x);
@@ -216,17 +251,49 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
                     n += 1u;
                 }
             } else if MODE == 1u {
+                n += fold_pair(&s, slot_a(px, 2u * b), slot_a(px, 2u * b + 1u), b, f32(K), zr);
+            } else if MODE == 4u {
+                // dmin¹ ≤ dmin² ≤ dmax² ≤ dmax¹ (§1.4): pass 2's pair sits inside pass 1's.
                 let vn = slot_a(px, 2u * b);
                 let vf = slot_a(px, 2u * b + 1u);
                 if vn != 0.0 {
                     let kn = 126u - keyed_key(vn);
                     fold_step(&s, frag_at(keyed_color(vn), keyed_t(b, kn), zr));
                     n += 1u;
-                    // One fragment alone (or all of one key) fills both slots with one value.
+                    n += fold_pair(&s, slot_b(px, 2u * b), slot_b(px, 2u * b + 1u), b, f32(K), zr);
                     let kf = keyed_key(vf);
                     let same_color = (bitcast<u32>(vn) & 0xffffffu) == (bitcast<u32>(vf) & 0xffffffu);
                     if !(kf == kn && same_color) {
                         fold_step(&s, frag_at(keyed_color(vf), keyed_t(b, kf), zr));
+                        n += 1u;
+                    }
+                }
+            } else if MODE == 5u {
+                let bin = adp_bounds[i * K + b];
+                if bin != 0xffffffffu {
+                    n += fold_pair(&s, slot_a(px, 2u * b), slot_a(px, 2u * b + 1u), bin, f32(HIST_BINS), zr);
+                }
+            } else if MODE == 6u {
+                // Nearest sides outside in, then farthest sides inside out: pass p + 1's pair
+                // lies strictly inside pass p's, and an empty pass ends the bucket.
+                let filled = atomicLoad(&occupied_max[0]);
+                let base = (i * K + b) * MAX_PASSES;
+                var deepest = 0u;
+                for (var p = 0u; p < filled; p++) {
+                    let vn = bitcast<f32>(adp_bounds[(base + p) * 2u]);
+                    if vn == 0.0 {
+                        break;
+                    }
+                    fold_step(&s, frag_at(keyed_color(vn), keyed_t(b, 126u - keyed_key(vn)), zr));
+                    n += 1u;
+                    deepest = p + 1u;
+                }
+                for (var p = deepest; p > 0u; p--) {
+                    let vn = bitcast<f32>(adp_bounds[(base + p - 1u) * 2u]);
+                    let vf = bitcast<f32>(adp_bounds[(base + p - 1u) * 2u + 1u]);
+                    let same_color = (bitcast<u32>(vn) & 0xffffffu) == (bitcast<u32>(vf) & 0xffffffu);
+                    if !(keyed_key(vf) == 126u - keyed_key(vn) && same_color) {
+                        fold_step(&s, frag_at(keyed_color(vf), keyed_t(b, keyed_key(vf)), zr));
                         n += 1u;
                     }
                 }

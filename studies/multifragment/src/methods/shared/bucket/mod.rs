@@ -49,10 +49,16 @@ const PASS_STRIDE: u64 = 256;
 pub enum Kind {
     /// BDP: uniform sub-intervals, one pass; `paired` keeps nearest and farthest per bucket.
     Uniform { paired: bool },
-    /// BDP2: uniform, a second pass keeps the next fragment of each bucket.
-    TwoPass,
-    /// ADP: histogram-equalised sub-intervals, passes of K buckets.
-    Adaptive { hist_bins: u32 },
+    /// BDP2: uniform, a second pass keeps the next fragment of each bucket; `paired` (§1.4):
+    /// both passes keep a bucket pair, pass 2 the nearest and farthest strictly inside pass 1's.
+    TwoPass { paired: bool },
+    /// ADP: histogram-equalised sub-intervals, passes of K buckets; `paired` (§1.5): each
+    /// occupied bin's bucket pair keeps its nearest and farthest fragment.
+    Adaptive { hist_bins: u32, paired: bool },
+    /// Multi-pass BDP (§1.4's loop): bucket pairs, each pass keeping the nearest and farthest
+    /// strictly inside the previous pass's, until an occlusion query counts no fragment or
+    /// `max_passes` passes have run.
+    UntilCaptured { max_passes: u32 },
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -65,9 +71,18 @@ pub struct Config {
 impl Config {
     /// Float channels per routing pass.
     pub fn channels(&self) -> u32 {
+        if self.paired() {
+            2 * self.buckets
+        } else {
+            self.buckets
+        }
+    }
+    /// Whether each bucket is a (nearest, farthest) pair of channels.
+    pub fn paired(&self) -> bool {
         match self.kind {
-            Kind::Uniform { paired: true } => 2 * self.buckets,
-            _ => self.buckets,
+            Kind::Uniform { paired } | Kind::TwoPass { paired } => paired,
+            Kind::Adaptive { paired, .. } => paired,
+            Kind::UntilCaptured { .. } => true,
         }
     }
     pub fn attachments(&self) -> u32 {
@@ -88,20 +103,24 @@ impl Config {
         match self.kind {
             Kind::Uniform { paired: false } => 0,
             Kind::Uniform { paired: true } => 1,
-            Kind::TwoPass => 2,
-            Kind::Adaptive { .. } => 3,
+            Kind::TwoPass { paired: false } => 2,
+            Kind::Adaptive { paired: false, .. } => 3,
+            Kind::TwoPass { paired: true } => 4,
+            Kind::Adaptive { paired: true, .. } => 5,
+            Kind::UntilCaptured { .. } => 6,
         }
     }
     fn hist_bins(&self) -> u32 {
         match self.kind {
-            Kind::Adaptive { hist_bins } => hist_bins,
+            Kind::Adaptive { hist_bins, .. } => hist_bins,
             _ => 32,
         }
     }
     /// Most routing passes a frame may need (adp: every bin occupied).
     pub fn max_passes(&self) -> u32 {
         match self.kind {
-            Kind::Adaptive { hist_bins } => hist_bins.div_ceil(self.buckets),
+            Kind::Adaptive { hist_bins, .. } => hist_bins.div_ceil(self.buckets),
+            Kind::UntilCaptured { max_passes } => max_passes,
             _ => 1,
         }
     }
@@ -127,6 +146,27 @@ pub fn buckets(point: &Point, paired: bool) -> std::result::Result<u32, String> 
         ));
     }
     Ok(k)
+}
+
+/// `bucket_pairing` of `bdp2` and `adp` (GPU Pro ch. 1 §1.4, §1.5: bucket pairs). Free text with
+/// no default, checked by [`pairing_of`] (each method's `validate`, before any GPU work): a suite
+/// that does not name it keeps its rows' empty cell and mfx's single buckets.
+pub const PAIRING_TEXT: Axis = Axis::text(
+    cols::BUCKET_PAIRING,
+    "single (unset: one fragment per bucket per pass) | paired (each bucket a pair keeping its nearest and farthest fragment, 2 channels: GPU Pro ch. 1 §1.4 for bdp2, §1.5 for adp)",
+    None,
+);
+
+/// Whether the point asks for bucket pairs ([`PAIRING_TEXT`]), or the error naming the axis.
+pub fn pairing_of(point: &Point) -> std::result::Result<bool, String> {
+    match point.get(PAIRING_TEXT.name()) {
+        None => Ok(false),
+        Some(scenarios::ParamValue::Str(s)) if s == "single" => Ok(false),
+        Some(scenarios::ParamValue::Str(s)) if s == "paired" => Ok(true),
+        Some(v) => Err(format!(
+            "axis 'bucket_pairing' = {v} must be one of single, paired"
+        )),
+    }
 }
 
 /// What the depth-range pre-pass draws. GPU Pro ch. 1 §1.3: "a bounding box or a coarse visual
@@ -300,6 +340,46 @@ pub fn supports_targets_fx(gpu: &Gpu, cfg: &Config, fx: bool) -> std::result::Re
     Ok(())
 }
 
+/// What `bdp`, `bdp2` and `adp` share as [`crate::methods::Method`]s: the point's [`Config`]
+/// and [`Fx`] (each method's own rules), the method's WGSL, and from those the features, the
+/// adapter check and the prepared frame, written once.
+pub struct Spec {
+    pub config: fn(&Point) -> std::result::Result<Config, String>,
+    pub fx: fn(&Point) -> std::result::Result<Fx, String>,
+    pub wgsl: &'static str,
+}
+
+impl Spec {
+    /// Every bucket method MAX-blends 32-bit float targets.
+    pub fn required_features(&self) -> wgpu::Features {
+        wgpu::Features::FLOAT32_BLENDABLE
+    }
+
+    /// The point's own refusals (config, effect), then the adapter's targets.
+    pub fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+        let fx = (self.fx)(point)?;
+        supports_targets_fx(gpu, &(self.config)(point)?, fx.pairs)
+    }
+
+    pub fn prepare(
+        &self,
+        gpu: &Gpu,
+        scene: &GpuScene,
+        point: &Point,
+    ) -> Result<Box<dyn crate::methods::Prepared>> {
+        let cfg = (self.config)(point).map_err(bench_core::CoreError::Param)?;
+        let fx = (self.fx)(point).map_err(bench_core::CoreError::Param)?;
+        Ok(Box::new(PreparedBucket::with_range(
+            gpu,
+            scene,
+            cfg,
+            self.wgsl,
+            fx,
+            RangePass::read(point),
+        )?))
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // CPU twins (same names and f32 arithmetic as the WGSL).
 
@@ -436,7 +516,11 @@ pub fn route_pixel_in(
         .map(|(index, &d)| {
             let t = rel_position(d, zmin, zmax, reversed);
             let (bucket, key, scale) = match cfg.kind {
-                Kind::Adaptive { hist_bins } => (adp_bin(t, hist_bins), 0, hist_bins as f32),
+                // The key inside the bin orders a paired bin's two fragments (§1.5's pairs).
+                Kind::Adaptive { hist_bins, .. } => {
+                    let b = adp_bin(t, hist_bins);
+                    (b, bucket_key(t, b, hist_bins), hist_bins as f32)
+                }
                 _ => {
                     let b = uniform_bucket(t, cfg.buckets);
                     (b, bucket_key(t, b, cfg.buckets), cfg.buckets as f32)
@@ -469,8 +553,8 @@ pub fn captured_in_pixel(cfg: &Config, routed: &[Routed]) -> u32 {
     per_bucket
         .values()
         .map(|keys| match cfg.kind {
-            Kind::Uniform { paired: false } | Kind::Adaptive { .. } => 1,
-            Kind::Uniform { paired: true } => {
+            Kind::Uniform { paired: false } | Kind::Adaptive { paired: false, .. } => 1,
+            Kind::Uniform { paired: true } | Kind::Adaptive { paired: true, .. } => {
                 let lo = keys.iter().min().unwrap();
                 let hi = keys.iter().max().unwrap();
                 if lo == hi {
@@ -479,9 +563,16 @@ pub fn captured_in_pixel(cfg: &Config, routed: &[Routed]) -> u32 {
                     2
                 }
             }
-            Kind::TwoPass => {
+            Kind::TwoPass { paired } => {
+                // Single: the largest key, then the largest below it. Paired: the smallest and
+                // largest key, then the smallest and largest strictly between them.
                 let distinct: std::collections::BTreeSet<_> = keys.iter().collect();
-                distinct.len().min(2) as u32
+                distinct.len().min(if paired { 4 } else { 2 }) as u32
+            }
+            // Two distinct keys a pass, the outermost first, until none is left.
+            Kind::UntilCaptured { max_passes } => {
+                let distinct: std::collections::BTreeSet<_> = keys.iter().collect();
+                distinct.len().min(2 * max_passes as usize) as u32
             }
         })
         .sum()
@@ -547,6 +638,7 @@ pub struct PreparedBucket {
     second: Option<wgpu::RenderPipeline>,
     hist_pass: Option<wgpu::RenderPipeline>,
     equalise: Option<wgpu::ComputePipeline>,
+    gather: Option<wgpu::ComputePipeline>,
     count: wgpu::RenderPipeline,
     resolve: wgpu::ComputePipeline,
     cam_bind: wgpu::BindGroup,
@@ -565,7 +657,40 @@ pub struct PreparedBucket {
     pub last_passes: u32,
     /// `range_pass = bounding_box`: the box drawn instead of the mesh.
     range_box: Option<RangeBox>,
+    /// Multi-pass BDP: the query that ends the loop.
+    occlusion: Option<OcclusionQuery>,
     alloc: AllocCounter,
+}
+
+/// One occlusion query, its resolve buffer and its read-back buffer (as depth peeling's).
+struct OcclusionQuery {
+    set: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    read: wgpu::Buffer,
+}
+
+impl OcclusionQuery {
+    fn new(gpu: &Gpu) -> OcclusionQuery {
+        let d = &gpu.device;
+        let set = d.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some("bdpn occlusion"),
+            ty: wgpu::QueryType::Occlusion,
+            count: 1,
+        });
+        let resolve = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("bdpn occlusion resolve"),
+            size: 256,
+            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let read = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("bdpn occlusion read"),
+            size: 8,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        OcclusionQuery { set, resolve, read }
+    }
 }
 
 /// The scene's padded bounding box as 36 vertices, and whether it crosses the near or far plane.
@@ -666,6 +791,7 @@ impl PreparedBucket {
             hist_pass,
             equalise,
             resolve,
+            gather,
         } = Passes::new(gpu, &module, &declared, cfg, attachments, layouts);
 
         let mut alloc = AllocCounter::default();
@@ -674,16 +800,17 @@ impl PreparedBucket {
             .texture(gpu, "bucket depth range", w, h, RANGE_FORMAT, usage)
             .create_view(&Default::default());
         let slots_a = Slots::new(gpu, &mut alloc, &arr, "bucket slots", (w, h), attachments);
-        let slots_b = (cfg.kind == Kind::TwoPass).then(|| {
-            Slots::new(
-                gpu,
-                &mut alloc,
-                &arr,
-                "bdp2 second slots",
-                (w, h),
-                attachments,
-            )
-        });
+        let slots_b =
+            matches!(cfg.kind, Kind::TwoPass { .. } | Kind::UntilCaptured { .. }).then(|| {
+                Slots::new(
+                    gpu,
+                    &mut alloc,
+                    &arr,
+                    "bdp2 second slots",
+                    (w, h),
+                    attachments,
+                )
+            });
         let b = Buffers::new(gpu, &mut alloc, &cfg, px);
         let range_box = match range {
             RangePass::Mesh => None,
@@ -712,9 +839,12 @@ impl PreparedBucket {
             second,
             hist_pass,
             equalise,
+            gather,
             count,
             resolve,
             cam_bind,
+            occlusion: matches!(cfg.kind, Kind::UntilCaptured { .. })
+                .then(|| OcclusionQuery::new(gpu)),
             main_bind,
             range_view,
             slots_a,
@@ -768,13 +898,32 @@ impl PreparedBucket {
         extra: Option<&wgpu::BindGroup>,
         pass_index: u32,
     ) {
+        self.geometry_pass_counted(
+            enc, scene, timer, label, pipeline, targets, extra, pass_index, None,
+        );
+    }
+
+    /// As [`Self::geometry_pass`], counting the samples its fragments write into `occlusion`.
+    #[allow(clippy::too_many_arguments)]
+    fn geometry_pass_counted(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        timer: &mut GpuTimer,
+        label: &str,
+        pipeline: &wgpu::RenderPipeline,
+        targets: &[wgpu::TextureView],
+        extra: Option<&wgpu::BindGroup>,
+        pass_index: u32,
+        occlusion: Option<&wgpu::QuerySet>,
+    ) {
         let att = Self::slot_attachments(targets);
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
             color_attachments: &att,
             depth_stencil_attachment: None,
             timestamp_writes: timer.render_pass(label),
-            occlusion_query_set: None,
+            occlusion_query_set: occlusion,
             multiview_mask: None,
         });
         pass.set_pipeline(pipeline);
@@ -782,7 +931,81 @@ impl PreparedBucket {
         if let Some(b) = extra {
             pass.set_bind_group(1, b, &[]);
         }
+        if occlusion.is_some() {
+            pass.begin_occlusion_query(0);
+        }
         scene.draw(&mut pass, Attrs::ALL);
+        if occlusion.is_some() {
+            pass.end_occlusion_query();
+        }
+    }
+
+    /// Multi-pass BDP (GPU Pro ch. 1 §1.4: "we can obtain accurate results by enabling the
+    /// occlusion query and looping in the same way until all the fragments have been
+    /// captured"). Pass p writes slots[p % 2] reading slots[(p − 1) % 2]; after each pass a
+    /// compute gather copies its pairs into the per-pass store, so the resolve can walk every
+    /// bucket dmin¹ ≤ dmin² ≤ … ≤ dmax² ≤ dmax¹ at the end (the fold runs nearest first and a
+    /// bucket's far fragments come after all of its passes' near ones). Each pass after the
+    /// first reads its query back before the next is encoded: one CPU round trip a pass, as
+    /// depth peeling's. Returns (passes holding fragments, geometry passes drawn).
+    fn frame_until_captured(
+        &self,
+        gpu: &Gpu,
+        scene: &GpuScene,
+        timer: &mut GpuTimer,
+        mut enc: wgpu::CommandEncoder,
+    ) -> Result<(u32, u32)> {
+        let (Some(second), Some(slots_b), Some(gather), Some(q)) =
+            (&self.second, &self.slots_b, &self.gather, &self.occlusion)
+        else {
+            unreachable!("multi-pass BDP prepares its second pass, slots, gather and query");
+        };
+        let slots = [&self.slots_a, slots_b];
+        let max_passes = self.cfg.max_passes();
+        self.geometry_pass(
+            &mut enc,
+            scene,
+            timer,
+            "route",
+            &self.route,
+            &self.slots_a.layers,
+            None,
+            0,
+        );
+        self.compute_pass(&mut enc, scene, timer, "gather", gather, 0);
+        let (mut filled, mut drawn) = (1, 1);
+        while filled < max_passes {
+            let p = filled;
+            self.geometry_pass_counted(
+                &mut enc,
+                scene,
+                timer,
+                "peel",
+                second,
+                &slots[(p % 2) as usize].layers,
+                Some(&slots[((p + 1) % 2) as usize].bind),
+                p,
+                Some(&q.set),
+            );
+            drawn += 1;
+            enc.resolve_query_set(&q.set, 0..1, &q.resolve, 0);
+            enc.copy_buffer_to_buffer(&q.resolve, 0, &q.read, 0, 8);
+            gpu.queue.submit([enc.finish()]);
+            let bytes = gpu.map_read(&q.read)?;
+            enc = gpu.device.create_command_encoder(&Default::default());
+            if u64::from_le_bytes(bytes[..8].try_into().unwrap()) == 0 {
+                break;
+            }
+            self.compute_pass(&mut enc, scene, timer, "gather", gather, p);
+            filled += 1;
+        }
+        // The resolve reads how many passes the store holds (stale passes of earlier frames
+        // lie beyond it).
+        gpu.queue
+            .write_buffer(&self.occupied_max, 0, &filled.to_le_bytes());
+        self.compute_pass(&mut enc, scene, timer, "resolve", &self.resolve, 0);
+        gpu.queue.submit([enc.finish()]);
+        Ok((filled, drawn))
     }
 
     fn compute_pass(
@@ -929,6 +1152,13 @@ impl bench_core::timed::Timed for PreparedBucket {
                 }
             }
         }
+        if self.occlusion.is_some() {
+            let (filled, drawn) = self.frame_until_captured(gpu, scene, timer, enc)?;
+            stats.geometry_passes += drawn;
+            self.last_passes = filled;
+            stats.layers = filled;
+            return Ok(stats);
+        }
         if let Some(hist_pass) = &self.hist_pass {
             enc.clear_buffer(&self.hist, 0, None);
             enc.clear_buffer(&self.occupied_max, 0, None);
@@ -1018,6 +1248,8 @@ struct Passes {
     hist_pass: Option<wgpu::RenderPipeline>,
     equalise: Option<wgpu::ComputePipeline>,
     resolve: wgpu::ComputePipeline,
+    /// Multi-pass BDP: copies a pass's pairs into the per-pass store (adp_bounds' buffer).
+    gather: Option<wgpu::ComputePipeline>,
 }
 
 impl Passes {
@@ -1090,7 +1322,7 @@ impl Passes {
                 None,
                 None,
             ),
-            Kind::TwoPass => (
+            Kind::TwoPass { .. } | Kind::UntilCaptured { .. } => (
                 render("bdp2 first", main_layout, full, "fs_first", slots),
                 Some(render(
                     "bdp2 second",
@@ -1119,6 +1351,8 @@ impl Passes {
         let resolve = compute("bucket resolve", resolve_layout, "resolve");
         let equalise = matches!(cfg.kind, Kind::Adaptive { .. })
             .then(|| compute("adp equalise", main_layout, "equalise"));
+        let gather = matches!(cfg.kind, Kind::UntilCaptured { .. })
+            .then(|| compute("bdpn gather", resolve_layout, "gather"));
         Passes {
             bounds,
             count,
@@ -1127,6 +1361,7 @@ impl Passes {
             hist_pass,
             equalise,
             resolve,
+            gather,
         }
     }
 }
@@ -1150,6 +1385,7 @@ fn declared_constants(cfg: &Config, fx: &Fx, body: &str) -> Vec<(&'static str, f
         ("HIST_BINS", cfg.hist_bins() as f64),
         ("PAIRED", if paired { 1.0 } else { 0.0 }),
         ("FX", if fx.pairs { 1.0 } else { 0.0 }),
+        ("MAX_PASSES", cfg.max_passes() as f64),
     ];
     constants
         .iter()
@@ -1227,6 +1463,7 @@ impl Buffers {
     fn new(gpu: &Gpu, alloc: &mut AllocCounter, cfg: &Config, px: u64) -> Buffers {
         let st = STORAGE_RW;
         let adaptive = matches!(cfg.kind, Kind::Adaptive { .. });
+        let until_captured = matches!(cfg.kind, Kind::UntilCaptured { .. });
         let frag_count = alloc.buffer(gpu, "bucket fragment counter", px * 4, st);
         let hist_bytes = if adaptive {
             px * (cfg.hist_bins() / 32) as u64 * 4
@@ -1234,8 +1471,11 @@ impl Buffers {
             4
         };
         let hist = alloc.buffer(gpu, "adp histogram", hist_bytes, st);
+        // adp: K bounds a pixel; multi-pass BDP: the per-pass store of K pairs a pass.
         let bounds_bytes = if adaptive {
             px * cfg.buckets as u64 * 4
+        } else if until_captured {
+            px * cfg.buckets as u64 * cfg.max_passes() as u64 * 2 * 4
         } else {
             4
         };

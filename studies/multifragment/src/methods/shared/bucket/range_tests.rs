@@ -15,8 +15,17 @@ fn every_method() -> [(Config, &'static str); 4] {
     [
         (c(Kind::Uniform { paired: false }, 32), BDP),
         (c(Kind::Uniform { paired: true }, 16), BDP),
-        (c(Kind::TwoPass, 16), BDP2),
-        (c(Kind::Adaptive { hist_bins: 1024 }, 16), ADP),
+        (c(Kind::TwoPass { paired: false }, 16), BDP2),
+        (
+            c(
+                Kind::Adaptive {
+                    hist_bins: 1024,
+                    paired: false,
+                },
+                16,
+            ),
+            ADP,
+        ),
     ]
 }
 

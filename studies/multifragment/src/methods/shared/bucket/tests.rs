@@ -106,14 +106,20 @@ fn twin_capacity_per_bucket_single_paired_two_pass() {
         captured_in_pixel(&cfg(Kind::Uniform { paired: true }), &routed),
         3
     );
-    assert_eq!(captured_in_pixel(&cfg(Kind::TwoPass), &routed), 3);
+    assert_eq!(
+        captured_in_pixel(&cfg(Kind::TwoPass { paired: false }), &routed),
+        3
+    );
     // Same key only: paired and two-pass cannot tell them apart.
     let tied = [r(1, 7), r(1, 7)];
     assert_eq!(
         captured_in_pixel(&cfg(Kind::Uniform { paired: true }), &tied),
         1
     );
-    assert_eq!(captured_in_pixel(&cfg(Kind::TwoPass), &tied), 1);
+    assert_eq!(
+        captured_in_pixel(&cfg(Kind::TwoPass { paired: false }), &tied),
+        1
+    );
 }
 
 #[test]
