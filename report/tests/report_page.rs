@@ -56,7 +56,7 @@ fn check_layouts(dir: &Path) -> usize {
 
 const HEADER: &str = "schema,run_id,suite,study,scene,scene_label,width,height,method,point_key,adapter,backend,device_type,status,reason,gpu_ms_median,gpu_ms_ci_lo,gpu_ms_ci_hi,x_floor,rmse,bad_pixel_frac,matches_truth,flag,flip_mean,flip_p99,bytes_allocated,bytes_per_pixel,depth_complexity_max,overflow_rate";
 
-#[allow(clippy::too_many_arguments)] // one CSV row, every cell named
+#[allow(clippy::too_many_arguments, reason = "one CSV row, every cell named")]
 fn row(
     scene: &str,
     method: &str,

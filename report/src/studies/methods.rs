@@ -155,7 +155,10 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     Ok(figs)
 }
 
-#[allow(clippy::too_many_arguments)]
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one scene's figures: its rows, floors, labels, styles and output folder"
+)]
 fn scene_figures(
     runs: &Runs,
     label: &str,

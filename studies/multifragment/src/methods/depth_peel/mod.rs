@@ -473,7 +473,10 @@ impl PreparedPeel {
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "one peel dispatch: encoder, scene, timer, pipeline and which peel and sample"
+    )]
     fn dispatch(
         &self,
         enc: &mut wgpu::CommandEncoder,

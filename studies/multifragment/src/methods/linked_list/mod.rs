@@ -321,7 +321,6 @@ struct PreparedList {
     /// The node pool's parts (bound in `bind`).
     _nodes: Vec<wgpu::Buffer>,
     alloc: AllocCounter,
-    #[allow(dead_code)]
     overhead: u64,
 }
 

@@ -756,7 +756,10 @@ impl PreparedBucket {
     }
 
     /// A geometry pass of `pipeline` into `targets` (cleared to 0 = empty).
-    #[allow(clippy::too_many_arguments)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "one geometry pass: encoder, scene, timer, pipeline, targets and bindings"
+    )]
     fn geometry_pass(
         &self,
         enc: &mut wgpu::CommandEncoder,
