@@ -66,7 +66,11 @@ impl Method for Bdp {
     fn required_features(&self) -> wgpu::Features {
         wgpu::Features::FLOAT32_BLENDABLE
     }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         let fx = fx(point)?;
         bucket::supports_targets_fx(gpu, &config(point)?, fx.pairs)
     }

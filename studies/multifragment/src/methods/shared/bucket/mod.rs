@@ -267,18 +267,25 @@ pub fn buckets_fx(point: &Point, paired: bool) -> std::result::Result<(u32, Fx),
 }
 
 /// What every bucket method checks: blendable RGBA32F/RG32F and enough attachments.
-pub fn supports_targets(gpu: &Gpu, cfg: &Config) -> std::result::Result<(), String> {
+pub fn supports_targets(
+    gpu: &Gpu,
+    cfg: &Config,
+) -> std::result::Result<(), bench_core::Unsupported> {
     supports_targets_fx(gpu, cfg, false)
 }
 
 /// As [`supports_targets`], for (depth, normal) pairs when `fx`.
-pub fn supports_targets_fx(gpu: &Gpu, cfg: &Config, fx: bool) -> std::result::Result<(), String> {
+pub fn supports_targets_fx(
+    gpu: &Gpu,
+    cfg: &Config,
+    fx: bool,
+) -> std::result::Result<(), bench_core::Unsupported> {
     if !gpu.has(wgpu::Features::FLOAT32_BLENDABLE) {
         return Err("adapter lacks FLOAT32_BLENDABLE (MAX blending on RGBA32F/RG32F)".into());
     }
     for f in [SLOT_FORMAT, RANGE_FORMAT] {
         if !gpu.renderable(f) {
-            return Err(format!("{f:?} is not renderable on this adapter"));
+            return Err(format!("{f:?} is not renderable on this adapter").into());
         }
     }
     let n = cfg.attachments_fx(fx);
@@ -287,7 +294,8 @@ pub fn supports_targets_fx(gpu: &Gpu, cfg: &Config, fx: bool) -> std::result::Re
             "{n} colour attachments needed, {} allows {}",
             gpu.profile.who(),
             gpu.limits.max_color_attachments
-        ));
+        )
+        .into());
     }
     if n * 16 > gpu.limits.max_color_attachment_bytes_per_sample {
         return Err(format!(
@@ -295,7 +303,8 @@ pub fn supports_targets_fx(gpu: &Gpu, cfg: &Config, fx: bool) -> std::result::Re
             n * 16,
             gpu.profile.who(),
             gpu.limits.max_color_attachment_bytes_per_sample
-        ));
+        )
+        .into());
     }
     Ok(())
 }
