@@ -39,6 +39,8 @@ EXCLUDED = [
     # the run, the moment, the host
     "run_id", "git_rev", "timestamp_utc", "adapter", "driver", "driver_info", "device_type",
     "adapter_features",
+    # which physical GPU and job ran it, and who else held the GPU
+    "gpu_uuid", "gpu_serial", "pci_bus_id", "slurm_*", "gpu_other_processes",
     # clocks and what follows from them
     "gpu_ms_*", "cpu_ms_*", "*_ms", "*_per_s", "shade_ns_per_light_quad*",
     "x_floor", "x_blend", "speedup_vs_*", "gpu_wall_ratio", "raster_bound_ratio",

@@ -305,6 +305,42 @@ pub fn definition(
     })
 }
 
+/// [`definition`], kept for the last few (scene, size, capture rule, effect, expected set).
+fn definition_cached(
+    cap: &Capture,
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    effect: &EffectConfig,
+) -> Option<Arc<Vec<[f64; 4]>>> {
+    type Key = (u64, u32, u32, String, String, String);
+    type Cache = Mutex<Vec<(Key, Arc<Vec<[f64; 4]>>)>>;
+    static CACHE: OnceLock<Cache> = OnceLock::new();
+    const KEEP: usize = 6;
+    let (Some(AaMode::Msaa(_)), Some(_)) = (cap.aa, cap.aa_capture) else {
+        return None;
+    };
+    let key: Key = (
+        scene_key(scene),
+        width,
+        height,
+        format!("{:?}{:?}", cap.aa, cap.aa_capture),
+        format!("{effect:?}"),
+        format!("{:?}", cap.expected),
+    );
+    let cache = CACHE.get_or_init(Default::default);
+    if let Some((_, d)) = cache.lock().unwrap().iter().find(|(k, _)| *k == key) {
+        return Some(d.clone());
+    }
+    let d = Arc::new(definition(cap, scene, width, height, effect)?);
+    let mut c = cache.lock().unwrap();
+    c.push((key, d.clone()));
+    if c.len() > KEEP {
+        c.remove(0);
+    }
+    Some(d)
+}
+
 /// A content hash of what the truth depends on (the label alone is not enough: tests edit
 /// meshes in place).
 fn scene_key(scene: &Scene) -> u64 {
@@ -409,12 +445,19 @@ pub fn reference_for(
     let mode = antialiased(cap)?;
     let (w, h) = (lists.width, lists.height);
     let all = truth_cached(scene, w, h, mode, effect, Expected::All);
-    let own = match (&cap.definition, definition(cap, scene, w, h, effect)) {
-        (Some(d), _) => Some(d.clone()),
-        (None, Some(d)) => Some(d),
-        (None, None) => match cap.expected {
-            Expected::FirstK(_) => Some(truth(scene, w, h, mode, effect, cap.expected).image),
-            Expected::All => None,
+    // The capture's own definition where it brings one; else its rule's image, computed once
+    // per scene, view and rule (the judge asks for it, and a path of views asks twice per view:
+    // at 1024² a multisampled rule costs about a second).
+    let own = match &cap.definition {
+        Some(d) => Some(d.clone()),
+        None => match definition_cached(cap, scene, w, h, effect) {
+            Some(d) => Some(d.to_vec()),
+            None => match cap.expected {
+                Expected::FirstK(_) => {
+                    Some(truth_cached(scene, w, h, mode, effect, cap.expected).image.clone())
+                }
+                Expected::All => None,
+            },
         },
     };
     Some(AaReference {
