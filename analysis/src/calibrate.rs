@@ -183,7 +183,10 @@ mod tests {
 
     /// Every ordered pair of `runs` at ×1, ×1.05 and ×0.95: a Markdown table, and each row's
     /// (pair, scale, SAME, FASTER, SLOWER, UNSURE, points).
-    #[allow(clippy::type_complexity)]
+    #[allow(
+        clippy::type_complexity,
+        reason = "the table's text and its rows, one tuple per printed column"
+    )]
     fn table(
         runs: &[(&str, &str)],
         cal: Option<&Calibration>,

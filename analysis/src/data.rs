@@ -23,6 +23,18 @@ impl Rec {
     pub fn f(&self, col: Col) -> Option<f64> {
         self.f_name(col.name)
     }
+    /// A row of the given cells (a test's or a derived row).
+    pub fn of(cells: &[(Col, &str)]) -> Rec {
+        Rec(cells
+            .iter()
+            .map(|(c, v)| (c.name.to_string(), v.to_string()))
+            .collect())
+    }
+    /// Sets a cell.
+    pub fn set(&mut self, col: Col, value: impl Into<String>) -> &mut Rec {
+        self.0.insert(col.name.to_string(), value.into());
+        self
+    }
     /// `f` for a column named by data.
     pub fn f_name(&self, name: &str) -> Option<f64> {
         let s = self.get_name(name);
@@ -422,11 +434,8 @@ pub fn platforms(runs: &Runs) -> Vec<String> {
 mod tests {
     use super::*;
 
-    fn rec(cells: &[(&str, &str)]) -> Rec {
-        Rec(cells
-            .iter()
-            .map(|(k, v)| (k.to_string(), v.to_string()))
-            .collect())
+    fn rec(cells: &[(Col, &str)]) -> Rec {
+        Rec::of(cells)
     }
 
     #[test]
@@ -434,45 +443,45 @@ mod tests {
         // quads(32) at 128²: kbuffer_rmw layers=16 overflows in 27 % of pixels, max_abs_err
         // under bad_pixel_tol, so matches_truth = true; today's CSV calls the method exact.
         let k = rec(&[
-            ("matches_truth", "true"),
-            ("exact", "true"),
-            ("overflow_rate", "0.271"),
-            ("rmse", "3.2e-4"),
-            ("flag", Flag::Overflow.name()),
+            (cols::MATCHES_TRUTH, "true"),
+            (cols::EXACT, "true"),
+            (cols::OVERFLOW_RATE, "0.271"),
+            (cols::RMSE, "3.2e-4"),
+            (cols::FLAG, Flag::Overflow.name()),
         ]);
         assert_eq!(k.within_tolerance(), Some(true));
         assert_eq!(k.exact_result(), Some(false));
         // Without the flag the rate alone decides; a clean exact method stays exact.
         let mut no_flag = k.clone();
-        no_flag.0.insert("flag".into(), String::new());
+        no_flag.set(cols::FLAG, "");
         assert_eq!(no_flag.exact_result(), Some(false));
         let peel = rec(&[
-            ("matches_truth", "true"),
-            ("exact", "true"),
-            ("rmse", "3e-8"),
+            (cols::MATCHES_TRUTH, "true"),
+            (cols::EXACT, "true"),
+            (cols::RMSE, "3e-8"),
         ]);
         assert_eq!(peel.exact_result(), Some(true));
         // An approximate method within tolerance is not exact either.
         let bdp = rec(&[
-            ("matches_truth", "true"),
-            ("exact", "false"),
-            ("rmse", "1.1e-4"),
+            (cols::MATCHES_TRUTH, "true"),
+            (cols::EXACT, "false"),
+            (cols::RMSE, "1.1e-4"),
         ]);
         assert_eq!(bdp.exact_result(), Some(false));
         // With exact_bound (the new judgement) `exact` is read as written.
         let new = rec(&[
-            ("matches_truth", "true"),
-            ("exact", "false"),
-            ("exact_bound", "1e-6"),
-            ("rmse", "1e-7"),
+            (cols::MATCHES_TRUTH, "true"),
+            (cols::EXACT, "false"),
+            (cols::EXACT_BOUND, "1e-6"),
+            (cols::RMSE, "1e-7"),
         ]);
         assert_eq!(new.exact_result(), Some(false));
         // Exact implies within tolerance, also in a CSV written when it did not.
         let tie = rec(&[
-            ("matches_truth", "false"),
-            ("exact", "true"),
-            ("exact_bound", "0.18"),
-            ("rmse", "1e-3"),
+            (cols::MATCHES_TRUTH, "false"),
+            (cols::EXACT, "true"),
+            (cols::EXACT_BOUND, "0.18"),
+            (cols::RMSE, "1e-3"),
         ]);
         assert_eq!(tie.exact_result(), Some(false));
     }
@@ -480,21 +489,21 @@ mod tests {
     #[test]
     fn untrusted_times_and_small_samples_are_read_with_fallbacks() {
         let r = rec(&[
-            ("gpu_ms_median", "3.45"),
-            ("flag", Flag::TimestampsIncomplete.name()),
-            ("samples", "3"),
+            (cols::GPU_MS_MEDIAN, "3.45"),
+            (cols::FLAG, Flag::TimestampsIncomplete.name()),
+            (cols::SAMPLES, "3"),
         ]);
         assert!(!r.time_trusted() && r.trusted_ms().is_none());
         assert_eq!(r.interval(), Interval::Range(Some(3)));
         assert_eq!(r.interval().name(), "range (n = 3)");
         let r = rec(&[
-            ("gpu_ms_median", "1"),
-            ("gpu_time_trusted", "true"),
-            ("samples", "6"),
+            (cols::GPU_MS_MEDIAN, "1"),
+            (cols::GPU_TIME_TRUSTED, "true"),
+            (cols::SAMPLES, "6"),
         ]);
         assert!(r.time_trusted());
         assert_eq!(r.interval(), Interval::Ci95);
-        let r = rec(&[("gpu_ms_interval", "range"), ("samples", "40")]);
+        let r = rec(&[(cols::GPU_MS_INTERVAL, "range"), (cols::SAMPLES, "40")]);
         assert_eq!(r.interval(), Interval::Range(Some(40)));
     }
 }

@@ -833,7 +833,10 @@ impl Gpu {
     /// (`limits::check_stage_storage`; only compatibility mode has them). Layout helpers call it.
     pub fn note_layout(&self, what: &str, entries: &[wgpu::BindGroupLayoutEntry]) {
         if let Err(why) = crate::limits::check_stage_storage(self.profile, what, entries) {
-            self.stage_violation.lock().unwrap().get_or_insert(why);
+            self.stage_violation
+                .lock()
+                .unwrap()
+                .get_or_insert(why.into());
         }
     }
 

@@ -337,7 +337,10 @@ impl AllocCounter {
     }
 
     /// A texture of `samples` samples per texel (MSAA), counted as `samples` texels' bytes.
-    #[allow(clippy::too_many_arguments)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "a texture's label, size, format, usage and samples, as wgpu's descriptor has them"
+    )]
     pub fn texture_ms(
         &mut self,
         gpu: &Gpu,

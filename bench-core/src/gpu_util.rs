@@ -254,7 +254,7 @@ pub fn check_msaa_format(
     gpu: &Gpu,
     format: wgpu::TextureFormat,
     samples: u32,
-) -> Result<(), String> {
+) -> Result<(), crate::Unsupported> {
     if samples <= 1 {
         return Ok(());
     }
@@ -269,6 +269,7 @@ pub fn check_msaa_format(
         Err(format!(
             "{format:?} cannot be multisampled {samples}× on this adapter (it allows {:?})",
             flags.supported_sample_counts()
-        ))
+        )
+        .into())
     }
 }

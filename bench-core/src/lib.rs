@@ -71,3 +71,48 @@ pub enum CoreError {
 }
 
 pub type Result<T, E = CoreError> = std::result::Result<T, E>;
+
+/// Why a point cannot run here: an adapter feature, format, sample count or limit it lacks, or
+/// a configuration a method cannot supply. Known before the point's GPU work, it is not an
+/// error of the run: its text is the `reason` of the point's `skipped` row, word for word.
+/// (`Method::supports`, `Study` skip paths and the harness's adapter checks return it; the text
+/// reads as a `&str` through `Deref`, and converts from and to `String` where a caller still
+/// speaks `String`.)
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct Unsupported(String);
+
+impl Unsupported {
+    pub fn new(why: impl Into<String>) -> Unsupported {
+        Unsupported(why.into())
+    }
+    /// The reason, as the `skipped` row says it.
+    pub fn reason(&self) -> &str {
+        &self.0
+    }
+}
+
+impl std::ops::Deref for Unsupported {
+    type Target = str;
+    fn deref(&self) -> &str {
+        &self.0
+    }
+}
+
+impl From<String> for Unsupported {
+    fn from(why: String) -> Unsupported {
+        Unsupported(why)
+    }
+}
+
+impl From<&str> for Unsupported {
+    fn from(why: &str) -> Unsupported {
+        Unsupported(why.to_string())
+    }
+}
+
+impl From<Unsupported> for String {
+    fn from(u: Unsupported) -> String {
+        u.0
+    }
+}

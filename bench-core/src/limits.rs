@@ -238,7 +238,7 @@ pub fn check_stage_storage(
     profile: Profile,
     what: &str,
     entries: &[wgpu::BindGroupLayoutEntry],
-) -> std::result::Result<(), String> {
+) -> std::result::Result<(), crate::Unsupported> {
     let Some((vertex, fragment)) = profile.stage_storage() else {
         return Ok(());
     };
@@ -279,7 +279,8 @@ pub fn check_stage_storage(
                     "fragment"
                 },
                 profile.owner()
-            ));
+            )
+            .into());
         }
     }
     Ok(())

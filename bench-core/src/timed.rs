@@ -42,7 +42,8 @@ pub trait Timed {
     /// Named parts of the frame just run, in ms, that the GPU timestamps do not give: CPU work
     /// it did (e.g. lighting on CPU cores while the GPU renders) or intervals read off its
     /// passes' `spans`. The harness keeps them for the kept samples and reports their medians
-    /// ([`crate::measure::Measured::parts`]).
+    /// ([`crate::measure::Measured::parts`]). A part that fills a column is named by it
+    /// (`cols::X.name`).
     fn parts(&self, spans: &[PassSpan]) -> Vec<(&'static str, f64)> {
         let _ = spans;
         Vec::new()

@@ -58,7 +58,10 @@ impl WorstKeeper {
     /// Offers one image row. Returns whether it was kept. Cheap when it is not among the worst:
     /// the mean is compared before anything is copied or coloured. A NaN mean is never kept
     /// (it cannot be ranked; FLIP of 8-bit images is always finite).
-    #[allow(clippy::too_many_arguments)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "one candidate: its point, method, scene, FLIP result and both 8-bit images with their size"
+    )]
     pub fn offer(
         &mut self,
         point_key: &str,

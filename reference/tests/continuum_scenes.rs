@@ -70,7 +70,10 @@ fn f32_image(v: &[[f64; 4]]) -> Vec<[f32; 4]> {
 }
 
 /// Every twin of `mfx_reference::oit` with its name, as an image function over `lists`.
-#[allow(clippy::type_complexity)]
+#[allow(
+    clippy::type_complexity,
+    reason = "a table of named image functions, read once"
+)]
 fn twins(
     near: f64,
     far: f64,

@@ -242,26 +242,22 @@ mod tests {
     use schema::Status;
 
     fn row(method: &str, ms: &str, pass_ms: &str, peak: &str) -> Rec {
-        let mut m = BTreeMap::new();
-        for (k, v) in [
-            ("status", Status::Ok.name()),
-            ("study", "methods"),
-            ("scene_label", "quads(n=2)"),
-            ("width", "512"),
-            ("height", "512"),
-            ("method", method),
+        Rec::of(&[
+            (cols::STATUS, Status::Ok.name()),
+            (cols::STUDY, "methods"),
+            (cols::SCENE_LABEL, "quads(n=2)"),
+            (cols::WIDTH, "512"),
+            (cols::HEIGHT, "512"),
+            (cols::METHOD, method),
             (
-                "point_key",
+                cols::POINT_KEY,
                 &format!("methods|quads(n=2)|512x512|{method}|layers=8"),
             ),
-            ("gpu_ms_median", ms),
-            ("pass_ms", pass_ms),
-            ("peak_bandwidth_frac", peak),
-            ("gpu_time_trusted", "true"),
-        ] {
-            m.insert(k.to_string(), v.to_string());
-        }
-        Rec(m)
+            (cols::GPU_MS_MEDIAN, ms),
+            (cols::PASS_MS, pass_ms),
+            (cols::PEAK_BANDWIDTH_FRAC, peak),
+            (cols::GPU_TIME_TRUSTED, "true"),
+        ])
     }
 
     fn runs(rows: Vec<Rec>) -> Runs {
@@ -293,7 +289,7 @@ mod tests {
         assert!(v.contains("of peak bandwidth"), "no roofs measured: {v}");
         // A run with measured roofs names the one the row is read against.
         let mut l2 = r.rows[1].clone();
-        l2.0.insert("l2_resident".into(), "true".into());
+        l2.set(cols::L2_RESIDENT, "true");
         let v = bounds(&runs(vec![r.rows[0].clone(), l2]))
             .remove(0)
             .verdict();
@@ -314,13 +310,9 @@ mod tests {
     #[test]
     fn untrusted_or_failed_or_passless_rows_are_left_out() {
         let mut untrusted = row("compute_abuffer", "3.0", "{\"count\":1.0}", "");
-        untrusted
-            .0
-            .insert("gpu_time_trusted".into(), "false".into());
+        untrusted.set(cols::GPU_TIME_TRUSTED, "false");
         let mut failed = row("linked_list", "3.0", "{\"count\":1.0}", "");
-        failed
-            .0
-            .insert("status".into(), Status::Failed.name().into());
+        failed.set(cols::STATUS, Status::Failed.name());
         let passless = row("wboit", "3.0", "", "");
         let r = runs(vec![untrusted, failed, passless]);
         assert!(bounds(&r).is_empty());

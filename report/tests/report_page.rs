@@ -56,7 +56,7 @@ fn check_layouts(dir: &Path) -> usize {
 
 const HEADER: &str = "schema,run_id,suite,study,scene,scene_label,width,height,method,point_key,adapter,backend,device_type,status,reason,gpu_ms_median,gpu_ms_ci_lo,gpu_ms_ci_hi,x_floor,rmse,bad_pixel_frac,matches_truth,flag,flip_mean,flip_p99,bytes_allocated,bytes_per_pixel,depth_complexity_max,overflow_rate";
 
-#[allow(clippy::too_many_arguments)] // one CSV row, every cell named
+#[allow(clippy::too_many_arguments, reason = "one CSV row, every cell named")]
 fn row(
     scene: &str,
     method: &str,
@@ -272,4 +272,98 @@ fn a_views_run_draws_flicker_against_time_and_error_and_popping_along_the_path()
             "no {kind} in {names:?}"
         );
     }
+}
+
+/// The image and chart paths a committed run's RUN.md (or any Markdown under
+/// results/reference, or README.md) names, in a link or a code span: `report/<chart>` is redrawn by
+/// `mfx report` (charts are not committed), so the run's report is built in a temp copy and the
+/// chart must be there; any other path must be in the tree.
+#[test]
+fn every_image_a_committed_doc_names_resolves() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut docs = vec![root.join("README.md")];
+    let mut stack = vec![root.join("results/reference")];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "md") {
+                docs.push(p);
+            }
+        }
+    }
+    let is_image = |s: &str| {
+        [".png", ".svg", ".pdf", ".jpg"]
+            .iter()
+            .any(|x| s.ends_with(x))
+    };
+    let (mut in_tree, mut redrawn, mut bad) = (0, 0, Vec::new());
+    for doc in &docs {
+        let text = std::fs::read_to_string(doc).unwrap();
+        // Code spans (odd pieces between backticks) and link targets `](…)` / `src="…"`.
+        let mut paths: Vec<&str> = text.split('`').skip(1).step_by(2).collect();
+        for open in ["](", "src=\""] {
+            paths.extend(
+                text.split(open)
+                    .skip(1)
+                    .filter_map(|s| s.split([')', '"', ' ']).next()),
+            );
+        }
+        // A path (it has a folder), not a pattern (`p*-…`, `0-…-512x512`) nor a web address.
+        paths.retain(|p| {
+            is_image(p)
+                && p.contains('/')
+                && !p.contains(['*', '…', '<', ' '])
+                && !p.contains("://")
+        });
+        if paths.is_empty() {
+            continue;
+        }
+        let dir = doc.parent().unwrap();
+        let mut report: Option<Tmp> = None;
+        for p in paths {
+            if let Some(chart) = p.strip_prefix("report/") {
+                let out = report.get_or_insert_with(|| {
+                    let t = tmp("cited");
+                    for f in ["runs.csv", "run.json"] {
+                        if dir.join(f).is_file() {
+                            std::fs::copy(dir.join(f), t.join(f)).unwrap();
+                        }
+                    }
+                    report::build(&t, None).unwrap_or_else(|e| panic!("{}: {e:#}", doc.display()));
+                    t
+                });
+                redrawn += 1;
+                if !out.join("report").join(chart).is_file() {
+                    // The charts it does draw of the same kind, to name the new one.
+                    let kind = chart.split('_').next().unwrap_or(chart);
+                    let ext = Path::new(chart).extension().unwrap_or_default();
+                    let drawn: Vec<String> = std::fs::read_dir(out.join("report"))
+                        .unwrap()
+                        .map(|e| e.unwrap().path())
+                        .filter(|f| f.extension() == Some(ext))
+                        .map(|f| f.file_name().unwrap().to_string_lossy().into_owned())
+                        .filter(|n| n.starts_with(kind))
+                        .collect();
+                    bad.push(format!(
+                        "{}: {p} is not drawn by mfx report (it draws {drawn:?})",
+                        doc.display()
+                    ));
+                }
+            } else {
+                in_tree += 1;
+                if !dir.join(p).is_file() && !root.join(p).is_file() {
+                    bad.push(format!("{}: {p}", doc.display()));
+                }
+            }
+        }
+    }
+    assert!(bad.is_empty(), "{bad:#?}");
+    // The reference runs cite charts (redrawn) today; a doc that cites none is fine, but the
+    // scan must have found what is there.
+    assert!(
+        redrawn + in_tree >= 2,
+        "{redrawn} redrawn, {in_tree} in the tree"
+    );
 }

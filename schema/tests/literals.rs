@@ -170,3 +170,91 @@ fn the_scanner_finds_literals_and_skips_comments_and_chars() {
     assert!(spells_a_word(texts[0], &words) && spells_a_word(texts[1], &words));
     assert!(!spells_a_word("noisy_run", &words) && !spells_a_word("", &words));
 }
+
+/// The calls that read a row's cell, or a timed frame's part, by a name given as text: a
+/// literal there that is a declared column should be `cols::X` (or `cols::X.name`).
+const BY_NAME: &[&str] = &["get_name(", "f_name(", "part_median(", "parts.get("];
+/// The same, and a row's map written by hand (`rec.0.insert(`), where `.0` is a row: in the
+/// crates that read runs.csv (elsewhere `.0` is an axis map, keyed by axis names).
+const ROW_BY_NAME: &[&str] = &[
+    "get_name(",
+    "f_name(",
+    "part_median(",
+    "parts.get(",
+    "0.insert(",
+];
+
+/// `call("name"` sites in `src` (for each of `calls`) whose literal is a declared column, with
+/// their line numbers (comment lines skipped).
+fn column_literals(src: &str, calls: &[&str]) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    for (i, line) in src.lines().enumerate() {
+        if line.trim_start().starts_with("//") {
+            continue;
+        }
+        for call in calls {
+            for (at, _) in line.match_indices(call) {
+                let rest = line[at + call.len()..].trim_start();
+                let Some(lit) = rest.strip_prefix('"').and_then(|r| r.split('"').next()) else {
+                    continue;
+                };
+                if schema::by_name(lit).is_some() {
+                    out.push((i + 1, format!("{call}\"{lit}\"")));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Column names only through `schema` (issue 40, item 5): where a row's cell or a frame's
+/// timed part is read or written by name, the name is `cols::X`, never a literal that a rename
+/// would leave behind.
+#[test]
+fn no_column_read_by_a_literal_name() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut found = Vec::new();
+    let mut n = 0;
+    for (dir, calls) in [
+        ("report", ROW_BY_NAME),
+        ("analysis", ROW_BY_NAME),
+        ("studies", BY_NAME),
+        ("bench-core", BY_NAME),
+        ("src", BY_NAME),
+        ("table", BY_NAME),
+    ] {
+        let mut files = Vec::new();
+        rust_files(&root.join(dir), &mut files);
+        n += files.len();
+        for f in &files {
+            let src = std::fs::read_to_string(f).unwrap();
+            for (line, site) in column_literals(&src, calls) {
+                let rel = f.strip_prefix(&root).unwrap_or(f).display().to_string();
+                found.push(format!("{rel}:{line}: {site}"));
+            }
+        }
+    }
+    assert!(n > 50, "found only {n} files");
+    assert!(
+        found.is_empty(),
+        "column names spelt as literals (use schema::cols::X, or cols::X.name):\n{}",
+        found.join("\n")
+    );
+}
+
+#[test]
+fn the_column_scanner_finds_calls_with_a_declared_name_only() {
+    let src = "let a = r.f_name(\"gpu_ms_median\");\n// r.get_name(\"method\")\nlet b = r.get_name( \"method\"); let c = r.f_name(\"reps\"); m.part_median(name);\nr.0.insert(\"method\".into(), m);";
+    assert_eq!(
+        column_literals(src, BY_NAME),
+        [
+            (1, "f_name(\"gpu_ms_median\"".to_string()),
+            (3, "get_name(\"method\"".to_string())
+        ]
+    );
+    assert_eq!(
+        column_literals(src, ROW_BY_NAME).len(),
+        3,
+        "a row written by hand"
+    );
+}

@@ -221,12 +221,12 @@ fn a_point_measured_under_two_keys_is_one_point_and_two_points_are_ambiguous() {
         cols::POINT_KEY.name.into(),
         format!("methods|{D}|512x512|depth_peel|effect=translucency,max_layers=256,sigma=0.8"),
     );
-    d2.0.insert("sigma".into(), String::new());
+    d2.set(cols::SIGMA, "");
     let one = section(&runs(vec![k.clone(), d.clone(), d2.clone()]));
     let row = row_of(&one, "fig1.3-kbuffer16-translucency", None);
     assert!(row.contains("holds"), "{row}");
     // Rows that differ in an axis their keys name are two points: the figure cannot pick.
-    d2.0.insert("sigma".into(), "0.8".into());
+    d2.set(cols::SIGMA, "0.8");
     let two = section(&runs(vec![k, d, d2]));
     let row = row_of(&two, "fig1.3-kbuffer16-translucency", None);
     assert!(row.contains("ambiguous: 2 points match"), "{row}");

@@ -154,27 +154,29 @@ pub fn figures(runs: &Runs, _dir: &Path) -> Result<Vec<Figure>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use schema::Col;
 
-    fn rec(kv: &[(&str, &str)]) -> Rec {
-        Rec(kv
-            .iter()
-            .map(|(k, v)| (k.to_string(), v.to_string()))
-            .collect())
+    fn rec(kv: &[(Col, &str)]) -> Rec {
+        Rec::of(kv)
     }
 
     #[test]
     fn the_table_says_runs_split_or_skipped_with_the_limit_per_resolution() {
-        let base = [("study", "methods"), ("width", "512"), ("height", "512")];
+        let base = [
+            (cols::STUDY, "methods"),
+            (cols::WIDTH, "512"),
+            (cols::HEIGHT, "512"),
+        ];
         let row = |m: &str, status: &str, split: &str, why: &str| {
             let mut r = rec(&base);
             for (k, v) in [
-                ("method", m),
-                ("status", status),
-                ("split", split),
-                ("reason", why),
-                ("limits", "webgpu"),
+                (cols::METHOD, m),
+                (cols::STATUS, status),
+                (cols::SPLIT, split),
+                (cols::REASON, why),
+                (cols::LIMITS, "webgpu"),
             ] {
-                r.0.insert(k.into(), v.into());
+                r.set(k, v);
             }
             r
         };
@@ -202,11 +204,11 @@ mod tests {
         let timed = |limits: &str, split: &str, key: &str, ms: &str| {
             let mut r = row("kbuffer_atomic", Status::Ok.name(), split, "");
             for (k, v) in [
-                ("limits", limits),
-                ("point_key", key),
-                ("gpu_ms_median", ms),
+                (cols::LIMITS, limits),
+                (cols::POINT_KEY, key),
+                (cols::GPU_MS_MEDIAN, ms),
             ] {
-                r.0.insert(k.into(), v.into());
+                r.set(k, v);
             }
             r
         };
@@ -227,7 +229,10 @@ mod tests {
             "{html}"
         );
         let adapter_only = Runs {
-            rows: vec![rec(&[("limits", "adapter"), ("status", Status::Ok.name())])],
+            rows: vec![rec(&[
+                (cols::LIMITS, "adapter"),
+                (cols::STATUS, Status::Ok.name()),
+            ])],
             ..Default::default()
         };
         assert!(!applies(&adapter_only));

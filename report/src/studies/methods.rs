@@ -155,7 +155,10 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     Ok(figs)
 }
 
-#[allow(clippy::too_many_arguments)]
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one scene's figures: its rows, floors, labels, styles and output folder"
+)]
 fn scene_figures(
     runs: &Runs,
     label: &str,
@@ -778,11 +781,8 @@ mod tests {
         for m in 0..17 {
             for k in 0..=(m % 4) {
                 let mut r = Rec::default();
-                r.0.insert("method".into(), format!("m{m}"));
-                r.0.insert(
-                    "point_key".into(),
-                    format!("methods|s|64x64|m{m}|layers={k}"),
-                );
+                r.set(cols::METHOD, format!("m{m}"));
+                r.set(cols::POINT_KEY, format!("methods|s|64x64|m{m}|layers={k}"));
                 rows.push(r);
             }
         }

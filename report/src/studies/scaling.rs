@@ -431,13 +431,13 @@ mod tests {
         let rec = |scene: &str, w: &str| {
             let mut r = Rec::default();
             for (k, v) in [
-                ("suite", "scaling"),
-                ("study", "methods"),
-                ("scene_label", scene),
-                ("width", w),
-                ("height", w),
+                (cols::SUITE, "scaling"),
+                (cols::STUDY, "methods"),
+                (cols::SCENE_LABEL, scene),
+                (cols::WIDTH, w),
+                (cols::HEIGHT, w),
             ] {
-                r.0.insert(k.into(), v.into());
+                r.set(k, v);
             }
             r
         };

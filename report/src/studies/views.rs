@@ -140,7 +140,10 @@ fn flicker_vs_time(
 }
 
 /// One line per configuration: the `key` array of its `path_series` against the view index.
-#[allow(clippy::too_many_arguments)]
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one chart: its rows, labels, styles, series key, texts and output"
+)]
 fn along_path(
     g: &[&Rec],
     labels: &ConfigLabels,

@@ -426,7 +426,10 @@ pub struct FeedGpu {
 impl FeedGpu {
     /// Creates everything for one point. `sizes` are the render targets (the suite's viewport,
     /// then the small one of the raster check).
-    #[allow(clippy::too_many_arguments)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "each input of the geometry frame is a different stream or buffer"
+    )]
     pub fn new(
         gpu: &Gpu,
         scene: &GpuScene,

@@ -95,7 +95,7 @@ pub struct AaSupport {
 
 impl AaSupport {
     /// `Err(reason)` when `method` cannot run `cfg` at all (any adapter).
-    pub fn check(&self, method: &str, cfg: AaConfig) -> Result<(), String> {
+    pub fn check(&self, method: &str, cfg: AaConfig) -> Result<(), Unsupported> {
         let ok = match (cfg.mode, cfg.capture) {
             (AaMode::None, _) => true,
             (AaMode::Ssaa2x2, _) => self.ssaa,
@@ -113,14 +113,15 @@ impl AaSupport {
             ),
             m => format!("aa = {}", m.name()),
         };
-        Err(format!("{method} does not support {what}: {}", self.why))
+        Err(format!("{method} does not support {what}: {}", self.why).into())
     }
 }
 
 pub use bench_core::gpu_util::check_msaa_format;
+use bench_core::Unsupported;
 
 /// Whether fragment shaders may run per sample (`@builtin(sample_index)`).
-pub fn check_sample_shading(gpu: &Gpu) -> Result<(), String> {
+pub fn check_sample_shading(gpu: &Gpu) -> Result<(), Unsupported> {
     if gpu
         .downlevel
         .flags
@@ -138,7 +139,7 @@ pub fn check_adapter(
     gpu: &Gpu,
     cfg: AaConfig,
     formats: &[wgpu::TextureFormat],
-) -> Result<(), String> {
+) -> Result<(), Unsupported> {
     let s = cfg.msaa();
     if s > 1 {
         for &f in formats {

@@ -107,7 +107,11 @@ pub trait Method: Send + Sync {
     }
     /// Whether this point can run on this adapter (limits, memory) or with this method at all
     /// (an effect it cannot supply); `Err(reason)` becomes a `skipped` row.
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         let _ = (gpu, point);
         Ok(())
     }
@@ -121,14 +125,19 @@ pub trait Method: Send + Sync {
 }
 
 /// Whether `method` can run `point` on `gpu`: its required features first, then its own rule.
-pub fn supports(method: &dyn Method, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+pub fn supports(
+    method: &dyn Method,
+    gpu: &Gpu,
+    point: &Point,
+) -> std::result::Result<(), bench_core::Unsupported> {
     let missing = method.required_features() - gpu.features;
     if !missing.is_empty() {
         let names = bench_core::gpu::feature_names(missing);
         return Err(match gpu.profile {
             bench_core::limits::Profile::Adapter => format!("adapter lacks {names}"),
             p => format!("the `{p}` limits profile grants no {names}"),
-        });
+        }
+        .into());
     }
     method.supports(gpu, point)
 }

@@ -341,7 +341,10 @@ fn cull(
         .collect()
 }
 
-#[allow(clippy::needless_range_loop)]
+#[allow(
+    clippy::needless_range_loop,
+    reason = "the lane index addresses several SoA arrays at once"
+)]
 fn shade_tile(
     vfc: &Mat4,
     gb: &GBuffer,
@@ -470,7 +473,11 @@ fn shade_tile(
 }
 
 /// One 4×4 quad in SoA lanes: lane k is pixel (q.x + k%4, q.y + k/4) of the tile.
-#[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
+#[allow(
+    clippy::too_many_arguments,
+    clippy::needless_range_loop,
+    reason = "a hot SoA kernel: its inputs passed apart, lanes indexed across arrays"
+)]
 fn shade_quad(
     gb: &GBuffer,
     lights: &[GpuLight],
@@ -695,7 +702,11 @@ struct BfLanes<'a> {
 /// leaves its sums bit-identical to the per-lane loop's. `diffuse_only`: BF3's second loop
 /// (no specular evaluation). `d_only` without it: the specular term is evaluated on every lane
 /// and thrown away (the cost the diffuse-only skip saves).
-#[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
+#[allow(
+    clippy::too_many_arguments,
+    clippy::needless_range_loop,
+    reason = "a hot SoA kernel: its inputs passed apart, lanes indexed across arrays"
+)]
 #[inline(never)]
 fn bf3_light(
     q: &BfLanes<'_>,
@@ -756,7 +767,11 @@ fn bf3_light(
 /// BF3's normal-cone cull of one region `sub` (tile-relative) of tile `rect`: keeps the lights
 /// of `list` that some pixel of it may face (see the module doc); returns them and how many
 /// were tested. f64 throughout, on the same f32 positions and normals the shading reads.
-#[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
+#[allow(
+    clippy::too_many_arguments,
+    clippy::needless_range_loop,
+    reason = "a hot SoA kernel: its inputs passed apart, lanes indexed across arrays"
+)]
 fn cone_cull(
     gb: &GBuffer,
     lights: &[GpuLight],

@@ -121,7 +121,10 @@ pub fn module(gpu: &Gpu, label: &str, extra: &str) -> wgpu::ShaderModule {
 impl ShadeInputs {
     /// `shadow`: the sun's map and its range map (bindings 4, 5); `None` binds 1×1 stand-ins (the
     /// uniform then says the shadow is off and nothing reads them).
-    #[allow(clippy::too_many_arguments)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "every input of the shading pass: set-up, G-buffer, tiles, shadow, allocation count"
+    )]
     pub fn new(
         gpu: &Gpu,
         setup: &ShadeSetup,
@@ -363,7 +366,10 @@ pub struct Deferred {
     sun: Option<SunShadow>,
 }
 
-#[allow(clippy::too_many_arguments)]
+#[allow(
+    clippy::too_many_arguments,
+    reason = "a pipeline's layout, shader, entry points, constants, blend and cull, each named"
+)]
 pub fn render_pipeline(
     gpu: &Gpu,
     label: &str,
@@ -486,7 +492,10 @@ impl Deferred {
     /// ([`ShadeSetup::with_diffuse_only`]) and the sun shaded through a shadow map or not
     /// (rendered here, once, untimed: `sun_shadow.rs`), over a 2×MSAA G-buffer or not
     /// (`msaa.rs`).
-    #[allow(clippy::too_many_arguments)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "a deferred path's scene, path and every axis it reads"
+    )]
     pub fn new_with(
         gpu: &Gpu,
         scene: &Scene,
@@ -951,7 +960,10 @@ impl Deferred {
     }
 
     /// Classified: (id per 4×4 tile, count per id, offset per id, the scattered tile list).
-    #[allow(clippy::type_complexity)]
+    #[allow(
+        clippy::type_complexity,
+        reason = "the four read-back arrays of the classification, in pass order"
+    )]
     pub fn classification(
         &self,
         gpu: &Gpu,

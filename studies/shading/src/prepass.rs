@@ -35,6 +35,7 @@ use super::gpu_paths::{bge, module, paths_source, Deferred, Path, ShadeInputs, H
 use super::{GBuffer, ShadeSetup, SKY, SKY_MATERIAL};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::{AllocCounter, Attrs, GpuScene};
+use bench_core::record::cols;
 
 use bench_core::timed::{FrameStats, PassSpan, Timed};
 use bench_core::timing::GpuTimer;
@@ -656,18 +657,22 @@ impl Timed for PrePass {
     fn parts(&self, spans: &[PassSpan]) -> Vec<(&'static str, f64)> {
         let mut v = Vec::new();
         if let Some(f) = self.samples.last() {
-            v.push(("latency_ms", f.latency_ms));
+            v.push((cols::LATENCY_MS.name, f.latency_ms));
             if matches!(self.accum, Accum::Cpu { .. }) {
                 v.extend([
-                    ("cpu_light_ms", f.cpu_light_ms),
-                    ("map_wait_ms", f.map_wait_ms),
+                    (cols::CPU_LIGHT_MS.name, f.cpu_light_ms),
+                    (cols::MAP_WAIT_MS.name, f.map_wait_ms),
+                    // Not a column: its median is said in the row's notes.
                     ("cpu_total_ms", f.cpu_total_ms),
-                    ("light_ready_ms", f.light_ready_ms),
+                    (cols::LIGHT_READY_MS.name, f.light_ready_ms),
                 ]);
             }
         }
         if let Some((gap, busy)) = gap_of(spans) {
-            v.extend([("gpu_gap_ms", gap), ("gpu_busy_in_gap_ms", busy)]);
+            v.extend([
+                (cols::GPU_GAP_MS.name, gap),
+                (cols::GPU_BUSY_IN_GAP_MS.name, busy),
+            ]);
         }
         v
     }

@@ -1,7 +1,10 @@
 //! Shading tests on lavapipe (tiny city scenes): every path against the f64 reference, the
 //! culling proof, the per-id tile lists, and the CPU path's determinism.
 
-#![allow(clippy::needless_range_loop)]
+#![allow(
+    clippy::needless_range_loop,
+    reason = "tests index several per-pixel arrays by one pixel index"
+)]
 
 use std::sync::OnceLock;
 

@@ -360,7 +360,10 @@ pub fn run_views_group(ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
 
 /// Judges one capture of view `v`: the judge's verdict, the step from the row's previous view,
 /// and (with images) crops where this view is the row's worst or its largest pop so far.
-#[allow(clippy::too_many_arguments)]
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one view judged: its row, capture, view, scene and the judge's settings"
+)]
 fn judge_view(
     r: &PathRow,
     cap: Capture,

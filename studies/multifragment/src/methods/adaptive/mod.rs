@@ -71,12 +71,12 @@ impl Method for Adaptive {
     fn axes(&self) -> Vec<Axis> {
         vec![LAYERS]
     }
-    fn supports(&self, gpu: &Gpu, _: &Point) -> std::result::Result<(), String> {
+    fn supports(&self, gpu: &Gpu, _: &Point) -> std::result::Result<(), bench_core::Unsupported> {
         if !gpu.has(wgpu::Features::FLOAT32_BLENDABLE) {
             return Err("adapter lacks FLOAT32_BLENDABLE (additive blending into RGBA32F)".into());
         }
         if !gpu.renderable(ACCUM) {
-            return Err(format!("{ACCUM:?} is not renderable on this adapter"));
+            return Err(format!("{ACCUM:?} is not renderable on this adapter").into());
         }
         Ok(())
     }

@@ -78,7 +78,11 @@ impl Method for Bdp2 {
     fn required_features(&self) -> wgpu::Features {
         SPEC.required_features()
     }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         SPEC.supports(gpu, point)
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {

@@ -104,13 +104,17 @@ impl Method for ComputeAbuffer {
     fn validate(&self, point: &Point) -> std::result::Result<(), String> {
         EffectConfig::from_point(point).map(|_| ())
     }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         let have = gpu.limits.max_storage_buffers_per_shader_stage;
         if have < PACKED_BUFFERS {
             return Err(format!(
                 "needs {PACKED_BUFFERS} storage buffers per shader stage (packed bindings), {} allows {have}",
                 gpu.profile.who()
-            ));
+            ).into());
         }
         let v = variants(point);
         let wg = gpu.limits.max_compute_workgroup_storage_size;
@@ -125,7 +129,8 @@ impl Method for ComputeAbuffer {
                 v.name(),
                 plan::RING_SHORT,
                 gpu.profile.who()
-            ));
+            )
+            .into());
         }
         let aa = AaConfig::from_point(point);
         // capture = auto falls back to pixels under MSAA (the binned resolve has no masks).
@@ -133,7 +138,7 @@ impl Method for ComputeAbuffer {
             return Err(format!(
                 "capture = tiles tests pixel centres only (no coverage masks): aa = {} needs capture = pixels",
                 point.choice(&aa::AA)
-            ));
+            ).into());
         }
         AA_SUPPORT.check(self.name(), aa)
     }

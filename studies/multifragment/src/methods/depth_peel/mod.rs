@@ -113,7 +113,11 @@ impl Method for DepthPeel {
     fn payload(&self, point: &Point) -> Option<&'static str> {
         Config::read(point).ok().map(|c| c.payload().name())
     }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         let cfg = Config::read(point)?;
         // naga's GLSL writer cannot translate `textureLoad` from a depth texture (the previous
         // layer's depth): a GL pipeline would fail to build, so it is an adapter limit, not a failure.
@@ -131,7 +135,7 @@ impl Method for DepthPeel {
             (p.object_id, ID_FORMAT),
         ] {
             if need && !gpu.renderable(f) {
-                return Err(format!("{f:?} is not renderable on this adapter"));
+                return Err(format!("{f:?} is not renderable on this adapter").into());
             }
         }
         AA_SUPPORT.check(self.name(), cfg.aa)?;
@@ -473,7 +477,10 @@ impl PreparedPeel {
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "one peel dispatch: encoder, scene, timer, pipeline and which peel and sample"
+    )]
     fn dispatch(
         &self,
         enc: &mut wgpu::CommandEncoder,

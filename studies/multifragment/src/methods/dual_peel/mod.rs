@@ -88,11 +88,15 @@ impl Method for DualPeel {
     fn required_features(&self) -> wgpu::Features {
         wgpu::Features::FLOAT32_BLENDABLE
     }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         effect_of(point)?;
         for f in [DEPTH_FORMAT, LAYER_FORMAT] {
             if !gpu.renderable(f) {
-                return Err(format!("{f:?} is not renderable on this adapter"));
+                return Err(format!("{f:?} is not renderable on this adapter").into());
             }
         }
         // The peel pass writes the depth pair and the front and back layers at once: checked
@@ -107,7 +111,8 @@ impl Method for DualPeel {
                 "{need} bytes per sample in colour attachments needed (a depth pair, the front and \
                  back layers in one pass), {} allows {have}",
                 gpu.profile.who()
-            ));
+            )
+            .into());
         }
         Ok(())
     }

@@ -44,7 +44,7 @@ impl Method for Hybrid {
     fn axes(&self) -> Vec<Axis> {
         vec![LAYERS]
     }
-    fn supports(&self, gpu: &Gpu, _: &Point) -> std::result::Result<(), String> {
+    fn supports(&self, gpu: &Gpu, _: &Point) -> std::result::Result<(), bench_core::Unsupported> {
         tail::supports(gpu, 0)
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {

@@ -59,7 +59,11 @@ impl Method for KBufferAtomic {
     fn payload(&self, point: &Point) -> Option<&'static str> {
         SlotConfig::read(point).ok().map(|c| c.payload.name())
     }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         let cfg = AaConfig::from_point(point);
         AA_SUPPORT.check(self.name(), cfg)?;
         let slot = SlotConfig::read(point)?;
@@ -68,7 +72,7 @@ impl Method for KBufferAtomic {
             return Err(format!(
                 "antialiasing is offered for transparency only: an averaged per-sample {} fold has no judged truth",
                 slot.effect.effect.name()
-            ));
+            ).into());
         }
         if cfg.msaa() > 1 {
             if Bounding::of(point, true) != Bounding::DEFAULT {

@@ -129,7 +129,11 @@ impl Method for KBufferRmw {
     fn payload(&self, point: &Point) -> Option<&'static str> {
         SlotConfig::read(point).ok().map(|c| c.payload.name())
     }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         let blends = Bounding::of(point, true).blends();
         SlotConfig::read(point)?.check(blends)?;
         if blends {

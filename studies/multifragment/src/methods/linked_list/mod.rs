@@ -133,7 +133,11 @@ impl Method for LinkedList {
     fn validate(&self, point: &Point) -> std::result::Result<(), String> {
         EffectConfig::from_point(point).map(|_| ())
     }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         AA_SUPPORT.check(self.name(), AaConfig::from_point(point))?;
         let c = list_config(point);
         if c.pixel && c.aa.msaa() > 1 {
@@ -157,7 +161,8 @@ impl Method for LinkedList {
                 return Err(format!(
                     "tail = blend composites a transparency tail: not {}",
                     e.effect.name()
-                ));
+                )
+                .into());
             }
         }
         if c.compact && !gpu.has(wgpu::Features::PRIMITIVE_INDEX) {
@@ -169,7 +174,8 @@ impl Method for LinkedList {
             return Err(format!(
                 "needs {need} storage buffers per shader stage, {} allows {have}",
                 gpu.profile.who()
-            ));
+            )
+            .into());
         }
         Ok(())
     }
@@ -321,7 +327,6 @@ struct PreparedList {
     /// The node pool's parts (bound in `bind`).
     _nodes: Vec<wgpu::Buffer>,
     alloc: AllocCounter,
-    #[allow(dead_code)]
     overhead: u64,
 }
 

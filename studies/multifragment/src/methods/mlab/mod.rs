@@ -113,7 +113,11 @@ impl Method for Mlab {
     fn axes(&self) -> Vec<Axis> {
         vec![LAYERS, TAIL]
     }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         if tail_rule(point) == Some(TailMode::Blend) {
             tail::supports(gpu, 0)?;
         }

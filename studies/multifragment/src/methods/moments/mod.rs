@@ -172,7 +172,11 @@ impl Method for Moments {
     fn validate(&self, point: &Point) -> std::result::Result<(), String> {
         variant(point).map(|_| ())
     }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         let v = variant(point)?;
         if !gpu.has(wgpu::Features::FLOAT32_BLENDABLE) {
             return Err("adapter lacks FLOAT32_BLENDABLE (additive blending into RGBA32F)".into());
@@ -190,12 +194,13 @@ impl Method for Moments {
                 return Err(format!(
                     "the moments pass writes {bytes} B per sample, {} allows {have}",
                     gpu.profile.who()
-                ));
+                )
+                .into());
             }
         }
         for f in formats {
             if !gpu.renderable(f) {
-                return Err(format!("{f:?} is not renderable on this adapter"));
+                return Err(format!("{f:?} is not renderable on this adapter").into());
             }
         }
         Ok(())

@@ -94,7 +94,10 @@ pub fn storage_pipeline_ms(
 
 /// A raster pipeline over `vs_full` (every attribute), both faces (transparency sees back faces
 /// too, like the reference), with `depth` (or none) and colour `targets`.
-#[allow(clippy::too_many_arguments)]
+#[allow(
+    clippy::too_many_arguments,
+    reason = "a pipeline's layout, shader, entry, constants, targets and depth, each named"
+)]
 pub fn full_pipeline(
     gpu: &Gpu,
     label: &str,
@@ -118,7 +121,10 @@ pub fn full_pipeline(
 }
 
 /// [`full_pipeline`] rasterising `samples` samples per pixel (MSAA).
-#[allow(clippy::too_many_arguments)]
+#[allow(
+    clippy::too_many_arguments,
+    reason = "a pipeline's layout, shader, entry, constants, targets, depth and samples, each named"
+)]
 pub fn full_pipeline_ms(
     gpu: &Gpu,
     label: &str,

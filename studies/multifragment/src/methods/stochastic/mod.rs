@@ -100,7 +100,11 @@ impl Method for Stochastic {
         }
         Ok(())
     }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         let cfg = Config::read(point);
         if !gpu.has(wgpu::Features::FLOAT32_BLENDABLE) {
             return Err("the RGBA32F sums need FLOAT32_BLENDABLE".into());

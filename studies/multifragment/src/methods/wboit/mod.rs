@@ -48,10 +48,14 @@ impl Method for Wboit {
     fn axes(&self) -> Vec<Axis> {
         vec![aa::AA, aa::AA_CAPTURE]
     }
-    fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         for f in [ACCUM, REVEAL] {
             if !gpu.renderable(f) {
-                return Err(format!("{f:?} is not renderable on this adapter"));
+                return Err(format!("{f:?} is not renderable on this adapter").into());
             }
         }
         let cfg = AaConfig::from_point(point);

@@ -307,18 +307,25 @@ pub fn buckets_fx(point: &Point, paired: bool) -> std::result::Result<(u32, Fx),
 }
 
 /// What every bucket method checks: blendable RGBA32F/RG32F and enough attachments.
-pub fn supports_targets(gpu: &Gpu, cfg: &Config) -> std::result::Result<(), String> {
+pub fn supports_targets(
+    gpu: &Gpu,
+    cfg: &Config,
+) -> std::result::Result<(), bench_core::Unsupported> {
     supports_targets_fx(gpu, cfg, false)
 }
 
 /// As [`supports_targets`], for (depth, normal) pairs when `fx`.
-pub fn supports_targets_fx(gpu: &Gpu, cfg: &Config, fx: bool) -> std::result::Result<(), String> {
+pub fn supports_targets_fx(
+    gpu: &Gpu,
+    cfg: &Config,
+    fx: bool,
+) -> std::result::Result<(), bench_core::Unsupported> {
     if !gpu.has(wgpu::Features::FLOAT32_BLENDABLE) {
         return Err("adapter lacks FLOAT32_BLENDABLE (MAX blending on RGBA32F/RG32F)".into());
     }
     for f in [SLOT_FORMAT, RANGE_FORMAT] {
         if !gpu.renderable(f) {
-            return Err(format!("{f:?} is not renderable on this adapter"));
+            return Err(format!("{f:?} is not renderable on this adapter").into());
         }
     }
     let n = cfg.attachments_fx(fx);
@@ -327,7 +334,8 @@ pub fn supports_targets_fx(gpu: &Gpu, cfg: &Config, fx: bool) -> std::result::Re
             "{n} colour attachments needed, {} allows {}",
             gpu.profile.who(),
             gpu.limits.max_color_attachments
-        ));
+        )
+        .into());
     }
     if n * 16 > gpu.limits.max_color_attachment_bytes_per_sample {
         return Err(format!(
@@ -335,7 +343,8 @@ pub fn supports_targets_fx(gpu: &Gpu, cfg: &Config, fx: bool) -> std::result::Re
             n * 16,
             gpu.profile.who(),
             gpu.limits.max_color_attachment_bytes_per_sample
-        ));
+        )
+        .into());
     }
     Ok(())
 }
@@ -356,7 +365,11 @@ impl Spec {
     }
 
     /// The point's own refusals (config, effect), then the adapter's targets.
-    pub fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    pub fn supports(
+        &self,
+        gpu: &Gpu,
+        point: &Point,
+    ) -> std::result::Result<(), bench_core::Unsupported> {
         let fx = (self.fx)(point)?;
         supports_targets_fx(gpu, &(self.config)(point)?, fx.pairs)
     }
@@ -886,7 +899,10 @@ impl PreparedBucket {
     }
 
     /// A geometry pass of `pipeline` into `targets` (cleared to 0 = empty).
-    #[allow(clippy::too_many_arguments)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "one geometry pass: encoder, scene, timer, pipeline, targets and bindings"
+    )]
     fn geometry_pass(
         &self,
         enc: &mut wgpu::CommandEncoder,

@@ -271,7 +271,6 @@ pub(crate) struct PreparedAbuffer {
     /// The clip buffer, the fragments and (packed) the packed mesh, kept for the bind group.
     _kept: Vec<wgpu::Buffer>,
     alloc: AllocCounter,
-    #[allow(dead_code)]
     overhead: u64,
 }
 

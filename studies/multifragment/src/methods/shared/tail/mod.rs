@@ -51,7 +51,10 @@ pub fn keep(point: &bench_core::axes::Point) -> Keep {
 }
 
 /// Whether the adapter can blend the tail targets; `Err` is a `skipped` row's reason.
-pub fn supports(gpu: &Gpu, extra_bytes_per_sample: u32) -> Result<(), String> {
+pub fn supports(
+    gpu: &Gpu,
+    extra_bytes_per_sample: u32,
+) -> std::result::Result<(), bench_core::Unsupported> {
     if !gpu.has(wgpu::Features::FLOAT32_BLENDABLE) {
         return Err(
             "tail = blend blends into RGBA32F/R32F: adapter lacks FLOAT32_BLENDABLE".into(),
@@ -59,9 +62,7 @@ pub fn supports(gpu: &Gpu, extra_bytes_per_sample: u32) -> Result<(), String> {
     }
     for f in [SUMS, TRANS, COUNT] {
         if !gpu.renderable(f) {
-            return Err(format!(
-                "tail = blend: {f:?} is not renderable on this adapter"
-            ));
+            return Err(format!("tail = blend: {f:?} is not renderable on this adapter").into());
         }
     }
     let need = TAIL_BYTES as u32 + extra_bytes_per_sample;
@@ -70,7 +71,8 @@ pub fn supports(gpu: &Gpu, extra_bytes_per_sample: u32) -> Result<(), String> {
         return Err(format!(
             "tail = blend writes {need} B per sample, {} allows {have}",
             gpu.profile.who()
-        ));
+        )
+        .into());
     }
     Ok(())
 }
