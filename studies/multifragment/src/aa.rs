@@ -453,9 +453,11 @@ pub fn reference_for(
         None => match definition_cached(cap, scene, w, h, effect) {
             Some(d) => Some(d.to_vec()),
             None => match cap.expected {
-                Expected::FirstK(_) => {
-                    Some(truth_cached(scene, w, h, mode, effect, cap.expected).image.clone())
-                }
+                Expected::FirstK(_) => Some(
+                    truth_cached(scene, w, h, mode, effect, cap.expected)
+                        .image
+                        .clone(),
+                ),
                 Expected::All => None,
             },
         },

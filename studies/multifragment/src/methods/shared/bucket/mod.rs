@@ -920,7 +920,10 @@ impl PreparedBucket {
     }
 
     /// As [`Self::geometry_pass`], counting the samples its fragments write into `occlusion`.
-    #[allow(clippy::too_many_arguments)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "geometry_pass's arguments plus the occlusion query set"
+    )]
     fn geometry_pass_counted(
         &self,
         enc: &mut wgpu::CommandEncoder,
