@@ -397,7 +397,7 @@ fn sample(numbers: &str, chart: Option<&str>) -> String {
         })
         .unwrap_or_default();
     format!(
-        "% Compiles the files beside it: pdflatex sample.tex\n\
+        "% Compiles the files beside it: pdflatex sample.tex, twice (longtable sets its column widths on the second run)\n\
          \\documentclass{{article}}\n\
          \\usepackage[T1]{{fontenc}}\n\
          \\usepackage[utf8]{{inputenc}}\n\
