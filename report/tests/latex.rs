@@ -136,3 +136,13 @@ fn a_run_without_image_studies_still_writes_every_file() {
     let r = std::fs::read_to_string(latex.join("reproduction.tex")).unwrap();
     assert!(r.starts_with("% mfx report: no "), "{r}");
 }
+
+#[test]
+fn a_run_without_a_verdict_table_says_so_in_numbers_tex() {
+    // The H200 views run: every row is a path's, none is in a verdict table.
+    let d = copy_run("2026-12-05-h200-merged/views");
+    report::build(d.path(), None).unwrap();
+    let numbers = std::fs::read_to_string(d.path().join("report/latex/numbers.tex")).unwrap();
+    assert!(!numbers.contains("\\newcommand"), "{numbers}");
+    assert!(numbers.ends_with(report::latex::NO_MACRO), "{numbers}");
+}
