@@ -46,18 +46,21 @@ const COVERAGE: Axis = Axis::choice(
 );
 const CAPTURE: Axis = Axis::choice(
     cols::CAPTURE,
-    "pixels: count, scan and fill an 8 B fragment per pixel slot, then sort; tiles: triangles over small_max binned to 8×8 tiles instead, each tile's pixels test them (their fragments never stored); auto: tiles where the triangles over small_max make at least 4 fragments a pixel, else pixels (decided at prepare)",
+    "pixels: count, scan and fill an 8 B fragment per pixel slot, then sort; tiles: triangles over small_max binned to 8×8 tiles instead, each tile's pixels test them (their fragments never stored); auto: tiles where the triangles over small_max make at least 3 fragments a pixel, else pixels (decided at prepare)",
     "pixels",
     &["pixels", "tiles", "auto"],
 );
 /// `capture = auto`: binned fragments per pixel (of the whole image) from which the scene is
-/// captured by tiles. From the H200's `perf-binned` (2026-12-03, `capture` pixels or tiles at
-/// small_max 256, every triangle big): quads(8) at 1024², 2.5 fragments a pixel, 0.367 ms by
-/// pixels, 0.455 by tiles; quads(32), 11 a pixel, 1.580 against 0.937. A line through both puts
-/// the break-even at 3.7 a pixel: what tiles save per binned fragment (its count and fill
-/// atomics, its 8 B store and load) against what their resolve costs per pixel (its workgroup
-/// memory and the tiles' scan). Not measured at points between: an A/B on the H200 says.
-const AUTO_BINNED_PER_PIXEL: f64 = 4.0;
+/// captured by tiles. First 4.0, from the H200's `perf-binned` (2026-12-03: quads(8), 2.5 a
+/// pixel, faster by pixels; quads(32), 11 a pixel, by tiles). The H100's `perf-issue41`
+/// (2026-12-05, `results/reference/2026-12-05-h100-perf-issue41`, pixels, tiles and auto side
+/// by side on 33 scene × resolution points) put points between: shells(4, 16) at 3.04–3.05 a
+/// pixel and shells(4, 48) at 3.09–3.13 ran 1.6–20 % faster by tiles at 1024² and 2048² (auto
+/// took pixels), quads(8) at 2.54 and shells(16, 256) at 2048² at 3.88 ran 2–18 % faster by
+/// pixels. 3.0 takes the first six and loses 2 % on the last; no single count separates them
+/// all (shells(4, 48) at 512², 2.32 a pixel, is 3 % faster by tiles). Fit on that run: an A/B
+/// on another run says whether it holds.
+const AUTO_BINNED_PER_PIXEL: f64 = 3.0;
 const ATTRIBUTES: Axis = Axis::choice(
     cols::ATTRIBUTES,
     "clip: attributes weighted by the unsnapped clip-space triangle (2D homogeneous); snapped: by the snapped screen triangle's perspective-corrected barycentrics (exact integer edges), as the reference",
@@ -82,7 +85,7 @@ impl Method for ComputeAbuffer {
         "compute_abuffer"
     }
     fn describe(&self) -> &'static str {
-        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position); capture=tiles bins the triangles over small_max to 8×8 tiles instead of storing their fragments (8 B per tile and triangle, + 8 B per pixel) and each tile's pixels test them, those fragments never leaving workgroup memory; attributes=snapped weights a fragment's attributes as its snapped screen triangle's (the reference's), not its clip-space triangle's; capture=auto picks tiles where the triangles over small_max make ≥ 4 fragments a pixel; bindings=auto packs its 10 storage buffers into 6 where the device allows fewer (WebGPU: 8), the fragments then split over up to 3 bindings"
+        "Maule et al. 2012 dynamic fragment buffer, rasterised in compute (no raster pipeline): count, prefix sum, fill, sort; exact (coverage rule for rule as the reference); vertices transformed once (transform=vertex), integer edge functions stepped and big triangles' tiles classified (coverage=stepped), short lists sorted in workgroup memory (resolve_sort=workgroup); 2 geometry passes + scan + resolve; 4 B offset + 16 B image per pixel + exactly 8 B per fragment (+ 24 B per vertex: clip and snapped screen position); capture=tiles bins the triangles over small_max to 8×8 tiles instead of storing their fragments (8 B per tile and triangle, + 8 B per pixel) and each tile's pixels test them, those fragments never leaving workgroup memory; attributes=snapped weights a fragment's attributes as its snapped screen triangle's (the reference's), not its clip-space triangle's; capture=auto picks tiles where the triangles over small_max make ≥ 3 fragments a pixel; bindings=auto packs its 10 storage buffers into 6 where the device allows fewer (WebGPU: 8), the fragments then split over up to 3 bindings"
     }
     fn exact(&self) -> bool {
         true

@@ -763,3 +763,31 @@ fn a_sliver_takes_its_snapped_triangles_attributes_with_attributes_snapped() {
         );
     }
 }
+
+#[test]
+fn capture_auto_takes_tiles_from_three_binned_fragments_a_pixel_and_stays_exact() {
+    // Every quad is bigger than small_max 16 at 64×64, so every fragment is a binned one; the
+    // census counts them per pixel of the image (quads cover about a third of it).
+    for (dc, want) in [(4, "pixels"), (16, "tiles")] {
+        let quads = scene("quads", &[("depth_complexity", Int(dc))]);
+        let p = params(&[("small_max", Int(16)), ("capture", Str("auto".into()))]);
+        let (cap, lists) = run(&ComputeAbuffer, &quads, 64, 64, &p);
+        let at = cap
+            .notes
+            .find("capture auto: ")
+            .unwrap_or_else(|| panic!("quads({dc}): no choice in the notes: {}", cap.notes));
+        let said = &cap.notes[at + 14..];
+        let per_px: f64 = said
+            .split(['(', ' '])
+            .find_map(|w| w.parse().ok())
+            .expect("the count in the note");
+        assert!(said.starts_with(want), "quads({dc}): {said}");
+        assert_eq!(
+            per_px >= AUTO_BINNED_PER_PIXEL,
+            want == "tiles",
+            "quads({dc}): {per_px} a pixel: {said}"
+        );
+        let (e, at) = max_err(&cap, &lists);
+        assert!(e <= IMAGE_TOL, "quads({dc}) auto: error {e} at pixel {at}");
+    }
+}
