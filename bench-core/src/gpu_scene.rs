@@ -176,10 +176,41 @@ impl GpuScene {
             1.0 / width as f32,
             1.0 / height as f32,
         ];
+        self.sharing_buffers(
+            gpu,
+            "camera (resized)",
+            camera_data,
+            (width, height),
+            self.reversed_z,
+        )
+    }
+
+    /// The same scene (vertex and index buffers shared) seen by `cam`: its own camera uniform.
+    /// A camera path renders each view through one of these, every method prepared on it.
+    pub fn with_camera(&self, gpu: &Gpu, cam: &scenarios::Camera) -> GpuScene {
+        let camera_data = camera_uniform_of(cam, self.width, self.height);
+        self.sharing_buffers(
+            gpu,
+            "camera (view)",
+            camera_data,
+            (self.width, self.height),
+            cam.reversed_z,
+        )
+    }
+
+    /// This scene's vertex and index buffers with a camera uniform of its own.
+    fn sharing_buffers(
+        &self,
+        gpu: &Gpu,
+        label: &str,
+        camera_data: CameraUniform,
+        (width, height): (u32, u32),
+        reversed_z: bool,
+    ) -> GpuScene {
         let camera = gpu
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("camera (resized)"),
+                label: Some(label),
                 contents: bytemuck::bytes_of(&camera_data),
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             });
@@ -194,34 +225,7 @@ impl GpuScene {
             camera_data,
             width,
             height,
-            reversed_z: self.reversed_z,
-            bytes: self.bytes,
-        }
-    }
-
-    /// The same scene (vertex and index buffers shared) seen by `cam`: its own camera uniform.
-    /// A camera path renders each view through one of these, every method prepared on it.
-    pub fn with_camera(&self, gpu: &Gpu, cam: &scenarios::Camera) -> GpuScene {
-        let camera_data = camera_uniform_of(cam, self.width, self.height);
-        let camera = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("camera (view)"),
-                contents: bytemuck::bytes_of(&camera_data),
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            });
-        GpuScene {
-            positions: self.positions.clone(),
-            normals: self.normals.clone(),
-            colors: self.colors.clone(),
-            object_ids: self.object_ids.clone(),
-            indices: self.indices.clone(),
-            index_count: self.index_count,
-            camera,
-            camera_data,
-            width: self.width,
-            height: self.height,
-            reversed_z: cam.reversed_z,
+            reversed_z,
             bytes: self.bytes,
         }
     }

@@ -314,9 +314,7 @@ fn definition_cached(
     effect: &EffectConfig,
 ) -> Option<Arc<Vec<[f64; 4]>>> {
     type Key = (u64, u32, u32, String, String, String);
-    type Cache = Mutex<Vec<(Key, Arc<Vec<[f64; 4]>>)>>;
-    static CACHE: OnceLock<Cache> = OnceLock::new();
-    const KEEP: usize = 6;
+    static CACHE: Memo<Key, Vec<[f64; 4]>> = OnceLock::new();
     let (Some(AaMode::Msaa(_)), Some(_)) = (cap.aa, cap.aa_capture) else {
         return None;
     };
@@ -328,17 +326,9 @@ fn definition_cached(
         format!("{effect:?}"),
         format!("{:?}", cap.expected),
     );
-    let cache = CACHE.get_or_init(Default::default);
-    if let Some((_, d)) = cache.lock().unwrap().iter().find(|(k, _)| *k == key) {
-        return Some(d.clone());
-    }
-    let d = Arc::new(definition(cap, scene, width, height, effect)?);
-    let mut c = cache.lock().unwrap();
-    c.push((key, d.clone()));
-    if c.len() > KEEP {
-        c.remove(0);
-    }
-    Some(d)
+    remembered(&CACHE, key, || {
+        definition(cap, scene, width, height, effect)
+    })
 }
 
 /// A content hash of what the truth depends on (the label alone is not enough: tests edit
@@ -367,9 +357,7 @@ pub fn truth_cached(
     expected: Expected,
 ) -> Arc<Truth> {
     type Key = (u64, u32, u32, AaMode, String, String);
-    type Cache = Mutex<Vec<(Key, Arc<Truth>)>>;
-    static CACHE: OnceLock<Cache> = OnceLock::new();
-    const KEEP: usize = 6;
+    static CACHE: Memo<Key, Truth> = OnceLock::new();
     let key: Key = (
         scene_key(scene),
         width,
@@ -378,17 +366,34 @@ pub fn truth_cached(
         format!("{effect:?}"),
         format!("{expected:?}"),
     );
-    let cache = CACHE.get_or_init(Default::default);
-    if let Some((_, t)) = cache.lock().unwrap().iter().find(|(k, _)| *k == key) {
-        return t.clone();
+    remembered(&CACHE, key, || {
+        Some(truth(scene, width, height, mode, effect, expected))
+    })
+    .expect("a truth is always made")
+}
+
+/// A few recent (key, value) pairs, shared by the judge's threads.
+type Memo<K, V> = OnceLock<Mutex<Vec<(K, Arc<V>)>>>;
+
+/// The value of `key` in `cache` (the last six kept), else what `make` makes, remembered when it
+/// makes one.
+fn remembered<K: PartialEq, V>(
+    cache: &Memo<K, V>,
+    key: K,
+    make: impl FnOnce() -> Option<V>,
+) -> Option<Arc<V>> {
+    const KEEP: usize = 6;
+    let cache = cache.get_or_init(Default::default);
+    if let Some((_, v)) = cache.lock().unwrap().iter().find(|(k, _)| *k == key) {
+        return Some(v.clone());
     }
-    let t = Arc::new(truth(scene, width, height, mode, effect, expected));
+    let v = Arc::new(make()?);
     let mut c = cache.lock().unwrap();
-    c.push((key, t.clone()));
+    c.push((key, v.clone()));
     if c.len() > KEEP {
         c.remove(0);
     }
-    t
+    Some(v)
 }
 
 /// The ground truth `cap` is judged against (the judge's rule: the effect over every
