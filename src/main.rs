@@ -255,16 +255,25 @@ enum Cmd {
     },
 }
 
-pub(crate) fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String> {
-    let (i, n) = s.split_once('/').ok_or("shard must be I/N, e.g. 0/4")?;
-    let i: usize = i
-        .parse()
-        .map_err(|_| format!("shard index '{i}' is not a number"))?;
-    let n: usize = n
-        .parse()
-        .map_err(|_| format!("shard count '{n}' is not a number"))?;
+/// A `--shard` value that is not `I/N` with 0 ≤ I < N.
+#[derive(Debug, PartialEq, Eq, thiserror::Error)]
+pub(crate) enum ShardError {
+    #[error("shard must be I/N, e.g. 0/4")]
+    NotIOverN,
+    #[error("shard index '{0}' is not a number")]
+    Index(String),
+    #[error("shard count '{0}' is not a number")]
+    Count(String),
+    #[error("shard {0}/{1}: need 0 <= I < N")]
+    OutOfRange(usize, usize),
+}
+
+pub(crate) fn parse_shard(s: &str) -> std::result::Result<(usize, usize), ShardError> {
+    let (i, n) = s.split_once('/').ok_or(ShardError::NotIOverN)?;
+    let i: usize = i.parse().map_err(|_| ShardError::Index(i.to_string()))?;
+    let n: usize = n.parse().map_err(|_| ShardError::Count(n.to_string()))?;
     if n == 0 || i >= n {
-        return Err(format!("shard {i}/{n}: need 0 <= I < N"));
+        return Err(ShardError::OutOfRange(i, n));
     }
     Ok((i, n))
 }
@@ -676,7 +685,7 @@ fn list_json(what: Option<&str>, gpu: &GpuArgs, internal: bool) -> Result<()> {
     if is("studies") {
         let v: Vec<_> = STUDIES
             .iter()
-            .map(|s| json!({"kind": s.kind(), "describe": s.describe()}))
+            .map(|s| json!({"kind": s.kind().name(), "describe": s.describe()}))
             .collect();
         o.insert("studies".into(), v.into());
     }
@@ -747,7 +756,7 @@ fn list(what: Option<&str>, gpu: &GpuArgs, internal: bool) -> Result<()> {
     if is("studies") {
         println!("studies:");
         for s in STUDIES {
-            println!("  {:<10} {}", s.kind(), s.describe());
+            println!("  {:<10} {}", s.kind().name(), s.describe());
         }
     }
     if is("suites") {

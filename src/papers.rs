@@ -328,7 +328,7 @@ fn check_point(pt: &PointRef) -> Result<(), String> {
     );
     let mut matches = BTreeSet::new();
     for spec in &suite.studies {
-        let Some(study) = by_kind(STUDIES, &spec.kind) else {
+        let Some(study) = by_kind(STUDIES, spec.kind) else {
             continue;
         };
         let runs_method = match study.methods() {

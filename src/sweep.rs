@@ -124,7 +124,7 @@ fn apply_sets(suite: &mut scenarios::Suite, sets: &[String], pats: &[glob::Patte
         let mut known = std::collections::BTreeSet::new();
         let mut unread = Vec::new();
         for (si, spec) in suite.studies.iter_mut().enumerate() {
-            let Some(study) = bench_core::study::by_kind(STUDIES, &spec.kind) else {
+            let Some(study) = bench_core::study::by_kind(STUDIES, spec.kind) else {
                 continue;
             };
             let points = bench_core::study::points(study, spec).unwrap_or_default();
@@ -1038,7 +1038,7 @@ pub fn compare(base: &Path, new: &Path, a: CompareArgs) -> Result<()> {
         .map_err(|e| usage(format!("--fail-on-slower: {e}")))?;
     let r =
         mfx_analysis::ab::compare_runs(base, new, &opts).map_err(|e| usage(format!("{e:#}")))?;
-    no_common_point(&r).map_err(usage)?;
+    no_common_point(&r).map_err(|e| usage(e.to_string()))?;
     if json {
         println!("{}", serde_json::to_string_pretty(&compare_json(&r))?);
     } else {
@@ -1066,21 +1066,36 @@ pub fn compare(base: &Path, new: &Path, a: CompareArgs) -> Result<()> {
 
 /// Two runs that share no point compared nothing: an error naming both sides' sizes and a key
 /// of each (a different suite, resolution or schema of keys), never an empty SAME.
-fn no_common_point(r: &mfx_analysis::ab::AbReport) -> std::result::Result<(), String> {
+fn no_common_point(r: &mfx_analysis::ab::AbReport) -> std::result::Result<(), NoCommonPoint> {
     if r.common > 0 {
         return Ok(());
     }
     let first = |v: &[String]| v.first().cloned().unwrap_or_else(|| "none".into());
-    Err(format!(
-        "{} and {} have no point in common (points are joined by point_key): nothing to compare. \
-         BASE has {} points (e.g. {}), NEW {} (e.g. {})",
-        r.base.runs_csv.display(),
-        r.new.runs_csv.display(),
-        r.only_base.len(),
-        first(&r.only_base),
-        r.only_new.len(),
-        first(&r.only_new)
-    ))
+    Err(NoCommonPoint {
+        base: r.base.runs_csv.clone(),
+        new: r.new.runs_csv.clone(),
+        base_points: r.only_base.len(),
+        base_example: first(&r.only_base),
+        new_points: r.only_new.len(),
+        new_example: first(&r.only_new),
+    })
+}
+
+/// Two runs with no point in common: both files, their sizes and a key of each.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "{} and {} have no point in common (points are joined by point_key): nothing to compare. \
+     BASE has {base_points} points (e.g. {base_example}), NEW {new_points} (e.g. {new_example})",
+    base.display(),
+    new.display()
+)]
+struct NoCommonPoint {
+    base: std::path::PathBuf,
+    new: std::path::PathBuf,
+    base_points: usize,
+    base_example: String,
+    new_points: usize,
+    new_example: String,
 }
 
 /// `mfx compare --json`: the comparison's points, verdicts and moves as one object (the same

@@ -1,5 +1,6 @@
 //! Reading runs.csv: rows as column → text maps, with typed accessors.
 
+use schema::StudyKind;
 use schema::{cols, Col, Flag, FlagSet, Status};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -326,10 +327,10 @@ impl Runs {
     }
 
     /// Rows of one study kind.
-    pub fn study(&self, kind: &str) -> Vec<&Rec> {
+    pub fn study(&self, kind: StudyKind) -> Vec<&Rec> {
         self.rows
             .iter()
-            .filter(|r| r.get(cols::STUDY) == kind)
+            .filter(|r| r.get(cols::STUDY) == kind.name())
             .collect()
     }
 

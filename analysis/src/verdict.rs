@@ -8,6 +8,7 @@
 //! so the two cannot disagree with each other or with the CSV.
 
 use schema::cols;
+use schema::StudyKind;
 
 use crate::data::{platform, platforms, resolution, Rec, Runs};
 
@@ -15,7 +16,7 @@ use crate::data::{platform, platforms, resolution, Rec, Runs};
 pub const BUDGETS: [f64; 2] = [1e-3, 1e-2];
 
 /// Studies whose rows carry an image error vs the ground truth (`rmse`).
-pub const IMAGE_STUDIES: [&str; 2] = ["methods", "stability"];
+pub const IMAGE_STUDIES: [StudyKind; 2] = [StudyKind::Methods, StudyKind::Stability];
 
 /// A configuration named by the verdict, with the candidates whose time interval overlaps its
 /// own ("tied with N": the data cannot tell them apart).
@@ -174,7 +175,7 @@ pub fn verdicts(runs: &Runs) -> Vec<(String, Verdict<'_>)> {
             let ok: Vec<&Rec> = rows
                 .iter()
                 .copied()
-                .filter(|r| r.get(cols::STUDY) == study && r.ok())
+                .filter(|r| r.get(cols::STUDY) == study.name() && r.ok())
                 .collect();
             let methods: Vec<&Rec> = ok.iter().copied().filter(|r| !r.is_floor()).collect();
             let effects = Runs::distinct(methods.iter().copied(), cols::EFFECT).len() > 1;
@@ -200,7 +201,7 @@ pub fn verdicts(runs: &Runs) -> Vec<(String, Verdict<'_>)> {
                     .collect();
                 out.push((
                     p.clone(),
-                    image_verdict(study, label, res, effect, g, &floors),
+                    image_verdict(study.name(), label, res, effect, g, &floors),
                 ));
             }
         }

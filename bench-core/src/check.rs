@@ -22,7 +22,7 @@ pub fn check_suite(studies: &[&dyn Study], suite: &Suite) -> Vec<Problem> {
             continue;
         }
         if let Err(why) = crate::measure::TimingPlan::from_spec(&suite.timing_for(software)) {
-            out.push(Problem::new(&suite.source, table, "", why));
+            out.push(Problem::new(&suite.source, table, "", why.to_string()));
         }
     }
     for spec in &suite.studies {
@@ -65,18 +65,18 @@ pub fn check_text(
 
 fn check_study(studies: &[&dyn Study], suite: &Suite, spec: &StudySpec, out: &mut Vec<Problem>) {
     let file = suite.source.as_str();
-    let table = study_table(spec.index, &spec.kind);
+    let table = study_table(spec.index, spec.kind);
     let before = out.len();
-    let Some(study) = by_kind(studies, &spec.kind) else {
+    let Some(study) = by_kind(studies, spec.kind) else {
         out.push(
             Problem::new(
                 file,
                 &format!("study {}", spec.index),
                 "kind",
-                "unknown study kind",
+                "no study of this kind in this binary",
             )
-            .value(&spec.kind)
-            .known(studies.iter().map(|s| s.kind())),
+            .value(spec.kind)
+            .known(studies.iter().map(|s| s.kind().name())),
         );
         return;
     };
@@ -99,10 +99,12 @@ fn check_study(studies: &[&dyn Study], suite: &Suite, spec: &StudySpec, out: &mu
             ),
             Some(o) => {
                 let checked = ParamValue::from_toml(v)
-                    .ok_or_else(|| format!("must be {}", o.kind.expected()))
+                    .ok_or_else(|| scenarios::params::NotExpected {
+                        expected: o.kind.expected(),
+                    })
                     .and_then(|pv| o.kind.check(&pv));
                 if let Err(why) = checked {
-                    out.push(Problem::new(file, &table, k, why).value(v));
+                    out.push(Problem::new(file, &table, k, why.to_string()).value(v));
                 }
             }
         }
@@ -190,7 +192,7 @@ fn check_study(studies: &[&dyn Study], suite: &Suite, spec: &StudySpec, out: &mu
         for v in values {
             let refused: Vec<(&str, String)> = declaring
                 .iter()
-                .filter_map(|(m, a)| a.kind.check(v).err().map(|why| (*m, why)))
+                .filter_map(|(m, a)| a.kind.check(v).err().map(|why| (*m, why.to_string())))
                 .collect();
             if refused.is_empty() {
                 continue;
@@ -230,7 +232,7 @@ fn check_study(studies: &[&dyn Study], suite: &Suite, spec: &StudySpec, out: &mu
                 Some(a) => {
                     for v in values {
                         if let Err(why) = a.kind.check(v) {
-                            out.push(Problem::new(file, &tn, k, why).value(v));
+                            out.push(Problem::new(file, &tn, k, why.to_string()).value(v));
                         }
                     }
                 }

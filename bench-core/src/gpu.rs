@@ -72,14 +72,18 @@ pub enum BackendChoice {
 }
 
 impl std::str::FromStr for BackendChoice {
-    type Err = String;
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
+    type Err = crate::UnknownWord;
+    fn from_str(s: &str) -> std::result::Result<Self, crate::UnknownWord> {
         match s.to_ascii_lowercase().as_str() {
             "vulkan" | "vk" => Ok(BackendChoice::Vulkan),
             "gl" | "opengl" => Ok(BackendChoice::Gl),
             "gles" => Ok(BackendChoice::Gles),
             "any" => Ok(BackendChoice::Any),
-            other => Err(format!("unknown backend '{other}' (vulkan, gl, gles, any)")),
+            other => Err(crate::UnknownWord {
+                what: "backend",
+                text: other.to_string(),
+                known: "vulkan, gl, gles, any".into(),
+            }),
         }
     }
 }

@@ -72,6 +72,17 @@ pub enum CoreError {
 
 pub type Result<T, E = CoreError> = std::result::Result<T, E>;
 
+/// A command-line word that is none of its option's values (`--backend`, `--limits`,
+/// `--texture-memory`): names the option, the word and the words it takes.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown {what} '{text}' ({known})")]
+pub struct UnknownWord {
+    pub what: &'static str,
+    pub text: String,
+    /// The words it takes, comma-separated.
+    pub known: String,
+}
+
 /// Why a point cannot run here: an adapter feature, format, sample count or limit it lacks, or
 /// a configuration a method cannot supply. Known before the point's GPU work, it is not an
 /// error of the run: its text is the `reason` of the point's `skipped` row, word for word.

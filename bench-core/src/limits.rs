@@ -67,8 +67,8 @@ const HARNESS_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
 
 impl std::str::FromStr for Profile {
-    type Err = String;
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
+    type Err = crate::UnknownWord;
+    fn from_str(s: &str) -> std::result::Result<Self, crate::UnknownWord> {
         let s = s.to_ascii_lowercase();
         PROFILES
             .iter()
@@ -76,7 +76,11 @@ impl std::str::FromStr for Profile {
             .map(|(p, _, _)| *p)
             .ok_or_else(|| {
                 let names: Vec<&str> = PROFILES.iter().map(|(_, n, _)| *n).collect();
-                format!("unknown limits profile '{s}' ({})", names.join(", "))
+                crate::UnknownWord {
+                    what: "limits profile",
+                    text: s.clone(),
+                    known: names.join(", "),
+                }
             })
     }
 }
@@ -434,7 +438,13 @@ mod tests {
             assert_eq!(n.parse::<Profile>().unwrap(), *p);
             assert_eq!(p.name(), *n);
         }
-        assert!("browser".parse::<Profile>().unwrap_err().contains("webgpu"));
+        let e = "browser".parse::<Profile>().unwrap_err();
+        assert_eq!(e.text, "browser");
+        assert!(
+            e.to_string().contains("unknown limits profile 'browser'"),
+            "{e}"
+        );
+        assert!(e.to_string().contains("webgpu"), "{e}");
         // The WebGPU specification's default limits (gpuweb "Limits" table).
         let l = Profile::WebGpu.limits(&wgpu::Limits::unlimited());
         assert_eq!(l.max_storage_buffer_binding_size, 128 << 20);

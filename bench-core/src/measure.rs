@@ -76,6 +76,15 @@ pub const CLOCK_LIFT_MS: f64 = 500.0;
 /// A clock at or above this share of the adapter's maximum SM clock needs no lift.
 pub const CLOCK_LIFT_TARGET: f64 = 0.97;
 
+/// A suite's `[timing]` that cannot work, naming the settings.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum TimingError {
+    #[error(transparent)]
+    Stop(#[from] mfx_stats::StopRuleError),
+    #[error("sessions > 1 measures each point on its own, one session after another: it cannot be combined with interleave = true")]
+    SessionsWithInterleave,
+}
+
 impl TimingPlan {
     /// One frame, no warm-up: for a single render (tests, `mfx render`), not for timings.
     pub fn once() -> TimingPlan {
@@ -103,7 +112,7 @@ impl TimingPlan {
 
     /// The plan a suite's `[timing]` (with `[software]`'s overrides applied) asks for: every
     /// key it leaves unset takes the default. `Err` names a setting that cannot work.
-    pub fn from_spec(spec: &scenarios::TimingSpec) -> std::result::Result<TimingPlan, String> {
+    pub fn from_spec(spec: &scenarios::TimingSpec) -> std::result::Result<TimingPlan, TimingError> {
         let d = TimingPlan::default();
         let mut stop = d.stop.clone();
         let mut warmup = d.warmup.clone();
@@ -137,10 +146,7 @@ impl TimingPlan {
         }
         stop.validate()?;
         if spec.sessions.unwrap_or(1) > 1 && spec.interleave == Some(true) {
-            return Err(
-                "sessions > 1 measures each point on its own, one session after another: it cannot be combined with interleave = true"
-                    .into(),
-            );
+            return Err(TimingError::SessionsWithInterleave);
         }
         Ok(TimingPlan {
             warmup,

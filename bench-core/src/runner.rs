@@ -38,14 +38,14 @@ pub struct RunOptions {
 pub fn expand(studies: &[&dyn Study], suite: &Suite, software: bool) -> Result<Vec<Group>> {
     let mut groups = Vec::new();
     for (si, spec) in suite.studies.iter().enumerate() {
-        let study = by_kind(studies, &spec.kind).ok_or_else(|| {
+        let study = by_kind(studies, spec.kind).ok_or_else(|| {
             CoreError::Param(format!(
-                "suite '{}' study {si}: unknown kind '{}' (known: {})",
+                "suite '{}' study {si}: no study of kind '{}' in this binary (known: {})",
                 suite.name,
                 spec.kind,
                 studies
                     .iter()
-                    .map(|s| s.kind())
+                    .map(|s| s.kind().name())
                     .collect::<Vec<_>>()
                     .join(", ")
             ))
@@ -68,7 +68,7 @@ pub fn expand(studies: &[&dyn Study], suite: &Suite, software: bool) -> Result<V
             for (w, h) in suite.study_resolutions(spec, software) {
                 groups.push(Group {
                     study_index: si,
-                    kind: spec.kind.clone(),
+                    kind: spec.kind,
                     scene: scene.clone(),
                     width: w,
                     height: h,
@@ -147,7 +147,7 @@ pub fn run(
                     chrono::Utc::now().to_rfc3339_opts(chrono::SecondsFormat::Secs, true),
                 )
                 .set(cols::SUITE, &suite.name)
-                .set(cols::STUDY, &group.kind)
+                .set(cols::STUDY, group.kind)
                 .set(cols::SHARD, opts.shard.0)
                 .set(cols::SHARDS, opts.shard.1)
                 .set(cols::POINT_KEY, group.point_key(method, params))
@@ -295,7 +295,7 @@ pub fn run(
                 write(sink, &row, &mut out)?;
             }
         }
-        let study = by_kind(studies, &group.kind).expect("checked in expand");
+        let study = by_kind(studies, group.kind).expect("checked in expand");
         let mut done = vec![false; group.points.len()];
         let mut sink_err: Option<CoreError> = None;
         let (floor_ms, blend_ms) = (ctx.floor_ms, ctx.blend_ms);

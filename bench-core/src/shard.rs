@@ -38,7 +38,7 @@ fn group_key(study: &str, scene: &str, w: u32, h: u32) -> String {
 
 /// The key of a group, as [`PreviousTimes::group_s`] holds it.
 pub fn key_of(g: &Group) -> String {
-    group_key(&g.kind, &g.scene.label(), g.width, g.height)
+    group_key(g.kind.name(), &g.scene.label(), g.width, g.height)
 }
 
 /// Seconds each group took in a previous run, and per row on average (for groups it did not

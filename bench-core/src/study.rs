@@ -7,6 +7,7 @@
 
 use scenarios::suite::{axes_for_method, axis_product};
 use scenarios::{ParamValue, Params, Scene, SceneSpec, StudySpec, Suite, ValueKind};
+pub use schema::StudyKind;
 
 use crate::axes::{Axis, Point};
 use crate::gpu::Gpu;
@@ -35,7 +36,7 @@ impl PointSpec {
 #[derive(Clone, Debug)]
 pub struct Group {
     pub study_index: usize,
-    pub kind: String,
+    pub kind: StudyKind,
     pub scene: SceneSpec,
     pub width: u32,
     pub height: u32,
@@ -179,8 +180,61 @@ impl Opt {
     }
 }
 
+/// Why a point as a suite gives it cannot run: a bad suite, named before any GPU work (exit 2).
+/// A study's `validate` and its methods' configuration readers return it; the harness reports it
+/// with the method and the point's values.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum InvalidPoint {
+    /// One axis's value that this point cannot take, though the axis's declared range admits it.
+    #[error("{axis} = {value} {rule}")]
+    Value {
+        axis: String,
+        value: String,
+        rule: String,
+    },
+    /// Values of several axes (or an effect and a method) that cannot go together.
+    #[error("{0}")]
+    Combination(String),
+    /// A method the study does not have.
+    #[error("unknown method '{0}'")]
+    UnknownMethod(String),
+}
+
+impl InvalidPoint {
+    /// `axis = value rule`, e.g. `hist_bins = 33 must be a multiple of 32`.
+    pub fn value(
+        axis: impl Into<String>,
+        value: impl std::fmt::Display,
+        rule: impl Into<String>,
+    ) -> InvalidPoint {
+        InvalidPoint::Value {
+            axis: axis.into(),
+            value: value.to_string(),
+            rule: rule.into(),
+        }
+    }
+    pub fn combination(why: impl Into<String>) -> InvalidPoint {
+        InvalidPoint::Combination(why.into())
+    }
+}
+
+/// A point a method cannot configure is a point it cannot run: where a configuration is read
+/// again at prepare or `supports` time, its problem is the skip's reason, word for word.
+impl From<InvalidPoint> for crate::Unsupported {
+    fn from(e: InvalidPoint) -> crate::Unsupported {
+        crate::Unsupported::new(e.to_string())
+    }
+}
+
+impl From<InvalidPoint> for crate::CoreError {
+    fn from(e: InvalidPoint) -> crate::CoreError {
+        crate::CoreError::Param(e.to_string())
+    }
+}
+
 pub trait Study: Sync {
-    fn kind(&self) -> &'static str;
+    /// The kind a suite's `[[study]]` names and its rows' `study` cell.
+    fn kind(&self) -> StudyKind;
     fn describe(&self) -> &'static str;
     /// What `methods = [...]` may name, or the implicit method of a study that takes no list.
     fn methods(&self) -> Methods;
@@ -188,7 +242,7 @@ pub trait Study: Sync {
     /// are checked against them and its product is taken over them.
     fn axes(&self, method: &str) -> Vec<Axis>;
     /// Rules across axes of one point that the declarations cannot say (before any GPU work).
-    fn validate(&self, method: &str, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, method: &str, point: &Point) -> std::result::Result<(), InvalidPoint> {
         let _ = (method, point);
         Ok(())
     }
@@ -263,6 +317,6 @@ pub fn points(
 }
 
 /// The study of `kind` among `studies` (the binary's `STUDIES` table, or a test's own list).
-pub fn by_kind<'s>(studies: &[&'s dyn Study], kind: &str) -> Option<&'s dyn Study> {
+pub fn by_kind<'s>(studies: &[&'s dyn Study], kind: StudyKind) -> Option<&'s dyn Study> {
     studies.iter().copied().find(|s| s.kind() == kind)
 }

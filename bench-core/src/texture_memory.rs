@@ -38,14 +38,16 @@ impl TextureMemory {
 }
 
 impl std::str::FromStr for TextureMemory {
-    type Err = String;
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
+    type Err = crate::UnknownWord;
+    fn from_str(s: &str) -> std::result::Result<Self, crate::UnknownWord> {
         match s.to_ascii_lowercase().as_str() {
             "pooled" | "pool" => Ok(TextureMemory::Pooled),
             "dedicated" => Ok(TextureMemory::Dedicated),
-            other => Err(format!(
-                "unknown texture memory '{other}' (pooled, dedicated)"
-            )),
+            other => Err(crate::UnknownWord {
+                what: "texture memory",
+                text: other.to_string(),
+                known: "pooled, dedicated".into(),
+            }),
         }
     }
 }

@@ -8,6 +8,7 @@
 //! compared only on exactly the same scene, resolution and configuration.
 
 use schema::cols;
+use schema::StudyKind;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -169,7 +170,7 @@ fn time_charts(
                 let r = pts.by_point[k].values().next().expect("non-empty");
                 let study = r.get(cols::STUDY);
                 let c = labels.get(r);
-                if study == "methods" || c.starts_with("floor_") {
+                if study == StudyKind::Methods.name() || c.starts_with("floor_") {
                     c
                 } else {
                     format!("{study}: {c}")

@@ -5,6 +5,7 @@
 //! first section) and `summary_text` (the end of `mfx sweep`) only write it down, so the two
 //! cannot disagree with each other or with the CSV.
 
+use schema::StudyKind;
 use schema::{cols, Col, Status};
 use std::collections::BTreeMap;
 use std::fmt::Write;
@@ -33,9 +34,9 @@ const NEWER: [(Col, &str); 5] = [
 
 /// The error column other studies are judged by, when they have one.
 fn error_col(study: &str) -> Option<Col> {
-    match study {
-        "shadows" => Some(cols::VIS_RMSE),
-        "deferred" | "prepass" => Some(cols::RMSE),
+    match study.parse().ok()? {
+        StudyKind::Shadows => Some(cols::VIS_RMSE),
+        StudyKind::Deferred | StudyKind::Prepass => Some(cols::RMSE),
         _ => None,
     }
 }
@@ -353,7 +354,7 @@ fn other_studies(runs: &Runs) -> Vec<(String, String, Vec<OtherLine>)> {
         let studies = Runs::distinct(rows.iter().copied(), cols::STUDY);
         for study in studies
             .iter()
-            .filter(|s| !IMAGE_STUDIES.contains(&s.as_str()))
+            .filter(|s| !IMAGE_STUDIES.iter().any(|k| k.name() == s.as_str()))
         {
             let methods: Vec<&Rec> = rows
                 .iter()

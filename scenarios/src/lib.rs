@@ -16,7 +16,7 @@ pub mod scenes;
 pub mod suite;
 
 pub use camera::Camera;
-pub use params::{ParamValue, Params, ValueKind};
+pub use params::{NotExpected, ParamValue, Params, ValueKind};
 pub use problem::Problem;
 pub use scenes::{AreaLight, Light, LightKind, Material, Mesh, ObjectInfo, Scene, SceneSpec, Sun};
 pub use suite::{StudySpec, Suite, TimingSpec};

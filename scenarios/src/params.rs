@@ -67,6 +67,15 @@ pub enum ValueKind {
     },
 }
 
+/// A value that is not what its key takes; the message is the rule (`must be one of a, b`),
+/// to follow the key and value that the caller names.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("must be {expected}")]
+pub struct NotExpected {
+    /// What the key takes, as [`ValueKind::expected`] says it.
+    pub expected: String,
+}
+
 impl ValueKind {
     /// The default value, if the kind has one.
     pub fn default_value(&self) -> Option<ParamValue> {
@@ -98,8 +107,12 @@ impl ValueKind {
 
     /// Checks `v` and returns it normalised (an integer given for a float becomes a float);
     /// `Err` says what was expected.
-    pub fn check(&self, v: &ParamValue) -> std::result::Result<ParamValue, String> {
-        let bad = || Err(format!("must be {}", self.expected()));
+    pub fn check(&self, v: &ParamValue) -> std::result::Result<ParamValue, NotExpected> {
+        let bad = || {
+            Err(NotExpected {
+                expected: self.expected(),
+            })
+        };
         match (self, v) {
             (ValueKind::Int { min, max, .. }, ParamValue::Int(i)) => {
                 if i < min || i > max {

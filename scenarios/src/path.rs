@@ -193,7 +193,7 @@ impl CameraPath {
                         scene: label.clone(),
                         param: key.name.into(),
                         value: v.to_string(),
-                        why,
+                        why: why.to_string(),
                     });
                     None
                 }

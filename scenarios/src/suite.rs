@@ -21,6 +21,8 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use schema::StudyKind;
+
 use crate::{ParamValue, Params, Problem, Result, SceneError, SceneSpec};
 
 /// Built-in suites, embedded so the binary works from any directory (a file on disk wins).
@@ -116,7 +118,7 @@ pub struct SoftwareProfile {
 pub struct StudySpec {
     /// Position of the `[[study]]` table in the file (for messages).
     pub index: usize,
-    pub kind: String,
+    pub kind: StudyKind,
     pub methods: Vec<String>,
     /// Whether the table had a `methods` key at all (`methods = []` is an error, not "none").
     pub methods_given: bool,
@@ -182,8 +184,9 @@ impl Suite {
     }
 
     /// Parses a suite, reporting every structural problem at once (unknown keys at any level,
-    /// wrong types, empty arrays) as `Err(SceneError::Problems)`. What depends on the study
-    /// kinds, methods and generators is checked by `bench_core::check`.
+    /// wrong types, empty arrays, an unknown study kind) as `Err(SceneError::Problems)`. What
+    /// depends on the studies' declarations, methods and generators is checked by
+    /// `bench_core::check`.
     pub fn parse(text: &str, source: &str) -> Result<Suite> {
         match Suite::parse_partial(text, source) {
             (Some(s), problems) if problems.is_empty() => Ok(s),
@@ -640,13 +643,13 @@ fn values(v: &toml::Value) -> std::result::Result<Vec<ParamValue>, String> {
 }
 
 /// The study's table name in problems: `study 2 (methods)`.
-pub fn study_table(index: usize, kind: &str) -> String {
+pub fn study_table(index: usize, kind: impl std::fmt::Display) -> String {
     format!("study {index} ({kind})")
 }
 
 fn parse_study(cx: &mut Ctx<'_>, index: usize, t: &toml::Table) -> Option<StudySpec> {
     let here0 = format!("study {index}");
-    let kind = match cx.string(t, &here0, "kind") {
+    let text = match cx.string(t, &here0, "kind") {
         Some(k) => k,
         None => {
             if t.get("kind").is_none() {
@@ -655,7 +658,18 @@ fn parse_study(cx: &mut Ctx<'_>, index: usize, t: &toml::Table) -> Option<StudyS
             return None;
         }
     };
-    let here = study_table(index, &kind);
+    // The kind is read once, here: a misspelt one is a problem naming the file and the value,
+    // and the rest of the table is still read so that its problems are reported with it.
+    let kind = match text.parse::<StudyKind>() {
+        Ok(k) => Some(k),
+        Err(_) => {
+            let p = cx.push(&here0, "kind", "unknown study kind");
+            p.value = Some(text.clone());
+            p.known = StudyKind::ALL.iter().map(|k| k.to_string()).collect();
+            None
+        }
+    };
+    let here = study_table(index, &text);
     let methods = match t.get("methods") {
         None => None,
         Some(toml::Value::Array(a)) => {
@@ -790,7 +804,7 @@ fn parse_study(cx: &mut Ctx<'_>, index: usize, t: &toml::Table) -> Option<StudyS
     }
     Some(StudySpec {
         index,
-        kind,
+        kind: kind?,
         methods: methods.clone().unwrap_or_default(),
         methods_given: methods.is_some(),
         axes,
@@ -870,4 +884,44 @@ pub fn axis_product(axes: &BTreeMap<String, Vec<ParamValue>>, names: &[&str]) ->
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_misspelt_study_kind_names_the_file_and_the_value_and_the_rest_is_still_read() {
+        let text =
+            "[[study]]\nkind = \"method\"\naxes = 3\n[[study.scenes]]\ngenerator = \"quads\"\n";
+        let (suite, problems) = Suite::parse_partial(text, "suites/typo.toml");
+        assert!(suite.expect("valid TOML").studies.is_empty());
+        let all = crate::problem::report(&problems);
+        let kind = problems
+            .iter()
+            .find(|p| p.key == "kind")
+            .unwrap_or_else(|| panic!("no kind problem in:\n{all}"))
+            .to_string();
+        for want in [
+            "suites/typo.toml",
+            "'kind' = method",
+            "unknown study kind",
+            "methods",
+        ] {
+            assert!(kind.contains(want), "{want:?} not in {kind:?}");
+        }
+        // The table's other problems are reported with it, not hidden behind the kind.
+        assert!(problems.iter().any(|p| p.key == "axes"), "{all}");
+    }
+
+    #[test]
+    fn every_study_kind_parses_from_its_csv_spelling() {
+        for k in StudyKind::ALL {
+            let text =
+                format!("[[study]]\nkind = \"{k}\"\n[[study.scenes]]\ngenerator = \"quads\"\n");
+            let suite = Suite::parse(&text, "t").unwrap_or_else(|e| panic!("{k}: {e}"));
+            assert_eq!(suite.studies[0].kind, k);
+            assert_eq!(suite.studies[0].kind.to_string(), k.name());
+        }
+    }
 }

@@ -11,7 +11,9 @@ use std::fmt;
 mod types;
 mod values;
 pub use types::{cell_type, cell_type_of, CellType};
-pub use values::{Flag, FlagSet, GpuMsInterval, ParseError, PointKey, Status, MIN_SAMPLES_CI95};
+pub use values::{
+    Flag, FlagSet, GpuMsInterval, ParseError, PointKey, Status, StudyKind, MIN_SAMPLES_CI95,
+};
 
 /// Bumped when a column is renamed or changes meaning; `mfx merge` and `mfx compare` refuse to
 /// mix versions (see `results/README.md` for what changed between versions).

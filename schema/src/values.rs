@@ -90,6 +90,28 @@ words! {
 }
 
 words! {
+    /// The `kind` of a suite's `[[study]]` table and the `study` cell of its rows: which study
+    /// ran the point. Parsed once where a suite is read, so a misspelt kind is a problem naming
+    /// the file and the value; the binary's study table maps each to its implementation.
+    pub enum StudyKind as "study kind" {
+        /// Multi-fragment capture methods vs the exact CPU reference.
+        Methods = "methods",
+        /// Multi-fragment methods along a camera path (flicker and popping per view).
+        Views = "views",
+        /// Stiff and extreme inputs: finite output and error per multi-fragment method.
+        Stability = "stability",
+        /// Geometry feeding (Bavoil ch. 3): batch size, vertex formats, index precision.
+        Geometry = "geometry",
+        /// Deferred shading paths.
+        Deferred = "deferred",
+        /// The light pre-pass against deferred shading.
+        Prepass = "prepass",
+        /// Layered soft shadow maps (Bavoil ch. 5) vs a ray-traced reference.
+        Shadows = "shadows",
+    }
+}
+
+words! {
     /// A known, reported failure mode of a row (the `flag` column holds them `|`-joined, in this
     /// order). Each is defined in results/README.md.
     pub enum Flag as "flag" {

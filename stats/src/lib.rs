@@ -32,7 +32,7 @@ pub use canary::{canary_discard, CanaryBaseline, CANARY_MAX_RATIO};
 pub use median_ci::{median_ci_order, median_of_sorted};
 pub use mwu::{mann_whitney_u, MwuMethod, MwuResult};
 pub use order::{interleave_order, round_order};
-pub use stop::{Decision, Sampler, StopReason, StopRule};
+pub use stop::{Decision, Sampler, StopReason, StopRule, StopRuleError};
 pub use summary::{Summary, BOOTSTRAP_RESAMPLES};
 pub use throttle::{discard, THROTTLE_FRACTION};
 pub use verdict::{

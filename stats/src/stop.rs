@@ -70,33 +70,51 @@ impl Default for StopRule {
     }
 }
 
+/// A stopping rule that cannot work, naming its settings.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum StopRuleError {
+    #[error("max_samples must be at least 1")]
+    NoSamples,
+    #[error("min_samples ({min}) exceeds max_samples ({max})")]
+    MinAboveMax { min: usize, max: usize },
+    #[error("max_noise must be ≥ 0, got {0}")]
+    Noise(f64),
+    #[error("need max_time_ms > 0 and min_time_ms ≥ 0, got {max} and {min}")]
+    Times { max: f64, min: f64 },
+    #[error("need drift_every ≥ 1 and 0 < drift_alpha < 1, got {every} and {alpha}")]
+    Drift { every: usize, alpha: f64 },
+}
+
 impl StopRule {
     /// Rejects settings that cannot work (a suite file's typo should fail, not run forever).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), StopRuleError> {
         if self.max_samples == 0 {
-            return Err("max_samples must be at least 1".into());
+            return Err(StopRuleError::NoSamples);
         }
         if self.min_samples > self.max_samples {
-            return Err(format!(
-                "min_samples ({}) exceeds max_samples ({})",
-                self.min_samples, self.max_samples
-            ));
+            return Err(StopRuleError::MinAboveMax {
+                min: self.min_samples,
+                max: self.max_samples,
+            });
         }
         if !(self.max_noise >= 0.0 && self.max_noise.is_finite()) {
-            return Err(format!("max_noise must be ≥ 0, got {}", self.max_noise));
+            return Err(StopRuleError::Noise(self.max_noise));
         }
         if self.max_time_ms.is_nan()
             || self.max_time_ms <= 0.0
             || self.min_time_ms.is_nan()
             || self.min_time_ms < 0.0
         {
-            return Err(format!(
-                "need max_time_ms > 0 and min_time_ms ≥ 0, got {} and {}",
-                self.max_time_ms, self.min_time_ms
-            ));
+            return Err(StopRuleError::Times {
+                max: self.max_time_ms,
+                min: self.min_time_ms,
+            });
         }
         if self.drift_every == 0 || !(self.drift_alpha > 0.0 && self.drift_alpha < 1.0) {
-            return Err("need drift_every ≥ 1 and 0 < drift_alpha < 1".into());
+            return Err(StopRuleError::Drift {
+                every: self.drift_every,
+                alpha: self.drift_alpha,
+            });
         }
         Ok(())
     }

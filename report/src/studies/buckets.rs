@@ -3,6 +3,7 @@
 //! bucket configuration buys).
 
 use schema::cols;
+use schema::StudyKind;
 use std::path::Path;
 
 use anyhow::Result;
@@ -16,12 +17,12 @@ use mfx_analysis::data::{resolution, Rec, Runs};
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     // Only rows that report a collision rate: the bucket methods.
     let rows: Vec<&Rec> = runs
-        .study("methods")
+        .study(StudyKind::Methods)
         .into_iter()
         .filter(|r| r.ok() && r.f(cols::COLLISION_RATE).is_some())
         .collect();
     let styles = Styles::new(
-        runs.study("methods")
+        runs.study(StudyKind::Methods)
             .into_iter()
             .filter(|r| r.ok() && !r.is_floor()),
     );

@@ -3,6 +3,7 @@
 //! over threads. The debug views (tiles coloured by classification id, lights-per-tile heat maps)
 //! are PNGs from `mfx shading-views`, not CSV figures.
 
+use schema::StudyKind;
 use schema::{cols, Col};
 use std::path::Path;
 
@@ -54,7 +55,10 @@ pub(crate) fn series(
 }
 
 /// The study's ok rows (floors left out) grouped by resolution, in first-seen order.
-pub(crate) fn rows_by_resolution<'a>(runs: &'a Runs, study: &str) -> Vec<(String, Vec<&'a Rec>)> {
+pub(crate) fn rows_by_resolution<'a>(
+    runs: &'a Runs,
+    study: StudyKind,
+) -> Vec<(String, Vec<&'a Rec>)> {
     let rows = runs
         .study(study)
         .into_iter()
@@ -107,7 +111,7 @@ fn outdoor(r: &Rec) -> bool {
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let mut figs = Vec::new();
-    for (res, at) in rows_by_resolution(runs, "deferred") {
+    for (res, at) in rows_by_resolution(runs, StudyKind::Deferred) {
         let stem = safe(&res);
         // Time vs light count per path (no threshold, outdoor city).
         let base: Vec<&Rec> = at

@@ -5,6 +5,7 @@
 //! 3.4), and the raster-stage check. Each `[[study]]` of a suite is told apart by the axes it
 //! sweeps (the point key's last field); every figure has min–max whiskers where times are drawn.
 
+use schema::StudyKind;
 use schema::{cols, Col, PointKey};
 use std::path::Path;
 
@@ -82,7 +83,7 @@ fn sorted(mut series: Vec<Series>) -> Vec<Series> {
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let rows: Vec<&Rec> = runs
-        .study("geometry")
+        .study(StudyKind::Geometry)
         .into_iter()
         .filter(|r| r.ok() && r.get(cols::METHOD) == "geometry")
         .collect();

@@ -6,6 +6,7 @@
 //! depth-only floor.
 
 use schema::cols;
+use schema::StudyKind;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -122,7 +123,7 @@ fn named(
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let all: Vec<&Rec> = runs
-        .study("methods")
+        .study(StudyKind::Methods)
         .into_iter()
         .filter(|r| r.ok())
         .collect();

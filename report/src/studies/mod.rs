@@ -14,6 +14,7 @@ pub mod stability;
 pub mod tail;
 pub mod views;
 
+use schema::StudyKind;
 use std::path::Path;
 
 use anyhow::Result;
@@ -32,7 +33,7 @@ pub struct StudyPage {
     pub across_platforms: bool,
 }
 
-fn has(runs: &Runs, study: &str) -> bool {
+fn has(runs: &Runs, study: StudyKind) -> bool {
     !runs.study(study).is_empty()
 }
 
@@ -40,7 +41,7 @@ fn has(runs: &Runs, study: &str) -> bool {
 pub const PAGES: &[StudyPage] = &[
     StudyPage {
         heading: "Multi-fragment methods",
-        applies: |r| has(r, "methods"),
+        applies: |r| has(r, StudyKind::Methods),
         figures: |r, d| {
             Ok(methods::figures(r, d)?
                 .into_iter()
@@ -63,37 +64,37 @@ pub const PAGES: &[StudyPage] = &[
     },
     StudyPage {
         heading: "Effects and stability",
-        applies: |r| has(r, "stability") || has(r, "methods"),
+        applies: |r| has(r, StudyKind::Stability) || has(r, StudyKind::Methods),
         figures: stability::figures,
         across_platforms: false,
     },
     StudyPage {
         heading: "Views that move (camera paths: flicker, popping, time per view)",
-        applies: |r| has(r, "views"),
+        applies: |r| has(r, StudyKind::Views),
         figures: views::figures,
         across_platforms: false,
     },
     StudyPage {
         heading: "Geometry feeding (Bavoil ch. 3)",
-        applies: |r| has(r, "geometry"),
+        applies: |r| has(r, StudyKind::Geometry),
         figures: geometry::figures,
         across_platforms: false,
     },
     StudyPage {
         heading: "Soft shadows (layered shadow maps vs ray tracing)",
-        applies: |r| has(r, "shadows"),
+        applies: |r| has(r, StudyKind::Shadows),
         figures: shadows::figures,
         across_platforms: false,
     },
     StudyPage {
         heading: "Deferred shading (tiles, classification, CPU tiles)",
-        applies: |r| has(r, "deferred"),
+        applies: |r| has(r, StudyKind::Deferred),
         figures: deferred::figures,
         across_platforms: false,
     },
     StudyPage {
         heading: "Light pre-pass (and the light buffer on CPU cores)",
-        applies: |r| has(r, "prepass"),
+        applies: |r| has(r, StudyKind::Prepass),
         figures: prepass::figures,
         across_platforms: false,
     },

@@ -3,6 +3,7 @@
 //! threads with and without the overlapping second view, against the GPU-only frame with the
 //! same second view; the GPU-clock gap between pre-pass and material pass and what filled it).
 
+use schema::StudyKind;
 use schema::{cols, Col};
 use std::path::Path;
 
@@ -31,7 +32,7 @@ fn single_view(r: &Rec) -> bool {
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let mut figs = Vec::new();
-    for (res, at) in rows_by_resolution(runs, "prepass") {
+    for (res, at) in rows_by_resolution(runs, StudyKind::Prepass) {
         let stem = safe(&res);
         let one: Vec<&Rec> = at
             .iter()

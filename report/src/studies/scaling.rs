@@ -9,6 +9,7 @@
 //! rows hollow. Drawn for runs of a suite named `scaling`: a mix of unrelated scenes (the
 //! `methods` suite) has no single law to fit.
 
+use schema::StudyKind;
 use schema::{cols, Flag};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -139,7 +140,9 @@ pub fn applies(runs: &Runs) -> bool {
     let places: std::collections::BTreeSet<String> = runs
         .rows
         .iter()
-        .filter(|r| r.get(cols::SUITE) == "scaling" && r.get(cols::STUDY) == "methods")
+        .filter(|r| {
+            r.get(cols::SUITE) == "scaling" && r.get(cols::STUDY) == StudyKind::Methods.name()
+        })
         .map(scene_res)
         .collect();
     places.len() >= 2
@@ -241,7 +244,7 @@ fn sweeps<'a>(rows: &[&'a Rec]) -> Vec<Sweep<'a>> {
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let rows: Vec<&Rec> = runs
-        .study("methods")
+        .study(StudyKind::Methods)
         .into_iter()
         .filter(|r| r.get(cols::SUITE) == "scaling")
         .collect();

@@ -2,6 +2,7 @@
 //! reference — error vs GPU time per configuration, error (and its sign: light bleeding vs
 //! overshadowing) vs layers, error vs max_nspp, the bias parameters, and HSM on/off.
 
+use schema::StudyKind;
 use schema::{cols, Col};
 use std::path::Path;
 
@@ -143,7 +144,7 @@ fn series(
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let rows: Vec<&Rec> = runs
-        .study("shadows")
+        .study(StudyKind::Shadows)
         .into_iter()
         .filter(|r| r.ok() && r.get(cols::METHOD) == "layered_ssm")
         .collect();

@@ -3,6 +3,7 @@
 //! time over specialised) per effect.
 
 use schema::cols;
+use schema::StudyKind;
 use std::path::Path;
 
 use anyhow::Result;
@@ -14,7 +15,7 @@ use mfx_analysis::data::{Rec, Runs};
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let rows: Vec<&Rec> = runs
-        .study("stability")
+        .study(StudyKind::Stability)
         .into_iter()
         .filter(|r| r.ok() && !r.is_floor())
         .collect();
@@ -107,7 +108,7 @@ pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
 /// Uber over specialised GPU time for every (scene, effect, other axes) pair present.
 fn specialisation(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let rows: Vec<&Rec> = runs
-        .study("methods")
+        .study(StudyKind::Methods)
         .into_iter()
         .filter(|r| r.ok() && !r.get(cols::SPECIALISATION).is_empty())
         .collect();

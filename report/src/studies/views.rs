@@ -5,6 +5,7 @@
 //! and popping along the path, view by view (`path_series`).
 
 use schema::cols;
+use schema::StudyKind;
 use std::path::Path;
 
 use anyhow::Result;
@@ -17,7 +18,7 @@ use crate::pareto;
 
 pub fn figures(runs: &Runs, dir: &Path) -> Result<Vec<Figure>> {
     let rows: Vec<&Rec> = runs
-        .study("views")
+        .study(StudyKind::Views)
         .into_iter()
         .filter(|r| r.ok() && !r.is_floor())
         .collect();

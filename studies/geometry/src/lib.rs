@@ -42,7 +42,7 @@ use self::prep::{
 use bench_core::axes::{Axis, Point};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::{AllocCounter, GpuScene};
-use bench_core::study::{Emit, GroupCtx, Methods, Opt, Study};
+use bench_core::study::{Emit, GroupCtx, Methods, Opt, Study, StudyKind};
 
 use bench_core::measure::{measure_timed, set_timing, Measured};
 use bench_core::record::cols;
@@ -799,8 +799,8 @@ pub fn prepare_feed(mesh: &Mesh, ordered: &Ordered, spec: &FeedSpec) -> Prepared
 }
 
 impl Study for GeometryStudy {
-    fn kind(&self) -> &'static str {
-        "geometry"
+    fn kind(&self) -> StudyKind {
+        StudyKind::Geometry
     }
     fn describe(&self) -> &'static str {
         "geometry feeding (Bavoil ch. 3): batch size, vertex formats, layout, index precision, mesh order, strips; triangles/s and post-transform cache hits"

@@ -9,6 +9,7 @@ use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::GpuScene;
 use bench_core::measure::{measure_timed, Measured, TimingPlan};
 use bench_core::record::FlagSet;
+use bench_core::study::InvalidPoint;
 pub use bench_core::timed::{FrameStats, Timed};
 use bench_core::Result;
 
@@ -101,7 +102,7 @@ pub trait Method: Send + Sync {
     }
     /// Rules across axes that one axis's range cannot say (e.g. `dof_near ≤ dof_far`); checked
     /// before any GPU work, so a violation is a bad suite, not a skipped row.
-    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, point: &Point) -> std::result::Result<(), InvalidPoint> {
         let _ = point;
         Ok(())
     }

@@ -122,5 +122,9 @@ fn texture_memory_names_parse_and_a_misspelt_one_is_refused() {
         Ok(TextureMemory::Dedicated)
     );
     let e = "dedicate".parse::<TextureMemory>().unwrap_err();
-    assert!(e.contains("pooled, dedicated"), "{e}");
+    assert_eq!((e.what, e.text.as_str()), ("texture memory", "dedicate"));
+    assert_eq!(
+        e.to_string(),
+        "unknown texture memory 'dedicate' (pooled, dedicated)"
+    );
 }

@@ -154,7 +154,7 @@ fn run_on(scene: &Scene, table: &str, w: u32) -> Vec<Row> {
     let plan = runner::timing_plan(&suite, true).unwrap();
     let ctx = GroupCtx::new(gpu, &suite, &suite.studies[0], group, scene, &gscene, plan);
     let mut rows: Vec<Option<Row>> = vec![None; group.points.len()];
-    let study = study::by_kind(STUDIES, "views").unwrap();
+    let study = study::by_kind(STUDIES, study::StudyKind::Views).unwrap();
     study
         .run_group(&ctx, &mut |i, row| {
             rows[i] = Some(row);

@@ -30,7 +30,7 @@ use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::{AllocCounter, GpuScene};
 use bench_core::timed::{FrameStats, Timed};
 use bench_core::timing::GpuTimer;
-use bench_core::{CoreError, Result};
+use bench_core::{CoreError, Result, Unsupported};
 
 pub const PATHS_WGSL: &str = include_str!("paths.wgsl");
 
@@ -442,7 +442,7 @@ pub fn bge(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
 }
 
 /// Why a path cannot run here (a `skipped` row), checked before `Deferred::new`.
-pub fn supports(gpu: &Gpu, path: Path) -> std::result::Result<(), String> {
+pub fn supports(gpu: &Gpu, path: Path) -> std::result::Result<(), Unsupported> {
     match path {
         Path::Volumes if !gpu.has(wgpu::Features::FLOAT32_BLENDABLE) => Err(
             "light volumes blend additively into Rgba32Float: adapter lacks FLOAT32_BLENDABLE"
@@ -450,15 +450,19 @@ pub fn supports(gpu: &Gpu, path: Path) -> std::result::Result<(), String> {
         ),
         Path::Tiled { tile, levels } => {
             if ![8, 16, 32, 64].contains(&tile) {
-                return Err(format!("tile_size {tile} is not one of 8, 16, 32, 64"));
+                return Err(Unsupported::new(format!(
+                    "tile_size {tile} is not one of 8, 16, 32, 64"
+                )));
             }
             if levels == 2 && tile != 64 {
-                return Err(format!(
+                return Err(Unsupported::new(format!(
                     "cull_levels = 2 is the BF3 64→32×16 hierarchy: needs tile_size 64, got {tile}"
-                ));
+                )));
             }
             if !(1..=2).contains(&levels) {
-                return Err(format!("cull_levels {levels} is not 1 or 2"));
+                return Err(Unsupported::new(format!(
+                    "cull_levels {levels} is not 1 or 2"
+                )));
             }
             Ok(())
         }
@@ -507,7 +511,7 @@ impl Deferred {
         shadow: sun_shadow::Mode,
         ms: msaa::Mode,
     ) -> Result<Deferred> {
-        supports(gpu, path).map_err(CoreError::Param)?;
+        supports(gpu, path).map_err(|e| CoreError::Param(e.into()))?;
         if ms != msaa::Mode::Off {
             if !matches!(path, Path::Naive | Path::Classified { .. }) {
                 return Err(CoreError::Param(format!(
@@ -516,7 +520,7 @@ impl Deferred {
                     path.name()
                 )));
             }
-            msaa::supported(gpu, ms).map_err(CoreError::Param)?;
+            msaa::supported(gpu, ms).map_err(|e| CoreError::Param(e.into()))?;
             if shadow != sun_shadow::Mode::Off {
                 return Err(CoreError::Param(format!(
                     "msaa = {} with sun_shadow = {} is not built (each is tested alone)",

@@ -22,7 +22,8 @@ use bench_core::gpu_scene::AllocCounter;
 use bench_core::gpu_util::{
     compute_pipeline, read_vec, shader_source, storage_entry, texture_entry_ms,
 };
-use bench_core::Result;
+use bench_core::study::InvalidPoint;
+use bench_core::{Result, Unsupported};
 
 use super::gbuffer::GBufferPass;
 use super::{class, pixel_class, reference, GBuffer, ShadeSetup};
@@ -38,12 +39,16 @@ pub enum Mode {
 
 impl Mode {
     pub const NAMES: &'static [&'static str] = &["off", "x2", "x4"];
-    pub fn parse(s: &str) -> std::result::Result<Mode, String> {
+    pub fn parse(s: &str) -> std::result::Result<Mode, InvalidPoint> {
         match s {
             "off" => Ok(Mode::Off),
             "x2" => Ok(Mode::X2),
             "x4" => Ok(Mode::X4),
-            o => Err(format!("msaa '{o}' is not one of off, x2, x4")),
+            o => Err(InvalidPoint::value(
+                "msaa",
+                format!("'{o}'"),
+                "is not one of off, x2, x4",
+            )),
         }
     }
     pub fn name(self) -> &'static str {
@@ -64,7 +69,7 @@ impl Mode {
 
 /// Whether every G-buffer format can be multisampled `mode.samples()`× on this adapter
 /// (WebGPU guarantees 4×; 2× needs the adapter's own capabilities: NVIDIA has it, lavapipe not).
-pub fn supported(gpu: &Gpu, mode: Mode) -> std::result::Result<(), String> {
+pub fn supported(gpu: &Gpu, mode: Mode) -> std::result::Result<(), Unsupported> {
     use super::gbuffer::{ALBEDO_FORMAT, MAT_FORMAT, NORMAL_FORMAT, SPEC_FORMAT};
     for f in [
         wgpu::TextureFormat::Depth32Float,
@@ -74,7 +79,7 @@ pub fn supported(gpu: &Gpu, mode: Mode) -> std::result::Result<(), String> {
         MAT_FORMAT,
     ] {
         bench_core::gpu_util::check_msaa_format(gpu, f, mode.samples())
-            .map_err(|e| format!("msaa = {}: {e}", mode.name()))?;
+            .map_err(|e| Unsupported::new(format!("msaa = {}: {e}", mode.name())))?;
     }
     Ok(())
 }

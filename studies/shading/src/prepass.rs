@@ -37,9 +37,10 @@ use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use bench_core::record::cols;
 
+use bench_core::study::InvalidPoint;
 use bench_core::timed::{FrameStats, PassSpan, Timed};
 use bench_core::timing::GpuTimer;
-use bench_core::{CoreError, Result};
+use bench_core::{CoreError, Result, Unsupported};
 
 const WGSL: &str = include_str!("prepass.wgsl");
 
@@ -51,13 +52,15 @@ pub enum LbFormat {
 }
 
 impl LbFormat {
-    pub fn parse(s: &str) -> std::result::Result<LbFormat, String> {
+    pub fn parse(s: &str) -> std::result::Result<LbFormat, InvalidPoint> {
         match s {
             "rgba8" => Ok(LbFormat::Rgba8),
             "rgba16f" => Ok(LbFormat::Rgba16F),
             "rg11b10" => Ok(LbFormat::Rg11b10),
-            o => Err(format!(
-                "light_buffer_format '{o}' is not one of rgba8, rgba16f, rg11b10"
+            o => Err(InvalidPoint::value(
+                "light_buffer_format",
+                format!("'{o}'"),
+                "is not one of rgba8, rgba16f, rg11b10",
             )),
         }
     }
@@ -109,7 +112,7 @@ pub enum Accum {
 }
 
 /// Why a pre-pass point cannot run here (a `skipped` row).
-pub fn supports(gpu: &Gpu, f: LbFormat, accum: Accum) -> std::result::Result<(), String> {
+pub fn supports(gpu: &Gpu, f: LbFormat, accum: Accum) -> std::result::Result<(), Unsupported> {
     if f == LbFormat::Rg11b10 {
         if !gpu.has(wgpu::Features::RG11B10UFLOAT_RENDERABLE) {
             return Err("adapter lacks RG11B10UFLOAT_RENDERABLE".into());
@@ -123,7 +126,9 @@ pub fn supports(gpu: &Gpu, f: LbFormat, accum: Accum) -> std::result::Result<(),
     }
     if let Accum::Tiled { tile } = accum {
         if ![8, 16, 32, 64].contains(&tile) {
-            return Err(format!("tile_size {tile} is not one of 8, 16, 32, 64"));
+            return Err(Unsupported::new(format!(
+                "tile_size {tile} is not one of 8, 16, 32, 64"
+            )));
         }
     }
     Ok(())
@@ -200,7 +205,7 @@ impl PrePass {
         tau: f64,
         second_view: bool,
     ) -> Result<PrePass> {
-        supports(gpu, format, accum).map_err(CoreError::Param)?;
+        supports(gpu, format, accum).map_err(|e| CoreError::Param(e.into()))?;
         let d = &gpu.device;
         let (w, h) = (gscene.width, gscene.height);
         let mut alloc = AllocCounter::default();

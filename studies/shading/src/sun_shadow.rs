@@ -24,6 +24,7 @@ use wgpu::util::DeviceExt;
 use bench_core::gpu::{read_texture, Gpu};
 use bench_core::gpu_scene::{camera_uniform, AllocCounter, Attrs, GpuScene};
 use bench_core::gpu_util::shader;
+use bench_core::study::InvalidPoint;
 use bench_core::Result;
 
 pub const WGSL: &str = include_str!("sun_shadow.wgsl");
@@ -65,11 +66,15 @@ pub enum Mode {
 
 impl Mode {
     pub const NAMES: &'static [&'static str] = &["off", "taps8"];
-    pub fn parse(s: &str) -> std::result::Result<Mode, String> {
+    pub fn parse(s: &str) -> std::result::Result<Mode, InvalidPoint> {
         match s {
             "off" => Ok(Mode::Off),
             "taps8" => Ok(Mode::Taps8),
-            o => Err(format!("sun_shadow '{o}' is not one of off, taps8")),
+            o => Err(InvalidPoint::value(
+                "sun_shadow",
+                format!("'{o}'"),
+                "is not one of off, taps8",
+            )),
         }
     }
     pub fn name(self) -> &'static str {

@@ -26,7 +26,7 @@ use bench_core::axes::{Axis, Point};
 use bench_core::record::cols;
 use bench_core::timed::{FrameStats, Timed};
 use bench_core::timing::GpuTimer;
-use bench_core::Result;
+use bench_core::{Result, Unsupported};
 
 use super::twin::LightUniform;
 
@@ -188,24 +188,26 @@ impl LayeredSsm {
         AXES.to_vec()
     }
     /// Whether this configuration can run on this adapter; `Err(reason)`: a `skipped` row.
-    pub fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), String> {
+    pub fn supports(&self, gpu: &Gpu, point: &Point) -> std::result::Result<(), Unsupported> {
         let c = Config::from_point(point);
         let max = gpu.limits.max_texture_dimension_2d;
         if c.shadow_map_res > max {
-            return Err(format!(
+            return Err(Unsupported::new(format!(
                 "shadow_map_res {} exceeds this adapter's max texture size {max}",
                 c.shadow_map_res
-            ));
+            )));
         }
         if c.top_level() >= MAX_LEVELS {
-            return Err(format!(
+            return Err(Unsupported::new(format!(
                 "shadow_map_res {} needs more than {MAX_LEVELS} pyramid levels",
                 c.shadow_map_res
-            ));
+            )));
         }
         for f in [LAYER_FORMAT, GBUFFER_FORMAT] {
             if !gpu.renderable(f) {
-                return Err(format!("{f:?} is not renderable on this adapter"));
+                return Err(Unsupported::new(format!(
+                    "{f:?} is not renderable on this adapter"
+                )));
             }
         }
         if !gpu
@@ -214,9 +216,9 @@ impl LayeredSsm {
             .allowed_usages
             .contains(wgpu::TextureUsages::STORAGE_BINDING)
         {
-            return Err(format!(
+            return Err(Unsupported::new(format!(
                 "{PACKED_FORMAT:?} storage textures are not supported"
-            ));
+            )));
         }
         Ok(())
     }

@@ -26,7 +26,7 @@ use bench_core::measure::{measure_timed, set_timing};
 use bench_core::record::Row;
 use bench_core::record::{cols, Flag};
 use bench_core::record::{error_row, failed_row, set_params, skipped_row};
-use bench_core::study::{Emit, GroupCtx, Methods, Opt, PointSpec, Study};
+use bench_core::study::{Emit, GroupCtx, InvalidPoint, Methods, Opt, PointSpec, Study, StudyKind};
 use bench_core::timed::Timed;
 use bench_core::timing::GpuTimer;
 use bench_core::{CoreError, Result};
@@ -59,12 +59,14 @@ struct Settings {
 }
 
 /// `shadow_rays` as rays per axis, or why it is not a perfect square.
-fn rays_per_axis(spec: &StudySpec) -> std::result::Result<u32, String> {
+fn rays_per_axis(spec: &StudySpec) -> std::result::Result<u32, InvalidPoint> {
     let rays = SHADOW_RAYS.int(spec);
     let m = (rays.max(0) as f64).sqrt().round() as i64;
     if !(1..=4096).contains(&m) || m * m != rays {
-        return Err(format!(
-            "shadow_rays = {rays} must be a perfect square m² with 1 ≤ m ≤ 4096 (the strata are m×m)"
+        return Err(InvalidPoint::value(
+            SHADOW_RAYS.name,
+            rays,
+            "must be a perfect square m² with 1 ≤ m ≤ 4096 (the strata are m×m)",
         ));
     }
     Ok(m as u32)
@@ -72,14 +74,14 @@ fn rays_per_axis(spec: &StudySpec) -> std::result::Result<u32, String> {
 
 fn settings(spec: &StudySpec) -> Result<Settings> {
     Ok(Settings {
-        rays_per_axis: rays_per_axis(spec).map_err(CoreError::Param)?,
+        rays_per_axis: rays_per_axis(spec)?,
         images: IMAGES.bool(spec),
     })
 }
 
 impl Study for ShadowsStudy {
-    fn kind(&self) -> &'static str {
-        "shadows"
+    fn kind(&self) -> StudyKind {
+        StudyKind::Shadows
     }
     fn describe(&self) -> &'static str {
         "layered soft shadow maps (Bavoil ch. 5) from a square area light vs a ray-traced reference"
@@ -94,7 +96,11 @@ impl Study for ShadowsStudy {
         vec![SHADOW_RAYS, IMAGES]
     }
     fn check_table(&self, spec: &StudySpec) -> Vec<String> {
-        rays_per_axis(spec).err().into_iter().collect()
+        rays_per_axis(spec)
+            .err()
+            .into_iter()
+            .map(|e| e.to_string())
+            .collect()
     }
 
     fn run_group(&self, ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
@@ -270,7 +276,9 @@ pub fn gbuffer_points(
         .with("max_nspp", ParamValue::Int(1));
     let point =
         Point::resolve(layered::AXES, &params).map_err(|e| CoreError::Param(e.join("; ")))?;
-    method.supports(gpu, &point).map_err(CoreError::Param)?;
+    method
+        .supports(gpu, &point)
+        .map_err(|e| CoreError::Param(e.into()))?;
     let mut prep = method.prepare_ssm(gpu, gscene, &point)?;
     let mut timer = GpuTimer::new(gpu);
     timer.begin_frame();

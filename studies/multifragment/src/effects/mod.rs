@@ -33,6 +33,7 @@ use scenarios::Scene;
 use crate::method::Expected;
 use bench_core::axes::{Axis, Point};
 use bench_core::record::cols;
+use bench_core::study::InvalidPoint;
 use mfx_reference::{FragmentLists, RefFragment};
 
 /// Known effect names (the `effect` CSV column).
@@ -57,7 +58,7 @@ pub enum Effect {
 }
 
 impl Effect {
-    pub fn parse(s: &str) -> Result<Effect, String> {
+    pub fn parse(s: &str) -> Result<Effect, InvalidPoint> {
         Ok(match s {
             "transparency" => Effect::Transparency,
             "translucency" => Effect::Translucency,
@@ -67,9 +68,10 @@ impl Effect {
             "csg_sub" => Effect::Csg(2),
             "dof" => Effect::Dof,
             other => {
-                return Err(format!(
-                    "effect '{other}' is not one of {}",
-                    EFFECTS.join(", ")
+                return Err(InvalidPoint::value(
+                    EFFECT.name(),
+                    format!("'{other}'"),
+                    format!("is not one of {}", EFFECTS.join(", ")),
                 ))
             }
         })
@@ -275,13 +277,13 @@ pub const AXES: &[Axis] = &[EFFECT, SIGMA, CSG_A, CSG_B, DOF_NEAR, DOF_FAR, THIC
 impl EffectConfig {
     /// Reads the effect axes of a resolved point; the one rule a range cannot say
     /// (`dof_near ≤ dof_far`) is an error naming both values.
-    pub fn from_point(point: &Point) -> Result<EffectConfig, String> {
+    pub fn from_point(point: &Point) -> Result<EffectConfig, InvalidPoint> {
         let effect = Effect::parse(&point.choice(&EFFECT))?;
         let (dof_near, dof_far) = (point.float(&DOF_NEAR), point.float(&DOF_FAR));
         if dof_near > dof_far {
-            return Err(format!(
+            return Err(InvalidPoint::combination(format!(
                 "dof bounds must satisfy dof_near ≤ dof_far, got {dof_near}, {dof_far}"
-            ));
+            )));
         }
         Ok(EffectConfig {
             effect,
@@ -591,6 +593,7 @@ mod tests {
                 .with("dof_far", ParamValue::Float(1.0)),
         )
         .unwrap();
-        assert!(EffectConfig::from_point(&p).unwrap_err().contains("dof"));
+        let e = EffectConfig::from_point(&p).unwrap_err().to_string();
+        assert!(e.contains("dof_near ≤ dof_far"), "{e}");
     }
 }

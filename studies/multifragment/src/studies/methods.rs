@@ -12,7 +12,8 @@ use bench_core::measure::set_timing;
 use bench_core::record::cols;
 use bench_core::record::{error_row, failed_row, set_params, skipped_row};
 use bench_core::record::{Flag, Row};
-use bench_core::study::{Emit, GroupCtx, Methods, PointSpec, Study};
+use bench_core::study::InvalidPoint;
+use bench_core::study::{Emit, GroupCtx, Methods, PointSpec, Study, StudyKind};
 use bench_core::Result;
 use mfx_reference::{rasterize, FragmentLists};
 
@@ -31,7 +32,7 @@ fn folds_effects(m: &dyn Method) -> bool {
 
 /// The effect of a point: read through the fold's axes when the method folds effects; for one
 /// that does not, only the effect's name (its other axes are not the method's).
-fn effect_of(m: &dyn Method, point: &Point) -> std::result::Result<EffectConfig, String> {
+fn effect_of(m: &dyn Method, point: &Point) -> std::result::Result<EffectConfig, InvalidPoint> {
     if folds_effects(m) {
         return EffectConfig::from_point(point);
     }
@@ -43,8 +44,8 @@ fn effect_of(m: &dyn Method, point: &Point) -> std::result::Result<EffectConfig,
 }
 
 impl Study for MethodsStudy {
-    fn kind(&self) -> &'static str {
-        "methods"
+    fn kind(&self) -> StudyKind {
+        StudyKind::Methods
     }
     fn describe(&self) -> &'static str {
         "multi-fragment capture methods: time, memory, and error vs the exact CPU reference"
@@ -64,10 +65,10 @@ impl Study for MethodsStudy {
         }
         axes
     }
-    fn validate(&self, method: &str, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, method: &str, point: &Point) -> std::result::Result<(), InvalidPoint> {
         match methods::by_name(method) {
             Some(m) => m.validate(point),
-            None => Err(format!("unknown method '{method}'")),
+            None => Err(InvalidPoint::UnknownMethod(method.to_string())),
         }
     }
 
@@ -178,7 +179,7 @@ pub fn ready_points(
         let effect = match effect_of(method.as_ref(), &pt.point) {
             Ok(e) => e,
             Err(why) => {
-                emit(i, skipped_row(row, &why))?;
+                emit(i, skipped_row(row, &why.to_string()))?;
                 continue;
             }
         };
@@ -192,11 +193,11 @@ pub fn ready_points(
                 pt.method,
                 effect.effect.name()
             );
-            emit(i, skipped_row(row, &why))?;
+            emit(i, skipped_row(row, &why.to_string()))?;
             continue;
         }
         if let Err(why) = methods::supports(method.as_ref(), ctx.gpu, &pt.point) {
-            emit(i, skipped_row(row, &why))?;
+            emit(i, skipped_row(row, &why.to_string()))?;
             continue;
         }
         runnable.push(Ready {

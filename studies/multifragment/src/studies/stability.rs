@@ -22,7 +22,8 @@ use crate::effects;
 use bench_core::axes::{Axis, Point};
 use bench_core::record::cols;
 use bench_core::record::Row;
-use bench_core::study::{Emit, GroupCtx, Methods, Opt, PointSpec, Study};
+use bench_core::study::InvalidPoint;
+use bench_core::study::{Emit, GroupCtx, Methods, Opt, PointSpec, Study, StudyKind};
 use bench_core::Result;
 /// Computed stiffness measures; any other name is read from the scene's or the point's params.
 pub const STIFFNESS: &[&str] = &[
@@ -107,8 +108,8 @@ pub fn stiffness_value(
 }
 
 impl Study for StabilityStudy {
-    fn kind(&self) -> &'static str {
-        "stability"
+    fn kind(&self) -> StudyKind {
+        StudyKind::Stability
     }
     fn describe(&self) -> &'static str {
         "stiff and extreme inputs: finite output, error vs the f64 reference and a flag per method, against a stiffness parameter"
@@ -119,7 +120,7 @@ impl Study for StabilityStudy {
     fn axes(&self, method: &str) -> Vec<Axis> {
         MethodsStudy.axes(method)
     }
-    fn validate(&self, method: &str, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, method: &str, point: &Point) -> std::result::Result<(), InvalidPoint> {
         MethodsStudy.validate(method, point)
     }
     fn options(&self) -> Vec<Opt> {

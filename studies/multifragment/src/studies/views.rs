@@ -32,7 +32,8 @@ use crate::judge::{self, Judgement, TruthCache};
 use crate::method::{measure, Capture, Expected};
 use bench_core::axes::{Axis, Point};
 use bench_core::record::{cols, failed_row, Flag, FlagSet, Row};
-use bench_core::study::{Emit, GroupCtx, Methods, Opt, Study};
+use bench_core::study::InvalidPoint;
+use bench_core::study::{Emit, GroupCtx, Methods, Opt, Study, StudyKind};
 use bench_core::Result;
 use mfx_reference::temporal::{self, Frame, Step};
 use mfx_reference::{rasterize, FragmentLists};
@@ -58,8 +59,8 @@ const FLIP: Opt = Opt {
 const CROP: u32 = 192;
 
 impl Study for ViewsStudy {
-    fn kind(&self) -> &'static str {
-        "views"
+    fn kind(&self) -> StudyKind {
+        StudyKind::Views
     }
     fn describe(&self) -> &'static str {
         "multi-fragment methods along a camera path: time, error, flicker and popping per view vs each view's exact truth"
@@ -70,7 +71,7 @@ impl Study for ViewsStudy {
     fn axes(&self, method: &str) -> Vec<Axis> {
         MethodsStudy.axes(method)
     }
-    fn validate(&self, method: &str, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, method: &str, point: &Point) -> std::result::Result<(), InvalidPoint> {
         MethodsStudy.validate(method, point)
     }
     fn options(&self) -> Vec<Opt> {

@@ -43,9 +43,9 @@ use bench_core::measure::{measure_timed, set_timing};
 use bench_core::record::Row;
 use bench_core::record::{cols, Flag};
 use bench_core::record::{error_row, failed_row, set_params, skipped_row};
-use bench_core::study::{Emit, GroupCtx, Methods, Opt, Study};
+use bench_core::study::{Emit, GroupCtx, Methods, Opt, Study, StudyKind};
 use bench_core::timing::{GpuTimer, Stats};
-use bench_core::Result;
+use bench_core::{Result, Unsupported};
 use mfx_reference::metrics::{image_error, BAD_PIXEL_TOL};
 pub const PATHS: &[&str] = &[
     "naive",
@@ -219,7 +219,7 @@ fn threshold(point: &Point) -> f64 {
     }
 }
 
-fn gpu_path(name: &str, point: &Point) -> std::result::Result<Path, String> {
+fn gpu_path(name: &str, point: &Point) -> std::result::Result<Path, Unsupported> {
     Ok(match name {
         "naive" => Path::Naive,
         "volumes" => Path::Volumes,
@@ -229,7 +229,11 @@ fn gpu_path(name: &str, point: &Point) -> std::result::Result<Path, String> {
             tile: point.int(&TILE_SIZE) as u32,
             levels: point.int(&GPU_CULL_LEVELS) as u32,
         },
-        other => return Err(format!("'{other}' is not a GPU shading path")),
+        other => {
+            return Err(Unsupported::new(format!(
+                "'{other}' is not a GPU shading path"
+            )))
+        }
     })
 }
 
@@ -272,8 +276,8 @@ type ImageKey = (u64, sun_shadow::Mode, msaa::Mode);
 pub struct DeferredStudy;
 
 impl Study for DeferredStudy {
-    fn kind(&self) -> &'static str {
-        "deferred"
+    fn kind(&self) -> StudyKind {
+        StudyKind::Deferred
     }
     fn describe(&self) -> &'static str {
         "deferred shading paths (naive, light volumes, GPU tiled, classified, CPU tiled) vs the f64 reference"

@@ -19,7 +19,7 @@ use bench_core::measure::{measure_timed, set_timing, Measured};
 use bench_core::record::cols;
 use bench_core::record::Row;
 use bench_core::record::{failed_row, set_params, skipped_row};
-use bench_core::study::{Emit, GroupCtx, Methods, Study};
+use bench_core::study::{Emit, GroupCtx, Methods, Study, StudyKind};
 use bench_core::{CoreError, Result};
 use mfx_reference::metrics::{image_error, BAD_PIXEL_TOL};
 const METHODS: &[&str] = &["deferred", "prepass", "prepass_cpu"];
@@ -116,8 +116,8 @@ fn lit_within_frame<T: ?Sized>(m: &Measured<T>) -> Option<bool> {
 }
 
 impl Study for PrepassStudy {
-    fn kind(&self) -> &'static str {
-        "prepass"
+    fn kind(&self) -> StudyKind {
+        StudyKind::Prepass
     }
     fn describe(&self) -> &'static str {
         "light pre-pass vs full deferred; light buffer formats; CPU lighting overlapped with a second GPU view"
@@ -225,7 +225,8 @@ impl PrepassStudy {
             set_times(row, &m);
             return Ok(Some((m.prepared.read_image(gpu)?, false)));
         }
-        let fmt = LbFormat::parse(&p.choice(&LIGHT_BUFFER_FORMAT)).map_err(Skip)?;
+        let fmt =
+            LbFormat::parse(&p.choice(&LIGHT_BUFFER_FORMAT)).map_err(|e| Skip(e.to_string()))?;
         row.set(cols::LIGHT_BUFFER_FORMAT, fmt.name());
         let (accum, view2) = if method == "prepass_cpu" {
             let threads = p.int(&THREAD_COUNT) as usize;
@@ -248,7 +249,7 @@ impl PrepassStudy {
                 v2,
             )
         };
-        prepass::supports(gpu, fmt, accum).map_err(Skip)?;
+        prepass::supports(gpu, fmt, accum).map_err(|e| Skip(e.into()))?;
         // CPU lighting runs inside the frame `measure` times (its wall clock is the frame's):
         // the stopping rule, canary and clock lift apply to the whole frame, and the CPU parts
         // the frame reports are the medians of the same kept samples.

@@ -16,6 +16,7 @@ use bench_core::axes::{Axis, Point};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::GpuScene;
 use bench_core::record::cols;
+use bench_core::study::InvalidPoint;
 use bench_core::Result;
 
 /// adp's WGSL, for the registry's test that holds it against bdp.
@@ -48,11 +49,13 @@ const HIST_BINS: Axis = Axis::int(
     8192,
 );
 
-pub fn config(point: &Point) -> std::result::Result<Config, String> {
+pub fn config(point: &Point) -> std::result::Result<Config, InvalidPoint> {
     let hist_bins = point.int(&HIST_BINS) as u32;
     if !hist_bins.is_multiple_of(32) {
-        return Err(format!(
-            "hist_bins = {hist_bins} must be a multiple of 32 (32-bit words)"
+        return Err(InvalidPoint::value(
+            HIST_BINS.name(),
+            hist_bins,
+            "must be a multiple of 32 (32-bit words)",
         ));
     }
     // §1.5: "we can further reduce collisions by binding the buckets into pairs and performing
@@ -65,7 +68,7 @@ pub fn config(point: &Point) -> std::result::Result<Config, String> {
 }
 
 /// The point's effect (translucency and fresnel on (depth, normal) bucket pairs).
-fn fx(point: &Point) -> std::result::Result<bucket::Fx, String> {
+fn fx(point: &Point) -> std::result::Result<bucket::Fx, InvalidPoint> {
     bucket::Fx::read(point)
 }
 
@@ -90,11 +93,13 @@ impl Method for Adp {
         v.extend_from_slice(effects::AXES);
         v
     }
-    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, point: &Point) -> std::result::Result<(), InvalidPoint> {
         let bins = point.int(&HIST_BINS);
         if bins % 32 != 0 {
-            return Err(format!(
-                "hist_bins = {bins} must be a multiple of 32 (32-bit words)"
+            return Err(InvalidPoint::value(
+                HIST_BINS.name(),
+                bins,
+                "must be a multiple of 32 (32-bit words)",
             ));
         }
         bucket::pairing_of(point).map(|_| ())
@@ -171,7 +176,7 @@ mod tests {
         let axes = Adp.axes();
         let given = Params::new().with("bucket_pairing", ParamValue::Str("both".into()));
         let point = bench_core::axes::Point::resolve(&axes, &given).unwrap();
-        let e = Adp.validate(&point).unwrap_err();
+        let e = Adp.validate(&point).unwrap_err().to_string();
         assert!(e.contains("bucket_pairing") && e.contains("both"), "{e}");
     }
 

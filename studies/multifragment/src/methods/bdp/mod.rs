@@ -14,6 +14,7 @@ use bench_core::axes::{Axis, Point};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::GpuScene;
 use bench_core::record::cols;
+use bench_core::study::InvalidPoint;
 use bench_core::Result;
 
 const WGSL: &str = include_str!("bdp.wgsl");
@@ -40,7 +41,7 @@ const PAIRING: Axis = Axis::choice(
 );
 
 /// The configuration a point asks for, or the reason it cannot run.
-pub fn config(point: &Point) -> std::result::Result<Config, String> {
+pub fn config(point: &Point) -> std::result::Result<Config, InvalidPoint> {
     let paired = point.choice(&PAIRING) == "paired";
     let buckets = bucket::buckets_fx(point, paired)?.0;
     Ok(Config {
@@ -50,7 +51,7 @@ pub fn config(point: &Point) -> std::result::Result<Config, String> {
 }
 
 /// The point's effect (translucency and fresnel on (depth, normal) bucket pairs).
-fn fx(point: &Point) -> std::result::Result<bucket::Fx, String> {
+fn fx(point: &Point) -> std::result::Result<bucket::Fx, InvalidPoint> {
     bucket::Fx::read(point)
 }
 

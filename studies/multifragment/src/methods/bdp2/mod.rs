@@ -11,6 +11,7 @@ use bench_core::axes::{Axis, Point};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::GpuScene;
 use bench_core::record::cols;
+use bench_core::study::InvalidPoint;
 use bench_core::Result;
 
 const WGSL: &str = include_str!("bdp2.wgsl");
@@ -33,7 +34,7 @@ const MODE: Axis = Axis::choice(
 /// The configuration a point asks for, or the reason it cannot run. `bucket_pairing = paired` is
 /// §1.4's two-pass BDP as the chapter describes it (16 bucket pairs a pass); unset or `single`
 /// is mfx's two-pass of single buckets (the farthest, then the next below it).
-pub fn config(point: &Point) -> std::result::Result<Config, String> {
+pub fn config(point: &Point) -> std::result::Result<Config, InvalidPoint> {
     let paired = bucket::pairing_of(point)?;
     Ok(Config {
         kind: Kind::TwoPass { paired },
@@ -44,10 +45,10 @@ pub fn config(point: &Point) -> std::result::Result<Config, String> {
 /// The point's effect: translucency on (depth, normal) pairs, not fresnel: a bucket here holds
 /// two fragments by design, and a MAX-blended normal channel cannot follow the farther one's
 /// depth (the chapter shows Fresnel by ADP only).
-fn fx(point: &Point) -> std::result::Result<bucket::Fx, String> {
+fn fx(point: &Point) -> std::result::Result<bucket::Fx, InvalidPoint> {
     let fx = bucket::Fx::read(point)?;
     if fx.effect.effect == effects::Effect::Fresnel {
-        return Err("bdp2 keeps two fragments per bucket, and a MAX-blended normal channel cannot follow the farther one's depth: fresnel is offered on bdp (single) and adp, as in the chapter".into());
+        return Err(InvalidPoint::combination("bdp2 keeps two fragments per bucket, and a MAX-blended normal channel cannot follow the farther one's depth: fresnel is offered on bdp (single) and adp, as in the chapter"));
     }
     Ok(fx)
 }
@@ -72,7 +73,7 @@ impl Method for Bdp2 {
         v.extend_from_slice(effects::AXES);
         v
     }
-    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, point: &Point) -> std::result::Result<(), InvalidPoint> {
         bucket::pairing_of(point).map(|_| ())
     }
     fn required_features(&self) -> wgpu::Features {
@@ -164,6 +165,11 @@ mod tests {
             bench_core::axes::Point::resolve(&axes, &given).unwrap()
         };
         let e = Bdp2.validate(&point("pairs")).unwrap_err();
+        assert!(
+            matches!(&e, InvalidPoint::Value { axis, .. } if axis == "bucket_pairing"),
+            "{e:?}"
+        );
+        let e = e.to_string();
         assert!(e.contains("bucket_pairing") && e.contains("pairs"), "{e}");
         assert!(Bdp2.validate(&point("paired")).is_ok());
         assert_eq!(
@@ -181,7 +187,10 @@ mod tests {
             .with("bucket_count", ParamValue::Int(32));
         let big = bench_core::axes::Point::resolve(&axes, &big).unwrap();
         assert!(Bdp2.validate(&big).is_ok());
-        assert!(config(&big).unwrap_err().contains("64 float channels"));
+        assert!(config(&big)
+            .unwrap_err()
+            .to_string()
+            .contains("64 float channels"));
     }
 
     #[test]

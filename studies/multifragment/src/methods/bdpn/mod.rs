@@ -16,6 +16,7 @@ use bench_core::axes::{Axis, Point};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::GpuScene;
 use bench_core::record::cols;
+use bench_core::study::InvalidPoint;
 use bench_core::Result;
 
 const WGSL: &str = concat!(
@@ -47,7 +48,7 @@ const MAX_PASSES: Axis = Axis::int(
 );
 
 /// The configuration a point asks for: bucket pairs, so at most 16 buckets.
-pub fn config(point: &Point) -> std::result::Result<Config, String> {
+pub fn config(point: &Point) -> std::result::Result<Config, InvalidPoint> {
     Ok(Config {
         kind: Kind::UntilCaptured {
             max_passes: point.int(&MAX_PASSES) as u32,
@@ -57,13 +58,13 @@ pub fn config(point: &Point) -> std::result::Result<Config, String> {
 }
 
 /// Transparency only: a pass keeps two keyed colours per bucket.
-fn fx(point: &Point) -> std::result::Result<bucket::Fx, String> {
+fn fx(point: &Point) -> std::result::Result<bucket::Fx, InvalidPoint> {
     let fx = bucket::Fx::read(point)?;
     if fx.pairs {
-        return Err(format!(
+        return Err(InvalidPoint::combination(format!(
             "bdpn keeps (near, far) colour pairs per bucket: {} needs (depth, normal) pairs, offered on bdp and adp",
             fx.effect.effect.name()
-        ));
+        )));
     }
     Ok(fx)
 }
@@ -159,9 +160,12 @@ mod tests {
         let e = fx(&at(
             Params::new().with("effect", ParamValue::Str("translucency".into()))
         ))
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("translucency"), "{e}");
-        let e = config(&at(Params::new().with("bucket_count", ParamValue::Int(32)))).unwrap_err();
+        let e = config(&at(Params::new().with("bucket_count", ParamValue::Int(32))))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("bucket_count = 32"), "{e}");
         let bad = Params::new().with("max_layers", ParamValue::Int(0));
         assert!(bench_core::axes::Point::resolve(&axes, &bad)

@@ -14,7 +14,8 @@ use bench_core::axes::{Axis, Point};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::GpuScene;
 use bench_core::record::cols;
-use bench_core::{CoreError, Result};
+use bench_core::study::InvalidPoint;
+use bench_core::Result;
 
 pub struct ComputeAbuffer;
 
@@ -104,7 +105,7 @@ impl Method for ComputeAbuffer {
         v.extend([aa::AA, aa::AA_CAPTURE]);
         v
     }
-    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, point: &Point) -> std::result::Result<(), InvalidPoint> {
         EffectConfig::from_point(point).map(|_| ())
     }
     fn supports(
@@ -147,7 +148,7 @@ impl Method for ComputeAbuffer {
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let small = point.int(&SMALL_MAX) as u32;
-        let effect = EffectConfig::from_point(point).map_err(CoreError::Param)?;
+        let effect = EffectConfig::from_point(point)?;
         let wg = gpu.limits.max_compute_workgroup_storage_size;
         let v = variants(point).fit_workgroup(wg).unwrap_or(variants(point));
         let aa = AaConfig::from_point(point);

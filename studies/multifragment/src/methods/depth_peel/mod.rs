@@ -34,8 +34,9 @@ use bench_core::gpu_util::{
     COMMON_WGSL, STORAGE_RW,
 };
 use bench_core::record::cols;
+use bench_core::study::InvalidPoint;
 use bench_core::timing::GpuTimer;
-use bench_core::{CoreError, Result};
+use bench_core::Result;
 
 const WGSL: &str = include_str!("depth_peel.wgsl");
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -69,7 +70,7 @@ struct Config {
 }
 
 impl Config {
-    fn read(point: &Point) -> std::result::Result<Config, String> {
+    fn read(point: &Point) -> std::result::Result<Config, InvalidPoint> {
         Ok(Config {
             max_layers: point.int(&MAX_LAYERS) as u32,
             occlusion_stop: point.bool(&OCCLUSION_STOP),
@@ -107,7 +108,7 @@ impl Method for DepthPeel {
         v.extend([aa::AA, aa::AA_CAPTURE]);
         v
     }
-    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, point: &Point) -> std::result::Result<(), InvalidPoint> {
         Config::read(point).map(|_| ())
     }
     fn payload(&self, point: &Point) -> Option<&'static str> {
@@ -144,7 +145,7 @@ impl Method for DepthPeel {
         aa::check_adapter(gpu, cfg.aa, &formats)
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
-        let cfg = Config::read(point).map_err(CoreError::Param)?;
+        let cfg = Config::read(point)?;
         if cfg.aa.mode == AaMode::Ssaa2x2 {
             let inner = Config {
                 aa: AaConfig::NONE,

@@ -25,8 +25,9 @@ use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use bench_core::gpu_util::{compute_pipeline, read_vec, shader, STORAGE_RW};
 use bench_core::record::Flag;
+use bench_core::study::InvalidPoint;
 use bench_core::timing::GpuTimer;
-use bench_core::{CoreError, Result};
+use bench_core::Result;
 
 const WGSL: &str = include_str!("dual_peel.wgsl");
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
@@ -40,14 +41,14 @@ pub struct DualPeel;
 /// nearest-per-partition both need what the front sweep has not yet seen when the back sweep
 /// meets it (csg: the inside/outside state; dof: colour beside the depth, 5 channels in a
 /// 4-channel layer).
-fn effect_of(point: &Point) -> std::result::Result<EffectConfig, String> {
+fn effect_of(point: &Point) -> std::result::Result<EffectConfig, InvalidPoint> {
     let e = EffectConfig::from_point(point)?;
     match e.effect {
         Effect::Transparency | Effect::Translucency | Effect::Fresnel => Ok(e),
-        other => Err(format!(
+        other => Err(InvalidPoint::combination(format!(
             "dual_peel folds transparency, translucency and fresnel (they compose from a front and a back sweep): {} needs the front sweep's state or colour beside the depth at the back sweep's layer, which a 4-channel layer and two accumulations cannot keep",
             other.name()
-        )),
+        ))),
     }
 }
 
@@ -71,7 +72,7 @@ impl Method for DualPeel {
         v.extend_from_slice(effects::AXES);
         v
     }
-    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, point: &Point) -> std::result::Result<(), InvalidPoint> {
         EffectConfig::from_point(point).map(|_| ())
     }
     fn payload(&self, point: &Point) -> Option<&'static str> {
@@ -119,7 +120,7 @@ impl Method for DualPeel {
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let max_layers = point.int(&MAX_LAYERS) as u32;
         let occlusion_stop = point.bool(&OCCLUSION_STOP);
-        let effect = effect_of(point).map_err(CoreError::Param)?;
+        let effect = effect_of(point)?;
         Ok(Box::new(PreparedDual::new(
             gpu,
             scene,

@@ -33,6 +33,7 @@ use crate::effects::{self, Effect};
 use bench_core::axes::{Axis, Point};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::GpuScene;
+use bench_core::study::InvalidPoint;
 use bench_core::Result;
 
 pub struct KBufferAtomic;
@@ -53,7 +54,7 @@ impl Method for KBufferAtomic {
         v.extend_from_slice(effects::AXES);
         v
     }
-    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, point: &Point) -> std::result::Result<(), InvalidPoint> {
         SlotConfig::read(point).map(|_| ())
     }
     fn payload(&self, point: &Point) -> Option<&'static str> {
@@ -88,7 +89,7 @@ impl Method for KBufferAtomic {
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let k = point.int(&LAYERS) as u32;
         let bounding = Bounding::of(point, true);
-        let slot = SlotConfig::read(point).map_err(bench_core::CoreError::Param)?;
+        let slot = SlotConfig::read(point)?;
         let cfg = AaConfig::from_point(point);
         if cfg.mode == AaMode::Ssaa2x2 {
             return ssaa::prepare(gpu, scene, |big| {

@@ -52,6 +52,7 @@ use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::{AllocCounter, GpuScene};
 use bench_core::gpu_util::{pixel_pass, read_vec, shader};
 use bench_core::record::cols;
+use bench_core::study::InvalidPoint;
 use bench_core::timing::GpuTimer;
 use bench_core::Result;
 use mfx_reference::oit::Keep;
@@ -123,7 +124,7 @@ impl Method for KBufferRmw {
         v.extend_from_slice(effects::AXES);
         v
     }
-    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, point: &Point) -> std::result::Result<(), InvalidPoint> {
         SlotConfig::read(point).map(|_| ())
     }
     fn payload(&self, point: &Point) -> Option<&'static str> {
@@ -143,7 +144,7 @@ impl Method for KBufferRmw {
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let k = point.int(&LAYERS) as u32;
-        let slot = SlotConfig::read(point).map_err(bench_core::CoreError::Param)?;
+        let slot = SlotConfig::read(point)?;
         let mut p = PreparedRmw::new(
             gpu,
             scene,

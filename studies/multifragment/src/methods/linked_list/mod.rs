@@ -63,6 +63,7 @@ use bench_core::gpu_util::{
 };
 use bench_core::limits::{self, Split};
 use bench_core::record::{cols, Flag};
+use bench_core::study::InvalidPoint;
 use bench_core::timing::GpuTimer;
 use bench_core::{CoreError, Result};
 
@@ -130,7 +131,7 @@ impl Method for LinkedList {
         v.extend([aa::AA, aa::AA_CAPTURE]);
         v
     }
-    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, point: &Point) -> std::result::Result<(), InvalidPoint> {
         EffectConfig::from_point(point).map(|_| ())
     }
     fn supports(
@@ -182,7 +183,7 @@ impl Method for LinkedList {
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
         let layers = point.int(&LAYERS) as u64;
         let c = list_config(point);
-        let effect = effect_config(point, c.compact).map_err(CoreError::Param)?;
+        let effect = effect_config(point, c.compact)?;
         if c.aa.mode == AaMode::Ssaa2x2 {
             let c = ListConfig {
                 aa: AaConfig::NONE,
@@ -247,10 +248,10 @@ fn list_config(point: &Point) -> ListConfig {
 /// The effect of a point: a full node stores colour, window depth, view depth, object id and
 /// facing, so every effect but Fresnel (which needs the normal) folds from it; a compact node
 /// re-derives everything.
-fn effect_config(point: &Point, compact: bool) -> std::result::Result<EffectConfig, String> {
+fn effect_config(point: &Point, compact: bool) -> std::result::Result<EffectConfig, InvalidPoint> {
     let e = EffectConfig::from_point(point)?;
     if e.effect == Effect::Fresnel && !compact {
-        return Err("linked_list full nodes store no normal: fresnel needs one (node = compact re-derives it)".into());
+        return Err(InvalidPoint::combination("linked_list full nodes store no normal: fresnel needs one (node = compact re-derives it)"));
     }
     Ok(e)
 }

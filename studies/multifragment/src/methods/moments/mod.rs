@@ -34,8 +34,9 @@ use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use bench_core::gpu_util::{compute_pipeline, pixel_pass, read_vec, shader, STORAGE_RW};
 use bench_core::record::{cols, Flag};
+use bench_core::study::InvalidPoint;
 use bench_core::timing::GpuTimer;
-use bench_core::{CoreError, Result};
+use bench_core::Result;
 use mfx_reference::oit::moment_math::wrapping_zone;
 use mfx_reference::oit::moments::{bias_vector, default_bias, depth_range_of, quant, B0_MIN};
 use mfx_reference::oit::{self, MomentConfig, MomentKind, MomentStorage};
@@ -89,7 +90,7 @@ struct Variant {
     normalize: bool,
 }
 
-fn variant(point: &Point) -> std::result::Result<Variant, String> {
+fn variant(point: &Point) -> std::result::Result<Variant, InvalidPoint> {
     let kind = match point.choice(&KIND).as_str() {
         "power" => MomentKind::Power,
         _ => MomentKind::Trigonometric,
@@ -100,20 +101,25 @@ fn variant(point: &Point) -> std::result::Result<Variant, String> {
     };
     let count = point.int(&COUNT) as u32;
     let paper = default_bias(kind, count, storage).ok_or_else(|| {
-        format!(
-            "moment_count = {count} with moment_kind = {}: power moments come in 4, 6, 8, trigonometric in 2, 3, 4",
-            point.choice(&KIND)
+        InvalidPoint::value(
+            COUNT.name(),
+            format!("{count} with moment_kind = {}", point.choice(&KIND)),
+            "is not offered: power moments come in 4, 6, 8, trigonometric in 2, 3, 4",
         )
     })?;
     let text = point.choice(&BIAS);
     let bias = if text == "paper" {
         paper
     } else {
-        let b: f64 = text
-            .parse()
-            .map_err(|_| format!("moment_bias = '{text}' is neither 'paper' nor a number"))?;
+        let b: f64 = text.parse().map_err(|_| {
+            InvalidPoint::value(
+                BIAS.name(),
+                format!("'{text}'"),
+                "is neither 'paper' nor a number",
+            )
+        })?;
         if !(0.0..1.0).contains(&b) {
-            return Err(format!("moment_bias = {b} must lie in [0, 1)"));
+            return Err(InvalidPoint::value(BIAS.name(), b, "must lie in [0, 1)"));
         }
         b
     };
@@ -138,8 +144,9 @@ impl Variant {
         self.storage == MomentStorage::Unorm16
     }
     /// The twin's configuration over the warp range [near, far].
-    fn config(&self, near: f64, far: f64) -> std::result::Result<MomentConfig, String> {
-        let mut c = MomentConfig::new(self.kind, self.count, self.storage, near, far)?;
+    fn config(&self, near: f64, far: f64) -> std::result::Result<MomentConfig, InvalidPoint> {
+        let mut c = MomentConfig::new(self.kind, self.count, self.storage, near, far)
+            .map_err(InvalidPoint::Combination)?;
         c.bias = self.bias;
         c.normalize = self.normalize;
         Ok(c)
@@ -169,7 +176,7 @@ impl Method for Moments {
     fn axes(&self) -> Vec<Axis> {
         vec![KIND, COUNT, PRECISION, BIAS, NORMALIZE]
     }
-    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, point: &Point) -> std::result::Result<(), InvalidPoint> {
         variant(point).map(|_| ())
     }
     fn supports(
@@ -206,7 +213,7 @@ impl Method for Moments {
         Ok(())
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
-        let v = variant(point).map_err(CoreError::Param)?;
+        let v = variant(point)?;
         Ok(Box::new(PreparedMoments::new(gpu, scene, v)?))
     }
 }
@@ -341,7 +348,7 @@ impl PreparedMoments {
     fn new(gpu: &Gpu, scene: &GpuScene, v: Variant) -> Result<Self> {
         let d = &gpu.device;
         let (near, far) = warp_range(gpu, scene)?;
-        let cfg = v.config(near, far).map_err(CoreError::Param)?;
+        let cfg = v.config(near, far)?;
         let module = shader(gpu, "moments", &format!("{WGSL}\n{MATH_WGSL}"));
         let constants = variant_constants(&v);
         // Camera, parameters, the 16-bit store; the resolve adds b0, m0, m1 and the failure

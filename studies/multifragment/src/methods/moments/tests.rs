@@ -371,13 +371,21 @@ fn moment_sets_and_biases_are_checked_before_any_gpu_work() {
         let p = bench_core::axes::Point::resolve(&Moments.axes(), &params(kv)).unwrap();
         Moments.validate(&p)
     };
-    assert!(check(&[("moment_count", Int(2))])
-        .unwrap_err()
-        .contains("4, 6, 8"));
+    let e = check(&[("moment_count", Int(2))]).unwrap_err().to_string();
+    assert!(
+        e.contains("moment_count = 2") && e.contains("4, 6, 8"),
+        "{e}"
+    );
     let trig = ("moment_kind", Str("trigonometric".into()));
     assert!(check(&[trig.clone(), ("moment_count", Int(6))]).is_err());
     assert!(check(&[trig.clone(), ("moment_count", Int(3))]).is_ok());
-    assert!(check(&[("moment_bias", Str("small".into()))]).is_err());
+    // The error is typed: it names the axis and the value the suite gave.
+    match check(&[("moment_bias", Str("small".into()))]).unwrap_err() {
+        bench_core::study::InvalidPoint::Value { axis, value, .. } => {
+            assert_eq!((axis.as_str(), value.as_str()), ("moment_bias", "'small'"))
+        }
+        e => panic!("not a value error: {e}"),
+    }
     assert!(check(&[("moment_bias", Str("1.5".into()))]).is_err());
     let p = bench_core::axes::Point::resolve(
         &Moments.axes(),

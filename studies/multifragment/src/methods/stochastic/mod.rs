@@ -22,8 +22,9 @@ use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::{AllocCounter, Attrs, GpuScene};
 use bench_core::gpu_util::{clear_depth, compute_pipeline, read_vec, shader, STORAGE_RW};
 use bench_core::record::cols;
+use bench_core::study::InvalidPoint;
 use bench_core::timing::GpuTimer;
-use bench_core::{CoreError, Result};
+use bench_core::Result;
 
 const WGSL: &str = include_str!("stochastic.wgsl");
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -91,11 +92,13 @@ impl Method for Stochastic {
     fn axes(&self) -> Vec<Axis> {
         vec![ST_SAMPLES, ST_PASSES, ST_CORRECTION, ST_SEED]
     }
-    fn validate(&self, point: &Point) -> std::result::Result<(), String> {
+    fn validate(&self, point: &Point) -> std::result::Result<(), InvalidPoint> {
         let s = point.int(&ST_SAMPLES);
         if ![2, 4, 8].contains(&s) {
-            return Err(format!(
-                "st_samples must be 2, 4 or 8 (an MSAA count), not {s}"
+            return Err(InvalidPoint::value(
+                ST_SAMPLES.name(),
+                s,
+                "must be 2, 4 or 8 (an MSAA count)",
             ));
         }
         Ok(())
@@ -115,7 +118,7 @@ impl Method for Stochastic {
         Ok(())
     }
     fn prepare(&self, gpu: &Gpu, scene: &GpuScene, point: &Point) -> Result<Box<dyn Prepared>> {
-        self.validate(point).map_err(CoreError::Param)?;
+        self.validate(point)?;
         Ok(Box::new(PreparedSt::new(gpu, scene, Config::read(point))))
     }
 }

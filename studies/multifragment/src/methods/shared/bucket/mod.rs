@@ -26,6 +26,7 @@ use bench_core::bind::{
 };
 use bench_core::gpu_util::{compute_pipeline, read_vec, STORAGE_RW};
 use bench_core::record::{cols, Flag};
+use bench_core::study::InvalidPoint;
 
 use crate::methods::{Capture, Expected, FrameStats};
 use bench_core::gpu::Gpu;
@@ -136,13 +137,23 @@ pub const BUCKET_COUNT: Axis = Axis::int(
 );
 
 /// `bucket_count`, checked against the channels one pass has.
-pub fn buckets(point: &Point, paired: bool) -> std::result::Result<u32, String> {
+pub fn buckets(point: &Point, paired: bool) -> std::result::Result<u32, InvalidPoint> {
     let k = point.int(&BUCKET_COUNT) as u32;
     let channels = if paired { 2 * k } else { k };
     if channels > MAX_CHANNELS {
-        return Err(format!(
-            "bucket_count = {k}{} needs {channels} float channels; one pass has {MAX_CHANNELS} (8 attachments × 4)",
-            if paired { " paired (2 channels per bucket)" } else { "" }
+        return Err(InvalidPoint::value(
+            BUCKET_COUNT.name(),
+            format!(
+                "{k}{}",
+                if paired {
+                    " paired (2 channels per bucket)"
+                } else {
+                    ""
+                }
+            ),
+            format!(
+                "needs {channels} float channels; one pass has {MAX_CHANNELS} (8 attachments × 4)"
+            ),
         ));
     }
     Ok(k)
@@ -158,13 +169,15 @@ pub const PAIRING_TEXT: Axis = Axis::text(
 );
 
 /// Whether the point asks for bucket pairs ([`PAIRING_TEXT`]), or the error naming the axis.
-pub fn pairing_of(point: &Point) -> std::result::Result<bool, String> {
+pub fn pairing_of(point: &Point) -> std::result::Result<bool, InvalidPoint> {
     match point.get(PAIRING_TEXT.name()) {
         None => Ok(false),
         Some(scenarios::ParamValue::Str(s)) if s == "single" => Ok(false),
         Some(scenarios::ParamValue::Str(s)) if s == "paired" => Ok(true),
-        Some(v) => Err(format!(
-            "axis 'bucket_pairing' = {v} must be one of single, paired"
+        Some(v) => Err(InvalidPoint::value(
+            PAIRING_TEXT.name(),
+            v,
+            "must be one of single, paired",
         )),
     }
 }
@@ -272,16 +285,16 @@ pub struct Fx {
 
 impl Fx {
     /// The point's effect, or why a bucket method cannot compute it.
-    pub fn read(point: &Point) -> std::result::Result<Fx, String> {
+    pub fn read(point: &Point) -> std::result::Result<Fx, InvalidPoint> {
         let effect = EffectConfig::from_point(point)?;
         let pairs = match effect.effect {
             Effect::Transparency => false,
             Effect::Translucency | Effect::Fresnel => true,
             e => {
-                return Err(format!(
+                return Err(InvalidPoint::combination(format!(
                     "bucket methods fold transparency, translucency and fresnel (the chapter's effects): {} needs an object id or colour beside the depth, which a MAX-blended bucket pair cannot keep together",
                     e.name()
-                ))
+                )))
             }
         };
         Ok(Fx { effect, pairs })
@@ -289,17 +302,20 @@ impl Fx {
 }
 
 /// `bucket_count` for a point's effect: (depth, normal) pairs take two channels per bucket.
-pub fn buckets_fx(point: &Point, paired: bool) -> std::result::Result<(u32, Fx), String> {
+pub fn buckets_fx(point: &Point, paired: bool) -> std::result::Result<(u32, Fx), InvalidPoint> {
     let fx = Fx::read(point)?;
     if fx.pairs && paired {
-        return Err("bucket_pairing = paired keeps near and far colour in a bucket's two channels; translucency and fresnel use them for (depth, normal)".into());
+        return Err(InvalidPoint::combination("bucket_pairing = paired keeps near and far colour in a bucket's two channels; translucency and fresnel use them for (depth, normal)"));
     }
     let k = point.int(&BUCKET_COUNT) as u32;
     if fx.pairs && 2 * k > MAX_CHANNELS {
-        return Err(format!(
-            "bucket_count = {k} with {} needs {} float channels ((depth, normal) per bucket); one pass has {MAX_CHANNELS} (8 attachments × 4)",
-            fx.effect.effect.name(),
-            2 * k
+        return Err(InvalidPoint::value(
+            BUCKET_COUNT.name(),
+            format!("{k} with {}", fx.effect.effect.name()),
+            format!(
+                "needs {} float channels ((depth, normal) per bucket); one pass has {MAX_CHANNELS} (8 attachments × 4)",
+                2 * k
+            ),
         ));
     }
     let k = buckets(point, paired)?;
@@ -353,8 +369,8 @@ pub fn supports_targets_fx(
 /// and [`Fx`] (each method's own rules), the method's WGSL, and from those the features, the
 /// adapter check and the prepared frame, written once.
 pub struct Spec {
-    pub config: fn(&Point) -> std::result::Result<Config, String>,
-    pub fx: fn(&Point) -> std::result::Result<Fx, String>,
+    pub config: fn(&Point) -> std::result::Result<Config, InvalidPoint>,
+    pub fx: fn(&Point) -> std::result::Result<Fx, InvalidPoint>,
     pub wgsl: &'static str,
 }
 
@@ -380,8 +396,8 @@ impl Spec {
         scene: &GpuScene,
         point: &Point,
     ) -> Result<Box<dyn crate::methods::Prepared>> {
-        let cfg = (self.config)(point).map_err(bench_core::CoreError::Param)?;
-        let fx = (self.fx)(point).map_err(bench_core::CoreError::Param)?;
+        let cfg = (self.config)(point)?;
+        let fx = (self.fx)(point)?;
         Ok(Box::new(PreparedBucket::with_range(
             gpu,
             scene,

@@ -12,6 +12,7 @@
 use crate::effects::{Effect, EffectConfig, Payload};
 use crate::methods::shared::axes::SPECIALISATION;
 use bench_core::axes::Point;
+use bench_core::study::InvalidPoint;
 
 /// A point's effect and the payload its slots store.
 #[derive(Clone, Copy, Debug)]
@@ -29,7 +30,7 @@ impl SlotConfig {
         }
     }
 
-    pub fn read(point: &Point) -> std::result::Result<SlotConfig, String> {
+    pub fn read(point: &Point) -> std::result::Result<SlotConfig, InvalidPoint> {
         let effect = EffectConfig::from_point(point)?;
         let payload = if point.choice(&SPECIALISATION) == "uber" {
             Payload::ALL
@@ -46,12 +47,12 @@ impl SlotConfig {
 
     /// What a point cannot do: the blended tail composites colour behind the kept fragments,
     /// which only transparency's fold output is.
-    pub fn check(&self, blends: bool) -> std::result::Result<(), String> {
+    pub fn check(&self, blends: bool) -> std::result::Result<(), InvalidPoint> {
         if blends && self.effect.effect != Effect::Transparency {
-            return Err(format!(
+            return Err(InvalidPoint::combination(format!(
                 "tail = blend composites the dropped fragments' colour behind the kept ones: it has no meaning for {}",
                 self.effect.effect.name()
-            ));
+            )));
         }
         Ok(())
     }
