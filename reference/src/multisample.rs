@@ -167,8 +167,7 @@ pub fn sample_list_centre_attributes(
 }
 
 /// [`sample_list`] of every position in `positions` (index = position), in one traversal of
-/// the scene (`rasterize_each`): exactly the lists of one pass per position, in the memory of
-/// all of them at once.
+/// the scene (`rasterize_each`): exactly the lists of one pass per position, held at once.
 pub fn sample_lists_at(
     scene: &Scene,
     width: u32,
