@@ -185,17 +185,8 @@ pub fn rasterize_with(
 struct StripLists {
     /// Fragments per pixel of the strip (row-major).
     counts: Vec<u32>,
-    /// (pixel, fragment, mask) in submission order.
-    pushed: Vec<(u32, RefFragment, u32)>,
-    /// Indices into `pushed`: by pixel, nearest first within each (read once, by the join:
-    /// no copy of the strip's fragments in between).
-    order: Vec<u32>,
-}
-
-impl StripLists {
-    fn at(&self, j: usize) -> &(u32, RefFragment, u32) {
-        &self.pushed[self.order[j] as usize]
-    }
+    frags: Vec<RefFragment>,
+    masks: Vec<u32>,
 }
 
 /// [`rasterize_with`] for several samplings in one traversal: every triangle is projected,
@@ -458,7 +449,7 @@ pub fn rasterize_each(
                 .with_min_len(1 << 12)
                 .map(|i| {
                     let (s, j) = at(i);
-                    strips[s].at(j).1
+                    strips[s].frags[j]
                 })
                 .collect();
             let masks: Vec<u32> = (0..total)
@@ -466,7 +457,7 @@ pub fn rasterize_each(
                 .with_min_len(1 << 12)
                 .map(|i| {
                     let (s, j) = at(i);
-                    strips[s].at(j).2
+                    strips[s].masks[j]
                 })
                 .collect();
             let lists = FragmentLists {
@@ -560,8 +551,8 @@ fn sort_strip(pushed: Vec<(u32, RefFragment, u32)>, pixels: usize, reversed: boo
     }
     StripLists {
         counts,
-        pushed,
-        order,
+        frags: order.iter().map(|&i| pushed[i as usize].1).collect(),
+        masks: order.iter().map(|&i| pushed[i as usize].2).collect(),
     }
 }
 
