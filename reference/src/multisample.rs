@@ -14,7 +14,7 @@
 
 use scenarios::Scene;
 
-use super::raster::{rasterize_with, Sampling, CENTRE};
+use super::raster::{rasterize_each, rasterize_with, Sampling, CENTRE};
 use super::{composite, FragmentLists, RefFragment};
 
 /// How a pixel is antialiased: the `aa` axis.
@@ -166,12 +166,56 @@ pub fn sample_list_centre_attributes(
     .0
 }
 
-/// One list set per standard sample position (index = sample index).
-pub fn sample_lists(scene: &Scene, width: u32, height: u32, samples: u32) -> Vec<FragmentLists> {
-    standard_positions(samples)
+/// [`sample_list`] of every position in `positions` (index = position), in one traversal of
+/// the scene (`rasterize_each`): exactly the lists of one pass per position, held at once.
+pub fn sample_lists_at(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    positions: &[(f64, f64)],
+) -> Vec<FragmentLists> {
+    let one: Vec<[(f64, f64); 1]> = positions.iter().map(|&p| [p]).collect();
+    let samplings: Vec<Sampling<'_>> = one
         .iter()
-        .map(|&pos| sample_list(scene, width, height, pos))
+        .zip(positions)
+        .map(|(c, &pos)| Sampling {
+            coverage: c,
+            attributes: pos,
+            depth: None,
+        })
+        .collect();
+    rasterize_each(scene, width, height, &samplings)
+        .into_iter()
+        .map(|(lists, _)| lists)
         .collect()
+}
+
+/// [`sample_list_centre_attributes`] of every position in `positions`, in one traversal.
+pub fn sample_lists_centre_attributes(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    positions: &[(f64, f64)],
+) -> Vec<FragmentLists> {
+    let one: Vec<[(f64, f64); 1]> = positions.iter().map(|&p| [p]).collect();
+    let samplings: Vec<Sampling<'_>> = one
+        .iter()
+        .zip(positions)
+        .map(|(c, &pos)| Sampling {
+            coverage: c,
+            attributes: CENTRE.attributes,
+            depth: Some(pos),
+        })
+        .collect();
+    rasterize_each(scene, width, height, &samplings)
+        .into_iter()
+        .map(|(lists, _)| lists)
+        .collect()
+}
+
+/// One list set per standard sample position (index = sample index), in one traversal.
+pub fn sample_lists(scene: &Scene, width: u32, height: u32, samples: u32) -> Vec<FragmentLists> {
+    sample_lists_at(scene, width, height, standard_positions(samples))
 }
 
 /// Per-fragment capture with coverage masks: each (pixel, triangle) covering any sample once,

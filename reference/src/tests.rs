@@ -232,7 +232,8 @@ fn vertices_far_outside_the_view_give_exact_finite_fragments() {
 // ---- the multisampled reference ----
 
 use super::multisample::{
-    box_filter_2x2, coverage_lists, resolve, sample_list, sample_lists, standard_positions,
+    box_filter_2x2, coverage_lists, resolve, sample_list, sample_list_centre_attributes,
+    sample_lists, sample_lists_at, sample_lists_centre_attributes, standard_positions,
 };
 
 /// World point on the plane `z` that projects to screen position (sx, sy) of a w×h image
@@ -474,4 +475,99 @@ fn coverage_masks_equal_per_sample_lists_where_depth_and_colour_are_constant_in_
     // A half-width sample list is what sample_list gives at that position.
     let l = sample_list(&s, 40, 40, (0.25, 0.75));
     assert_eq!(l.pixels(), 1600);
+}
+
+/// A random scene over a `w` × `h` image: `n` triangles with corners anywhere over it and beyond
+/// its edges, every other one on the 1/16 grid where the sample positions lie (edges through
+/// samples, shared corners), at random depths (they intersect), each corner its own colour,
+/// alpha and normal (attributes vary across every pixel).
+fn random_scene(w: u32, h: u32, n: u32, seed: u64) -> Scene {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let mut s = empty_scene();
+    for t in 0..n {
+        let base = s.mesh.positions.len() as u32;
+        for _ in 0..3 {
+            let mut x = rng.random_range(-4.0..w as f64 + 4.0);
+            let mut y = rng.random_range(-4.0..h as f64 + 4.0);
+            if t % 2 == 0 {
+                (x, y) = ((x * 16.0).round() / 16.0, (y * 16.0).round() / 16.0);
+            }
+            let z = rng.random_range(-2.0..2.0);
+            let p = screen_point(&s, w, h, x, y, z);
+            let c: [f32; 4] = std::array::from_fn(|_| rng.random_range(0.05..1.0));
+            let nrm = Vec3::new(rng.random(), rng.random(), 1.0).normalize();
+            s.mesh.positions.push(p.into());
+            s.mesh.colors.push(c);
+            s.mesh.normals.push(nrm.into());
+            s.mesh.object_ids.push(t % 5);
+        }
+        s.mesh
+            .indices
+            .extend_from_slice(&[base, base + 1, base + 2]);
+    }
+    s
+}
+
+#[test]
+fn one_traversal_lists_equal_the_lists_of_each_sample_position() {
+    // The multisampled truth rasterises every sample position in one traversal
+    // (`rasterize_each`); each position's lists must be exactly those of its own pass: the same
+    // fragments (coverage, f64 depth and attributes to the bit) in the same order. For 2×, 4×
+    // and 8× MSAA, the 2×2 grid of `ssaa2x2` at one resolution, the per-sample capture's
+    // centre-attribute rule, and a mix of samplings of several coverage positions.
+    let (w, h) = (37, 29);
+    let grid = [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)];
+    for seed in 0..3 {
+        let s = random_scene(w, h, 90, seed);
+        let sets: Vec<&[(f64, f64)]> = vec![
+            standard_positions(2),
+            standard_positions(4),
+            standard_positions(8),
+            &grid,
+        ];
+        let mut fragments = 0;
+        for pos in sets {
+            let each = sample_lists_at(&s, w, h, pos);
+            let centre = sample_lists_centre_attributes(&s, w, h, pos);
+            assert_eq!(each.len(), pos.len());
+            for (k, &p) in pos.iter().enumerate() {
+                let one = sample_list(&s, w, h, p);
+                assert_eq!(each[k].offsets, one.offsets, "seed {seed}, {p:?}");
+                assert_eq!(each[k].frags, one.frags, "seed {seed}, {p:?}");
+                let one = sample_list_centre_attributes(&s, w, h, p);
+                assert_eq!(centre[k].offsets, one.offsets, "seed {seed}, {p:?}");
+                assert_eq!(centre[k].frags, one.frags, "seed {seed}, {p:?}");
+                fragments += one.frags.len();
+            }
+        }
+        // The scene covers enough to mean something: overlapping layers at many samples.
+        assert!(fragments > 4 * (w * h) as usize, "seed {seed}: {fragments}");
+        // Samplings of several positions (coverage masks) beside single ones, in one traversal.
+        let samplings = [
+            raster::CENTRE,
+            Sampling {
+                coverage: standard_positions(4),
+                attributes: (0.5, 0.5),
+                depth: None,
+            },
+            Sampling {
+                coverage: standard_positions(8),
+                attributes: (0.5, 0.5),
+                depth: Some((0.0625, 0.4375)),
+            },
+            Sampling {
+                coverage: &grid[1..2],
+                attributes: (0.9375, 0.0625),
+                depth: None,
+            },
+        ];
+        let all = raster::rasterize_each(&s, w, h, &samplings);
+        for (k, sampling) in samplings.iter().enumerate() {
+            let (lists, masks) = rasterize_with(&s, w, h, *sampling);
+            assert_eq!(all[k].0.offsets, lists.offsets, "seed {seed}, sampling {k}");
+            assert_eq!(all[k].0.frags, lists.frags, "seed {seed}, sampling {k}");
+            assert_eq!(all[k].1, masks, "seed {seed}, sampling {k}");
+        }
+    }
 }

@@ -28,6 +28,7 @@ pub const FOLD_WGSL: &str = include_str!("fold.wgsl");
 pub const FOLD_STATE_BYTES: u64 = 64;
 
 use glam::{DMat4, DVec3};
+use rayon::prelude::*;
 use scenarios::Scene;
 
 use crate::method::Expected;
@@ -334,11 +335,16 @@ impl EffectConfig {
         let n = lists.pixels();
         let frags = |p: usize| lists.pixel(p).iter().take(k);
         match self.effect {
-            Effect::Transparency => (0..n).map(|p| mfx_reference::composite(frags(p))).collect(),
+            // Per pixel, independent: in parallel (a 1024² truth of 16 layers is ~0.1 s on one core).
+            Effect::Transparency => (0..n)
+                .into_par_iter()
+                .map(|p| mfx_reference::composite(frags(p)))
+                .collect(),
             Effect::Translucency | Effect::Fresnel => {
                 let dirs = (self.effect == Effect::Fresnel)
                     .then(|| view_dirs(scene, lists.width, lists.height));
                 (0..n)
+                    .into_par_iter()
                     .map(|p| {
                         let l: f64 = frags(p).map(signed_view_z).sum();
                         let x = (self.sigma * l).max(0.0);
@@ -355,6 +361,7 @@ impl EffectConfig {
                     .collect()
             }
             Effect::Csg(op) => (0..n)
+                .into_par_iter()
                 .map(|p| csg(frags(p), op, self.csg_a, self.csg_b))
                 .collect(),
             Effect::Dof => {
