@@ -69,6 +69,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
         include_str!("../suites/seeds-kbuffer-flush.toml"),
     ),
     (
+        "seeds-volume",
+        include_str!("../suites/seeds-volume.toml"),
+    ),
+    (
         "seeds-geometry",
         include_str!("../suites/seeds-geometry.toml"),
     ),
