@@ -94,16 +94,16 @@ fn with_k_at_least_the_depth_complexity_the_k_buffer_matches_the_whole_truth() {
     for sigma in [0.5, 2.0] {
         let (img, lists) = capture(&scene, &params("volume", k, ("sigma", sigma)));
         let (mut worst, mut opaque) = (0.0f64, 0usize);
-        for p in 0..lists.pixels() {
+        for (p, got) in img.iter().enumerate() {
             let f = lists.pixel(p);
             let truth = volume(f, sigma);
-            let e = err(&img[p], &truth);
+            let e = err(got, &truth);
             let tol = volume_tol(f, sigma);
             assert!(
                 e <= tol,
                 "volume σ = {sigma}, k = {k}: pixel {p} ({} fragments) off by {e:.3e} > {tol:.3e}: {:?} vs {truth:?}",
                 f.len(),
-                img[p]
+                got
             );
             worst = worst.max(e);
             opaque += (truth[3] > 0.1) as usize;
@@ -126,19 +126,19 @@ fn with_k_at_least_the_depth_complexity_the_k_buffer_matches_the_whole_truth() {
     for iso in [0.2, 0.3] {
         let (img, lists) = capture(&scene, &params("isosurface", k, ("iso_value", iso)));
         let (mut worst, mut hits, mut touch) = (0.0f64, 0usize, 0usize);
-        for p in 0..lists.pixels() {
+        for (p, got) in img.iter().enumerate() {
             let f = lists.pixel(p);
             let truth = isosurface(f, iso);
             if touching(f, iso) {
                 touch += 1;
                 continue;
             }
-            let e = err(&img[p], &truth);
+            let e = err(got, &truth);
             let tol = iso_tol(f, iso);
             assert!(
                 e <= tol,
                 "isosurface {iso}, k = {k}: pixel {p} off by {e:.3e} > {tol:.3e}: {:?} vs {truth:?}",
-                img[p]
+                got
             );
             worst = worst.max(e);
             hits += (truth[3] == 1.0) as usize;
@@ -165,13 +165,13 @@ fn with_k_below_the_depth_complexity_the_image_differs_exactly_where_segments_ar
     let sigma = 2.0;
     let (img, lists) = capture(&scene, &params("volume", k as i64, ("sigma", sigma)));
     let (mut lost, mut deep) = (0usize, 0usize);
-    for p in 0..lists.pixels() {
+    for (p, got) in img.iter().enumerate() {
         let f = lists.pixel(p);
         let full = volume(f, sigma);
         let kept = &f[..f.len().min(k)];
         let trunc = volume(kept, sigma);
-        let e_full = err(&img[p], &full);
-        let e_trunc = err(&img[p], &trunc);
+        let e_full = err(got, &full);
+        let e_trunc = err(got, &trunc);
         assert!(
             e_trunc <= volume_tol(kept, sigma),
             "pixel {p}: off its k nearest's composite by {e_trunc:.3e}"
@@ -203,14 +203,14 @@ fn with_k_below_the_depth_complexity_the_image_differs_exactly_where_segments_ar
     let iso = 0.2;
     let (img, lists) = capture(&scene, &params("isosurface", k as i64, ("iso_value", iso)));
     let (mut missed, mut found_deep, mut found_any) = (0usize, 0usize, 0usize);
-    for p in 0..lists.pixels() {
+    for (p, got) in img.iter().enumerate() {
         let f = lists.pixel(p);
         if touching(f, iso) {
             continue;
         }
         let full = isosurface(f, iso);
         let trunc = isosurface(&f[..f.len().min(k)], iso);
-        let e = err(&img[p], &full);
+        let e = err(got, &full);
         if trunc == full {
             assert!(
                 e <= iso_tol(f, iso),
@@ -220,7 +220,7 @@ fn with_k_below_the_depth_complexity_the_image_differs_exactly_where_segments_ar
             found_any += (full[3] == 1.0) as usize;
         } else {
             missed += 1;
-            assert_eq!(img[p], [0.0; 4], "pixel {p}: crossing beyond k, none seen");
+            assert_eq!(*got, [0.0; 4], "pixel {p}: crossing beyond k, none seen");
         }
     }
     assert!(
