@@ -423,12 +423,12 @@ fn the_seeds_suites_check_without_their_models_and_skip_naming_the_fetch_script(
         .map(|(n, _)| *n)
         .filter(|n| n.starts_with("seeds-"))
         .collect();
-    // One per source setup, and seeds-kbuffer-flush: the stand-ins' SPwH, too slow to run
-    // inside seeds-kbuffer's budget.
+    // One per source setup, seeds-kbuffer-flush (the stand-ins' SPwH, too slow to run inside
+    // seeds-kbuffer's budget) and seeds-volume (§6.3's applications on a generated mesh).
     assert_eq!(
         seeds.len(),
-        7,
-        "one seeds suite per source setup, and seeds-kbuffer-flush: {seeds:?}"
+        8,
+        "one seeds suite per source setup, seeds-kbuffer-flush and seeds-volume: {seeds:?}"
     );
     for name in seeds {
         let s = Suite::load(name).unwrap();

@@ -15,6 +15,7 @@ pub mod multisample;
 pub mod oit;
 pub mod raster;
 pub mod temporal;
+pub mod volume;
 
 pub use multisample::AaMode;
 pub use raster::{rasterize, rasterize_with, RefFragment, Sampling, SUBPIXEL_BITS};

@@ -70,6 +70,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "seeds-kbuffer-flush",
         include_str!("../suites/seeds-kbuffer-flush.toml"),
     ),
+    ("seeds-volume", include_str!("../suites/seeds-volume.toml")),
     (
         "seeds-geometry",
         include_str!("../suites/seeds-geometry.toml"),

@@ -192,7 +192,7 @@ pub mod cols {
     );
     pub const EFFECT: Col = Col::new(
         "effect",
-        "effect computed on the captured fragments (transparency, translucency, fresnel, csg_*, dof)",
+        "effect computed on the captured fragments (transparency, translucency, fresnel, csg_*, dof, volume, isosurface)",
     );
     pub const STATUS: Col = Col::new("status", "ok | skipped | failed");
     pub const REASON: Col = Col::new(
@@ -366,7 +366,7 @@ pub mod cols {
     // ---- Effect parameters (axes of the effects fold) ----
     pub const SIGMA: Col = Col::new(
         "sigma",
-        "translucency/fresnel: extinction coefficient σ per world unit (Beer–Lambert exp(−σ·l))",
+        "translucency/fresnel: extinction coefficient σ per world unit (Beer–Lambert exp(−σ·l)); volume: σ·s per unit of linear view depth at scalar s",
     );
     pub const CSG_A: Col = Col::new("csg_a", "csg_*: object id of operand A");
     pub const CSG_B: Col = Col::new("csg_b", "csg_*: object id of operand B");
@@ -377,6 +377,11 @@ pub mod cols {
     pub const DOF_FAR: Col = Col::new(
         "dof_far",
         "dof: linear view depth (world units) between the midground and background partitions",
+    );
+
+    pub const ISO_VALUE: Col = Col::new(
+        "iso_value",
+        "isosurface: the iso-value cut on the scalar field (the fragment colour's red channel) between consecutive fragments (Bavoil 2007 §6.3.1)",
     );
 
     // ---- The geometry study ----
@@ -1322,6 +1327,7 @@ pub const GROUPS: &[Group] = &[
             cols::CSG_B,
             cols::DOF_NEAR,
             cols::DOF_FAR,
+            cols::ISO_VALUE,
         ],
     },
     Group {

@@ -197,6 +197,7 @@ const FLOAT: &[Col] = &[
     cols::SIGMA,
     cols::DOF_NEAR,
     cols::DOF_FAR,
+    cols::ISO_VALUE,
     cols::ACMR,
     cols::ATVR,
     cols::VS_ACMR,

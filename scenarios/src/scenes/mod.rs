@@ -18,6 +18,7 @@
 //! | `particles` | N camera-facing low-alpha quads in a smoke column (stratified depths) | ≈ 0.022·N at the centre |
 //! | `hair`   | many thin curved ribbons hanging from a scalp, facing the camera | —                 |
 //! | `slivers` | N thin needles crossing the view at distinct depths: nearly every pixel an edge (AA) | — |
+//! | `tets`   | the distinct faces of a tetrahedralised cube with a scalar field in the colour's red channel (§6.3, Fig. 6.4) | (4T + B)/2 faces |
 
 pub mod city;
 pub mod grass;
@@ -31,6 +32,7 @@ pub mod shells;
 pub mod slivers;
 pub mod soft_shadow;
 pub mod stiff;
+pub mod tets;
 
 #[cfg(test)]
 use glam::Vec3;
@@ -119,6 +121,7 @@ impl SceneSpec {
             "particles" => particles::build(self)?,
             "hair" => hair::build(self)?,
             "slivers" => slivers::build(self)?,
+            "tets" => tets::build(self)?,
             other => {
                 return Err(SceneError::UnknownGenerator(
                     other.to_string(),
@@ -146,6 +149,7 @@ pub const GENERATORS: &[&str] = &[
     "particles",
     "hair",
     "slivers",
+    "tets",
 ];
 
 /// One-line description per generator, for `mfx list scenes`.
@@ -166,6 +170,7 @@ pub fn describe(generator: &str) -> &'static str {
         "particles" => "count, alpha_min, alpha_max, size, spread, seed: camera-facing low-alpha quads in a smoke column, ≈ 0.022·count layers at the centre",
         "hair" => "strands, segments, width, length, alpha, seed: thin curved ribbons hanging from a scalp, facing the camera",
         "slivers" => "count, width, alpha, span, distance, seed: thin needles crossing the view at distinct depths, nearly every covered pixel an edge (antialiasing)",
+        "tets" => "cells, alpha, distance: the distinct faces of a cube of cells³ cells split into 6 tetrahedra each, a scalar field (two blobs) in the colour's red channel: the volume and isosurface effects (Bavoil 2007 §6.3, Fig. 6.4)",
         _ => "",
     }
 }

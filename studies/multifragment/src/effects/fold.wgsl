@@ -17,6 +17,12 @@
 // 4       dof           colour + view_z          3 images: the nearest fragment of each view-depth
 //                                                 partition [0, DOF_NEAR), [DOF_NEAR, DOF_FAR),
 //                                                 [DOF_FAR, ∞), as (rgb·a, a)
+// 5       volume        colour.r (scalar) +      Bavoil 2007 §6.3.2: each ray segment between
+//                       view_z                   consecutive fragments, opacity
+//                                                 1 − exp(−SIGMA·(s1 + s2)/2·Δz), colour
+//                                                 fold_transfer(mean s), composited front to back
+// 6       isosurface    colour.r (scalar) +      §6.3.1: (view_z of the nearest ISO_VALUE
+//                       view_z                   crossing between consecutive fragments, 0, 0, 1)
 //
 // Contract for callers: FoldState s = fold_init_at(pixel centre) (or fold_init() when the
 // effect needs no view direction: all but fresnel); fold_step(&s, Frag(...)) per fragment,
@@ -36,6 +42,8 @@ override CSG_B: u32 = 1u;
 // Depth-of-field partition bounds in linear view depth (world units).
 override DOF_NEAR: f32 = 1.0;
 override DOF_FAR: f32 = 10.0;
+// The iso-value of the isosurface effect.
+override ISO_VALUE: f32 = 0.3;
 
 // What a captured fragment offers to effects; a method fills what its payload stores.
 struct Frag {
@@ -51,12 +59,14 @@ struct FoldState {
     // transparency: premultiplied RGBA accumulated under; csg: the result; dof: image 0.
     accum: vec4<f32>,
     // translucency/fresnel: x thickness sum, y Kahan compensation, z previous view_z,
-    // w product of Fresnel transmittances; dof: image 1.
+    // w product of Fresnel transmittances; dof: image 1; volume/isosurface: x previous scalar,
+    // z previous view_z.
     aux: vec4<f32>,
     // translucency/fresnel: xyz world-space view direction (0 = unknown: the view axis),
     // w = objects open (entries − exits so far); dof: image 2.
     extra: vec4<f32>,
-    // csg: bit 0 inside A, bit 1 inside B, bit 2 done; dof: bit i = image i filled.
+    // csg: bit 0 inside A, bit 1 inside B, bit 2 done; dof: bit i = image i filled;
+    // isosurface: bit 2 done.
     flags: u32,
     count: u32,
 };
@@ -124,6 +134,12 @@ fn fold_schlick_t(n: vec3<f32>, dir: vec3<f32>) -> f32 {
     return 1.0 - m2 * m2 * m;
 }
 
+// The volume effect's transfer function: a ramp from blue through green to red over s ∈ [0, 1]
+// (mfx_reference::volume::transfer).
+fn fold_transfer(s: f32) -> vec3<f32> {
+    return vec3<f32>(s, 4.0 * s * (1.0 - s), 1.0 - s);
+}
+
 fn fold_step(s: ptr<function, FoldState>, f: Frag) {
     let first = (*s).count == 0u;
     (*s).count = (*s).count + 1u;
@@ -187,6 +203,35 @@ fn fold_step(s: ptr<function, FoldState>, f: Frag) {
                 (*s).extra = c;
             }
         }
+    } else if EFFECT == 5u {
+        // §6.3.2: the segment from the previous fragment to this one. The thesis looks its
+        // colour up in a pre-integrated table of (s_f, s_b, distance); with extinction linear in
+        // s the table's entry is this closed form (the reference's, in f64).
+        if !first {
+            let mean = 0.5 * ((*s).aux.x + f.color.r);
+            let x = max(SIGMA * mean * (f.view_z - (*s).aux.z), 0.0);
+            let a = select(1.0 - exp(-x), x * (1.0 - 0.5 * x * (1.0 - x / 3.0)), x < 1e-2);
+            let t = 1.0 - (*s).accum.a;
+            (*s).accum = vec4<f32>((*s).accum.rgb + t * a * fold_transfer(mean), (*s).accum.a + t * a);
+        }
+        (*s).aux.x = f.color.r;
+        (*s).aux.z = f.view_z;
+    } else if EFFECT == 6u {
+        // §6.3.1: the first segment whose scalars bracket the iso-value; its depth by linear
+        // interpolation (the thesis then depth-tests it against one k-buffer entry: the first
+        // crossing front to back is that test's winner).
+        if ((*s).flags & 4u) != 0u {
+            return;
+        }
+        let s1 = (*s).aux.x;
+        let s2 = f.color.r;
+        if !first && (s1 - ISO_VALUE) * (s2 - ISO_VALUE) <= 0.0 && s1 != s2 {
+            let t = (ISO_VALUE - s1) / (s2 - s1);
+            (*s).accum = vec4<f32>((*s).aux.z + t * (f.view_z - (*s).aux.z), 0.0, 0.0, 1.0);
+            (*s).flags = (*s).flags | 4u;
+        }
+        (*s).aux.x = s2;
+        (*s).aux.z = f.view_z;
     }
 }
 

@@ -12,6 +12,8 @@
 //! | `fresnel`      | view_z + facing + normal| as translucency with T × Π_i (1 − (1 − cos θ_i)^5)                   |
 //! | `csg_and/or/sub` | window depth + object id | (depth, 1 if A, 1 if B, 1) of the first fragment where A∩B / A∪B / A−B becomes true; 0 if never |
 //! | `dof`          | colour + view_z         | three images (foreground, midground, background) one after another: the nearest fragment of view depth in [0, n), [n, f), [f, ∞) as (rgb·a, a); 0 if none |
+//! | `volume`       | colour (scalar s = red) + view_z | Bavoil 2007 §6.3.2: the ray segments between consecutive fragments composited front to back, opacity 1 − exp(−σ·(s₁ + s₂)/2·Δz), colour the transfer ramp at the mean s (`mfx_reference::volume`) |
+//! | `isosurface`   | colour (scalar s = red) + view_z | §6.3.1: (view depth of the nearest crossing of `iso_value` between consecutive fragments, interpolated linearly, 0, 0, 1); 0 if none |
 //!
 //! Thickness uses front faces as entries and back faces as exits (Σ ±z by facing: the seed
 //! alternates by index, which is the same for disjoint closed objects), so `variant=naive` (the
@@ -46,6 +48,8 @@ pub const EFFECTS: &[&str] = &[
     "csg_or",
     "csg_sub",
     "dof",
+    "volume",
+    "isosurface",
 ];
 /// The effect a point computes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -56,6 +60,10 @@ pub enum Effect {
     /// 0 = A ∩ B, 1 = A ∪ B, 2 = A − B (the WGSL CSG_OP).
     Csg(u32),
     Dof,
+    /// §6.3.2 direct volume rendering of the ray segments between consecutive fragments.
+    Volume,
+    /// §6.3.1 the nearest iso-value crossing between consecutive fragments.
+    Isosurface,
 }
 
 impl Effect {
@@ -68,6 +76,8 @@ impl Effect {
             "csg_or" => Effect::Csg(1),
             "csg_sub" => Effect::Csg(2),
             "dof" => Effect::Dof,
+            "volume" => Effect::Volume,
+            "isosurface" => Effect::Isosurface,
             other => {
                 return Err(InvalidPoint::value(
                     EFFECT.name(),
@@ -85,6 +95,8 @@ impl Effect {
             Effect::Fresnel => 2,
             Effect::Csg(_) => 3,
             Effect::Dof => 4,
+            Effect::Volume => 5,
+            Effect::Isosurface => 6,
         }
     }
     pub fn name(self) -> &'static str {
@@ -96,6 +108,8 @@ impl Effect {
             Effect::Csg(1) => "csg_or",
             Effect::Csg(_) => "csg_sub",
             Effect::Dof => "dof",
+            Effect::Volume => "volume",
+            Effect::Isosurface => "isosurface",
         }
     }
     /// What a fragment must carry for this effect (window depth is always available).
@@ -105,7 +119,9 @@ impl Effect {
             Effect::Translucency => Payload::DEPTH,
             Effect::Fresnel => Payload::DEPTH_NORMAL,
             Effect::Csg(_) => Payload::DEPTH_ID,
-            Effect::Dof => Payload::RGBA_VIEWZ,
+            // The scalar rides in the colour (the thesis stores "a depth value and a scalar
+            // value with each fragment": 8 B; mfx's colour payload keeps 16 B of colour).
+            Effect::Dof | Effect::Volume | Effect::Isosurface => Payload::RGBA_VIEWZ,
         }
     }
     /// Images the effect outputs (concatenated in `Capture.image`).
@@ -199,6 +215,7 @@ pub struct EffectConfig {
     pub csg_b: u32,
     pub dof_near: f64,
     pub dof_far: f64,
+    pub iso_value: f64,
 }
 
 impl Default for EffectConfig {
@@ -211,6 +228,7 @@ impl Default for EffectConfig {
             csg_b: 1,
             dof_near: 1.0,
             dof_far: 10.0,
+            iso_value: 0.3,
         }
     }
 }
@@ -225,12 +243,12 @@ pub const EFFECT: Axis = Axis::choice(
 );
 pub const SIGMA: Axis = Axis::float(
     cols::SIGMA,
-    "translucency/fresnel: extinction coefficient per world unit",
+    "translucency/fresnel: extinction coefficient per world unit; volume: σ·s per unit of view depth",
     1.0,
     0.0,
     f64::MAX,
 )
-.only_when(&EFFECT, &["translucency", "fresnel"]);
+.only_when(&EFFECT, &["translucency", "fresnel", "volume"]);
 pub const CSG_A: Axis = Axis::int(
     cols::CSG_A,
     "csg_*: object id of operand A",
@@ -263,6 +281,14 @@ pub const DOF_FAR: Axis = Axis::float(
     f64::MAX,
 )
 .only_when(&EFFECT, &["dof"]);
+pub const ISO_VALUE: Axis = Axis::float(
+    cols::ISO_VALUE,
+    "isosurface: the iso-value cut on the scalar (the colour's red channel)",
+    0.3,
+    f64::MIN,
+    f64::MAX,
+)
+.only_when(&EFFECT, &["isosurface"]);
 pub const THICKNESS: Axis = Axis::choice(
     cols::THICKNESS,
     "translucency/fresnel thickness arithmetic: naive (running ±z sum) or stable (Kahan pair differences)",
@@ -273,7 +299,9 @@ pub const THICKNESS: Axis = Axis::choice(
 
 /// Axes every effect-capable method reads: list them in its `axes()`, validate with
 /// [`EffectConfig::from_point`].
-pub const AXES: &[Axis] = &[EFFECT, SIGMA, CSG_A, CSG_B, DOF_NEAR, DOF_FAR, THICKNESS];
+pub const AXES: &[Axis] = &[
+    EFFECT, SIGMA, CSG_A, CSG_B, DOF_NEAR, DOF_FAR, ISO_VALUE, THICKNESS,
+];
 
 impl EffectConfig {
     /// Reads the effect axes of a resolved point; the one rule a range cannot say
@@ -294,6 +322,7 @@ impl EffectConfig {
             csg_b: point.int(&CSG_B) as u32,
             dof_near,
             dof_far,
+            iso_value: point.float(&ISO_VALUE),
         })
     }
 
@@ -317,6 +346,10 @@ impl EffectConfig {
             ("CSG_B", self.csg_b as f64),
             ("DOF_NEAR", self.dof_near.min(f32::MAX as f64)),
             ("DOF_FAR", self.dof_far.min(f32::MAX as f64)),
+            (
+                "ISO_VALUE",
+                self.iso_value.clamp(f32::MIN as f64, f32::MAX as f64),
+            ),
         ]
     }
 
@@ -385,6 +418,12 @@ impl EffectConfig {
                 }
                 out
             }
+            Effect::Volume => (0..n)
+                .map(|p| mfx_reference::volume::volume(frags(p), self.sigma))
+                .collect(),
+            Effect::Isosurface => (0..n)
+                .map(|p| mfx_reference::volume::isosurface(frags(p), self.iso_value))
+                .collect(),
         }
     }
 }
