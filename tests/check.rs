@@ -330,7 +330,7 @@ fn an_unread_axis_leaves_the_point_key_and_the_row_and_its_points_collapse() {
     };
     assert!(p.is_empty(), "{}", problem::report(&p));
     let spec = &s.studies[0];
-    let study = bench_core::study::by_kind(STUDIES, &spec.kind).unwrap();
+    let study = bench_core::study::by_kind(STUDIES, spec.kind).unwrap();
     let points = bench_core::study::points(study, spec).unwrap();
     let labels: Vec<String> = points.iter().map(|p| p.given().label()).collect();
     assert_eq!(points.len(), 3, "{labels:?}");

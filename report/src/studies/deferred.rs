@@ -55,10 +55,7 @@ pub(crate) fn series(
 }
 
 /// The study's ok rows (floors left out) grouped by resolution, in first-seen order.
-pub(crate) fn rows_by_resolution<'a>(
-    runs: &'a Runs,
-    study: StudyKind,
-) -> Vec<(String, Vec<&'a Rec>)> {
+pub(crate) fn rows_by_resolution(runs: &Runs, study: StudyKind) -> Vec<(String, Vec<&Rec>)> {
     let rows = runs
         .study(study)
         .into_iter()
