@@ -385,6 +385,10 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
                     }
                     // Thickness and Fresnel are sums and products: no order changes them.
                     Effect::Translucency | Effect::Fresnel => false,
+                    // A volume's or an isosurface's error beyond its arithmetic comes from its
+                    // segments' attributes (a raster method interpolates unsnapped vertices),
+                    // not from an order of ties: never excused as `depth_ties`.
+                    Effect::Volume | Effect::Isosurface => false,
                     // CSG and depth-of-field pick fragments by order: held to the order bound.
                     _ => true,
                 }
