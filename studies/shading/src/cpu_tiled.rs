@@ -626,7 +626,7 @@ fn mask(
 /// [`perm::HOLES`] when a quad of the sub-tile reaches past it (an image edge that is not a
 /// multiple of 4): lanes outside the image.
 fn edge_holes(sub: [u32; 4]) -> u32 {
-    if (sub[2] - sub[0]) % 4 != 0 || (sub[3] - sub[1]) % 4 != 0 {
+    if !(sub[2] - sub[0]).is_multiple_of(4) || !(sub[3] - sub[1]).is_multiple_of(4) {
         perm::HOLES
     } else {
         0
