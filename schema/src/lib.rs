@@ -668,7 +668,15 @@ pub mod cols {
     );
     pub const PERMUTATIONS: Col = Col::new(
         "permutations",
-        "shader permutations compiled and drawn (classified: one per id the scene can produce; uber: 1)",
+        "shader permutations compiled and drawn (classified: one per id the scene can produce; uber: 1; cpu_tiled: the code permutations that shaded at least one sub-tile)",
+    );
+    pub const CLASSIFY: Col = Col::new(
+        "classify",
+        "CPU tile path: BF3's material classification: materials (each 32×16 sub-tile's material + light mask from the G-buffer and its light list picks a compiled code permutation: sky/edge lanes, specular, spot and line attenuation compiled in only where present) | none (the catch-all übershader on every quad); same image bit for bit",
+    );
+    pub const PERM_NARROW_FRAC: Col = Col::new(
+        "perm_narrow_frac",
+        "CPU tile path: fraction of sub-tiles shaded by a permutation narrower than the übershader (0 with classify = none)",
     );
     pub const CPU_LIGHT_MS: Col = Col::new(
         "cpu_light_ms",
@@ -759,6 +767,15 @@ pub mod cols {
     pub const FRAME_MS: Col = Col::new(
         "frame_ms",
         "median wall-clock ms per frame, first submit to all GPU work done (both views when second_view)",
+    );
+    pub const FRAME_MS_CI_LO: Col = Col::new(
+        "frame_ms_ci_lo",
+        "lower end of the 95 % interval of frame_ms's median over the kept frames (order statistics; 6 or more kept frames, empty below)",
+    );
+    pub const FRAME_MS_CI_HI: Col = Col::new("frame_ms_ci_hi", "upper end of that interval");
+    pub const HOST_WORK: Col = Col::new(
+        "host_work",
+        "CPU-lit light pre-pass: the host work around the lighting (depth/normal decode, the tiles' reorder into rows, the light buffer's pack): parallel (on the lighting's own worker threads, rayon) | serial (one thread, mfx's earlier host); same image",
     );
     pub const GPU_IDLE_MS: Col = Col::new(
         "gpu_idle_ms",
@@ -1438,6 +1455,8 @@ pub const GROUPS: &[Group] = &[
             cols::SHADE_NS_PER_LIGHT_QUAD_CI_LO,
             cols::SHADE_NS_PER_LIGHT_QUAD_CI_HI,
             cols::LIGHT_LOOP,
+            cols::CLASSIFY,
+            cols::PERM_NARROW_FRAC,
             cols::QUAD_SKIP_FRAC,
             cols::SPEEDUP_VS_NAIVE,
             cols::REL_ERR_MAX,
@@ -1451,11 +1470,14 @@ pub const GROUPS: &[Group] = &[
             cols::LIGHT_BUFFER_FORMAT,
             cols::SECOND_VIEW,
             cols::OVERLAP,
+            cols::HOST_WORK,
             cols::BYTES_RT_WRITTEN,
             cols::BYTES_RT_READ,
             cols::SPEC_COLOR_LOSS_RMSE,
             cols::FORMAT_RMSE,
             cols::FRAME_MS,
+            cols::FRAME_MS_CI_LO,
+            cols::FRAME_MS_CI_HI,
             cols::GPU_IDLE_MS,
             cols::LATENCY_MS,
             cols::LIGHT_READY_MS,

@@ -31,6 +31,23 @@
 //! specular (optimisation #6) without their formulas: neither is built (the f64 reference has
 //! neither).
 //!
+//! `classify`: BF3's material classification ("Algorithmic optimization #0 Material
+//! Classification: Knowing which materials reside in a tile = choose optimal SPU code
+//! permutation that avoids unneeded work … Use SPU shading code permutations!"; "Material +
+//! Light Tile permutations. Still need a catch-all übershader"). [`Classify::None`] shades
+//! every 4×4 quad with the catch-all übershader: every feature compiled in, with runtime tests
+//! (sky lanes and image-edge lanes, the per-quad no-specular test, the light kind's
+//! attenuation branches). [`Classify::Materials`] reads each sub-tile's material mask from the
+//! G-buffer (sky present, specular albedo present: the city's matte material has none) and its
+//! light list's kinds (spot, line present), and shades the sub-tile with the code permutation
+//! compiled for exactly that mask ([`perm`]; const generics stand for the deck's `#define`s):
+//! a permutation without `HOLES` has no per-lane sky or edge test, one without `SPEC` no
+//! specular code, one without `SPOT` or `LINE` no such attenuation. The deck names Skin,
+//! Translucent, Metal, Foliage and Emissive shading without giving their formulas, so the only
+//! materials mfx shades are the model's (albedo, specular colour, smoothness): their mask bits
+//! are the features above. A permutation leaves out only code whose branch the übershader
+//! would not take for that sub-tile, so the images are bit-identical.
+//!
 //! `phase_times`: BF3's per-phase costs (its slides give culling as 1–4 ms of a 40 ms budget),
 //! summed over worker threads: cull (tile and sub-tile frusta, the cone cull), unpack (G-buffer
 //! reads, position reconstruction, the quads' SoA lanes), shade (the light loop, then the sun)
@@ -81,8 +98,56 @@ impl LightLoop {
     }
 }
 
+/// BF3's material classification (see the module doc).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Classify {
+    /// The catch-all übershader on every quad (mfx's earlier path).
+    #[default]
+    None,
+    /// Per sub-tile: the material + light mask picks a compiled permutation.
+    Materials,
+}
+
+impl Classify {
+    pub const NAMES: &'static [&'static str] = &["none", "materials"];
+    pub fn parse(s: &str) -> Option<Classify> {
+        match s {
+            "none" => Some(Classify::None),
+            "materials" => Some(Classify::Materials),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Classify::None => "none",
+            Classify::Materials => "materials",
+        }
+    }
+}
+
+/// Feature bits of a shading permutation: a sub-tile's material + light mask.
+pub mod perm {
+    /// Some lane of a quad is not shaded: a sky pixel, or outside the image.
+    pub const HOLES: u32 = 1;
+    /// Some pixel has a specular colour (the specular term is compiled in).
+    pub const SPEC: u32 = 2;
+    /// Spot lights in the list (the cone attenuation is compiled in).
+    pub const SPOT: u32 = 4;
+    /// Line lights in the list (the nearest point on the segment is compiled in).
+    pub const LINE: u32 = 8;
+    /// The catch-all übershader: every feature.
+    pub const ALL: u32 = 15;
+    /// Number of permutations.
+    pub const COUNT: usize = 16;
+}
+
 #[derive(Clone, Copy, Debug)]
 pub struct CpuOptions {
+    /// BF3's material classification (see the module doc).
+    pub classify: Classify,
+    /// Tests only: shade every sub-tile with this permutation whatever its mask (a wrong one
+    /// must change the image: the proof that the mask matters).
+    pub force_perm: Option<u32>,
     /// The light loop (see the module doc).
     pub light_loop: LightLoop,
     /// Tile side (BF3: 64).
@@ -110,11 +175,16 @@ pub struct CpuOptions {
     pub light_buffer: bool,
     /// Time the phases ([`Phases`]; see the module doc).
     pub phase_times: bool,
+    /// Reorder the tiles into rows on the calling rayon pool's threads (bands of tile rows)
+    /// instead of on the calling thread; the same image. The light pre-pass's host work.
+    pub parallel_reorder: bool,
 }
 
 impl Default for CpuOptions {
     fn default() -> Self {
         CpuOptions {
+            classify: Classify::None,
+            force_perm: None,
             light_loop: LightLoop::Bf3,
             tile: 64,
             sub: Some((32, 16)),
@@ -127,6 +197,7 @@ impl Default for CpuOptions {
             keep_lists: false,
             light_buffer: false,
             phase_times: false,
+            parallel_reorder: false,
         }
     }
 }
@@ -206,6 +277,9 @@ pub struct CpuResult {
     pub diffuse_skips: u64,
     /// Per-phase times, thread-summed, when `phase_times`.
     pub phases: Option<Phases>,
+    /// Sub-tiles (tiles with one level) shaded by each permutation ([`perm`] bits), with
+    /// `classify = materials`; all in [`perm::ALL`] (the übershader) without.
+    pub perm_regions: [u64; perm::COUNT],
 }
 
 struct TileOut {
@@ -221,6 +295,7 @@ struct TileOut {
     cone_tests: u64,
     diffuse_skips: u64,
     phases: Phases,
+    perms: [u64; perm::COUNT],
 }
 
 /// Lights (with culling spheres for the threshold already in `lights`) on the G-buffer `gb`.
@@ -267,14 +342,38 @@ pub fn shade(
     let (mut quad_skips, mut quad_evals, mut spec_skipped_quads, mut quads) = (0, 0, 0, 0);
     let (mut cone_culls, mut cone_tests, mut diffuse_skips) = (0, 0, 0);
     let mut phases = Phases::default();
+    let mut perm_regions = [0u64; perm::COUNT];
     let mut lap = Lap::start(opts.phase_times);
+    let outs: Vec<TileOut> = outs
+        .into_iter()
+        .map(|o| o.into_inner().unwrap().expect("every tile was taken"))
+        .collect();
+    if opts.parallel_reorder {
+        use rayon::prelude::*;
+        // One band of tile rows per task: its image rows are its own.
+        image
+            .par_chunks_mut((w * t) as usize)
+            .enumerate()
+            .for_each(|(by, band)| {
+                for bx in 0..tx {
+                    let o = &outs[(by as u32 * tx + bx) as usize];
+                    let x0 = bx * t;
+                    let tw = (x0 + t).min(w) - x0;
+                    for (ry, row) in o.pixels.chunks(tw as usize).enumerate() {
+                        let at = ry * w as usize + x0 as usize;
+                        band[at..at + tw as usize].copy_from_slice(row);
+                    }
+                }
+            });
+    }
     for (i, o) in outs.into_iter().enumerate() {
-        let o = o.into_inner().unwrap().expect("every tile was taken");
-        let (x0, y0) = ((i as u32 % tx) * t, (i as u32 / tx) * t);
-        let tw = (x0 + t).min(w) - x0;
-        for (k, p) in o.pixels.iter().enumerate() {
-            let (x, y) = (x0 + k as u32 % tw, y0 + k as u32 / tw);
-            image[(y * w + x) as usize] = *p;
+        if !opts.parallel_reorder {
+            let (x0, y0) = ((i as u32 % tx) * t, (i as u32 / tx) * t);
+            let tw = (x0 + t).min(w) - x0;
+            for (k, p) in o.pixels.iter().enumerate() {
+                let (x, y) = (x0 + k as u32 % tw, y0 + k as u32 / tw);
+                image[(y * w + x) as usize] = *p;
+            }
         }
         tile_counts.push(o.count);
         lists.extend(o.list);
@@ -287,6 +386,9 @@ pub fn shade(
         cone_tests += o.cone_tests;
         diffuse_skips += o.diffuse_skips;
         phases.add(&o.phases);
+        for (a, b) in perm_regions.iter_mut().zip(o.perms) {
+            *a += b;
+        }
     }
     // The reorder into rows is packing (on this thread, after the workers).
     lap.lap(&mut phases.pack);
@@ -304,6 +406,7 @@ pub fn shade(
         cone_tests,
         diffuse_skips,
         phases: opts.phase_times.then_some(phases),
+        perm_regions,
     }
 }
 
@@ -392,6 +495,7 @@ fn shade_tile(
         cone_tests: 0,
         diffuse_skips: 0,
         phases: ph,
+        perms: [0; perm::COUNT],
     };
     let (sw, sh) = opts.sub.unwrap_or((tw, th));
     let mut sy = 0;
@@ -438,12 +542,24 @@ fn shade_tile(
                 sub_list
             };
             lap.lap(&mut out.phases.cull);
+            // The permutation: the übershader, or the sub-tile's material + light mask.
+            let p = match (opts.force_perm, opts.classify) {
+                // Lanes outside the image stay masked (their reads would leave the buffers).
+                (Some(p), _) => p & perm::ALL | edge_holes(sub),
+                (None, Classify::None) => perm::ALL,
+                (None, Classify::Materials) => {
+                    mask(gb, lights, rect, sub, &sub_list, opts.light_buffer)
+                }
+            };
+            out.perms[p as usize] += 1;
+            lap.lap(&mut out.phases.unpack);
+            let quad = QUAD_PERMS[p as usize];
             // 4×4 quads of the sub-tile.
             let mut qy = sub[1];
             while qy < sub[3] {
                 let mut qx = sub[0];
                 while qx < sub[2] {
-                    shade_quad(
+                    quad(
                         gb,
                         lights,
                         sun,
@@ -472,13 +588,99 @@ fn shade_tile(
     out
 }
 
-/// One 4×4 quad in SoA lanes: lane k is pixel (q.x + k%4, q.y + k/4) of the tile.
+/// BF3's tile material mask of sub-tile `sub` (tile-relative) of tile `rect`, from the
+/// G-buffer (sky, specular colour) and its light list (kinds): the [`perm`] bits it needs. The
+/// light buffer stores specular luminance whatever the material: `SPEC` always.
+fn mask(
+    gb: &GBuffer,
+    lights: &[GpuLight],
+    rect: [u32; 4],
+    sub: [u32; 4],
+    list: &[u32],
+    light_buffer: bool,
+) -> u32 {
+    let mut m = edge_holes(sub);
+    if light_buffer {
+        m |= perm::SPEC;
+    }
+    for y in sub[1]..sub[3] {
+        let row = ((rect[1] + y) * gb.width + rect[0]) as usize;
+        for gi in row + sub[0] as usize..row + sub[2] as usize {
+            if gb.is_sky(gi) {
+                m |= perm::HOLES;
+            } else if gb.spec[gi] != [0.0; 3] {
+                m |= perm::SPEC;
+            }
+        }
+    }
+    for &li in list {
+        m |= match lights[li as usize].dir_kind[3] as u32 {
+            1 => perm::SPOT,
+            2 => perm::LINE,
+            _ => 0,
+        };
+    }
+    m
+}
+
+/// [`perm::HOLES`] when a quad of the sub-tile reaches past it (an image edge that is not a
+/// multiple of 4): lanes outside the image.
+fn edge_holes(sub: [u32; 4]) -> u32 {
+    if !(sub[2] - sub[0]).is_multiple_of(4) || !(sub[3] - sub[1]).is_multiple_of(4) {
+        perm::HOLES
+    } else {
+        0
+    }
+}
+
+/// A quad shader: one permutation of [`shade_quad`].
+type QuadFn = fn(
+    &GBuffer,
+    &[GpuLight],
+    Option<([f32; 3], [f32; 3])>,
+    &[u32],
+    [u32; 4],
+    u32,
+    [u32; 2],
+    [u32; 2],
+    &[[f32; 3]],
+    bool,
+    bool,
+    bool,
+    bool,
+    LightLoop,
+    &mut TileOut,
+    &mut Lap,
+);
+
+/// Every permutation, compiled (index: its [`perm`] bits).
+const QUAD_PERMS: [QuadFn; perm::COUNT] = [
+    shade_quad::<0>,
+    shade_quad::<1>,
+    shade_quad::<2>,
+    shade_quad::<3>,
+    shade_quad::<4>,
+    shade_quad::<5>,
+    shade_quad::<6>,
+    shade_quad::<7>,
+    shade_quad::<8>,
+    shade_quad::<9>,
+    shade_quad::<10>,
+    shade_quad::<11>,
+    shade_quad::<12>,
+    shade_quad::<13>,
+    shade_quad::<14>,
+    shade_quad::<15>,
+];
+
+/// One 4×4 quad in SoA lanes: lane k is pixel (q.x + k%4, q.y + k/4) of the tile. `P`: the
+/// features compiled in ([`perm`]); [`perm::ALL`] is the übershader.
 #[allow(
     clippy::too_many_arguments,
     clippy::needless_range_loop,
     reason = "a hot SoA kernel: its inputs passed apart, lanes indexed across arrays"
 )]
-fn shade_quad(
+fn shade_quad<const P: u32>(
     gb: &GBuffer,
     lights: &[GpuLight],
     sun: Option<([f32; 3], [f32; 3])>,
@@ -505,12 +707,12 @@ fn shade_quad(
     let mut gidx = [0usize; N];
     for k in 0..N {
         let (x, y) = (q[0] + k as u32 % 4, q[1] + k as u32 / 4);
-        if x >= end[0] || y >= end[1] {
+        if P & perm::HOLES != 0 && (x >= end[0] || y >= end[1]) {
             continue;
         }
         let gi = ((rect[1] + y) * gb.width + rect[0] + x) as usize;
         gidx[k] = gi;
-        if gb.is_sky(gi) {
+        if P & perm::HOLES != 0 && gb.is_sky(gi) {
             continue;
         }
         active[k] = true;
@@ -523,7 +725,8 @@ fn shade_quad(
         pw[k] = (1.0 + 10.0 * n[3]).exp2();
         norm[k] = (pw[k] + 8.0) / 8.0;
     }
-    let no_spec = spec_skip && (0..N).all(|k| !active[k] || gb.spec[gidx[k]] == [0.0; 3]);
+    let no_spec = P & perm::SPEC == 0
+        || (spec_skip && (0..N).all(|k| !active[k] || gb.spec[gidx[k]] == [0.0; 3]));
     lap.lap(&mut out.phases.unpack);
     if active.iter().any(|&a| a) {
         out.quads += 1;
@@ -584,7 +787,7 @@ fn shade_quad(
         // SoA attenuation of all 16 lanes (the part that vectorises).
         for k in 0..N {
             let (mut qx, mut qy, mut qz) = (l.pos_range[0], l.pos_range[1], l.pos_range[2]);
-            if kind == 2 {
+            if P & perm::LINE != 0 && kind == 2 {
                 let t = ((px[k] - qx) * l.dir_kind[0]
                     + (py[k] - qy) * l.dir_kind[1]
                     + (pz[k] - qz) * l.dir_kind[2])
@@ -601,7 +804,7 @@ fn shade_quad(
             (lx[k], ly[k], lz[k]) = (dx * id, dy * id, dz * id);
             let x = 1.0 - d2 / r2;
             let mut a = x * x;
-            if kind == 1 {
+            if P & perm::SPOT != 0 && kind == 1 {
                 let c = l.color_cos[3];
                 let cosang =
                     -(lx[k] * l.dir_kind[0] + ly[k] * l.dir_kind[1] + lz[k] * l.dir_kind[2]);
@@ -662,7 +865,7 @@ fn shade_quad(
     lap.lap(&mut out.phases.sun);
     for k in 0..N {
         let (x, y) = (q[0] + k as u32 % 4, q[1] + k as u32 / 4);
-        if x >= end[0] || y >= end[1] {
+        if P & perm::HOLES != 0 && (x >= end[0] || y >= end[1]) {
             continue;
         }
         let gi = gidx[k];

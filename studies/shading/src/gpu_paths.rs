@@ -17,6 +17,13 @@
 //! (naive, classified, uber) the G-buffer has 2 samples per pixel (`msaa.rs`; x4: 4): naive and
 //! the uber-shader shade every sample of every pixel and average, the classified path only in
 //! tiles of the edge class (elsewhere a pixel's samples are equal: it shades sample 0).
+//!
+//! Split/Second's light-scattering and solid-shadow classes are not built: the chapter's copy
+//! (`/work/shared/sources/002_…`, pp. 60–64) gives only the line that sets the scattering bit
+//! from the shadow mask's green channel (Listing 4.2) and the `SOLID_SHADOW` define in the
+//! uber-shader fragment where the copy ends (Listing 4.7); what sets them and what their
+//! permutations shade is on pages it does not have (`scenarios/papers/splitsecond-geg2.toml`,
+//! s4-light-scattering-class and s4-solid-shadow-class).
 
 use bench_core::gpu_util::{compute_pipeline, read_vec, storage_entry, texture_entry_ms};
 use scenarios::{ParamValue, Scene};

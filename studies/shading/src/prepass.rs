@@ -107,8 +107,45 @@ impl LbFormat {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Accum {
     Naive,
-    Tiled { tile: u32 },
-    Cpu { threads: usize, overlap: bool },
+    Tiled {
+        tile: u32,
+    },
+    Cpu {
+        threads: usize,
+        overlap: bool,
+        host: HostWork,
+    },
+}
+
+/// How the host's work around the CPU lighting runs: the depth/normal decode, the reorder of
+/// the lit tiles into rows, and the light buffer's pack into its texture format.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum HostWork {
+    /// Split across the lighting's own workers (a rayon pool of `threads`), as the SPEs do all
+    /// of a tile's work (the chapter: the SPEs light the buffer while the RSX renders other
+    /// views; BF3: "Unpack Gbuffer+Z Data -> Shade -> Pack to fp16 -> DMA out" per tile): no
+    /// single-threaded pass over the frame besides the upload's copy.
+    #[default]
+    Parallel,
+    /// mfx's earlier host: decode, reorder and pack on one thread around the workers.
+    Serial,
+}
+
+impl HostWork {
+    pub const NAMES: &'static [&'static str] = &["parallel", "serial"];
+    pub fn parse(s: &str) -> Option<HostWork> {
+        match s {
+            "parallel" => Some(HostWork::Parallel),
+            "serial" => Some(HostWork::Serial),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            HostWork::Parallel => "parallel",
+            HostWork::Serial => "serial",
+        }
+    }
 }
 
 /// Why a pre-pass point cannot run here (a `skipped` row).
@@ -148,6 +185,9 @@ enum AccumKind {
         lights: Vec<super::GpuLight>,
         threads: usize,
         overlap: bool,
+        host: HostWork,
+        /// The workers' pool for the parallel host work (`threads` threads).
+        pool: Option<rayon::ThreadPool>,
     },
 }
 
@@ -321,7 +361,11 @@ impl PrePass {
                     groups: tiles,
                 }
             }
-            Accum::Cpu { threads, overlap } => {
+            Accum::Cpu {
+                threads,
+                overlap,
+                host,
+            } => {
                 let mut mk = |label, bpp| {
                     alloc.buffer(
                         gpu,
@@ -339,6 +383,16 @@ impl PrePass {
                     setup: Box::new(setup.clone()),
                     threads,
                     overlap,
+                    host,
+                    pool: match host {
+                        HostWork::Parallel => Some(
+                            rayon::ThreadPoolBuilder::new()
+                                .num_threads(threads.max(1))
+                                .build()
+                                .map_err(|e| CoreError::Gpu(format!("thread pool: {e}")))?,
+                        ),
+                        HostWork::Serial => None,
+                    },
                 }
             }
         };
@@ -709,6 +763,8 @@ impl PrePass {
             lights,
             threads,
             overlap,
+            host,
+            pool,
         } = &self.kind
         {
             let (w, h) = (gscene.width, gscene.height);
@@ -785,17 +841,31 @@ impl PrePass {
                     .slice(..)
                     .get_mapped_range()
                     .map_err(|e| CoreError::Gpu(e.to_string()))?;
-                decode_prepass(&dm, &nm, w, h, setup.clear_depth)
+                match pool {
+                    Some(p) => p.install(|| decode_prepass_par(&dm, &nm, w, h, setup.clear_depth)),
+                    None => decode_prepass(&dm, &nm, w, h, setup.clear_depth),
+                }
             };
             staging_depth.unmap();
             staging_normal.unmap();
             let o = CpuOptions {
                 threads: *threads,
                 light_buffer: true,
+                parallel_reorder: *host == HostWork::Parallel,
                 ..Default::default()
             };
-            let r = cpu_tiled::shade(setup, &gb, lights, &o);
-            let (bytes0, bytes1) = pack(self.format, &r.image);
+            let (r, (bytes0, bytes1)) = match pool {
+                Some(p) => p.install(|| {
+                    let r = cpu_tiled::shade(setup, &gb, lights, &o);
+                    let b = pack_par(self.format, &r.image);
+                    (r, b)
+                }),
+                None => {
+                    let r = cpu_tiled::shade(setup, &gb, lights, &o);
+                    let b = pack(self.format, &r.image);
+                    (r, b)
+                }
+            };
             upload(gpu, &self.lb0, &bytes0);
             if let (Some(t), Some(b)) = (&self.lb1, &bytes1) {
                 upload(gpu, t, b);
@@ -901,6 +971,85 @@ pub fn decode_prepass(depth: &[u8], normal: &[u8], w: u32, h: u32, clear: f32) -
         }
     }
     g
+}
+
+/// [`decode_prepass`] by rows on the current rayon pool's threads: the same G-buffer. The
+/// albedo and specular planes (the pre-pass has none) are zeroed allocations the light-buffer
+/// shading never reads.
+pub fn decode_prepass_par(depth: &[u8], normal: &[u8], w: u32, h: u32, clear: f32) -> GBuffer {
+    use rayon::prelude::*;
+    let (rd, rn) = (padded_row(w, 4) as usize, padded_row(w, 8) as usize);
+    let (wu, n) = (w as usize, (w * h) as usize);
+    let mut g = GBuffer {
+        width: w,
+        height: h,
+        depth: vec![0.0; n],
+        normal: vec![[0.0; 4]; n],
+        albedo: vec![[0.0; 3]; n],
+        spec: vec![[0.0; 3]; n],
+        material: vec![0; n],
+    };
+    g.depth
+        .par_chunks_mut(wu)
+        .zip(g.normal.par_chunks_mut(wu))
+        .zip(g.material.par_chunks_mut(wu))
+        .enumerate()
+        .for_each(|(y, ((d, nr), m))| {
+            let drow: &[f32] = bytemuck::cast_slice(&depth[y * rd..y * rd + wu * 4]);
+            let nrow: &[u16] = bytemuck::cast_slice(&normal[y * rn..y * rn + wu * 8]);
+            d.copy_from_slice(drow);
+            for x in 0..wu {
+                m[x] = if drow[x] == clear { SKY_MATERIAL } else { 0 };
+                nr[x] = std::array::from_fn(|c| half::f16::from_bits(nrow[x * 4 + c]).to_f32());
+            }
+        });
+    g
+}
+
+/// [`pack`] in chunks on the current rayon pool's threads: the same bytes.
+pub fn pack_par(f: LbFormat, lb: &[[f32; 4]]) -> (Vec<u8>, Option<Vec<u8>>) {
+    use rayon::prelude::*;
+    const CHUNK: usize = 4096;
+    let s = f.scale();
+    let f16 = |v: f32| half::f16::from_f32(v).to_bits().to_le_bytes();
+    let bpp0 = match f {
+        LbFormat::Rgba8 | LbFormat::Rg11b10 => 4,
+        LbFormat::Rgba16F => 8,
+    };
+    let mut b0 = vec![0u8; lb.len() * bpp0];
+    b0.par_chunks_mut(CHUNK * bpp0)
+        .zip(lb.par_chunks(CHUNK))
+        .for_each(|(out, px)| {
+            for (o, p) in out.chunks_exact_mut(bpp0).zip(px) {
+                match f {
+                    LbFormat::Rgba8 => {
+                        for c in 0..4 {
+                            o[c] = ((p[c] * s).clamp(0.0, 1.0) * 255.0).round() as u8;
+                        }
+                    }
+                    LbFormat::Rgba16F => {
+                        for c in 0..4 {
+                            o[2 * c..2 * c + 2].copy_from_slice(&f16(p[c] * s));
+                        }
+                    }
+                    LbFormat::Rg11b10 => {
+                        o.copy_from_slice(&pack_rg11b10([p[0], p[1], p[2]]).to_le_bytes())
+                    }
+                }
+            }
+        });
+    let b1 = (f == LbFormat::Rg11b10).then(|| {
+        let mut b1 = vec![0u8; lb.len() * 2];
+        b1.par_chunks_mut(CHUNK * 2)
+            .zip(lb.par_chunks(CHUNK))
+            .for_each(|(out, px)| {
+                for (o, p) in out.chunks_exact_mut(2).zip(px) {
+                    o.copy_from_slice(&f16(p[3]));
+                }
+            });
+        b1
+    });
+    (b0, b1)
 }
 
 /// The light buffer in its texture format(s), tightly packed rows: the first target, and the

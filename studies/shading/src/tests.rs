@@ -295,6 +295,83 @@ fn cpu_path_equals_reference_is_deterministic_and_culls_soundly() {
     }
 }
 
+/// BF3's material classification (`classify = materials`): each sub-tile shaded by the code
+/// permutation its material + light mask picks gives the übershader's image bit for bit and
+/// matches the f64 reference, for both light loops, one and two culling levels, the light
+/// buffer and an image whose side is not a multiple of 4 (edge lanes); on the city (matte
+/// buildings without specular, sky, three light kinds) some 32×16 sub-tiles take a narrower
+/// permutation. A permutation narrower than a sub-tile's mask changes
+/// the image: the mask is what keeps the permutations exact.
+#[test]
+fn material_classification_permutations_equal_the_ubershader_and_the_reference() {
+    use cpu_tiled::{perm, Classify, LightLoop};
+    let s = city(64, false);
+    for size in [80, 78] {
+        let base = run(&s, size, Path::Naive, 0.0, false);
+        let setup = base.setup.clone().with_diffuse_only(0.5);
+        let reference = reference::shade(&setup, &base.gb);
+        let lights = setup.gpu_lights(0.0);
+        for (light_loop, sub, light_buffer) in [
+            (LightLoop::Bf3, Some((32, 16)), false),
+            (LightLoop::Mfx, Some((32, 16)), false),
+            (LightLoop::Bf3, None, false),
+            (LightLoop::Bf3, Some((32, 16)), true),
+        ] {
+            let shade = |classify, force_perm| {
+                let o = CpuOptions {
+                    classify,
+                    force_perm,
+                    light_loop,
+                    sub,
+                    threads: 2,
+                    light_buffer,
+                    ..Default::default()
+                };
+                cpu_tiled::shade(&setup, &base.gb, &lights, &o)
+            };
+            let what = format!("{size}px {light_loop:?} sub {sub:?} lb {light_buffer}");
+            let uber = shade(Classify::None, None);
+            let mat = shade(Classify::Materials, None);
+            assert_eq!(differing(&uber.image, &mat.image), 0, "{what}");
+            // The reorder into rows by bands on a rayon pool (the pre-pass's parallel host)
+            // places every tile where the serial reorder does, partial edge tiles included.
+            let banded = rayon::ThreadPoolBuilder::new()
+                .num_threads(3)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let o = CpuOptions {
+                        light_loop,
+                        sub,
+                        threads: 2,
+                        light_buffer,
+                        parallel_reorder: true,
+                        ..Default::default()
+                    };
+                    cpu_tiled::shade(&setup, &base.gb, &lights, &o)
+                });
+            assert_eq!(differing(&uber.image, &banded.image), 0, "{what}: banded");
+            let regions: u64 = mat.perm_regions.iter().sum();
+            assert_eq!(regions, uber.perm_regions[perm::ALL as usize], "{what}");
+            let narrow = regions - mat.perm_regions[perm::ALL as usize];
+            // 32×16 sub-tiles are small enough to miss a feature (a 64² tile at 78 px has
+            // them all).
+            assert!(
+                narrow > 0 || sub.is_none(),
+                "{what}: no sub-tile took a narrower permutation"
+            );
+            if !light_buffer {
+                let e = max_rel_err(&reference, &mat.image);
+                assert!(e < PATH_TOL, "{what}: {e}");
+            }
+            // Every sub-tile forced to the narrowest permutation: no sky or edge lanes, no
+            // specular, spot or line terms. The city has all of them: the image must change.
+            let wrong = shade(Classify::Materials, Some(0));
+            assert!(differing(&uber.image, &wrong.image) > 0, "{what}");
+        }
+    }
+}
+
 /// The per-quad culls only drop exact zeros: skipping a light whose 16 attenuations are all 0,
 /// and skipping the specular term of a quad without specular colour (matte buildings), leave the
 /// image bit-identical; on a many-light city both do skip something.
@@ -811,7 +888,7 @@ mod msaa_x2_tests {
 
 mod prepass_tests {
     use super::*;
-    use crate::prepass::{Accum, LbFormat, PrePass};
+    use crate::prepass::{Accum, HostWork, LbFormat, PrePass};
 
     /// RGBA16F light buffer: f16 keeps 11 bits (4.9e-4 relative), the metal model divides by
     /// lum(D); lavapipe shows ~1e-3 relative, 5e-3 leaves 5× margin.
@@ -908,6 +985,7 @@ mod prepass_tests {
                 Accum::Cpu {
                     threads: 2,
                     overlap,
+                    host: HostWork::Parallel,
                 },
                 true,
             );
@@ -921,6 +999,81 @@ mod prepass_tests {
         let packed = reference::prepass_image(&r.gb, &reference::all_terms(&r.setup, &r.gb));
         let e = max_rel_err(&packed, &imgs[0].0);
         assert!(e < LB_TOL, "cpu prepass vs packed reference: {e}");
+    }
+
+    /// The host work on the lighting's workers (rayon: decode by rows, the tiles' reorder by
+    /// bands, the pack by chunks) gives the serial host's frame bit for bit, in every light
+    /// buffer format the adapter renders, and its functions give the serial ones' G-buffer
+    /// (rows padded to 256 bytes, a width not a multiple of 64) and bytes.
+    #[test]
+    fn parallel_host_work_equals_serial_host_work() {
+        use crate::prepass::{decode_prepass, decode_prepass_par, pack, pack_par};
+        let s = city(48, false);
+        let g = gpu();
+        for fmt in [LbFormat::Rgba16F, LbFormat::Rgba8, LbFormat::Rg11b10] {
+            let cpu = |host| Accum::Cpu {
+                threads: 3,
+                overlap: true,
+                host,
+            };
+            if crate::prepass::supports(g, fmt, cpu(HostWork::Serial)).is_err() {
+                continue;
+            }
+            let mut out = vec![];
+            for host in [HostWork::Serial, HostWork::Parallel] {
+                let (p, _) = frame(&s, fmt, cpu(host), true);
+                out.push((
+                    p.read_image(g).unwrap(),
+                    p.read_light_buffer(g).unwrap(),
+                    p.view2.as_ref().unwrap().1.read_image(g).unwrap(),
+                ));
+            }
+            assert!(out[0].0 == out[1].0, "{fmt:?}: main view differs");
+            assert!(out[0].1 == out[1].1, "{fmt:?}: light buffer differs");
+            assert!(out[0].2 == out[1].2, "{fmt:?}: second view differs");
+            let lb: Vec<[f32; 4]> = out[0].1.clone();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(3)
+                .build()
+                .unwrap();
+            assert_eq!(
+                pack(fmt, &lb),
+                pool.install(|| pack_par(fmt, &lb)),
+                "{fmt:?}"
+            );
+        }
+        // Decoding: rows padded to 256 bytes, a width that is not a multiple of 64.
+        let (w, h) = (70u32, 9u32);
+        let (rd, rn) = (
+            crate::gbuffer::padded_row(w, 4) as usize,
+            crate::gbuffer::padded_row(w, 8) as usize,
+        );
+        let depth: Vec<u8> = (0..rd * h as usize).map(|i| (i * 7 % 251) as u8).collect();
+        let normal: Vec<u8> = (0..rn * h as usize).map(|i| (i * 13 % 241) as u8).collect();
+        let clear = f32::from_le_bytes([depth[4], depth[5], depth[6], depth[7]]);
+        let a = decode_prepass(&depth, &normal, w, h, clear);
+        let b = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap()
+            .install(|| decode_prepass_par(&depth, &normal, w, h, clear));
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&a.depth), bits(&b.depth));
+        assert_eq!(
+            a.normal
+                .iter()
+                .map(|n| n.map(f32::to_bits))
+                .collect::<Vec<_>>(),
+            b.normal
+                .iter()
+                .map(|n| n.map(f32::to_bits))
+                .collect::<Vec<_>>()
+        );
+        assert_eq!(a.material, b.material);
+        assert!(
+            a.material.contains(&crate::SKY_MATERIAL),
+            "the clear value marks sky"
+        );
     }
 
     #[test]
@@ -963,6 +1116,7 @@ mod prepass_tests {
             Accum::Cpu {
                 threads: 2,
                 overlap: false,
+                host: HostWork::Parallel,
             },
             false,
         );

@@ -122,6 +122,12 @@ const LIGHT_LOOP: Axis = Axis::choice(
     "bf3",
     cpu_tiled::LightLoop::NAMES,
 );
+const CLASSIFY: Axis = Axis::choice(
+    cols::CLASSIFY,
+    "cpu_tiled: BF3's material classification: materials (a code permutation per 32×16 sub-tile from its material + light mask) or none (the catch-all übershader); same image",
+    "none",
+    cpu_tiled::Classify::NAMES,
+);
 const PHASE_REPS: Opt = Opt {
     name: "phase_reps",
     doc: "cpu_tiled: phase-clock frames per point (the cpu_*_ms phases and shade_ns_per_light_quad are their medians; from 6 on, shade_ns_per_light_quad carries its 95 % interval)",
@@ -156,6 +162,7 @@ fn axes_of(path: &str) -> Vec<Axis> {
             DIFFUSE_SKIP,
             DIFFUSE_ONLY_FRAC,
             LIGHT_LOOP,
+            CLASSIFY,
         ],
         "naive" | "classified" | "uber" => vec![DIFFUSE_ONLY_FRAC, SUN_SHADOW, MSAA],
         _ => vec![DIFFUSE_ONLY_FRAC],
@@ -401,6 +408,9 @@ impl Study for DeferredStudy {
                 let light_loop =
                     cpu_tiled::LightLoop::parse(&pt.point.choice(&LIGHT_LOOP)).unwrap_or_default();
                 row.set(cols::LIGHT_LOOP, light_loop.name());
+                let classify =
+                    cpu_tiled::Classify::parse(&pt.point.choice(&CLASSIFY)).unwrap_or_default();
+                row.set(cols::CLASSIFY, classify.name());
                 row.set(cols::TILE_SIZE, 64)
                     .set(cols::QUAD_SKIP, quad_skip)
                     .set(cols::SPEC_SKIP, spec_skip)
@@ -408,6 +418,8 @@ impl Study for DeferredStudy {
                     .set(cols::DIFFUSE_SKIP, diffuse_skip);
                 let lights = setup.gpu_lights(tau);
                 let o = CpuOptions {
+                    classify,
+                    force_perm: None,
                     light_loop,
                     tile: 64,
                     sub: (levels == 2).then_some((32, 16)),
@@ -420,6 +432,7 @@ impl Study for DeferredStudy {
                     keep_lists: false,
                     light_buffer: false,
                     phase_times: false,
+                    parallel_reorder: false,
                 };
                 let mut samples = Vec::new();
                 let mut last = None;
@@ -473,6 +486,16 @@ impl Study for DeferredStudy {
                         cols::DIFFUSE_SKIP_FRAC,
                         r.diffuse_skips as f64 / r.quad_evals.max(1) as f64,
                     );
+                let regions: u64 = r.perm_regions.iter().sum();
+                let ubershader = r.perm_regions[cpu_tiled::perm::ALL as usize];
+                row.set_f(
+                    cols::PERM_NARROW_FRAC,
+                    (regions - ubershader) as f64 / regions.max(1) as f64,
+                )
+                .set(
+                    cols::PERMUTATIONS,
+                    r.perm_regions.iter().filter(|&&n| n > 0).count(),
+                );
                 set_tile_stats(&mut row, &r.tile_counts);
                 if let Some(n) = naive_ms {
                     if st.median > 0.0 {

@@ -5,13 +5,15 @@
 //!
 //! Methods: `deferred` (axis `light_accum` = naive | tiled), `prepass` (`light_accum`,
 //! `light_buffer_format`, `second_view`), `prepass_cpu` (`light_buffer_format`,
-//! `thread_count`, `overlap`; always with the independent view). Compare `prepass_cpu` with
+//! `thread_count`, `overlap`, `host_work`: the decode, reorder and pack around the lighting on
+//! the workers (parallel, the default) or on one thread (serial); always with the independent
+//! view). Compare `prepass_cpu` with
 //! `prepass(second_view=true)`: the same two views, lit on the GPU.
 
 use super::deferred::{gbuffer_of, rel_err_max};
 use crate::gbuffer::FULL_BYTES_PER_PIXEL;
 use crate::gpu_paths::{Deferred, Path};
-use crate::prepass::{self, Accum, LbFormat, PrePass};
+use crate::prepass::{self, Accum, HostWork, LbFormat, PrePass};
 use crate::{reference, ShadeSetup};
 use bench_core::axes::{Axis, Point};
 use bench_core::gpu_scene::GpuScene;
@@ -54,11 +56,18 @@ const OVERLAP: Axis = Axis::bool(
     true,
 );
 
+const HOST_WORK: Axis = Axis::choice(
+    cols::HOST_WORK,
+    "the host work around the CPU lighting (decode, reorder, pack): parallel on the lighting's workers, or serial on one thread (mfx's earlier host)",
+    "parallel",
+    HostWork::NAMES,
+);
+
 fn axes_of(m: &str) -> Vec<Axis> {
     match m {
         "deferred" => vec![LIGHT_ACCUM],
         "prepass" => vec![LIGHT_ACCUM, LIGHT_BUFFER_FORMAT, SECOND_VIEW],
-        _ => vec![LIGHT_BUFFER_FORMAT, THREAD_COUNT, OVERLAP],
+        _ => vec![LIGHT_BUFFER_FORMAT, THREAD_COUNT, OVERLAP, HOST_WORK],
     }
 }
 
@@ -68,6 +77,18 @@ pub struct PrepassStudy;
 /// wall time, the wall time the GPU was not busy, and the parts the frame reported.
 fn set_times<T: ?Sized>(row: &mut Row, m: &Measured<T>) {
     row.set_f(cols::FRAME_MS, m.cpu.median);
+    // frame_ms's interval over the kept frames (a verdict on frame_ms needs one).
+    let mut wall: Vec<f64> = m
+        .samples
+        .iter()
+        .filter(|s| !s.discarded)
+        .map(|s| s.cpu_ms)
+        .collect();
+    wall.sort_by(|a, b| a.total_cmp(b));
+    if let Some((lo, hi)) = mfx_stats::median_ci_order(&wall) {
+        row.set_f(cols::FRAME_MS_CI_LO, lo)
+            .set_f(cols::FRAME_MS_CI_HI, hi);
+    }
     if let Some(idle) = m.idle_median() {
         row.set_f(cols::GPU_IDLE_MS, idle);
     }
@@ -231,9 +252,19 @@ impl PrepassStudy {
         let (accum, view2) = if method == "prepass_cpu" {
             let threads = p.int(&THREAD_COUNT) as usize;
             let overlap = p.bool(&OVERLAP);
+            // Checked against NAMES with the suite, before any GPU work.
+            let host = HostWork::parse(&p.choice(&HOST_WORK)).unwrap_or_default();
             row.set(cols::LIGHT_ACCUM, "cpu")
-                .set(cols::SECOND_VIEW, true);
-            (Accum::Cpu { threads, overlap }, true)
+                .set(cols::SECOND_VIEW, true)
+                .set(cols::HOST_WORK, host.name());
+            (
+                Accum::Cpu {
+                    threads,
+                    overlap,
+                    host,
+                },
+                true,
+            )
         } else {
             let v2 = p.bool(&SECOND_VIEW);
             row.set(cols::LIGHT_ACCUM, &accum_name);
