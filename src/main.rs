@@ -1147,7 +1147,8 @@ fn render(job: &RenderJob) -> Result<()> {
             .iter()
             .all(|e| m.axes().iter().any(|a| a.name() == e.name()));
         let effect = if folds {
-            mfx_multifragment::effects::EffectConfig::from_point(point).map_err(|e| usage(e.to_string()))?
+            mfx_multifragment::effects::EffectConfig::from_point(point)
+                .map_err(|e| usage(e.to_string()))?
         } else {
             mfx_multifragment::effects::EffectConfig::default()
         };

@@ -390,7 +390,11 @@ pub(crate) mod tests {
             min_samples: 60,
             ..StopRule::default()
         };
-        assert!(bad.validate().unwrap_err().to_string().contains("min_samples"));
+        assert!(bad
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("min_samples"));
         let bad = StopRule {
             max_noise: f64::NAN,
             ..StopRule::default()
