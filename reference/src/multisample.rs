@@ -126,19 +126,59 @@ pub fn standard_positions(samples: u32) -> &'static [(f64, f64)] {
     }
 }
 
+/// Where a per-sample list interpolates its attributes.
+#[derive(Clone, Copy)]
+enum Attributes {
+    /// At the sample, with depth (sample shading).
+    AtSample,
+    /// At the pixel centre, depth still at the sample: a driver that interpolates inputs at
+    /// the centre (lavapipe; see `AaCapture::Sample`).
+    AtCentre,
+}
+
+/// The sampling of one sample position `one[0]`: coverage and depth there, attributes where
+/// `attributes` says.
+fn at_sample(one: &[(f64, f64); 1], attributes: Attributes) -> Sampling<'_> {
+    let pos = one[0];
+    match attributes {
+        Attributes::AtSample => Sampling {
+            coverage: one,
+            attributes: pos,
+            depth: None,
+        },
+        Attributes::AtCentre => Sampling {
+            coverage: one,
+            attributes: CENTRE.attributes,
+            depth: Some(pos),
+        },
+    }
+}
+
+/// The lists of every position in `positions` (index = position), in one traversal of the
+/// scene (`rasterize_each`): exactly the lists of one pass per position, held at once.
+fn lists_at(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    positions: &[(f64, f64)],
+    attributes: Attributes,
+) -> Vec<FragmentLists> {
+    let one: Vec<[(f64, f64); 1]> = positions.iter().map(|&p| [p]).collect();
+    let samplings: Vec<Sampling<'_>> = one.iter().map(|c| at_sample(c, attributes)).collect();
+    rasterize_each(scene, width, height, &samplings)
+        .into_iter()
+        .map(|(lists, _)| lists)
+        .collect()
+}
+
 /// The lists of one sample position `pos` of every pixel: coverage, depth and attributes at
 /// `pos` (sample shading). At the centre this is [`super::rasterize`].
 pub fn sample_list(scene: &Scene, width: u32, height: u32, pos: (f64, f64)) -> FragmentLists {
-    let one = [pos];
     rasterize_with(
         scene,
         width,
         height,
-        Sampling {
-            coverage: &one,
-            attributes: pos,
-            depth: None,
-        },
+        at_sample(&[pos], Attributes::AtSample),
     )
     .0
 }
@@ -152,16 +192,11 @@ pub fn sample_list_centre_attributes(
     height: u32,
     pos: (f64, f64),
 ) -> FragmentLists {
-    let one = [pos];
     rasterize_with(
         scene,
         width,
         height,
-        Sampling {
-            coverage: &one,
-            attributes: CENTRE.attributes,
-            depth: Some(pos),
-        },
+        at_sample(&[pos], Attributes::AtCentre),
     )
     .0
 }
@@ -174,20 +209,7 @@ pub fn sample_lists_at(
     height: u32,
     positions: &[(f64, f64)],
 ) -> Vec<FragmentLists> {
-    let one: Vec<[(f64, f64); 1]> = positions.iter().map(|&p| [p]).collect();
-    let samplings: Vec<Sampling<'_>> = one
-        .iter()
-        .zip(positions)
-        .map(|(c, &pos)| Sampling {
-            coverage: c,
-            attributes: pos,
-            depth: None,
-        })
-        .collect();
-    rasterize_each(scene, width, height, &samplings)
-        .into_iter()
-        .map(|(lists, _)| lists)
-        .collect()
+    lists_at(scene, width, height, positions, Attributes::AtSample)
 }
 
 /// [`sample_list_centre_attributes`] of every position in `positions`, in one traversal.
@@ -197,20 +219,7 @@ pub fn sample_lists_centre_attributes(
     height: u32,
     positions: &[(f64, f64)],
 ) -> Vec<FragmentLists> {
-    let one: Vec<[(f64, f64); 1]> = positions.iter().map(|&p| [p]).collect();
-    let samplings: Vec<Sampling<'_>> = one
-        .iter()
-        .zip(positions)
-        .map(|(c, &pos)| Sampling {
-            coverage: c,
-            attributes: CENTRE.attributes,
-            depth: Some(pos),
-        })
-        .collect();
-    rasterize_each(scene, width, height, &samplings)
-        .into_iter()
-        .map(|(lists, _)| lists)
-        .collect()
+    lists_at(scene, width, height, positions, Attributes::AtCentre)
 }
 
 /// One list set per standard sample position (index = sample index), in one traversal.
