@@ -27,7 +27,7 @@ pub fn check_builtin() -> Vec<Problem> {
 pub fn check_text(text: &str, file: &str) -> Vec<Problem> {
     match papers::parse(text) {
         Ok(f) => check_file(&f, file),
-        Err(e) => vec![Problem::new(file, "top level", "", e)],
+        Err(e) => vec![Problem::new(file, "top level", "", e.to_string())],
     }
 }
 

@@ -88,6 +88,17 @@ impl Camera {
     }
 }
 
+/// Why a camera file cannot be applied (the caller names the file).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CameraFileError {
+    #[error("clip_from_world has a non-finite entry")]
+    NonFinite,
+    #[error("near {near} and far {far} must satisfy 0 < near < far")]
+    NearFar { near: f64, far: f64 },
+    #[error("width {width} × height {height} is empty")]
+    Empty { width: u32, height: u32 },
+}
+
 /// The camera as JSON for outside tools (`mfx render --camera-out / --camera-in`).
 ///
 /// Matrices are row-major: `clip = M · [x, y, z, 1]ᵀ` with `M[row][col]`. Clip space is wgpu's:
@@ -158,26 +169,26 @@ impl CameraFile {
 
     /// Applies this file to a scene's camera: the matrix overrides the look-at camera (whose
     /// eye/target stay for view-space quantities unless the file gives its own).
-    pub fn apply(&self, camera: &mut Camera) -> Result<(), String> {
+    pub fn apply(&self, camera: &mut Camera) -> Result<(), CameraFileError> {
         if self
             .clip_from_world
             .iter()
             .flatten()
             .any(|v| !v.is_finite())
         {
-            return Err("clip_from_world has a non-finite entry".into());
+            return Err(CameraFileError::NonFinite);
         }
         if !(self.near > 0.0 && self.far > self.near) {
-            return Err(format!(
-                "near {} and far {} must satisfy 0 < near < far",
-                self.near, self.far
-            ));
+            return Err(CameraFileError::NearFar {
+                near: self.near,
+                far: self.far,
+            });
         }
         if self.width == 0 || self.height == 0 {
-            return Err(format!(
-                "width {} × height {} is empty",
-                self.width, self.height
-            ));
+            return Err(CameraFileError::Empty {
+                width: self.width,
+                height: self.height,
+            });
         }
         camera.clip_from_world_override = Some(self.clip_from_world);
         camera.near = self.near;

@@ -15,10 +15,13 @@ pub mod problem;
 pub mod scenes;
 pub mod suite;
 
-pub use camera::Camera;
+pub use camera::{Camera, CameraFileError};
 pub use params::{NotExpected, ParamValue, Params, ValueKind};
 pub use problem::Problem;
-pub use scenes::{AreaLight, Light, LightKind, Material, Mesh, ObjectInfo, Scene, SceneSpec, Sun};
+pub use scenes::{
+    AreaLight, InvalidMesh, Light, LightKind, Material, Mesh, MeshProblem, ObjectInfo, Scene,
+    SceneSpec, Sun,
+};
 pub use suite::{StudySpec, Suite, TimingSpec};
 
 /// Errors from building scenes and reading suites. Each names the file, scene or value at fault.

@@ -75,8 +75,8 @@ pub fn load_with_warnings(path: &Path) -> Result<(Mesh, Vec<String>)> {
         return Err(err("is a directory, not a model file".into()));
     }
     if crate::ply::is_ply(&path.to_string_lossy()) {
-        let mesh = crate::ply::load(path).map_err(err)?;
-        check_extent(&mesh).map_err(err)?;
+        let mesh = crate::ply::load(path).map_err(|e| err(e.to_string()))?;
+        check_extent(&mesh).map_err(|e| err(e.to_string()))?;
         return Ok((mesh, Vec::new()));
     }
     let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
@@ -166,8 +166,47 @@ pub fn load_with_warnings(path: &Path) -> Result<(Mesh, Vec<String>)> {
     if mesh.indices.is_empty() {
         return Err(err("no triangles (no faces found)".into()));
     }
-    check_extent(&mesh).map_err(err)?;
+    check_extent(&mesh).map_err(|e| err(e.to_string()))?;
     Ok((mesh, warnings))
+}
+
+/// What is wrong with one value of an OBJ statement, an MTL material or a loaded mesh; the
+/// loader adds the file, and the line and statement where there is one
+/// ([`SceneError::ModelLine`], [`SceneError::Obj`]).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ObjError {
+    #[error("{what} '{token}' is not a number")]
+    NotANumber { what: &'static str, token: String },
+    #[error(
+        "{what} {token} is outside the f32 range (±{:e}) that the mesh is held in",
+        f32::MAX
+    )]
+    OutsideF32 { what: &'static str, token: String },
+    #[error("face vertex '{0}' has more than v/vt/vn")]
+    TooManyIndices(String),
+    #[error("face vertex '{0}' has no vertex index")]
+    NoVertexIndex(String),
+    #[error("{what} index '{token}' is not an integer")]
+    NotAnInteger { what: &'static str, token: String },
+    /// A negative index beyond the elements defined before its line.
+    #[error("{what} index {index} out of range (-{so_far}..=-1 counts back over the {so_far} defined before this line)")]
+    BackOutOfRange {
+        what: &'static str,
+        index: i64,
+        so_far: usize,
+    },
+    #[error("{what} index {index} out of range (1..={total}: the file has {total})")]
+    OutOfRange {
+        what: &'static str,
+        index: i64,
+        total: usize,
+    },
+    #[error("zero extent: every vertex is at {0:?}, so the mesh cannot be scaled into view")]
+    ZeroExtent([f32; 3]),
+    #[error("Tr '{0}' is not a number")]
+    TrNotANumber(String),
+    #[error("{what} gives opacity {alpha}, outside [0, 1]")]
+    OpacityOutOfRange { what: &'static str, alpha: f32 },
 }
 
 /// What [`scan`] learns besides the file being well formed: the material libraries it names.
@@ -191,15 +230,16 @@ fn scan(text: &str) -> std::result::Result<Scanned, (usize, String)> {
             _ => {}
         }
     }
-    let number = |t: &str, what: &str| -> std::result::Result<f64, String> {
-        let x: f64 = t
-            .parse()
-            .map_err(|_| format!("{what} '{t}' is not a number"))?;
+    let number = |t: &str, what: &'static str| -> std::result::Result<f64, ObjError> {
+        let x: f64 = t.parse().map_err(|_| ObjError::NotANumber {
+            what,
+            token: t.to_string(),
+        })?;
         if x.is_finite() && x.abs() > f32::MAX as f64 {
-            return Err(format!(
-                "{what} {t} is outside the f32 range (±{:e}) that the mesh is held in",
-                f32::MAX
-            ));
+            return Err(ObjError::OutsideF32 {
+                what,
+                token: t.to_string(),
+            });
         }
         Ok(x)
     };
@@ -207,7 +247,7 @@ fn scan(text: &str) -> std::result::Result<Scanned, (usize, String)> {
     let (mut faces, mut lines, mut points) = (0usize, 0usize, 0usize);
     let mut mtllibs = Vec::new();
     for (n, line) in text.lines().enumerate() {
-        let at = |why: String| (n + 1, format!("{why}: '{}'", line.trim()));
+        let at = |why: &dyn std::fmt::Display| (n + 1, format!("{why}: '{}'", line.trim()));
         let mut it = line.split_whitespace();
         let Some(head) = it.next() else { continue };
         let rest: Vec<&str> = it.collect();
@@ -215,32 +255,30 @@ fn scan(text: &str) -> std::result::Result<Scanned, (usize, String)> {
             "v" | "vt" | "vn" => {
                 let need = if head == "vt" { 2 } else { 3 };
                 if rest.len() < need {
-                    return Err(at(format!(
+                    return Err(at(&format!(
                         "'{head}' needs {need} numbers, has {}",
                         rest.len()
                     )));
                 }
                 for t in &rest[..need] {
-                    number(t, "coordinate").map_err(at)?;
+                    number(t, "coordinate").map_err(|e| at(&e))?;
                 }
                 if head == "v" {
                     // tobj reads x y z, then w (a divisor) or r g b.
                     match rest.len() - 3 {
                         0 => {}
                         1 => {
-                            if number(rest[3], "w").map_err(at)? == 0.0 {
-                                return Err(
-                                    at("w is 0 (the coordinates are divided by it)".into()),
-                                );
+                            if number(rest[3], "w").map_err(|e| at(&e))? == 0.0 {
+                                return Err(at(&"w is 0 (the coordinates are divided by it)"));
                             }
                         }
                         3 => {
                             for t in &rest[3..] {
-                                number(t, "colour").map_err(at)?;
+                                number(t, "colour").map_err(|e| at(&e))?;
                             }
                         }
                         k => {
-                            return Err(at(format!(
+                            return Err(at(&format!(
                                 "'v' takes x y z and then w or r g b, not {k} more values"
                             )))
                         }
@@ -254,7 +292,7 @@ fn scan(text: &str) -> std::result::Result<Scanned, (usize, String)> {
             }
             "f" | "l" | "p" => {
                 if head == "f" && rest.len() < 3 {
-                    return Err(at(format!(
+                    return Err(at(&format!(
                         "face with {} vertices (a face needs at least 3)",
                         rest.len()
                     )));
@@ -269,7 +307,7 @@ fn scan(text: &str) -> std::result::Result<Scanned, (usize, String)> {
                                 (nvn, svn, "normal"),
                             ],
                         )
-                        .map_err(at)?;
+                        .map_err(|e| at(&e))?;
                     }
                 }
                 match head {
@@ -305,22 +343,26 @@ fn scan(text: &str) -> std::result::Result<Scanned, (usize, String)> {
 /// One `v[/vt[/vn]]` of a face: each given index an integer, not 0, within the file's elements
 /// of its kind (`(total in the file, defined so far, name)`; a negative index counts back from
 /// the last one defined so far).
-fn face_vertex(r: &str, kinds: [(usize, usize, &str); 3]) -> std::result::Result<(), String> {
+fn face_vertex(
+    r: &str,
+    kinds: [(usize, usize, &'static str); 3],
+) -> std::result::Result<(), ObjError> {
     let parts: Vec<&str> = r.split('/').collect();
     if parts.len() > 3 {
-        return Err(format!("face vertex '{r}' has more than v/vt/vn"));
+        return Err(ObjError::TooManyIndices(r.to_string()));
     }
     for (i, t) in parts.iter().enumerate() {
         let (total, so_far, what) = kinds[i];
         if t.is_empty() {
             if i == 0 {
-                return Err(format!("face vertex '{r}' has no vertex index"));
+                return Err(ObjError::NoVertexIndex(r.to_string()));
             }
             continue;
         }
-        let x: i64 = t
-            .parse()
-            .map_err(|_| format!("{what} index '{t}' is not an integer"))?;
+        let x: i64 = t.parse().map_err(|_| ObjError::NotAnInteger {
+            what,
+            token: t.to_string(),
+        })?;
         let ok = match x {
             0 => false,
             x if x > 0 => x as u64 <= total as u64,
@@ -328,9 +370,17 @@ fn face_vertex(r: &str, kinds: [(usize, usize, &str); 3]) -> std::result::Result
         };
         if !ok {
             return Err(if x < 0 {
-                format!("{what} index {x} out of range (-{so_far}..=-1 counts back over the {so_far} defined before this line)")
+                ObjError::BackOutOfRange {
+                    what,
+                    index: x,
+                    so_far,
+                }
             } else {
-                format!("{what} index {x} out of range (1..={total}: the file has {total})")
+                ObjError::OutOfRange {
+                    what,
+                    index: x,
+                    total,
+                }
             });
         }
     }
@@ -338,19 +388,17 @@ fn face_vertex(r: &str, kinds: [(usize, usize, &str); 3]) -> std::result::Result
 }
 
 /// What normalising needs: a finite extent above zero (the loaders refuse non-finite values).
-fn check_extent(mesh: &Mesh) -> std::result::Result<(), String> {
+fn check_extent(mesh: &Mesh) -> std::result::Result<(), ObjError> {
     let first = mesh.positions.first().copied().unwrap_or_default();
     if mesh.positions.iter().all(|p| *p == first) {
-        return Err(format!(
-            "zero extent: every vertex is at {first:?}, so the mesh cannot be scaled into view"
-        ));
+        return Err(ObjError::ZeroExtent(first));
     }
     Ok(())
 }
 
 /// Opacity of an MTL material: its dissolve `d` if given, else 1 − `Tr` (the MTL spec's
 /// transparency, which tobj leaves in `unknown_param`), else 1. `d` wins when both are present.
-pub fn material_alpha(m: &tobj::Material) -> std::result::Result<f32, String> {
+pub fn material_alpha(m: &tobj::Material) -> std::result::Result<f32, ObjError> {
     let (what, alpha) = match (m.dissolve, m.unknown_param.get("Tr")) {
         (Some(d), _) => ("d", d),
         (None, Some(tr)) => {
@@ -358,13 +406,13 @@ pub fn material_alpha(m: &tobj::Material) -> std::result::Result<f32, String> {
                 .split_whitespace()
                 .next()
                 .and_then(|v| v.parse().ok())
-                .ok_or_else(|| format!("Tr '{tr}' is not a number"))?;
+                .ok_or_else(|| ObjError::TrNotANumber(tr.clone()))?;
             ("Tr", 1.0 - tr)
         }
         (None, None) => return Ok(1.0),
     };
     if !(0.0..=1.0).contains(&alpha) {
-        return Err(format!("{what} gives opacity {alpha}, outside [0, 1]"));
+        return Err(ObjError::OpacityOutOfRange { what, alpha });
     }
     Ok(alpha)
 }

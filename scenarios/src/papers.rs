@@ -475,8 +475,8 @@ pub fn judge_order(each: &[Verdict]) -> Option<Verdict> {
 }
 
 /// Parses one papers file (`Err`: the TOML or serde message, which names the key).
-pub fn parse(text: &str) -> Result<PapersFile, String> {
-    toml::from_str(text).map_err(|e| e.to_string())
+pub fn parse(text: &str) -> Result<PapersFile, toml::de::Error> {
+    toml::from_str(text)
 }
 
 /// Every built-in papers file, parsed (a file that does not parse is left out: `mfx check` and
@@ -539,7 +539,7 @@ mod tests {
         let bad = BUILTIN[0]
             .1
             .replacen("[source]\n", "[source]\nauthor = \"x\"\n", 1);
-        let e = parse(&bad).unwrap_err();
+        let e = parse(&bad).unwrap_err().to_string();
         assert!(e.contains("unknown field `author`"), "{e}");
     }
 

@@ -98,16 +98,60 @@ impl PropertyAccess for Skip {
     }
 }
 
+/// What is wrong with a PLY file (its text names no path: the loader's [`crate::SceneError`]
+/// does).
+#[derive(Debug, thiserror::Error)]
+pub enum PlyError {
+    #[error("cannot open: {0}")]
+    Open(std::io::Error),
+    /// The file's modification time (the cache's key) cannot be read.
+    #[error("{0}")]
+    Modified(std::io::Error),
+    #[error("malformed PLY header: {0}")]
+    Header(ply_rs_bw::parser::ParseError),
+    #[error("element '{name}' ({count} declared): {source}")]
+    Element {
+        name: String,
+        count: usize,
+        source: ply_rs_bw::parser::ParseError,
+    },
+    #[error("no 'vertex' element")]
+    NoVertexElement,
+    #[error("no 'face' element (a point cloud has no triangles)")]
+    NoFaceElement,
+    /// Reading past the last element failed.
+    #[error("{0}")]
+    Tail(std::io::Error),
+    #[error("data after the last declared element: the header's element counts are wrong")]
+    DataAfterElements,
+    #[error("element 'vertex' {index}: non-finite coordinate {p:?}")]
+    NonFinite { index: usize, p: [f64; 3] },
+    #[error("element 'vertex' {index}: coordinate {p:?} is outside the f32 range (±{:e}) that the mesh is held in", f32::MAX)]
+    OutsideF32 { index: usize, p: [f64; 3] },
+    #[error("element 'face' {0}: no vertex_indices list property")]
+    NoVertexIndices(usize),
+    #[error("element 'face' {face}: {vertices} vertices (a face needs at least 3)")]
+    TooFewVertices { face: usize, vertices: usize },
+    #[error("element 'face' {face}: vertex index {index} out of range ({vertices} vertices)")]
+    IndexOutOfRange {
+        face: usize,
+        index: i64,
+        vertices: usize,
+    },
+    #[error("no triangles (the face element is empty)")]
+    NoTriangles,
+}
+
 /// Loads a `.ply` or `.ply.gz` file into one mesh (grey, opaque, object id 0), computing
 /// area-weighted normals where the file has none. `Err` is the reason, without the path.
 ///
 /// The last file read is kept (keyed by path, size and modification time): a suite checks and
 /// builds the Dragon once per scene table, and parsing its 1.3M ASCII lines takes seconds.
-pub fn load(path: &Path) -> Result<Mesh, String> {
+pub fn load(path: &Path) -> Result<Mesh, PlyError> {
     type Cached = Option<(std::path::PathBuf, u64, std::time::SystemTime, Mesh)>;
     static LAST: std::sync::Mutex<Cached> = std::sync::Mutex::new(None);
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot open: {e}"))?;
-    let key = (meta.len(), meta.modified().map_err(|e| e.to_string())?);
+    let meta = std::fs::metadata(path).map_err(PlyError::Open)?;
+    let key = (meta.len(), meta.modified().map_err(PlyError::Modified)?);
     if let Some((p, len, t, m)) = &*LAST.lock().unwrap_or_else(|e| e.into_inner()) {
         if p == path && (*len, *t) == key {
             return Ok(m.clone());
@@ -119,8 +163,8 @@ pub fn load(path: &Path) -> Result<Mesh, String> {
     Ok(mesh)
 }
 
-fn load_uncached(path: &Path) -> Result<Mesh, String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot open: {e}"))?;
+fn load_uncached(path: &Path) -> Result<Mesh, PlyError> {
+    let file = std::fs::File::open(path).map_err(PlyError::Open)?;
     let gz = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
@@ -132,18 +176,17 @@ fn load_uncached(path: &Path) -> Result<Mesh, String> {
 }
 
 /// Reads a PLY stream (already decompressed) into a mesh.
-pub fn read<R: BufRead>(source: R) -> Result<Mesh, String> {
+pub fn read<R: BufRead>(source: R) -> Result<Mesh, PlyError> {
     let mut r = Reader::new(source);
     let header = Parser::<Skip>::new()
         .read_header(&mut r)
-        .map_err(|e| format!("malformed PLY header: {e}"))?;
+        .map_err(PlyError::Header)?;
     let (mut verts, mut faces) = (None::<Vec<Vertex>>, None::<Vec<Face>>);
     for element in header.elements.values() {
-        let what = |e: ply_rs_bw::parser::ParseError| {
-            format!(
-                "element '{}' ({} declared): {e}",
-                element.name, element.count
-            )
+        let what = |source| PlyError::Element {
+            name: element.name.clone(),
+            count: element.count,
+            source,
         };
         match element.name.as_str() {
             "vertex" => {
@@ -167,36 +210,27 @@ pub fn read<R: BufRead>(source: R) -> Result<Mesh, String> {
             }
         }
     }
-    let verts = verts.ok_or("no 'vertex' element")?;
-    let faces = faces.ok_or("no 'face' element (a point cloud has no triangles)")?;
+    let verts = verts.ok_or(PlyError::NoVertexElement)?;
+    let faces = faces.ok_or(PlyError::NoFaceElement)?;
     // Anything after the declared elements means the header's counts are wrong.
     let mut rest = [0u8; 1];
     let mut tail = r.into_inner();
-    if tail.read(&mut rest).map_err(|e| e.to_string())? > 0 {
-        return Err(
-            "data after the last declared element: the header's element counts are wrong".into(),
-        );
+    if tail.read(&mut rest).map_err(PlyError::Tail)? > 0 {
+        return Err(PlyError::DataAfterElements);
     }
     to_mesh(&verts, &faces)
 }
 
-fn to_mesh(verts: &[Vertex], faces: &[Face]) -> Result<Mesh, String> {
+fn to_mesh(verts: &[Vertex], faces: &[Face]) -> Result<Mesh, PlyError> {
     let n = verts.len();
     let mut mesh = Mesh::default();
     for (i, v) in verts.iter().enumerate() {
         let p = v.p.map(|c| c as f32);
         if v.p.iter().any(|c| !c.is_finite()) {
-            return Err(format!(
-                "element 'vertex' {i}: non-finite coordinate {:?}",
-                v.p
-            ));
+            return Err(PlyError::NonFinite { index: i, p: v.p });
         }
         if p.iter().any(|c| !c.is_finite()) {
-            return Err(format!(
-                "element 'vertex' {i}: coordinate {:?} is outside the f32 range (±{:e}) that the mesh is held in",
-                v.p,
-                f32::MAX
-            ));
+            return Err(PlyError::OutsideF32 { index: i, p: v.p });
         }
         mesh.positions.push(p);
         mesh.colors.push([0.8, 0.8, 0.8, 1.0]);
@@ -204,20 +238,20 @@ fn to_mesh(verts: &[Vertex], faces: &[Face]) -> Result<Mesh, String> {
     }
     for (f, face) in faces.iter().enumerate() {
         if !face.set {
-            return Err(format!(
-                "element 'face' {f}: no vertex_indices list property"
-            ));
+            return Err(PlyError::NoVertexIndices(f));
         }
         if face.idx.len() < 3 {
-            return Err(format!(
-                "element 'face' {f}: {} vertices (a face needs at least 3)",
-                face.idx.len()
-            ));
+            return Err(PlyError::TooFewVertices {
+                face: f,
+                vertices: face.idx.len(),
+            });
         }
         if let Some(&i) = face.idx.iter().find(|&&i| i < 0 || i as usize >= n) {
-            return Err(format!(
-                "element 'face' {f}: vertex index {i} out of range ({n} vertices)"
-            ));
+            return Err(PlyError::IndexOutOfRange {
+                face: f,
+                index: i,
+                vertices: n,
+            });
         }
         // Fan from the first vertex: exact for the convex quads and polygons scanners write.
         for k in 1..face.idx.len() - 1 {
@@ -226,7 +260,7 @@ fn to_mesh(verts: &[Vertex], faces: &[Face]) -> Result<Mesh, String> {
         }
     }
     if mesh.indices.is_empty() {
-        return Err("no triangles (the face element is empty)".into());
+        return Err(PlyError::NoTriangles);
     }
     // The file's normals only when every vertex has all three; otherwise computed.
     if verts.iter().all(|v| v.has_n == 3) {
@@ -334,11 +368,11 @@ mod tests {
     fn a_malformed_face_line_is_refused_naming_the_element_and_line() {
         // Line 12 (the first face) says 4 indices but gives 3.
         let bad = ASCII.replace("4 0 1 2 3\n", "4 0 1 2\n");
-        let e = read(bad.as_bytes()).unwrap_err();
+        let e = read(bad.as_bytes()).unwrap_err().to_string();
         assert!(e.contains("element 'face'") && e.contains("Line 16"), "{e}");
         // A number that is not one, in the vertex element.
         let bad = ASCII.replace("1 1 0\n", "1 one 0\n");
-        let e = read(bad.as_bytes()).unwrap_err();
+        let e = read(bad.as_bytes()).unwrap_err().to_string();
         assert!(
             e.contains("element 'vertex'") && e.contains("Line 13"),
             "{e}"
@@ -347,26 +381,35 @@ mod tests {
 
     #[test]
     fn bad_indices_short_faces_and_truncated_files_are_named() {
-        let e = read(ASCII.replace("3 0 1 4", "3 0 1 9").as_bytes()).unwrap_err();
+        let e = read(ASCII.replace("3 0 1 4", "3 0 1 9").as_bytes())
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("'face' 1") && e.contains("index 9 out of range"),
             "{e}"
         );
-        let e = read(ASCII.replace("3 0 1 4", "2 0 1").as_bytes()).unwrap_err();
+        let e = read(ASCII.replace("3 0 1 4", "2 0 1").as_bytes())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("'face' 1") && e.contains("2 vertices"), "{e}");
-        let e = read(ASCII.replace("3 0 1 4\n", "").as_bytes()).unwrap_err();
+        let e = read(ASCII.replace("3 0 1 4\n", "").as_bytes())
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("element 'face'") && e.contains("end of file"),
             "{e}"
         );
-        let e = read(ASCII.replace("element face 2", "element face 1").as_bytes()).unwrap_err();
+        let e = read(ASCII.replace("element face 2", "element face 1").as_bytes())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("counts are wrong"), "{e}");
-        let e =
-            read(&b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float q\n"[..]).unwrap_err();
+        let e = read(&b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float q\n"[..])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("header"), "{e}");
         let mut b = binary_le(&[&[0, 1, 2]], &[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
         b.truncate(b.len() - 2);
-        let e = read(&b[..]).unwrap_err();
+        let e = read(&b[..]).unwrap_err().to_string();
         assert!(e.contains("element 'face'"), "{e}");
     }
 

@@ -27,18 +27,17 @@ fn obj(text: &str) -> TmpFile {
     }
 }
 
-fn build(path: &str) -> Result<scenarios::Scene, String> {
+fn build(path: &str) -> Result<scenarios::Scene, scenarios::SceneError> {
     SceneSpec::new(
         "obj",
         Params::new().with("path", ParamValue::Str(path.into())),
     )
     .build()
-    .map_err(|e| e.to_string())
 }
 
 #[test]
 fn missing_obj_names_the_file() {
-    let e = build("/no/such/file.obj").unwrap_err();
+    let e = build("/no/such/file.obj").unwrap_err().to_string();
     assert!(
         e.contains("/no/such/file.obj") && e.contains("not found"),
         "{e}"
@@ -48,21 +47,21 @@ fn missing_obj_names_the_file() {
 #[test]
 fn obj_without_faces_is_an_error() {
     let p = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\n");
-    let e = build(&p).unwrap_err();
+    let e = build(&p).unwrap_err().to_string();
     assert!(e.contains(p.as_str()) && e.contains("no triangles"), "{e}");
 }
 
 #[test]
 fn obj_with_nan_vertex_is_an_error() {
     let p = obj("v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
-    let e = build(&p).unwrap_err();
+    let e = build(&p).unwrap_err().to_string();
     assert!(e.contains(p.as_str()), "{e}");
 }
 
 #[test]
 fn malformed_obj_is_an_error() {
     let p = obj("v 0 0 0\nf 1 2 7\n");
-    let e = build(&p).unwrap_err();
+    let e = build(&p).unwrap_err().to_string();
     assert!(e.contains(p.as_str()), "{e}");
 }
 

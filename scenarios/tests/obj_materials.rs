@@ -29,12 +29,12 @@ fn write(tag: &str, files: &[(&str, &str)]) -> TmpFile {
     }
 }
 
-fn build(path: &str, alpha: Option<f64>) -> Result<scenarios::Scene, String> {
+fn build(path: &str, alpha: Option<f64>) -> Result<scenarios::Scene, scenarios::SceneError> {
     let mut p = Params::new().with("path", ParamValue::Str(path.into()));
     if let Some(a) = alpha {
         p.set("alpha", ParamValue::Float(a));
     }
-    SceneSpec::new("obj", p).build().map_err(|e| e.to_string())
+    SceneSpec::new("obj", p).build()
 }
 
 /// Three separate triangles: no material (first: `usemtl` persists across objects), material
@@ -105,7 +105,7 @@ fn bad_mtl_opacity_is_an_error_naming_file_and_material() {
         "range",
         &[("m.obj", OBJ), ("m.mtl", "newmtl half\nd 1.5\n")],
     );
-    let e = build(&p, None).unwrap_err();
+    let e = build(&p, None).unwrap_err().to_string();
     assert!(
         e.contains(p.as_str()) && e.contains("half") && e.contains("1.5"),
         "{e}"
@@ -114,9 +114,9 @@ fn bad_mtl_opacity_is_an_error_naming_file_and_material() {
         "nan",
         &[("m.obj", OBJ), ("m.mtl", "newmtl quarter\nTr abc\n")],
     );
-    let e = build(&p, None).unwrap_err();
+    let e = build(&p, None).unwrap_err().to_string();
     assert!(e.contains("quarter") && e.contains("Tr"), "{e}");
     let p = write("parse", &[("m.obj", OBJ), ("m.mtl", "newmtl half\nd x\n")]);
-    let e = build(&p, None).unwrap_err();
+    let e = build(&p, None).unwrap_err().to_string();
     assert!(e.contains("malformed MTL"), "{e}");
 }

@@ -38,8 +38,8 @@ pub mod tets;
 use glam::Vec3;
 
 pub use scene::{
-    face_normals, frame_sphere, normalise, palette, AreaLight, Light, LightKind, Material, Mesh,
-    ObjectInfo, Scene, SceneSpec, Sun,
+    face_normals, frame_sphere, normalise, palette, AreaLight, InvalidMesh, Light, LightKind,
+    Material, Mesh, MeshProblem, ObjectInfo, Scene, SceneSpec, Sun,
 };
 
 use crate::{obj, Result, SceneError};
@@ -81,7 +81,7 @@ impl SceneSpec {
                 scene: self.label(),
                 param: "mesh".into(),
                 value: String::new(),
-                why,
+                why: why.to_string(),
             })?;
         Ok(scene)
     }

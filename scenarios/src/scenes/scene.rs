@@ -64,37 +64,61 @@ impl Mesh {
     }
 
     /// Checks the invariants every consumer relies on; names the first violation.
-    pub fn validate(&self, what: &str) -> std::result::Result<(), String> {
+    pub fn validate(&self, what: &str) -> std::result::Result<(), InvalidMesh> {
         let n = self.positions.len();
+        let fail = |problem| {
+            Err(InvalidMesh {
+                what: what.to_string(),
+                problem,
+            })
+        };
         if self.indices.is_empty() {
-            return Err(format!("{what}: no triangles"));
+            return fail(MeshProblem::NoTriangles);
         }
         if !self.indices.len().is_multiple_of(3) {
-            return Err(format!(
-                "{what}: index count {} is not a multiple of 3",
-                self.indices.len()
-            ));
+            return fail(MeshProblem::IndexCount(self.indices.len()));
         }
         if self.normals.len() != n || self.colors.len() != n || self.object_ids.len() != n {
-            return Err(format!(
-                "{what}: attribute arrays differ in length from positions ({n})"
-            ));
+            return fail(MeshProblem::AttributeLengths(n));
         }
-        if let Some(i) = self.indices.iter().find(|&&i| i as usize >= n) {
-            return Err(format!("{what}: index {i} out of range (vertices: {n})"));
+        if let Some(&index) = self.indices.iter().find(|&&i| i as usize >= n) {
+            return fail(MeshProblem::IndexOutOfRange { index, vertices: n });
         }
         if let Some(v) = self
             .positions
             .iter()
             .position(|p| p.iter().any(|c| !c.is_finite()))
         {
-            return Err(format!(
-                "{what}: vertex {v} has a non-finite coordinate {:?}",
-                self.positions[v]
-            ));
+            return fail(MeshProblem::NonFinite {
+                vertex: v,
+                p: self.positions[v],
+            });
         }
         Ok(())
     }
+}
+
+/// A mesh that breaks an invariant of [`Mesh`]: `what` names the mesh (the scene's label).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{what}: {problem}")]
+pub struct InvalidMesh {
+    pub what: String,
+    pub problem: MeshProblem,
+}
+
+/// The first invariant of [`Mesh`] a mesh breaks.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum MeshProblem {
+    #[error("no triangles")]
+    NoTriangles,
+    #[error("index count {0} is not a multiple of 3")]
+    IndexCount(usize),
+    #[error("attribute arrays differ in length from positions ({0})")]
+    AttributeLengths(usize),
+    #[error("index {index} out of range (vertices: {vertices})")]
+    IndexOutOfRange { index: u32, vertices: usize },
+    #[error("vertex {vertex} has a non-finite coordinate {p:?}")]
+    NonFinite { vertex: usize, p: [f32; 3] },
 }
 
 /// One object of the scene (object ids index this table).
