@@ -15,7 +15,39 @@ use std::collections::BTreeSet;
 
 use nvml_wrapper::bitmasks::device::ThrottleReasons;
 use nvml_wrapper::enum_wrappers::device::{Clock, TemperatureSensor};
+use nvml_wrapper::error::NvmlError;
 use nvml_wrapper::Nvml;
+
+/// Why there is no NVML monitor for the adapter, or why a process list cannot be read: its text
+/// is the `clock_source = none: <reason>` cell, word for word.
+#[derive(Debug, thiserror::Error)]
+pub enum MonitorError {
+    /// `libnvidia-ml.so.1` cannot be loaded or initialised (no NVIDIA driver).
+    #[error("NVML not available: {0}")]
+    Unavailable(NvmlError),
+    #[error("NVML device count: {0}")]
+    DeviceCount(NvmlError),
+    #[error("NVML device {index}: {error}")]
+    Device { index: u32, error: NvmlError },
+    #[error("adapter PCI bus id '{0}' is not domain:bus:dev.fn")]
+    BadBusId(String),
+    #[error("no NVML device at PCI bus id {bus_id} (NVML devices: {})", .seen.join(", "))]
+    NoDeviceAt { bus_id: String, seen: Vec<String> },
+    #[error("NVML lists no devices")]
+    NoDevices,
+    /// Several NVIDIA devices and no bus id to choose one by: none is guessed.
+    #[error("{count} NVML devices and no adapter PCI bus id to choose one ({})", .seen.join(", "))]
+    Ambiguous { count: u32, seen: Vec<String> },
+    /// Neither of NVML's process lists (compute, graphics) can be read.
+    #[error("NVML process lists: compute: {compute}; graphics: {graphics}")]
+    ProcessLists {
+        compute: NvmlError,
+        graphics: NvmlError,
+    },
+    /// NVML knows no other vendor's GPUs.
+    #[error("not an NVIDIA adapter ({name}, vendor {vendor:#06x}): no NVML clocks")]
+    NotNvidia { name: String, vendor: u32 },
+}
 
 /// NVML's throttle reasons by the names written in `throttle_reasons`.
 const REASONS: [(ThrottleReasons, &str); 9] = [
@@ -98,7 +130,7 @@ pub fn parse_pci_bus_id(s: &str) -> Option<(u32, u32, u32, u32)> {
 /// its own (the GPU's process list cannot be faked through NVML).
 pub trait ProcessList: Send + Sync {
     /// The ids of every process holding the GPU now (this one included, where listed).
-    fn pids(&self) -> Result<Vec<u32>, String>;
+    fn pids(&self) -> Result<Vec<u32>, MonitorError>;
 }
 
 /// A fixed list (tests): every read returns `pids`.
@@ -106,7 +138,7 @@ pub trait ProcessList: Send + Sync {
 pub struct FixedProcesses(pub Vec<u32>);
 
 impl ProcessList for FixedProcesses {
-    fn pids(&self) -> Result<Vec<u32>, String> {
+    fn pids(&self) -> Result<Vec<u32>, MonitorError> {
         Ok(self.0.clone())
     }
 }
@@ -188,16 +220,13 @@ impl GpuMonitor {
     /// Opens the NVML device at `pci_bus_id` (the wgpu adapter's `device_pci_bus_id`; pass
     /// `None` when it is empty). Without a bus id the single NVIDIA device is used; with
     /// several, none is guessed. Every failure is a readable reason for `clock_source`.
-    pub fn open(pci_bus_id: Option<&str>) -> Result<GpuMonitor, String> {
-        let nvml = Nvml::init().map_err(|e| format!("NVML not available: {e}"))?;
-        let count = nvml
-            .device_count()
-            .map_err(|e| format!("NVML device count: {e}"))?;
+    pub fn open(pci_bus_id: Option<&str>) -> Result<GpuMonitor, MonitorError> {
+        let nvml = Nvml::init().map_err(MonitorError::Unavailable)?;
+        let count = nvml.device_count().map_err(MonitorError::DeviceCount)?;
         let want = match pci_bus_id.filter(|s| !s.trim().is_empty()) {
-            Some(s) => Some(
-                parse_pci_bus_id(s)
-                    .ok_or_else(|| format!("adapter PCI bus id '{s}' is not domain:bus:dev.fn"))?,
-            ),
+            Some(s) => {
+                Some(parse_pci_bus_id(s).ok_or_else(|| MonitorError::BadBusId(s.to_string()))?)
+            }
             None => None,
         };
         let mut seen = Vec::new();
@@ -205,7 +234,7 @@ impl GpuMonitor {
         for i in 0..count {
             let d = nvml
                 .device_by_index(i)
-                .map_err(|e| format!("NVML device {i}: {e}"))?;
+                .map_err(|error| MonitorError::Device { index: i, error })?;
             let bus = d.pci_info().map(|p| p.bus_id).unwrap_or_default();
             let hit = match want {
                 Some(w) => parse_pci_bus_id(&bus) == Some(w),
@@ -218,20 +247,17 @@ impl GpuMonitor {
         }
         let Some((index, bus_id)) = found else {
             return Err(match pci_bus_id {
-                Some(s) if want.is_some() => format!(
-                    "no NVML device at PCI bus id {s} (NVML devices: {})",
-                    seen.join(", ")
-                ),
-                _ if count == 0 => "NVML lists no devices".to_string(),
-                _ => format!(
-                    "{count} NVML devices and no adapter PCI bus id to choose one ({})",
-                    seen.join(", ")
-                ),
+                Some(s) if want.is_some() => MonitorError::NoDeviceAt {
+                    bus_id: s.to_string(),
+                    seen,
+                },
+                _ if count == 0 => MonitorError::NoDevices,
+                _ => MonitorError::Ambiguous { count, seen },
             });
         };
         let d = nvml
             .device_by_index(index)
-            .map_err(|e| format!("NVML device {index}: {e}"))?;
+            .map_err(|error| MonitorError::Device { index, error })?;
         let name = d.name().unwrap_or_default();
         let uuid = d.uuid().unwrap_or_default();
         let serial = d.serial().unwrap_or_default();
@@ -330,27 +356,36 @@ impl GpuMonitor {
 /// NVML's compute and graphics process lists of the device (a Vulkan process is listed as
 /// graphics, a CUDA one as compute); one list that cannot be read is left out, both is an error.
 impl ProcessList for GpuMonitor {
-    fn pids(&self) -> Result<Vec<u32>, String> {
+    fn pids(&self) -> Result<Vec<u32>, MonitorError> {
         let d = self
             .nvml
             .device_by_index(self.index)
-            .map_err(|e| format!("NVML device {}: {e}", self.index))?;
-        let (c, g) = (
+            .map_err(|error| MonitorError::Device {
+                index: self.index,
+                error,
+            })?;
+        match (
             d.running_compute_processes(),
             d.running_graphics_processes(),
-        );
-        if let (Err(a), Err(b)) = (&c, &g) {
-            return Err(format!("NVML process lists: compute: {a}; graphics: {b}"));
+        ) {
+            (Err(compute), Err(graphics)) => Err(MonitorError::ProcessLists { compute, graphics }),
+            (c, g) => Ok(c.into_iter().chain(g).flatten().map(|p| p.pid).collect()),
         }
-        Ok(c.into_iter().chain(g).flatten().map(|p| p.pid).collect())
     }
+}
+
+/// Where a point's clock readings come from (the `clock_source` cell).
+#[derive(Clone, Debug, PartialEq)]
+enum ClockSource {
+    Nvml,
+    /// No monitor: the reason.
+    Unavailable(String),
 }
 
 /// Accumulates the readings of one point.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PointClocks {
-    /// `Ok(())` for NVML, `Err(reason)` when there is no monitor.
-    source: Result<(), String>,
+    source: ClockSource,
     sm: Vec<f64>,
     mem_sum: f64,
     mem_n: usize,
@@ -365,20 +400,20 @@ pub struct PointClocks {
 impl PointClocks {
     /// For a point measured with a monitor.
     pub fn nvml() -> PointClocks {
-        PointClocks::with_source(Ok(()))
+        PointClocks::with_source(ClockSource::Nvml)
     }
     /// For a point measured without one (`clock_source = none: <reason>`).
     pub fn unavailable(reason: impl Into<String>) -> PointClocks {
-        PointClocks::with_source(Err(reason.into()))
+        PointClocks::with_source(ClockSource::Unavailable(reason.into()))
     }
     /// From `GpuMonitor::open`'s result.
-    pub fn for_monitor(m: &Result<GpuMonitor, String>) -> PointClocks {
+    pub fn for_monitor(m: &Result<GpuMonitor, MonitorError>) -> PointClocks {
         match m {
             Ok(_) => PointClocks::nvml(),
-            Err(e) => PointClocks::unavailable(e.clone()),
+            Err(e) => PointClocks::unavailable(e.to_string()),
         }
     }
-    fn with_source(source: Result<(), String>) -> PointClocks {
+    fn with_source(source: ClockSource) -> PointClocks {
         PointClocks {
             source,
             sm: Vec::new(),
@@ -458,9 +493,11 @@ impl PointClocks {
         let mem = (self.mem_n > 0).then(|| self.mem_sum / self.mem_n as f64);
         let power = (self.power_n > 0).then(|| self.power_sum / self.power_n as f64);
         let source = match &self.source {
-            Ok(()) if self.sm.is_empty() => "none: NVML gave no SM clock reading".to_string(),
-            Ok(()) => "nvml".to_string(),
-            Err(e) => format!("none: {e}"),
+            ClockSource::Nvml if self.sm.is_empty() => {
+                "none: NVML gave no SM clock reading".to_string()
+            }
+            ClockSource::Nvml => "nvml".to_string(),
+            ClockSource::Unavailable(e) => format!("none: {e}"),
         };
         vec![
             (cols::SM_CLOCK_MHZ_MEAN, mhz(self.sm_mean())),
@@ -513,7 +550,7 @@ mod tests {
     fn open_without_a_driver_is_a_readable_error_not_a_panic() {
         // On a machine with the NVIDIA driver and one GPU this opens; elsewhere it must say why.
         match GpuMonitor::open(None) {
-            Err(e) => assert!(e.contains("NVML"), "{e}"),
+            Err(e) => assert!(e.to_string().contains("NVML"), "{e}"),
             Ok(m) => {
                 let s = m.sample();
                 assert!(s.sm_mhz.is_some_and(|c| c > 0.0), "{s:?}");
@@ -557,11 +594,17 @@ mod tests {
 
     #[test]
     fn without_a_monitor_every_cell_is_empty_but_the_reason() {
-        let p = PointClocks::for_monitor(&Err("NVML not available: no driver".into()));
+        let p = PointClocks::for_monitor(&Err(MonitorError::NotNvidia {
+            name: "llvmpipe".into(),
+            vendor: 0x10005,
+        }));
         let cells = p.to_cells();
         for (k, v) in &cells {
             if *k == cols::CLOCK_SOURCE {
-                assert_eq!(v, "none: NVML not available: no driver");
+                assert_eq!(
+                    v,
+                    "none: not an NVIDIA adapter (llvmpipe, vendor 0x10005): no NVML clocks"
+                );
             } else {
                 assert!(v.is_empty(), "{k} = {v}");
             }

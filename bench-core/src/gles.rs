@@ -23,6 +23,37 @@ const EGL_PLATFORM_DEVICE_EXT: egl::Enum = 0x313F;
 /// `EGL_MESA_platform_surfaceless` (Mesa without a window system: llvmpipe, or a DRM device).
 const EGL_PLATFORM_SURFACELESS_MESA: egl::Enum = 0x31DD;
 
+/// Why EGL gives no GLES 3 adapter, or why one display was passed over. `origin` names the
+/// display (platform, device index).
+#[derive(Debug, thiserror::Error)]
+pub enum GlesError {
+    /// The loader's message (its error type is libloading's, which khronos-egl does not export).
+    #[error("cannot load libEGL.so.1: {0}")]
+    LoadEgl(String),
+    /// An EGL call failed on one display.
+    #[error("{origin}: {call}: {error}")]
+    Egl {
+        origin: String,
+        call: &'static str,
+        error: egl::Error,
+    },
+    #[error("{origin}: no EGL config renders GLES 3")]
+    NoConfig { origin: String },
+    /// No 3.2, 3.1 or 3.0 context; `last` is the error of the last one tried.
+    #[error("{origin}: no GLES 3.x context ({})", .last.map_or("?".into(), |e| e.to_string()))]
+    NoContext {
+        origin: String,
+        last: Option<egl::Error>,
+    },
+    #[error("{0}: wgpu does not accept the GLES context")]
+    Refused(String),
+    #[error("EGL offers no display")]
+    NoDisplay,
+    /// Every display tried, each with why it was passed over.
+    #[error("no GLES 3 adapter through EGL: {}", .0.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("; "))]
+    NoAdapter(Vec<GlesError>),
+}
+
 /// One EGL display with a current-able GLES 3.x context. Kept alive as long as its adapter and
 /// device (the `Gpu` holds it); dropping it destroys the context and terminates the display.
 pub struct GlesContext {
@@ -41,10 +72,14 @@ unsafe impl Sync for GlesContext {}
 
 impl GlesContext {
     /// Makes this context current on the calling thread.
-    pub fn make_current(&self) -> Result<(), String> {
+    pub fn make_current(&self) -> Result<(), GlesError> {
         self.egl
             .make_current(self.display, self.surface, self.surface, Some(self.context))
-            .map_err(|e| format!("eglMakeCurrent ({}): {e}", self.origin))
+            .map_err(|error| GlesError::Egl {
+                origin: self.origin.clone(),
+                call: "eglMakeCurrent",
+                error,
+            })
     }
 }
 
@@ -68,10 +103,9 @@ impl Drop for GlesContext {
 /// device (`EGL_EXT_platform_device`), else Mesa's surfaceless platform, else the default
 /// display; the first platform that yields an adapter is used, and each display that failed is
 /// named in the error when none did.
-pub fn adapters(instance: &wgpu::Instance) -> Result<Vec<(wgpu::Adapter, GlesContext)>, String> {
-    let egl = Arc::new(
-        unsafe { Egl::load_required() }.map_err(|e| format!("cannot load libEGL.so.1: {e}"))?,
-    );
+pub fn adapters(instance: &wgpu::Instance) -> Result<Vec<(wgpu::Adapter, GlesContext)>, GlesError> {
+    let egl =
+        Arc::new(unsafe { Egl::load_required() }.map_err(|e| GlesError::LoadEgl(e.to_string()))?);
     let mut why = Vec::new();
     for platform in platforms(&egl) {
         let mut out = Vec::new();
@@ -79,7 +113,7 @@ pub fn adapters(instance: &wgpu::Instance) -> Result<Vec<(wgpu::Adapter, GlesCon
             match open(&egl, display, origin.clone()).and_then(|ctx| {
                 expose(instance, &egl, &ctx)
                     .map(|a| (a, ctx))
-                    .ok_or_else(|| format!("{origin}: wgpu does not accept the GLES context"))
+                    .ok_or_else(|| GlesError::Refused(origin.clone()))
             }) {
                 Ok(pair) => out.push(pair),
                 Err(e) => why.push(e),
@@ -93,9 +127,9 @@ pub fn adapters(instance: &wgpu::Instance) -> Result<Vec<(wgpu::Adapter, GlesCon
         }
     }
     if why.is_empty() {
-        why.push("EGL offers no display".into());
+        why.push(GlesError::NoDisplay);
     }
-    Err(format!("no GLES 3 adapter through EGL: {}", why.join("; ")))
+    Err(GlesError::NoAdapter(why))
 }
 
 /// The displays to try, by platform in order of preference: one per device
@@ -160,8 +194,12 @@ fn query_devices(egl: &Egl) -> Vec<*mut c_void> {
 
 /// Initialises `display` and makes the newest GLES 3 context it offers (3.2, else 3.1, else
 /// 3.0) current on this thread.
-fn open(egl: &Arc<Egl>, display: egl::Display, origin: String) -> Result<GlesContext, String> {
-    let fail = |what: &str, e: egl::Error| format!("{origin}: {what}: {e}");
+fn open(egl: &Arc<Egl>, display: egl::Display, origin: String) -> Result<GlesContext, GlesError> {
+    let fail = |call: &'static str, error: egl::Error| GlesError::Egl {
+        origin: origin.clone(),
+        call,
+        error,
+    };
     egl.initialize(display)
         .map_err(|e| fail("eglInitialize", e))?;
     let exts = egl
@@ -185,7 +223,7 @@ fn open(egl: &Arc<Egl>, display: egl::Display, origin: String) -> Result<GlesCon
         None if surfaceless && has("EGL_KHR_no_config_context") => unsafe {
             egl::Config::from_ptr(std::ptr::null_mut())
         },
-        None => return Err(format!("{origin}: no EGL config renders GLES 3")),
+        None => return Err(GlesError::NoConfig { origin }),
     };
     egl.bind_api(egl::OPENGL_ES_API)
         .map_err(|e| fail("eglBindAPI(OPENGL_ES)", e))?;
@@ -207,11 +245,9 @@ fn open(egl: &Arc<Egl>, display: egl::Display, origin: String) -> Result<GlesCon
             Err(e) => last = Some(e),
         }
     }
-    let context = context.ok_or_else(|| {
-        format!(
-            "{origin}: no GLES 3.x context ({})",
-            last.map_or("?".into(), |e| e.to_string())
-        )
+    let context = context.ok_or_else(|| GlesError::NoContext {
+        origin: origin.clone(),
+        last,
     })?;
     let surface = if surfaceless {
         None

@@ -184,7 +184,7 @@ pub struct Gpu {
     pub lost: Arc<Mutex<Option<String>>>,
     /// NVML for this adapter's clocks, temperature, power and throttle reasons, or why not
     /// (no NVIDIA driver, not an NVIDIA adapter): every point's `clock_source` says which.
-    pub monitor: std::result::Result<crate::clocks::GpuMonitor, String>,
+    pub monitor: std::result::Result<crate::clocks::GpuMonitor, crate::clocks::MonitorError>,
     /// Where the processes holding the GPU are read after every timed frame (flag
     /// `gpu_shared`): `None` reads NVML's lists through `monitor`; a test sets its own.
     pub process_list: Option<Box<dyn crate::clocks::ProcessList>>,
@@ -227,7 +227,10 @@ pub fn list_adapters(backend: BackendChoice) -> Vec<wgpu::Adapter> {
 /// `gles` has none (no libEGL, no display, no GLES 3 context).
 fn candidates(
     backend: BackendChoice,
-) -> std::result::Result<Vec<(wgpu::Adapter, Option<crate::gles::GlesContext>)>, String> {
+) -> std::result::Result<
+    Vec<(wgpu::Adapter, Option<crate::gles::GlesContext>)>,
+    crate::gles::GlesError,
+> {
     let instance = make_instance(backend);
     if backend == BackendChoice::Gles {
         return Ok(crate::gles::adapters(&instance)?
@@ -263,7 +266,7 @@ fn type_rank(t: wgpu::DeviceType) -> u8 {
 impl Gpu {
     /// Opens the chosen adapter: a hardware GPU if one exists, else a software one (lavapipe).
     pub fn new(opts: &GpuOptions) -> Result<Gpu> {
-        let adapters = candidates(opts.backend).map_err(CoreError::NoAdapter)?;
+        let adapters = candidates(opts.backend).map_err(|e| CoreError::NoAdapter(e.to_string()))?;
         if adapters.is_empty() {
             return Err(CoreError::NoAdapter(format!(
                 "no {:?} adapter found (on a machine without a GPU install Mesa's lavapipe: scripts/setup.sh)",
@@ -297,7 +300,8 @@ impl Gpu {
         let (adapter, gles) = adapter;
         let mut gpu = match gles {
             Some(ctx) => {
-                ctx.make_current().map_err(CoreError::NoAdapter)?;
+                ctx.make_current()
+                    .map_err(|e| CoreError::NoAdapter(e.to_string()))?;
                 let mut gpu = Self::open_with(adapter, opts.limits)?;
                 gpu.facts.backend = "gles".into();
                 gpu.gles = Some(ctx);
@@ -347,10 +351,10 @@ impl Gpu {
                 Some(info.device_pci_bus_id.as_str()).filter(|s| !s.is_empty()),
             )
         } else {
-            Err(format!(
-                "not an NVIDIA adapter ({}, vendor {:#06x}): no NVML clocks",
-                info.name, info.vendor
-            ))
+            Err(crate::clocks::MonitorError::NotNvidia {
+                name: info.name.clone(),
+                vendor: info.vendor,
+            })
         };
         Ok(Gpu {
             facts: AdapterFacts::of(&info, features),

@@ -89,9 +89,14 @@ impl GpuIdentity {
         }
         let own = crate::clocks::own_pids();
         let pids = match (&gpu.process_list, &gpu.monitor) {
-            (Some(l), _) => l.pids().map(|p| ("a given list", p)),
-            (None, Ok(m)) => crate::clocks::ProcessList::pids(m).map(|p| ("nvml", p)),
-            (None, Err(why)) => Err(why.clone()),
+            (Some(l), _) => l
+                .pids()
+                .map(|p| ("a given list", p))
+                .map_err(|e| e.to_string()),
+            (None, Ok(m)) => crate::clocks::ProcessList::pids(m)
+                .map(|p| ("nvml", p))
+                .map_err(|e| e.to_string()),
+            (None, Err(why)) => Err(why.to_string()),
         };
         id.process_list = match pids {
             Err(why) => format!("none: {why} (gpu_other_processes stays empty)"),

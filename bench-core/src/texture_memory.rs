@@ -120,13 +120,26 @@ pub fn dedicated_texture(
     }
 }
 
+/// Why a dedicated allocation failed (the texture is then taken from the pool).
+#[derive(Debug, thiserror::Error)]
+enum DedicatedError {
+    #[error("vkCreateImage: {0}")]
+    CreateImage(vk::Result),
+    #[error("no device-local memory type for the image")]
+    NoDeviceLocalMemory,
+    #[error("vkAllocateMemory: {0}")]
+    Allocate(vk::Result),
+    #[error("vkBindImageMemory: {0}")]
+    Bind(vk::Result),
+}
+
 /// Creates the Vulkan image, its own memory and the wgpu texture over them; `None` when the
 /// device is not Vulkan.
 fn dedicated(
     adapter: &wgpu::Adapter,
     device: &wgpu::Device,
     desc: &wgpu::TextureDescriptor,
-) -> std::result::Result<Option<wgpu::Texture>, String> {
+) -> std::result::Result<Option<wgpu::Texture>, DedicatedError> {
     // SAFETY: the raw device is used only to create, bind and hand over one image and its
     // memory; wgpu owns both afterwards (TextureMemory::Dedicated is freed with the texture).
     let Some(dev) = (unsafe { device.as_hal::<hal::api::Vulkan>() }) else {
@@ -156,8 +169,7 @@ fn dedicated(
         .sharing_mode(vk::SharingMode::EXCLUSIVE)
         .initial_layout(vk::ImageLayout::UNDEFINED);
     // SAFETY: a valid create info on this device.
-    let image =
-        unsafe { raw.create_image(&info, None) }.map_err(|e| format!("vkCreateImage: {e}"))?;
+    let image = unsafe { raw.create_image(&info, None) }.map_err(DedicatedError::CreateImage)?;
     let mut dedicated_req = vk::MemoryDedicatedRequirements::default();
     let mut req2 = vk::MemoryRequirements2::default().push_next(&mut dedicated_req);
     let req_info = vk::ImageMemoryRequirementsInfo2::default().image(image);
@@ -177,7 +189,7 @@ fn dedicated(
     let Some(ty) = ty else {
         // SAFETY: nothing is bound to the image yet.
         unsafe { raw.destroy_image(image, None) };
-        return Err("no device-local memory type for the image".into());
+        return Err(DedicatedError::NoDeviceLocalMemory);
     };
     let mut ded = vk::MemoryDedicatedAllocateInfo::default().image(image);
     let alloc = vk::MemoryAllocateInfo::default()
@@ -189,7 +201,7 @@ fn dedicated(
         Ok(m) => m,
         Err(e) => {
             unsafe { raw.destroy_image(image, None) };
-            return Err(format!("vkAllocateMemory: {e}"));
+            return Err(DedicatedError::Allocate(e));
         }
     };
     // SAFETY: fresh image and memory of the required size and type.
@@ -198,7 +210,7 @@ fn dedicated(
             raw.destroy_image(image, None);
             raw.free_memory(memory, None);
         }
-        return Err(format!("vkBindImageMemory: {e}"));
+        return Err(DedicatedError::Bind(e));
     }
     let hal_desc = hal::TextureDescriptor {
         label: desc.label,
