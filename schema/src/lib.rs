@@ -10,7 +10,7 @@ use std::fmt;
 
 mod types;
 mod values;
-pub use types::{cell_type, cell_type_of, CellType};
+pub use types::{cell_type, cell_type_of, CellType, NotOfType};
 pub use values::{
     Flag, FlagSet, GpuMsInterval, ParseError, PointKey, Status, StudyKind, MIN_SAMPLES_CI95,
 };

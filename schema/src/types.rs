@@ -59,7 +59,7 @@ impl CellType {
     }
 
     /// Checks one non-empty cell against the type; the error says what it is not.
-    pub fn check(self, cell: &str) -> Result<(), String> {
+    pub fn check(self, cell: &str) -> Result<(), NotOfType> {
         let ok = match self {
             CellType::Int => cell.parse::<i64>().is_ok(),
             CellType::UInt => cell.parse::<u64>().is_ok(),
@@ -73,9 +73,20 @@ impl CellType {
         if ok {
             Ok(())
         } else {
-            Err(format!("'{cell}' is not a {}", self.name()))
+            Err(NotOfType {
+                cell: cell.to_string(),
+                ty: self,
+            })
         }
     }
+}
+
+/// A cell that does not read as its column's type.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("'{cell}' is not a {ty}")]
+pub struct NotOfType {
+    pub cell: String,
+    pub ty: CellType,
 }
 
 impl fmt::Display for CellType {

@@ -66,7 +66,7 @@ fn column_type(table: &Table, i: usize, fallback: &mut Written) -> CellType {
         if let Err(why) = t.check(cell) {
             fallback
                 .text_fallback
-                .push((name.clone(), r, cell.to_string(), why));
+                .push((name.clone(), r, cell.to_string(), why.to_string()));
             return CellType::Text;
         }
     }
