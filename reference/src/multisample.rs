@@ -17,6 +17,13 @@ use scenarios::Scene;
 use super::raster::{rasterize_each, rasterize_with, Sampling, CENTRE};
 use super::{composite, FragmentLists, RefFragment};
 
+/// An `aa` value that is none of [`AaMode::NAMES`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("aa '{text}' is not one of {}", AaMode::NAMES.join(", "))]
+pub struct UnknownAaMode {
+    pub text: String,
+}
+
 /// How a pixel is antialiased: the `aa` axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum AaMode {
@@ -32,7 +39,7 @@ impl AaMode {
     /// The `aa` axis values, in order.
     pub const NAMES: &'static [&'static str] = &["none", "msaa2", "msaa4", "msaa8", "ssaa2x2"];
 
-    pub fn parse(s: &str) -> Result<AaMode, String> {
+    pub fn parse(s: &str) -> Result<AaMode, UnknownAaMode> {
         Ok(match s {
             "none" => AaMode::None,
             "msaa2" => AaMode::Msaa(2),
@@ -40,10 +47,9 @@ impl AaMode {
             "msaa8" => AaMode::Msaa(8),
             "ssaa2x2" => AaMode::Ssaa2x2,
             other => {
-                return Err(format!(
-                    "aa '{other}' is not one of {}",
-                    Self::NAMES.join(", ")
-                ))
+                return Err(UnknownAaMode {
+                    text: other.to_string(),
+                })
             }
         })
     }

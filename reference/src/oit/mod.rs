@@ -48,7 +48,7 @@ use crate::{FragmentLists, RefFragment};
 pub use adaptive::adaptive;
 pub use hybrid::hybrid;
 pub use mlab::{mlab, mlab_merges};
-pub use moments::{moments, MomentConfig, MomentKind, MomentStorage, Warp};
+pub use moments::{moments, MomentConfig, MomentConfigError, MomentKind, MomentStorage, Warp};
 pub use tail::{tail_blend, Bounded, Keep, TailMode};
 pub use wboit::wboit;
 

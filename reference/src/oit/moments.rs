@@ -121,6 +121,17 @@ pub struct MomentConfig {
     pub accum: Storage,
 }
 
+/// A moment configuration the paper does not define.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum MomentConfigError {
+    #[error(
+        "{kind:?} moments come in counts 4, 6, 8 (power) or 2, 3, 4 (trigonometric), not {count}"
+    )]
+    Count { kind: MomentKind, count: u32 },
+    #[error("warp range needs 0 < near < far, got {near}, {far}")]
+    WarpRange { near: f64, far: f64 },
+}
+
 impl MomentConfig {
     /// The paper's defaults for `count` moments of `kind` in `storage`, normalised, log warp
     /// over [near, far]. Errors name a count the kind does not have.
@@ -130,14 +141,11 @@ impl MomentConfig {
         storage: MomentStorage,
         near: f64,
         far: f64,
-    ) -> Result<Self, String> {
-        let bias = default_bias(kind, count, storage).ok_or_else(|| {
-            format!("{kind:?} moments come in counts 4, 6, 8 (power) or 2, 3, 4 (trigonometric), not {count}")
-        })?;
+    ) -> Result<Self, MomentConfigError> {
+        let bias =
+            default_bias(kind, count, storage).ok_or(MomentConfigError::Count { kind, count })?;
         if !(near > 0.0 && far > near) {
-            return Err(format!(
-                "warp range needs 0 < near < far, got {near}, {far}"
-            ));
+            return Err(MomentConfigError::WarpRange { near, far });
         }
         Ok(MomentConfig {
             kind,

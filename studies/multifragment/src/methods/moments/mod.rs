@@ -146,7 +146,7 @@ impl Variant {
     /// The twin's configuration over the warp range [near, far].
     fn config(&self, near: f64, far: f64) -> std::result::Result<MomentConfig, InvalidPoint> {
         let mut c = MomentConfig::new(self.kind, self.count, self.storage, near, far)
-            .map_err(InvalidPoint::Combination)?;
+            .map_err(|e| InvalidPoint::Combination(e.to_string()))?;
         c.bias = self.bias;
         c.normalize = self.normalize;
         Ok(c)
