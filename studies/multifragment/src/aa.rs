@@ -581,7 +581,18 @@ pub fn probe_verdict(masks: &[u32], samples: u32) -> String {
     }
 }
 
-fn run_probe(gpu: &Gpu, samples: u32) -> Result<Vec<u32>, String> {
+/// Why the sample positions were not probed (`sample_positions = unverified: <why>`).
+#[derive(Debug, thiserror::Error)]
+enum ProbeError {
+    #[error(transparent)]
+    Unsupported(#[from] bench_core::Unsupported),
+    #[error("probe render failed: {0}")]
+    Render(wgpu::Error),
+    #[error("probe read-back failed: {0}")]
+    ReadBack(bench_core::CoreError),
+}
+
+fn run_probe(gpu: &Gpu, samples: u32) -> Result<Vec<u32>, ProbeError> {
     let format = wgpu::TextureFormat::Rgba8Unorm;
     check_msaa_format(gpu, format, samples)?;
     let d = &gpu.device;
@@ -698,10 +709,10 @@ fn run_probe(gpu: &Gpu, samples: u32) -> Result<Vec<u32>, String> {
     }
     gpu.queue.submit([enc.finish()]);
     if let Some(e) = pollster::block_on(scope.pop()) {
-        return Err(format!("probe render failed: {e}"));
+        return Err(ProbeError::Render(e));
     }
     bench_core::gpu_util::read_vec::<u32>(gpu, &masks, (PROBE_W * PROBE_H) as usize)
-        .map_err(|e| format!("probe read-back failed: {e}"))
+        .map_err(ProbeError::ReadBack)
 }
 
 /// The `sample_positions` column for `samples`× MSAA on `gpu`: `standard`, `differs: …` or

@@ -205,8 +205,30 @@ impl Judgement {
     }
 }
 
+/// Why a capture cannot be compared with its reference: its row is `failed` with this text.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum JudgeError {
+    #[error("counts cover {counts} pixels, the reference {reference}")]
+    CountsSize { counts: usize, reference: usize },
+    #[error("image has {image} pixels, the {effect} ground truth {truth}")]
+    TruthSize {
+        image: usize,
+        effect: String,
+        truth: usize,
+    },
+    #[error("image has {image} pixels, the method's own definition {own}")]
+    DefinitionSize { image: usize, own: usize },
+    /// A study that compares images (the views study) got a capture without one.
+    #[error("the method made no image")]
+    NoImage,
+}
+
 /// Judges `cap` against `lists`. `Err` when the image cannot be compared (wrong size).
-pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Judgement, String> {
+pub fn judge(
+    cap: &Capture,
+    lists: &FragmentLists,
+    cx: Context<'_>,
+) -> Result<Judgement, JudgeError> {
     let mut j = Judgement::default();
     j.flags.add_all(&cap.flag);
     // An antialiased capture is judged against the multisampled truth of its mode; its depth
@@ -243,11 +265,10 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
     // Per-pixel counts are single-sample by contract (an AA capture leaves them `None`).
     if let (Some(counts), None) = (&cap.counts, &aa) {
         if counts.len() != dc.len() {
-            return Err(format!(
-                "counts cover {} pixels, the reference {}",
-                counts.len(),
-                dc.len()
-            ));
+            return Err(JudgeError::CountsSize {
+                counts: counts.len(),
+                reference: dc.len(),
+            });
         }
         // Fragments the method should have captured (within its k) but did not: at a pixel
         // whose f64 reference has exact depth ties this is strict peeling's coplanar loss;
@@ -308,12 +329,11 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
             None => reference_image(&cx, lists, Expected::All),
         };
         if truth.len() != img.len() {
-            return Err(format!(
-                "image has {} pixels, the {} ground truth {}",
-                img.len(),
-                cx.effect.effect.name(),
-                truth.len()
-            ));
+            return Err(JudgeError::TruthSize {
+                image: img.len(),
+                effect: cx.effect.effect.name().to_string(),
+                truth: truth.len(),
+            });
         }
         let e = image_error(&truth, img, BAD_PIXEL_TOL);
         j.matches_truth = Some(e.bad_pixel_frac == 0.0 && e.non_finite == 0);
@@ -331,11 +351,10 @@ pub fn judge(cap: &Capture, lists: &FragmentLists, cx: Context<'_>) -> Result<Ju
         };
         if let Some(own) = &own {
             if own.len() != img.len() {
-                return Err(format!(
-                    "image has {} pixels, the method's own definition {}",
-                    img.len(),
-                    own.len()
-                ));
+                return Err(JudgeError::DefinitionSize {
+                    image: img.len(),
+                    own: own.len(),
+                });
             }
             j.vs_k = Some(image_error(own, img, BAD_PIXEL_TOL));
         }

@@ -295,7 +295,7 @@ fn finish_point(
     };
     let j = match judge::judge(&cap, lists, cx) {
         Ok(j) => j,
-        Err(why) => return emit(i, failed_row(row, &why)),
+        Err(why) => return emit(i, failed_row(row, &why.to_string())),
     };
     j.write(&mut row);
     if let Err(e) = recapture_hazards(&mut row, &mut *m.prepared, ctx.gpu, ctx.gscene, lists) {

@@ -28,7 +28,7 @@ use scenarios::path::CameraPath;
 use scenarios::{Camera, ParamValue, Scene, StudySpec};
 
 use super::methods::{ready_points, set_reference_columns, GroupTruth, MethodsStudy, Ready};
-use crate::judge::{self, Judgement, TruthCache};
+use crate::judge::{self, JudgeError, Judgement, TruthCache};
 use crate::method::{measure, Capture, Expected};
 use bench_core::axes::{Axis, Point};
 use bench_core::record::{cols, failed_row, Flag, FlagSet, Row};
@@ -322,7 +322,7 @@ pub fn run_views_group(ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
             }
         }
         // The CPU: every capture of this view judged at once.
-        let judged: Vec<(usize, std::result::Result<Outcome, String>)> = caps
+        let judged: Vec<(usize, std::result::Result<Outcome, JudgeError>)> = caps
             .into_par_iter()
             .map(|(i, cap)| {
                 (
@@ -335,7 +335,7 @@ pub fn run_views_group(ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
             let r = &mut rows[i];
             match o {
                 Ok(o) => apply(r, o),
-                Err(why) => r.fail(v, &why),
+                Err(why) => r.fail(v, &why.to_string()),
             }
         }
     }
@@ -374,7 +374,7 @@ fn judge_view(
     flip: bool,
     eps: f64,
     images: bool,
-) -> std::result::Result<Outcome, String> {
+) -> std::result::Result<Outcome, JudgeError> {
     let t = std::time::Instant::now();
     let effect = r.ready.effect;
     let cx = judge::Context {
@@ -394,7 +394,7 @@ fn judge_view(
             Some(vw.bounds.clone()),
         ),
     };
-    let image = cap.image.ok_or("the method made no image")?;
+    let image = cap.image.ok_or(JudgeError::NoImage)?;
     let frame = Frame {
         image: &image,
         truth: &truth,
