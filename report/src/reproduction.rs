@@ -186,23 +186,35 @@ struct Value {
     interval: Option<(f64, f64)>,
 }
 
+/// What a row lacks for a comparison.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+enum Missing {
+    /// Every sample was discarded (a throttled or noisy clock): no pass is timed.
+    #[error("the row kept no samples ({discarded} discarded, flag {flag}): no pass times")]
+    NoSamples { discarded: String, flag: String },
+    /// The study never writes this pass (a suite not run with it).
+    #[error("the rows have no pass '{0}'")]
+    NoPass(String),
+    #[error("no {0} in the rows")]
+    NoColumn(String),
+}
+
 /// A row's value of a column or pass: `Err` says what the row lacks.
-fn value(r: &Rec, col: &str, pass: Option<&str>) -> Result<Value, String> {
+fn value(r: &Rec, col: &str, pass: Option<&str>) -> Result<Value, Missing> {
     if let Some(p) = pass {
         let passes = pass_json(r, cols::PASS_MS).unwrap_or_default();
         if passes.is_empty() && r.f(cols::SAMPLES) == Some(0.0) {
             // Every sample was discarded (a throttled or noisy clock): the row times no pass,
             // which is not the same as a study that never writes the pass.
-            return Err(format!(
-                "the row kept no samples ({} discarded, flag {}): no pass times",
-                r.get(cols::SAMPLES_DISCARDED),
-                r.get(cols::FLAG)
-            ));
+            return Err(Missing::NoSamples {
+                discarded: r.get(cols::SAMPLES_DISCARDED).to_string(),
+                flag: r.get(cols::FLAG).to_string(),
+            });
         }
         let v = passes
             .get(p)
             .and_then(|v| v.as_f64())
-            .ok_or_else(|| format!("the rows have no pass '{p}'"))?;
+            .ok_or_else(|| Missing::NoPass(p.to_string()))?;
         let interval = pass_json(r, cols::PASS_MS_CI).and_then(|m| {
             let a = m.get(p)?.as_array()?;
             Some((a.first()?.as_f64()?, a.get(1)?.as_f64()?))
@@ -211,7 +223,7 @@ fn value(r: &Rec, col: &str, pass: Option<&str>) -> Result<Value, String> {
     }
     let v = r
         .f_name(col)
-        .ok_or_else(|| format!("no {col} in the rows"))?;
+        .ok_or_else(|| Missing::NoColumn(col.to_string()))?;
     let ci = || Some((r.f(cols::GPU_MS_CI_LO)?, r.f(cols::GPU_MS_CI_HI)?));
     let med = r.f(cols::GPU_MS_MEDIAN);
     let interval = if col == cols::GPU_MS_MEDIAN.name {
@@ -280,7 +292,7 @@ struct Ratio {
 }
 
 /// The ratio of the rule's column (or pass) between two rows.
-fn ratio(rule: &Rule, ro: &Rec, rb: &Rec, bands: &Bands) -> Result<Ratio, String> {
+fn ratio(rule: &Rule, ro: &Rec, rb: &Rec, bands: &Bands) -> Result<Ratio, Missing> {
     let o = value(ro, rule.column(), rule.pass.as_deref())?;
     let b = value(rb, rule.baseline_column(), rule.baseline_pass())?;
     let r = b.v / o.v;
@@ -319,10 +331,10 @@ fn rule_points(
             Ok(x) => x,
             Err(why) => {
                 let suite = &points[0].suite;
-                return if why.starts_with("the rows have no pass") {
+                return if matches!(why, Missing::NoPass(_)) {
                     Outcome::NotRun(format!("not run: {why} (suite {suite})"))
                 } else {
-                    Outcome::NotMeasured(why)
+                    Outcome::NotMeasured(why.to_string())
                 };
             }
         };
@@ -397,37 +409,69 @@ fn named_rows<'a>(runs: &'a Runs, fig: &Figure) -> BTreeMap<String, &'a Rec> {
         .collect()
 }
 
+/// Why a fact of a figure has no value.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub(crate) enum FactError {
+    #[error("no fact '{0}'")]
+    NoFact(String),
+    #[error("facts.{fact}: row '{row}' is not in the run")]
+    RowNotRun { fact: String, row: String },
+    #[error("facts.{fact}: no {column} in row '{row}'")]
+    NoColumn {
+        fact: String,
+        column: String,
+        row: String,
+    },
+    #[error("facts.{fact}: no pass '{pass}' in row '{row}'")]
+    NoPass {
+        fact: String,
+        pass: String,
+        row: String,
+    },
+    #[error("facts.{0}: no column or pass")]
+    NoColumnOrPass(String),
+    /// A chain of `over` facts that returns to itself.
+    #[error("facts.{0}: `over` loops")]
+    OverLoops(String),
+}
+
 /// A fact's value from the named rows (`Err`: what is missing).
 pub(crate) fn fact_value(
     fig: &Figure,
     rows: &BTreeMap<String, &Rec>,
     name: &str,
     depth: usize,
-) -> Result<f64, String> {
+) -> Result<f64, FactError> {
     let f: &Fact = fig
         .facts
         .get(name)
-        .ok_or_else(|| format!("no fact '{name}'"))?;
-    let r = rows
-        .get(&f.row)
-        .ok_or_else(|| format!("facts.{name}: row '{}' is not in the run", f.row))?;
+        .ok_or_else(|| FactError::NoFact(name.to_string()))?;
+    let r = rows.get(&f.row).ok_or_else(|| FactError::RowNotRun {
+        fact: name.to_string(),
+        row: f.row.clone(),
+    })?;
+    let no_column = |column: &str| FactError::NoColumn {
+        fact: name.to_string(),
+        column: column.to_string(),
+        row: f.row.clone(),
+    };
     let mut v = match (&f.column, &f.pass) {
-        (Some(c), _) => r
-            .f_name(c)
-            .ok_or_else(|| format!("facts.{name}: no {c} in row '{}'", f.row))?,
+        (Some(c), _) => r.f_name(c).ok_or_else(|| no_column(c))?,
         (None, Some(p)) => pass_json(r, cols::PASS_MS)
             .and_then(|m| m.get(p)?.as_f64())
-            .ok_or_else(|| format!("facts.{name}: no pass '{p}' in row '{}'", f.row))?,
-        (None, None) => return Err(format!("facts.{name}: no column or pass")),
+            .ok_or_else(|| FactError::NoPass {
+                fact: name.to_string(),
+                pass: p.clone(),
+                row: f.row.clone(),
+            })?,
+        (None, None) => return Err(FactError::NoColumnOrPass(name.to_string())),
     };
     if let Some(per) = &f.per {
-        v /= r
-            .f_name(per)
-            .ok_or_else(|| format!("facts.{name}: no {per} in row '{}'", f.row))?;
+        v /= r.f_name(per).ok_or_else(|| no_column(per))?;
     }
     if let Some(o) = &f.over {
         if depth > 8 {
-            return Err(format!("facts.{name}: `over` loops"));
+            return Err(FactError::OverLoops(name.to_string()));
         }
         v /= fact_value(fig, rows, o, depth + 1)?;
     }

@@ -563,7 +563,7 @@ fn a_row_that_kept_no_samples_is_not_a_row_without_the_pass() {
     ] {
         r.0.insert(c.name.into(), v.into());
     }
-    let e = value(&r, "", Some("readback")).err().unwrap();
+    let e = value(&r, "", Some("readback")).err().unwrap().to_string();
     assert!(
         e.contains("kept no samples") && e.contains(schema::Flag::Throttled.name()),
         "{e}"
@@ -571,7 +571,7 @@ fn a_row_that_kept_no_samples_is_not_a_row_without_the_pass() {
     // A row with passes but not this one names the pass as missing.
     r.0.insert(cols::PASS_MS.name.into(), r#"{"prepass":0.6}"#.into());
     r.0.insert(cols::SAMPLES.name.into(), "9".into());
-    let e = value(&r, "", Some("readback")).err().unwrap();
+    let e = value(&r, "", Some("readback")).err().unwrap().to_string();
     assert!(e.starts_with("the rows have no pass 'readback'"), "{e}");
     assert_eq!(value(&r, "", Some("prepass")).ok().map(|v| v.v), Some(0.6));
 }
