@@ -201,7 +201,7 @@ fn check_points(
         );
     for (key, point) in named {
         if let Err(why) = check_point(point) {
-            p(&format!("{prefix}{key}"), why);
+            p(&format!("{prefix}{key}"), why.to_string());
         }
     }
 }
@@ -320,12 +320,15 @@ fn same(v: &ParamValue, t: &toml::Value) -> bool {
 /// Whether exactly one point of the point's suite is the one it names: some study runs its
 /// method at its resolution on its scene and sweeps each named axis with the named value, and
 /// the named axes tell it from every other point there (defaults resolved).
-fn check_point(pt: &PointRef) -> Result<(), String> {
-    let suite = Suite::load(&pt.suite).map_err(|e| format!("suite '{}': {e}", pt.suite))?;
-    let mut why = format!(
-        "no study of suite '{}' runs method '{}'",
-        pt.suite, pt.method
-    );
+fn check_point(pt: &PointRef) -> Result<(), PointMismatch> {
+    let suite = Suite::load(&pt.suite).map_err(|error| PointMismatch::Suite {
+        suite: pt.suite.clone(),
+        error,
+    })?;
+    let mut why = PointMismatch::NoStudy {
+        suite: pt.suite.clone(),
+        method: pt.method.clone(),
+    };
     let mut matches = BTreeSet::new();
     for spec in &suite.studies {
         let Some(study) = by_kind(STUDIES, spec.kind) else {
@@ -340,29 +343,33 @@ fn check_point(pt: &PointRef) -> Result<(), String> {
         }
         let res = (pt.resolution[0], pt.resolution[1]);
         if !suite.study_resolutions(spec, false).contains(&res) {
-            why = format!(
-                "study {} of '{}' does not run {}x{}",
-                spec.index, pt.suite, res.0, res.1
-            );
+            why = PointMismatch::Resolution {
+                study: spec.index,
+                suite: pt.suite.clone(),
+                width: res.0,
+                height: res.1,
+            };
             continue;
         }
         let labels: Vec<String> = spec.scenes.iter().map(|s| s.label()).collect();
         if !labels.contains(&pt.scene) {
-            why = format!(
-                "study {} of '{}' has no scene '{}' (it has: {})",
-                spec.index,
-                pt.suite,
-                pt.scene,
-                labels.join(", ")
-            );
+            why = PointMismatch::Scene {
+                study: spec.index,
+                suite: pt.suite.clone(),
+                scene: pt.scene.clone(),
+                labels,
+            };
             continue;
         }
         if let Some(b) = swept(spec, study, pt, &suite) {
-            why = b;
+            why = PointMismatch::Axes(b);
             continue;
         }
         let Ok(points) = bench_core::study::points(study, spec) else {
-            why = format!("study {} of '{}' does not resolve", spec.index, pt.suite);
+            why = PointMismatch::Unresolved {
+                study: spec.index,
+                suite: pt.suite.clone(),
+            };
             continue;
         };
         for ps in points.iter().filter(|ps| ps.method == pt.method) {
@@ -378,12 +385,50 @@ fn check_point(pt: &PointRef) -> Result<(), String> {
     match matches.len() {
         0 => Err(why),
         1 => Ok(()),
-        n => Err(format!(
-            "matches {n} points of '{}' ({}): name the axis that tells them apart",
-            pt.suite,
-            matches.into_iter().collect::<Vec<_>>().join("; ")
-        )),
+        n => Err(PointMismatch::Ambiguous {
+            n,
+            suite: pt.suite.clone(),
+            points: matches.into_iter().collect(),
+        }),
     }
+}
+
+/// Why a figure's point is not exactly one point of its suite (the last study's reason where
+/// none runs it).
+#[derive(Debug, thiserror::Error)]
+enum PointMismatch {
+    #[error("suite '{suite}': {error}")]
+    Suite {
+        suite: String,
+        error: scenarios::SceneError,
+    },
+    #[error("no study of suite '{suite}' runs method '{method}'")]
+    NoStudy { suite: String, method: String },
+    #[error("study {study} of '{suite}' does not run {width}x{height}")]
+    Resolution {
+        study: usize,
+        suite: String,
+        width: u32,
+        height: u32,
+    },
+    #[error("study {study} of '{suite}' has no scene '{scene}' (it has: {})", .labels.join(", "))]
+    Scene {
+        study: usize,
+        suite: String,
+        scene: String,
+        labels: Vec<String>,
+    },
+    /// A named axis the study does not declare or sweep with the named value ([`swept`]).
+    #[error("{0}")]
+    Axes(String),
+    #[error("study {study} of '{suite}' does not resolve")]
+    Unresolved { study: usize, suite: String },
+    #[error("matches {n} points of '{suite}' ({}): name the axis that tells them apart", .points.join("; "))]
+    Ambiguous {
+        n: usize,
+        suite: String,
+        points: Vec<String>,
+    },
 }
 
 /// Why a study table cannot run the named axis values (None: each is declared and swept).
