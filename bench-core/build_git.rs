@@ -1,6 +1,9 @@
 // The git half of bench-core's build script, in its own file so that `tests/provenance.rs` can
 // test it on throw-away repositories (`#[path]`). Only std: build scripts get no dependencies
-// beyond `[build-dependencies]`, and this needs none.
+// beyond `[build-dependencies]`, and this needs none. Its errors stay `String`: each is one
+// reason that the build script prints as a cargo warning (and records as "unknown" provenance)
+// and no caller tells one from another, so an error enum would add `thiserror` to the build
+// dependencies for nothing.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
