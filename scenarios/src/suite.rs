@@ -401,7 +401,7 @@ impl Ctx<'_> {
                 None
             }
             Err(why) => {
-                self.push(table, "resolutions", why).value = Some(v.to_string());
+                self.push(table, "resolutions", why.to_string()).value = Some(v.to_string());
                 None
             }
         }
@@ -610,36 +610,66 @@ fn timing_spec(cx: &mut Ctx<'_>, t: &toml::Table, tn: &str) -> TimingSpec {
     spec
 }
 
-fn resolutions(v: &toml::Value) -> std::result::Result<Vec<(u32, u32)>, String> {
-    let arr = v.as_array().ok_or("must be an array of [width, height]")?;
+/// What is wrong with a `resolutions` value (the caller names the file and table).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ResolutionsError {
+    #[error("must be an array of [width, height]")]
+    NotAnArray,
+    #[error("each resolution must be [width, height]")]
+    NotAPair,
+    #[error("width must be an integer")]
+    Width,
+    #[error("height must be an integer")]
+    Height,
+    #[error("resolution {width}x{height} out of range 1..={max}")]
+    OutOfRange { width: i64, height: i64, max: i64 },
+}
+
+fn resolutions(v: &toml::Value) -> std::result::Result<Vec<(u32, u32)>, ResolutionsError> {
+    let arr = v.as_array().ok_or(ResolutionsError::NotAnArray)?;
     arr.iter()
         .map(|r| {
             let wh = r
                 .as_array()
                 .filter(|a| a.len() == 2)
-                .ok_or("each resolution must be [width, height]")?;
-            let w = wh[0].as_integer().ok_or("width must be an integer")?;
-            let h = wh[1].as_integer().ok_or("height must be an integer")?;
+                .ok_or(ResolutionsError::NotAPair)?;
+            let w = wh[0].as_integer().ok_or(ResolutionsError::Width)?;
+            let h = wh[1].as_integer().ok_or(ResolutionsError::Height)?;
             let max = MAX_SIDE as i64;
             if !(1..=max).contains(&w) || !(1..=max).contains(&h) {
-                return Err(format!("resolution {w}x{h} out of range 1..={max}"));
+                return Err(ResolutionsError::OutOfRange {
+                    width: w,
+                    height: h,
+                    max,
+                });
             }
             Ok((w as u32, h as u32))
         })
         .collect()
 }
 
+/// Why a value cannot be swept: sweep values are a scalar or a non-empty array of scalars.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum SweepValuesError {
+    #[error("is an empty array: nothing to sweep")]
+    Empty,
+    #[error("arrays must hold scalars")]
+    NotScalars,
+    #[error("must be a scalar or an array of scalars")]
+    NotAScalar,
+}
+
 /// A scalar or a non-empty array of scalars, as sweep values.
-fn values(v: &toml::Value) -> std::result::Result<Vec<ParamValue>, String> {
+fn values(v: &toml::Value) -> std::result::Result<Vec<ParamValue>, SweepValuesError> {
     match v {
-        toml::Value::Array(a) if a.is_empty() => Err("is an empty array: nothing to sweep".into()),
+        toml::Value::Array(a) if a.is_empty() => Err(SweepValuesError::Empty),
         toml::Value::Array(a) => a
             .iter()
-            .map(|x| ParamValue::from_toml(x).ok_or_else(|| "arrays must hold scalars".to_string()))
+            .map(|x| ParamValue::from_toml(x).ok_or(SweepValuesError::NotScalars))
             .collect(),
-        other => Ok(vec![ParamValue::from_toml(other).ok_or_else(|| {
-            "must be a scalar or an array of scalars".to_string()
-        })?]),
+        other => Ok(vec![
+            ParamValue::from_toml(other).ok_or(SweepValuesError::NotAScalar)?
+        ]),
     }
 }
 
@@ -777,7 +807,7 @@ fn parse_study(cx: &mut Ctx<'_>, index: usize, t: &toml::Table) -> Option<StudyS
                 let mut ok = true;
                 for (k, v) in &st {
                     if let Err(why) = values(v) {
-                        cx.push(&tn, k, why).value = Some(v.to_string());
+                        cx.push(&tn, k, why.to_string()).value = Some(v.to_string());
                         ok = false;
                     }
                 }
@@ -829,30 +859,41 @@ fn parse_axes(
                 axes.insert(k.clone(), vals);
             }
             Err(why) => {
-                cx.push(table, k, why).value = Some(v.to_string());
+                cx.push(table, k, why.to_string()).value = Some(v.to_string());
             }
         }
     }
     axes
 }
 
+/// A key of a table that [`expand_product`] cannot expand.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ProductError {
+    #[error("'{0}': arrays must hold scalars")]
+    NotScalars(String),
+    #[error("'{0}' must be a scalar or array")]
+    NotAScalar(String),
+    #[error("'{0}' is an empty array: nothing to sweep")]
+    Empty(String),
+}
+
 /// Expands a table whose values may be arrays into the cartesian product of scalar tables.
-pub fn expand_product(t: &toml::Table) -> std::result::Result<Vec<Params>, String> {
+pub fn expand_product(t: &toml::Table) -> std::result::Result<Vec<Params>, ProductError> {
     let mut out = vec![Params::new()];
     for (k, v) in t {
-        let values: Vec<ParamValue> = match v {
-            toml::Value::Array(a) => a
-                .iter()
-                .map(|x| {
-                    ParamValue::from_toml(x)
-                        .ok_or_else(|| format!("'{k}': arrays must hold scalars"))
-                })
-                .collect::<std::result::Result<_, _>>()?,
-            other => vec![ParamValue::from_toml(other)
-                .ok_or_else(|| format!("'{k}' must be a scalar or array"))?],
-        };
+        let values: Vec<ParamValue> =
+            match v {
+                toml::Value::Array(a) => a
+                    .iter()
+                    .map(|x| {
+                        ParamValue::from_toml(x).ok_or_else(|| ProductError::NotScalars(k.clone()))
+                    })
+                    .collect::<std::result::Result<_, _>>()?,
+                other => vec![ParamValue::from_toml(other)
+                    .ok_or_else(|| ProductError::NotAScalar(k.clone()))?],
+            };
         if values.is_empty() {
-            return Err(format!("'{k}' is an empty array: nothing to sweep"));
+            return Err(ProductError::Empty(k.clone()));
         }
         out = out
             .into_iter()
