@@ -14,7 +14,7 @@ use mfx_stats::{
 use crate::clocks::{MonitorSample, PointClocks};
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
-use crate::record::{cols, GpuMsInterval, Row, Sample};
+use crate::record::{cols, Col, GpuMsInterval, Row, Sample};
 use crate::timed::{FrameStats, Timed};
 use crate::timing::GpuTimer;
 use crate::{CoreError, Result};
@@ -233,7 +233,7 @@ pub struct Measured<T: ?Sized> {
     /// Sampled cold (the L2 flushed before each sample).
     pub cold: bool,
     /// The frame's own parts ([`Timed::parts`]) per kept sample, in sample order.
-    pub parts: BTreeMap<&'static str, Vec<f64>>,
+    pub parts: BTreeMap<Col, Vec<f64>>,
     pub prepared: Box<T>,
     /// Every timed frame in order, discarded ones included (`samples.csv`).
     pub samples: Vec<Sample>,
@@ -259,8 +259,8 @@ impl<T: ?Sized> Measured<T> {
         self.gpu.as_ref().map(|s| s.median)
     }
     /// The median of a part the frame reported ([`Timed::parts`]) over the kept samples.
-    pub fn part_median(&self, name: &str) -> Option<f64> {
-        let mut v = self.parts.get(name)?.clone();
+    pub fn part_median(&self, col: Col) -> Option<f64> {
+        let mut v = self.parts.get(&col)?.clone();
         v.sort_by(f64::total_cmp);
         (!v.is_empty()).then(|| mfx_stats::median_of_sorted(&v))
     }
@@ -292,12 +292,7 @@ fn scope_error(e: Option<wgpu::Error>, what: &str) -> Result<()> {
 
 /// What one frame gave: the GPU passes' ms (empty without timestamps), the wall ms, the
 /// clocks right after it, and the frame's own parts ([`Timed::parts`]).
-type FrameTimes = (
-    Vec<(String, f64)>,
-    f64,
-    MonitorSample,
-    Vec<(&'static str, f64)>,
-);
+type FrameTimes = (Vec<(String, f64)>, f64, MonitorSample, Vec<(Col, f64)>);
 
 /// One frame: encode, submit, wait.
 fn one_frame<T: Timed + ?Sized>(
@@ -336,7 +331,7 @@ pub struct PointTimer<'g, T: ?Sized> {
     prepared: Box<T>,
     bytes_allocated: u64,
     bytes_overhead: Option<u64>,
-    parts: BTreeMap<&'static str, Vec<f64>>,
+    parts: BTreeMap<Col, Vec<f64>>,
     timer: GpuTimer,
     reference_mhz: Option<f64>,
     clocks: PointClocks,
@@ -549,8 +544,8 @@ impl<'g, T: Timed + ?Sized> PointTimer<'g, T> {
             self.sampler.push_discarded(self.sampling_ms)
         } else {
             self.clocks.push(&c);
-            for (name, ms) in parts {
-                self.parts.entry(name).or_default().push(ms);
+            for (col, ms) in parts {
+                self.parts.entry(col).or_default().push(ms);
             }
             let mut frame_labels: BTreeMap<String, f64> = BTreeMap::new();
             for (l, ms) in passes {
@@ -731,13 +726,13 @@ fn combine<T: ?Sized>(
     canary: Option<(usize, f64)>,
     (measure_ms, prepare_ms): (f64, f64),
     reached: bool,
-    parts: BTreeMap<&'static str, Vec<f64>>,
+    parts: BTreeMap<Col, Vec<f64>>,
     mut next: Measured<T>,
 ) -> Measured<T> {
-    for (name, mut v) in parts {
-        let later = next.parts.remove(name).unwrap_or_default();
+    for (col, mut v) in parts {
+        let later = next.parts.remove(&col).unwrap_or_default();
         v.extend(later);
-        next.parts.insert(name, v);
+        next.parts.insert(col, v);
     }
     let mut all = samples;
     all.append(&mut next.samples);

@@ -6,6 +6,7 @@
 
 use crate::gpu::Gpu;
 use crate::gpu_scene::GpuScene;
+use crate::record::Col;
 use crate::timing::GpuTimer;
 use crate::Result;
 
@@ -42,9 +43,9 @@ pub trait Timed {
     /// Named parts of the frame just run, in ms, that the GPU timestamps do not give: CPU work
     /// it did (e.g. lighting on CPU cores while the GPU renders) or intervals read off its
     /// passes' `spans`. The harness keeps them for the kept samples and reports their medians
-    /// ([`crate::measure::Measured::parts`]). A part that fills a column is named by it
-    /// (`cols::X.name`).
-    fn parts(&self, spans: &[PassSpan]) -> Vec<(&'static str, f64)> {
+    /// ([`crate::measure::Measured::parts`]). Each part is keyed by the column it fills
+    /// (`cols::X`), or by a [`Col`] its study declares for a part that has no column.
+    fn parts(&self, spans: &[PassSpan]) -> Vec<(Col, f64)> {
         let _ = spans;
         Vec::new()
     }

@@ -35,7 +35,7 @@ use super::gpu_paths::{bge, module, paths_source, Deferred, Path, ShadeInputs, H
 use super::{GBuffer, ShadeSetup, SKY, SKY_MATERIAL};
 use bench_core::gpu::Gpu;
 use bench_core::gpu_scene::{AllocCounter, Attrs, GpuScene};
-use bench_core::record::cols;
+use bench_core::record::{cols, Col};
 
 use bench_core::study::InvalidPoint;
 use bench_core::timed::{FrameStats, PassSpan, Timed};
@@ -43,6 +43,13 @@ use bench_core::timing::GpuTimer;
 use bench_core::{CoreError, Result, Unsupported};
 
 const WGSL: &str = include_str!("prepass.wgsl");
+
+/// A timed part with no column of its own (`Timed::parts` keys every part by a `Col`): the CPU
+/// side's whole frame (decode + light + pack + upload), whose median the row's notes say.
+pub const CPU_TOTAL_MS: Col = Col::new(
+    "cpu_total_ms",
+    "pre-pass, CPU lighting: decode + light + pack + upload per frame, ms (a part: in the notes, not a column)",
+);
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LbFormat {
@@ -713,25 +720,21 @@ impl Timed for PrePass {
 
     /// The wall-clock parts of the frame just run (CPU lighting, the wait for the pre-pass's
     /// maps, the main view's latency) and the pre-pass → material gap on the GPU clock.
-    fn parts(&self, spans: &[PassSpan]) -> Vec<(&'static str, f64)> {
+    fn parts(&self, spans: &[PassSpan]) -> Vec<(Col, f64)> {
         let mut v = Vec::new();
         if let Some(f) = self.samples.last() {
-            v.push((cols::LATENCY_MS.name, f.latency_ms));
+            v.push((cols::LATENCY_MS, f.latency_ms));
             if matches!(self.accum, Accum::Cpu { .. }) {
                 v.extend([
-                    (cols::CPU_LIGHT_MS.name, f.cpu_light_ms),
-                    (cols::MAP_WAIT_MS.name, f.map_wait_ms),
-                    // Not a column: its median is said in the row's notes.
-                    ("cpu_total_ms", f.cpu_total_ms),
-                    (cols::LIGHT_READY_MS.name, f.light_ready_ms),
+                    (cols::CPU_LIGHT_MS, f.cpu_light_ms),
+                    (cols::MAP_WAIT_MS, f.map_wait_ms),
+                    (CPU_TOTAL_MS, f.cpu_total_ms),
+                    (cols::LIGHT_READY_MS, f.light_ready_ms),
                 ]);
             }
         }
         if let Some((gap, busy)) = gap_of(spans) {
-            v.extend([
-                (cols::GPU_GAP_MS.name, gap),
-                (cols::GPU_BUSY_IN_GAP_MS.name, busy),
-            ]);
+            v.extend([(cols::GPU_GAP_MS, gap), (cols::GPU_BUSY_IN_GAP_MS, busy)]);
         }
         v
     }

@@ -93,16 +93,16 @@ fn set_times<T: ?Sized>(row: &mut Row, m: &Measured<T>) {
         row.set_f(cols::GPU_IDLE_MS, idle);
     }
     if let (Some(gap), Some(busy)) = (
-        m.part_median(cols::GPU_GAP_MS.name),
-        m.part_median(cols::GPU_BUSY_IN_GAP_MS.name),
+        m.part_median(cols::GPU_GAP_MS),
+        m.part_median(cols::GPU_BUSY_IN_GAP_MS),
     ) {
         row.set_f(cols::GPU_GAP_MS, gap)
             .set_f(cols::GPU_BUSY_IN_GAP_MS, busy);
     }
-    if let Some(l) = m.part_median(cols::LATENCY_MS.name) {
+    if let Some(l) = m.part_median(cols::LATENCY_MS) {
         row.set_f(cols::LATENCY_MS, l);
     }
-    if let Some(r) = m.part_median(cols::LIGHT_READY_MS.name) {
+    if let Some(r) = m.part_median(cols::LIGHT_READY_MS) {
         row.set_f(cols::LIGHT_READY_MS, r);
         if let Some(within) = lit_within_frame(m) {
             row.set(cols::LIT_WITHIN_FRAME, within);
@@ -116,8 +116,8 @@ fn set_times<T: ?Sized>(row: &mut Row, m: &Measured<T>) {
 /// frame N + 1 would fail the second). `None` where the parts and the kept samples do not
 /// line up one to one (nothing to decide from).
 fn lit_within_frame<T: ?Sized>(m: &Measured<T>) -> Option<bool> {
-    let ready = m.parts.get(cols::LIGHT_READY_MS.name)?;
-    let latency = m.parts.get(cols::LATENCY_MS.name)?;
+    let ready = m.parts.get(&cols::LIGHT_READY_MS)?;
+    let latency = m.parts.get(&cols::LATENCY_MS)?;
     let wall: Vec<f64> = m
         .samples
         .iter()
@@ -297,9 +297,9 @@ impl PrepassStudy {
             .set(cols::BYTES_RT_READ, rd);
         if matches!(accum, Accum::Cpu { .. }) {
             if let (Some(light), Some(wait), Some(total)) = (
-                m.part_median(cols::CPU_LIGHT_MS.name),
-                m.part_median(cols::MAP_WAIT_MS.name),
-                m.part_median("cpu_total_ms"),
+                m.part_median(cols::CPU_LIGHT_MS),
+                m.part_median(cols::MAP_WAIT_MS),
+                m.part_median(crate::prepass::CPU_TOTAL_MS),
             ) {
                 row.set_f(cols::CPU_LIGHT_MS, light)
                     .set_f(cols::MAP_WAIT_MS, wait)
