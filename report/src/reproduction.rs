@@ -191,12 +191,12 @@ struct Value {
 enum Missing {
     /// Every sample was discarded (a throttled or noisy clock): no pass is timed.
     #[error("the row kept no samples ({discarded} discarded, flag {flag}): no pass times")]
-    NoSamples { discarded: String, flag: String },
+    Samples { discarded: String, flag: String },
     /// The study never writes this pass (a suite not run with it).
     #[error("the rows have no pass '{0}'")]
-    NoPass(String),
+    Pass(String),
     #[error("no {0} in the rows")]
-    NoColumn(String),
+    Column(String),
 }
 
 /// A row's value of a column or pass: `Err` says what the row lacks.
@@ -206,7 +206,7 @@ fn value(r: &Rec, col: &str, pass: Option<&str>) -> Result<Value, Missing> {
         if passes.is_empty() && r.f(cols::SAMPLES) == Some(0.0) {
             // Every sample was discarded (a throttled or noisy clock): the row times no pass,
             // which is not the same as a study that never writes the pass.
-            return Err(Missing::NoSamples {
+            return Err(Missing::Samples {
                 discarded: r.get(cols::SAMPLES_DISCARDED).to_string(),
                 flag: r.get(cols::FLAG).to_string(),
             });
@@ -214,7 +214,7 @@ fn value(r: &Rec, col: &str, pass: Option<&str>) -> Result<Value, Missing> {
         let v = passes
             .get(p)
             .and_then(|v| v.as_f64())
-            .ok_or_else(|| Missing::NoPass(p.to_string()))?;
+            .ok_or_else(|| Missing::Pass(p.to_string()))?;
         let interval = pass_json(r, cols::PASS_MS_CI).and_then(|m| {
             let a = m.get(p)?.as_array()?;
             Some((a.first()?.as_f64()?, a.get(1)?.as_f64()?))
@@ -223,7 +223,7 @@ fn value(r: &Rec, col: &str, pass: Option<&str>) -> Result<Value, Missing> {
     }
     let v = r
         .f_name(col)
-        .ok_or_else(|| Missing::NoColumn(col.to_string()))?;
+        .ok_or_else(|| Missing::Column(col.to_string()))?;
     let ci = || Some((r.f(cols::GPU_MS_CI_LO)?, r.f(cols::GPU_MS_CI_HI)?));
     let med = r.f(cols::GPU_MS_MEDIAN);
     let interval = if col == cols::GPU_MS_MEDIAN.name {
@@ -331,7 +331,7 @@ fn rule_points(
             Ok(x) => x,
             Err(why) => {
                 let suite = &points[0].suite;
-                return if matches!(why, Missing::NoPass(_)) {
+                return if matches!(why, Missing::Pass(_)) {
                     Outcome::NotRun(format!("not run: {why} (suite {suite})"))
                 } else {
                     Outcome::NotMeasured(why.to_string())
