@@ -31,21 +31,18 @@ fn open(limits: Profile) -> Gpu {
 /// with room for 40).
 const IMAGE_TOL: f64 = 1e-4;
 
+/// One run's split column and image, or why it could not be prepared (an unsupported point, a
+/// measuring error).
+type RunResult = Result<(Option<String>, Vec<[f32; 4]>), Box<dyn std::error::Error>>;
+
 /// Runs `method` at `p` on `s` (w × h) on `gpu` once; Ok: (split column, image), after checking
 /// counts and image against the f64 reference; Err: why it could not be prepared.
-fn exact_run(
-    gpu: &Gpu,
-    method: &str,
-    s: &Scene,
-    (w, h): (u32, u32),
-    p: &Params,
-) -> Result<(Option<String>, Vec<[f32; 4]>), String> {
+fn exact_run(gpu: &Gpu, method: &str, s: &Scene, (w, h): (u32, u32), p: &Params) -> RunResult {
     let m = methods::by_name(method).unwrap();
     let pt = point(m.as_ref(), p);
     mfx_multifragment::method::supports(m.as_ref(), gpu, &pt)?;
     let gs = GpuScene::upload(gpu, s, w, h);
-    let mut r =
-        measure(gpu, &gs, m.as_ref(), &pt, &TimingPlan::once()).map_err(|e| e.to_string())?;
+    let mut r = measure(gpu, &gs, m.as_ref(), &pt, &TimingPlan::once())?;
     let mut cap = r.prepared.readback(gpu, &gs).unwrap();
     let lists = rasterize(s, w, h);
     r.prepared.judge(&mut cap, &lists);
@@ -67,7 +64,7 @@ fn exact_run(
 fn split_somewhere(
     what: &str,
     gpu: &mut Gpu,
-    run: impl Fn(&Gpu) -> Result<(Option<String>, Vec<[f32; 4]>), String>,
+    run: impl Fn(&Gpu) -> RunResult,
 ) -> (String, Vec<[f32; 4]>) {
     let full = gpu.limits.max_storage_buffer_binding_size;
     let mut tried = Vec::new();
