@@ -37,6 +37,8 @@ pub enum GlesError {
         call: &'static str,
         error: egl::Error,
     },
+    #[error("eglMakeCurrent ({origin}): {error}")]
+    MakeCurrent { origin: String, error: egl::Error },
     #[error("{origin}: no EGL config renders GLES 3")]
     NoConfig { origin: String },
     /// No 3.2, 3.1 or 3.0 context; `last` is the error of the last one tried.
@@ -75,9 +77,8 @@ impl GlesContext {
     pub fn make_current(&self) -> Result<(), GlesError> {
         self.egl
             .make_current(self.display, self.surface, self.surface, Some(self.context))
-            .map_err(|error| GlesError::Egl {
+            .map_err(|error| GlesError::MakeCurrent {
                 origin: self.origin.clone(),
-                call: "eglMakeCurrent",
                 error,
             })
     }
