@@ -744,6 +744,7 @@ mod tests {
                     object_id: i,
                     front_facing: true,
                     prim: i,
+                    depth_slope: 0.0,
                 });
             }
             offsets.push(frags.len() as u32);
@@ -1121,6 +1122,7 @@ mod tests {
                     object_id: i as u32,
                     front_facing: true,
                     prim: i as u32,
+                    depth_slope: 0.0,
                 });
             }
             offsets.push(frags.len() as u32);
