@@ -27,6 +27,11 @@ pub struct RefFragment {
     pub front_facing: bool,
     /// Triangle index in the scene's index buffer (submission order).
     pub prim: u32,
+    /// |∂depth/∂x| + |∂depth/∂y| of the fragment's triangle (window depth per pixel, on the
+    /// snapped vertices): how far a GPU's depth of this fragment may sit from `depth` when it
+    /// sets depth up from the unsnapped vertices (lavapipe does; ≤ 1/512 px per coordinate,
+    /// times this, to first order). A sliver seen edge-on has a large one.
+    pub depth_slope: f32,
 }
 
 /// A vertex after projection, carrying what is interpolated.
@@ -49,6 +54,8 @@ struct ScreenVert {
 
 struct Tri {
     v: [ScreenVert; 3],
+    /// |∂z/∂x| + |∂z/∂y| of window depth ([`RefFragment::depth_slope`]).
+    depth_slope: f32,
     area: f64,
     front: bool,
     prim: u32,
@@ -122,6 +129,15 @@ fn clip_guard(poly: &[ClipVert], axis: usize, sign: f64) -> Vec<ClipVert> {
         }
     }
     out
+}
+
+/// |∂z/∂x| + |∂z/∂y| of window depth over the positively wound screen triangle `t` of twice
+/// the area `area` (the derivatives of [`fragment`]'s barycentric interpolation).
+fn depth_slope(t: &[ScreenVert; 3], area: f64) -> f32 {
+    let [a, b, c] = t;
+    let zx = -((c.y - b.y) * a.z + (a.y - c.y) * b.z + (b.y - a.y) * c.z) / area;
+    let zy = ((c.x - b.x) * a.z + (a.x - c.x) * b.z + (b.x - a.x) * c.z) / area;
+    (zx.abs() + zy.abs()) as f32
 }
 
 fn snap(v: f64) -> f64 {
@@ -334,6 +350,7 @@ pub fn rasterize_each(
                     continue;
                 };
                 out.push(Tri {
+                    depth_slope: depth_slope(&t, area.abs()),
                     v: t,
                     area: area.abs(),
                     front,
@@ -514,6 +531,7 @@ fn fragment(t: &Tri, p: [(f64, f64); 3], sampling: &Sampling<'_>, x: u32, y: u32
         object_id: t.object_id,
         front_facing: t.front,
         prim: t.prim,
+        depth_slope: t.depth_slope,
     }
 }
 

@@ -571,3 +571,44 @@ fn one_traversal_lists_equal_the_lists_of_each_sample_position() {
         }
     }
 }
+
+#[test]
+fn depth_slope_is_the_triangle_s_depth_change_a_pixel() {
+    // Depth is linear in screen space over a triangle, so where one triangle covers a pixel and
+    // its right and lower neighbours, |Δx depth| + |Δy depth| is its depth_slope (the f32 of it).
+    let scene = scenarios::SceneSpec::new(
+        "tets",
+        scenarios::Params::new().with("cells", scenarios::ParamValue::Int(2)),
+    )
+    .build()
+    .unwrap();
+    let (w, h) = (48u32, 48u32);
+    let l = rasterize(&scene, w, h);
+    let of = |x: u32, y: u32, prim: u32| {
+        l.pixel((y * w + x) as usize)
+            .iter()
+            .find(|f| f.prim == prim)
+            .copied()
+    };
+    let (mut checked, mut steep) = (0usize, 0.0f64);
+    for y in 0..h - 1 {
+        for x in 0..w - 1 {
+            for f in l.pixel((y * w + x) as usize) {
+                let (Some(r), Some(d)) = (of(x + 1, y, f.prim), of(x, y + 1, f.prim)) else {
+                    continue;
+                };
+                let slope = (r.depth - f.depth).abs() + (d.depth - f.depth).abs();
+                let want = f64::from(f.depth_slope);
+                assert!(
+                    (slope - want).abs() <= 1e-6 * want + 1e-12,
+                    "prim {} at ({x},{y}): {slope:e} a pixel, depth_slope {want:e}",
+                    f.prim
+                );
+                checked += 1;
+                steep = steep.max(want);
+            }
+        }
+    }
+    assert!(checked > 1000, "{checked} fragments checked");
+    assert!(steep > 1e-3, "some triangle is steep: {steep:e}");
+}

@@ -140,6 +140,7 @@ mod tests {
             object_id: 0,
             front_facing: true,
             prim: 0,
+            depth_slope: 0.0,
         }
     }
 

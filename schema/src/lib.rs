@@ -1190,7 +1190,7 @@ pub mod cols {
     );
     pub const HAZARD_RATE: Col = Col::new(
         "hazard_rate",
-        "unguarded read-modify-write captures: k-buffer: fraction of pixels whose captured set differs from the true k nearest, excluding pixels with an f32 depth tie among their k + 1 nearest (those are flagged lost_coplanar and counted in notes); mlab, adaptive: fraction of pixels whose image differs from the ideal-order (primitive order) twin by more than 1e-4",
+        "unguarded read-modify-write captures: k-buffer: fraction of pixels whose captured set differs from the true k nearest (each captured depth matched to a true fragment within 1e-5 plus its triangle's depth slope times 1/256 px: a GPU may set depth up from unsnapped vertices), excluding pixels with an f32 depth tie among their k + 1 nearest (those are flagged lost_coplanar and counted in notes); mlab, adaptive: fraction of pixels whose image differs from the ideal-order (primitive order) twin by more than 1e-4",
     );
     pub const HAZARD_RATE_CI_LO: Col = Col::new(
         "hazard_rate_ci_lo",

@@ -15,6 +15,7 @@ pub fn frag(z: f64, color: [f64; 4], prim: u32) -> RefFragment {
         object_id: prim,
         front_facing: true,
         prim,
+        depth_slope: 0.0,
     }
 }
 

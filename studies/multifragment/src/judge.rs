@@ -763,6 +763,7 @@ mod tests {
                     object_id: i,
                     front_facing: true,
                     prim: i,
+                    depth_slope: 0.0,
                 });
             }
             offsets.push(frags.len() as u32);
@@ -1140,6 +1141,7 @@ mod tests {
                     object_id: i as u32,
                     front_facing: true,
                     prim: i as u32,
+                    depth_slope: 0.0,
                 });
             }
             offsets.push(frags.len() as u32);

@@ -556,6 +556,7 @@ mod tests {
             object_id: id,
             front_facing: front,
             prim: 0,
+            depth_slope: 0.0,
         }
     }
 

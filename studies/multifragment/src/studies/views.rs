@@ -28,6 +28,8 @@ use scenarios::path::CameraPath;
 use scenarios::{Camera, ParamValue, Scene, StudySpec};
 
 use super::methods::{ready_points, set_reference_columns, GroupTruth, MethodsStudy, Ready};
+use crate::aa::AaMode;
+use crate::effects::EffectConfig;
 use crate::judge::{self, JudgeError, Judgement, TruthCache};
 use crate::method::{measure, Capture, Expected};
 use bench_core::axes::{Axis, Point};
@@ -243,95 +245,51 @@ pub fn run_views_group(ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
     let mut scene = ctx.scene.clone();
     let mut view: Option<Arc<View>> = None;
     let mut reference_ms = 0.0;
+    // The next view's reference (its fragment lists and the truths this view's judging asked
+    // for) is made on the CPU while the GPU draws this view: on a 1024² path the truths, not the
+    // GPU, are most of a path's wall time. One core is left to the thread that drives the GPU.
+    let cores = rayon::current_num_threads().saturating_sub(1).max(1);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(cores)
+        .build()
+        .map_err(|e| {
+            bench_core::CoreError::Io(format!("the views study's reference threads: {e}"))
+        })?;
+    let mut wants: Vec<Want> = Vec::new();
+    let mut next: Option<(View, f64)> = None;
     for (v, cam) in cameras.iter().enumerate() {
         if view.as_ref().is_none_or(|x| x.camera != *cam) {
             scene.camera = cam.clone();
-            let t = std::time::Instant::now();
-            let lists = rasterize(&scene, w, h);
-            let bounds = judge::exact_bounds(&lists.depth_complexity(), None)
-                .iter()
-                .map(|b| b.arith)
-                .collect();
-            let ms = t.elapsed().as_secs_f64() * 1e3;
+            let (made, ms) = match next.take() {
+                Some(n) if n.0.camera == *cam => n,
+                _ => make_view(&scene, w, h, &[]),
+            };
             reference_ms += ms;
-            view = Some(Arc::new(View {
-                camera: cam.clone(),
-                lists,
-                bounds: Arc::new(bounds),
-                truths: TruthCache::default(),
-            }));
+            view = Some(Arc::new(made));
         }
+        let after = cameras.get(v + 1).filter(|c| **c != *cam).cloned();
+        let mut ahead = after.map(|c| {
+            let mut s = scene.clone();
+            s.camera = c;
+            s
+        });
         let vw = view.clone().expect("set above");
-        let gscene = ctx.gscene.with_camera(ctx.gpu, cam);
-        // The GPU: every live row draws this view, one after another.
-        let mut caps: Vec<(usize, Capture)> = Vec::new();
-        for (i, r) in rows.iter_mut().enumerate() {
-            if r.failed.is_some() {
-                continue;
-            }
-            let pt = &ctx.group.points[r.ready.index];
-            let mut m = match measure(
-                ctx.gpu,
-                &gscene,
-                r.ready.method.as_ref(),
-                &pt.point,
-                &ctx.plan,
-            ) {
-                Ok(m) => m,
-                Err(e) => {
-                    r.fail(v, &e.to_string());
-                    continue;
-                }
-            };
-            let g = m.gpu_median();
-            if let Some(g) = g {
-                if bench_core::measure::timestamps_incomplete(g, m.cpu.median) {
-                    r.flags.add(Flag::TimestampsIncomplete);
-                }
-            }
-            if !m.target_reached {
-                r.flags.add(Flag::Noisy);
-            }
-            r.bytes_max = r.bytes_max.max(m.bytes_allocated);
-            r.samples += m.samples.len() - m.discarded();
-            r.cpu_ms.push(m.cpu.median);
-            r.measure_ms += m.measure_ms;
-            r.prepare_ms += m.prepare_ms;
-            r.views.push(ViewRecord {
-                gpu_ms: g,
-                ..Default::default()
+        let (done, judged) = std::thread::scope(|s| {
+            let handle = ahead.as_mut().map(|sc| {
+                let (sc, wants, pool) = (&*sc, &wants, &pool);
+                s.spawn(move || pool.install(|| make_view(sc, w, h, wants)))
             });
-            let mut cap = match m.prepared.readback(ctx.gpu, &gscene) {
-                Ok(c) => c,
-                Err(e) => {
-                    r.fail(v, &format!("readback: {e}"));
-                    continue;
-                }
-            };
-            // The method's own judge (hazards, its CPU twin) sees this view's fragments.
-            m.prepared.judge(&mut cap, &vw.lists);
-            caps.push((i, cap));
-        }
-        // The truth of every effect a row needs, composited once before the rows share it.
-        for (i, cap) in &caps {
-            if cap.aa.is_none() {
-                let e = rows[*i].ready.effect;
-                vw.truths.get(&e, Expected::All, || {
-                    e.reference(&scene, &vw.lists, Expected::All)
-                });
-            }
-        }
-        // The CPU: every capture of this view judged at once.
-        let judged: Vec<(usize, std::result::Result<Outcome, JudgeError>)> = caps
-            .into_par_iter()
-            .map(|(i, cap)| {
-                (
-                    i,
-                    judge_view(&rows[i], cap, &vw, &scene, v, flip, eps, images),
-                )
-            })
-            .collect();
-        for (i, o) in judged {
+            let judged = draw_and_judge(ctx, &mut rows, &vw, &scene, v, cam, flip, eps, images);
+            (handle.map(|h| h.join()), judged)
+        });
+        next = match done {
+            Some(Ok(n)) => Some(n),
+            // A panic in the reference is the same panic as when it ran on this thread.
+            Some(Err(p)) => std::panic::resume_unwind(p),
+            None => None,
+        };
+        wants = judged.wants;
+        for (i, o) in judged.outcomes {
             let r = &mut rows[i];
             match o {
                 Ok(o) => apply(r, o),
@@ -357,6 +315,156 @@ pub fn run_views_group(ctx: &GroupCtx<'_>, emit: &mut Emit<'_>) -> Result<()> {
         emit(index, row)?;
     }
     Ok(())
+}
+
+/// A view's reference, made before the view is judged: its fragment lists, their f32 bounds,
+/// and the truths of `wants`; with the milliseconds the lists and bounds took (`reference_ms`).
+fn make_view(scene: &Scene, w: u32, h: u32, wants: &[Want]) -> (View, f64) {
+    let t = std::time::Instant::now();
+    let lists = rasterize(scene, w, h);
+    let bounds = judge::exact_bounds(&lists.depth_complexity(), None)
+        .iter()
+        .map(|b| b.arith)
+        .collect();
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    let view = View {
+        camera: scene.camera.clone(),
+        lists,
+        bounds: Arc::new(bounds),
+        truths: TruthCache::default(),
+    };
+    for want in wants {
+        match *want {
+            Want::Effect(e) => {
+                view.truths.get(&e, Expected::All, || {
+                    e.reference(scene, &view.lists, Expected::All)
+                });
+            }
+            // Kept by the antialiasing truths' own cache, where the judge looks first.
+            Want::Aa(mode, e, expected) => {
+                crate::aa::truth_cached(scene, w, h, mode, &e, Expected::All);
+                if expected != Expected::All {
+                    crate::aa::truth_cached(scene, w, h, mode, &e, expected);
+                }
+            }
+        }
+    }
+    (view, ms)
+}
+
+/// A truth a view's judging asked for: a single-sample effect's, or an antialiased one's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Want {
+    Effect(EffectConfig),
+    Aa(AaMode, EffectConfig, Expected),
+}
+
+/// One view drawn by every live row and judged.
+struct Judged {
+    outcomes: Vec<(usize, std::result::Result<Outcome, JudgeError>)>,
+    /// The truths the judging asked for, for the next view's [`make_view`].
+    wants: Vec<Want>,
+}
+
+/// View `v`: every live row draws it on the GPU, one after another (time, readback, the
+/// method's own judge), then every capture is judged against the view's truth at once.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one view of a path: the group, its rows, the view and the judge's settings"
+)]
+fn draw_and_judge(
+    ctx: &GroupCtx<'_>,
+    rows: &mut [PathRow],
+    vw: &View,
+    scene: &Scene,
+    v: usize,
+    cam: &Camera,
+    flip: bool,
+    eps: f64,
+    images: bool,
+) -> Judged {
+    let gscene = ctx.gscene.with_camera(ctx.gpu, cam);
+    // The GPU: every live row draws this view, one after another.
+    let mut caps: Vec<(usize, Capture)> = Vec::new();
+    for (i, r) in rows.iter_mut().enumerate() {
+        if r.failed.is_some() {
+            continue;
+        }
+        let pt = &ctx.group.points[r.ready.index];
+        let mut m = match measure(
+            ctx.gpu,
+            &gscene,
+            r.ready.method.as_ref(),
+            &pt.point,
+            &ctx.plan,
+        ) {
+            Ok(m) => m,
+            Err(e) => {
+                r.fail(v, &e.to_string());
+                continue;
+            }
+        };
+        let g = m.gpu_median();
+        if let Some(g) = g {
+            if bench_core::measure::timestamps_incomplete(g, m.cpu.median) {
+                r.flags.add(Flag::TimestampsIncomplete);
+            }
+        }
+        if !m.target_reached {
+            r.flags.add(Flag::Noisy);
+        }
+        r.bytes_max = r.bytes_max.max(m.bytes_allocated);
+        r.samples += m.samples.len() - m.discarded();
+        r.cpu_ms.push(m.cpu.median);
+        r.measure_ms += m.measure_ms;
+        r.prepare_ms += m.prepare_ms;
+        r.views.push(ViewRecord {
+            gpu_ms: g,
+            ..Default::default()
+        });
+        let mut cap = match m.prepared.readback(ctx.gpu, &gscene) {
+            Ok(c) => c,
+            Err(e) => {
+                r.fail(v, &format!("readback: {e}"));
+                continue;
+            }
+        };
+        // The method's own judge (hazards, its CPU twin) sees this view's fragments.
+        m.prepared.judge(&mut cap, &vw.lists);
+        caps.push((i, cap));
+    }
+    // The truth of every effect a row needs, composited once before the rows share it.
+    for (i, cap) in &caps {
+        if cap.aa.is_none() {
+            let e = rows[*i].ready.effect;
+            vw.truths.get(&e, Expected::All, || {
+                e.reference(&scene, &vw.lists, Expected::All)
+            });
+        }
+    }
+    // What the next view's judging will ask for, made ahead while the GPU draws it.
+    let mut wants: Vec<Want> = Vec::new();
+    for (i, cap) in &caps {
+        let effect = rows[*i].ready.effect;
+        let want = match crate::aa::antialiased(cap) {
+            None => Want::Effect(effect),
+            Some(mode) => Want::Aa(mode, effect, cap.expected),
+        };
+        if !wants.contains(&want) {
+            wants.push(want);
+        }
+    }
+    // The CPU: every capture of this view judged at once.
+    let outcomes: Vec<(usize, std::result::Result<Outcome, JudgeError>)> = caps
+        .into_par_iter()
+        .map(|(i, cap)| {
+            (
+                i,
+                judge_view(&rows[i], cap, vw, scene, v, flip, eps, images),
+            )
+        })
+        .collect();
+    Judged { outcomes, wants }
 }
 
 /// Judges one capture of view `v`: the judge's verdict, the step from the row's previous view,

@@ -606,9 +606,8 @@ mod tests {
                 }
                 let twin: Vec<Option<f32>> =
                     (0..4).map(|i| slots.get(i).map(|s| s.0 as f32)).collect();
-                let truth: Vec<f64> = lists.pixel(px).iter().map(|f| f.depth).collect();
                 assert!(
-                    store::same_k_nearest(&twin, &truth, 4),
+                    store::same_k_nearest(&twin, lists.pixel(px), 4),
                     "twin is wrong at pixel {px}"
                 );
             }
