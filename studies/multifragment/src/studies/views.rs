@@ -438,7 +438,7 @@ fn draw_and_judge(
         if cap.aa.is_none() {
             let e = rows[*i].ready.effect;
             vw.truths.get(&e, Expected::All, || {
-                e.reference(&scene, &vw.lists, Expected::All)
+                e.reference(scene, &vw.lists, Expected::All)
             });
         }
     }
