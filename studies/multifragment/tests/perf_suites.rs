@@ -132,7 +132,7 @@ fn scaling_spans_the_stated_triangles_resolutions_and_depth_complexities() {
 }
 
 #[test]
-fn perf_binned_puts_both_captures_on_every_scene_and_resolution() {
+fn perf_binned_puts_both_captures_and_the_methods_choice_on_every_scene_and_resolution() {
     let groups = load("perf-binned");
     // quads ×3, shells ×4, grass ×2, the bunnies: 10 scenes × 512², 1024², 2048².
     assert_eq!(groups.len(), 30);
@@ -149,7 +149,7 @@ fn perf_binned_puts_both_captures_on_every_scene_and_resolution() {
             })
             .collect();
         let want: std::collections::BTreeSet<String> =
-            ["pixels", "tiles"].iter().map(|s| s.to_string()).collect();
+            ["auto", "pixels", "tiles"].iter().map(|s| s.to_string()).collect();
         assert_eq!(captures, want, "{}", g.scene.label());
     }
 }

@@ -26,7 +26,8 @@
 //!   fragments in workgroup memory (16 KiB per 8×8 pixels) — into a ring, from its nearer end,
 //!   so lists that arrive in depth order or reversed cost no moves — longer ones in a per-thread
 //!   array; `private` sorts every list in the per-thread array (the first version).
-//! - `capture = pixels|tiles`: `pixels` (default) is the count → scan → fill above; with
+//! - `capture = pixels|tiles|auto`: `pixels` is the count → scan → fill above (`auto`, compute_abuffer's
+//!   default, picks one of the two at prepare from a census of the scene's fragments); with
 //!   `tiles` (binned.wgsl) what one thread would not rasterise (bounding box over `small_max`,
 //!   long or clipped) is binned to 8×8-pixel tiles instead of shared by tiles of the raster
 //!   (an 8 B entry per tile it may touch, counted, scanned and filled with the fragments), and
