@@ -476,7 +476,7 @@ fn every_figure_differs_on_rows_with_no_effect_and_holds_on_the_paper_s_effect()
 // ---- why_differs against the newest committed run (an H100) ----
 
 /// The committed run whose rows the papers files' `why_differs` were written from.
-const COMMITTED: &str = "../results/reference/2026-12-06-h100-sources/merged/runs.csv";
+const COMMITTED: &str = "../results/reference/2026-12-06-h100-sources-b/merged/runs.csv";
 
 #[test]
 fn every_why_differs_number_is_a_number_of_the_committed_run() {
