@@ -37,6 +37,8 @@ fn error_col(study: &str) -> Option<Col> {
     match study.parse().ok()? {
         StudyKind::Shadows => Some(cols::VIS_RMSE),
         StudyKind::Deferred | StudyKind::Prepass => Some(cols::RMSE),
+        // A path's error is its worst view's: the mean would hide the view that pops.
+        StudyKind::Views => Some(cols::RMSE_PATH_WORST),
         _ => None,
     }
 }
@@ -828,6 +830,26 @@ mod tests {
             if let Some(p) = v.fastest_exact {
                 assert!(p.row.f(cols::OVERFLOW_RATE).is_none_or(|o| o == 0.0));
             }
+        }
+    }
+
+    #[test]
+    fn a_views_run_names_the_lowest_worst_view_error_of_each_path() {
+        let csv = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../results/reference/2026-12-06-h100-sources/views/runs.csv"
+        );
+        let r = Runs::load(std::path::Path::new(csv)).unwrap();
+        let views: Vec<_> = other_studies(&r)
+            .into_iter()
+            .filter(|(_, study, _)| study == "views")
+            .flat_map(|(_, _, lines)| lines)
+            .collect();
+        // Four paths (shells, grass, bunnies, teapots); the frames at rest have no path error.
+        let named: Vec<_> = views.iter().filter(|(_, _, best)| !best.is_empty()).collect();
+        assert!(named.len() >= 4, "{views:?}");
+        for (scene, _, best) in named {
+            assert!(best.starts_with("rmse_path_worst "), "{scene}: {best:?}");
         }
     }
 
