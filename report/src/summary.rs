@@ -846,7 +846,10 @@ mod tests {
             .flat_map(|(_, _, lines)| lines)
             .collect();
         // Four paths (shells, grass, bunnies, teapots); the frames at rest have no path error.
-        let named: Vec<_> = views.iter().filter(|(_, _, best)| !best.is_empty()).collect();
+        let named: Vec<_> = views
+            .iter()
+            .filter(|(_, _, best)| !best.is_empty())
+            .collect();
         assert!(named.len() >= 4, "{views:?}");
         for (scene, _, best) in named {
             assert!(best.starts_with("rmse_path_worst "), "{scene}: {best:?}");

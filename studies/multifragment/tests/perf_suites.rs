@@ -148,8 +148,10 @@ fn perf_binned_puts_both_captures_and_the_methods_choice_on_every_scene_and_reso
                     .unwrap_or_default()
             })
             .collect();
-        let want: std::collections::BTreeSet<String> =
-            ["auto", "pixels", "tiles"].iter().map(|s| s.to_string()).collect();
+        let want: std::collections::BTreeSet<String> = ["auto", "pixels", "tiles"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
         assert_eq!(captures, want, "{}", g.scene.label());
     }
 }
