@@ -47,7 +47,7 @@ const COVERAGE: Axis = Axis::choice(
 );
 const CAPTURE: Axis = Axis::choice(
     cols::CAPTURE,
-    "pixels: count, scan and fill an 8 B fragment per pixel slot, then sort; tiles: triangles over small_max binned to 8×8 tiles instead, each tile's pixels test them (their fragments never stored); auto: tiles where the triangles over small_max make at least 3 fragments a pixel, else pixels (decided at prepare; the default: issue 41 asks the method, not the suite, to choose)",
+    "pixels: count, scan and fill an 8 B fragment per pixel slot, then sort; tiles: triangles over small_max binned to 8×8 tiles instead, each tile's pixels test them (their fragments never stored); auto: tiles where the triangles over small_max make at least 3 fragments a pixel, else pixels (decided at prepare; the default: the method, not the suite, chooses)",
     "auto",
     &["pixels", "tiles", "auto"],
 );
