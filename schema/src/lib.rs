@@ -275,7 +275,7 @@ pub mod cols {
     );
     pub const CAPTURE: Col = Col::new(
         "capture",
-        "compute_abuffer: pixels (count → scan → fill: an 8 B fragment per pixel slot, then sort) | tiles (triangles over small_max binned to 8×8-pixel tiles instead, 8 B per tile and triangle; each tile's pixels test them and sort in workgroup memory: their fragments are never stored) | auto (the method's choice at prepare: tiles where the triangles over small_max make at least 3 fragments a pixel, else pixels; the notes say which)",
+        "compute_abuffer: pixels (count → scan → fill: an 8 B fragment per pixel slot, then sort) | tiles (triangles over small_max binned to 8×8-pixel tiles instead, 8 B per tile and triangle; each tile's pixels test them and sort in workgroup memory: their fragments are never stored) | auto (the default: the method's choice at prepare, tiles where the triangles over small_max make at least 3 fragments a pixel, else pixels; the notes say which)",
     );
     pub const ATTRIBUTES: Col = Col::new(
         "attributes",
