@@ -34,11 +34,15 @@ if missing; then
     command -v apt-get >/dev/null || skip "slurm-wlm/munge are not installed and there is no apt-get"
     say "installing slurm-wlm and munge (Debian packages)"
     export DEBIAN_FRONTEND=noninteractive
-    if ! timeout 600 apt-get install -y -q slurm-wlm munge >/tmp/mfx-slurm-apt.log 2>&1; then
-        timeout 300 apt-get update -q >>/tmp/mfx-slurm-apt.log 2>&1
-        timeout 600 apt-get install -y -q slurm-wlm munge >>/tmp/mfx-slurm-apt.log 2>&1 ||
-            skip "apt-get install slurm-wlm munge failed (see /tmp/mfx-slurm-apt.log)"
+    # The install's log is kept only when the install fails (the skip names it): a fixed
+    # /tmp/mfx-* file would outlive the test.
+    aptlog=$(mktemp -t slurm-apt.XXXXXX.log)
+    if ! timeout 600 apt-get install -y -q slurm-wlm munge >"$aptlog" 2>&1; then
+        timeout 300 apt-get update -q >>"$aptlog" 2>&1
+        timeout 600 apt-get install -y -q slurm-wlm munge >>"$aptlog" 2>&1 ||
+            skip "apt-get install slurm-wlm munge failed (see $aptlog)"
     fi
+    rm -f "$aptlog"
     missing && skip "slurm-wlm/munge installed but ${need[*]} not all on PATH"
 fi
 [ "$(id -u)" = 0 ] || skip "the daemons need root here (slurmd runs jobs as the submitting user)"
