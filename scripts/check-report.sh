@@ -41,12 +41,15 @@ if [ -z "$browser" ]; then
     if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
         say "installing chromium (Debian package)"
         export DEBIAN_FRONTEND=noninteractive
-        timeout 600 apt-get install -y -q chromium >/tmp/mfx-chromium-apt.log 2>&1 ||
-            { timeout 300 apt-get update -q >>/tmp/mfx-chromium-apt.log 2>&1 &&
-              timeout 600 apt-get install -y -q chromium >>/tmp/mfx-chromium-apt.log 2>&1; }
-        command -v chromium >/dev/null && browser=chromium
+        # The install's log is kept only when no Chromium comes of it (the skip names it): a
+        # fixed /tmp/mfx-* file would outlive the run and fail CI's clean-temp check.
+        aptlog=$(mktemp -t chromium-apt.XXXXXX.log)
+        timeout 600 apt-get install -y -q chromium >"$aptlog" 2>&1 ||
+            { timeout 300 apt-get update -q >>"$aptlog" 2>&1 &&
+              timeout 600 apt-get install -y -q chromium >>"$aptlog" 2>&1; }
+        command -v chromium >/dev/null && browser=chromium && rm -f "$aptlog"
     fi
-    [ -n "$browser" ] || { say "SKIPPED: no Chromium here and it cannot be installed (not root, no apt, or apt failed: /tmp/mfx-chromium-apt.log)"; exit 0; }
+    [ -n "$browser" ] || { say "SKIPPED: no Chromium here and it cannot be installed (not root, no apt, or apt failed: ${aptlog:-no install tried})"; exit 0; }
 fi
 
 # A copy of the report folder (the original is left untouched; relative image paths still
