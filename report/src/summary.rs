@@ -817,13 +817,15 @@ mod tests {
         );
     }
 
+    /// A committed run's rows (`results/reference/<folder>/runs.csv`).
+    fn committed(folder: &str) -> Runs {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../results/reference");
+        Runs::load(&root.join(folder).join("runs.csv")).unwrap()
+    }
+
     #[test]
     fn a_committed_run_s_verdict_agrees_with_its_rows() {
-        let csv = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../results/reference/2026-12-02-h200-default/default/runs.csv"
-        );
-        let r = Runs::load(std::path::Path::new(csv)).unwrap();
+        let r = committed("2026-12-02-h200-default/default");
         assert!(check_against_rows(&r) > 5);
         // No row with an overflow is named exact.
         for (_, v) in verdicts(&r) {
@@ -835,11 +837,7 @@ mod tests {
 
     #[test]
     fn a_views_run_names_the_lowest_worst_view_error_of_each_path() {
-        let csv = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../results/reference/2026-12-06-h100-sources/views/runs.csv"
-        );
-        let r = Runs::load(std::path::Path::new(csv)).unwrap();
+        let r = committed("2026-12-06-h100-sources/views");
         let views: Vec<_> = other_studies(&r)
             .into_iter()
             .filter(|(_, study, _)| study == "views")
